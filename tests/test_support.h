@@ -1,0 +1,25 @@
+// Shared helpers for tests: where ../shared/models is, and skipping cleanly when it is not there.
+#pragma once
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <string>
+
+namespace pms::test {
+
+// ../shared/models next to the checkout, or empty when this clone has no ../shared.
+std::filesystem::path shared_models_dir();
+
+// Path of a model in ../shared/models (e.g. "bunny.ply.xz"); empty when absent.
+std::filesystem::path shared_model(const std::string& file);
+
+// A fresh directory under the system temp dir, unique per test.
+std::filesystem::path temp_dir();
+
+}  // namespace pms::test
+
+// Skips the test with a clear message when the shared model is not available (a user's fresh clone).
+#define PMS_REQUIRE_SHARED_MODEL(var, file)                                                        \
+  const auto var = ::pms::test::shared_model(file);                                                \
+  if (var.empty()) GTEST_SKIP() << "../shared/models/" << (file) << " not found: this test needs " \
+                                   "the shared test meshes (CI has them beside the checkout)"
