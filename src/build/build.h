@@ -1,0 +1,28 @@
+// Builds the view-dependent progressive mesh of a cleaned input (kim-lee-kobbelt §6.2; Hoppe 1997;
+// Garland & Heckbert 1997): QEM half-edge collapses in balanced rounds (or one at a time with
+// `greedy`), the packed hierarchy, fundamental cut vertices and refinement info.
+#pragma once
+#include <cstdint>
+
+#include "common/progress.h"
+#include "io/mesh.h"
+#include "pm/pm.h"
+
+namespace pms {
+
+struct BuildOptions {
+  bool greedy = false;         // classic one-at-a-time PM order (the view-independent baseline)
+  uint64_t base_vertices = 0;  // stop once the base mesh has this many vertices (0: as coarse as possible)
+  ProgressFn progress;
+};
+
+struct BuildResult {
+  Hierarchy hierarchy;
+  BuildStats stats;
+};
+
+// `mesh` must be an oriented 2-manifold (boundaries allowed), i.e. the output of clean_mesh().
+// Throws pms::Error if it is not.
+BuildResult build_progressive_mesh(const Mesh& mesh, const BuildOptions& options = {});
+
+}  // namespace pms
