@@ -1,0 +1,88 @@
+// Kim, Lee, Kobbelt 2005 §6.2 (balanced vertex hierarchy); Xia & Varshney 1996 (independent sets of
+// collapses); Garland & Heckbert 1997 (quadric error). Each round takes the cheapest valid
+// half-edge collapses such that no vertex takes part in two of them, so a round raises any
+// subtree by at most one level; the cost is weighted by the height the new node would have, so
+// short subtrees merge first and node ids stay short.
+#include <algorithm>
+#include <cmath>
+
+#include "build/bounds.h"
+#include "build/simplify.h"
+
+namespace pms {
+namespace {
+
+// Targets kept per vertex: the best one may be blocked this round while the next is fine.
+constexpr int kTargetsPerVertex = 3;
+// Share of the live vertices one round may remove: a lower share keeps the order closer to the
+// greedy quadric order (better intermediate meshes), a higher one gives fewer levels.
+constexpr double kRoundShare = 0.22;
+// Height weighting exponent: key = (cost + epsilon) * (1 + height)^kHeightExponent.
+constexpr double kHeightExponent = 3.0;
+
+struct Entry {
+  double key;
+  uint32_t t, u;
+};
+
+void collect_candidates(CollapseMesh& mesh, const CollapseRecorder& recorder, double epsilon,
+                        std::vector<uint32_t>& neighbours, std::vector<Entry>& out) {
+  out.clear();
+  for (uint32_t t = 0; t < mesh.vertex_count(); ++t) {
+    if (!mesh.alive(t)) continue;
+    mesh.neighbours(t, neighbours);
+    Entry best[kTargetsPerVertex];
+    int kept = 0;
+    const uint32_t height_t = recorder.height(t);
+    for (uint32_t u : neighbours) {
+      const double cost = mesh.quadric(t).error_sum(mesh.quadric(u), mesh.position(u));
+      const double height = double(std::max(height_t, recorder.height(u)) + 1);
+      const Entry e{(cost + epsilon) * std::pow(height, kHeightExponent), t, u};
+      int i = kept < kTargetsPerVertex ? kept++ : kTargetsPerVertex - 1;
+      if (i == kTargetsPerVertex - 1 && kept == kTargetsPerVertex && e.key >= best[i].key) continue;
+      best[i] = e;
+      for (; i > 0 && best[i].key < best[i - 1].key; --i) std::swap(best[i], best[i - 1]);
+    }
+    out.insert(out.end(), best, best + kept);
+  }
+}
+
+}  // namespace
+
+CollapseForest simplify_balanced(const Mesh& input, const BuildOptions& options) {
+  CollapseMesh mesh(input);
+  CollapseRecorder recorder(input, mesh);
+  const uint32_t start = mesh.alive_vertex_count();
+  const uint32_t target = uint32_t(std::clamp<uint64_t>(options.base_vertices, 1, start));
+  const double diagonal = bounds_of(input.positions).diagonal();
+  // Keeps zero-error collapses (flat regions) ordered by height too.
+  const double epsilon = 1e-10 * diagonal * diagonal;
+
+  std::vector<Entry> entries;
+  std::vector<uint32_t> neighbours;
+  std::vector<uint8_t> touched(mesh.vertex_count(), 0);
+  CollapseSite site;
+  while (mesh.alive_vertex_count() > target) {
+    collect_candidates(mesh, recorder, epsilon, neighbours, entries);
+    std::sort(entries.begin(), entries.end(), [](const Entry& a, const Entry& b) {
+      return a.key < b.key || (a.key == b.key && (a.t < b.t || (a.t == b.t && a.u < b.u)));
+    });
+    const uint32_t alive = mesh.alive_vertex_count();
+    const uint32_t quota = std::min<uint32_t>(alive - target, std::max<uint32_t>(1, uint32_t(alive * kRoundShare)));
+    uint32_t accepted = 0;
+    std::fill(touched.begin(), touched.end(), 0);
+    for (const Entry& e : entries) {
+      if (accepted == quota) break;
+      if (touched[e.t] || touched[e.u]) continue;
+      if (!mesh.check_collapse(e.t, e.u, site)) continue;
+      recorder.apply(e.t, e.u, site);
+      touched[e.t] = touched[e.u] = 1;
+      ++accepted;
+    }
+    if (accepted == 0) break;  // no valid collapse left anywhere
+    report(options.progress, "simplify", double(start - mesh.alive_vertex_count()) / double(start - target));
+  }
+  return recorder.finish();
+}
+
+}  // namespace pms

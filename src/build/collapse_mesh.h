@@ -1,0 +1,84 @@
+// Mutable connectivity for simplification: triangles as index triples plus, per vertex, a singly
+// linked list of its corners (corner c = 3 * face + slot). Dead faces are unlinked lazily while
+// walking, so a half-edge collapse costs O(valence) and nothing is allocated per vertex.
+#pragma once
+#include <cstdint>
+#include <vector>
+
+#include "build/quadric.h"
+#include "io/mesh.h"
+
+namespace pms {
+
+// What check_collapse() found out about a valid half-edge collapse t -> u.
+struct CollapseSite {
+  uint32_t face_l = UINT32_MAX;  // face (t, u, l): holds the directed edge t->u
+  uint32_t face_r = UINT32_MAX;  // face (u, t, r): holds u->t
+  uint32_t l = UINT32_MAX, r = UINT32_MAX;
+};
+
+class CollapseMesh {
+ public:
+  // Plane quadrics weighted by area; boundary edges add a perpendicular plane so borders keep their shape.
+  explicit CollapseMesh(const Mesh& mesh);
+
+  uint32_t vertex_count() const { return uint32_t(head_.size()); }
+  uint32_t alive_vertex_count() const { return alive_vertices_; }
+  bool alive(uint32_t v) const { return vertex_alive_[v] != 0; }
+  const float* position(uint32_t v) const { return &positions_[3 * size_t(v)]; }
+  const Quadric& quadric(uint32_t v) const { return quadrics_[v]; }
+  const uint32_t* face(uint32_t f) const { return &faces_[3 * size_t(f)]; }
+  uint32_t original_corner(uint32_t corner) const { return original_[corner]; }
+  uint32_t face_count() const { return uint32_t(face_alive_.size()); }
+  bool face_alive(uint32_t f) const { return face_alive_[f] != 0; }
+
+  // Live faces around v (unlinks dead ones on the way).
+  template <class Fn>
+  void for_each_face(uint32_t v, Fn&& fn);
+
+  // Neighbours of v, each once, into `out`; returns whether v lies on the boundary.
+  bool neighbours(uint32_t v, std::vector<uint32_t>& out);
+
+  // Topological and geometric validity of collapsing t into u (link condition, boundary rules,
+  // no vertex left with a degenerate fan, no face flipped or made degenerate).
+  bool check_collapse(uint32_t t, uint32_t u, CollapseSite& site);
+
+  // Performs a collapse that check_collapse() accepted.
+  void collapse(uint32_t t, uint32_t u, const CollapseSite& site);
+
+ private:
+  static constexpr uint32_t kEnd = UINT32_MAX;
+  std::vector<float> positions_;
+  std::vector<uint32_t> faces_;
+  std::vector<uint32_t> original_;   // input corners, never modified: the dual view of every face
+  std::vector<uint8_t> face_alive_;
+  std::vector<uint32_t> next_corner_;
+  std::vector<uint32_t> head_;       // first corner of each vertex; kEnd once the vertex is gone
+  std::vector<uint8_t> vertex_alive_;
+  std::vector<Quadric> quadrics_;
+  uint32_t alive_vertices_ = 0;
+  // Scratch for neighbour sets: mark_[v] == stamp_ means "in the current set".
+  std::vector<uint32_t> mark_;
+  std::vector<uint8_t> mark_count_;
+  uint32_t stamp_ = 0;
+  std::vector<uint32_t> scratch_;
+  uint32_t next_stamp();
+};
+
+template <class Fn>
+void CollapseMesh::for_each_face(uint32_t v, Fn&& fn) {
+  uint32_t prev = kEnd;
+  for (uint32_t c = head_[v]; c != kEnd;) {
+    const uint32_t next = next_corner_[c];
+    const uint32_t f = c / 3;
+    if (!face_alive_[f]) {
+      if (prev == kEnd) head_[v] = next; else next_corner_[prev] = next;
+    } else {
+      fn(f, c - 3 * f);
+      prev = c;
+    }
+    c = next;
+  }
+}
+
+}  // namespace pms

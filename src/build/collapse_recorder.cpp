@@ -1,0 +1,58 @@
+#include <algorithm>
+
+#include "build/simplify.h"
+
+namespace pms {
+namespace {
+
+uint32_t slot_of(const uint32_t* face, uint32_t v) { return face[0] == v ? 0 : face[1] == v ? 1 : 2; }
+
+}  // namespace
+
+CollapseRecorder::CollapseRecorder(const Mesh& mesh, CollapseMesh& collapse_mesh)
+    : mesh_(collapse_mesh), refinement_(mesh, 2 * mesh.vertex_count()) {
+  const uint32_t n = uint32_t(mesh.vertex_count());
+  forest_.leaf_count = n;
+  node_of_vertex_.resize(n);
+  for (uint32_t v = 0; v < n; ++v) node_of_vertex_[v] = v;
+  height_.assign(2 * size_t(n), 0);
+  forest_.survivor_leaf.resize(n);
+  for (uint32_t v = 0; v < n; ++v) forest_.survivor_leaf[v] = v;
+}
+
+void CollapseRecorder::apply(uint32_t t, uint32_t u, const CollapseSite& site) {
+  // The fundamental cut vertex is the input corner of the removed face at the apex (dual view).
+  auto cut_leaf = [&](uint32_t face, uint32_t apex) {
+    if (face == UINT32_MAX) return UINT32_MAX;
+    return mesh_.original_corner(3 * face + slot_of(mesh_.face(face), apex));
+  };
+  const uint32_t node_t = node_of_vertex_[t], node_u = node_of_vertex_[u];
+  const uint32_t s = forest_.node_count();
+  forest_.child_t.push_back(node_t);
+  forest_.child_u.push_back(node_u);
+  forest_.cut_l.push_back(cut_leaf(site.face_l, site.l));
+  forest_.cut_r.push_back(cut_leaf(site.face_r, site.r));
+  forest_.survivor_leaf.push_back(forest_.survivor_leaf[node_u]);
+  mesh_.collapse(t, u, site);
+  node_of_vertex_[u] = s;
+  height_[s] = std::max(height_[node_t], height_[node_u]) + 1;
+  refinement_.on_collapse(s, node_t, node_u, mesh_, u);
+}
+
+CollapseForest CollapseRecorder::finish() {
+  std::vector<uint32_t> root_index(mesh_.vertex_count(), UINT32_MAX);
+  for (uint32_t v = 0; v < mesh_.vertex_count(); ++v) {
+    if (!mesh_.alive(v)) continue;
+    root_index[v] = uint32_t(forest_.root_node.size());
+    forest_.root_node.push_back(node_of_vertex_[v]);
+  }
+  for (uint32_t f = 0; f < mesh_.face_count(); ++f) {
+    if (!mesh_.face_alive(f)) continue;
+    for (int k = 0; k < 3; ++k) forest_.base_faces.push_back(root_index[mesh_.face(f)[k]]);
+  }
+  forest_.info = refinement_.take();
+  forest_.info.resize(forest_.node_count());
+  return std::move(forest_);
+}
+
+}  // namespace pms

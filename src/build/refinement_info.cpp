@@ -1,0 +1,195 @@
+// Hoppe 1997, "View-dependent refinement of progressive meshes", §4: bounding spheres, normal
+// cones and deviation spaces D(mu, delta) per vertex-hierarchy node. The closest-point query is
+// the classic Voronoi-region test (Ericson, Real-Time Collision Detection §5.1.5).
+#include "build/refinement_info.h"
+
+#include "build/bounds.h"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+
+namespace pms {
+namespace {
+
+constexpr float kPi = std::numbers::pi_v<float>;
+// Leaves sampled per node for the deviation space: the top levels have thousands of leaves, and
+// the children's bounds (merged in) already cover the detail below them.
+constexpr uint32_t kDeviationSamples = 16;
+
+struct V3 {
+  double x = 0, y = 0, z = 0;
+};
+V3 load(const float* p) { return {p[0], p[1], p[2]}; }
+V3 operator-(V3 a, V3 b) { return {a.x - b.x, a.y - b.y, a.z - b.z}; }
+V3 operator+(V3 a, V3 b) { return {a.x + b.x, a.y + b.y, a.z + b.z}; }
+V3 operator*(V3 a, double s) { return {a.x * s, a.y * s, a.z * s}; }
+double dot(V3 a, V3 b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
+V3 cross(V3 a, V3 b) { return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x}; }
+double length(V3 a) { return std::sqrt(dot(a, a)); }
+V3 normalized(V3 a) {
+  const double len = length(a);
+  return len > 0 ? a * (1.0 / len) : V3{0, 0, 1};
+}
+double angle_between(V3 a, V3 b) { return std::acos(std::clamp(dot(a, b), -1.0, 1.0)); }
+
+V3 closest_point_on_triangle(V3 p, V3 a, V3 b, V3 c) {
+  const V3 ab = b - a, ac = c - a, ap = p - a;
+  const double d1 = dot(ab, ap), d2 = dot(ac, ap);
+  if (d1 <= 0 && d2 <= 0) return a;
+  const V3 bp = p - b;
+  const double d3 = dot(ab, bp), d4 = dot(ac, bp);
+  if (d3 >= 0 && d4 <= d3) return b;
+  const double vc = d1 * d4 - d3 * d2;
+  if (vc <= 0 && d1 >= 0 && d3 <= 0) return a + ab * (d1 / (d1 - d3));
+  const V3 cp = p - c;
+  const double d5 = dot(ab, cp), d6 = dot(ac, cp);
+  if (d6 >= 0 && d5 <= d6) return c;
+  const double vb = d5 * d2 - d1 * d6;
+  if (vb <= 0 && d2 >= 0 && d6 <= 0) return a + ac * (d2 / (d2 - d6));
+  const double va = d3 * d6 - d5 * d4;
+  if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0) return b + (c - b) * ((d4 - d3) / ((d4 - d3) + (d5 - d6)));
+  const double denom = 1.0 / (va + vb + vc);
+  return a + ab * (vb * denom) + ac * (vc * denom);
+}
+
+struct Cone {
+  V3 axis;
+  double angle;  // >= pi/2 means "no cone": the node is never culled as back-facing
+};
+
+// Smallest cone containing two cones (both axes unit length).
+Cone merge_cones(const Cone& a, const Cone& b) {
+  if (a.angle >= kPi / 2 || b.angle >= kPi / 2) return {a.axis, kPi};
+  const double theta = angle_between(a.axis, b.axis);
+  if (theta + b.angle <= a.angle) return a;
+  if (theta + a.angle <= b.angle) return b;
+  const double angle = (theta + a.angle + b.angle) * 0.5;
+  if (angle >= kPi / 2 || theta < 1e-12) return {a.axis, angle >= kPi / 2 ? kPi : angle};
+  const double k = (angle - a.angle) / theta;
+  const double s = std::sin(theta);
+  const V3 axis = normalized(a.axis * (std::sin((1 - k) * theta) / s) + b.axis * (std::sin(k * theta) / s));
+  // Slerp rounding can leave an input normal a hair outside: widen by a micro-radian.
+  return {axis, angle + 1e-6};
+}
+
+RefineBounds to_bounds(double radius, const Cone& cone, double mu, double delta) {
+  RefineBounds b;
+  b.radius = float(radius);
+  b.mu = float(mu);
+  b.delta = float(delta);
+  b.axis[0] = float(cone.axis.x);
+  b.axis[1] = float(cone.axis.y);
+  b.axis[2] = float(cone.axis.z);
+  b.cone_angle = float(std::min<double>(cone.angle, kPi));
+  return b;
+}
+
+Cone cone_of(const RefineBounds& b) { return {normalized(V3{b.axis[0], b.axis[1], b.axis[2]}), b.cone_angle}; }
+
+}  // namespace
+
+RefinementInfoBuilder::RefinementInfoBuilder(const Mesh& mesh, size_t max_nodes)
+    : positions_(mesh.positions), scale_(bounds_of(mesh.positions).diagonal()) {
+  const size_t n = mesh.vertex_count();
+  info_.resize(max_nodes);
+  survivor_.resize(max_nodes);
+  leaf_head_.resize(max_nodes);
+  leaf_tail_.resize(max_nodes);
+  leaf_count_.resize(max_nodes);
+  leaf_next_.assign(n, UINT32_MAX);
+  std::vector<V3> normal_sum(n);
+  std::vector<double> radius(n, 0);
+  const size_t faces = mesh.face_count();
+  std::vector<V3> face_normal(faces);
+  for (size_t f = 0; f < faces; ++f) {
+    const uint32_t* t = &mesh.indices[3 * f];
+    const V3 a = load(leaf_position(t[0])), b = load(leaf_position(t[1])), c = load(leaf_position(t[2]));
+    face_normal[f] = normalized(cross(b - a, c - a));
+    const V3 corners[3] = {a, b, c};
+    for (int k = 0; k < 3; ++k) {
+      normal_sum[t[k]] = normal_sum[t[k]] + face_normal[f];
+      radius[t[k]] = std::max({radius[t[k]], length(corners[(k + 1) % 3] - corners[k]),
+                               length(corners[(k + 2) % 3] - corners[k])});
+    }
+  }
+  std::vector<double> cone_angle(n, 0);
+  for (size_t f = 0; f < faces; ++f)
+    for (int k = 0; k < 3; ++k) {
+      const uint32_t v = mesh.indices[3 * f + k];
+      cone_angle[v] = std::max(cone_angle[v], angle_between(normalized(normal_sum[v]), face_normal[f]));
+    }
+  for (uint32_t v = 0; v < n; ++v) {
+    const Cone cone{normalized(normal_sum[v]), cone_angle[v] + 1e-6};
+    info_[v] = quantize_refine(to_bounds(radius[v], cone, 0, 0), scale_);
+    survivor_[v] = v;
+    leaf_head_[v] = leaf_tail_[v] = v;
+    leaf_count_[v] = 1;
+  }
+}
+
+void RefinementInfoBuilder::on_collapse(uint32_t s, uint32_t t_node, uint32_t u_node, CollapseMesh& mesh,
+                                        uint32_t u) {
+  survivor_[s] = survivor_[u_node];
+  leaf_next_[leaf_tail_[t_node]] = leaf_head_[u_node];
+  leaf_head_[s] = leaf_head_[t_node];
+  leaf_tail_[s] = leaf_tail_[u_node];
+  leaf_count_[s] = leaf_count_[t_node] + leaf_count_[u_node];
+
+  const RefineBounds bt = dequantize_refine(info_[t_node], scale_);
+  const RefineBounds bu = dequantize_refine(info_[u_node], scale_);
+  const double shift = length(load(leaf_position(survivor_[t_node])) - load(leaf_position(survivor_[s])));
+  // v_u sits where v_s sits, so only v_t's sphere moves.
+  const double radius = std::max<double>(bu.radius, bt.radius + shift) * (1 + 1e-6);
+  const Cone cone = merge_cones(cone_of(bt), cone_of(bu));
+  const float axis[3] = {float(cone.axis.x), float(cone.axis.y), float(cone.axis.z)};
+  float mu = 0, delta = 0;
+  deviation(s, mesh, u, axis, mu, delta);
+  info_[s] = quantize_refine(to_bounds(radius, cone, std::max({mu, bt.mu, bu.mu}), std::max({delta, bt.delta, bu.delta})),
+                             scale_);
+}
+
+void RefinementInfoBuilder::deviation(uint32_t s, CollapseMesh& mesh, uint32_t u, const float axis_f[3], float& mu,
+                                      float& delta) const {
+  struct Tri {
+    V3 a, b, c, n;
+    double d;
+  };
+  Tri fan[32];
+  uint32_t fan_size = 0;
+  mesh.for_each_face(u, [&](uint32_t f, uint32_t) {
+    if (fan_size == 32) return;
+    const uint32_t* t = mesh.face(f);
+    Tri tri{load(mesh.position(t[0])), load(mesh.position(t[1])), load(mesh.position(t[2])), {}, 0};
+    tri.n = normalized(cross(tri.b - tri.a, tri.c - tri.a));
+    tri.d = dot(tri.n, tri.a);
+    fan[fan_size++] = tri;
+  });
+  if (fan_size == 0) return;
+  const V3 axis{axis_f[0], axis_f[1], axis_f[2]};
+  const uint32_t count = leaf_count_[s];
+  const uint32_t stride = count <= kDeviationSamples ? 1 : count / kDeviationSamples;
+  double max_mu = 0, max_delta = 0;
+  uint32_t index = 0;
+  for (uint32_t leaf = leaf_head_[s]; leaf != UINT32_MAX && index < count; leaf = leaf_next_[leaf], ++index) {
+    if (index % stride != 0) continue;
+    const V3 p = load(leaf_position(leaf));
+    double best = INFINITY;
+    V3 best_error;
+    for (uint32_t i = 0; i < fan_size; ++i) {
+      const double plane = dot(fan[i].n, p) - fan[i].d;
+      if (plane * plane >= best) continue;  // the plane distance bounds the triangle distance from below
+      const V3 error = p - closest_point_on_triangle(p, fan[i].a, fan[i].b, fan[i].c);
+      const double d2 = dot(error, error);
+      if (d2 < best) { best = d2; best_error = error; }
+    }
+    const double along = dot(best_error, axis);
+    max_delta = std::max(max_delta, std::abs(along));
+    max_mu = std::max(max_mu, length(best_error - axis * along));
+    if (leaf == leaf_tail_[s]) break;
+  }
+  mu = float(max_mu);
+  delta = float(max_delta);
+}
+
+}  // namespace pms

@@ -1,0 +1,59 @@
+// The simplification stage shared by the balanced and the greedy orders: every accepted half-edge
+// collapse goes through CollapseRecorder, which keeps the vertex hierarchy (temporary numbering:
+// leaves = input vertices, then one internal node per collapse) and its refinement info.
+#pragma once
+#include <cstdint>
+#include <vector>
+
+#include "build/build.h"
+#include "build/collapse_mesh.h"
+#include "build/refinement_info.h"
+
+namespace pms {
+
+// The forest in collapse order. Internal node k (k = 0..collapses-1) has temporary index
+// leaf_count + k; its children are child_t[k] (removed vertex) and child_u[k] (survivor).
+struct CollapseForest {
+  uint32_t leaf_count = 0;
+  std::vector<uint32_t> child_t, child_u;
+  std::vector<uint32_t> cut_l, cut_r;      // fundamental cut leaves (input vertices), UINT32_MAX if absent
+  std::vector<uint32_t> root_node;         // temporary node of each base vertex
+  std::vector<uint32_t> base_faces;        // 3 per base face, indices into root_node
+  std::vector<RefineInfo> info;            // per temporary node
+  std::vector<uint32_t> survivor_leaf;     // per temporary node: the leaf whose position/attributes it carries
+
+  uint32_t node_count() const { return leaf_count + uint32_t(child_t.size()); }
+};
+
+class CollapseRecorder {
+ public:
+  CollapseRecorder(const Mesh& mesh, CollapseMesh& collapse_mesh);
+
+  // Collapses t into u (check_collapse() must have accepted it) and records the new node.
+  void apply(uint32_t t, uint32_t u, const CollapseSite& site);
+  // Height of the subtree whose root is vertex v's current node (0 for an input vertex).
+  uint32_t height(uint32_t v) const { return height_[node_of_vertex_[v]]; }
+  uint64_t collapses() const { return forest_.child_t.size(); }
+
+  CollapseForest finish();
+
+ private:
+  CollapseMesh& mesh_;
+  CollapseForest forest_;
+  RefinementInfoBuilder refinement_;
+  std::vector<uint32_t> node_of_vertex_;
+  std::vector<uint32_t> height_;
+};
+
+// kim-lee-kobbelt §6.2: rounds of independent cheapest collapses, cost weighted by subtree height.
+CollapseForest simplify_balanced(const Mesh& mesh, const BuildOptions& options);
+// Hoppe 1996: one collapse at a time in quadric-error order (the view-independent baseline).
+CollapseForest simplify_greedy(const Mesh& mesh, const BuildOptions& options);
+
+// Best target u for removing t (lowest quadric error over t's neighbours), ignoring validity.
+struct Candidate {
+  double cost;
+  uint32_t t, u;
+};
+
+}  // namespace pms
