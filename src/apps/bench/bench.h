@@ -1,0 +1,58 @@
+// `pmstream bench`: the experiments of DESIGN.md §7, in groups. Each group prints its tables to
+// stdout as they fill (progress lines go to stderr), appends a section to report.md and writes its
+// own GROUP.json and plots into the output directory.
+#pragma once
+#include <filesystem>
+#include <nlohmann/json.hpp>
+#include <span>
+#include <string>
+#include <vector>
+
+namespace pms::app {
+
+struct BenchOptions {
+  bool quick = false;               // the small end of every series, for a smoke run
+  std::vector<std::string> models;  // short names ("bunny"); empty: each group's default list
+  std::filesystem::path out_dir;
+  std::string command_line;         // as typed, for the report
+};
+
+struct BenchContext {
+  BenchOptions options;
+  std::filesystem::path models_dir;  // ../shared/models; empty when not found (real-model parts skipped)
+  std::filesystem::path temp_dir;    // scratch for this run, removed afterwards
+  std::string self_exe;              // this binary, run as a child for our own builds
+  std::string report;                // report.md so far; groups append their sections
+};
+
+using BenchGroupFn = void (*)(BenchContext&);
+
+struct BenchGroup {
+  const char* name;         // as given to --only
+  const char* experiments;  // what it reproduces, for --help and the report
+  BenchGroupFn run;
+};
+
+// Every experiment group, in the order a full run executes them.
+std::span<const BenchGroup> bench_groups();
+
+// E1, E12 and the terrain scaling series (bench_build.cpp).
+void run_build_group(BenchContext& context);
+
+// The directory holding models/: `explicit_dir` (--shared) if given, else $PMSTREAM_SHARED_DIR, else
+// ../shared or ../../shared relative to the working directory and then to `exe_dir`. An explicit
+// directory without models/ is an error; otherwise returns empty when nothing is found.
+std::filesystem::path locate_shared_dir(const std::string& explicit_dir, const std::filesystem::path& exe_dir);
+
+// The file in `models_dir` for a short model name ("bunny" -> bunny.ply.xz); pms::Error listing the
+// available names when there is none.
+std::filesystem::path find_model(const std::filesystem::path& models_dir, const std::string& name);
+
+// "2 CPUs (nproc), <model name from /proc/cpuinfo>, 15.6 GiB RAM" for the report header.
+std::string machine_description();
+nlohmann::json machine_json();
+
+// Writes `text` to `path`, pms::Error naming the file when it cannot.
+void write_text_file(const std::filesystem::path& path, const std::string& text);
+
+}  // namespace pms::app

@@ -1,0 +1,60 @@
+// pmstream build IN -o OUT.pms [--greedy] [--base-vertices N] [--json]
+#include <cstdio>
+
+#include "apps/build_pipeline.h"
+#include "apps/commands.h"
+#include "apps/progress_bar.h"
+#include "apps/resource_usage.h"
+
+namespace pms::app {
+namespace {
+
+struct BuildArgs {
+  std::string input, output;
+  bool greedy = false, json = false;
+  uint64_t base_vertices = 0;
+};
+
+void run_build(const BuildArgs& args) {
+  Stopwatch total;
+  ProgressBar bar(!args.json);
+  BuildOptions options;
+  options.greedy = args.greedy;
+  options.base_vertices = args.base_vertices;
+  options.progress = bar.callback();
+  const BuildRun run = build_file(args.input, args.output, options);
+  bar.finish();
+  const double seconds = total.seconds();
+  if (args.json) {
+    std::printf("%s\n", build_json(run, seconds, peak_rss_mb()).dump().c_str());
+    return;
+  }
+  const BuildStats& s = run.stats;
+  std::printf("%s -> %s\n", args.input.c_str(), args.output.c_str());
+  std::printf("  cleaning:   %s\n", describe(run.clean).c_str());
+  std::printf("  input:      %llu vertices, %llu faces\n", (unsigned long long)s.input_vertices,
+              (unsigned long long)s.input_faces);
+  std::printf("  base mesh:  %llu vertices, %llu faces\n", (unsigned long long)s.base_vertices,
+              (unsigned long long)s.base_faces);
+  std::printf("  vsplits:    %llu (%s)\n", (unsigned long long)s.vsplits, s.options.c_str());
+  std::printf("  ids:        <%u, %u> bits (tree, node), max depth %u\n", s.tree_id_bits, s.node_id_bits, s.max_depth);
+  std::printf("  time:       %.2f s (load %.2f, clean %.2f, build+write %.2f), peak RSS %.0f MB\n", seconds,
+              run.load_seconds, run.clean_seconds, run.build_seconds, peak_rss_mb());
+  std::printf("  output:     %llu bytes\n", (unsigned long long)run.output_bytes);
+}
+
+}  // namespace
+
+void add_build_command(CLI::App& app) {
+  auto args = std::make_shared<BuildArgs>();
+  CLI::App* cmd = app.add_subcommand("build", "Build a view-dependent progressive mesh (.pms) from a mesh file");
+  cmd->add_option("input", args->input, "Input mesh (PLY, OBJ, OFF, STL, glTF/GLB; may end in .gz or .xz)")
+      ->required();
+  cmd->add_option("-o,--output", args->output, "Output .pms file")->required();
+  cmd->add_flag("--greedy", args->greedy, "Classic one-at-a-time PM order (view-independent baseline)");
+  cmd->add_option("--base-vertices", args->base_vertices, "Stop when the base mesh has this many vertices (0: as coarse as possible)");
+  cmd->add_flag("--json", args->json, "Print one JSON object with the statistics");
+  cmd->callback([args] { run_build(*args); });
+}
+
+}  // namespace pms::app
