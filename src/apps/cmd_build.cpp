@@ -12,7 +12,7 @@ namespace {
 struct BuildArgs {
   std::string input, output;
   bool greedy = false, json = false;
-  uint64_t base_vertices = 0;
+  uint64_t base_vertices = BuildOptions{}.base_vertices;
 };
 
 void run_build(const BuildArgs& args) {
@@ -52,7 +52,8 @@ void add_build_command(CLI::App& app) {
       ->required();
   cmd->add_option("-o,--output", args->output, "Output .pms file")->required();
   cmd->add_flag("--greedy", args->greedy, "Classic one-at-a-time PM order (view-independent baseline)");
-  cmd->add_option("--base-vertices", args->base_vertices, "Stop when the base mesh has this many vertices (0: as coarse as possible)");
+  cmd->add_option("--base-vertices", args->base_vertices, "Stop when the base mesh has this many vertices (0: as coarse as the mesh allows)")
+      ->capture_default_str();
   cmd->add_flag("--json", args->json, "Print one JSON object with the statistics");
   cmd->callback([args] { run_build(*args); });
 }

@@ -16,9 +16,10 @@ namespace {
 constexpr int kTargetsPerVertex = 3;
 // Share of the live vertices one round may remove: a lower share keeps the order closer to the
 // greedy quadric order (better intermediate meshes), a higher one gives fewer levels.
-constexpr double kRoundShare = 0.22;
-// Height weighting exponent: key = (cost + epsilon) * (1 + height)^kHeightExponent.
-constexpr double kHeightExponent = 3.0;
+constexpr double kRoundShare = 0.25;
+// Height weighting: key = (cost + epsilon) * 4^height. Exponential, because quadric
+// costs span orders of magnitude and a polynomial weight barely reorders them.
+constexpr int kHeightBaseLog2 = 2;  // base 4
 
 struct Entry {
   double key;
@@ -36,10 +37,16 @@ void collect_candidates(CollapseMesh& mesh, const CollapseRecorder& recorder, do
     const uint32_t height_t = recorder.height(t);
     for (uint32_t u : neighbours) {
       const double cost = mesh.quadric(t).error_sum(mesh.quadric(u), mesh.position(u));
-      const double height = double(std::max(height_t, recorder.height(u)) + 1);
-      const Entry e{(cost + epsilon) * std::pow(height, kHeightExponent), t, u};
-      int i = kept < kTargetsPerVertex ? kept++ : kTargetsPerVertex - 1;
-      if (i == kTargetsPerVertex - 1 && kept == kTargetsPerVertex && e.key >= best[i].key) continue;
+      const int height = int(std::max(height_t, recorder.height(u)));
+      const Entry e{std::ldexp(cost + epsilon, kHeightBaseLog2 * height), t, u};
+      int i;
+      if (kept < kTargetsPerVertex) {
+        i = kept++;
+      } else if (e.key < best[kTargetsPerVertex - 1].key) {
+        i = kTargetsPerVertex - 1;
+      } else {
+        continue;
+      }
       best[i] = e;
       for (; i > 0 && best[i].key < best[i - 1].key; --i) std::swap(best[i], best[i - 1]);
     }
@@ -53,7 +60,7 @@ CollapseForest simplify_balanced(const Mesh& input, const BuildOptions& options)
   CollapseMesh mesh(input);
   CollapseRecorder recorder(input, mesh);
   const uint32_t start = mesh.alive_vertex_count();
-  const uint32_t target = uint32_t(std::clamp<uint64_t>(options.base_vertices, 1, start));
+  const uint32_t target = uint32_t(std::clamp<uint64_t>(options.base_vertices, 1, start));  // 0 -> 1: no limit
   const double diagonal = bounds_of(input.positions).diagonal();
   // Keeps zero-error collapses (flat regions) ordered by height too.
   const double epsilon = 1e-10 * diagonal * diagonal;

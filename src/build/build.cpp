@@ -90,7 +90,7 @@ BuildResult build_progressive_mesh(const Mesh& mesh, const BuildOptions& options
   const Hierarchy& h = result.hierarchy;
   BuildStats& s = result.stats;
   s.options = options.greedy ? "greedy" : "balanced";
-  if (options.base_vertices) s.options += " base_vertices=" + std::to_string(options.base_vertices);
+  s.options += " base_vertices=" + std::to_string(options.base_vertices);
   s.input_vertices = mesh.vertex_count();
   s.input_faces = mesh.face_count();
   s.base_vertices = h.root_count;

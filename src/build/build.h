@@ -12,7 +12,10 @@ namespace pms {
 
 struct BuildOptions {
   bool greedy = false;         // classic one-at-a-time PM order (the view-independent baseline)
-  uint64_t base_vertices = 0;  // stop once the base mesh has this many vertices (0: as coarse as possible)
+  // Stop once the base mesh has this many vertices, or earlier when no valid collapse is left
+  // (0: as coarse as the mesh allows). The default keeps the base a few KB and ids short: the last
+  // few rounds below it add a level to the hierarchy each while removing only a handful of vertices.
+  uint64_t base_vertices = 64;
   ProgressFn progress;
 };
 

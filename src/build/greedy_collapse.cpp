@@ -64,7 +64,7 @@ CollapseForest simplify_greedy(const Mesh& input, const BuildOptions& options) {
   CollapseRecorder recorder(input, mesh);
   GreedySimplifier simplifier(mesh);
   const uint32_t start = mesh.alive_vertex_count();
-  const uint32_t target = uint32_t(std::clamp<uint64_t>(options.base_vertices, 1, start));
+  const uint32_t target = uint32_t(std::clamp<uint64_t>(options.base_vertices, 1, start));  // 0 -> 1: no limit
   for (uint32_t v = 0; v < mesh.vertex_count(); ++v) simplifier.refresh(v);
   QueueEntry e;
   CollapseSite site;

@@ -39,7 +39,11 @@ Table::Table(std::vector<Column> columns) : columns_(std::move(columns)) {
 
 std::string Table::line(const std::vector<std::string>& cells, const std::vector<size_t>& widths) const {
   std::string out = "|";
-  for (size_t i = 0; i < cells.size(); ++i) out += " " + pad(cells[i], widths[i], columns_[i].numeric) + " |";
+  for (size_t i = 0; i < cells.size(); ++i) {
+    out += ' ';
+    out += pad(cells[i], widths[i], columns_[i].numeric);
+    out += " |";
+  }
   return out + "\n";
 }
 
@@ -48,7 +52,9 @@ std::string Table::rule(const std::vector<size_t>& widths) const {
   for (size_t i = 0; i < columns_.size(); ++i) {
     // Markdown wants at least three dashes; ':' on the right marks a right-aligned column.
     const size_t dashes = std::max<size_t>(widths[i], 3);
-    out += columns_[i].numeric ? " " + std::string(dashes - 1, '-') + ": |" : " " + std::string(dashes, '-') + " |";
+    out += ' ';
+    out.append(columns_[i].numeric ? dashes - 1 : dashes, '-');
+    out += columns_[i].numeric ? ": |" : " |";
   }
   return out + "\n";
 }
@@ -83,9 +89,13 @@ std::string Table::markdown() const {
 }
 
 std::string thousands(uint64_t value) {
-  std::string digits = std::to_string(value);
-  for (size_t i = digits.size(); i > 3; i -= 3) digits.insert(i - 3, ",");
-  return digits;
+  const std::string digits = std::to_string(value);
+  std::string out;
+  for (size_t i = 0; i < digits.size(); ++i) {
+    if (i > 0 && (digits.size() - i) % 3 == 0) out += ',';
+    out += digits[i];
+  }
+  return out;
 }
 
 std::string fixed(double value, int decimals) {
@@ -95,7 +105,9 @@ std::string fixed(double value, int decimals) {
 }
 
 std::string id_bits(uint32_t tree, uint32_t node) {
-  return "<" + std::to_string(tree) + ", " + std::to_string(node) + ">";
+  char text[32];
+  std::snprintf(text, sizeof text, "<%u, %u>", tree, node);
+  return text;
 }
 
 }  // namespace pms::app

@@ -1,0 +1,156 @@
+// pmstream bench [--quick] [--models bunny,horse,...] [--only build,...] [--shared DIR] [--out DIR]
+#include <stdlib.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <ctime>
+#include <fstream>
+
+#include "apps/bench/bench.h"
+#include "apps/bench/report.h"
+#include "apps/commands.h"
+#include "apps/resource_usage.h"
+#include "common/error.h"
+
+namespace pms::app {
+namespace fs = std::filesystem;
+
+// The experiment groups of DESIGN.md §7: a new group is one function and one line here.
+constexpr BenchGroup kGroups[] = {
+    {"build", "E12 build time and memory, E1 hierarchy statistics, terrain scaling", run_build_group},
+};
+
+std::span<const BenchGroup> bench_groups() { return kGroups; }
+
+namespace {
+
+struct BenchArgs {
+  bool quick = false;
+  std::vector<std::string> models, only;
+  std::string shared, out = "bench-out";
+};
+
+std::string group_names() {
+  std::string names;
+  for (const BenchGroup& g : bench_groups()) names += (names.empty() ? "" : ", ") + std::string(g.name);
+  return names;
+}
+
+// Checked before anything runs, so a typo costs nothing.
+std::vector<const BenchGroup*> select_groups(const std::vector<std::string>& only) {
+  std::vector<const BenchGroup*> selected;
+  if (only.empty()) {
+    for (const BenchGroup& g : bench_groups()) selected.push_back(&g);
+    return selected;
+  }
+  for (const std::string& name : only) {
+    const auto g = std::find_if(bench_groups().begin(), bench_groups().end(),
+                                [&](const BenchGroup& group) { return name == group.name; });
+    if (g == bench_groups().end())
+      fail("--only", "unknown experiment group '" + name + "' (known: " + group_names() + ")");
+    if (std::find(selected.begin(), selected.end(), &*g) == selected.end()) selected.push_back(&*g);
+  }
+  return selected;
+}
+
+std::string shell_quote(const std::string& arg) {
+  const bool plain = !arg.empty() && arg.find_first_not_of("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ"
+                                                           "0123456789-_./=,:+@%") == std::string::npos;
+  if (plain) return arg;
+  std::string quoted = "'";
+  for (char c : arg) quoted += c == '\'' ? std::string("'\\''") : std::string(1, c);
+  return quoted + "'";
+}
+
+// The command line exactly as given (from /proc/self/cmdline), quoted for a shell where needed.
+std::string command_line() {
+  std::ifstream in("/proc/self/cmdline", std::ios::binary);
+  std::string line, arg;
+  while (std::getline(in, arg, '\0')) line += (line.empty() ? "" : " ") + shell_quote(arg);
+  return line;
+}
+
+std::string utc_now() {
+  const std::time_t now = std::time(nullptr);
+  std::tm tm{};
+  gmtime_r(&now, &tm);
+  char text[32];
+  std::strftime(text, sizeof text, "%Y-%m-%d %H:%M UTC", &tm);
+  return text;
+}
+
+// Scratch space for decompressed meshes and build outputs, removed however the run ends.
+class TempDir {
+ public:
+  TempDir() {
+    std::string pattern = (fs::temp_directory_path() / "pmstream-bench-XXXXXX").string();
+    if (!mkdtemp(pattern.data())) fail(pattern, "cannot create a temporary directory");
+    path_ = pattern;
+  }
+  ~TempDir() {
+    std::error_code ignored;
+    fs::remove_all(path_, ignored);
+  }
+  TempDir(const TempDir&) = delete;
+  TempDir& operator=(const TempDir&) = delete;
+  const fs::path& path() const { return path_; }
+
+ private:
+  fs::path path_;
+};
+
+std::string report_header(const BenchContext& context) {
+  std::string s = "# pmstream bench\n\n";
+  s += "- command: `" + context.options.command_line + "`" + (context.options.quick ? " (quick: small series)" : "") + "\n";
+  s += "- machine: " + machine_description() + "\n";
+  s += "- pmstream " + std::string(PMSTREAM_VERSION) + ", run " + utc_now() + "\n";
+  s += "- models: " + (context.models_dir.empty() ? std::string("../shared/models not found") : context.models_dir.string()) + "\n";
+  return s;
+}
+
+void run_bench(const BenchArgs& args) {
+  const std::vector<const BenchGroup*> groups = select_groups(args.only);
+  BenchContext context;
+  context.options = {args.quick, args.models, args.out, command_line()};
+  std::error_code error;
+  fs::create_directories(context.options.out_dir, error);
+  if (error) fail(args.out, "cannot create the output directory: " + error.message());
+  // Exec'ing /proc/self/exe runs this very binary even if the file is rebuilt during a long run.
+  context.self_exe = "/proc/self/exe";
+  const fs::path exe = fs::read_symlink("/proc/self/exe", error);
+  const fs::path shared = locate_shared_dir(args.shared, error ? fs::path() : exe.parent_path());
+  if (!shared.empty()) context.models_dir = shared / "models";
+  const TempDir temp;
+  context.temp_dir = temp.path();
+
+  for (const BenchGroup* group : groups) {
+    std::fprintf(stderr, "bench: group %s (%s)\n", group->name, group->experiments);
+    group->run(context);
+  }
+  // Linux counts the pages a child inherits at fork in its ru_maxrss: this bounds that share.
+  const std::string footer = "\n---\nThe bench process itself peaked at " + fixed(peak_rss_mb(), 0) +
+                             " MB RSS; a child's peak RSS includes at most that much inherited at fork.\n";
+  write_text_file(context.options.out_dir / "report.md", report_header(context) + "\n" + context.report + footer);
+  std::printf("\nbench: wrote %s\n", (context.options.out_dir / "report.md").string().c_str());
+}
+
+}  // namespace
+
+void add_bench_command(CLI::App& app) {
+  auto args = std::make_shared<BenchArgs>();
+  CLI::App* cmd = app.add_subcommand("bench", "Run the experiments (DESIGN.md §7): tables on stdout, report.md, "
+                                              "JSON and PNG in --out");
+  cmd->add_flag("--quick", args->quick, "Only the small end of every series (a smoke run)");
+  cmd->add_option("--models", args->models, "Comma-separated model names in ../shared/models (default per group; "
+                                            "build: bunny,horse,feline,skull,dragon)")
+      ->delimiter(',');
+  cmd->add_option("--only", args->only, "Comma-separated experiment groups (default: all; known: " + group_names() + ")")
+      ->delimiter(',');
+  cmd->add_option("--shared", args->shared, "Directory holding models/ (default: $PMSTREAM_SHARED_DIR, else ../shared "
+                                            "or ../../shared from here or from the binary)");
+  cmd->add_option("--out", args->out, "Output directory")->capture_default_str();
+  cmd->callback([args] { run_bench(*args); });
+}
+
+}  // namespace pms::app
