@@ -26,6 +26,11 @@ struct Entry {
   uint32_t t, u;
 };
 
+// Ties broken by vertex so the order, hence the hierarchy, is the same on every run.
+bool by_key(const Entry& a, const Entry& b) {
+  return a.key < b.key || (a.key == b.key && (a.t < b.t || (a.t == b.t && a.u < b.u)));
+}
+
 void collect_candidates(CollapseMesh& mesh, const CollapseRecorder& recorder, double epsilon,
                         std::vector<uint32_t>& neighbours, std::vector<Entry>& out) {
   out.clear();
@@ -71,15 +76,20 @@ CollapseForest simplify_balanced(const Mesh& input, const BuildOptions& options)
   CollapseSite site;
   while (mesh.alive_vertex_count() > target) {
     collect_candidates(mesh, recorder, epsilon, neighbours, entries);
-    std::sort(entries.begin(), entries.end(), [](const Entry& a, const Entry& b) {
-      return a.key < b.key || (a.key == b.key && (a.t < b.t || (a.t == b.t && a.u < b.u)));
-    });
     const uint32_t alive = mesh.alive_vertex_count();
     const uint32_t quota = std::min<uint32_t>(alive - target, std::max<uint32_t>(1, uint32_t(alive * kRoundShare)));
-    uint32_t accepted = 0;
     std::fill(touched.begin(), touched.end(), 0);
-    for (const Entry& e : entries) {
-      if (accepted == quota) break;
+    // Usually the quota fills from the cheapest few quota-sized chunks: sort only what is walked.
+    uint32_t accepted = 0;
+    size_t sorted_end = 0;
+    for (size_t i = 0; i < entries.size() && accepted < quota; ++i) {
+      if (i == sorted_end) {
+        const size_t chunk_end = std::min(entries.size(), sorted_end + 2 * size_t(quota) + 1024);
+        std::nth_element(entries.begin() + sorted_end, entries.begin() + chunk_end - 1, entries.end(), by_key);
+        std::sort(entries.begin() + sorted_end, entries.begin() + chunk_end, by_key);
+        sorted_end = chunk_end;
+      }
+      const Entry& e = entries[i];
       if (touched[e.t] || touched[e.u]) continue;
       if (!mesh.check_collapse(e.t, e.u, site)) continue;
       recorder.apply(e.t, e.u, site);

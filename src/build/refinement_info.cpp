@@ -15,7 +15,7 @@ namespace {
 constexpr float kPi = std::numbers::pi_v<float>;
 // Leaves sampled per node for the deviation space: the top levels have thousands of leaves, and
 // the children's bounds (merged in) already cover the detail below them.
-constexpr uint32_t kDeviationSamples = 16;
+constexpr uint32_t kDeviationSamples = 8;
 
 struct V3 {
   double x = 0, y = 0, z = 0;
