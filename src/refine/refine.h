@@ -1,0 +1,190 @@
+// The refine layer: a selectively refinable mesh over a vertex hierarchy that the client may know only
+// in part (kim-lee-kobbelt 2005 §4–5; Kim & Lee 2001, truly selective refinement of progressive meshes).
+// Conventions (v_t / v_u, f_l / f_r, fan order) are those of docs/internals.md.
+// Shared with the browser build: single-threaded, no std::ranges algorithms, std::format or coroutines.
+#pragma once
+#include <cstdint>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "pm/pm.h"
+
+namespace pms {
+
+// "No vertex" for optional ids such as a missing fundamental cut vertex: node-id 0 never occurs,
+// every real id carries the implicit leading 1.
+constexpr VertexId kNoVertex{0, 0};
+inline bool is_vertex(VertexId v) { return v.node != 0; }
+std::string to_string(VertexId v);  // "<tree,node>"
+
+// What a vsplit packet carries (kim-lee-kobbelt §5.3, Fig. 3b). v_u inherits v_s's position and
+// attributes (half-edge collapse t -> u), so only v_t's geometry travels.
+struct SplitRecord {
+  VertexId vs;                 // the node being split
+  VertexId cut_l = kNoVertex;  // fundamental cut vertices v̂_l, v̂_r (leaves); kNoVertex for a missing side,
+  VertexId cut_r = kNoVertex;  // at least one is present
+  float position_t[3] = {0, 0, 0};
+  RefineInfo info_t{}, info_u{};
+  bool has_normal = false;     // required when the hierarchy keeps normals
+  float normal_t[3] = {0, 0, 0};
+  bool has_color = false;      // required when the hierarchy keeps colors
+  uint8_t color_t[4] = {0, 0, 0, 0};
+};
+
+// The client's partial vertex hierarchy (UpdateVHierarchy, kim-lee-kobbelt §5.3): every node received so
+// far lives in a slot of flat arrays; children are allocated as an adjacent pair (v_t, v_u = v_t + 1)
+// when their split arrives, so a known node with no children is a leaf of what is known (IsLeaf).
+class VertexHierarchy {
+ public:
+  explicit VertexHierarchy(bool has_normals = false, bool has_colors = false);
+
+  // Loads the roots (base-mesh vertices) of a complete model; splits are added as they "arrive".
+  static VertexHierarchy from_model(const ModelView& view);
+
+  // Roots must come in tree-id order (tree-id = base-vertex index, DESIGN.md §2). `normal`/`color`
+  // are required when the hierarchy keeps them. Returns the slot.
+  uint32_t add_root(VertexId id, const float position[3], const RefineInfo& info, const float* normal = nullptr,
+                    const uint8_t* color = nullptr);
+  // Attaches v_t and v_u below v_s; returns v_t's slot (v_u's is the next one). Throws pms::Error for
+  // an unknown or already split v_s, a record without cut vertices, or cut ids that cannot be leaves
+  // outside v_s's subtree.
+  uint32_t add_split(const SplitRecord& split);
+
+  uint32_t find(VertexId id) const;  // slot, or kNone when the node is not known
+  void reserve(size_t slots);
+
+  uint32_t size() const { return uint32_t(id_.size()); }
+  uint32_t root_count() const { return uint32_t(root_slot_.size()); }
+  uint32_t root_slot(uint32_t tree) const { return root_slot_[tree]; }
+  VertexId id(uint32_t slot) const { return id_[slot]; }
+  const float* position(uint32_t slot) const { return &position_[3 * size_t(slot)]; }
+  const RefineInfo& refine(uint32_t slot) const { return info_[slot]; }
+  uint32_t parent(uint32_t slot) const { return parent_[slot]; }
+  uint32_t first_child(uint32_t slot) const { return first_child_[slot]; }
+  bool is_leaf(uint32_t slot) const { return first_child_[slot] == kNone; }
+  // v̂_l / v̂_r of a split node (kNoVertex for a missing side); only valid when !is_leaf(slot).
+  VertexId cut_left(uint32_t slot) const { return cut_[first_child_[slot]]; }
+  VertexId cut_right(uint32_t slot) const { return cut_[first_child_[slot] + 1]; }
+  bool has_normals() const { return has_normals_; }
+  bool has_colors() const { return has_colors_; }
+  const float* normal(uint32_t slot) const { return &normal_[3 * size_t(slot)]; }
+  const uint8_t* color(uint32_t slot) const { return &color_[4 * size_t(slot)]; }
+
+ private:
+  uint32_t push_slot(VertexId id, const float position[3], const RefineInfo& info, uint32_t parent,
+                     const float* normal, const uint8_t* color);
+  void insert(uint32_t slot);
+  void grow_table();
+
+  bool has_normals_, has_colors_;
+  std::vector<VertexId> id_;
+  std::vector<float> position_;
+  std::vector<RefineInfo> info_;
+  std::vector<uint32_t> parent_;
+  std::vector<uint32_t> first_child_;
+  // The cuts of a split are stored with its children pair: cut_[v_t] = v̂_l, cut_[v_u] = v̂_r, so no
+  // slot pays for them before its split is known.
+  std::vector<VertexId> cut_;
+  std::vector<float> normal_;
+  std::vector<uint8_t> color_;
+  std::vector<uint32_t> root_slot_;  // per tree-id
+  // Open addressing with linear probing, VertexId -> slot; buckets hold slots (kNone = empty) and keys
+  // are read back from id_, so a bucket costs 4 bytes. Power-of-two size, at most half full.
+  std::vector<uint32_t> table_;
+};
+
+// The vsplit packet of internal node `node` of a complete model: ids from view.id(), cut ids from the
+// cut_left / cut_right leaf indices. Throws pms::Error for a leaf or an index out of range.
+SplitRecord split_record(const ModelView& view, uint32_t node);
+
+struct VSplitResult {
+  bool done = false;
+  uint32_t needs = kNone;  // when !done: slot of an active leaf whose vsplit packet must arrive first
+};
+
+// The current mesh as flat arrays: output vertex i is hierarchy slot slots[i].
+struct MeshArrays {
+  std::vector<float> positions;   // 3 per vertex
+  std::vector<float> normals;     // 3 per vertex when the hierarchy keeps normals
+  std::vector<uint8_t> colors;    // 4 per vertex when the hierarchy keeps colors
+  std::vector<uint32_t> indices;  // 3 per face, CCW
+  std::vector<uint32_t> slots;
+};
+
+// The selectively refined mesh over the active slots of a VertexHierarchy (SelVSplit / SelECol,
+// kim-lee-kobbelt §5.3; Kim & Lee 2001). Triangles are flat corner arrays with a free list; half-edge
+// h = 3 * face + k runs from corner k to corner k + 1 and twin_[h] is the opposite half-edge (kNone on
+// the boundary); every active vertex keeps one outgoing half-edge, so its CCW fan can be walked.
+class SelectiveMesh {
+ public:
+  // `base_faces`: 3 tree-ids (= root indices) per face, CCW. Every root of `hierarchy` must be used and
+  // the faces must form an oriented 2-manifold (boundaries allowed); throws pms::Error otherwise.
+  // `hierarchy` must outlive the mesh; it may keep growing (add_split) in the meantime.
+  SelectiveMesh(const VertexHierarchy& hierarchy, std::span<const uint32_t> base_faces);
+
+  // ActiveAncestor (kim-lee-kobbelt §4): the active node on the path from v's root to v; kNone when the
+  // front does not cross that path (inconsistent data).
+  uint32_t active_ancestor(VertexId v) const;
+
+  // SelVSplit of the active, split-known node `slot`, splitting v_l = v_r first as the partial order of
+  // §5.3 requires. Returns !done with the leaf that still needs its packet when a split in that chain is
+  // not known yet (the mesh then stays valid, possibly with some of the chain already split). Throws
+  // pms::Error when `slot` is not active or the packets contradict the mesh.
+  VSplitResult vsplit(uint32_t slot);
+
+  // SelECol of the known internal node `parent_slot` (pms::Error if it has no known children). Returns
+  // false, changing nothing, unless both children are active and adjacent with f_l / f_r apexes
+  // ActiveAncestor(v̂_l) / ActiveAncestor(v̂_r), the partial order holds backwards (no performed split
+  // would see its two cut vertices merge: that split's subtree must collapse first), and the result is
+  // an oriented 2-manifold without isolated vertices (link condition).
+  bool ecol(uint32_t parent_slot);
+
+  bool is_active(uint32_t slot) const { return slot < out_.size() && out_[slot] != kNone; }
+  std::span<const uint32_t> active_vertices() const { return active_; }
+  size_t vertex_count() const { return active_.size(); }
+  size_t face_count() const { return face_count_; }
+  // Faces are [0, face_capacity()); dead ones (on the free list) are skipped by face_alive().
+  uint32_t face_capacity() const { return uint32_t(corner_.size() / 3); }
+  bool face_alive(uint32_t f) const { return corner_[3 * size_t(f)] != kNone; }
+  const uint32_t* face(uint32_t f) const { return &corner_[3 * size_t(f)]; }  // 3 slots, CCW
+  const VertexHierarchy& hierarchy() const { return *hierarchy_; }
+
+  // Vertices in active_vertices() order.
+  void extract(MeshArrays& out) const;
+  // Audit for tests: twins symmetric, each directed edge once, one fan per active vertex with >= 1 face,
+  // the active set a front of the hierarchy that respects the partial order (no performed split whose
+  // cut vertices share an active ancestor). On failure `why` (if given) says what.
+  bool check_invariants(std::string* why) const;
+
+ private:
+  static uint32_t next_edge(uint32_t h) { return h % 3 == 2 ? h - 2 : h + 1; }
+  static uint32_t prev_edge(uint32_t h) { return h % 3 == 0 ? h + 2 : h - 1; }
+  uint32_t head(uint32_t h) const { return corner_[next_edge(h)]; }
+
+  void sync_slots();
+  bool gather_fan(uint32_t v, std::vector<uint32_t>& fan) const;
+  uint32_t cut_ancestor(VertexId cut, uint32_t slot) const;
+  void split_fan(uint32_t s, uint32_t l, uint32_t r);
+  bool breaks_split_order(uint32_t t, uint32_t u) const;  // over fan_ (t)
+  bool link_condition(uint32_t t, uint32_t l, uint32_t r);  // over fan_ (t) and fan_u_ (u)
+  uint32_t new_face(uint32_t a, uint32_t b, uint32_t c);
+  void free_face(uint32_t f);
+  void link(uint32_t a, uint32_t b);
+  void activate(uint32_t v, uint32_t out);
+  void deactivate(uint32_t v);
+
+  const VertexHierarchy* hierarchy_;
+  std::vector<uint32_t> corner_;      // 3 slots per face; a dead face holds kNone, next free face
+  std::vector<uint32_t> twin_;        // per half-edge
+  uint32_t free_face_ = kNone;
+  size_t face_count_ = 0;
+  std::vector<uint32_t> out_;         // per slot: an outgoing half-edge; kNone = inactive
+  std::vector<uint32_t> active_;      // active slots
+  std::vector<uint32_t> active_pos_;  // per slot: index in active_
+  std::vector<uint32_t> mark_;        // per slot: link-condition stamps
+  uint32_t stamp_ = 0;
+  std::vector<uint32_t> fan_, fan_u_, stack_;  // scratch, kept to avoid allocating per operation
+};
+
+}  // namespace pms
