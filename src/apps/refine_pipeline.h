@@ -7,8 +7,7 @@
 
 namespace pms::app {
 
-// Applies split_order[0, k) through the selective-refinement engine (k is clamped to the total)
-// and returns the resulting mesh with its normals/colors.
+// refine_in_stream_order() as a Mesh (with normals/colors) for the exporters.
 Mesh refine_first_splits(const ModelView& model, uint64_t k);
 
 }  // namespace pms::app

@@ -14,6 +14,7 @@
 #include "apps/bench/gnuplot.h"
 #include "apps/bench/openmesh_pm.h"
 #include "apps/bench/report.h"
+#include "apps/resource_usage.h"
 #include "common/error.h"
 
 namespace pms::app {
@@ -169,8 +170,9 @@ ModelResult run_model(const BenchContext& context, const std::string& name, cons
   fs::path mesh;
   try {
     progress_begin(label + " decompress " + file.filename().string());
+    const Stopwatch clock;
     mesh = decompress(context, file);
-    progress_end("done");
+    progress_end(fixed(clock.seconds(), 2) + " s");
   } catch (const Error& e) {
     progress_end("FAILED");
     result.error = e.what();
@@ -360,9 +362,11 @@ std::string model_notes(const std::vector<ModelResult>& results) {
       notes += "- " + r.name + ": OpenMesh keeps the " + thousands(r.openmesh->pm->isolated_base_vertices) +
                " input vertices that no face uses as extra base vertices (\"isolated\"); pmstream drops them "
                "while cleaning. This inflates OpenMesh's base #v and tree-id bits, as measured.\n";
-    if (r.openmesh && r.openmesh->pm && !r.openmesh->reported_bits.empty())
-      notes += "- " + r.name + ": mkbalancedpm itself printed <tree-id, node-id> bits " +
-               r.openmesh->reported_bits + "; the OpenMesh column is parsed from its .pm file.\n";
+    // The OpenMesh columns come from parsing the .pm; mkbalancedpm's own printout should agree.
+    if (r.openmesh && r.openmesh->pm && !r.openmesh->reported_bits.empty() &&
+        r.openmesh->reported_bits != id_bits(r.openmesh->pm->tree_id_bits, r.openmesh->pm->max_depth))
+      notes += "- " + r.name + ": mkbalancedpm printed <tree-id, node-id> bits " + r.openmesh->reported_bits +
+               ", the table shows what its .pm file holds.\n";
     const PaperRow* paper = paper_row(r.name);
     if (paper && !r.ours.stats.is_null()) {
       const uint64_t paper_vertices = uint64_t(paper->base_vertices) + paper->details;

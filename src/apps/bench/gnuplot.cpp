@@ -44,7 +44,7 @@ std::string gnuplot_script(const Plot& plot, const std::filesystem::path& png_pa
   s += "set xlabel " + quote(plot.xlabel) + "\n";
   s += "set ylabel " + quote(plot.ylabel) + "\n";
   s += "set grid\nset key top left\n";
-  if (plot.log_x) s += "set logscale x\n";
+  if (plot.log_x) s += "set logscale x\nset format x \"%.0s%c\"\n";  // 100k, 1M, 10M
   if (plot.log_y) s += "set logscale y\n";
   bool right_axis = false;
   for (const PlotSeries& series : plot.series) right_axis |= series.right_axis;

@@ -1,0 +1,178 @@
+// Quantized refinement info (Hoppe 1997 §4; kim-lee-kobbelt §5 sends it with every vsplit).
+// Every bound is rounded *outward*: the decoded sphere, deviation space and normal cone contain
+// whatever the exact ones contained, so refinement decisions on decoded values stay conservative.
+// Half floats: IEEE 754 binary16. Cone axis: octahedral encoding (Meyer et al. 2010, "On floating-point
+// normal vectors"), 16-bit snorm per coordinate.
+#include <algorithm>
+#include <bit>
+#include <cmath>
+#include <numbers>
+
+#include "pm/pm.h"
+
+namespace pms {
+namespace {
+
+constexpr uint16_t kHalfInfinity = 0x7C00;
+constexpr float kHalfMax = 65504.0f;
+constexpr double kConeUnit = std::numbers::pi / 65534;  // one step of RefineInfo::cone_angle
+constexpr double kHalfPi = std::numbers::pi / 2;
+// Consumers test normals against the decoded float axis, which is unit length only to ~1e-7:
+// widen every cone by a micro-radian so that float slack never leaves a normal outside.
+constexpr double kConeSlack = 1e-6;
+
+// A zero or broken scale (a model that is a single point) would turn every bound into NaN; such
+// models keep their bounds unscaled instead. Encoder and decoder agree on this.
+float effective_scale(float scale) { return scale > 0 && std::isfinite(scale) ? scale : 1.0f; }
+
+float decode_length(uint16_t half, float scale) { return float_from_half(half) * effective_scale(scale); }
+
+// Smallest half h with decode_length(h) >= value: the division and the multiply each round, so
+// the first guess is checked against the exact decoder and bumped (at most a step or two).
+uint16_t encode_length(float value, float scale) {
+  if (std::isnan(value)) return kHalfInfinity;  // unknown bound: never culls, always refines
+  if (!(value > 0)) return 0;
+  uint16_t half = half_from_float_up(value / effective_scale(scale));
+  while (half < kHalfInfinity && decode_length(half, scale) < value) ++half;
+  return half;
+}
+
+float snorm16_to_float(uint16_t bits) { return std::max(float(int16_t(bits)) / 32767.0f, -1.0f); }
+
+// Octahedral decode into a unit float vector; this exact vector is what dequantize_refine returns.
+void decode_axis(uint16_t qx, uint16_t qy, float axis[3]) {
+  float x = snorm16_to_float(qx), y = snorm16_to_float(qy);
+  const float z = 1.0f - std::abs(x) - std::abs(y);
+  const float fold = std::max(-z, 0.0f);  // lower hemisphere is folded over the diagonals
+  x += x >= 0 ? -fold : fold;
+  y += y >= 0 ? -fold : fold;
+  const float inv = 1.0f / std::sqrt(x * x + y * y + z * z);
+  axis[0] = x * inv;
+  axis[1] = y * inv;
+  axis[2] = z * inv;
+}
+
+// Angle between unit `a` and the (nearly unit) float vector `b`; atan2 stays accurate for tiny
+// angles, where acos(dot) loses half its digits.
+double angle_to(const double a[3], const float b_in[3]) {
+  double b[3] = {b_in[0], b_in[1], b_in[2]};
+  const double len = std::sqrt(b[0] * b[0] + b[1] * b[1] + b[2] * b[2]);
+  for (double& c : b) c /= len;
+  const double cx = a[1] * b[2] - a[2] * b[1], cy = a[2] * b[0] - a[0] * b[2], cz = a[0] * b[1] - a[1] * b[0];
+  return std::atan2(std::sqrt(cx * cx + cy * cy + cz * cz), a[0] * b[0] + a[1] * b[1] + a[2] * b[2]);
+}
+
+struct EncodedAxis {
+  uint16_t x = 0, y = 0;
+  double error = 0;  // angle between the exact axis and the decoded one
+};
+
+// Encodes unit `axis`, trying the four snorm roundings around the exact octahedral point and
+// keeping the one whose decoded axis is closest (the error widens the cone, so smaller is better).
+EncodedAxis encode_axis(const double axis[3]) {
+  const double l1 = std::abs(axis[0]) + std::abs(axis[1]) + std::abs(axis[2]);
+  double px = axis[0] / l1, py = axis[1] / l1;
+  if (axis[2] < 0) {
+    const double fx = (1 - std::abs(py)) * (px >= 0 ? 1 : -1);
+    const double fy = (1 - std::abs(px)) * (py >= 0 ? 1 : -1);
+    px = fx;
+    py = fy;
+  }
+  EncodedAxis best{0, 0, INFINITY};
+  for (int i = 0; i < 4; ++i) {
+    const double sx = px * 32767, sy = py * 32767;
+    const auto qx = int16_t(std::clamp((i & 1) ? std::ceil(sx) : std::floor(sx), -32767.0, 32767.0));
+    const auto qy = int16_t(std::clamp((i & 2) ? std::ceil(sy) : std::floor(sy), -32767.0, 32767.0));
+    float decoded[3];
+    decode_axis(uint16_t(qx), uint16_t(qy), decoded);
+    const double error = angle_to(axis, decoded);
+    if (error < best.error) best = {uint16_t(qx), uint16_t(qy), error};
+  }
+  return best;
+}
+
+float decode_cone_angle(uint16_t units) {
+  return units == kNoCone ? std::numbers::pi_v<float> : float(units * kConeUnit);
+}
+
+// Smallest step count whose decoded angle covers `angle`, or kNoCone once the cone reaches pi/2
+// (a half-space of normals: the back-face test can never cull it).
+uint16_t encode_cone_angle(double angle) {
+  if (!(angle < kHalfPi)) return kNoCone;
+  auto units = uint32_t(std::ceil(angle / kConeUnit));
+  while (decode_cone_angle(uint16_t(units)) < angle) ++units;
+  return decode_cone_angle(uint16_t(units)) >= kHalfPi ? kNoCone : uint16_t(units);
+}
+
+}  // namespace
+
+uint16_t half_from_float_up(float value) {
+  if (std::isnan(value) || value > kHalfMax) return kHalfInfinity;
+  if (!(value > 0)) return 0;
+  const uint32_t bits = std::bit_cast<uint32_t>(value);
+  const int exponent = int(bits >> 23) - 127;
+  const uint32_t mantissa = bits & 0x7FFFFF;
+  if (exponent >= -14) {  // a normal half: keep 10 of the 23 mantissa bits, round the rest up
+    const uint32_t half = uint32_t(exponent + 15) << 10 | mantissa >> 13;
+    return uint16_t(half + ((mantissa & 0x1FFF) != 0));  // a carry correctly bumps the exponent
+  }
+  if (exponent == -127) return 1;  // float subnormal: far below the smallest half subnormal
+  // Subnormal half = m * 2^-24. value = significand * 2^(exponent - 23), so m = significand >> shift.
+  const uint32_t significand = mantissa | 0x800000;
+  const int shift = -(exponent + 1);  // >= 14
+  if (shift >= 24) return 1;
+  const uint32_t m = significand >> shift;
+  return uint16_t(m + ((significand & ((1u << shift) - 1)) != 0));  // m == 1024 is the smallest normal
+}
+
+float float_from_half(uint16_t half) {
+  const uint32_t sign = uint32_t(half & 0x8000) << 16;
+  const uint32_t exponent = (half >> 10) & 0x1F;
+  const uint32_t mantissa = half & 0x3FF;
+  if (exponent == 0) {  // zero or subnormal: exact in float
+    const float magnitude = float(mantissa) * 0x1p-24f;
+    return sign ? -magnitude : magnitude;
+  }
+  if (exponent == 31) return std::bit_cast<float>(sign | 0x7F800000 | mantissa << 13);  // inf / NaN
+  return std::bit_cast<float>(sign | (exponent + 112) << 23 | mantissa << 13);
+}
+
+RefineInfo quantize_refine(const RefineBounds& bounds, float scale) {
+  RefineInfo info{};
+  info.radius = encode_length(bounds.radius, scale);
+  info.mu = encode_length(bounds.mu, scale);
+  info.delta = encode_length(bounds.delta, scale);
+
+  double axis[3] = {bounds.axis[0], bounds.axis[1], bounds.axis[2]};
+  const double length = std::sqrt(axis[0] * axis[0] + axis[1] * axis[1] + axis[2] * axis[2]);
+  if (!(length > 0) || !std::isfinite(length)) {  // no usable axis: store +z and no cone
+    const double z[3] = {0, 0, 1};
+    const EncodedAxis e = encode_axis(z);
+    info.cone_x = e.x;
+    info.cone_y = e.y;
+    info.cone_angle = kNoCone;
+    return info;
+  }
+  for (double& c : axis) c /= length;
+  const EncodedAxis e = encode_axis(axis);
+  info.cone_x = e.x;
+  info.cone_y = e.y;
+  // Triangle inequality: a normal within `angle` of the exact axis is within angle + error of the
+  // decoded one.
+  const double angle = std::max<double>(bounds.cone_angle, 0.0);
+  info.cone_angle =
+      std::isnan(bounds.cone_angle) || angle >= kHalfPi ? kNoCone : encode_cone_angle(angle + e.error + kConeSlack);
+  return info;
+}
+
+RefineBounds dequantize_refine(const RefineInfo& info, float scale) {
+  RefineBounds b;
+  b.radius = decode_length(info.radius, scale);
+  b.mu = decode_length(info.mu, scale);
+  b.delta = decode_length(info.delta, scale);
+  decode_axis(info.cone_x, info.cone_y, b.axis);
+  b.cone_angle = decode_cone_angle(info.cone_angle);
+  return b;
+}
+
+}  // namespace pms
