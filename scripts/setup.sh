@@ -58,6 +58,16 @@ case "$mode" in
     # Second configuration: the unit tests under AddressSanitizer + UndefinedBehaviorSanitizer.
     configure_and_build build-asan -DCMAKE_BUILD_TYPE=RelWithDebInfo -DPMSTREAM_SANITIZE=ON
     (cd build-asan && ASAN_OPTIONS=detect_leaks=1 ctest --output-on-failure -j "$jobs" --timeout 900 -LE slow)
+    # Third: every decoder's libFuzzer target (clang) builds and runs briefly.
+    CC=clang CXX=clang++ cmake -S . -B build-fuzz -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DPMSTREAM_WERROR=ON \
+      -DPMSTREAM_FUZZ=ON -DPMSTREAM_TESTS=OFF >/dev/null
+    cmake --build build-fuzz -j "$jobs" --target fuzz_targets
+    for target in build-fuzz/fuzz_*; do
+      [ -x "$target" ] || continue
+      echo "fuzz: $(basename "$target") for ${PMSTREAM_FUZZ_SECONDS:-30} s"
+      "$target" -max_total_time="${PMSTREAM_FUZZ_SECONDS:-30}" -max_len=65536 -print_final_stats=1 2>&1 | tail -3
+      [ "${PIPESTATUS[0]}" -eq 0 ] || { echo "fuzz: $(basename "$target") found a failure" >&2; exit 1; }
+    done
     ;;
   *)
     echo "usage: scripts/setup.sh [build|demo|test]" >&2

@@ -9,7 +9,7 @@
 #include "apps/progress_bar.h"
 #include "apps/refine_pipeline.h"
 #include "apps/resource_usage.h"
-#include "io/shapes.h"
+#include "common/error.h"
 
 namespace pms::app {
 namespace {

@@ -31,7 +31,8 @@ V3 normalized(V3 a) {
   const double len = length(a);
   return len > 0 ? a * (1.0 / len) : V3{0, 0, 1};
 }
-double angle_between(V3 a, V3 b) { return std::acos(std::clamp(dot(a, b), -1.0, 1.0)); }
+// atan2 form: acos of a dot product near 1 is ill-conditioned.
+double angle_between(V3 a, V3 b) { return std::atan2(length(cross(a, b)), dot(a, b)); }
 
 V3 closest_point_on_triangle(V3 p, V3 a, V3 b, V3 c) {
   const V3 ab = b - a, ac = c - a, ap = p - a;

@@ -18,9 +18,12 @@ double distance(const float* a, const float* b) {
                    double(a[2] - b[2]) * (a[2] - b[2]));
 }
 
+// atan2 form: acos of a dot product near 1 loses ~sqrt(float epsilon) of precision.
 double angle(const float* a, const float* b) {
   const double d = double(a[0]) * b[0] + double(a[1]) * b[1] + double(a[2]) * b[2];
-  return std::acos(std::clamp(d, -1.0, 1.0));
+  const double cx = double(a[1]) * b[2] - double(a[2]) * b[1], cy = double(a[2]) * b[0] - double(a[0]) * b[2],
+               cz = double(a[0]) * b[1] - double(a[1]) * b[0];
+  return std::atan2(std::sqrt(cx * cx + cy * cy + cz * cz), d);
 }
 
 void expect_valid_hierarchy(const Mesh& mesh, const BuildResult& built) {
@@ -76,7 +79,9 @@ void expect_valid_hierarchy(const Mesh& mesh, const BuildResult& built) {
       const RefineBounds child = dequantize_refine(h.refine[c], h.scale);
       const double shift = distance(&h.position[3 * size_t(c)], &h.position[3 * size_t(i)]);
       EXPECT_GE(parent.radius * (1 + 1e-6), child.radius + shift) << "sphere of node " << i;
-      if (parent.cone_angle < 1.5707) EXPECT_LE(angle(parent.axis, child.axis) + child.cone_angle, parent.cone_angle + 1e-5) << "cone of node " << i;
+      if (parent.cone_angle < 1.5707) {
+        EXPECT_LE(angle(parent.axis, child.axis) + child.cone_angle, parent.cone_angle + 1e-5) << "cone of node " << i;
+      }
       EXPECT_GE(parent.mu, child.mu);
       EXPECT_GE(parent.delta, child.delta);
     }
@@ -88,8 +93,11 @@ void expect_valid_hierarchy(const Mesh& mesh, const BuildResult& built) {
     ASSERT_EQ(position[h.split_order[k]], -1);
     position[h.split_order[k]] = int(k);
   }
-  for (uint32_t i = h.root_count; i < n; ++i)
-    if (!h.is_leaf(i)) EXPECT_LT(position[h.parent[i]], position[i]);
+  for (uint32_t i = h.root_count; i < n; ++i) {
+    if (!h.is_leaf(i)) {
+      EXPECT_LT(position[h.parent[i]], position[i]);
+    }
+  }
   // Leaf radii and cones cover the input faces around them.
   std::vector<uint32_t> leaf_node(mesh.vertex_count());
   for (uint32_t i = 0; i < n; ++i)

@@ -60,7 +60,9 @@ void expect_full_refinement_is_input(const Mesh& mesh, const BuildOptions& optio
   for (uint32_t n = 0; n < model.node_count(); ++n) {
     if (model.is_leaf(n)) continue;
     const uint32_t slot = hierarchy.find(model.id(n));
-    if (selective.is_active(slot)) ASSERT_TRUE(selective.vsplit(slot).done);
+    if (selective.is_active(slot)) {
+      ASSERT_TRUE(selective.vsplit(slot).done);
+    }
   }
   std::string why;
   ASSERT_TRUE(selective.check_invariants(&why)) << why;
