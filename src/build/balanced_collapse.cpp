@@ -20,6 +20,10 @@ constexpr double kRoundShare = 0.25;
 // Height weighting: key = (cost + epsilon) * 4^height. Exponential, because quadric
 // costs span orders of magnitude and a polynomial weight barely reorders them.
 constexpr int kHeightBaseLog2 = 2;  // base 4
+// A round removing fewer than this share of the live vertices ends the simplification: past that
+// point (components stuck at a few vertices) every further round would add a level to the
+// hierarchy, i.e. one more bit to every node id, for a handful of vertices.
+constexpr double kMinRoundShare = 0.02;
 
 struct Entry {
   double key;
@@ -96,7 +100,7 @@ CollapseForest simplify_balanced(const Mesh& input, const BuildOptions& options)
       touched[e.t] = touched[e.u] = 1;
       ++accepted;
     }
-    if (accepted == 0) break;  // no valid collapse left anywhere
+    if (accepted == 0 || accepted < kMinRoundShare * alive) break;
     report(options.progress, "simplify", double(start - mesh.alive_vertex_count()) / double(start - target));
   }
   return recorder.finish();
