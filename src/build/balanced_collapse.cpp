@@ -5,6 +5,7 @@
 // short subtrees merge first and node ids stay short.
 #include <algorithm>
 #include <cmath>
+#include <thread>
 
 #include "build/bounds.h"
 #include "build/simplify.h"
@@ -35,12 +36,14 @@ bool by_key(const Entry& a, const Entry& b) {
   return a.key < b.key || (a.key == b.key && (a.t < b.t || (a.t == b.t && a.u < b.u)));
 }
 
-void collect_candidates(CollapseMesh& mesh, const CollapseRecorder& recorder, double epsilon,
-                        std::vector<uint32_t>& neighbours, std::vector<Entry>& out) {
+// Best targets of the vertices in [begin, end): read-only on the mesh, so chunks run in parallel.
+void collect_range(const CollapseMesh& mesh, const CollapseRecorder& recorder, double epsilon, uint32_t begin,
+                   uint32_t end, NeighbourScratch& marks, std::vector<Entry>& out) {
   out.clear();
-  for (uint32_t t = 0; t < mesh.vertex_count(); ++t) {
+  std::vector<uint32_t> neighbours;
+  for (uint32_t t = begin; t < end; ++t) {
     if (!mesh.alive(t)) continue;
-    mesh.neighbours(t, neighbours);
+    mesh.neighbours(t, neighbours, marks);
     Entry best[kTargetsPerVertex];
     int kept = 0;
     const uint32_t height_t = recorder.height(t);
@@ -63,6 +66,33 @@ void collect_candidates(CollapseMesh& mesh, const CollapseRecorder& recorder, do
   }
 }
 
+// Candidates of every live vertex, in vertex order whatever the thread count.
+class CandidateCollector {
+ public:
+  CandidateCollector(size_t vertices, unsigned threads) : marks_(threads), parts_(threads) {
+    for (NeighbourScratch& m : marks_) m.resize(vertices);
+  }
+
+  void collect(const CollapseMesh& mesh, const CollapseRecorder& recorder, double epsilon, std::vector<Entry>& out) {
+    const uint32_t n = mesh.vertex_count();
+    const unsigned threads = unsigned(parts_.size());
+    std::vector<std::thread> workers;
+    for (unsigned i = 1; i < threads; ++i)
+      workers.emplace_back([&, i] {
+        collect_range(mesh, recorder, epsilon, chunk(n, i), chunk(n, i + 1), marks_[i], parts_[i]);
+      });
+    collect_range(mesh, recorder, epsilon, 0, chunk(n, 1), marks_[0], parts_[0]);
+    for (std::thread& w : workers) w.join();
+    out.clear();
+    for (const auto& part : parts_) out.insert(out.end(), part.begin(), part.end());
+  }
+
+ private:
+  uint32_t chunk(uint32_t n, unsigned i) const { return uint32_t(uint64_t(n) * i / parts_.size()); }
+  std::vector<NeighbourScratch> marks_;
+  std::vector<std::vector<Entry>> parts_;
+};
+
 }  // namespace
 
 CollapseForest simplify_balanced(const Mesh& input, const BuildOptions& options) {
@@ -75,11 +105,11 @@ CollapseForest simplify_balanced(const Mesh& input, const BuildOptions& options)
   const double epsilon = 1e-10 * diagonal * diagonal;
 
   std::vector<Entry> entries;
-  std::vector<uint32_t> neighbours;
+  CandidateCollector collector(mesh.vertex_count(), std::clamp(std::thread::hardware_concurrency(), 1u, 8u));
   std::vector<uint8_t> touched(mesh.vertex_count(), 0);
   CollapseSite site;
   while (mesh.alive_vertex_count() > target) {
-    collect_candidates(mesh, recorder, epsilon, neighbours, entries);
+    collector.collect(mesh, recorder, epsilon, entries);
     const uint32_t alive = mesh.alive_vertex_count();
     const uint32_t quota = std::min<uint32_t>(alive - target, std::max<uint32_t>(1, uint32_t(alive * kRoundShare)));
     std::fill(touched.begin(), touched.end(), 0);
@@ -100,6 +130,7 @@ CollapseForest simplify_balanced(const Mesh& input, const BuildOptions& options)
       touched[e.t] = touched[e.u] = 1;
       ++accepted;
     }
+    recorder.flush();
     if (accepted == 0 || accepted < kMinRoundShare * alive) break;
     report(options.progress, "simplify", double(start - mesh.alive_vertex_count()) / double(start - target));
   }

@@ -32,8 +32,8 @@ CollapseMesh::CollapseMesh(const Mesh& mesh)
       vertex_alive_(mesh.vertex_count(), 1),
       quadrics_(mesh.vertex_count()),
       alive_vertices_(uint32_t(mesh.vertex_count())),
-      mark_(mesh.vertex_count(), 0),
-      mark_count_(mesh.vertex_count(), 0) {
+      scratch_marks_() {
+  scratch_marks_.resize(mesh.vertex_count());
   if (mesh.vertex_count() >= kEnd / 2 || mesh.indices.size() >= kEnd) fail("", "mesh too large for 32-bit indices");
   for (size_t c = faces_.size(); c-- > 0;) {
     const uint32_t v = faces_[c];
@@ -53,15 +53,16 @@ CollapseMesh::CollapseMesh(const Mesh& mesh)
   // A directed edge v->a is on the boundary when no face holds a->v.
   std::vector<uint32_t> around;
   for (uint32_t v = 0; v < vertex_count(); ++v) {
-    const uint32_t stamp = next_stamp();
+    NeighbourScratch& marks = scratch_marks_;
+    const uint32_t stamp = marks.next();
     for_each_face(v, [&](uint32_t f, uint32_t slot) {
       const uint32_t b = faces_[3 * f + (slot + 2) % 3];
-      if (mark_[b] != stamp) { mark_[b] = stamp; mark_count_[b] = 0; }
-      mark_count_[b] |= 2;  // b -> v exists
+      if (marks.mark[b] != stamp) { marks.mark[b] = stamp; marks.bits[b] = 0; }
+      marks.bits[b] |= 2;  // b -> v exists
     });
     for_each_face(v, [&](uint32_t f, uint32_t slot) {
       const uint32_t a = faces_[3 * f + (slot + 1) % 3];
-      if (mark_[a] == stamp && (mark_count_[a] & 2)) return;
+      if (marks.mark[a] == stamp && (marks.bits[a] & 2)) return;
       const Vec3 edge = sub(position(a), position(v));
       const uint32_t* t = face(f);
       const Vec3 n = triangle_normal(position(t[0]), position(t[1]), position(t[2]));
@@ -78,27 +79,27 @@ CollapseMesh::CollapseMesh(const Mesh& mesh)
   }
 }
 
-uint32_t CollapseMesh::next_stamp() {
-  if (++stamp_ == 0) {  // wrapped: clear so stale marks cannot match
-    std::fill(mark_.begin(), mark_.end(), 0);
-    stamp_ = 1;
+uint32_t NeighbourScratch::next() {
+  if (++stamp == 0) {  // wrapped: clear so stale marks cannot match
+    std::fill(mark.begin(), mark.end(), 0);
+    stamp = 1;
   }
-  return stamp_;
+  return stamp;
 }
 
-bool CollapseMesh::neighbours(uint32_t v, std::vector<uint32_t>& out) {
+bool CollapseMesh::neighbours(uint32_t v, std::vector<uint32_t>& out, NeighbourScratch& marks) const {
   out.clear();
-  const uint32_t stamp = next_stamp();
-  for_each_face(v, [&](uint32_t f, uint32_t slot) {
+  const uint32_t stamp = marks.next();
+  for_each_live_face(v, [&](uint32_t f, uint32_t slot) {
     const uint32_t a = faces_[3 * f + (slot + 1) % 3];
     const uint32_t b = faces_[3 * f + (slot + 2) % 3];
-    if (mark_[a] != stamp) { mark_[a] = stamp; mark_count_[a] = 0; out.push_back(a); }
-    if (mark_[b] != stamp) { mark_[b] = stamp; mark_count_[b] = 0; out.push_back(b); }
-    mark_count_[a] |= 1;  // v -> a
-    mark_count_[b] |= 2;  // b -> v
+    if (marks.mark[a] != stamp) { marks.mark[a] = stamp; marks.bits[a] = 0; out.push_back(a); }
+    if (marks.mark[b] != stamp) { marks.mark[b] = stamp; marks.bits[b] = 0; out.push_back(b); }
+    marks.bits[a] |= 1;  // v -> a
+    marks.bits[b] |= 2;  // b -> v
   });
   bool boundary = false;
-  for (uint32_t n : out) boundary |= mark_count_[n] != 3;
+  for (uint32_t n : out) boundary |= marks.bits[n] != 3;
   return boundary;
 }
 
@@ -124,14 +125,14 @@ bool CollapseMesh::check_collapse(uint32_t t, uint32_t u, CollapseSite& site) {
 
   // Link condition: the only common neighbours of t and u are the apexes of the edge's faces.
   // neighbours(t) left N(t) marked with the current stamp.
-  const uint32_t stamp = stamp_;
+  const uint32_t stamp = scratch_marks_.stamp;
   bool link_ok = true;
   uint32_t u_valence_faces = 0;
   for_each_face(u, [&](uint32_t f, uint32_t slot) {
     ++u_valence_faces;
     for (uint32_t k = 1; k <= 2; ++k) {
       const uint32_t w = faces_[3 * f + (slot + k) % 3];
-      if (w != t && mark_[w] == stamp && w != site.l && w != site.r) link_ok = false;
+      if (w != t && scratch_marks_.mark[w] == stamp && w != site.l && w != site.r) link_ok = false;
     }
   });
   if (!link_ok) return false;

@@ -17,6 +17,15 @@ struct CollapseSite {
   uint32_t l = UINT32_MAX, r = UINT32_MAX;
 };
 
+// Marks for neighbour sets: mark[v] == stamp means "in the current set". One per thread.
+struct NeighbourScratch {
+  std::vector<uint32_t> mark;
+  std::vector<uint8_t> bits;  // 1: v -> w exists, 2: w -> v exists
+  uint32_t stamp = 0;
+  void resize(size_t vertices) { mark.assign(vertices, 0), bits.assign(vertices, 0), stamp = 0; }
+  uint32_t next();
+};
+
 class CollapseMesh {
  public:
   // Plane quadrics weighted by area; boundary edges add a perpendicular plane so borders keep their shape.
@@ -36,8 +45,13 @@ class CollapseMesh {
   template <class Fn>
   void for_each_face(uint32_t v, Fn&& fn);
 
+  // Live faces around v without unlinking dead ones: safe from several threads at once.
+  template <class Fn>
+  void for_each_live_face(uint32_t v, Fn&& fn) const;
+
   // Neighbours of v, each once, into `out`; returns whether v lies on the boundary.
-  bool neighbours(uint32_t v, std::vector<uint32_t>& out);
+  bool neighbours(uint32_t v, std::vector<uint32_t>& out) { return neighbours(v, out, scratch_marks_); }
+  bool neighbours(uint32_t v, std::vector<uint32_t>& out, NeighbourScratch& scratch) const;
 
   // Topological and geometric validity of collapsing t into u (link condition, boundary rules,
   // no vertex left with a degenerate fan, no face flipped or made degenerate).
@@ -57,13 +71,15 @@ class CollapseMesh {
   std::vector<uint8_t> vertex_alive_;
   std::vector<Quadric> quadrics_;
   uint32_t alive_vertices_ = 0;
-  // Scratch for neighbour sets: mark_[v] == stamp_ means "in the current set".
-  std::vector<uint32_t> mark_;
-  std::vector<uint8_t> mark_count_;
-  uint32_t stamp_ = 0;
+  NeighbourScratch scratch_marks_;
   std::vector<uint32_t> scratch_;
-  uint32_t next_stamp();
 };
+
+template <class Fn>
+void CollapseMesh::for_each_live_face(uint32_t v, Fn&& fn) const {
+  for (uint32_t c = head_[v]; c != kEnd; c = next_corner_[c])
+    if (face_alive_[c / 3]) fn(c / 3, c % 3);
+}
 
 template <class Fn>
 void CollapseMesh::for_each_face(uint32_t v, Fn&& fn) {

@@ -1,4 +1,5 @@
 #include <algorithm>
+#include <thread>
 
 #include "build/simplify.h"
 
@@ -36,10 +37,30 @@ void CollapseRecorder::apply(uint32_t t, uint32_t u, const CollapseSite& site) {
   mesh_.collapse(t, u, site);
   node_of_vertex_[u] = s;
   height_[s] = std::max(height_[node_t], height_[node_u]) + 1;
-  refinement_.on_collapse(s, node_t, node_u, mesh_, u);
+  refinement_.merge_leaves(s, node_t, node_u);
+  pending_.push_back({s, node_t, node_u, u});
+}
+
+void CollapseRecorder::flush() {
+  auto run = [this](size_t begin, size_t end) {
+    for (size_t i = begin; i < end; ++i)
+      refinement_.compute(pending_[i].s, pending_[i].t_node, pending_[i].u_node, mesh_, pending_[i].u);
+  };
+  const unsigned threads = std::clamp(std::thread::hardware_concurrency(), 1u, 8u);
+  if (pending_.size() < 4096 || threads == 1) {  // starting threads costs more than small batches
+    run(0, pending_.size());
+  } else {
+    std::vector<std::thread> workers;
+    for (unsigned i = 1; i < threads; ++i)
+      workers.emplace_back(run, pending_.size() * i / threads, pending_.size() * (i + 1) / threads);
+    run(0, pending_.size() / threads);
+    for (std::thread& w : workers) w.join();
+  }
+  pending_.clear();
 }
 
 CollapseForest CollapseRecorder::finish() {
+  flush();
   std::vector<uint32_t> root_index(mesh_.vertex_count(), UINT32_MAX);
   for (uint32_t v = 0; v < mesh_.vertex_count(); ++v) {
     if (!mesh_.alive(v)) continue;

@@ -75,6 +75,7 @@ CollapseForest simplify_greedy(const Mesh& input, const BuildOptions& options) {
       continue;
     }
     recorder.apply(e.t, e.u, site);
+    recorder.flush();  // the next collapse may involve u again
     ring = simplifier.neighbours_of(e.u);
     simplifier.refresh(e.u);
     for (uint32_t w : ring) simplifier.refresh(w);

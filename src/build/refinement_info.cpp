@@ -129,14 +129,16 @@ RefinementInfoBuilder::RefinementInfoBuilder(const Mesh& mesh, size_t max_nodes)
   }
 }
 
-void RefinementInfoBuilder::on_collapse(uint32_t s, uint32_t t_node, uint32_t u_node, CollapseMesh& mesh,
-                                        uint32_t u) {
+void RefinementInfoBuilder::merge_leaves(uint32_t s, uint32_t t_node, uint32_t u_node) {
   survivor_[s] = survivor_[u_node];
   leaf_next_[leaf_tail_[t_node]] = leaf_head_[u_node];
   leaf_head_[s] = leaf_head_[t_node];
   leaf_tail_[s] = leaf_tail_[u_node];
   leaf_count_[s] = leaf_count_[t_node] + leaf_count_[u_node];
+}
 
+void RefinementInfoBuilder::compute(uint32_t s, uint32_t t_node, uint32_t u_node, const CollapseMesh& mesh,
+                                    uint32_t u) {
   const RefineBounds bt = dequantize_refine(info_[t_node], scale_);
   const RefineBounds bu = dequantize_refine(info_[u_node], scale_);
   const double shift = length(load(leaf_position(survivor_[t_node])) - load(leaf_position(survivor_[s])));
@@ -150,7 +152,7 @@ void RefinementInfoBuilder::on_collapse(uint32_t s, uint32_t t_node, uint32_t u_
                              scale_);
 }
 
-void RefinementInfoBuilder::deviation(uint32_t s, CollapseMesh& mesh, uint32_t u, const float axis_f[3], float& mu,
+void RefinementInfoBuilder::deviation(uint32_t s, const CollapseMesh& mesh, uint32_t u, const float axis_f[3], float& mu,
                                       float& delta) const {
   struct Tri {
     V3 a, b, c, n;
@@ -158,7 +160,7 @@ void RefinementInfoBuilder::deviation(uint32_t s, CollapseMesh& mesh, uint32_t u
   };
   Tri fan[32];
   uint32_t fan_size = 0;
-  mesh.for_each_face(u, [&](uint32_t f, uint32_t) {
+  mesh.for_each_live_face(u, [&](uint32_t f, uint32_t) {
     if (fan_size == 32) return;
     const uint32_t* t = mesh.face(f);
     Tri tri{load(mesh.position(t[0])), load(mesh.position(t[1])), load(mesh.position(t[2])), {}, 0};

@@ -18,17 +18,19 @@ class RefinementInfoBuilder {
 
   float scale() const { return scale_; }
 
-  // Node s was made by collapsing node t_node (vertex at p_t) into u_node; the surviving vertex u of
-  // `mesh` now carries s. Bounds are merged from the children's *decoded* values so every parent
-  // contains its children exactly as every consumer will see them.
-  void on_collapse(uint32_t s, uint32_t t_node, uint32_t u_node, CollapseMesh& mesh, uint32_t u);
+  // Node s was made by collapsing node t_node into u_node: joins their leaf lists. Sequential.
+  void merge_leaves(uint32_t s, uint32_t t_node, uint32_t u_node);
+  // Bounds of s; the surviving vertex u of `mesh` carries s. Merged from the children's *decoded*
+  // values so every parent contains its children exactly as every consumer will see them.
+  // Reads the mesh only and writes only node s: independent collapses may run in parallel.
+  void compute(uint32_t s, uint32_t t_node, uint32_t u_node, const CollapseMesh& mesh, uint32_t u);
 
   const RefineInfo& info(uint32_t node) const { return info_[node]; }
   std::vector<RefineInfo> take() { return std::move(info_); }
 
  private:
   const float* leaf_position(uint32_t leaf) const { return &positions_[3 * size_t(leaf)]; }
-  void deviation(uint32_t s, CollapseMesh& mesh, uint32_t u, const float axis[3], float& mu, float& delta) const;
+  void deviation(uint32_t s, const CollapseMesh& mesh, uint32_t u, const float axis[3], float& mu, float& delta) const;
 
   const std::vector<float>& positions_;
   float scale_ = 1;

@@ -29,8 +29,12 @@ class CollapseRecorder {
  public:
   CollapseRecorder(const Mesh& mesh, CollapseMesh& collapse_mesh);
 
-  // Collapses t into u (check_collapse() must have accepted it) and records the new node.
+  // Collapses t into u (check_collapse() must have accepted it) and records the new node. Its
+  // refinement info is computed by the next flush().
   void apply(uint32_t t, uint32_t u, const CollapseSite& site);
+  // Refinement info of the collapses applied since the last flush, in parallel when there are many.
+  // They must be independent (no vertex in two of them), as in one balanced round.
+  void flush();
   // Height of the subtree whose root is vertex v's current node (0 for an input vertex).
   uint32_t height(uint32_t v) const { return height_[node_of_vertex_[v]]; }
   uint64_t collapses() const { return forest_.child_t.size(); }
@@ -43,6 +47,10 @@ class CollapseRecorder {
   RefinementInfoBuilder refinement_;
   std::vector<uint32_t> node_of_vertex_;
   std::vector<uint32_t> height_;
+  struct Pending {
+    uint32_t s, t_node, u_node, u;
+  };
+  std::vector<Pending> pending_;
 };
 
 // kim-lee-kobbelt §6.2: rounds of independent cheapest collapses, cost weighted by subtree height.

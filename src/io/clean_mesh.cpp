@@ -267,11 +267,13 @@ CleanReport clean_mesh(Mesh& mesh) {
   CleanReport report;
   weld(mesh, report);
   drop_bad_faces(mesh, report);
+  drop_unreferenced(mesh, report);
+  if (mesh.face_count() == 0) fail("", "no faces left after cleaning");
+  // Most scans are already oriented manifolds: checking is cheaper than repairing.
+  if (is_oriented_manifold(mesh)) return report;
   // A cut can expose another problem at the new copies; a few passes settle every case seen.
   for (int pass = 0; pass < 4 && repair_manifold(mesh, report); ++pass) {
   }
-  drop_unreferenced(mesh, report);
-  if (mesh.face_count() == 0) fail("", "no faces left after cleaning");
   std::string why;
   if (!is_oriented_manifold(mesh, &why)) fail("", "could not repair the mesh into an oriented manifold: " + why);
   return report;
