@@ -1,0 +1,91 @@
+// The `pmstream` binary end to end (DESIGN.md §5 contracts): build/info/refine on a generated mesh,
+// JSON fields, exact reconstruction through files, and one-line errors with a non-zero exit code.
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+#include <sys/wait.h>
+
+#include <array>
+#include <cstdio>
+#include <fstream>
+#include <string>
+
+#include "io/mesh.h"
+#include "io/shapes.h"
+#include "test_support.h"
+
+namespace pms {
+namespace {
+
+struct RunResult {
+  int exit_code;
+  std::string out, err;
+};
+
+RunResult run(const std::string& args) {
+  const auto dir = test::temp_dir();
+  const std::string out = (dir / "stdout").string(), err = (dir / "stderr").string();
+  const std::string command = std::string(PMSTREAM_BINARY) + " " + args + " >" + out + " 2>" + err;
+  const int status = std::system(command.c_str());
+  auto slurp = [](const std::string& path) {
+    std::ifstream in(path);
+    return std::string(std::istreambuf_iterator<char>(in), {});
+  };
+  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, slurp(out), slurp(err)};
+}
+
+TEST(Cli, BuildInfoRefineRoundTrip) {
+  const auto dir = test::temp_dir();
+  Mesh input = make_torus(40, 16, 2.0f, 0.5f);
+  const std::string ply = (dir / "torus.ply").string(), pms_path = (dir / "torus.pms").string();
+  save_ply(input, ply);
+
+  const RunResult build = run("build " + ply + " -o " + pms_path + " --json");
+  ASSERT_EQ(build.exit_code, 0) << build.err;
+  const auto stats = nlohmann::json::parse(build.out);
+  for (const char* field : {"input_vertices", "input_faces", "base_vertices", "base_faces", "vsplits", "tree_id_bits",
+                            "node_id_bits", "max_depth", "seconds", "peak_rss_mb", "output_bytes"})
+    EXPECT_TRUE(stats.contains(field)) << field;
+  EXPECT_EQ(stats["input_faces"], input.face_count());
+  EXPECT_EQ(stats["vsplits"].get<uint64_t>() + stats["base_vertices"].get<uint64_t>(), input.vertex_count());
+
+  const RunResult info = run("info " + pms_path + " --json");
+  ASSERT_EQ(info.exit_code, 0) << info.err;
+  const auto info_stats = nlohmann::json::parse(info.out);
+  for (const char* field : {"input_vertices", "input_faces", "base_vertices", "base_faces", "vsplits", "tree_id_bits",
+                            "node_id_bits", "max_depth"})
+    EXPECT_EQ(info_stats[field], stats[field]) << field;
+
+  const std::string full = (dir / "full.ply").string(), coarse = (dir / "coarse.ply").string();
+  const RunResult refine = run("refine " + pms_path + " --full -o " + full + " --json");
+  ASSERT_EQ(refine.exit_code, 0) << refine.err;
+  const Mesh finest = load_mesh(full);
+  EXPECT_EQ(finest.face_count(), input.face_count());
+  EXPECT_EQ(finest.vertex_count(), input.vertex_count());
+  EXPECT_EQ(nlohmann::json::parse(refine.out)["vsplits_applied"], stats["vsplits"]);
+
+  const RunResult base = run("refine " + pms_path + " --splits 0 -o " + coarse);
+  ASSERT_EQ(base.exit_code, 0) << base.err;
+  EXPECT_EQ(load_mesh(coarse).face_count(), stats["base_faces"].get<size_t>());
+}
+
+TEST(Cli, ErrorsAreOneLineNamingTheFile) {
+  const auto dir = test::temp_dir();
+  const std::string missing = (dir / "nope.ply").string();
+  const RunResult r = run("build " + missing + " -o " + (dir / "x.pms").string());
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_NE(r.err.find(missing), std::string::npos) << r.err;
+  EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+
+  const std::string garbage = (dir / "garbage.pms").string();
+  std::ofstream(garbage) << "this is not a pms file at all, just text that is long enough to look at";
+  const RunResult info = run("info " + garbage);
+  EXPECT_NE(info.exit_code, 0);
+  EXPECT_NE(info.err.find(garbage), std::string::npos) << info.err;
+  EXPECT_EQ(std::count(info.err.begin(), info.err.end(), '\n'), 1) << info.err;
+
+  const RunResult both = run("refine " + garbage + " -o " + (dir / "o.ply").string());
+  EXPECT_NE(both.exit_code, 0);
+}
+
+}  // namespace
+}  // namespace pms
