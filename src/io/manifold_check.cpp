@@ -30,27 +30,33 @@ bool is_oriented_manifold(const Mesh& mesh, std::string* why) {
   if (mesh.indices.size() % 3 != 0) return fail_with(why, "index count is not a multiple of 3");
   for (uint32_t v : mesh.indices)
     if (v >= n) return fail_with(why, "index " + std::to_string(v) + " out of range");
-  std::vector<std::array<uint32_t, 3>> sorted(m);
-  std::vector<uint64_t> directed;
-  directed.reserve(3 * m);
   for (size_t f = 0; f < m; ++f) {
     const uint32_t* t = &mesh.indices[3 * f];
     if (t[0] == t[1] || t[1] == t[2] || t[2] == t[0]) return fail_with(why, "face " + std::to_string(f) + " is degenerate");
-    sorted[f] = {t[0], t[1], t[2]};
-    std::sort(sorted[f].begin(), sorted[f].end());
-    for (int k = 0; k < 3; ++k) directed.push_back(uint64_t(t[k]) << 32 | t[(k + 1) % 3]);
   }
-  std::sort(sorted.begin(), sorted.end());
-  if (std::adjacent_find(sorted.begin(), sorted.end()) != sorted.end()) return fail_with(why, "duplicate faces");
-  std::sort(directed.begin(), directed.end());
-  const auto dup = std::adjacent_find(directed.begin(), directed.end());
-  if (dup != directed.end())
-    return fail_with(why, "directed edge " + std::to_string(*dup >> 32) + "->" + std::to_string(*dup & 0xffffffffu) +
-                              " used twice (non-manifold edge or inconsistent orientation)");
-
-  // Single fan per vertex: the link edges a->b of faces (v, a, b) form one path or one cycle.
   std::vector<uint32_t> offsets, faces;
   vertex_faces(mesh, offsets, faces);
+  // Per vertex (linear, no global sort): each outgoing edge v->a once; duplicate faces are found at
+  // their smallest corner.
+  std::vector<uint32_t> seen(n, 0);
+  std::vector<std::pair<uint32_t, uint32_t>> others;
+  for (uint32_t v = 0; v < n; ++v) {
+    others.clear();
+    for (uint32_t i = offsets[v]; i < offsets[v + 1]; ++i) {
+      const uint32_t* t = &mesh.indices[3 * size_t(faces[i])];
+      const int k = t[0] == v ? 0 : t[1] == v ? 1 : 2;
+      const uint32_t a = t[(k + 1) % 3], b = t[(k + 2) % 3];
+      if (seen[a] == v + 1)
+        return fail_with(why, "directed edge " + std::to_string(v) + "->" + std::to_string(a) +
+                                  " used twice (non-manifold edge or inconsistent orientation)");
+      seen[a] = v + 1;
+      if (v < a && v < b) others.push_back({std::min(a, b), std::max(a, b)});
+    }
+    std::sort(others.begin(), others.end());
+    if (std::adjacent_find(others.begin(), others.end()) != others.end()) return fail_with(why, "duplicate faces");
+  }
+
+  // Single fan per vertex: the link edges a->b of faces (v, a, b) form one path or one cycle.
   std::vector<uint32_t> next(n, UINT32_MAX), has_in(n, 0);
   for (uint32_t v = 0; v < n; ++v) {
     const uint32_t begin = offsets[v], end = offsets[v + 1];
