@@ -78,16 +78,26 @@ EncodedAxis encode_axis(const double axis[3]) {
     px = fx;
     py = fy;
   }
+  // Rank the candidates by cosine (cheap); only the winner's angle needs atan2.
   EncodedAxis best{0, 0, INFINITY};
+  double best_cos = -INFINITY;
   for (int i = 0; i < 4; ++i) {
     const double sx = px * 32767, sy = py * 32767;
     const auto qx = int16_t(std::clamp((i & 1) ? std::ceil(sx) : std::floor(sx), -32767.0, 32767.0));
     const auto qy = int16_t(std::clamp((i & 2) ? std::ceil(sy) : std::floor(sy), -32767.0, 32767.0));
     float decoded[3];
     decode_axis(uint16_t(qx), uint16_t(qy), decoded);
-    const double error = angle_to(axis, decoded);
-    if (error < best.error) best = {uint16_t(qx), uint16_t(qy), error};
+    const double len = std::sqrt(double(decoded[0]) * decoded[0] + double(decoded[1]) * decoded[1] +
+                                 double(decoded[2]) * decoded[2]);
+    const double cosine = (axis[0] * decoded[0] + axis[1] * decoded[1] + axis[2] * decoded[2]) / len;
+    if (cosine > best_cos) {
+      best_cos = cosine;
+      best = {uint16_t(qx), uint16_t(qy), 0};
+    }
   }
+  float decoded[3];
+  decode_axis(best.x, best.y, decoded);
+  best.error = angle_to(axis, decoded);
   return best;
 }
 
