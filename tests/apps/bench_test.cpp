@@ -13,11 +13,12 @@
 
 // The bench sources are part of the pmstream executable, not of a library this test links, so the
 // ones under test are compiled into this test directly.
-#include "apps/bench/bench_setup.cpp"
-#include "apps/bench/child_process.cpp"
-#include "apps/bench/gnuplot.cpp"
-#include "apps/bench/openmesh_pm.cpp"
-#include "apps/bench/report.cpp"
+#include "apps/bench/bench.h"
+#include "common/error.h"
+#include "apps/bench/child_process.h"
+#include "apps/bench/gnuplot.h"
+#include "apps/bench/openmesh_pm.h"
+#include "apps/bench/report.h"
 
 namespace pms::app {
 namespace {
