@@ -24,7 +24,8 @@ constexpr int kHeightBaseLog2 = 2;  // base 4
 // A round removing fewer than this share of the live vertices ends the simplification: past that
 // point (components stuck at a few vertices) every further round would add a level to the
 // hierarchy, i.e. one more bit to every node id, for a handful of vertices.
-constexpr double kMinRoundShare = 0.02;
+constexpr double kMinRoundShare = 0.10;
+constexpr size_t kPrefetchDistance = 8;
 
 struct Entry {
   double key;
@@ -123,6 +124,8 @@ CollapseForest simplify_balanced(const Mesh& input, const BuildOptions& options)
         std::sort(entries.begin() + sorted_end, entries.begin() + chunk_end, by_key);
         sorted_end = chunk_end;
       }
+      // Entries come in cost order, i.e. scattered over the mesh: fetch a few ahead.
+      if (i + kPrefetchDistance < sorted_end) mesh.prefetch(entries[i + kPrefetchDistance].t);
       const Entry& e = entries[i];
       if (touched[e.t] || touched[e.u]) continue;
       if (!mesh.check_collapse(e.t, e.u, site)) continue;

@@ -37,7 +37,7 @@ void CollapseRecorder::apply(uint32_t t, uint32_t u, const CollapseSite& site) {
   mesh_.collapse(t, u, site);
   node_of_vertex_[u] = s;
   height_[s] = std::max(height_[node_t], height_[node_u]) + 1;
-  refinement_.merge_leaves(s, node_t, node_u);
+  refinement_.merge_leaves(s, node_t, node_u, t, u);
   pending_.push_back({s, node_t, node_u, u});
 }
 

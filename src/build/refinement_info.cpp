@@ -13,9 +13,6 @@ namespace pms {
 namespace {
 
 constexpr float kPi = std::numbers::pi_v<float>;
-// Leaves sampled per node for the deviation space: the top levels have thousands of leaves, and
-// the children's bounds (merged in) already cover the detail below them.
-constexpr uint32_t kDeviationSamples = 8;
 
 struct V3 {
   double x = 0, y = 0, z = 0;
@@ -95,10 +92,9 @@ RefinementInfoBuilder::RefinementInfoBuilder(const Mesh& mesh, size_t max_nodes)
   const size_t n = mesh.vertex_count();
   info_.resize(max_nodes);
   survivor_.resize(max_nodes);
-  leaf_head_.resize(max_nodes);
-  leaf_tail_.resize(max_nodes);
-  leaf_count_.resize(max_nodes);
-  leaf_next_.assign(n, UINT32_MAX);
+  samples_.resize(kSamples * n);
+  sample_count_.assign(n, 1);
+  leaf_count_.assign(n, 1);
   std::vector<V3> normal_sum(n);
   std::vector<double> radius(n, 0);
   const size_t faces = mesh.face_count();
@@ -124,17 +120,25 @@ RefinementInfoBuilder::RefinementInfoBuilder(const Mesh& mesh, size_t max_nodes)
     const Cone cone{normalized(normal_sum[v]), cone_angle[v] + 1e-6};
     info_[v] = quantize_refine(to_bounds(radius[v], cone, 0, 0), scale_);
     survivor_[v] = v;
-    leaf_head_[v] = leaf_tail_[v] = v;
-    leaf_count_[v] = 1;
+    samples_[kSamples * size_t(v)] = v;
   }
 }
 
-void RefinementInfoBuilder::merge_leaves(uint32_t s, uint32_t t_node, uint32_t u_node) {
+void RefinementInfoBuilder::merge_leaves(uint32_t s, uint32_t, uint32_t u_node, uint32_t t, uint32_t u) {
   survivor_[s] = survivor_[u_node];
-  leaf_next_[leaf_tail_[t_node]] = leaf_head_[u_node];
-  leaf_head_[s] = leaf_head_[t_node];
-  leaf_tail_[s] = leaf_tail_[u_node];
-  leaf_count_[s] = leaf_count_[t_node] + leaf_count_[u_node];
+  const uint32_t total = leaf_count_[t] + leaf_count_[u];
+  const uint32_t have_t = sample_count_[t], have_u = sample_count_[u];
+  // Take from t in proportion to its share of the leaves, at least one from each side.
+  uint32_t from_t = have_t + have_u <= kSamples
+                        ? have_t
+                        : std::clamp<uint32_t>(uint32_t(uint64_t(kSamples) * leaf_count_[t] / total), 1, kSamples - 1);
+  from_t = std::min(from_t, have_t);
+  const uint32_t from_u = std::min(have_u, kSamples - from_t);
+  uint32_t* out = &samples_[kSamples * size_t(u)];
+  // u's first samples stay in place; t's go after them.
+  std::copy_n(&samples_[kSamples * size_t(t)], from_t, out + from_u);
+  sample_count_[u] = uint8_t(from_t + from_u);
+  leaf_count_[u] = total;
 }
 
 void RefinementInfoBuilder::compute(uint32_t s, uint32_t t_node, uint32_t u_node, const CollapseMesh& mesh,
@@ -147,12 +151,12 @@ void RefinementInfoBuilder::compute(uint32_t s, uint32_t t_node, uint32_t u_node
   const Cone cone = merge_cones(cone_of(bt), cone_of(bu));
   const float axis[3] = {float(cone.axis.x), float(cone.axis.y), float(cone.axis.z)};
   float mu = 0, delta = 0;
-  deviation(s, mesh, u, axis, mu, delta);
+  deviation(mesh, u, axis, mu, delta);
   info_[s] = quantize_refine(to_bounds(radius, cone, std::max({mu, bt.mu, bu.mu}), std::max({delta, bt.delta, bu.delta})),
                              scale_);
 }
 
-void RefinementInfoBuilder::deviation(uint32_t s, const CollapseMesh& mesh, uint32_t u, const float axis_f[3], float& mu,
+void RefinementInfoBuilder::deviation(const CollapseMesh& mesh, uint32_t u, const float axis_f[3], float& mu,
                                       float& delta) const {
   struct Tri {
     V3 a, b, c, n;
@@ -170,26 +174,22 @@ void RefinementInfoBuilder::deviation(uint32_t s, const CollapseMesh& mesh, uint
   });
   if (fan_size == 0) return;
   const V3 axis{axis_f[0], axis_f[1], axis_f[2]};
-  const uint32_t count = leaf_count_[s];
-  const uint32_t stride = count <= kDeviationSamples ? 1 : count / kDeviationSamples;
   double max_mu = 0, max_delta = 0;
-  uint32_t index = 0;
-  for (uint32_t leaf = leaf_head_[s]; leaf != UINT32_MAX && index < count; leaf = leaf_next_[leaf], ++index) {
-    if (index % stride != 0) continue;
-    const V3 p = load(leaf_position(leaf));
+  const uint32_t* samples = &samples_[kSamples * size_t(u)];
+  for (uint32_t i = 0; i < sample_count_[u]; ++i) {
+    const V3 p = load(leaf_position(samples[i]));
     double best = INFINITY;
     V3 best_error;
-    for (uint32_t i = 0; i < fan_size; ++i) {
-      const double plane = dot(fan[i].n, p) - fan[i].d;
+    for (uint32_t f = 0; f < fan_size; ++f) {
+      const double plane = dot(fan[f].n, p) - fan[f].d;
       if (plane * plane >= best) continue;  // the plane distance bounds the triangle distance from below
-      const V3 error = p - closest_point_on_triangle(p, fan[i].a, fan[i].b, fan[i].c);
+      const V3 error = p - closest_point_on_triangle(p, fan[f].a, fan[f].b, fan[f].c);
       const double d2 = dot(error, error);
       if (d2 < best) { best = d2; best_error = error; }
     }
     const double along = dot(best_error, axis);
     max_delta = std::max(max_delta, std::abs(along));
     max_mu = std::max(max_mu, length(best_error - axis * along));
-    if (leaf == leaf_tail_[s]) break;
   }
   mu = float(max_mu);
   delta = float(max_delta);

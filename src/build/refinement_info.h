@@ -18,8 +18,9 @@ class RefinementInfoBuilder {
 
   float scale() const { return scale_; }
 
-  // Node s was made by collapsing node t_node into u_node: joins their leaf lists. Sequential.
-  void merge_leaves(uint32_t s, uint32_t t_node, uint32_t u_node);
+  // Node s was made by collapsing vertex t (node t_node) into vertex u (node u_node): u's leaf
+  // samples become s's. Sequential.
+  void merge_leaves(uint32_t s, uint32_t t_node, uint32_t u_node, uint32_t t, uint32_t u);
   // Bounds of s; the surviving vertex u of `mesh` carries s. Merged from the children's *decoded*
   // values so every parent contains its children exactly as every consumer will see them.
   // Reads the mesh only and writes only node s: independent collapses may run in parallel.
@@ -30,14 +31,19 @@ class RefinementInfoBuilder {
 
  private:
   const float* leaf_position(uint32_t leaf) const { return &positions_[3 * size_t(leaf)]; }
-  void deviation(uint32_t s, const CollapseMesh& mesh, uint32_t u, const float axis[3], float& mu, float& delta) const;
+  void deviation(const CollapseMesh& mesh, uint32_t u, const float axis[3], float& mu, float& delta) const;
 
   const std::vector<float>& positions_;
   float scale_ = 1;
   std::vector<RefineInfo> info_;
   std::vector<uint32_t> survivor_;   // per node: leaf carrying its position
-  // Leaves below each node as linked lists (head/tail per node, next per leaf): merging is O(1).
-  std::vector<uint32_t> leaf_head_, leaf_tail_, leaf_next_, leaf_count_;
+  // Per current vertex: up to kSamples leaves spread over the subtree it carries, and the subtree's
+  // leaf count. A parent's samples are drawn from its children's in proportion to their sizes, so
+  // nothing walks a subtree (that walk was n * depth cache misses on big meshes).
+  static constexpr uint32_t kSamples = 8;
+  std::vector<uint32_t> samples_;     // kSamples per vertex
+  std::vector<uint8_t> sample_count_;
+  std::vector<uint32_t> leaf_count_;  // per vertex
 };
 
 }  // namespace pms
