@@ -351,27 +351,7 @@ ReferenceModel build_reference_model(const TestMesh& mesh, uint32_t seed, uint32
   return model;
 }
 
-ModelView ReferenceModel::view() const {
-  ModelView v;
-  v.root_count = h.root_count;
-  v.base_faces = h.base_faces;
-  v.parent = h.parent;
-  v.first_child = h.first_child;
-  v.position = h.position;
-  v.cut_left = h.cut_left;
-  v.cut_right = h.cut_right;
-  v.refine = h.refine;
-  v.leaf_vertex = h.leaf_vertex;
-  v.split_order = h.split_order;
-  v.normals = h.normals;
-  v.colors = h.colors;
-  v.tree_id = h.tree_id;
-  v.node_id = h.node_id;
-  v.bbox_min = h.bbox_min;
-  v.bbox_max = h.bbox_max;
-  v.scale = h.scale;
-  return v;
-}
+ModelView ReferenceModel::view() const { return view_of(h); }
 
 uint32_t ReferenceModel::node_of(VertexId id) const {
   auto it = node_by_id.find({id.tree, id.node});
