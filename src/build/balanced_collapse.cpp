@@ -108,6 +108,7 @@ CollapseForest simplify_balanced(const Mesh& input, const BuildOptions& options)
   std::vector<Entry> entries;
   CandidateCollector collector(mesh.vertex_count(), std::clamp(std::thread::hardware_concurrency(), 1u, 8u));
   std::vector<uint8_t> touched(mesh.vertex_count(), 0);
+  std::vector<uint32_t> new_index;
   CollapseSite site;
   while (mesh.alive_vertex_count() > target) {
     collector.collect(mesh, recorder, epsilon, entries);
@@ -135,6 +136,10 @@ CollapseForest simplify_balanced(const Mesh& input, const BuildOptions& options)
     }
     recorder.flush();
     if (accepted == 0 || accepted < kMinRoundShare * alive) break;
+    if (mesh.alive_vertex_count() < mesh.vertex_count() / 2) {
+      recorder.compact(new_index);
+      touched.resize(mesh.vertex_count());
+    }
     report(options.progress, "simplify", double(start - mesh.alive_vertex_count()) / double(start - target));
   }
   return recorder.finish();

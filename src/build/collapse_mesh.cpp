@@ -161,6 +161,41 @@ bool CollapseMesh::check_collapse(uint32_t t, uint32_t u, CollapseSite& site) {
   return geometry_ok;
 }
 
+void CollapseMesh::compact(std::vector<uint32_t>& new_index) {
+  const uint32_t n = vertex_count();
+  new_index.assign(n, UINT32_MAX);
+  uint32_t live = 0;
+  for (uint32_t v = 0; v < n; ++v)
+    if (vertex_alive_[v]) {
+      new_index[v] = live;
+      std::copy_n(&positions_[3 * size_t(v)], 3, &positions_[3 * size_t(live)]);
+      quadrics_[live] = quadrics_[v];
+      ++live;
+    }
+  positions_.resize(3 * size_t(live));
+  quadrics_.resize(live);
+  vertex_alive_.assign(live, 1);
+  size_t kept = 0;
+  for (size_t f = 0; f < face_alive_.size(); ++f) {
+    if (!face_alive_[f]) continue;
+    for (int k = 0; k < 3; ++k) {
+      faces_[3 * kept + k] = new_index[faces_[3 * f + k]];
+      original_[3 * kept + k] = original_[3 * f + k];
+    }
+    ++kept;
+  }
+  faces_.resize(3 * kept);
+  original_.resize(3 * kept);
+  face_alive_.assign(kept, 1);
+  next_corner_.assign(3 * kept, kEnd);
+  head_.assign(live, kEnd);
+  for (size_t c = faces_.size(); c-- > 0;) {
+    next_corner_[c] = head_[faces_[c]];
+    head_[faces_[c]] = uint32_t(c);
+  }
+  scratch_marks_.resize(live);
+}
+
 void CollapseMesh::collapse(uint32_t t, uint32_t u, const CollapseSite& site) {
   if (site.face_l != UINT32_MAX) face_alive_[site.face_l] = 0;
   if (site.face_r != UINT32_MAX) face_alive_[site.face_r] = 0;

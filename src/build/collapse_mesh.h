@@ -67,6 +67,11 @@ class CollapseMesh {
   // Performs a collapse that check_collapse() accepted.
   void collapse(uint32_t t, uint32_t u, const CollapseSite& site);
 
+  // Renumbers the live vertices 0.. in their current order and drops dead faces, so later rounds
+  // walk dense arrays (a big mesh's survivors are otherwise scattered over gigabytes).
+  // new_index[old vertex] = new vertex, or UINT32_MAX for a dead one.
+  void compact(std::vector<uint32_t>& new_index);
+
  private:
   static constexpr uint32_t kEnd = UINT32_MAX;
   std::vector<float> positions_;

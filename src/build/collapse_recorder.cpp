@@ -59,6 +59,16 @@ void CollapseRecorder::flush() {
   pending_.clear();
 }
 
+void CollapseRecorder::compact(std::vector<uint32_t>& new_index) {
+  flush();
+  mesh_.compact(new_index);
+  uint32_t live = 0;
+  for (uint32_t v = 0; v < new_index.size(); ++v)
+    if (new_index[v] != UINT32_MAX) node_of_vertex_[live++] = node_of_vertex_[v];
+  node_of_vertex_.resize(live);
+  refinement_.compact(new_index);
+}
+
 CollapseForest CollapseRecorder::finish() {
   flush();
   std::vector<uint32_t> root_index(mesh_.vertex_count(), UINT32_MAX);

@@ -141,6 +141,20 @@ void RefinementInfoBuilder::merge_leaves(uint32_t s, uint32_t, uint32_t u_node, 
   leaf_count_[u] = total;
 }
 
+void RefinementInfoBuilder::compact(const std::vector<uint32_t>& new_index) {
+  uint32_t live = 0;
+  for (uint32_t v = 0; v < new_index.size(); ++v) {
+    if (new_index[v] == UINT32_MAX) continue;
+    std::copy_n(&samples_[kSamples * size_t(v)], kSamples, &samples_[kSamples * size_t(live)]);
+    sample_count_[live] = sample_count_[v];
+    leaf_count_[live] = leaf_count_[v];
+    ++live;
+  }
+  samples_.resize(kSamples * size_t(live));
+  sample_count_.resize(live);
+  leaf_count_.resize(live);
+}
+
 void RefinementInfoBuilder::compute(uint32_t s, uint32_t t_node, uint32_t u_node, const CollapseMesh& mesh,
                                     uint32_t u) {
   const RefineBounds bt = dequantize_refine(info_[t_node], scale_);

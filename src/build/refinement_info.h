@@ -26,6 +26,9 @@ class RefinementInfoBuilder {
   // Reads the mesh only and writes only node s: independent collapses may run in parallel.
   void compute(uint32_t s, uint32_t t_node, uint32_t u_node, const CollapseMesh& mesh, uint32_t u);
 
+  // Follows CollapseMesh::compact(): per-vertex arrays renumbered the same way.
+  void compact(const std::vector<uint32_t>& new_index);
+
   const RefineInfo& info(uint32_t node) const { return info_[node]; }
   std::vector<RefineInfo> take() { return std::move(info_); }
 

@@ -41,6 +41,10 @@ class CollapseRecorder {
 
   CollapseForest finish();
 
+  // Renumbers the working mesh's live vertices (CollapseMesh::compact) and every per-vertex array
+  // here with it; flush() first. new_index as compact() returns it.
+  void compact(std::vector<uint32_t>& new_index);
+
  private:
   CollapseMesh& mesh_;
   CollapseForest forest_;
