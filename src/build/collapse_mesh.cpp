@@ -23,9 +23,9 @@ constexpr double kBoundaryWeight = 8.0;
 }  // namespace
 
 CollapseMesh::CollapseMesh(const Mesh& mesh)
-    : positions_(mesh.positions),
-      faces_(mesh.indices),
-      original_(mesh.indices),
+    : positions_(mesh.positions.begin(), mesh.positions.end()),
+      faces_(mesh.indices.begin(), mesh.indices.end()),
+      original_(mesh.indices.begin(), mesh.indices.end()),
       face_alive_(mesh.face_count(), 1),
       next_corner_(mesh.indices.size(), kEnd),
       head_(mesh.vertex_count(), kEnd),

@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "build/huge_pages.h"
 #include "build/quadric.h"
 #include "io/mesh.h"
 
@@ -74,14 +75,14 @@ class CollapseMesh {
 
  private:
   static constexpr uint32_t kEnd = UINT32_MAX;
-  std::vector<float> positions_;
-  std::vector<uint32_t> faces_;
-  std::vector<uint32_t> original_;   // input corners, never modified: the dual view of every face
-  std::vector<uint8_t> face_alive_;
-  std::vector<uint32_t> next_corner_;
-  std::vector<uint32_t> head_;       // first corner of each vertex; kEnd once the vertex is gone
-  std::vector<uint8_t> vertex_alive_;
-  std::vector<Quadric> quadrics_;
+  BigVector<float> positions_;
+  BigVector<uint32_t> faces_;
+  BigVector<uint32_t> original_;   // input corners, never modified: the dual view of every face
+  BigVector<uint8_t> face_alive_;
+  BigVector<uint32_t> next_corner_;
+  BigVector<uint32_t> head_;       // first corner of each vertex; kEnd once the vertex is gone
+  BigVector<uint8_t> vertex_alive_;
+  BigVector<Quadric> quadrics_;
   uint32_t alive_vertices_ = 0;
   NeighbourScratch scratch_marks_;
   std::vector<uint32_t> scratch_;

@@ -42,6 +42,10 @@ void CollapseRecorder::apply(uint32_t t, uint32_t u, const CollapseSite& site) {
 }
 
 void CollapseRecorder::flush() {
+  // Accepted in cost order, i.e. scattered over the mesh; computed in vertex order, the fans and
+  // samples they read are neighbours in memory. Every record of one round reads only the
+  // previous rounds' info and the round's final mesh, so the order does not change the result.
+  std::sort(pending_.begin(), pending_.end(), [](const Pending& a, const Pending& b) { return a.u < b.u; });
   auto run = [this](size_t begin, size_t end) {
     for (size_t i = begin; i < end; ++i)
       refinement_.compute(pending_[i].s, pending_[i].t_node, pending_[i].u_node, mesh_, pending_[i].u);

@@ -39,14 +39,14 @@ class RefinementInfoBuilder {
   const std::vector<float>& positions_;
   float scale_ = 1;
   std::vector<RefineInfo> info_;
-  std::vector<uint32_t> survivor_;   // per node: leaf carrying its position
+  BigVector<uint32_t> survivor_;   // per node: leaf carrying its position
   // Per current vertex: up to kSamples leaves spread over the subtree it carries, and the subtree's
   // leaf count. A parent's samples are drawn from its children's in proportion to their sizes, so
   // nothing walks a subtree (that walk was n * depth cache misses on big meshes).
   static constexpr uint32_t kSamples = 8;
-  std::vector<uint32_t> samples_;     // kSamples per vertex
-  std::vector<uint8_t> sample_count_;
-  std::vector<uint32_t> leaf_count_;  // per vertex
+  BigVector<uint32_t> samples_;     // kSamples per vertex
+  BigVector<uint8_t> sample_count_;
+  BigVector<uint32_t> leaf_count_;  // per vertex
 };
 
 }  // namespace pms
