@@ -1,0 +1,88 @@
+// Kim, Lee, Kobbelt 2005 §5.3 (SelectiveStreaming, SelStreamVSplit) and §6.1 (windowed active tags).
+#include "server/selective_streaming.h"
+
+#include <algorithm>
+
+namespace pms {
+namespace {
+
+// StreamVSplit: the client will have v's children, so the server's front moves below v.
+void stream_vsplit(const ModelView& model, ActiveTags& tags, uint32_t node, std::vector<uint32_t>& out) {
+  tags.deactivate(node);
+  tags.activate(model.first_child[node]);
+  tags.activate(model.first_child[node] + 1);
+  out.push_back(node);
+}
+
+// SelStreamVSplit(v) without recursion: v's split waits on the stack while the ancestor shared by
+// its cut vertices is split first, and so on down the chain.
+void sel_stream_vsplit(const ModelView& model, ActiveTags& tags, uint32_t node, std::vector<uint32_t>& out,
+                       std::vector<uint32_t>& stack) {
+  stack.clear();
+  stack.push_back(node);
+  while (!stack.empty()) {
+    const uint32_t v = stack.back();
+    if (!tags.is_active(v)) {  // already split while serving another chain
+      stack.pop_back();
+      continue;
+    }
+    const uint32_t cut_l = model.cut_left[v], cut_r = model.cut_right[v];
+    if (cut_l != kNone && cut_r != kNone) {
+      const uint32_t left = active_ancestor(model, tags, cut_l);
+      if (left == active_ancestor(model, tags, cut_r)) {
+        stack.push_back(left);
+        continue;
+      }
+    }
+    stream_vsplit(model, tags, v, out);
+    stack.pop_back();
+  }
+}
+
+}  // namespace
+
+uint32_t active_ancestor(const ModelView& model, const ActiveTags& tags, uint32_t node) {
+  while (node != kNone && !tags.is_active(node)) node = model.parent[node];
+  return node;
+}
+
+bool selective_streaming(const ModelView& model, ActiveTags& tags, const Importance& importance, size_t max_splits,
+                         std::vector<uint32_t>& out, StreamingScratch& scratch) {
+  auto& heap = scratch.heap;
+  heap.clear();
+  auto consider = [&](uint32_t node) {
+    if (model.is_leaf(node)) return;
+    const float error = importance(node);
+    if (error > 0) heap.emplace_back(error, node);
+  };
+  for (uint32_t v = tags.next_active(0); v != UINT32_MAX; v = tags.next_active(v + 1)) consider(v);
+  // Ties broken by node index, so the batch is the same on every run.
+  auto less = [](const std::pair<float, uint32_t>& a, const std::pair<float, uint32_t>& b) {
+    return a.first < b.first || (a.first == b.first && a.second > b.second);
+  };
+  std::make_heap(heap.begin(), heap.end(), less);
+  const size_t start = out.size();
+  while (!heap.empty()) {
+    if (out.size() - start >= max_splits) return false;
+    std::pop_heap(heap.begin(), heap.end(), less);
+    const uint32_t v = heap.back().second;
+    heap.pop_back();
+    if (!tags.is_active(v)) continue;  // split earlier as a dependency
+    const size_t before = out.size();
+    sel_stream_vsplit(model, tags, v, out, scratch.stack);
+    // Children of every split just made may want refining too; forced splits' children included.
+    for (size_t i = before; i < out.size(); ++i) {
+      const uint32_t child = model.first_child[out[i]];
+      for (uint32_t c : {child, child + 1}) {
+        if (!tags.is_active(c) || model.is_leaf(c)) continue;
+        const float error = importance(c);
+        if (error <= 0) continue;
+        heap.emplace_back(error, c);
+        std::push_heap(heap.begin(), heap.end(), less);
+      }
+    }
+  }
+  return true;
+}
+
+}  // namespace pms
