@@ -1,0 +1,91 @@
+// libFuzzer target for every protocol message decoder (DESIGN.md §6.5): the first byte picks the
+// decoder, VSPLITS takes its stream context from the next 8 bytes, the rest is the payload. Any bytes
+// must decode or throw ProtocolError — never crash, hang, over-allocate or throw anything else — and what
+// decodes must re-encode and decode to the same message (byte for byte where no quantization is involved).
+#include <cstddef>
+#include <cstdint>
+#include <cstring>
+#include <span>
+#include <vector>
+
+#include "protocol/protocol.h"
+
+namespace {
+
+using namespace pms::protocol;
+
+std::span<const uint8_t> payload_of(const std::vector<uint8_t>& frame) {
+  return std::span<const uint8_t>(frame).subspan(kFrameHeaderBytes);
+}
+
+bool same(std::span<const uint8_t> a, std::span<const uint8_t> b) {
+  return a.size() == b.size() && (a.empty() || std::memcmp(a.data(), b.data(), a.size()) == 0);
+}
+
+void check(bool condition) {
+  if (!condition) __builtin_trap();
+}
+
+// A context from 8 bytes, always one the encoder accepts: widths clamped into their valid ranges.
+StreamContext context_from(const uint8_t* b) {
+  StreamContext c;
+  c.tree_id_bits = 1 + b[0] % 32;
+  const uint64_t max_roots = uint64_t(1) << c.tree_id_bits;
+  c.root_count = uint32_t(1 + (uint64_t(b[1]) | uint64_t(b[2]) << 8 | uint64_t(b[3]) << 16) % max_roots);
+  c.node_id_bits = b[4] % 64;
+  static const uint32_t kBits[] = {1, 5, 8, 12, 16, 20, 24, 32};
+  c.grid.bits = kBits[b[5] % 8];
+  c.has_normals = b[6] & 1;
+  c.has_colors = b[6] & 2;
+  for (int i = 0; i < 3; ++i) {
+    c.grid.min[i] = -1.0f - float(b[7] % 4);
+    c.grid.max[i] = 1.0f + float(b[7] / 4 % 4);
+  }
+  return c;
+}
+
+bool same_split(const pms::SplitRecord& a, const pms::SplitRecord& b) {
+  return a.vs == b.vs && a.cut_l == b.cut_l && a.cut_r == b.cut_r && a.info_t == b.info_t && a.info_u == b.info_u &&
+         a.has_normal == b.has_normal && a.has_color == b.has_color && std::memcmp(a.color_t, b.color_t, 4) == 0;
+}
+
+void fuzz_one(uint8_t which, std::span<const uint8_t> payload, const StreamContext& context) {
+  switch (which % 10) {
+    case 0: check(same(payload_of(encode(decode_hello(payload))), payload)); break;
+    case 1: check(same(payload_of(encode(decode_list(payload))), payload)); break;
+    case 2: check(same(payload_of(encode(decode_open(payload, 1u << 16))), payload)); break;
+    case 3: check(same(payload_of(encode(decode_view(payload))), payload)); break;
+    case 4: check(same(payload_of(encode(decode_close(payload))), payload)); break;
+    case 5: check(same(payload_of(encode(decode_hello_ok(payload))), payload)); break;
+    case 6: check(same(payload_of(encode(decode_catalogue(payload))), payload)); break;
+    case 7: {
+      // Positions and normals may move by a rounding step when re-quantized; the rest must not change.
+      const Base base = decode_base(payload);
+      const std::vector<uint8_t> again = encode(base);
+      const Base back = decode_base(payload_of(again));
+      check(back.refine == base.refine && back.faces == base.faces && back.colors == base.colors &&
+            back.positions.size() == base.positions.size() && back.normals.size() == base.normals.size());
+      break;
+    }
+    case 8: {
+      const VSplits batch = decode_vsplits(payload, context);
+      const VSplits back = decode_vsplits(payload_of(encode(batch, context)), context);
+      check(back.frame == batch.frame && back.final == batch.final && back.splits.size() == batch.splits.size());
+      for (size_t i = 0; i < batch.splits.size(); ++i) check(same_split(back.splits[i], batch.splits[i]));
+      break;
+    }
+    case 9: check(same(payload_of(encode(decode_error(payload))), payload)); break;
+  }
+}
+
+}  // namespace
+
+extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
+  if (size < 9) return 0;
+  const StreamContext context = context_from(data + 1);
+  try {
+    fuzz_one(data[0], std::span<const uint8_t>(data + 9, size - 9), context);
+  } catch (const ProtocolError&) {
+  }
+  return 0;
+}

@@ -1,0 +1,38 @@
+// One entry point per direction: a frame's type picks the decoder, and a message that belongs to the
+// other direction is as malformed as garbage.
+#include "protocol/protocol.h"
+
+namespace pms::protocol {
+namespace {
+
+[[noreturn]] void unexpected(MessageType type, const char* from) {
+  throw ProtocolError(ErrorCode::bad_message, to_string(type) + ": not a message a " + from + " sends");
+}
+
+}  // namespace
+
+ClientMessage decode_client_message(const Frame& frame, uint64_t max_resume_leaves) {
+  switch (frame.type) {
+    case MessageType::hello: return decode_hello(frame.payload);
+    case MessageType::list: return decode_list(frame.payload);
+    case MessageType::open: return decode_open(frame.payload, max_resume_leaves);
+    case MessageType::view: return decode_view(frame.payload);
+    case MessageType::close: return decode_close(frame.payload);
+    default: unexpected(frame.type, "client");
+  }
+}
+
+ServerMessage decode_server_message(const Frame& frame, const StreamContext* context) {
+  switch (frame.type) {
+    case MessageType::hello_ok: return decode_hello_ok(frame.payload);
+    case MessageType::catalogue: return decode_catalogue(frame.payload);
+    case MessageType::base: return decode_base(frame.payload);
+    case MessageType::vsplits:
+      if (!context) throw ProtocolError(ErrorCode::out_of_order, "VSPLITS: before any BASE");
+      return decode_vsplits(frame.payload, *context);
+    case MessageType::error: return decode_error(frame.payload);
+    default: unexpected(frame.type, "server");
+  }
+}
+
+}  // namespace pms::protocol

@@ -1,0 +1,160 @@
+// VSPLITS: a batch of vsplit packets (kim-lee-kobbelt §5.2, Fig. 3b; Table 2). Per packet the topology
+// is only the ids of v_s, v̂_l and v̂_r — v_t and v_u are v_s's children, implied — each written as
+//   tree-id (tree_id_bits) | depth (depth_field_bits) | the node-id's path below the root (depth bits),
+// i.e. the heap node-id without its implicit leading 1, so an id costs what its depth needs rather than
+// the model's worst case. Then v_t's quantized position (v_u keeps v_s's), info_t, info_u and the optional
+// normal / color of v_t. The whole batch is one bit stream padded once at the end: packets are not
+// byte-aligned (docs/protocol.md has the measurements that chose this).
+#include <bit>
+#include <cmath>
+
+#include "protocol/wire_internal.h"
+
+namespace pms::protocol {
+namespace {
+
+constexpr uint8_t kFlagFinal = 1;
+constexpr unsigned kCutLeft = 1, kCutRight = 2;  // the 2-bit cut flags
+constexpr uint32_t kCutFlagBits = 2;
+constexpr uint32_t kInfoBits = 96;
+
+uint32_t attribute_bits(const StreamContext& c) { return (c.has_normals ? 32 : 0) + (c.has_colors ? 32 : 0); }
+
+// Smallest packet: depth-0 ids, one cut vertex. Bounds a batch's count by its bytes before allocating.
+uint64_t min_packet_bits(const StreamContext& c) {
+  const uint64_t id = c.tree_id_bits + depth_field_bits(c.node_id_bits);
+  return 2 * id + kCutFlagBits + 3 * uint64_t(c.grid.bits) + 2 * kInfoBits + attribute_bits(c);
+}
+
+void write_id(Writer& w, VertexId v, const StreamContext& c, const char* field) {
+  if (!is_vertex(v) || v.tree >= c.root_count || uint32_t(v.depth()) > c.node_id_bits)
+    fail("VSPLITS", std::string(field) + " " + to_string(v) + " is outside the model's ids");
+  const int depth = v.depth();
+  w.bits(v.tree, c.tree_id_bits);
+  w.bits(uint64_t(depth), depth_field_bits(c.node_id_bits));
+  w.bits(v.node, unsigned(depth));  // the low `depth` bits: the leading 1 is implied
+}
+
+VertexId read_id(Reader& r, const StreamContext& c, const char* field) {
+  VertexId v;
+  v.tree = uint32_t(r.bits(c.tree_id_bits, field));
+  if (v.tree >= c.root_count)
+    r.fail(ErrorCode::bad_id, field,
+           "tree-id " + std::to_string(v.tree) + " >= root count " + std::to_string(c.root_count));
+  const uint32_t depth = uint32_t(r.bits(depth_field_bits(c.node_id_bits), field));
+  if (depth > c.node_id_bits)
+    r.fail(ErrorCode::bad_id, field,
+           "depth " + std::to_string(depth) + " > the model's " + std::to_string(c.node_id_bits));
+  v.node = (uint64_t(1) << depth) | r.bits(depth, field);
+  return v;
+}
+
+void write_packet(Writer& w, const SplitRecord& s, const StreamContext& c) {
+  if (s.has_normal != c.has_normals || s.has_color != c.has_colors)
+    fail("VSPLITS", "split of " + to_string(s.vs) + ": normal/color presence differs from the model's");
+  if (uint32_t(s.vs.depth()) >= c.node_id_bits)
+    fail("VSPLITS", "split of " + to_string(s.vs) + ": its children would be deeper than node_id_bits");
+  write_id(w, s.vs, c, "v_s");
+  const unsigned cuts = (is_vertex(s.cut_l) ? kCutLeft : 0) | (is_vertex(s.cut_r) ? kCutRight : 0);
+  if (cuts == 0) fail("VSPLITS", "split of " + to_string(s.vs) + " has no cut vertex");
+  w.bits(cuts, kCutFlagBits);
+  if (cuts & kCutLeft) write_id(w, s.cut_l, c, "v_l");
+  if (cuts & kCutRight) write_id(w, s.cut_r, c, "v_r");
+  uint32_t q[3];
+  quantize_position(c.grid, s.position_t, q);
+  for (uint32_t v : q) w.bits(v, c.grid.bits);
+  write_refine(w, s.info_t);
+  write_refine(w, s.info_u);
+  if (c.has_normals) {
+    uint16_t n[2];
+    encode_normal(s.normal_t, n);
+    w.u16(n[0]);
+    w.u16(n[1]);
+  }
+  if (c.has_colors)
+    for (uint8_t v : s.color_t) w.u8(v);
+}
+
+void read_packet(Reader& r, const StreamContext& c, SplitRecord& s) {
+  s.vs = read_id(r, c, "v_s");
+  if (uint32_t(s.vs.depth()) >= c.node_id_bits)
+    r.fail(ErrorCode::bad_id, "v_s", to_string(s.vs) + " is at the deepest level: it has no children to split into");
+  const unsigned cuts = unsigned(r.bits(kCutFlagBits, "cut flags"));
+  if (cuts == 0) r.fail(ErrorCode::bad_message, "cut flags", "neither v_l nor v_r is present");
+  if (cuts & kCutLeft) s.cut_l = read_id(r, c, "v_l");
+  if (cuts & kCutRight) s.cut_r = read_id(r, c, "v_r");
+  // A cut vertex is a leaf beside v_s's faces, never inside its own subtree (pms-format.md, CUTL/CUTR).
+  if (is_ancestor_or_self(s.vs, s.cut_l))
+    r.fail(ErrorCode::bad_id, "v_l", to_string(s.cut_l) + " is inside v_s's subtree");
+  if (is_ancestor_or_self(s.vs, s.cut_r))
+    r.fail(ErrorCode::bad_id, "v_r", to_string(s.cut_r) + " is inside v_s's subtree");
+  uint32_t q[3];
+  for (uint32_t& v : q) v = uint32_t(r.bits(c.grid.bits, "position"));
+  dequantize_position(c.grid, q, s.position_t);
+  for (float v : s.position_t)
+    if (!std::isfinite(v)) r.fail(ErrorCode::bad_message, "position", "is not finite");
+  s.info_t = read_refine(r, "info_t");
+  s.info_u = read_refine(r, "info_u");
+  s.has_normal = c.has_normals;
+  if (c.has_normals) {
+    const uint16_t n[2] = {r.u16("normal"), r.u16("normal")};
+    decode_normal(n, s.normal_t);
+  }
+  s.has_color = c.has_colors;
+  if (c.has_colors)
+    for (uint8_t& v : s.color_t) v = r.u8("color");
+}
+
+}  // namespace
+
+uint32_t depth_field_bits(uint32_t node_id_bits) {
+  return node_id_bits == 0 ? 1 : uint32_t(std::bit_width(node_id_bits));
+}
+
+uint32_t id_bits(VertexId id, const StreamContext& c) {
+  return c.tree_id_bits + depth_field_bits(c.node_id_bits) + uint32_t(id.depth());
+}
+
+PacketBits packet_bits(const SplitRecord& s, const StreamContext& c) {
+  PacketBits bits;
+  bits.topology = id_bits(s.vs, c) + kCutFlagBits;
+  if (is_vertex(s.cut_l)) bits.topology += id_bits(s.cut_l, c);
+  if (is_vertex(s.cut_r)) bits.topology += id_bits(s.cut_r, c);
+  bits.position = 3 * c.grid.bits;
+  bits.refinement = 2 * kInfoBits;
+  bits.attributes = attribute_bits(c);
+  return bits;
+}
+
+std::vector<uint8_t> encode(const VSplits& m, const StreamContext& c) {
+  if (const std::string why = check_context(c); !why.empty()) fail("VSPLITS", "stream context: " + why);
+  if (m.splits.size() > UINT32_MAX) fail("VSPLITS", "too many packets in one batch");
+  Writer w(MessageType::vsplits);
+  w.u32(m.frame);
+  w.u8(m.final ? kFlagFinal : 0);
+  w.u32(uint32_t(m.splits.size()));
+  for (const SplitRecord& s : m.splits) write_packet(w, s, c);
+  return w.finish();
+}
+
+VSplits decode_vsplits(std::span<const uint8_t> payload, const StreamContext& c) {
+  Reader r(payload, MessageType::vsplits);
+  if (const std::string why = check_context(c); !why.empty()) r.fail(ErrorCode::internal, "stream context", why);
+  VSplits m;
+  m.frame = r.u32("frame");
+  const uint8_t flags = r.u8("flags");
+  if (flags & ~kFlagFinal) r.fail(ErrorCode::bad_message, "flags", "unknown bits set");
+  m.final = flags & kFlagFinal;
+  const uint32_t count = r.u32("packet count");
+  r.check_count(count, min_packet_bits(c), "packet count");
+  m.splits.resize(count);
+  for (uint32_t i = 0; i < count; ++i) {
+    r.set_item("packet", i);
+    read_packet(r, c, m.splits[i]);
+  }
+  r.clear_item();
+  r.expect_end();
+  return m;
+}
+
+}  // namespace pms::protocol

@@ -1,0 +1,154 @@
+// The bit writer/reader of wire_internal.h and the field codecs shared by several messages.
+#include <algorithm>
+#include <bit>
+#include <cmath>
+#include <cstring>
+
+#include "protocol/wire_internal.h"
+
+namespace pms::protocol {
+
+Writer::Writer(MessageType type) : type_(type) {
+  out_.resize(kFrameHeaderBytes);
+  out_[4] = uint8_t(type);
+}
+
+void Writer::bits(uint64_t value, unsigned n) {
+  if (n > 32) {  // keeps acc_ below 64 bits: at most 7 pending + 32 new
+    bits(value & 0xFFFFFFFFu, 32);
+    bits(value >> 32, n - 32);
+    return;
+  }
+  if (n < 64) value &= (uint64_t(1) << n) - 1;
+  acc_ |= value << fill_;
+  fill_ += n;
+  while (fill_ >= 8) {
+    out_.push_back(uint8_t(acc_));
+    acc_ >>= 8;
+    fill_ -= 8;
+  }
+}
+
+void Writer::f32(float v) { u32(std::bit_cast<uint32_t>(v)); }
+
+void Writer::string(const std::string& s, size_t max, const char* field) {
+  if (s.size() > max || s.size() > UINT16_MAX)
+    fail(to_string(type_), std::string(field) + " is " + std::to_string(s.size()) + " bytes, at most " +
+                               std::to_string(max) + " fit");
+  u16(uint16_t(s.size()));
+  for (unsigned char c : s) u8(c);
+}
+
+void Writer::align() {
+  if (fill_ > 0) bits(0, 8 - fill_);
+}
+
+std::vector<uint8_t> Writer::finish() {
+  align();
+  const uint64_t size = out_.size() - kFrameHeaderBytes;
+  if (size > UINT32_MAX) fail(to_string(type_), "payload of " + std::to_string(size) + " bytes exceeds the u32 length");
+  for (int i = 0; i < 4; ++i) out_[i] = uint8_t(size >> (8 * i));
+  return std::move(out_);
+}
+
+uint64_t Reader::bits(unsigned n, const char* field) {
+  if (n > bits_left())
+    fail(ErrorCode::bad_message, field,
+         "truncated (needs " + std::to_string(n) + " bits, " + std::to_string(bits_left()) + " left)");
+  uint64_t value = 0;
+  unsigned got = 0;
+  while (got < n) {
+    const unsigned offset = unsigned(pos_ & 7);
+    const unsigned take = std::min(8 - offset, n - got);
+    const uint64_t chunk = (uint64_t(data_[pos_ >> 3]) >> offset) & ((1u << take) - 1);
+    value |= chunk << got;
+    got += take;
+    pos_ += take;
+  }
+  return value;
+}
+
+float Reader::f32(const char* field) { return std::bit_cast<float>(u32(field)); }
+
+float Reader::finite_f32(const char* field) {
+  const float v = f32(field);
+  if (!std::isfinite(v)) fail(ErrorCode::bad_message, field, "is not finite");
+  return v;
+}
+
+std::string Reader::string(size_t max, const char* field) {
+  const uint16_t size = u16(field);
+  if (size > max)
+    fail(ErrorCode::bad_message, field, std::to_string(size) + " bytes, at most " + std::to_string(max) + " allowed");
+  check_count(size, 8, field);
+  std::string s(size, '\0');
+  if (pos_ % 8 == 0) {  // the usual case: whole bytes
+    std::memcpy(s.data(), data_.data() + pos_ / 8, size);
+    pos_ += 8 * uint64_t(size);
+  } else {
+    for (char& c : s) c = char(u8(field));
+  }
+  return s;
+}
+
+void Reader::check_count(uint64_t count, uint64_t min_bits, const char* field) {
+  // Division, not multiplication: a hostile count must not overflow its way past the check.
+  if (min_bits > 0 && count > bits_left() / min_bits)
+    fail(ErrorCode::bad_message, field,
+         "count " + std::to_string(count) + " does not fit in the " + std::to_string(bits_left() / 8) +
+             " bytes left");
+}
+
+void Reader::expect_end() {
+  const unsigned pad = unsigned((8 - pos_ % 8) % 8);
+  if (pad > 0 && bits(pad, "padding") != 0) fail(ErrorCode::bad_message, "padding", "bits are not zero");
+  if (pos_ / 8 != data_.size())
+    fail(ErrorCode::bad_message, "end", std::to_string(data_.size() - pos_ / 8) + " trailing bytes");
+}
+
+void Reader::fail(ErrorCode code, const char* field, const std::string& what) const {
+  std::string text = to_string(type_) + ": ";
+  if (item_) text += std::string(item_) + " " + std::to_string(item_index_) + ": ";
+  text += field;
+  text += ": ";
+  text += what;
+  throw ProtocolError(code, text);
+}
+
+void write_refine(Writer& w, const RefineInfo& info) {
+  for (uint16_t v : {info.radius, info.mu, info.delta, info.cone_x, info.cone_y, info.cone_angle}) w.u16(v);
+}
+
+namespace {
+// Half-float bits that are negative or NaN; +inf is allowed ("always refine").
+bool bad_length(uint16_t half) { return (half & 0x8000) != 0 || (half & 0x7FFF) > 0x7C00; }
+}  // namespace
+
+RefineInfo read_refine(Reader& r, const char* field) {
+  RefineInfo info;
+  info.radius = r.u16(field);
+  info.mu = r.u16(field);
+  info.delta = r.u16(field);
+  info.cone_x = r.u16(field);
+  info.cone_y = r.u16(field);
+  info.cone_angle = r.u16(field);
+  if (bad_length(info.radius) || bad_length(info.mu) || bad_length(info.delta))
+    r.fail(ErrorCode::bad_message, field, "a length (radius, mu or delta) is negative or NaN");
+  return info;
+}
+
+std::string check_context(const StreamContext& c) {
+  if (c.root_count == 0) return "no roots";
+  if (c.tree_id_bits < 1 || c.tree_id_bits > 32)
+    return "tree_id_bits " + std::to_string(c.tree_id_bits) + " not in 1..32";
+  if (c.tree_id_bits < 32 && ((c.root_count - 1) >> c.tree_id_bits) != 0)
+    return "tree_id_bits " + std::to_string(c.tree_id_bits) + " cannot hold " + std::to_string(c.root_count) + " roots";
+  if (c.node_id_bits > 63) return "node_id_bits " + std::to_string(c.node_id_bits) + " over 63";
+  if (!valid_position_bits(c.grid.bits)) return "position bits " + std::to_string(c.grid.bits) + " not in 1..24 or 32";
+  for (int i = 0; i < 3; ++i)
+    if (!std::isfinite(c.grid.min[i]) || !std::isfinite(c.grid.max[i]) || !(c.grid.min[i] <= c.grid.max[i]))
+      return "bounding box is not finite or min > max";
+  return "";
+}
+
+}  // namespace pms::protocol

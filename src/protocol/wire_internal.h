@@ -1,0 +1,84 @@
+// Inside the protocol layer only: the bit writer/reader every message codec is made of.
+// One LSB-first bit stream per message: a value of n bits at a byte boundary is exactly its n/8
+// little-endian bytes, so byte-aligned fields (lengths, floats, strings) and packed fields (ids,
+// quantized coordinates) use the same two classes and the docs can describe both as "u32", "6 bits".
+#pragma once
+#include <cstdint>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "protocol/protocol.h"
+
+namespace pms::protocol {
+
+// Builds one frame: header placeholder first, payload bits after, length patched by finish().
+class Writer {
+ public:
+  explicit Writer(MessageType type);
+  void bits(uint64_t value, unsigned n);  // n <= 64; value must fit (checked by the callers' ids)
+  void u8(uint8_t v) { bits(v, 8); }
+  void u16(uint16_t v) { bits(v, 16); }
+  void u32(uint32_t v) { bits(v, 32); }
+  void u64(uint64_t v) { bits(v, 64); }
+  void f32(float v);
+  // u16 length + bytes; throws pms::Error naming `field` when longer than `max`.
+  void string(const std::string& s, size_t max, const char* field);
+  void align();  // zero bits up to the next byte
+  std::vector<uint8_t> finish();
+
+ private:
+  MessageType type_;
+  std::vector<uint8_t> out_;
+  uint64_t acc_ = 0;
+  unsigned fill_ = 0;
+};
+
+// Reads one payload; every read is bounds-checked and every failure names the message, the item (e.g.
+// "packet 12") and the field.
+class Reader {
+ public:
+  Reader(std::span<const uint8_t> payload, MessageType type) : data_(payload), type_(type) {}
+
+  uint64_t bits(unsigned n, const char* field);  // n <= 64
+  uint8_t u8(const char* field) { return uint8_t(bits(8, field)); }
+  uint16_t u16(const char* field) { return uint16_t(bits(16, field)); }
+  uint32_t u32(const char* field) { return uint32_t(bits(32, field)); }
+  uint64_t u64(const char* field) { return bits(64, field); }
+  float f32(const char* field);         // any bits, NaN included
+  float finite_f32(const char* field);  // rejects NaN and infinities
+  std::string string(size_t max, const char* field);
+  uint64_t bits_left() const { return 8 * uint64_t(data_.size()) - pos_; }
+  // `count` items of at least `min_bits` each must fit in what is left: checked before any allocation.
+  void check_count(uint64_t count, uint64_t min_bits, const char* field);
+  // Padding bits up to the byte boundary must be zero and nothing may follow: one encoding per message.
+  void expect_end();
+
+  void set_item(const char* name, uint64_t index) {
+    item_ = name;
+    item_index_ = index;
+  }
+  void clear_item() { item_ = nullptr; }
+  [[noreturn]] void fail(ErrorCode code, const char* field, const std::string& what) const;
+
+ private:
+  std::span<const uint8_t> data_;
+  uint64_t pos_ = 0;  // in bits
+  MessageType type_;
+  const char* item_ = nullptr;
+  uint64_t item_index_ = 0;
+};
+
+// RefineInfo as 6 x u16 (12 bytes), the order of the struct. Lengths that are negative or NaN would
+// poison qrefine's comparisons, so the reader rejects them (the .pms reader does the same).
+void write_refine(Writer& w, const RefineInfo& info);
+RefineInfo read_refine(Reader& r, const char* field);
+
+// Unit normals as octahedral 2 x 16-bit snorm (Meyer et al. 2010): 32 bits instead of 96, ~1e-4 rad.
+void encode_normal(const float n[3], uint16_t q[2]);
+void decode_normal(const uint16_t q[2], float n[3]);
+
+// PositionGrid / id widths a decoder accepts; "" when fine, else what is wrong.
+std::string check_context(const StreamContext& context);
+
+}  // namespace pms::protocol
