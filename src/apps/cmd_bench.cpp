@@ -19,6 +19,9 @@ namespace fs = std::filesystem;
 // The experiment groups of DESIGN.md §7: a new group is one function and one line here.
 constexpr BenchGroup kGroups[] = {
     {"build", "E12 build time and memory, E1 hierarchy statistics, terrain scaling", run_build_group},
+    {"refine", "adaptation time and ops/s on a scan path, renderer speed, image quality at far/mid/close", run_refine_group},
+    {"sender", "E2 packet bits, E3 server memory, E4 two laps, E5 bytes to satisfy tolerance, E11 many clients",
+     run_sender_group},
 };
 
 std::span<const BenchGroup> bench_groups() { return kGroups; }

@@ -6,6 +6,7 @@
 
 #include "apps/build_pipeline.h"
 #include "apps/commands.h"
+#include "apps/demo_flight.h"
 #include "apps/progress_bar.h"
 #include "apps/refine_pipeline.h"
 #include "apps/resource_usage.h"
@@ -20,6 +21,8 @@ constexpr double kRefinedShare = 0.1;  // the partly refined mesh applies this s
 struct DemoArgs {
   std::string out_dir = "demo-out";
   bool rebuild = false;
+  uint32_t frames = 240;
+  float tolerance = 1;
 };
 
 // The cached build is reused only if it was made from the same generator input by this version.
@@ -69,15 +72,25 @@ void run_demo(const DemoArgs& args) {
   save_ply(partial, refined);
   std::printf("wrote:     %s (%zu faces), %s (%llu splits in %.3f s -> %zu faces)\n", coarse.c_str(), base.face_count(),
               refined.c_str(), (unsigned long long)k, seconds, partial.face_count());
+
+  FlightOptions flight;
+  flight.out_dir = args.out_dir;
+  flight.frames = args.frames;
+  flight.tolerance = args.tolerance;
+  run_demo_flight(pms_path, "terrain", flight);
 }
 
 }  // namespace
 
 void add_demo_command(CLI::App& app) {
   auto args = std::make_shared<DemoArgs>();
-  CLI::App* cmd = app.add_subcommand("demo", "Build and refine the built-in terrain (no input needed)");
+  CLI::App* cmd = app.add_subcommand("demo", "Build the built-in terrain and stream it to a headless client over loopback (no input needed)");
   cmd->add_option("--out", args->out_dir, "Output directory")->capture_default_str();
   cmd->add_flag("--rebuild", args->rebuild, "Ignore the cached build");
+  cmd->add_option("--frames", args->frames, "Frames of the flight")->check(CLI::Range(1u, 100000u))->capture_default_str();
+  cmd->add_option("--tolerance", args->tolerance, "Screen-space error tolerance in pixels")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
   cmd->callback([args] { run_demo(*args); });
 }
 

@@ -1,7 +1,9 @@
-// pmstream refine FILE.pms (--full | --splits K) -o OUT.ply [--json]
+// pmstream refine FILE.pms (--full | --splits K | --camera CAM.json [--tolerance PX]) -o OUT.ply [--json]
+#include <cmath>
 #include <cstdio>
 #include <limits>
 
+#include "apps/camera_json.h"
 #include "apps/commands.h"
 #include "apps/refine_pipeline.h"
 #include "apps/resource_usage.h"
@@ -12,18 +14,36 @@ namespace pms::app {
 namespace {
 
 struct RefineArgs {
-  std::string input, output;
+  std::string input, output, camera;
   bool full = false, json = false;
   uint64_t splits = 0;
+  float tolerance = 1;
 };
 
-void run_refine(const RefineArgs& args, bool splits_given) {
-  if (args.full == splits_given) fail("", "give exactly one of --full and --splits K");
+void run_refine(const RefineArgs& args, bool splits_given, bool tolerance_given) {
+  const bool camera_given = !args.camera.empty();
+  if (int(args.full) + int(splits_given) + int(camera_given) != 1)
+    fail("", "give exactly one of --full, --splits K and --camera CAM.json");
+  if (tolerance_given && !camera_given) fail("", "--tolerance goes with --camera");
+  if (!(args.tolerance >= 0) || !std::isfinite(args.tolerance)) fail("", "--tolerance must be a number >= 0 (pixels)");
   Stopwatch clock;
+  const Camera camera = camera_given ? load_camera(args.camera) : Camera{};
   const auto file = PmsFile::open(args.input);
-  const uint64_t k = args.full ? std::numeric_limits<uint64_t>::max() : args.splits;
-  const Mesh mesh = refine_first_splits(file->view(), k);
-  const uint64_t applied = std::min<uint64_t>(k, file->view().split_order.size());
+  const ModelView& model = file->view();
+  uint64_t applied = 0;
+  Mesh mesh;
+  if (camera_given) {
+    try {  // a camera that parses but cannot see (eye == target, up along the view): name the file
+      make_view(camera, model.bbox_min, model.bbox_max);
+    } catch (const Error& e) {
+      fail(args.camera, e.what());
+    }
+    mesh = refine_for_camera(model, camera, args.tolerance, &applied);
+  } else {
+    const uint64_t k = args.full ? std::numeric_limits<uint64_t>::max() : args.splits;
+    mesh = refine_first_splits(model, k);
+    applied = std::min<uint64_t>(k, model.split_order.size());
+  }
   save_ply(mesh, args.output);
   const double seconds = clock.seconds();
   if (args.json) {
@@ -43,9 +63,13 @@ void add_refine_command(CLI::App& app) {
   cmd->add_option("file", args->input, ".pms file")->required();
   cmd->add_flag("--full", args->full, "Apply every vertex split (the finest mesh = the cleaned input)");
   CLI::Option* splits = cmd->add_option("--splits", args->splits, "Apply the first K vertex splits in stream order");
+  cmd->add_option("--camera", args->camera,
+                  "Refine for the view in CAM.json (Hoppe 1997 criteria: frustum, back faces, screen-space error)");
+  CLI::Option* tolerance =
+      cmd->add_option("--tolerance", args->tolerance, "Screen-space error tolerance in pixels with --camera (default 1)");
   cmd->add_option("-o,--output", args->output, "Output .ply file")->required();
   cmd->add_flag("--json", args->json, "Print one JSON object");
-  cmd->callback([args, splits] { run_refine(*args, splits->count() > 0); });
+  cmd->callback([args, splits, tolerance] { run_refine(*args, splits->count() > 0, tolerance->count() > 0); });
 }
 
 }  // namespace pms::app

@@ -12,8 +12,13 @@ int main(int argc, char** argv) {
   pms::app::add_build_command(app);
   pms::app::add_info_command(app);
   pms::app::add_refine_command(app);
+  pms::app::add_path_command(app);
   pms::app::add_demo_command(app);
   pms::app::add_bench_command(app);
+  pms::app::add_render_command(app);
+  pms::app::add_compare_command(app);
+  pms::app::add_serve_command(app);
+  pms::app::add_stream_command(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

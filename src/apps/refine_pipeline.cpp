@@ -1,17 +1,28 @@
 #include "apps/refine_pipeline.h"
 
+#include "refine/adapt.h"
 #include "refine/stream_order.h"
 
 namespace pms::app {
+namespace {
 
-Mesh refine_first_splits(const ModelView& model, uint64_t k) {
-  MeshArrays arrays = refine_in_stream_order(model, k);
+Mesh to_mesh(MeshArrays&& arrays) {
   Mesh out;
   out.positions = std::move(arrays.positions);
   out.normals = std::move(arrays.normals);
   out.colors = std::move(arrays.colors);
   out.indices = std::move(arrays.indices);
   return out;
+}
+
+}  // namespace
+
+Mesh refine_first_splits(const ModelView& model, uint64_t k) { return to_mesh(refine_in_stream_order(model, k)); }
+
+Mesh refine_for_camera(const ModelView& model, const Camera& camera, float tolerance_px, uint64_t* vsplits) {
+  ViewRefineResult result = refine_for_view(model, camera, tolerance_px);
+  if (vsplits) *vsplits = result.mesh.slots.size() - model.root_count;
+  return to_mesh(std::move(result.mesh));
 }
 
 }  // namespace pms::app

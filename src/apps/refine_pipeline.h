@@ -1,13 +1,19 @@
-// View-independent refinement of a complete model: the first K vsplits in stream (PM) order.
+// Refinement of a complete model for the CLI: the first K vsplits in stream order (view-independent), or
+// the mesh of one view at a screen-space tolerance (view-dependent, Hoppe 1997 criteria).
 #pragma once
 #include <cstdint>
 
 #include "io/mesh.h"
 #include "pm/pm.h"
+#include "refine/camera.h"
 
 namespace pms::app {
 
 // refine_in_stream_order() as a Mesh (with normals/colors) for the exporters.
 Mesh refine_first_splits(const ModelView& model, uint64_t k);
+
+// refine_for_view(): from the base mesh to the converged mesh of `camera` at `tolerance_px`;
+// `vsplits` (if given) receives how many vsplits the mesh holds (its vertices minus the base's).
+Mesh refine_for_camera(const ModelView& model, const Camera& camera, float tolerance_px, uint64_t* vsplits = nullptr);
 
 }  // namespace pms::app

@@ -46,43 +46,66 @@ uint32_t active_ancestor(const ModelView& model, const ActiveTags& tags, uint32_
   return node;
 }
 
-bool selective_streaming(const ModelView& model, ActiveTags& tags, const Importance& importance, size_t max_splits,
-                         std::vector<uint32_t>& out, StreamingScratch& scratch) {
-  auto& heap = scratch.heap;
-  heap.clear();
-  auto consider = [&](uint32_t node) {
-    if (model.is_leaf(node)) return;
-    const float error = importance(node);
-    if (error > 0) heap.emplace_back(error, node);
-  };
-  for (uint32_t v = tags.next_active(0); v != UINT32_MAX; v = tags.next_active(v + 1)) consider(v);
-  // Ties broken by node index, so the batch is the same on every run.
-  auto less = [](const std::pair<float, uint32_t>& a, const std::pair<float, uint32_t>& b) {
-    return a.first < b.first || (a.first == b.first && a.second > b.second);
-  };
-  std::make_heap(heap.begin(), heap.end(), less);
+namespace {
+// Max-heap on importance; ties broken by node index, so the batch is the same on every run.
+bool less_important(const std::pair<float, uint32_t>& a, const std::pair<float, uint32_t>& b) {
+  return a.first < b.first || (a.first == b.first && a.second > b.second);
+}
+}  // namespace
+
+void SelectiveStreamer::start(const ModelView& model, ActiveTags& tags, Importance importance) {
+  model_ = &model;
+  tags_ = &tags;
+  importance_ = std::move(importance);
+  heap_.clear();
+  for (uint32_t v = tags.next_active(0); v != UINT32_MAX; v = tags.next_active(v + 1)) {
+    if (model.is_leaf(v)) continue;
+    const float error = importance_(v);
+    if (error > 0) heap_.emplace_back(error, v);
+  }
+  std::make_heap(heap_.begin(), heap_.end(), less_important);
+}
+
+bool SelectiveStreamer::step(size_t max_splits, std::vector<uint32_t>& out) {
+  if (!model_) return true;
+  const ModelView& model = *model_;
   const size_t start = out.size();
-  while (!heap.empty()) {
+  while (!heap_.empty()) {
     if (out.size() - start >= max_splits) return false;
-    std::pop_heap(heap.begin(), heap.end(), less);
-    const uint32_t v = heap.back().second;
-    heap.pop_back();
-    if (!tags.is_active(v)) continue;  // split earlier as a dependency
+    std::pop_heap(heap_.begin(), heap_.end(), less_important);
+    const uint32_t v = heap_.back().second;
+    heap_.pop_back();
+    if (!tags_->is_active(v)) continue;  // split earlier as a dependency
     const size_t before = out.size();
-    sel_stream_vsplit(model, tags, v, out, scratch.stack);
+    sel_stream_vsplit(model, *tags_, v, out, stack_);
     // Children of every split just made may want refining too; forced splits' children included.
     for (size_t i = before; i < out.size(); ++i) {
       const uint32_t child = model.first_child[out[i]];
       for (uint32_t c : {child, child + 1}) {
-        if (!tags.is_active(c) || model.is_leaf(c)) continue;
-        const float error = importance(c);
+        if (!tags_->is_active(c) || model.is_leaf(c)) continue;
+        const float error = importance_(c);
         if (error <= 0) continue;
-        heap.emplace_back(error, c);
-        std::push_heap(heap.begin(), heap.end(), less);
+        heap_.emplace_back(error, c);
+        std::push_heap(heap_.begin(), heap_.end(), less_important);
       }
     }
   }
   return true;
+}
+
+void SelectiveStreamer::stop() {
+  model_ = nullptr;
+  tags_ = nullptr;
+  importance_ = nullptr;
+  std::vector<std::pair<float, uint32_t>>().swap(heap_);
+  std::vector<uint32_t>().swap(stack_);
+}
+
+bool selective_streaming(const ModelView& model, ActiveTags& tags, const Importance& importance, size_t max_splits,
+                         std::vector<uint32_t>& out) {
+  SelectiveStreamer streamer;
+  streamer.start(model, tags, importance);
+  return streamer.step(max_splits, out);
 }
 
 }  // namespace pms

@@ -16,16 +16,29 @@ namespace pms {
 // importance(node) > 0 when qrefine(node) holds for the view; larger = more visible error.
 using Importance = std::function<float(uint32_t node)>;
 
-struct StreamingScratch {
-  std::vector<std::pair<float, uint32_t>> heap;
-  std::vector<uint32_t> stack;
+// One VIEW's answer, produced in batches so a session holds encoded bytes for one batch at a time:
+// start() ranks the front once; each step() hands out the next most important splits.
+class SelectiveStreamer {
+ public:
+  void start(const ModelView& model, ActiveTags& tags, Importance importance);
+  // Appends up to `max_splits` nodes to split to `out`, each after every split it depends on, and
+  // updates the tags as if they were sent. Returns true once the view is fully served.
+  bool step(size_t max_splits, std::vector<uint32_t>& out);
+  bool active() const { return model_ != nullptr; }
+  // Frees the ranking (a served view keeps no memory in the session).
+  void stop();
+
+ private:
+  const ModelView* model_ = nullptr;
+  ActiveTags* tags_ = nullptr;
+  Importance importance_;
+  std::vector<std::pair<float, uint32_t>> heap_;
+  std::vector<uint32_t> stack_;
 };
 
-// Appends to `out` the internal nodes to split, each after every split it depends on, and updates
-// `tags` as if they were sent. Stops after `max_splits` (the rest waits for the next VIEW).
-// Returns whether the view is fully served (nothing left that qrefine wants).
+// The whole answer at once (tests and tools): returns whether the view is served within max_splits.
 bool selective_streaming(const ModelView& model, ActiveTags& tags, const Importance& importance, size_t max_splits,
-                         std::vector<uint32_t>& out, StreamingScratch& scratch);
+                         std::vector<uint32_t>& out);
 
 // ActiveAncestor (kim-lee-kobbelt §4) on the server: walk up from `node` to the active node.
 uint32_t active_ancestor(const ModelView& model, const ActiveTags& tags, uint32_t node);

@@ -71,7 +71,6 @@ TEST(SelectiveStreaming, BatchesApplyInOrderAndTheFrontMatchesTheServer) {
     SCOPED_TRACE(seed);
     ActiveTags tags(model.root_count);
     Client client(model);
-    StreamingScratch scratch;
     std::vector<uint32_t> batch;
     // Views as pseudo-random predicates: each VIEW wants a different region, with varying importance.
     for (uint32_t view = 0; view < 6; ++view) {
@@ -81,7 +80,7 @@ TEST(SelectiveStreaming, BatchesApplyInOrderAndTheFrontMatchesTheServer) {
         return (h % 5 < 2) ? float(h % 1000 + 1) : 0.0f;
       };
       batch.clear();
-      ASSERT_TRUE(selective_streaming(model, tags, importance, SIZE_MAX, batch, scratch));
+      ASSERT_TRUE(selective_streaming(model, tags, importance, SIZE_MAX, batch));
       deliver(model, batch, client);
       EXPECT_FALSE(batch.empty()) << "view " << view << " sent nothing";
       std::string why;
@@ -101,14 +100,15 @@ TEST(SelectiveStreaming, EverythingWantedStreamsTheWholeModelOnce) {
   const ModelView model = view_of(built.hierarchy);
   ActiveTags tags(model.root_count);
   Client client(model);
-  StreamingScratch scratch;
   std::vector<uint32_t> batch;
   const Importance everything = [](uint32_t) { return 1.0f; };
-  // In bounded batches, as a server does per VIEW; the last call reports the view served.
+  // In bounded batches, as a server does per VIEW; the last step reports the view served.
+  SelectiveStreamer streamer;
+  streamer.start(model, tags, everything);
   bool served = false;
   for (int call = 0; call < 10000 && !served; ++call) {
     const size_t before = batch.size();
-    served = selective_streaming(model, tags, everything, 100, batch, scratch);
+    served = streamer.step(100, batch);
     deliver(model, std::vector<uint32_t>(batch.begin() + ptrdiff_t(before), batch.end()), client);
   }
   ASSERT_TRUE(served);
@@ -118,7 +118,7 @@ TEST(SelectiveStreaming, EverythingWantedStreamsTheWholeModelOnce) {
   EXPECT_EQ(tags.active_count(), built.stats.input_vertices);
   // A second pass finds nothing to send.
   const size_t total = batch.size();
-  EXPECT_TRUE(selective_streaming(model, tags, everything, SIZE_MAX, batch, scratch));
+  EXPECT_TRUE(selective_streaming(model, tags, everything, SIZE_MAX, batch));
   EXPECT_EQ(batch.size(), total);
 }
 

@@ -38,6 +38,10 @@ std::span<const BenchGroup> bench_groups();
 
 // E1, E12 and the terrain scaling series (bench_build.cpp).
 void run_build_group(BenchContext& context);
+// Adaptation, renderer and image quality of the refinement engine (bench_refine.cpp).
+void run_refine_group(BenchContext& context);
+// E2, E3, E4, E5 and E11 of the sender-driven mode (bench_sender.cpp).
+void run_sender_group(BenchContext& context);
 
 // The directory holding models/: `explicit_dir` (--shared) if given, else $PMSTREAM_SHARED_DIR, else
 // ../shared or ../../shared relative to the working directory and then to `exe_dir`. An explicit

@@ -194,6 +194,7 @@ ChildResult run_child(const std::vector<std::string>& argv, const ChildOptions& 
     got = ::read(report.read.get(), &exec_error, sizeof exec_error);
   } while (got < 0 && errno == EINTR);
   const bool started = got != ssize_t(sizeof exec_error);
+  if (started && options.on_start) options.on_start(pid);
 
   if (started && !drain(out.read, err.read, result, options, clock)) {
     ::kill(pid, SIGKILL);

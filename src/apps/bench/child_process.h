@@ -4,7 +4,9 @@
 // what it inherited from this process at fork; the bench stays small to keep that floor low.
 #pragma once
 #include <cstddef>
+#include <functional>
 #include <string>
+#include <sys/types.h>
 #include <vector>
 
 namespace pms::app {
@@ -13,6 +15,9 @@ struct ChildOptions {
   double timeout_seconds = 0;              // 0: no limit; else SIGKILL once this much wall time has passed
   std::string stdout_path;                 // when set, stdout goes to this file instead of being captured
   size_t max_captured_bytes = size_t(16) << 20;  // per stream; the rest is read and dropped
+  // Called in the parent once the child runs, with its pid: a long-running child (a server) can be
+  // signalled from another thread while run_child waits for it.
+  std::function<void(pid_t)> on_start;
 };
 
 struct ChildResult {

@@ -1,0 +1,217 @@
+// The "refine" group (issue: truly selective refinement engine): on dragon, the adaptation loop along a
+// 180-frame scan path at τ = 1 px (per-frame time, operations per second, faces), the engine's raw
+// vsplit/ecol throughput, the renderer's triangles per second, and the quality table at three
+// viewpoints: the refined mesh's image against the full mesh's at τ = 0 px (culling only, cheng-ooi
+// 2008 Table 2) and τ = 1 px, beside the view-independent mesh with as many faces (the first K splits
+// in stream order, kim-lee-kobbelt Fig 10).
+#include <algorithm>
+#include <cstdio>
+
+#include "apps/bench/bench.h"
+#include "apps/bench/child_process.h"
+#include "apps/bench/report.h"
+#include "apps/camera_path.h"
+#include "apps/resource_usage.h"
+#include "common/error.h"
+#include "refine/adapt.h"
+#include "refine/stream_order.h"
+#include "render/render.h"
+
+namespace pms::app {
+namespace fs = std::filesystem;
+using nlohmann::json;
+namespace {
+
+constexpr uint32_t kScanFrames = 180, kQuickScanFrames = 40;
+constexpr uint32_t kRenderRepeats = 5;
+
+void print(const std::string& text) {
+  std::fputs(text.c_str(), stdout);
+  std::fflush(stdout);
+}
+
+double percentile(std::vector<double> v, double p) {
+  if (v.empty()) return 0;
+  std::sort(v.begin(), v.end());
+  return v[std::min(v.size() - 1, size_t(p * double(v.size() - 1) + 0.5))];
+}
+
+// Every split known: the loop's cost alone, with nothing to fetch.
+VertexHierarchy complete_hierarchy(const ModelView& model) {
+  VertexHierarchy h = VertexHierarchy::from_model(model);
+  h.reserve(model.node_count());
+  for (uint32_t node : model.split_order) h.add_split(split_record(model, node));
+  return h;
+}
+
+struct PathRun {
+  std::vector<double> frame_ms;
+  uint64_t ops = 0;
+  double adapt_seconds = 0;
+  std::vector<double> faces;
+};
+
+PathRun run_path(const ModelView& model, const std::vector<Camera>& path, float tolerance) {
+  VertexHierarchy h = complete_hierarchy(model);
+  SelectiveMesh mesh(h, model.base_faces);
+  SelectiveRefinement refinement(mesh, model.scale, AdaptOptions{tolerance, 0, 0});
+  // The first view from the base mesh is a load, not a frame: converge on it untimed.
+  refinement.set_view(make_view(path[0], model.bbox_min, model.bbox_max));
+  refinement.converge();
+  PathRun run;
+  for (const Camera& camera : path) {
+    Stopwatch clock;
+    refinement.set_view(make_view(camera, model.bbox_min, model.bbox_max));
+    const FrameStats stats = refinement.adapt();
+    const double seconds = clock.seconds();
+    run.frame_ms.push_back(1000 * seconds);
+    run.adapt_seconds += seconds;
+    run.ops += stats.ops();
+    run.faces.push_back(double(mesh.face_count()));
+  }
+  return run;
+}
+
+// Raw engine throughput: every split in PM order, then every collapse in reverse.
+double engine_ops_per_second(const ModelView& model, uint64_t& ops) {
+  VertexHierarchy h = complete_hierarchy(model);
+  SelectiveMesh mesh(h, model.base_faces);
+  std::vector<uint32_t> slots;
+  slots.reserve(model.split_order.size());
+  for (uint32_t node : model.split_order) slots.push_back(h.find(model.id(node)));
+  Stopwatch clock;
+  for (uint32_t slot : slots) mesh.vsplit(slot);
+  for (size_t i = slots.size(); i-- > 0;) mesh.ecol(slots[i]);
+  const double seconds = clock.seconds();
+  ops = 2 * slots.size();
+  if (mesh.face_count() != model.base_faces.size() / 3) fail("bench refine", "collapsing everything did not give the base");
+  return double(ops) / seconds;
+}
+
+RenderMesh as_render(const MeshArrays& m) { return {m.positions, m.indices, m.colors}; }
+
+struct Quality {
+  uint64_t faces = 0;
+  ImageMetrics metrics;
+};
+
+Quality quality_of(const MeshArrays& mesh, const ViewParams& view, const Image& reference, Renderer& renderer) {
+  Image image;
+  renderer.render(as_render(mesh), view, image);
+  return {mesh.indices.size() / 3, compare_images(image, reference)};
+}
+
+// The view-independent mesh with (about) `faces` faces: each split adds two faces, one on the boundary.
+MeshArrays view_independent(const ModelView& model, uint64_t faces) {
+  const uint64_t base = model.base_faces.size() / 3;
+  uint64_t k = faces > base ? (faces - base) / 2 : 0;
+  MeshArrays mesh = refine_in_stream_order(model, k);
+  while (mesh.indices.size() / 3 < faces && k < model.split_order.size()) {
+    k += std::max<uint64_t>(1, (faces - mesh.indices.size() / 3) / 2);
+    mesh = refine_in_stream_order(model, k);
+  }
+  return mesh;
+}
+
+std::string psnr_text(double psnr) { return std::isinf(psnr) ? "inf" : fixed(psnr, 2); }
+double psnr_json(double psnr) { return std::isinf(psnr) ? kPsnrIdenticalJson : psnr; }
+
+}  // namespace
+
+void run_refine_group(BenchContext& context) {
+  std::string section = "## refine: selective refinement, renderer and image quality\n\n";
+  if (context.models_dir.empty()) {
+    context.report += section + "Skipped: ../shared/models not found.\n\n";
+    return;
+  }
+  const bool quick = context.options.quick;
+  const std::string name = context.options.models.empty() ? (quick ? "bunny" : "dragon") : context.options.models[0];
+  const fs::path pms = context.temp_dir / (name + ".pms");
+  std::fprintf(stderr, "bench: building %s ... ", name.c_str());
+  const ChildResult built =
+      run_child({context.self_exe, "build", find_model(context.models_dir, name).string(), "-o", pms.string()});
+  if (!built.ok()) fail(name, "pmstream build: " + built.failure());
+  std::fprintf(stderr, "%.2f s\n", built.wall_seconds);
+  const auto file = PmsFile::open(pms.string());
+  const ModelView& model = file->view();
+  json out = {{"command", context.options.command_line}, {"machine", machine_json()}, {"model", name}};
+
+  // Adaptation along the scan path.
+  PathOptions scan_options;
+  scan_options.frames = quick ? kQuickScanFrames : kScanFrames;
+  const std::vector<Camera> scan = make_camera_path(PathKind::scan, model, scan_options);
+  std::fprintf(stderr, "bench: %u-frame scan at 1 px ...\n", scan_options.frames);
+  const PathRun run = run_path(model, scan, 1.0f);
+  uint64_t engine_ops = 0;
+  const double engine_rate = engine_ops_per_second(model, engine_ops);
+  Table adapt({{"model", false}, {"frames", true}, {"median ms", true}, {"p99 ms", true}, {"loop ops/s", true},
+               {"engine ops/s", true}, {"faces (median)", true}});
+  adapt.add_row({name, std::to_string(scan.size()), fixed(percentile(run.frame_ms, 0.5), 3),
+                 fixed(percentile(run.frame_ms, 0.99), 3),
+                 thousands(uint64_t(double(run.ops) / std::max(run.adapt_seconds, 1e-9))), thousands(uint64_t(engine_rate)),
+                 thousands(uint64_t(percentile(run.faces, 0.5)))});
+  out["adapt"] = {{"frames", scan.size()}, {"frame_ms", run.frame_ms}, {"ops", run.ops}, {"adapt_seconds", run.adapt_seconds},
+                  {"engine_ops", engine_ops}, {"engine_ops_per_second", engine_rate}, {"faces", run.faces}};
+  print("\nAdaptation along a scan path at τ = 1 px (targets: median ≤ 4 ms, ≥ 3 M ops/s)\n" + adapt.markdown());
+
+  // Renderer throughput on the full mesh.
+  const MeshArrays full = refine_in_stream_order(model, model.split_order.size());
+  Renderer renderer;
+  PathOptions view_options;
+  view_options.frames = 3;
+  const std::vector<Camera> zoom = make_camera_path(PathKind::zoom, model, view_options);
+  const std::vector<Camera> orbit = make_camera_path(PathKind::orbit, model, view_options);
+  Image image;
+  Stopwatch render_clock;
+  for (uint32_t i = 0; i < kRenderRepeats; ++i)
+    renderer.render(as_render(full), make_view(orbit[0], model.bbox_min, model.bbox_max), image);
+  const double triangles_per_second = double(kRenderRepeats) * double(full.indices.size() / 3) / render_clock.seconds();
+  out["render_triangles_per_second"] = triangles_per_second;
+  print("\nRenderer: " + thousands(uint64_t(triangles_per_second)) + " triangles/s (" + thousands(full.indices.size() / 3) +
+        " faces, " + std::to_string(orbit[0].width) + "x" + std::to_string(orbit[0].height) + ")\n");
+
+  // Quality at far / mid / close.
+  struct Viewpoint {
+    const char* label;
+    Camera camera;
+  };
+  Camera mid = orbit[0];
+  for (int k = 0; k < 3; ++k) mid.eye[k] = 0.5f * (mid.eye[k] + mid.target[k]);
+  const Viewpoint viewpoints[] = {{"far", zoom[0]}, {"mid", mid}, {"close", zoom[2]}};
+  Table quality({{"view", false}, {"full faces", true}, {"τ=0 faces", true}, {"τ=0 %", true}, {"τ=0 PSNR", true},
+                 {"τ=0 err px", true}, {"τ=0 err %", true}, {"τ=1 faces", true}, {"τ=1 %", true}, {"τ=1 PSNR", true},
+                 {"τ=1 err px", true}, {"VI PSNR", true}, {"VI err px", true}});
+  json quality_json = json::array();
+  for (const Viewpoint& vp : viewpoints) {
+    const ViewParams view = make_view(vp.camera, model.bbox_min, model.bbox_max);
+    Image reference;
+    renderer.render(as_render(full), view, reference);
+    const Quality t0 = quality_of(refine_for_view(model, vp.camera, 0.0f).mesh, view, reference, renderer);
+    const Quality t1 = quality_of(refine_for_view(model, vp.camera, 1.0f).mesh, view, reference, renderer);
+    const Quality vi = quality_of(view_independent(model, t1.faces), view, reference, renderer);
+    const double full_faces = double(full.indices.size() / 3);
+    quality.add_row({vp.label, thousands(uint64_t(full_faces)), thousands(t0.faces), fixed(100 * double(t0.faces) / full_faces, 1),
+                     psnr_text(t0.metrics.psnr), thousands(t0.metrics.error_pixels), fixed(100 * t0.metrics.error_fraction, 3),
+                     thousands(t1.faces), fixed(100 * double(t1.faces) / full_faces, 1), psnr_text(t1.metrics.psnr),
+                     thousands(t1.metrics.error_pixels), psnr_text(vi.metrics.psnr), thousands(vi.metrics.error_pixels)});
+    quality_json.push_back({{"view", vp.label},
+                            {"full_faces", full_faces},
+                            {"tau0", {{"faces", t0.faces}, {"psnr", psnr_json(t0.metrics.psnr)}, {"error_pixels", t0.metrics.error_pixels}}},
+                            {"tau1", {{"faces", t1.faces}, {"psnr", psnr_json(t1.metrics.psnr)}, {"error_pixels", t1.metrics.error_pixels}}},
+                            {"vi", {{"faces", vi.faces}, {"psnr", psnr_json(vi.metrics.psnr)}, {"error_pixels", vi.metrics.error_pixels}}}});
+  }
+  out["quality"] = quality_json;
+  print("\nImage quality against the full mesh (targets: τ=0 err ≤ 0.2 %, PSNR ≥ 35 dB, ≤ 60 % faces close; τ=1 ≤ 30 % faces "
+        "close, better than VI at mid and close)\n" +
+        quality.markdown());
+
+  section += "### Adaptation along a " + std::to_string(scan.size()) + "-frame scan path, τ = 1 px (" + name + ")\n\n" +
+             adapt.markdown() + "\nEngine ops/s: every vsplit in PM order, then every ecol in reverse, one core.\n\n";
+  section += "Renderer: " + thousands(uint64_t(triangles_per_second)) + " triangles/s on the full mesh.\n\n";
+  section += "### Image quality against the full mesh\n\n" + quality.markdown() +
+             "\nVI = the first K splits in stream order with at least the τ = 1 px mesh's face count.\n\n";
+  write_text_file(context.options.out_dir / "refine.json", out.dump(2) + "\n");
+  context.report += section;
+}
+
+}  // namespace pms::app

@@ -1,0 +1,43 @@
+// pmstream path (orbit|scan|zoom) --model FILE.pms --frames N -o PATH.json [--width W --height H --fovy F]
+#include <cstdio>
+
+#include "apps/camera_json.h"
+#include "apps/camera_path.h"
+#include "apps/commands.h"
+#include "common/error.h"
+#include "pm/pm.h"
+
+namespace pms::app {
+namespace {
+
+struct PathArgs {
+  std::string kind, model, output;
+  PathOptions options;
+};
+
+void run_path(const PathArgs& args) {
+  const PathKind kind = parse_path_kind(args.kind);
+  const auto file = PmsFile::open(args.model);
+  const std::vector<Camera> frames = make_camera_path(kind, file->view(), args.options);
+  save_path(args.output, frames);
+  std::printf("%s path over %s: %zu frames -> %s\n", args.kind.c_str(), args.model.c_str(), frames.size(),
+              args.output.c_str());
+}
+
+}  // namespace
+
+void add_path_command(CLI::App& app) {
+  auto args = std::make_shared<PathArgs>();
+  CLI::App* cmd = app.add_subcommand("path", "Write a scripted camera path (PATH.json) around a .pms model");
+  cmd->add_option("kind", args->kind, "orbit (circle around the model), scan (close, bottom to top) or zoom (far to close-up)")
+      ->required();
+  cmd->add_option("--model", args->model, ".pms file the path is made for")->required();
+  cmd->add_option("--frames", args->options.frames, "Number of cameras")->required();
+  cmd->add_option("-o,--output", args->output, "Output PATH.json")->required();
+  cmd->add_option("--width", args->options.width, "Viewport width in pixels (default 800)");
+  cmd->add_option("--height", args->options.height, "Viewport height in pixels (default 600)");
+  cmd->add_option("--fovy", args->options.fovy_deg, "Vertical field of view in degrees (default 45)");
+  cmd->callback([args] { run_path(*args); });
+}
+
+}  // namespace pms::app

@@ -1,0 +1,142 @@
+// pmstream stream --server HOST:PORT --model NAME --path PATH.json --mode sender --tolerance PX
+//                 [--laps K] [--save-mesh OUT.ply] [--snapshots DIR] [--json]
+// The headless viewer: follows a camera path, streaming what each frame needs, and reports per frame.
+#include <cstdio>
+#include <filesystem>
+
+#include <nlohmann/json.hpp>
+
+#include "apps/camera_json.h"
+#include "apps/commands.h"
+#include "apps/resource_usage.h"
+#include "client/client.h"
+#include "common/error.h"
+#include "io/mesh.h"
+#include "render/render.h"
+
+namespace pms::app {
+namespace {
+
+struct StreamArgs {
+  std::string server, model, path, mode = "sender", save_mesh, snapshots;
+  float tolerance = 1;
+  uint32_t laps = 1, morph_frames = 0, max_ops = 0;
+  bool json = false;
+};
+
+void split_host_port(const std::string& text, std::string& host, uint16_t& port) {
+  const size_t colon = text.rfind(':');
+  if (colon == std::string::npos || colon == 0) fail("--server", "'" + text + "' is not HOST:PORT");
+  host = text.substr(0, colon);
+  try {
+    const unsigned long value = std::stoul(text.substr(colon + 1));
+    if (value == 0 || value > 65535) throw std::out_of_range("port");
+    port = uint16_t(value);
+  } catch (const std::exception&) {
+    fail("--server", "'" + text + "' has no valid port");
+  }
+}
+
+Mesh current_mesh(client::StreamingClient& client) {
+  MeshArrays arrays;
+  client.session().refinement().extract(arrays);
+  Mesh mesh;
+  mesh.positions = std::move(arrays.positions);
+  mesh.normals = std::move(arrays.normals);
+  mesh.colors = std::move(arrays.colors);
+  mesh.indices = std::move(arrays.indices);
+  return mesh;
+}
+
+void snapshot(client::StreamingClient& client, const Camera& camera, const std::string& dir, size_t index,
+              Renderer& renderer, Image& image) {
+  const Mesh mesh = current_mesh(client);
+  renderer.render({mesh.positions, mesh.indices, mesh.colors}, client.session().view_params(camera), image);
+  char name[32];
+  std::snprintf(name, sizeof name, "frame_%05zu.png", index);
+  save_png((std::filesystem::path(dir) / name).string(), image);
+}
+
+void run_stream(const StreamArgs& args) {
+  if (args.mode != "sender")
+    fail("--mode", "'" + args.mode + "': this build streams in sender mode (vi, receiver and dag come with their issues)");
+  std::string host;
+  uint16_t port = 0;
+  split_host_port(args.server, host, port);
+  const std::vector<Camera> path = load_path(args.path);
+  if (!args.snapshots.empty()) std::filesystem::create_directories(args.snapshots);
+
+  Stopwatch clock;
+  client::ClientOptions options;
+  options.tolerance = args.tolerance;
+  options.morph_frames = args.morph_frames;
+  options.max_ops = args.max_ops;
+  client::StreamingClient client(host, port, options);
+  client.open(args.model);
+
+  nlohmann::json frames = nlohmann::json::array();
+  Renderer renderer;
+  Image image;
+  size_t index = 0;
+  for (uint32_t lap = 0; lap < args.laps; ++lap) {
+    for (const Camera& camera : path) {
+      const client::FrameReport r = client.frame(camera);
+      frames.push_back({{"frame", index},
+                        {"lap", lap},
+                        {"up_bytes", r.up_bytes},
+                        {"down_bytes", r.down_bytes},
+                        {"faces", r.faces},
+                        {"vsplits", r.vsplits},
+                        {"latency_ms", r.latency_ms}});
+      if (!args.snapshots.empty()) snapshot(client, camera, args.snapshots, index, renderer, image);
+      if (!args.json)
+        std::fprintf(stderr, "\rframe %zu/%zu  faces %llu  down %llu B", index + 1, size_t(args.laps) * path.size(),
+                     (unsigned long long)r.faces, (unsigned long long)r.down_bytes);
+      ++index;
+    }
+  }
+  if (!args.json) std::fprintf(stderr, "\n");
+  client.settle(path.back());
+  if (!args.save_mesh.empty()) save_ply(current_mesh(client), args.save_mesh);
+
+  const client::LinkCounters c = client.counters();
+  nlohmann::json out = {{"frames", frames},
+                        {"total_up_bytes", c.bytes_up},
+                        {"total_down_bytes", c.bytes_down},
+                        {"total_up_payload_bytes", c.payload_up()},
+                        {"total_down_payload_bytes", c.payload_down()},
+                        {"vsplits_received", client.session().splits_received()},
+                        {"seconds", clock.seconds()}};
+  if (args.json) {
+    std::printf("%s\n", out.dump().c_str());
+  } else {
+    std::printf("%s: %zu frames, %llu vsplits received, %llu B up, %llu B down, %llu faces at the end (%.2f s)\n",
+                args.model.c_str(), index, (unsigned long long)client.session().splits_received(),
+                (unsigned long long)c.bytes_up, (unsigned long long)c.bytes_down,
+                (unsigned long long)client.session().mesh().face_count(), clock.seconds());
+  }
+}
+
+}  // namespace
+
+void add_stream_command(CLI::App& app) {
+  auto args = std::make_shared<StreamArgs>();
+  CLI::App* cmd = app.add_subcommand("stream", "Headless viewer: stream a model from a server along a camera path");
+  cmd->add_option("--server", args->server, "HOST:PORT of the server's TCP port")->required();
+  cmd->add_option("--model", args->model, "Model name in the server's catalogue")->required();
+  cmd->add_option("--path", args->path, "PATH.json (pmstream path ...)")->required();
+  cmd->add_option("--mode", args->mode, "sender")->capture_default_str();
+  cmd->add_option("--tolerance", args->tolerance, "Screen-space error tolerance in pixels")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
+  cmd->add_option("--laps", args->laps, "Times the path is flown")->check(CLI::Range(1u, 1000u))->capture_default_str();
+  cmd->add_option("--geomorph-frames", args->morph_frames, "Blend splits and collapses over N frames (0 = off)")
+      ->capture_default_str();
+  cmd->add_option("--max-ops", args->max_ops, "vsplits + ecols per frame (0 = no cap)")->capture_default_str();
+  cmd->add_option("--save-mesh", args->save_mesh, "Write the client's mesh after the last frame (PLY)");
+  cmd->add_option("--snapshots", args->snapshots, "Write a PNG per frame into this directory");
+  cmd->add_flag("--json", args->json, "Print one JSON object");
+  cmd->callback([args] { run_stream(*args); });
+}
+
+}  // namespace pms::app

@@ -1,0 +1,155 @@
+// The sender-driven streaming client (kim-lee-kobbelt 2005 §5.3): it keeps the partial vertex hierarchy
+// and the selectively refined mesh, runs SelectiveRefinement every frame, and sends VIEW only when the
+// front needs vsplit packets it does not have. ClientSession is the protocol logic without I/O (shared
+// with the browser build); Link is the TCP transport (its own I/O thread, a bounded receive queue);
+// StreamingClient puts the two together for the headless viewer, the demo, tests and benches.
+#pragma once
+#include <chrono>
+#include <condition_variable>
+#include <cstdint>
+#include <deque>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "protocol/protocol.h"
+#include "refine/adapt.h"
+#include "refine/camera.h"
+#include "refine/refine.h"
+
+namespace pms::client {
+
+// ---- protocol logic ------------------------------------------------------------------------------------
+
+class ClientSession {
+ public:
+  // Builds the base mesh, hierarchy and refinement loop from a BASE. With `keep` (a resumed session whose
+  // hierarchy is already here) the BASE only has to match the model held.
+  void on_base(const protocol::Base& base);
+  // Attaches a batch's packets as leaves of the partial hierarchy (UpdateVHierarchy).
+  void on_vsplits(const protocol::VSplits& batch);
+
+  bool has_model() const { return refinement_ != nullptr; }
+  const protocol::StreamContext& context() const { return context_; }
+  const protocol::Base& base() const { return base_; }
+  VertexHierarchy& hierarchy() { return *hierarchy_; }
+  SelectiveMesh& mesh() { return *mesh_; }
+  SelectiveRefinement& refinement() { return *refinement_; }
+  ViewParams view_params(const Camera& camera) const;
+  // The leaves of the partial hierarchy: what a resumed session sends in OPEN.
+  std::vector<VertexId> known_leaves() const;
+  uint64_t splits_received() const { return splits_received_; }
+
+  AdaptOptions adapt_options;
+
+ private:
+  protocol::Base base_;
+  protocol::StreamContext context_;
+  std::unique_ptr<VertexHierarchy> hierarchy_;
+  std::unique_ptr<SelectiveMesh> mesh_;
+  std::unique_ptr<SelectiveRefinement> refinement_;
+  uint64_t splits_received_ = 0;
+};
+
+// ---- transport -----------------------------------------------------------------------------------------
+
+struct LinkCounters {
+  uint64_t bytes_up = 0, bytes_down = 0;      // whole frames, as on the wire
+  uint64_t frames_up = 0, frames_down = 0;
+  uint64_t payload_up() const { return bytes_up - frames_up * protocol::kFrameHeaderBytes; }
+  uint64_t payload_down() const { return bytes_down - frames_down * protocol::kFrameHeaderBytes; }
+};
+
+// How a client reaches a server: frames out, frames in. TCP here (Link); the browser's WebSocket and
+// the bench's in-process pipe are others.
+class Transport {
+ public:
+  virtual ~Transport() = default;
+  virtual void send(const std::vector<uint8_t>& frame) = 0;
+  // The next frame from the server; std::nullopt after `timeout`. Throws pms::Error once the connection
+  // is gone (with the reason) and nothing is left to read.
+  virtual std::optional<protocol::Frame> receive(std::chrono::milliseconds timeout) = 0;
+  virtual LinkCounters counters() const = 0;
+};
+
+// A TCP connection whose reads run on their own thread into a bounded queue of frames (the socket is
+// not read while the queue is full, so a slow consumer back-pressures the server instead of growing
+// memory). Connection loss and protocol errors surface as pms::Error from receive().
+class Link : public Transport {
+ public:
+  Link(const std::string& host, uint16_t port, size_t max_queued_bytes = 64u << 20,
+       uint32_t max_message = protocol::kDefaultMaxMessage);
+  ~Link() override;
+  Link(const Link&) = delete;
+  Link& operator=(const Link&) = delete;
+
+  void send(const std::vector<uint8_t>& frame) override;
+  std::optional<protocol::Frame> receive(std::chrono::milliseconds timeout) override;
+  LinkCounters counters() const override;
+  void close();
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+// ---- the two together ----------------------------------------------------------------------------------
+
+struct FrameReport {
+  uint32_t frame = 0;
+  uint64_t up_bytes = 0, down_bytes = 0;  // this frame's traffic
+  uint64_t vsplits = 0;                   // packets received this frame
+  uint64_t faces = 0;
+  bool requested = false;                 // a VIEW was sent
+  double latency_ms = 0;                  // VIEW sent -> last split of its answer applied (0 if none)
+};
+
+struct ClientOptions {
+  float tolerance = 1;
+  uint32_t morph_frames = 0;
+  uint32_t max_ops = 0;  // per frame, 0 = no cap
+  std::chrono::milliseconds answer_timeout{30000};
+  std::string name = "pmstream-client";
+};
+
+class StreamingClient {
+ public:
+  // Connects over TCP and says HELLO.
+  StreamingClient(const std::string& host, uint16_t port, const ClientOptions& options = {});
+  // Over any transport (already connected); says HELLO.
+  StreamingClient(std::unique_ptr<Transport> transport, const ClientOptions& options = {});
+  ~StreamingClient();
+
+  protocol::Catalogue list();
+  // OPEN; with `resume` (the leaves of a hierarchy held from an earlier session) the server rebuilds its
+  // tags from them. Waits for BASE.
+  void open(const std::string& model);
+  // Reconnects after a lost connection and resumes the session with the hierarchy held.
+  void resume(const std::string& host, uint16_t port);
+  void resume(std::unique_ptr<Transport> transport);
+
+  // One frame of the path: adapt to the camera; when the front needs packets it lacks, send VIEW, wait
+  // for the whole answer and adapt again, until the view is satisfied.
+  FrameReport frame(const Camera& camera);
+  // Frames at the last camera until nothing changes and nothing moves (geomorphs).
+  void settle(const Camera& camera);
+
+  ClientSession& session() { return session_; }
+  LinkCounters counters() const;  // over every connection this client made
+
+ private:
+  protocol::Frame expect(protocol::MessageType type);
+  size_t request(const Camera& camera, FrameReport& report);
+  void greet(std::unique_ptr<Transport> transport);
+
+  ClientOptions options_;
+  std::unique_ptr<Transport> link_;
+  LinkCounters past_;  // counters of closed links
+  ClientSession session_;
+  std::string model_;
+  uint32_t frame_ = 0;
+};
+
+}  // namespace pms::client

@@ -1,0 +1,45 @@
+// The client's protocol logic (kim-lee-kobbelt §5.3): BASE builds the base mesh and the roots of the
+// partial hierarchy; every VSPLITS packet is attached below its v_s (UpdateVHierarchy).
+#include "client/client.h"
+
+#include "common/error.h"
+
+namespace pms::client {
+
+void ClientSession::on_base(const protocol::Base& base) {
+  if (has_model()) {
+    // A resumed session: the server sends BASE again; the hierarchy held must be of the same model.
+    if (base.root_count() != base_.root_count() || base.faces != base_.faces || base.scale != base_.scale)
+      fail("BASE", "the server's model '" + base.model + "' is not the one this client holds");
+    return;
+  }
+  base_ = base;
+  context_ = protocol::stream_context(base);
+  hierarchy_ = std::make_unique<VertexHierarchy>(base.has_normals, base.has_colors);
+  hierarchy_->reserve(base.root_count());
+  for (uint32_t r = 0; r < base.root_count(); ++r)
+    hierarchy_->add_root(VertexId{r, 1}, &base.positions[3 * size_t(r)], base.refine[r],
+                         base.has_normals ? &base.normals[3 * size_t(r)] : nullptr,
+                         base.has_colors ? &base.colors[4 * size_t(r)] : nullptr);
+  mesh_ = std::make_unique<SelectiveMesh>(*hierarchy_, base.faces);
+  refinement_ = std::make_unique<SelectiveRefinement>(*mesh_, base.scale, adapt_options);
+}
+
+void ClientSession::on_vsplits(const protocol::VSplits& batch) {
+  if (!has_model()) fail("VSPLITS", "received before BASE");
+  for (const SplitRecord& split : batch.splits) hierarchy_->add_split(split);
+  splits_received_ += batch.splits.size();
+}
+
+ViewParams ClientSession::view_params(const Camera& camera) const {
+  return make_view(camera, base_.bbox_min, base_.bbox_max);
+}
+
+std::vector<VertexId> ClientSession::known_leaves() const {
+  std::vector<VertexId> leaves;
+  for (uint32_t slot = 0; slot < hierarchy_->size(); ++slot)
+    if (hierarchy_->is_leaf(slot)) leaves.push_back(hierarchy_->id(slot));
+  return leaves;
+}
+
+}  // namespace pms::client

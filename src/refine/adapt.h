@@ -1,0 +1,127 @@
+// View-dependent adaptation of a SelectiveMesh, frame by frame (Hoppe 1997 §5; the client loop
+// SelectiveRefinement of kim-lee-kobbelt 2005 §5.3): split where qrefine() asks, collapse where it no
+// longer does, report the known leaves whose vsplit packets are needed, optionally with geomorphs.
+// docs/internals.md ("Adaptation loop") explains the target mesh and why the loop reaches it.
+// Shared with the browser build: single-threaded, no std::ranges algorithms, std::format or coroutines.
+#pragma once
+#include <cstdint>
+#include <functional>
+#include <span>
+#include <vector>
+
+#include "pm/pm.h"
+#include "refine/camera.h"
+#include "refine/criteria.h"
+#include "refine/geomorph.h"
+#include "refine/refine.h"
+
+namespace pms {
+
+struct AdaptOptions {
+  float tolerance = 1;        // τ: screen-space error in pixels
+  uint32_t max_ops = 0;       // vsplits + ecols per frame (a forced chain counts each split); 0 = no cap
+  uint32_t morph_frames = 0;  // geomorph length in frames; 0 = off (viewers use kDefaultMorphFrames)
+};
+constexpr uint32_t kDefaultMorphFrames = 8;
+
+struct FrameStats {
+  uint32_t vsplits = 0;    // splits done, including those the partial order forced
+  uint32_t ecols = 0;
+  uint32_t missing = 0;    // leaves reported by missing()
+  uint32_t evaluated = 0;  // qrefine evaluations
+  uint32_t morphing = 0;   // vertices that moved this frame (geomorphs)
+  bool capped = false;     // stopped at max_ops; more work is left for the next frames
+  uint32_t ops() const { return vsplits + ecols; }
+};
+
+struct ConvergeStats {
+  uint32_t frames = 0;
+  uint64_t vsplits = 0, ecols = 0;
+  uint64_t fetched = 0;    // splits the fetch callback added
+};
+
+// Owns no mesh: adapts `mesh` (and reads its hierarchy, which may grow between frames as packets arrive).
+// `model_scale` is the model's scale (ModelView::scale): refinement info is decoded with it.
+class SelectiveRefinement {
+ public:
+  SelectiveRefinement(SelectiveMesh& mesh, float model_scale, const AdaptOptions& options = {});
+
+  void set_options(const AdaptOptions& options);
+  const AdaptOptions& options() const { return options_; }
+  // The view for the next frames, with options().tolerance; pms::Error for a negative tolerance.
+  void set_view(const ViewParams& view);
+
+  // One frame. Walks the split forest from the roots and evaluates qrefine once per node it reaches:
+  // splits active vertices that want it (the partial order's forced chain included), keeps a split node
+  // while it is wanted, forced by a kept split, or an ancestor of one, and collapses the rest (after a
+  // geomorph when morph_frames > 0). Known leaves that want a split whose packet is unknown go to missing().
+  FrameStats adapt();
+
+  // Active known leaves (slots) that qrefine wants split but whose vsplit packet is not known, including
+  // the leaf a forced chain stopped at. Valid until the next adapt(): the streaming client asks for them.
+  std::span<const uint32_t> missing() const { return missing_; }
+
+  // Adds the vsplit packets of (some of) `leaves` to the hierarchy; returns how many it added.
+  using Fetch = std::function<size_t(std::span<const uint32_t> leaves)>;
+  // adapt() until a frame changes nothing, moves nothing and `fetch` (if given) adds nothing more.
+  // With every packet available the result is the target mesh of the view, whatever the mesh was.
+  ConvergeStats converge(const Fetch& fetch = {}, uint32_t max_frames = 1u << 20);
+
+  // The mesh with vertices at their shown (morphed) positions.
+  void extract(MeshArrays& out) const;
+  const Geomorphs& geomorphs() const { return morphs_; }
+  const SelectiveMesh& mesh() const { return *mesh_; }
+  // qrefine(v) for a known slot under the current view.
+  bool qrefine(uint32_t slot);
+
+ private:
+  void sync();
+  uint32_t dependency(uint32_t slot);
+  void push_eval(uint32_t v) { stack_.push_back(uint64_t(v) << 1); }
+  void push_forced(uint32_t v) { stack_.push_back(uint64_t(v) << 1 | 1); }
+  void justify(uint32_t v);
+  void visit_active(uint32_t v, FrameStats& stats);
+  void visit_split(uint32_t v, FrameStats& stats);
+  void pin_chain(uint32_t v);
+  void report_missing(uint32_t v);
+  void collapse_unwanted(FrameStats& stats);
+  bool cap_reached(const FrameStats& stats) const { return options_.max_ops && stats.ops() >= options_.max_ops; }
+
+  SelectiveMesh* mesh_;
+  float scale_;
+  AdaptOptions options_;
+  ViewParams view_params_;
+  ViewCriteria view_;
+  bool has_view_ = false;
+  uint32_t frame_ = 0;
+  // Everything the walk reads of a slot, in one cache line: the walk is bound by memory latency.
+  struct alignas(64) Slot {
+    NodeCriteria criteria;  // decoded once
+    uint32_t kept = 0;      // frame in which the node was found wanted or forced
+    uint32_t first_child = kNone;
+    uint32_t parent = kNone;
+    uint32_t dependency = kNone - 1;  // the node its split needs split (partial order); kNone - 1: not computed
+  };
+  std::vector<Slot> slots_;
+  std::vector<uint32_t> reported_;  // per slot: frame in which it went to missing_
+  std::vector<uint64_t> stack_;       // slot << 1 | forced
+  std::vector<uint32_t> tops_;        // split nodes not wanted, whose subtrees may have to collapse
+  std::vector<uint32_t> collapse_, retry_;
+  std::vector<uint32_t> missing_;
+  Geomorphs morphs_;
+};
+
+// Local refinement of a complete model: adds the vsplit packets of those `leaves` that are internal nodes
+// of `model` (a Fetch for SelectiveRefinement::converge). Returns how many it added.
+size_t add_model_splits(VertexHierarchy& hierarchy, const ModelView& model, std::span<const uint32_t> leaves);
+
+struct ViewRefineResult {
+  MeshArrays mesh;
+  ConvergeStats stats;
+};
+
+// The mesh of `model` for one view: from the base mesh, splits fetched from the model as the loop asks
+// for them, run to convergence (no geomorphs).
+ViewRefineResult refine_for_view(const ModelView& model, const Camera& camera, float tolerance_px);
+
+}  // namespace pms

@@ -1,0 +1,89 @@
+// Hoppe 1997, "View-dependent refinement of progressive meshes", §4.1 (view frustum), §4.2 (surface
+// orientation, normal cones), §4.3 (screen-space geometric error, deviation space D(mu, delta)).
+// kim-lee-kobbelt 2005 §5.3: qrefine() is false for a real leaf, whatever the view.
+#include "refine/criteria.h"
+
+#include <cmath>
+#include <numbers>
+
+#include "common/error.h"
+
+namespace pms {
+namespace {
+
+// Float slack, relative to the eye distance, for the two culling tests: rounding in the planes, the
+// decoded cone axis and cos/sin of its angle is ~1e-7 of the distance; culling a little less is safe.
+constexpr float kCullSlack = 1e-5f;
+
+float dot3(const float a[3], const float b[3]) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
+
+}  // namespace
+
+ViewCriteria make_criteria(const ViewParams& view, float tolerance_px) {
+  if (!(tolerance_px >= 0) || !std::isfinite(tolerance_px)) fail("view", "tolerance must be a finite number >= 0");
+  ViewCriteria c;
+  for (int i = 0; i < 6; ++i)
+    for (int k = 0; k < 4; ++k) c.planes[i][k] = view.planes[i][k];
+  for (int k = 0; k < 3; ++k) c.eye[k] = view.eye[k];
+  const float kappa = tolerance_px * view.pixel_angle;
+  c.kappa2 = kappa * kappa;
+  return c;
+}
+
+NodeCriteria node_criteria(const float position[3], const RefineBounds& bounds) {
+  NodeCriteria n;
+  for (int k = 0; k < 3; ++k) {
+    n.p[k] = position[k];
+    n.axis[k] = bounds.axis[k];
+  }
+  n.radius = bounds.radius;
+  n.mu2 = bounds.mu * bounds.mu;
+  n.delta2 = bounds.delta * bounds.delta;
+  // A cone of half-angle >= pi/2 holds opposite normals: some face below may always face the eye.
+  if (bounds.cone_angle < std::numbers::pi_v<float> / 2) {
+    n.cos_a = std::cos(bounds.cone_angle);
+    n.sin_a = std::sin(bounds.cone_angle);
+  }
+  return n;
+}
+
+bool outside_frustum(const ViewCriteria& view, const NodeCriteria& node) {
+  float d[3];
+  for (int k = 0; k < 3; ++k) d[k] = node.p[k] - view.eye[k];
+  const float slack = node.radius + kCullSlack * std::sqrt(dot3(d, d));
+  for (const float* plane : view.planes)
+    if (dot3(plane, node.p) + plane[3] < -slack) return true;
+  return false;
+}
+
+// With d = p − e, θ = angle(a, d) and α the cone half-angle, min over the cone of n·d is
+// ‖d‖ cos(θ + α) = (a·d) cos α − ‖a × d‖ sin α, and min over the sphere of n·(q − e) is n·d − r.
+// Hoppe's test (a·d > 0 ∧ (a·d)² > ‖d‖² sin²α) is this with r = 0.
+bool back_facing(const ViewCriteria& view, const NodeCriteria& node) {
+  if (node.cos_a <= 0) return false;
+  float d[3];
+  for (int k = 0; k < 3; ++k) d[k] = node.p[k] - view.eye[k];
+  const float along = dot3(node.axis, d);
+  if (along <= node.radius) return false;  // cos α <= 1: the bound below cannot exceed r
+  const float* a = node.axis;
+  const float c[3] = {a[1] * d[2] - a[2] * d[1], a[2] * d[0] - a[0] * d[2], a[0] * d[1] - a[1] * d[0]};
+  const float across = std::sqrt(dot3(c, c));  // ‖a × d‖: accurate where sqrt(‖d‖² − (a·d)²) cancels
+  const float distance = std::sqrt(dot3(d, d));
+  return along * node.cos_a - across * node.sin_a > node.radius + kCullSlack * distance;
+}
+
+bool screen_error_exceeds(const ViewCriteria& view, const NodeCriteria& node) {
+  float d[3];
+  for (int k = 0; k < 3; ++k) d[k] = node.p[k] - view.eye[k];
+  const float d2 = dot3(d, d);
+  const float bound = view.kappa2 * d2;  // kappa² ‖d‖²
+  if (node.mu2 > bound) return true;
+  const float along = dot3(d, node.axis);
+  return node.delta2 * (d2 - along * along) > bound * d2;
+}
+
+bool qrefine(const ViewCriteria& view, const NodeCriteria& node) {
+  return screen_error_exceeds(view, node) && !outside_frustum(view, node) && !back_facing(view, node);
+}
+
+}  // namespace pms

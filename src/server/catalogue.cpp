@@ -1,0 +1,86 @@
+// The models a server offers: opened once, memory-mapped, shared read-only by every session.
+#include <algorithm>
+#include <filesystem>
+
+#include "common/error.h"
+#include "server/server.h"
+
+namespace pms::server {
+namespace {
+
+namespace fs = std::filesystem;
+
+std::vector<std::string> model_files(const std::vector<std::string>& paths) {
+  std::vector<std::string> files;
+  for (const std::string& path : paths) {
+    std::error_code ec;
+    if (fs::is_directory(path, ec)) {
+      std::vector<std::string> found;
+      for (const auto& entry : fs::directory_iterator(path, ec))
+        if (entry.is_regular_file() && entry.path().extension() == ".pms") found.push_back(entry.path().string());
+      if (ec) fail(path, "cannot list directory: " + ec.message());
+      std::sort(found.begin(), found.end());
+      files.insert(files.end(), found.begin(), found.end());
+    } else if (fs::exists(path, ec)) {
+      files.push_back(path);
+    } else {
+      fail(path, "no such file or directory");
+    }
+  }
+  return files;
+}
+
+// qrefine's inputs per node on the positions the clients will hold (snapped to the wire grid).
+std::vector<NodeCriteria> decode_criteria(const ModelView& view, const protocol::PositionGrid& grid) {
+  std::vector<NodeCriteria> criteria(view.node_count());
+  for (size_t n = 0; n < criteria.size(); ++n) {
+    float p[3];
+    protocol::snap_position(grid, &view.position[3 * n], p);
+    criteria[n] = node_criteria(p, dequantize_refine(view.refine[n], view.scale));
+  }
+  return criteria;
+}
+
+std::unique_ptr<ServedModel> open_model(const std::string& path, uint32_t position_bits) {
+  auto model = std::make_unique<ServedModel>();
+  model->path = path;
+  model->name = fs::path(path).stem().string();
+  model->file = PmsFile::open(path);
+  const ModelView& view = model->file->view();
+  model->info = protocol::model_info(view, model->name);
+  const protocol::Base base = protocol::make_base(view, model->name, position_bits);
+  model->context = protocol::stream_context(base);
+  model->base_frame = std::make_shared<const std::vector<uint8_t>>(protocol::encode(base));
+  model->criteria = decode_criteria(view, model->context.grid);
+  return model;
+}
+
+}  // namespace
+
+std::shared_ptr<const Catalogue> Catalogue::open(const std::vector<std::string>& paths, uint32_t position_bits) {
+  auto catalogue = std::make_shared<Catalogue>();
+  for (const std::string& file : model_files(paths)) {
+    auto model = open_model(file, position_bits);
+    if (catalogue->find(model->name)) fail(file, "a model named '" + model->name + "' is already served");
+    catalogue->models_.push_back(std::move(model));
+  }
+  if (catalogue->models_.empty()) fail("serve", "no .pms models found in the paths given");
+  protocol::Catalogue message;
+  for (const auto& model : catalogue->models_) message.models.push_back(model->info);
+  catalogue->catalogue_frame_ = protocol::encode(message);
+  return catalogue;
+}
+
+const ServedModel* Catalogue::find(const std::string& name) const {
+  for (const auto& model : models_)
+    if (model->name == name) return model.get();
+  return nullptr;
+}
+
+uint64_t Catalogue::mapped_bytes() const {
+  uint64_t total = 0;
+  for (const auto& model : models_) total += model->file->file_size();
+  return total;
+}
+
+}  // namespace pms::server

@@ -1,0 +1,132 @@
+// One client's session of the sender-driven protocol (kim-lee-kobbelt §5.3): HELLO, LIST, OPEN (with
+// resume), VIEW -> SelectiveStreaming in batches, CLOSE. The session holds a reference to its model
+// and the windowed active tags; a VIEW's ranking lives only while that VIEW is being answered.
+#include <cmath>
+#include <variant>
+
+#include "server/server.h"
+
+namespace pms::server {
+namespace {
+
+using protocol::ErrorCode;
+using protocol::ProtocolError;
+
+// Screen-space error (squared, in units of pixel_angle²·τ²-free radians²) of a node that qrefine
+// wants split: the larger of Hoppe's two deviation terms over the squared eye distance. Orders a
+// VIEW's answer so the most visible error is fixed first.
+float visible_error(const ViewCriteria& view, const NodeCriteria& node) {
+  if (!qrefine(view, node)) return 0;
+  float d[3];
+  for (int k = 0; k < 3; ++k) d[k] = node.p[k] - view.eye[k];
+  const float d2 = std::max(d[0] * d[0] + d[1] * d[1] + d[2] * d[2], 1e-30f);
+  const float along = d[0] * node.axis[0] + d[1] * node.axis[1] + d[2] * node.axis[2];
+  const float error = std::max(node.mu2 * d2, node.delta2 * (d2 - along * along)) / (d2 * d2);
+  return std::max(error, 1e-30f);  // qrefine held: stay > 0 even when it underflows
+}
+
+}  // namespace
+
+Session::Session(std::shared_ptr<const Catalogue> catalogue, const ServerLimits& limits)
+    : catalogue_(std::move(catalogue)), limits_(limits) {}
+
+void Session::queue(std::vector<uint8_t> frame) {
+  outbox_.push_back(std::make_shared<const std::vector<uint8_t>>(std::move(frame)));
+}
+
+void Session::abort_with(ErrorCode code, const std::string& text) {
+  if (closing_) return;
+  streamer_.stop();
+  queue(protocol::encode(protocol::ErrorMessage{code, text}));
+  closing_ = true;
+}
+
+void Session::receive(const protocol::Frame& frame) {
+  if (closing_) return;
+  try {
+    const protocol::ClientMessage message = protocol::decode_client_message(frame);
+    if (!greeted_ && !std::holds_alternative<protocol::Hello>(message))
+      throw ProtocolError(ErrorCode::out_of_order, protocol::to_string(frame.type) + " before HELLO");
+    if (const auto* hello = std::get_if<protocol::Hello>(&message)) {
+      on_hello(*hello);
+    } else if (std::holds_alternative<protocol::List>(message)) {
+      queue(catalogue_->catalogue_frame());
+    } else if (const auto* open = std::get_if<protocol::Open>(&message)) {
+      on_open(*open);
+    } else if (const auto* view = std::get_if<protocol::View>(&message)) {
+      on_view(*view);
+    } else {  // CLOSE
+      streamer_.stop();
+      closing_ = true;
+    }
+  } catch (const ProtocolError& e) {
+    abort_with(e.code, e.what());
+  } catch (const Error& e) {
+    abort_with(ErrorCode::bad_message, e.what());
+  }
+}
+
+void Session::on_hello(const protocol::Hello& m) {
+  if (greeted_) throw ProtocolError(ErrorCode::out_of_order, "HELLO: sent twice");
+  if (m.version != protocol::kProtocolVersion)
+    throw ProtocolError(ErrorCode::unsupported_version,
+                        "HELLO: protocol version " + std::to_string(m.version) + " (this server speaks " +
+                            std::to_string(protocol::kProtocolVersion) + ")");
+  greeted_ = true;
+  protocol::HelloOk ok;
+  ok.server_name = "pmstream";
+  ok.max_client_message = limits_.max_client_message;
+  ok.max_server_message = limits_.max_server_message;
+  queue(protocol::encode(ok));
+}
+
+void Session::on_open(const protocol::Open& m) {
+  if (model_) throw ProtocolError(ErrorCode::out_of_order, "OPEN: a model is already open in this session");
+  const ServedModel* model = catalogue_->find(m.model);
+  if (!model) throw ProtocolError(ErrorCode::unknown_model, "OPEN: no model named '" + m.model + "'");
+  const ModelView& view = model->view();
+  ActiveTags tags(m.resume.empty() ? view.root_count : 0);
+  // Resume (kim-lee-kobbelt §5.3 "Session close"): the client's known leaves are the front.
+  for (const VertexId& id : m.resume) {
+    if (id.tree >= view.root_count)
+      throw ProtocolError(ErrorCode::bad_id, "OPEN: resume id " + to_string(id) + " has no tree in the model");
+    const uint32_t node = view.find(id);
+    if (node == kNone) throw ProtocolError(ErrorCode::bad_id, "OPEN: resume id " + to_string(id) + " not in the model");
+    tags.activate(node);
+  }
+  model_ = model;
+  tags_ = std::move(tags);
+  outbox_.push_back(model->base_frame);
+}
+
+void Session::on_view(const protocol::View& m) {
+  if (!model_) throw ProtocolError(ErrorCode::out_of_order, "VIEW before OPEN");
+  const ModelView& model = model_->view();
+  // The same derivation as the client's, from the same box: bit-identical criteria on both ends.
+  view_ = make_criteria(make_view(m.camera, model.bbox_min, model.bbox_max), m.tolerance);
+  view_frame_ = m.frame;
+  // A new VIEW replaces the one being answered: what was not sent yet is judged again under the new one.
+  const std::vector<NodeCriteria>& criteria = model_->criteria;
+  streamer_.start(model, tags_, [this, &criteria](uint32_t node) { return visible_error(view_, criteria[node]); });
+}
+
+bool Session::pump() {
+  if (closing_ || !streamer_.active()) return false;
+  batch_.clear();
+  const bool served = streamer_.step(limits_.batch_splits, batch_);
+  protocol::VSplits message;
+  message.frame = view_frame_;
+  message.final = served;
+  message.splits.reserve(batch_.size());
+  for (uint32_t node : batch_) message.splits.push_back(split_record(model_->view(), node));
+  queue(protocol::encode(message, model_->context));
+  splits_sent_ += batch_.size();
+  if (served) streamer_.stop();
+  return true;
+}
+
+size_t Session::state_bytes() const {
+  return sizeof(*this) + tags_.memory_bytes() + batch_.capacity() * sizeof(uint32_t);
+}
+
+}  // namespace pms::server
