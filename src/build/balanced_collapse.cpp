@@ -126,7 +126,14 @@ CollapseForest simplify_balanced(const Mesh& input, const BuildOptions& options)
         sorted_end = chunk_end;
       }
       // Entries come in cost order, i.e. scattered over the mesh: fetch a few ahead.
-      if (i + kPrefetchDistance < sorted_end) mesh.prefetch(entries[i + kPrefetchDistance].t);
+      if (i + 2 * kPrefetchDistance < sorted_end) {
+        mesh.prefetch(entries[i + 2 * kPrefetchDistance].t);
+        mesh.prefetch(entries[i + 2 * kPrefetchDistance].u);
+      }
+      if (i + kPrefetchDistance < sorted_end) {
+        mesh.prefetch_fan(entries[i + kPrefetchDistance].t);
+        mesh.prefetch_fan(entries[i + kPrefetchDistance].u);
+      }
       const Entry& e = entries[i];
       if (touched[e.t] || touched[e.u]) continue;
       if (!mesh.check_collapse(e.t, e.u, site)) continue;

@@ -48,6 +48,13 @@ class CollapseMesh {
     __builtin_prefetch(&quadrics_[v]);
     __builtin_prefetch(&positions_[3 * size_t(v)]);
   }
+  // The second step, once head_[v] is in cache: the first corner of v's fan.
+  void prefetch_fan(uint32_t v) const {
+    const uint32_t c = head_[v];
+    if (c == kEnd) return;
+    __builtin_prefetch(&next_corner_[c]);
+    __builtin_prefetch(&faces_[c - c % 3]);
+  }
 
   // Live faces around v (unlinks dead ones on the way).
   template <class Fn>
