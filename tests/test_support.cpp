@@ -2,6 +2,9 @@
 
 #include <atomic>
 #include <cstdlib>
+#include <fstream>
+#include <iterator>
+#include <sys/wait.h>
 #include <unistd.h>
 
 namespace pms::test {
@@ -31,6 +34,18 @@ std::filesystem::path temp_dir() {
              ("pmstream-test-" + std::to_string(getpid()) + "-" + std::to_string(counter++) + "-" + name);
   std::filesystem::create_directories(dir);
   return dir;
+}
+
+CliRun run_pmstream(const std::string& args) {
+  const auto dir = temp_dir();
+  const std::string out = (dir / "stdout").string(), err = (dir / "stderr").string();
+  const std::string command = std::string(PMSTREAM_BINARY) + " " + args + " >" + out + " 2>" + err;
+  const int status = std::system(command.c_str());
+  auto slurp = [](const std::string& path) {
+    std::ifstream in(path);
+    return std::string(std::istreambuf_iterator<char>(in), {});
+  };
+  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, slurp(out), slurp(err)};
 }
 
 }  // namespace pms::test

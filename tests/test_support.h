@@ -16,6 +16,13 @@ std::filesystem::path shared_model(const std::string& file);
 // A fresh directory under the system temp dir, unique per test.
 std::filesystem::path temp_dir();
 
+// Runs the pmstream binary (PMSTREAM_BINARY) with `args` (shell words) and captures both streams.
+struct CliRun {
+  int exit_code;  // -1 when it did not exit normally
+  std::string out, err;
+};
+CliRun run_pmstream(const std::string& args);
+
 }  // namespace pms::test
 
 // Skips the test with a clear message when the shared model is not available (a user's fresh clone).

@@ -8,6 +8,7 @@
 
 #include "apps/camera_json.h"
 #include "apps/commands.h"
+#include "apps/refine_pipeline.h"
 #include "apps/resource_usage.h"
 #include "client/client.h"
 #include "common/error.h"
@@ -40,12 +41,7 @@ void split_host_port(const std::string& text, std::string& host, uint16_t& port)
 Mesh current_mesh(client::StreamingClient& client) {
   MeshArrays arrays;
   client.session().refinement().extract(arrays);
-  Mesh mesh;
-  mesh.positions = std::move(arrays.positions);
-  mesh.normals = std::move(arrays.normals);
-  mesh.colors = std::move(arrays.colors);
-  mesh.indices = std::move(arrays.indices);
-  return mesh;
+  return to_mesh(std::move(arrays));
 }
 
 void snapshot(client::StreamingClient& client, const Camera& camera, const std::string& dir, size_t index,

@@ -10,6 +10,7 @@
 #include <unistd.h>
 
 #include "apps/camera_path.h"
+#include "apps/percentile.h"
 #include "apps/resource_usage.h"
 #include "client/client.h"
 #include "common/error.h"
@@ -51,12 +52,6 @@ std::vector<Camera> flight_path(const ModelView& model, uint32_t frames) {
     path.push_back(c);
   }
   return path;
-}
-
-double percentile(std::vector<double> values, double p) {
-  if (values.empty()) return 0;
-  std::sort(values.begin(), values.end());
-  return values[std::min(values.size() - 1, size_t(p * double(values.size() - 1) + 0.5))];
 }
 
 void snapshot(client::StreamingClient& client, const Camera& camera, const std::string& path, Renderer& renderer,

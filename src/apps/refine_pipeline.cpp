@@ -4,7 +4,6 @@
 #include "refine/stream_order.h"
 
 namespace pms::app {
-namespace {
 
 Mesh to_mesh(MeshArrays&& arrays) {
   Mesh out;
@@ -14,8 +13,6 @@ Mesh to_mesh(MeshArrays&& arrays) {
   out.indices = std::move(arrays.indices);
   return out;
 }
-
-}  // namespace
 
 Mesh refine_first_splits(const ModelView& model, uint64_t k) { return to_mesh(refine_in_stream_order(model, k)); }
 

@@ -6,8 +6,12 @@
 #include "io/mesh.h"
 #include "pm/pm.h"
 #include "refine/camera.h"
+#include "refine/refine.h"
 
 namespace pms::app {
+
+// The refine layer's flat arrays as io's Mesh (for the exporters).
+Mesh to_mesh(MeshArrays&& arrays);
 
 // refine_in_stream_order() as a Mesh (with normals/colors) for the exporters.
 Mesh refine_first_splits(const ModelView& model, uint64_t k);

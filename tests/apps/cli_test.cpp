@@ -16,22 +16,8 @@
 namespace pms {
 namespace {
 
-struct RunResult {
-  int exit_code;
-  std::string out, err;
-};
-
-RunResult run(const std::string& args) {
-  const auto dir = test::temp_dir();
-  const std::string out = (dir / "stdout").string(), err = (dir / "stderr").string();
-  const std::string command = std::string(PMSTREAM_BINARY) + " " + args + " >" + out + " 2>" + err;
-  const int status = std::system(command.c_str());
-  auto slurp = [](const std::string& path) {
-    std::ifstream in(path);
-    return std::string(std::istreambuf_iterator<char>(in), {});
-  };
-  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, slurp(out), slurp(err)};
-}
+using RunResult = test::CliRun;
+RunResult run(const std::string& args) { return test::run_pmstream(args); }
 
 TEST(Cli, BuildInfoRefineRoundTrip) {
   const auto dir = test::temp_dir();

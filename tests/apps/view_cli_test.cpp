@@ -17,23 +17,13 @@
 namespace pms {
 namespace {
 
-struct RunResult {
-  int exit_code;
-  std::string out, err;
-};
-
 std::string slurp(const std::string& path) {
   std::ifstream in(path);
   return std::string(std::istreambuf_iterator<char>(in), {});
 }
 
-RunResult run(const std::string& args) {
-  const auto dir = test::temp_dir();
-  const std::string out = (dir / "stdout").string(), err = (dir / "stderr").string();
-  const std::string command = std::string(PMSTREAM_BINARY) + " " + args + " >" + out + " 2>" + err;
-  const int status = std::system(command.c_str());
-  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, slurp(out), slurp(err)};
-}
+using RunResult = test::CliRun;
+RunResult run(const std::string& args) { return test::run_pmstream(args); }
 
 // A torus built once per test (flat: its up axis is z).
 struct Model {

@@ -11,6 +11,7 @@
 #include "apps/bench/child_process.h"
 #include "apps/bench/report.h"
 #include "apps/camera_path.h"
+#include "apps/percentile.h"
 #include "apps/resource_usage.h"
 #include "common/error.h"
 #include "refine/adapt.h"
@@ -28,12 +29,6 @@ constexpr uint32_t kRenderRepeats = 5;
 void print(const std::string& text) {
   std::fputs(text.c_str(), stdout);
   std::fflush(stdout);
-}
-
-double percentile(std::vector<double> v, double p) {
-  if (v.empty()) return 0;
-  std::sort(v.begin(), v.end());
-  return v[std::min(v.size() - 1, size_t(p * double(v.size() - 1) + 0.5))];
 }
 
 // Every split known: the loop's cost alone, with nothing to fetch.

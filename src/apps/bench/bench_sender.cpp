@@ -20,6 +20,7 @@
 #include "apps/bench/local_transport.h"
 #include "apps/bench/report.h"
 #include "apps/camera_path.h"
+#include "apps/percentile.h"
 #include "apps/resource_usage.h"
 #include "common/error.h"
 
@@ -204,12 +205,6 @@ struct E11 {
   double p50 = 0, p99 = 0;
   std::string error;
 };
-
-double percentile(std::vector<double>& v, double p) {
-  if (v.empty()) return 0;
-  std::sort(v.begin(), v.end());
-  return v[std::min(v.size() - 1, size_t(p * double(v.size() - 1) + 0.5))];
-}
 
 E11 run_e11(const BenchContext& context, const Model& m, uint32_t clients) {
   E11 e;
