@@ -164,8 +164,8 @@ class SelectiveMesh {
 
   void sync_slots();
   bool gather_fan(uint32_t v, std::vector<uint32_t>& fan) const;
-  uint32_t cut_ancestor(VertexId cut, uint32_t slot) const;
-  void split_fan(uint32_t s, uint32_t l, uint32_t r);
+  uint32_t cut_ancestor(VertexId cut, uint32_t slot) const;  // over fan_ (slot)
+  void split_fan(uint32_t s, uint32_t l, uint32_t r, bool closed);  // over fan_ (s)
   bool breaks_split_order(uint32_t t, uint32_t u) const;  // over fan_ (t)
   bool link_condition(uint32_t t, uint32_t l, uint32_t r);  // over fan_ (t) and fan_u_ (u)
   uint32_t new_face(uint32_t a, uint32_t b, uint32_t c);

@@ -17,6 +17,7 @@ namespace pms {
 namespace {
 
 constexpr const char* kWhere = "selective mesh";
+constexpr int kMaxClimb = 3;  // breaks_split_order: parent steps before a hash probe is cheaper
 
 }  // namespace
 
@@ -162,8 +163,17 @@ uint32_t SelectiveMesh::active_ancestor(VertexId v) const {
   }
 }
 
+// ActiveAncestor of a cut vertex of `slot`, which fan_ holds. When the packets agree with the mesh the
+// answer is a neighbour of v_s (it becomes an apex of f_l or f_r), and an active vertex whose id is a
+// prefix of the cut's is its only active ancestor; so one id per neighbour replaces the walk down from
+// the root (one dependent load per level). The walk remains for the rest: the forced chain (v_l == v_r
+// need not be adjacent to v_s) and the error.
 uint32_t SelectiveMesh::cut_ancestor(VertexId cut, uint32_t slot) const {
   if (!is_vertex(cut)) return kNone;
+  for (uint32_t h : fan_) {
+    const uint32_t w = head(h);
+    if (is_ancestor_or_self(hierarchy_->id(w), cut)) return w;
+  }
   const uint32_t a = active_ancestor(cut);
   if (a == kNone)
     fail(kWhere, "vertex " + to_string(hierarchy_->id(slot)) + ": no active ancestor for cut vertex " + to_string(cut));
@@ -176,9 +186,8 @@ uint32_t SelectiveMesh::cut_ancestor(VertexId cut, uint32_t slot) const {
 // the fan, with no face (v_s, ·, v_r) they run to its end, and with neither (or a one-sided split whose
 // only side is a border) v_t keeps only the new faces. Everything is checked before the first write,
 // so inconsistent packets leave the mesh as it was.
-void SelectiveMesh::split_fan(uint32_t s, uint32_t l, uint32_t r) {
+void SelectiveMesh::split_fan(uint32_t s, uint32_t l, uint32_t r, bool closed) {  // fan_: s's fan
   const uint32_t t = hierarchy_->first_child(s), u = t + 1;
-  const bool closed = gather_fan(s, fan_);
   const uint32_t n = uint32_t(fan_.size());
   // Half-edges between s and the cut vertices, kNone on a border: s->l (becomes t->l), l->s (l->u),
   // r->s (r->t), s->r (u->r). ia / ib: fan positions of the faces holding s->l / r->s.
@@ -234,6 +243,7 @@ VSplitResult SelectiveMesh::vsplit(uint32_t slot) {
     const uint32_t s = stack_.back();
     if (!is_active(s)) fail(kWhere, "cyclic split order at " + to_string(hierarchy_->id(s)));
     if (hierarchy_->is_leaf(s)) return {false, s};
+    const bool closed = gather_fan(s, fan_);
     const uint32_t l = cut_ancestor(hierarchy_->cut_left(s), s);
     const uint32_t r = cut_ancestor(hierarchy_->cut_right(s), s);
     if (l != kNone && l == r) {
@@ -241,7 +251,7 @@ VSplitResult SelectiveMesh::vsplit(uint32_t slot) {
       stack_.push_back(l);
       continue;
     }
-    split_fan(s, l, r);
+    split_fan(s, l, r, closed);
     stack_.pop_back();
   }
   return {true, kNone};
@@ -278,8 +288,15 @@ bool SelectiveMesh::breaks_split_order(uint32_t t, uint32_t u) const {
     const uint64_t pa = a.node >> (da - d), pb = b.node >> (db - d);
     if (pa == pb) continue;  // one above the other: not a front, cannot happen
     const int below = std::bit_width(pa ^ pb);  // levels from the common ancestor q down to depth d
-    const uint32_t q = h.find({a.tree, pa >> below});  // one probe; walking up parents can take dozens
-    if (q == kNone) continue;                          // cannot happen: q is an ancestor of a front vertex
+    // q is (da - d) + below parents up from A: a short climb beats a hash probe (two cache misses),
+    // a long one (dozens of levels) does not.
+    uint32_t q = head(e);
+    if (da - d + below <= kMaxClimb) {
+      for (int k = da - d + below; k > 0; --k) q = h.parent(q);
+    } else {
+      q = h.find({a.tree, pa >> below});
+      if (q == kNone) continue;  // cannot happen: q is an ancestor of a front vertex
+    }
     // A below q's v_t: the face is (A, B, t) = f_l(q), else (B, A, t) = f_r(q).
     const bool a_first = ((pa >> (below - 1)) & 1) == 0;
     const VertexId cut_t = a_first ? h.cut_left(q) : h.cut_right(q);
