@@ -1,7 +1,8 @@
 // libFuzzer target for the frame reader and the two direction dispatchers (DESIGN.md §6.5): a byte
 // stream cut into chunks (sizes from the input) must frame exactly as it would in one piece, frames never
 // exceed the limit, and every frame decodes or throws ProtocolError. A BASE that decodes becomes the
-// context of later VSPLITS, as in a client session.
+// context of later VSPLITS, as in a client session; an OPEN before it in view-independent mode takes the
+// refinement info out of that context.
 #include <algorithm>
 #include <cstddef>
 #include <cstdint>
@@ -51,13 +52,19 @@ Outcome read_frames(const uint8_t* stream, size_t size, uint32_t limit, const ui
 
 void decode_frames(const std::vector<Frame>& frames) {
   std::optional<StreamContext> context;
+  bool has_refinement = true;
   for (const Frame& frame : frames) {
     try {
       if (uint8_t(frame.type) & 0x80) {
         const ServerMessage message = decode_server_message(frame, context ? &*context : nullptr);
-        if (const Base* base = std::get_if<Base>(&message)) context = stream_context(*base);
+        if (const Base* base = std::get_if<Base>(&message)) {
+          context = stream_context(*base);
+          context->has_refinement = has_refinement;
+        }
       } else {
-        decode_client_message(frame, 1u << 16);
+        const ClientMessage message = decode_client_message(frame, 1u << 16);
+        if (const Open* open = std::get_if<Open>(&message))
+          has_refinement = open->mode == StreamMode::sender_driven;
       }
     } catch (const ProtocolError&) {
     }

@@ -37,6 +37,7 @@ StreamContext context_from(const uint8_t* b) {
   c.grid.bits = kBits[b[5] % 8];
   c.has_normals = b[6] & 1;
   c.has_colors = b[6] & 2;
+  c.has_refinement = !(b[6] & 4);  // a view-independent session's packets
   for (int i = 0; i < 3; ++i) {
     c.grid.min[i] = -1.0f - float(b[7] % 4);
     c.grid.max[i] = 1.0f + float(b[7] / 4 % 4);

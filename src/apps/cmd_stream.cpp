@@ -1,4 +1,4 @@
-// pmstream stream --server HOST:PORT --model NAME --path PATH.json --mode sender --tolerance PX
+// pmstream stream --server HOST:PORT --model NAME --path PATH.json --mode sender|vi --tolerance PX
 //                 [--laps K] [--save-mesh OUT.ply] [--snapshots DIR] [--json]
 // The headless viewer: follows a camera path, streaming what each frame needs, and reports per frame.
 #include <cstdio>
@@ -54,8 +54,8 @@ void snapshot(client::StreamingClient& client, const Camera& camera, const std::
 }
 
 void run_stream(const StreamArgs& args) {
-  if (args.mode != "sender")
-    fail("--mode", "'" + args.mode + "': this build streams in sender mode (vi, receiver and dag come with their issues)");
+  if (args.mode != "sender" && args.mode != "vi")
+    fail("--mode", "'" + args.mode + "': this build streams in sender and vi modes (receiver and dag come with their issues)");
   std::string host;
   uint16_t port = 0;
   split_host_port(args.server, host, port);
@@ -67,6 +67,7 @@ void run_stream(const StreamArgs& args) {
   options.tolerance = args.tolerance;
   options.morph_frames = args.morph_frames;
   options.max_ops = args.max_ops;
+  if (args.mode == "vi") options.mode = protocol::StreamMode::view_independent;
   client::StreamingClient client(host, port, options);
   client.open(args.model);
 
@@ -121,7 +122,8 @@ void add_stream_command(CLI::App& app) {
   cmd->add_option("--server", args->server, "HOST:PORT of the server's TCP port")->required();
   cmd->add_option("--model", args->model, "Model name in the server's catalogue")->required();
   cmd->add_option("--path", args->path, "PATH.json (pmstream path ...)")->required();
-  cmd->add_option("--mode", args->mode, "sender")->capture_default_str();
+  cmd->add_option("--mode", args->mode, "sender (view-dependent) or vi (plain PM order until the view is satisfied)")
+      ->capture_default_str();
   cmd->add_option("--tolerance", args->tolerance, "Screen-space error tolerance in pixels")
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();

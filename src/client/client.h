@@ -28,7 +28,8 @@ class ClientSession {
   // Builds the base mesh, hierarchy and refinement loop from a BASE. With `keep` (a resumed session whose
   // hierarchy is already here) the BASE only has to match the model held.
   void on_base(const protocol::Base& base);
-  // Attaches a batch's packets as leaves of the partial hierarchy (UpdateVHierarchy).
+  // Attaches a batch's packets as leaves of the partial hierarchy (UpdateVHierarchy); in view-independent
+  // mode also applies each split to the mesh at once (they come in PM order, so each one can be made).
   void on_vsplits(const protocol::VSplits& batch);
 
   bool has_model() const { return refinement_ != nullptr; }
@@ -43,6 +44,8 @@ class ClientSession {
   uint64_t splits_received() const { return splits_received_; }
 
   AdaptOptions adapt_options;
+  // Set before on_base: a view-independent session's packets carry no refinement info.
+  protocol::StreamMode mode = protocol::StreamMode::sender_driven;
 
  private:
   protocol::Base base_;
@@ -112,6 +115,10 @@ struct ClientOptions {
   uint32_t max_ops = 0;  // per frame, 0 = no cap
   std::chrono::milliseconds answer_timeout{30000};
   std::string name = "pmstream-client";
+  // view_independent: the baseline of kim-lee-kobbelt §8 Fig. 9. Splits arrive in PM order without
+  // refinement info and are applied as they come; qrefine never runs here, so the client sends VIEW every
+  // frame (it cannot know what it lacks) and the server decides how much of the PM order the view needs.
+  protocol::StreamMode mode = protocol::StreamMode::sender_driven;
 };
 
 class StreamingClient {
@@ -131,7 +138,8 @@ class StreamingClient {
   void resume(std::unique_ptr<Transport> transport);
 
   // One frame of the path: adapt to the camera; when the front needs packets it lacks, send VIEW, wait
-  // for the whole answer and adapt again, until the view is satisfied.
+  // for the whole answer and adapt again, until the view is satisfied. View-independent: VIEW, and apply
+  // the answer's splits in order.
   FrameReport frame(const Camera& camera);
   // Frames at the last camera until nothing changes and nothing moves (geomorphs).
   void settle(const Camera& camera);
@@ -142,6 +150,7 @@ class StreamingClient {
  private:
   protocol::Frame expect(protocol::MessageType type);
   size_t request(const Camera& camera, FrameReport& report);
+  void adapt_and_request(const Camera& camera, FrameReport& report);  // sender-driven frame
   void greet(std::unique_ptr<Transport> transport);
 
   ClientOptions options_;

@@ -1,5 +1,6 @@
 // The client's protocol logic (kim-lee-kobbelt §5.3): BASE builds the base mesh and the roots of the
-// partial hierarchy; every VSPLITS packet is attached below its v_s (UpdateVHierarchy).
+// partial hierarchy; every VSPLITS packet is attached below its v_s (UpdateVHierarchy). In view-independent
+// mode (kim-lee-kobbelt §8, Fig. 9) every packet is also applied at once, in arrival (PM) order.
 #include "client/client.h"
 
 #include "common/error.h"
@@ -15,6 +16,7 @@ void ClientSession::on_base(const protocol::Base& base) {
   }
   base_ = base;
   context_ = protocol::stream_context(base);
+  context_.has_refinement = mode == protocol::StreamMode::sender_driven;
   hierarchy_ = std::make_unique<VertexHierarchy>(base.has_normals, base.has_colors);
   hierarchy_->reserve(base.root_count());
   for (uint32_t r = 0; r < base.root_count(); ++r)
@@ -27,7 +29,13 @@ void ClientSession::on_base(const protocol::Base& base) {
 
 void ClientSession::on_vsplits(const protocol::VSplits& batch) {
   if (!has_model()) fail("VSPLITS", "received before BASE");
-  for (const SplitRecord& split : batch.splits) hierarchy_->add_split(split);
+  const bool apply = mode == protocol::StreamMode::view_independent;
+  for (const SplitRecord& split : batch.splits) {
+    hierarchy_->add_split(split);
+    // PM order: the split's ancestors and cut-vertex splits came earlier, so it can be made now.
+    if (apply && !mesh_->vsplit(hierarchy_->find(split.vs)).done)
+      fail("VSPLITS", "split of " + to_string(split.vs) + " arrived before a split it needs (not in PM order)");
+  }
   splits_received_ += batch.splits.size();
 }
 

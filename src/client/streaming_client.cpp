@@ -32,6 +32,7 @@ StreamingClient::StreamingClient(std::unique_ptr<Transport> transport, const Cli
   session_.adapt_options.tolerance = options.tolerance;
   session_.adapt_options.morph_frames = options.morph_frames;
   session_.adapt_options.max_ops = options.max_ops;
+  session_.mode = options.mode;
   greet(std::move(transport));
 }
 
@@ -68,7 +69,7 @@ protocol::Catalogue StreamingClient::list() {
 
 void StreamingClient::open(const std::string& model) {
   model_ = model;
-  protocol::Open message{model, {}};
+  protocol::Open message{model, {}, options_.mode};
   if (session_.has_model()) message.resume = session_.known_leaves();
   link_->send(protocol::encode(message));
   session_.on_base(protocol::decode_base(expect(protocol::MessageType::base).payload));
@@ -108,6 +109,19 @@ FrameReport StreamingClient::frame(const Camera& camera) {
   FrameReport report;
   report.frame = frame_ + 1;
   const LinkCounters before = link_->counters();
+  if (options_.mode == protocol::StreamMode::view_independent) {
+    report.vsplits = request(camera, report);  // the splits are applied as they arrive
+  } else {
+    adapt_and_request(camera, report);
+  }
+  const LinkCounters after = link_->counters();
+  report.up_bytes = after.bytes_up - before.bytes_up;
+  report.down_bytes = after.bytes_down - before.bytes_down;
+  report.faces = session_.mesh().face_count();
+  return report;
+}
+
+void StreamingClient::adapt_and_request(const Camera& camera, FrameReport& report) {
   SelectiveRefinement& refinement = session_.refinement();
   refinement.set_view(session_.view_params(camera));
   // The server answers a VIEW with every split the view wants over its front, so one request per frame
@@ -123,16 +137,11 @@ FrameReport StreamingClient::frame(const Camera& camera) {
     report.vsplits += received;
     if (received == 0) break;  // the server has nothing more for this view
   }
-  const LinkCounters after = link_->counters();
-  report.up_bytes = after.bytes_up - before.bytes_up;
-  report.down_bytes = after.bytes_down - before.bytes_down;
-  report.faces = session_.mesh().face_count();
-  return report;
 }
 
 void StreamingClient::settle(const Camera& camera) {
   frame(camera);
-  session_.refinement().converge();
+  if (options_.mode == protocol::StreamMode::sender_driven) session_.refinement().converge();
 }
 
 LinkCounters StreamingClient::counters() const {

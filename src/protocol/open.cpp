@@ -1,4 +1,4 @@
-// OPEN{model, optional resume front}. The resume list is the set of leaves of the client's partial
+// OPEN{model, mode, optional resume front}. The resume list is the set of leaves of the client's partial
 // hierarchy, which is always a complete front of the forest (every root-to-leaf path meets one of them):
 // roots arrive with BASE and every split adds both children. A front is coded in preorder, one bit per
 // node: 1 = split (both children follow), 0 = a listed leaf, trees in tree-id order. That is 2F - R bits
@@ -13,6 +13,7 @@ namespace {
 
 constexpr int kMaxDepth = 63;  // node-ids are 64 bits with the leading 1
 constexpr uint8_t kFlagResume = 1;
+constexpr uint8_t kFlagViewIndependent = 2;  // StreamMode::view_independent
 
 // Preorder: in the same tree, left-aligned path bits compare like the bit strings they are (for ids
 // where neither is an ancestor of the other, which is the case inside a front).
@@ -63,7 +64,9 @@ struct FrontReader {
 std::vector<uint8_t> encode(const Open& m) {
   Writer w(MessageType::open);
   w.string(m.model, kMaxNameBytes, "model");
-  w.u8(m.resume.empty() ? 0 : kFlagResume);
+  const bool vi = m.mode == StreamMode::view_independent;
+  if (!vi && m.mode != StreamMode::sender_driven) fail("OPEN", "mode: not a mode this protocol knows");
+  w.u8(uint8_t((m.resume.empty() ? 0 : kFlagResume) | (vi ? kFlagViewIndependent : 0)));
   if (!m.resume.empty()) {
     std::vector<VertexId> leaves = m.resume;
     for (VertexId v : leaves)
@@ -84,7 +87,8 @@ Open decode_open(std::span<const uint8_t> payload, uint64_t max_resume_leaves) {
   Open m;
   m.model = r.string(kMaxNameBytes, "model");
   const uint8_t flags = r.u8("flags");
-  if (flags & ~kFlagResume) r.fail(ErrorCode::bad_message, "flags", "unknown bits set");
+  if (flags & ~(kFlagResume | kFlagViewIndependent)) r.fail(ErrorCode::bad_message, "flags", "unknown bits set");
+  if (flags & kFlagViewIndependent) m.mode = StreamMode::view_independent;
   if (flags & kFlagResume) {
     const uint32_t trees = r.u32("resume tree count");
     if (trees == 0) r.fail(ErrorCode::bad_message, "resume tree count", "is 0");

@@ -130,6 +130,9 @@ struct StreamContext {
   PositionGrid grid;
   bool has_normals = false;
   bool has_colors = false;
+  // Packets carry info_t and info_u. Not in a view-independent session (kim-lee-kobbelt §8, Fig. 9): its
+  // client applies splits in PM order and never evaluates qrefine. Both ends set it from the OPEN's mode.
+  bool has_refinement = true;
 };
 
 // ---- client -> server ----------------------------------------------------------------------------------
@@ -144,9 +147,14 @@ struct List {};
 // Empty = a fresh session. A non-empty list must be a complete front of trees 0..R-1 (every root-to-leaf
 // path meets exactly one listed id): the client's known leaves always are. It travels as a preorder
 // split/leaf bit code (about 2 bits per leaf, not ~40).
+// `mode`: sender-driven (kim-lee-kobbelt §5.3, the default) or view-independent, the baseline of §8 Fig. 9:
+// the server streams the plain PM order (coarse to fine, packets without refinement info) until the prefix
+// sent satisfies the client's view, and the client applies every split as it arrives.
+enum class StreamMode : uint8_t { sender_driven, view_independent };
 struct Open {
   std::string model;
   std::vector<VertexId> resume;
+  StreamMode mode = StreamMode::sender_driven;
 };
 // The Camera itself rather than a modelview matrix: client and server both call make_view() on it with
 // the model's box and get bit-identical ViewParams, so qrefine agrees on both sides.
@@ -258,7 +266,7 @@ ModelInfo model_info(const ModelView& model, const std::string& name);  // count
 
 // Bits one vsplit packet takes inside a VSPLITS bit stream. topology = the ids of v_s, v̂_l, v̂_r and the
 // 2-bit cut flags (children are implied); position = v_t's quantized position; refinement = info_t +
-// info_u; attributes = normal and color.
+// info_u (0 when the context has no refinement info); attributes = normal and color.
 struct PacketBits {
   uint32_t topology = 0, position = 0, refinement = 0, attributes = 0;
   uint32_t total() const { return topology + position + refinement + attributes; }

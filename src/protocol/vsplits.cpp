@@ -3,7 +3,8 @@
 //   tree-id (tree_id_bits) | depth (depth_field_bits) | the node-id's path below the root (depth bits),
 // i.e. the heap node-id without its implicit leading 1, so an id costs what its depth needs rather than
 // the model's worst case. Then v_t's quantized position (v_u keeps v_s's), info_t, info_u and the optional
-// normal / color of v_t. The whole batch is one bit stream padded once at the end: packets are not
+// normal / color of v_t (info_t and info_u only when the session's context has refinement info: not in a
+// view-independent session). The whole batch is one bit stream padded once at the end: packets are not
 // byte-aligned (docs/protocol.md has the measurements that chose this).
 #include <bit>
 #include <cmath>
@@ -19,11 +20,13 @@ constexpr uint32_t kCutFlagBits = 2;
 constexpr uint32_t kInfoBits = 96;
 
 uint32_t attribute_bits(const StreamContext& c) { return (c.has_normals ? 32 : 0) + (c.has_colors ? 32 : 0); }
+// info_t + info_u; a view-independent session's packets have none (its client never runs qrefine).
+uint32_t refinement_bits(const StreamContext& c) { return c.has_refinement ? 2 * kInfoBits : 0; }
 
 // Smallest packet: depth-0 ids, one cut vertex. Bounds a batch's count by its bytes before allocating.
 uint64_t min_packet_bits(const StreamContext& c) {
   const uint64_t id = c.tree_id_bits + depth_field_bits(c.node_id_bits);
-  return 2 * id + kCutFlagBits + 3 * uint64_t(c.grid.bits) + 2 * kInfoBits + attribute_bits(c);
+  return 2 * id + kCutFlagBits + 3 * uint64_t(c.grid.bits) + refinement_bits(c) + attribute_bits(c);
 }
 
 void write_id(Writer& w, VertexId v, const StreamContext& c, const char* field) {
@@ -63,8 +66,10 @@ void write_packet(Writer& w, const SplitRecord& s, const StreamContext& c) {
   uint32_t q[3];
   quantize_position(c.grid, s.position_t, q);
   for (uint32_t v : q) w.bits(v, c.grid.bits);
-  write_refine(w, s.info_t);
-  write_refine(w, s.info_u);
+  if (c.has_refinement) {
+    write_refine(w, s.info_t);
+    write_refine(w, s.info_u);
+  }
   if (c.has_normals) {
     uint16_t n[2];
     encode_normal(s.normal_t, n);
@@ -93,8 +98,12 @@ void read_packet(Reader& r, const StreamContext& c, SplitRecord& s) {
   dequantize_position(c.grid, q, s.position_t);
   for (float v : s.position_t)
     if (!std::isfinite(v)) r.fail(ErrorCode::bad_message, "position", "is not finite");
-  s.info_t = read_refine(r, "info_t");
-  s.info_u = read_refine(r, "info_u");
+  if (c.has_refinement) {
+    s.info_t = read_refine(r, "info_t");
+    s.info_u = read_refine(r, "info_u");
+  } else {
+    s.info_t = s.info_u = RefineInfo{};  // not on the wire: zeroed
+  }
   s.has_normal = c.has_normals;
   if (c.has_normals) {
     const uint16_t n[2] = {r.u16("normal"), r.u16("normal")};
@@ -121,7 +130,7 @@ PacketBits packet_bits(const SplitRecord& s, const StreamContext& c) {
   if (is_vertex(s.cut_l)) bits.topology += id_bits(s.cut_l, c);
   if (is_vertex(s.cut_r)) bits.topology += id_bits(s.cut_r, c);
   bits.position = 3 * c.grid.bits;
-  bits.refinement = 2 * kInfoBits;
+  bits.refinement = refinement_bits(c);
   bits.attributes = attribute_bits(c);
   return bits;
 }

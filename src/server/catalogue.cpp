@@ -52,6 +52,8 @@ std::unique_ptr<ServedModel> open_model(const std::string& path, uint32_t positi
   model->context = protocol::stream_context(base);
   model->base_frame = std::make_shared<const std::vector<uint8_t>>(protocol::encode(base));
   model->criteria = decode_criteria(view, model->context.grid);
+  model->split_rank.assign(view.node_count(), kNone);
+  for (uint32_t i = 0; i < view.split_order.size(); ++i) model->split_rank[view.split_order[i]] = i;
   return model;
 }
 

@@ -28,6 +28,7 @@ struct ServedModel {
   protocol::StreamContext context;
   std::shared_ptr<const std::vector<uint8_t>> base_frame;
   std::vector<NodeCriteria> criteria;  // per node
+  std::vector<uint32_t> split_rank;    // per node: its index in split_order (view-independent mode); leaves kNone
   const ModelView& view() const { return file->view(); }
 };
 
@@ -81,23 +82,31 @@ class Session {
   const ActiveTags& tags() const { return tags_; }
   const ServedModel* model() const { return model_; }
   uint64_t splits_sent() const { return splits_sent_; }
+  protocol::StreamMode mode() const { return mode_; }
 
  private:
   void on_hello(const protocol::Hello& m);
   void on_open(const protocol::Open& m);
   void on_view(const protocol::View& m);
   void queue(std::vector<uint8_t> frame);
+  // View-independent mode (kim-lee-kobbelt §8, Fig. 9): the plain PM order, prefix by prefix.
+  uint64_t prefix_for_view() const;
+  bool pump_view_independent();
 
   std::shared_ptr<const Catalogue> catalogue_;
   ServerLimits limits_;
   bool greeted_ = false, closing_ = false;
   const ServedModel* model_ = nullptr;
+  protocol::StreamMode mode_ = protocol::StreamMode::sender_driven;
+  protocol::StreamContext context_;  // the model's, without refinement info in view-independent mode
   ActiveTags tags_;
   SelectiveStreamer streamer_;
   ViewCriteria view_;
   uint32_t view_frame_ = 0;
   std::vector<uint32_t> batch_;
   uint64_t splits_sent_ = 0;
+  uint64_t sent_ = 0, prefix_end_ = 0;  // view-independent: split_order[0, sent_) sent, [sent_, prefix_end_) due
+  bool answering_prefix_ = false;       // view-independent: a VIEW's answer is not final yet
   std::deque<Buffer> outbox_;
 };
 

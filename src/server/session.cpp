@@ -1,7 +1,11 @@
 // One client's session of the sender-driven protocol (kim-lee-kobbelt §5.3): HELLO, LIST, OPEN (with
 // resume), VIEW -> SelectiveStreaming in batches, CLOSE. The session holds a reference to its model
 // and the windowed active tags; a VIEW's ranking lives only while that VIEW is being answered.
+// A view-independent session (the baseline of §8, Fig. 9) streams the plain PM order instead: each VIEW
+// extends the prefix of split_order sent up to the shortest one that satisfies the view.
+#include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <variant>
 
 #include "server/server.h"
@@ -84,6 +88,9 @@ void Session::on_open(const protocol::Open& m) {
   if (model_) throw ProtocolError(ErrorCode::out_of_order, "OPEN: a model is already open in this session");
   const ServedModel* model = catalogue_->find(m.model);
   if (!model) throw ProtocolError(ErrorCode::unknown_model, "OPEN: no model named '" + m.model + "'");
+  if (m.mode == protocol::StreamMode::view_independent && !m.resume.empty())
+    throw ProtocolError(ErrorCode::bad_message,
+                        "OPEN: resume: a view-independent session cannot resume (sender-driven only)");
   const ModelView& view = model->view();
   ActiveTags tags(m.resume.empty() ? view.root_count : 0);
   // Resume (kim-lee-kobbelt §5.3 "Session close"): the client's known leaves are the front.
@@ -95,6 +102,9 @@ void Session::on_open(const protocol::Open& m) {
     tags.activate(node);
   }
   model_ = model;
+  mode_ = m.mode;
+  context_ = model->context;
+  context_.has_refinement = mode_ == protocol::StreamMode::sender_driven;
   tags_ = std::move(tags);
   outbox_.push_back(model->base_frame);
 }
@@ -105,13 +115,72 @@ void Session::on_view(const protocol::View& m) {
   // The same derivation as the client's, from the same box: bit-identical criteria on both ends.
   view_ = make_criteria(make_view(m.camera, model.bbox_min, model.bbox_max), m.tolerance);
   view_frame_ = m.frame;
+  if (mode_ == protocol::StreamMode::view_independent) {
+    prefix_end_ = prefix_for_view();
+    answering_prefix_ = true;
+    return;
+  }
   // A new VIEW replaces the one being answered: what was not sent yet is judged again under the new one.
   const std::vector<NodeCriteria>& criteria = model_->criteria;
   streamer_.start(model, tags_, [this, &criteria](uint32_t node) { return visible_error(view_, criteria[node]); });
 }
 
+// The shortest prefix of split_order whose front satisfies the view. SelectiveStreaming on a copy of the
+// tags (the front of the prefix sent) collects every split the view wants there, partial-order
+// dependencies included; the furthest of them in PM order ends the prefix. The PM order makes other
+// splits on the way, whose children the view may want in turn, so the walk repeats from the new
+// prefix's front until it wants nothing (each round only moves the end right).
+uint64_t Session::prefix_for_view() const {
+  const ModelView& model = model_->view();
+  const std::vector<NodeCriteria>& criteria = model_->criteria;
+  const ViewCriteria& view = view_;
+  const Importance importance = [&](uint32_t node) { return visible_error(view, criteria[node]); };
+  ActiveTags front = tags_;
+  uint64_t end = sent_;
+  std::vector<uint32_t> wanted;
+  for (;;) {
+    wanted.clear();
+    selective_streaming(model, front, importance, SIZE_MAX, wanted);
+    if (wanted.empty()) return end;
+    uint64_t furthest = end;
+    for (uint32_t node : wanted) furthest = std::max<uint64_t>(furthest, uint64_t(model_->split_rank[node]) + 1);
+    // The rest of the prefix, so `front` is again the front of split_order[0, furthest).
+    for (uint64_t i = end; i < furthest; ++i) {
+      const uint32_t node = model.split_order[i];
+      if (!front.is_active(node)) continue;  // split above as one the view wanted
+      front.deactivate(node);
+      front.activate(model.first_child[node]);
+      front.activate(model.first_child[node] + 1);
+    }
+    end = furthest;
+  }
+}
+
+// The next batch of split_order[sent_, prefix_end_); the last (possibly empty) one is final.
+bool Session::pump_view_independent() {
+  if (!answering_prefix_) return false;
+  const ModelView& model = model_->view();
+  const uint64_t stop = std::min<uint64_t>(prefix_end_, sent_ + limits_.batch_splits);
+  protocol::VSplits message;
+  message.frame = view_frame_;
+  message.final = stop >= prefix_end_;
+  for (; sent_ < stop; ++sent_) {
+    const uint32_t node = model.split_order[sent_];
+    tags_.deactivate(node);
+    tags_.activate(model.first_child[node]);
+    tags_.activate(model.first_child[node] + 1);
+    message.splits.push_back(split_record(model, node));
+  }
+  queue(protocol::encode(message, context_));
+  splits_sent_ += message.splits.size();
+  if (message.final) answering_prefix_ = false;
+  return true;
+}
+
 bool Session::pump() {
-  if (closing_ || !streamer_.active()) return false;
+  if (closing_) return false;
+  if (mode_ == protocol::StreamMode::view_independent) return pump_view_independent();
+  if (!streamer_.active()) return false;
   batch_.clear();
   const bool served = streamer_.step(limits_.batch_splits, batch_);
   protocol::VSplits message;
@@ -119,7 +188,7 @@ bool Session::pump() {
   message.final = served;
   message.splits.reserve(batch_.size());
   for (uint32_t node : batch_) message.splits.push_back(split_record(model_->view(), node));
-  queue(protocol::encode(message, model_->context));
+  queue(protocol::encode(message, context_));
   splits_sent_ += batch_.size();
   if (served) streamer_.stop();
   return true;

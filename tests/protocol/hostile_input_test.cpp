@@ -148,7 +148,7 @@ TEST(HostileInput, OpenResume) {
     for (int b : bits) w.bits(uint64_t(b), 1);
     return payload_of(w.finish(), MessageType::open);
   };
-  expect_rejected([&] { decode_open(open_payload(2, {}, {})); }, ErrorCode::bad_message, "OPEN: flags: unknown bits");
+  expect_rejected([&] { decode_open(open_payload(4, {}, {})); }, ErrorCode::bad_message, "OPEN: flags: unknown bits");
   expect_rejected([&] { decode_open(open_payload(1, {0}, {})); }, ErrorCode::bad_message, "resume tree count: is 0");
   expect_rejected([&] { decode_open(open_payload(1, {0xFFFFFFFF}, {0, 0})); }, ErrorCode::bad_message,
                   "resume tree count: count 4294967295 does not fit");

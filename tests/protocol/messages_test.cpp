@@ -58,6 +58,13 @@ TEST(Messages, OpenRoundTrip) {
     const Open fresh = round_trip(m, MessageType::open, [](auto p) { return decode_open(p); });
     EXPECT_EQ(fresh.model, m.model);
     EXPECT_TRUE(fresh.resume.empty());
+    EXPECT_EQ(fresh.mode, StreamMode::sender_driven);
+
+    m.mode = StreamMode::view_independent;
+    const Open vi = round_trip(m, MessageType::open, [](auto p) { return decode_open(p); });
+    EXPECT_EQ(vi.mode, StreamMode::view_independent);
+    EXPECT_EQ(encode(m)[kFrameHeaderBytes + 2 + m.model.size()], 2) << "flags: bit 1 = view-independent";
+    m.mode = seed % 2 ? StreamMode::view_independent : StreamMode::sender_driven;
 
     m.resume = test::random_front(rng, uint32_t(1 + rng() % 100), 63);
     const Open back = round_trip(m, MessageType::open, [](auto p) { return decode_open(p); });
@@ -232,7 +239,8 @@ TEST(Messages, VSplitsRoundTrip) {
   for (uint64_t seed : kSeeds) {
     for (int round = 0; round < 20; ++round) {
       Rng rng(seed * 1000 + round);
-      const StreamContext c = test::random_context(rng);
+      StreamContext c = test::random_context(rng);
+      c.has_refinement = round % 3 != 0;  // a view-independent session's packets have no info_t / info_u
       VSplits m;
       m.frame = uint32_t(rng());
       m.final = rng() & 1;
@@ -251,8 +259,8 @@ TEST(Messages, VSplitsRoundTrip) {
         float snapped[3];
         snap_position(c.grid, a.position_t, snapped);
         EXPECT_EQ(std::memcmp(b.position_t, snapped, sizeof snapped), 0);
-        EXPECT_EQ(b.info_t, a.info_t);
-        EXPECT_EQ(b.info_u, a.info_u);
+        EXPECT_EQ(b.info_t, c.has_refinement ? a.info_t : RefineInfo{});
+        EXPECT_EQ(b.info_u, c.has_refinement ? a.info_u : RefineInfo{});
         EXPECT_EQ(b.has_normal, c.has_normals);
         if (c.has_normals) {
           EXPECT_LT(angle_between(b.normal_t, a.normal_t), 1e-4);
@@ -261,6 +269,7 @@ TEST(Messages, VSplitsRoundTrip) {
         if (c.has_colors) {
           EXPECT_EQ(std::memcmp(b.color_t, a.color_t, 4), 0);
         }
+        EXPECT_EQ(packet_bits(a, c).refinement, c.has_refinement ? 192u : 0u);
         bits += packet_bits(a, c).total();
       }
       // packet_bits is exact: header (4 + 1 + 4 bytes) + the packets' bits, padded once.

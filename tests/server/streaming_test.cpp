@@ -1,6 +1,7 @@
 // Sender-driven streaming over real loopback TCP (DESIGN.md §6 properties 3 and 4): the client's mesh
 // equals local refinement of the same view, a second lap costs nothing, a resumed session ends where an
 // unbroken one does, many clients at once all succeed, and hostile input only ends its own session.
+// The view-independent baseline (kim-lee-kobbelt §8 Fig. 9): PM order, prefix by prefix.
 #include <gtest/gtest.h>
 
 #include <utility>  // before asio with C++20
@@ -19,6 +20,7 @@
 #include "io/mesh.h"
 #include "io/shapes.h"
 #include "refine/adapt.h"
+#include "refine/stream_order.h"
 #include "server/server.h"
 #include "test_support.h"
 
@@ -198,6 +200,115 @@ TEST(Streaming, TwentyConcurrentClientsWithDifferentPathsAllSucceed) {
   for (int i = 0; i < 20; ++i) EXPECT_TRUE(ok[size_t(i)]) << "client " << i;
 }
 
+// ---- view-independent mode ------------------------------------------------------------------------------
+
+client::ClientOptions vi_options(float tolerance) {
+  client::ClientOptions options{tolerance};
+  options.mode = protocol::StreamMode::view_independent;
+  return options;
+}
+
+// A mesh as a sorted list of triangles of positions (vertex numbering differs between two builds of
+// the same mesh; positions are the wire's snapped ones on both sides, so they compare exactly).
+std::vector<std::array<float, 9>> triangles(const MeshArrays& mesh) {
+  std::vector<std::array<float, 9>> out;
+  for (size_t f = 0; f < mesh.indices.size(); f += 3) {
+    std::array<std::array<float, 3>, 3> corners;
+    for (int k = 0; k < 3; ++k) std::copy_n(&mesh.positions[3 * size_t(mesh.indices[f + k])], 3, corners[k].begin());
+    std::rotate(corners.begin(), std::min_element(corners.begin(), corners.end()), corners.end());
+    std::array<float, 9> t;
+    for (int k = 0; k < 3; ++k) std::copy_n(corners[k].begin(), 3, t.begin() + 3 * k);
+    out.push_back(t);
+  }
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+TEST(Streaming, ViewIndependentClientHoldsThePmOrderPrefix) {
+  const Fixture& f = terrain();
+  const ModelView model = view_of(f.snapped);
+  Server server(f.catalogue);
+  const std::vector<Camera> path = orbit_path(f.hierarchy, 8, 0.7f);
+  client::StreamingClient client("127.0.0.1", server.tcp.port(), vi_options(1.0f));
+  client.open("terrain");
+  uint64_t lap1_down = 0, previous = 0;
+  for (const Camera& camera : path) {
+    const client::FrameReport r = client.frame(camera);
+    lap1_down += r.down_bytes;
+    EXPECT_TRUE(r.requested) << "a vi client asks every frame";
+    const uint64_t k = client.session().splits_received();
+    EXPECT_GE(k, previous);
+    previous = k;
+    MeshArrays mesh;
+    client.session().mesh().extract(mesh);
+    EXPECT_EQ(triangles(mesh), triangles(refine_in_stream_order(model, k))) << "frame " << r.frame << ", K = " << k;
+  }
+  EXPECT_GT(previous, 0u);
+  EXPECT_LT(previous, model.split_order.size()) << "the path should not need the whole model at τ = 1";
+  EXPECT_GT(lap1_down, 0u);
+  // Lap 2: nothing new. Each VIEW is answered by one empty final VSPLITS (header + 9 bytes).
+  uint64_t lap2_splits = 0, lap2_down = 0;
+  for (const Camera& camera : path) {
+    const client::FrameReport r = client.frame(camera);
+    lap2_splits += r.vsplits;
+    lap2_down += r.down_bytes;
+  }
+  EXPECT_EQ(lap2_splits, 0u) << "property 4: every vsplit crosses the network once";
+  EXPECT_EQ(lap2_down, path.size() * (protocol::kFrameHeaderBytes + 9)) << "only the empty final batches";
+}
+
+TEST(Streaming, ViewIndependentPacketsComeInPmOrderWithoutRefinementInfo) {
+  const Fixture& f = terrain();
+  const ModelView model = view_of(f.snapped);
+  Server server(f.catalogue);
+  client::Link link("127.0.0.1", server.tcp.port());
+  const std::chrono::seconds timeout(30);
+  auto expect = [&](protocol::MessageType type) {
+    std::optional<protocol::Frame> frame = link.receive(timeout);
+    EXPECT_TRUE(frame && frame->type == type);
+    return frame ? std::move(*frame) : protocol::Frame{};
+  };
+  link.send(protocol::encode(protocol::Hello{protocol::kProtocolVersion, "vi"}));
+  expect(protocol::MessageType::hello_ok);
+  link.send(protocol::encode(protocol::Open{"terrain", {}, protocol::StreamMode::view_independent}));
+  protocol::StreamContext context = protocol::stream_context(protocol::decode_base(expect(protocol::MessageType::base).payload));
+  context.has_refinement = false;
+  uint64_t next = 0;
+  const std::vector<Camera> path = orbit_path(f.hierarchy, 6, 2.1f);
+  for (uint32_t frame = 1; frame <= path.size(); ++frame) {
+    link.send(protocol::encode(protocol::View{path[frame - 1], 1.0f, frame}));
+    for (;;) {
+      const protocol::Frame message = expect(protocol::MessageType::vsplits);
+      ASSERT_EQ(message.type, protocol::MessageType::vsplits);
+      const protocol::VSplits batch = protocol::decode_vsplits(message.payload, context);
+      for (const SplitRecord& split : batch.splits) {
+        ASSERT_LT(next, model.split_order.size());
+        EXPECT_EQ(split.vs, model.id(model.split_order[next])) << "packet " << next << " is out of PM order";
+        EXPECT_EQ(split.info_t, RefineInfo{});
+        ++next;
+      }
+      if (batch.final && batch.frame == frame) break;
+    }
+  }
+  EXPECT_GT(next, 0u);
+}
+
+TEST(Streaming, ViewIndependentNeedsAtLeastTheBytesOfSenderDriven) {
+  const Fixture& f = terrain();
+  Server server(f.catalogue);
+  const Camera close = orbit_path(f.hierarchy, 8, 0.4f).back();
+  client::StreamingClient sender("127.0.0.1", server.tcp.port(), client::ClientOptions{1.0f});
+  sender.open("terrain");
+  sender.frame(close);
+  client::StreamingClient vi("127.0.0.1", server.tcp.port(), vi_options(1.0f));
+  vi.open("terrain");
+  vi.frame(close);
+  EXPECT_GT(sender.counters().bytes_down, 0u);
+  EXPECT_GE(vi.counters().bytes_down, sender.counters().bytes_down);
+  // Every split the view-dependent client needed is in the vi client's prefix.
+  EXPECT_GE(vi.session().splits_received(), sender.session().splits_received());
+}
+
 // A raw connection that sends bytes and reads until the server closes; returns the ERROR's code.
 std::optional<protocol::ErrorCode> send_raw(uint16_t port, const std::vector<std::vector<uint8_t>>& messages) {
   namespace asio = boost::asio;
@@ -256,6 +367,10 @@ TEST(Streaming, HostileInputGetsAnErrorWhileAGoodSessionGoesOn) {
     deep.resume.push_back(v);
   }
   EXPECT_EQ(send_raw(port, {hello, protocol::encode(deep)}), ErrorCode::bad_id);
+  // Resume is sender-driven only.
+  protocol::Open resume_vi{"terrain", {}, protocol::StreamMode::view_independent};
+  for (uint32_t t = 0; t < roots; ++t) resume_vi.resume.push_back({t, 1});
+  EXPECT_EQ(send_raw(port, {hello, protocol::encode(resume_vi)}), ErrorCode::bad_message);
   good.join();
 }
 

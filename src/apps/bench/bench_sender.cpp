@@ -170,23 +170,16 @@ E5 run_e5(const Model& m, const Camera& camera) {
   client.frame(camera);
   e.vd_bytes = client.counters().bytes_down;
   e.vd_faces = client.session().mesh().face_count();
-  // The plain PM order satisfies the view once its prefix holds every split the view needed: the
-  // furthest of them in split_order. Packets in that order carry no refinement info.
-  const ModelView& view = m.served->view();
-  std::vector<uint32_t> rank(view.node_count(), 0);
-  for (uint32_t i = 0; i < view.split_order.size(); ++i) rank[view.split_order[i]] = i;
-  const VertexHierarchy& h = client.session().hierarchy();
-  uint32_t needed = 0;
-  for (uint32_t slot = 0; slot < h.size(); ++slot)
-    if (!h.is_leaf(slot)) needed = std::max(needed, rank[view.find(h.id(slot))] + 1);
-  uint64_t bits = 0;
-  for (uint32_t i = 0; i < needed; ++i) {
-    const protocol::PacketBits b = protocol::packet_bits(split_record(view, view.split_order[i]), m.served->context);
-    bits += b.total() - b.refinement;
-  }
-  e.vi_splits = needed;
-  e.vi_bytes = m.served->base_frame->size() + (bits + 7) / 8;
-  e.vi_faces = view.base_faces.size() / 3 + 2 * uint64_t(needed);  // upper bound: boundary splits add one
+  // The view-independent baseline streams the plain PM order (packets without refinement info) until the
+  // prefix satisfies the same view: a real vi session, bytes down until that VIEW's final batch.
+  client::ClientOptions vi_options{kTolerance};
+  vi_options.mode = protocol::StreamMode::view_independent;
+  client::StreamingClient vi(std::make_unique<LocalTransport>(m.catalogue), vi_options);
+  vi.open(m.name);
+  vi.frame(camera);
+  e.vi_bytes = vi.counters().bytes_down;
+  e.vi_splits = vi.session().splits_received();
+  e.vi_faces = vi.session().mesh().face_count();
   return e;
 }
 
@@ -343,8 +336,9 @@ void run_sender_group(BenchContext& context) {
   section += "### E3/E4: two laps of one orbit path, τ = 1 px\n\n" + e34.markdown() +
              "\nA stored front costs " + fixed(kFrontEntryBytes, 0) + " bytes per active node (one 64-bit id).\n\n";
   section += "### E5: bytes to satisfy τ = 1 px from a close view\n\n" + e5.markdown() +
-             "\nVI = the base mesh plus the plain PM-order prefix (packets without refinement info) up to the last split the "
-             "view needs, computed from the same packet encoder.\n\n";
+             "\nVI = a view-independent session (`stream --mode vi`) to the same view: the base mesh plus the plain "
+             "PM-order prefix (packets without refinement info) up to the last split the view needs, bytes down until "
+             "that VIEW's final batch.\n\n";
 
   // E11 on the largest model asked for.
   const Model& big = models.back();
