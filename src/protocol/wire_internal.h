@@ -12,7 +12,7 @@
 
 namespace pms::protocol {
 
-// Builds one frame: header placeholder first, payload bits after, length patched by finish().
+// Builds one frame: header bytes reserved first, payload bits after, length patched by finish().
 class Writer {
  public:
   explicit Writer(MessageType type);
