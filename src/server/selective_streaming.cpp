@@ -39,19 +39,17 @@ void sel_stream_vsplit(const ModelView& model, ActiveTags& tags, uint32_t node, 
   }
 }
 
+// Max-heap on importance; ties broken by node index, so the batch is the same on every run.
+bool less_important(const std::pair<float, uint32_t>& a, const std::pair<float, uint32_t>& b) {
+  return a.first < b.first || (a.first == b.first && a.second > b.second);
+}
+
 }  // namespace
 
 uint32_t active_ancestor(const ModelView& model, const ActiveTags& tags, uint32_t node) {
   while (node != kNone && !tags.is_active(node)) node = model.parent[node];
   return node;
 }
-
-namespace {
-// Max-heap on importance; ties broken by node index, so the batch is the same on every run.
-bool less_important(const std::pair<float, uint32_t>& a, const std::pair<float, uint32_t>& b) {
-  return a.first < b.first || (a.first == b.first && a.second > b.second);
-}
-}  // namespace
 
 void SelectiveStreamer::start(const ModelView& model, ActiveTags& tags, Importance importance) {
   model_ = &model;
