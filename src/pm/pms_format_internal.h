@@ -1,4 +1,4 @@
-// On-disk layout of .pms version 1, shared by the writer and the reader (docs/pms-format.md).
+// On-disk layout of .pms version 2, shared by the writer and the reader (docs/pms-format.md).
 // Sections are used in place (spans into the mapping), so the layout is the host's: little-endian.
 #pragma once
 #include <array>
@@ -16,7 +16,8 @@ namespace pms::format {
 static_assert(std::endian::native == std::endian::little, ".pms sections are little-endian and mapped in place");
 
 constexpr char kMagic[8] = {'P', 'M', 'S', 'T', 'R', 'E', 'A', 'M'};
-constexpr uint32_t kVersion = 1;
+// Version 2 stores refinement info at the precision the wire carries (version 1 had finer RINF).
+constexpr uint32_t kVersion = 2;
 constexpr uint64_t kAlignment = 64;  // every section starts here, so spans into a mapping are aligned
 
 struct FileHeader {
@@ -24,7 +25,7 @@ struct FileHeader {
   uint32_t version;
   uint32_t header_bytes;     // sizeof(FileHeader); the section table follows it
   uint32_t section_count;
-  uint32_t flags;            // none defined in version 1: must be 0
+  uint32_t flags;            // none defined yet: must be 0
   uint64_t file_size;
   uint64_t header_checksum;  // xxh64 of header + table with this field zero
 };

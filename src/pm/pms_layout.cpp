@@ -39,9 +39,10 @@ FileHeader read_header(const std::string& where, const uint8_t* data, uint64_t s
   std::memcpy(&h, data, sizeof h);
   if (std::memcmp(h.magic, kMagic, sizeof kMagic) != 0) header_error(where, "not a .pms file (bad magic)");
   if (h.version != kVersion)
-    header_error(where, "unsupported version " + str(h.version) + " (this build reads " + str(kVersion) + ")");
+    header_error(where, "unsupported version " + str(h.version) + " (this build reads " + str(kVersion) +
+                            (h.version < kVersion ? "; rebuild the file with this pmstream)" : ")"));
   if (h.header_bytes != sizeof h)
-    header_error(where, "header size " + str(h.header_bytes) + ", version 1 has " + str(sizeof h));
+    header_error(where, "header size " + str(h.header_bytes) + ", version " + str(kVersion) + " has " + str(sizeof h));
   if (h.flags != 0) header_error(where, "unknown flags " + str(h.flags));
   const uint64_t table_end = sizeof h + uint64_t(h.section_count) * sizeof(SectionEntry);  // < 2^38: no overflow
   if (table_end > size)

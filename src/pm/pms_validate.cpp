@@ -147,14 +147,12 @@ void check_finite(const std::string& where, Section section, std::span<const flo
     if (!std::isfinite(values[k])) section_error(where, section, "node " + str(k / 3) + ": value is not finite");
 }
 
-// Lengths must decode to a non-negative number (infinity is allowed: "always refine").
+// Only values the quantizer produces: lengths non-negative (infinity allowed: "always refine") at the
+// stored precision, axis and angle in range. The wire carries exactly these, nothing finer.
 void check_refine(const std::string& where, const ModelView& m) {
-  const auto bad = [](uint16_t half) { return (half & 0x8000) || ((half & 0x7C00) == 0x7C00 && (half & 0x3FF)); };
-  for (size_t i = 0; i < m.refine.size(); ++i) {
-    const RefineInfo& r = m.refine[i];
-    if (bad(r.radius) || bad(r.mu) || bad(r.delta))
-      section_error(where, Refine, "node " + str(i) + ": radius, mu or delta is negative or NaN");
-  }
+  for (size_t i = 0; i < m.refine.size(); ++i)
+    if (!is_canonical(m.refine[i]))
+      section_error(where, Refine, "node " + str(i) + ": a length is negative, NaN or finer than stored, or the cone is out of range");
 }
 
 }  // namespace

@@ -1,8 +1,9 @@
 // Quantized refinement info (Hoppe 1997 §4; kim-lee-kobbelt §5 sends it with every vsplit).
 // Every bound is rounded *outward*: the decoded sphere, deviation space and normal cone contain
 // whatever the exact ones contained, so refinement decisions on decoded values stay conservative.
-// Half floats: IEEE 754 binary16. Cone axis: octahedral encoding (Meyer et al. 2010, "On floating-point
-// normal vectors"), 16-bit snorm per coordinate.
+// Half floats: IEEE 754 binary16 with the low kLengthDroppedBits mantissa bits dropped (about 1.6 %
+// precision: bounds a little loose are cheap, bits on the wire are not). Cone axis: octahedral encoding
+// (Meyer et al. 2010, "On floating-point normal vectors"), kAxisBits-bit snorm per coordinate.
 #include <algorithm>
 #include <bit>
 #include <cmath>
@@ -15,7 +16,7 @@ namespace {
 
 constexpr uint16_t kHalfInfinity = 0x7C00;
 constexpr float kHalfMax = 65504.0f;
-constexpr double kConeUnit = std::numbers::pi / 65534;  // one step of RefineInfo::cone_angle
+constexpr double kConeUnit = std::numbers::pi / 2 / (kConeSteps + 1);  // one step of RefineInfo::cone_angle
 constexpr double kHalfPi = std::numbers::pi / 2;
 // Consumers test normals against the decoded float axis, which is unit length only to ~1e-7:
 // widen every cone by a micro-radian so that float slack never leaves a normal outside.
@@ -27,21 +28,27 @@ float effective_scale(float scale) { return scale > 0 && std::isfinite(scale) ? 
 
 float decode_length(uint16_t half, float scale) { return float_from_half(half) * effective_scale(scale); }
 
-// Smallest half h with decode_length(h) >= value: the division and the multiply each round, so
-// the first guess is checked against the exact decoder and bumped (at most a step or two).
+constexpr uint16_t kDroppedMask = (1u << kLengthDroppedBits) - 1;
+
+// The next half at or above `half` whose dropped bits are 0; a carry correctly bumps the exponent
+// (and the largest finite values round up to infinity, 0x7C00).
+uint16_t round_up_to_kept_bits(uint32_t half) { return uint16_t(std::min<uint32_t>((half + kDroppedMask) & ~uint32_t(kDroppedMask), kHalfInfinity)); }
+
+// Smallest kept-bits half h with decode_length(h) >= value: the division and the multiply each
+// round, so the first guess is checked against the exact decoder and bumped (at most a step).
 uint16_t encode_length(float value, float scale) {
   if (std::isnan(value)) return kHalfInfinity;  // unknown bound: never culls, always refines
   if (!(value > 0)) return 0;
-  uint16_t half = half_from_float_up(value / effective_scale(scale));
-  while (half < kHalfInfinity && decode_length(half, scale) < value) ++half;
+  uint16_t half = round_up_to_kept_bits(half_from_float_up(value / effective_scale(scale)));
+  while (half < kHalfInfinity && decode_length(half, scale) < value) half = round_up_to_kept_bits(half + 1u);
   return half;
 }
 
-float snorm16_to_float(uint16_t bits) { return std::max(float(int16_t(bits)) / 32767.0f, -1.0f); }
+float snorm_to_float(uint16_t bits) { return std::max(float(int16_t(bits)) / float(kAxisSteps), -1.0f); }
 
 // Octahedral decode into a unit float vector; this exact vector is what dequantize_refine returns.
 void decode_axis(uint16_t qx, uint16_t qy, float axis[3]) {
-  float x = snorm16_to_float(qx), y = snorm16_to_float(qy);
+  float x = snorm_to_float(qx), y = snorm_to_float(qy);
   const float z = 1.0f - std::abs(x) - std::abs(y);
   const float fold = std::max(-z, 0.0f);  // lower hemisphere is folded over the diagonals
   x += x >= 0 ? -fold : fold;
@@ -82,9 +89,9 @@ EncodedAxis encode_axis(const double axis[3]) {
   EncodedAxis best{0, 0, INFINITY};
   double best_cos = -INFINITY;
   for (int i = 0; i < 4; ++i) {
-    const double sx = px * 32767, sy = py * 32767;
-    const auto qx = int16_t(std::clamp((i & 1) ? std::ceil(sx) : std::floor(sx), -32767.0, 32767.0));
-    const auto qy = int16_t(std::clamp((i & 2) ? std::ceil(sy) : std::floor(sy), -32767.0, 32767.0));
+    const double steps = kAxisSteps, sx = px * steps, sy = py * steps;
+    const auto qx = int16_t(std::clamp((i & 1) ? std::ceil(sx) : std::floor(sx), -steps, steps));
+    const auto qy = int16_t(std::clamp((i & 2) ? std::ceil(sy) : std::floor(sy), -steps, steps));
     float decoded[3];
     decode_axis(uint16_t(qx), uint16_t(qy), decoded);
     const double len = std::sqrt(double(decoded[0]) * decoded[0] + double(decoded[1]) * decoded[1] +
@@ -155,24 +162,27 @@ RefineInfo quantize_refine(const RefineBounds& bounds, float scale) {
 
   double axis[3] = {bounds.axis[0], bounds.axis[1], bounds.axis[2]};
   const double length = std::sqrt(axis[0] * axis[0] + axis[1] * axis[1] + axis[2] * axis[2]);
-  if (!(length > 0) || !std::isfinite(length)) {  // no usable axis: store +z and no cone
-    const double z[3] = {0, 0, 1};
-    const EncodedAxis e = encode_axis(z);
-    info.cone_x = e.x;
-    info.cone_y = e.y;
-    info.cone_angle = kNoCone;
-    return info;
-  }
+  // Without a cone the axis is never read: it is stored as +z, (0, 0), so the wire can leave it out.
+  info.cone_angle = kNoCone;
+  const double angle = std::max<double>(bounds.cone_angle, 0.0);
+  if (!(length > 0) || !std::isfinite(length) || std::isnan(bounds.cone_angle) || angle >= kHalfPi) return info;
   for (double& c : axis) c /= length;
   const EncodedAxis e = encode_axis(axis);
-  info.cone_x = e.x;
-  info.cone_y = e.y;
   // Triangle inequality: a normal within `angle` of the exact axis is within angle + error of the
   // decoded one.
-  const double angle = std::max<double>(bounds.cone_angle, 0.0);
-  info.cone_angle =
-      std::isnan(bounds.cone_angle) || angle >= kHalfPi ? kNoCone : encode_cone_angle(angle + e.error + kConeSlack);
+  info.cone_angle = encode_cone_angle(angle + e.error + kConeSlack);
+  if (info.cone_angle == kNoCone) return info;
+  info.cone_x = e.x;
+  info.cone_y = e.y;
   return info;
+}
+
+bool is_canonical(const RefineInfo& info) {
+  const auto length_ok = [](uint16_t half) { return half <= kHalfInfinity && (half & kDroppedMask) == 0; };
+  const auto axis_ok = [](uint16_t q) { return int16_t(q) >= -kAxisSteps && int16_t(q) <= kAxisSteps; };
+  if (!length_ok(info.radius) || !length_ok(info.mu) || !length_ok(info.delta)) return false;
+  if (info.cone_angle == kNoCone) return info.cone_x == 0 && info.cone_y == 0;
+  return info.cone_angle <= kConeSteps && axis_ok(info.cone_x) && axis_ok(info.cone_y);
 }
 
 RefineBounds dequantize_refine(const RefineInfo& info, float scale) {

@@ -9,10 +9,10 @@ namespace pms::protocol {
 namespace {
 
 constexpr uint8_t kFlagNormals = 1, kFlagColors = 2;
-constexpr uint32_t kInfoBits = 96;  // RefineInfo: 6 x u16
 
+// The smallest a root record can be: bounds the root count by the payload before allocating.
 uint64_t root_bits(const StreamContext& c) {
-  return 3 * uint64_t(c.grid.bits) + kInfoBits + (c.has_normals ? 32 : 0) + (c.has_colors ? 32 : 0);
+  return 3 * uint64_t(c.grid.bits) + kMinRefineBits + (c.has_normals ? 32 : 0) + (c.has_colors ? 32 : 0);
 }
 
 StreamContext context_fields(const Base& m) {
@@ -66,7 +66,7 @@ std::vector<uint8_t> encode(const Base& m) {
     uint32_t q[3];
     quantize_position(c.grid, &m.positions[3 * size_t(i)], q);
     for (uint32_t v : q) w.bits(v, c.grid.bits);
-    write_refine(w, m.refine[i]);
+    write_refine(w, m.refine[i], "BASE");
     if (c.has_normals) {
       uint16_t n[2];
       encode_normal(&m.normals[3 * size_t(i)], n);

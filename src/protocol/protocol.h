@@ -22,7 +22,8 @@
 
 namespace pms::protocol {
 
-constexpr uint16_t kProtocolVersion = 1;
+// 2: refinement info at the .pms version-2 precision, 43 or 65 bits per node (1 sent 6 x u16).
+constexpr uint16_t kProtocolVersion = 2;
 constexpr char kMagic[4] = {'P', 'M', 'S', 'T'};
 constexpr size_t kFrameHeaderBytes = 5;                 // u32 payload length + u8 type
 constexpr uint32_t kDefaultMaxMessage = 16u << 20;      // payload bytes a reader accepts by default

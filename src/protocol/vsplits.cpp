@@ -2,9 +2,9 @@
 // is only the ids of v_s, v̂_l and v̂_r — v_t and v_u are v_s's children, implied — each written as
 //   tree-id (tree_id_bits) | depth (depth_field_bits) | the node-id's path below the root (depth bits),
 // i.e. the heap node-id without its implicit leading 1, so an id costs what its depth needs rather than
-// the model's worst case. Then v_t's quantized position (v_u keeps v_s's), info_t, info_u and the optional
-// normal / color of v_t (info_t and info_u only when the session's context has refinement info: not in a
-// view-independent session). The whole batch is one bit stream padded once at the end: packets are not
+// the model's worst case. Then v_t's quantized position (v_u keeps v_s's), info_t and info_u (43 or 65
+// bits each) and the optional normal / color of v_t (info_t and info_u only when the session's context
+// has refinement info: not in a view-independent session). The whole batch is one bit stream padded once at the end: packets are not
 // byte-aligned (docs/protocol.md has the measurements that chose this).
 #include <bit>
 #include <cmath>
@@ -17,16 +17,18 @@ namespace {
 constexpr uint8_t kFlagFinal = 1;
 constexpr unsigned kCutLeft = 1, kCutRight = 2;  // the 2-bit cut flags
 constexpr uint32_t kCutFlagBits = 2;
-constexpr uint32_t kInfoBits = 96;
 
 uint32_t attribute_bits(const StreamContext& c) { return (c.has_normals ? 32 : 0) + (c.has_colors ? 32 : 0); }
 // info_t + info_u; a view-independent session's packets have none (its client never runs qrefine).
-uint32_t refinement_bits(const StreamContext& c) { return c.has_refinement ? 2 * kInfoBits : 0; }
+uint32_t refinement_bits(const SplitRecord& s, const StreamContext& c) {
+  return c.has_refinement ? refine_bits(s.info_t) + refine_bits(s.info_u) : 0;
+}
 
 // Smallest packet: depth-0 ids, one cut vertex. Bounds a batch's count by its bytes before allocating.
 uint64_t min_packet_bits(const StreamContext& c) {
   const uint64_t id = c.tree_id_bits + depth_field_bits(c.node_id_bits);
-  return 2 * id + kCutFlagBits + 3 * uint64_t(c.grid.bits) + refinement_bits(c) + attribute_bits(c);
+  return 2 * id + kCutFlagBits + 3 * uint64_t(c.grid.bits) + (c.has_refinement ? 2 * kMinRefineBits : 0) +
+         attribute_bits(c);
 }
 
 void write_id(Writer& w, VertexId v, const StreamContext& c, const char* field) {
@@ -67,8 +69,8 @@ void write_packet(Writer& w, const SplitRecord& s, const StreamContext& c) {
   quantize_position(c.grid, s.position_t, q);
   for (uint32_t v : q) w.bits(v, c.grid.bits);
   if (c.has_refinement) {
-    write_refine(w, s.info_t);
-    write_refine(w, s.info_u);
+    write_refine(w, s.info_t, "VSPLITS info_t");
+    write_refine(w, s.info_u, "VSPLITS info_u");
   }
   if (c.has_normals) {
     uint16_t n[2];
@@ -130,7 +132,7 @@ PacketBits packet_bits(const SplitRecord& s, const StreamContext& c) {
   if (is_vertex(s.cut_l)) bits.topology += id_bits(s.cut_l, c);
   if (is_vertex(s.cut_r)) bits.topology += id_bits(s.cut_r, c);
   bits.position = 3 * c.grid.bits;
-  bits.refinement = refinement_bits(c);
+  bits.refinement = refinement_bits(s, c);
   bits.attributes = attribute_bits(c);
   return bits;
 }

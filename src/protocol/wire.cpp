@@ -115,25 +115,40 @@ void Reader::fail(ErrorCode code, const char* field, const std::string& what) co
   throw ProtocolError(code, text);
 }
 
-void write_refine(Writer& w, const RefineInfo& info) {
-  for (uint16_t v : {info.radius, info.mu, info.delta, info.cone_x, info.cone_y, info.cone_angle}) w.u16(v);
+// Lengths are half floats whose sign and low kLengthDroppedBits are always 0; the cone axis only
+// exists when there is a cone (the angle field's top value means "no cone").
+constexpr uint32_t kNoConeOnWire = (1u << kConeAngleBits) - 1;
+
+void write_refine(Writer& w, const RefineInfo& info, const char* field) {
+  if (!is_canonical(info)) fail(field, "refinement info is not at the stored precision (pms-format.md RINF)");
+  for (uint16_t half : {info.radius, info.mu, info.delta}) w.bits(half >> kLengthDroppedBits, kLengthBits);
+  if (info.cone_angle == kNoCone) {
+    w.bits(kNoConeOnWire, kConeAngleBits);
+    return;
+  }
+  w.bits(info.cone_angle, kConeAngleBits);
+  for (uint16_t q : {info.cone_x, info.cone_y}) w.bits(uint32_t(int16_t(q) + kAxisSteps), kAxisBits);
 }
 
-namespace {
-// Half-float bits that are negative or NaN; +inf is allowed ("always refine").
-bool bad_length(uint16_t half) { return (half & 0x8000) != 0 || (half & 0x7FFF) > 0x7C00; }
-}  // namespace
+uint32_t refine_bits(const RefineInfo& info) {
+  return 3 * kLengthBits + kConeAngleBits + (info.cone_angle == kNoCone ? 0 : 2 * kAxisBits);
+}
 
 RefineInfo read_refine(Reader& r, const char* field) {
-  RefineInfo info;
-  info.radius = r.u16(field);
-  info.mu = r.u16(field);
-  info.delta = r.u16(field);
-  info.cone_x = r.u16(field);
-  info.cone_y = r.u16(field);
-  info.cone_angle = r.u16(field);
-  if (bad_length(info.radius) || bad_length(info.mu) || bad_length(info.delta))
-    r.fail(ErrorCode::bad_message, field, "a length (radius, mu or delta) is negative or NaN");
+  RefineInfo info{};
+  for (uint16_t* half : {&info.radius, &info.mu, &info.delta})
+    *half = uint16_t(r.bits(kLengthBits, field) << kLengthDroppedBits);
+  const auto angle = uint32_t(r.bits(kConeAngleBits, field));
+  if (angle == kNoConeOnWire) {
+    info.cone_angle = kNoCone;
+  } else {
+    info.cone_angle = uint16_t(angle);
+    for (uint16_t* q : {&info.cone_x, &info.cone_y})
+      *q = uint16_t(int16_t(int32_t(r.bits(kAxisBits, field)) - kAxisSteps));
+  }
+  // Lengths above +inf (NaN), an axis coordinate above kAxisSteps or the one unused angle would poison
+  // qrefine's comparisons or mean nothing.
+  if (!is_canonical(info)) r.fail(ErrorCode::bad_message, field, "a length is NaN, or the cone axis or angle is out of range");
   return info;
 }
 

@@ -69,9 +69,12 @@ class Reader {
   uint64_t item_index_ = 0;
 };
 
-// RefineInfo as 6 x u16 (12 bytes), the order of the struct. Lengths that are negative or NaN would
-// poison qrefine's comparisons, so the reader rejects them (the .pms reader does the same).
-void write_refine(Writer& w, const RefineInfo& info);
+// RefineInfo at its stored precision (pm.h): 3 lengths of kLengthBits, the cone angle, and the cone
+// axis only when there is a cone: 65 bits, or 43 without a cone (docs/protocol.md). The writer throws
+// for values the quantizer never produces, the reader rejects them (the .pms reader does the same).
+void write_refine(Writer& w, const RefineInfo& info, const char* field);
+uint32_t refine_bits(const RefineInfo& info);
+constexpr uint32_t kMinRefineBits = 3 * kLengthBits + kConeAngleBits;
 RefineInfo read_refine(Reader& r, const char* field);
 
 // Unit normals as octahedral 2 x 16-bit snorm (Meyer et al. 2010): 32 bits instead of 96, ~1e-4 rad.

@@ -175,9 +175,13 @@ TEST(PmsCorrupt, WrongMagicAndNewerVersion) {
   f.bytes[0] = 'X';
   expect_error(f, "header: ", "not a .pms file");
   f = small();
-  store<uint32_t>(f.bytes, kVersionAt, 2);
+  store<uint32_t>(f.bytes, kVersionAt, 3);
   f.fix_checksums();
-  EXPECT_EQ(f.error(), "header: unsupported version 2 (this build reads 1)");
+  EXPECT_EQ(f.error(), "header: unsupported version 3 (this build reads 2)");
+  f = small();
+  store<uint32_t>(f.bytes, kVersionAt, 1);
+  f.fix_checksums();
+  EXPECT_EQ(f.error(), "header: unsupported version 1 (this build reads 2; rebuild the file with this pmstream)");
 }
 
 TEST(PmsCorrupt, AbsurdNodeCountInHead) {
@@ -317,14 +321,26 @@ TEST(PmsCorrupt, NonFiniteAndNegativeValues) {
   EXPECT_EQ(f.error(), "section NRML: node 2: value is not finite");
 
   f = small();
+  const std::string bad_rinf =
+      "section RINF: node 6: a length is negative, NaN or finer than stored, or the cone is out of range";
   f.set<uint16_t>("RINF", 6, 0xBC00);  // radius -1
   f.fix_checksums();
-  EXPECT_EQ(f.error(), "section RINF: node 6: radius, mu or delta is negative or NaN");
+  EXPECT_EQ(f.error(), bad_rinf);
 
   f = small();
   f.set<uint16_t>("RINF", 6, 0x7E00, 4);  // delta NaN
   f.fix_checksums();
-  EXPECT_EQ(f.error(), "section RINF: node 6: radius, mu or delta is negative or NaN");
+  EXPECT_EQ(f.error(), bad_rinf);
+
+  f = small();
+  f.set<uint16_t>("RINF", 6, 0x3C01, 2);  // mu with a mantissa bit the file format drops
+  f.fix_checksums();
+  EXPECT_EQ(f.error(), bad_rinf);
+
+  f = small();
+  f.set<uint16_t>("RINF", 6, 1023 + 1, 10);  // cone angle past pi/2 that is not kNoCone
+  f.fix_checksums();
+  EXPECT_EQ(f.error(), bad_rinf);
 }
 
 TEST(PmsCorrupt, Meta) {

@@ -12,6 +12,11 @@ namespace pms {
 namespace {
 
 constexpr double kPi = std::numbers::pi;
+// Precision of the stored info (pm.h): lengths keep 6 of the half's 10 mantissa bits, the axis is an
+// 11-bit octahedral code (error under 2 of its steps), the cone angle has (pi/2) / 1023 steps.
+constexpr double kLengthStep = 0x1p-6;
+constexpr double kAxisError = 2.0 / kAxisSteps;
+constexpr double kConeStep = kPi / 2 / (kConeSteps + 1);
 
 TEST(HalfFloat, KnownValues) {
   EXPECT_EQ(half_from_float_up(0.0f), 0x0000);
@@ -103,29 +108,32 @@ TEST(QuantizeRefine, RandomBoundsDecodeConservativelyAndTightly) {
     for (int k = 0; k < 3; ++k) b.axis[k] = float(axis[k] / len);
     b.cone_angle = float(unit(rng) * 1.6);
 
-    const RefineBounds d = dequantize_refine(quantize_refine(b, scale), scale);
+    const RefineInfo q = quantize_refine(b, scale);
+    ASSERT_TRUE(is_canonical(q));
+    const RefineBounds d = dequantize_refine(q, scale);
     ASSERT_GE(d.radius, b.radius);
     ASSERT_GE(d.mu, b.mu);
     ASSERT_GE(d.delta, b.delta);
-    // Tight: rounding up plus at most one bump for the float divide/multiply is two half steps
-    // (2^-10 relative each), or two subnormal steps for tiny values.
-    ASSERT_LE(d.radius, b.radius * (1 + 0x1p-9) + 2 * scale * 0x1p-24);
-    ASSERT_LE(d.mu, b.mu * (1 + 0x1p-9) + 2 * scale * 0x1p-24);
+    // Tight: rounding up plus at most one bump for the float divide/multiply is two stored steps
+    // (2^-6 relative each), or two subnormal steps (16 x 2^-24) for tiny values.
+    ASSERT_LE(d.radius, b.radius * (1 + 2 * kLengthStep) + 2 * scale * 0x1p-20);
+    ASSERT_LE(d.mu, b.mu * (1 + 2 * kLengthStep) + 2 * scale * 0x1p-20);
 
     const double true_axis[3] = {b.axis[0], b.axis[1], b.axis[2]};
     const double axis_len =
         std::sqrt(double(d.axis[0]) * d.axis[0] + double(d.axis[1]) * d.axis[1] + double(d.axis[2]) * d.axis[2]);
     ASSERT_NEAR(axis_len, 1.0, 1e-6);
-    ASSERT_LT(angle(d.axis, true_axis), 1e-4) << "16-bit octahedral axis error is ~3e-5 rad";
     if (b.cone_angle >= kPi / 2) {
       ASSERT_EQ(d.cone_angle, float(kPi)) << "a half-space cone is stored as kNoCone";
       continue;
     }
+    const double widening = kAxisError + kConeStep + 1e-6;
     if (d.cone_angle >= kPi / 2) {
-      ASSERT_GT(b.cone_angle + 2e-4, kPi / 2) << "only cones already near pi/2 may be widened to no cone";
+      ASSERT_GT(b.cone_angle + widening, kPi / 2) << "only cones already near pi/2 may be widened to no cone";
       continue;
     }
-    ASSERT_LE(d.cone_angle, b.cone_angle + 2e-4) << "cone widened by more than axis error + one step";
+    ASSERT_LT(angle(d.axis, true_axis), kAxisError);
+    ASSERT_LE(d.cone_angle, b.cone_angle + widening) << "cone widened by more than axis error + one step";
     // Normals on the rim of the exact cone are inside the decoded one.
     for (int k = 0; k < 8; ++k) {
       double normal[3];
@@ -145,7 +153,7 @@ TEST(QuantizeRefine, ZeroWidthConeStillContainsItsAxis) {
     const RefineBounds d = dequantize_refine(quantize_refine(b, 1), 1);
     const double axis[3] = {b.axis[0], b.axis[1], b.axis[2]};
     EXPECT_LE(angle(d.axis, axis), d.cone_angle);
-    EXPECT_LT(d.cone_angle, 1e-4);
+    EXPECT_LT(d.cone_angle, kAxisError + kConeStep + 1e-6);
   }
 }
 
@@ -171,6 +179,31 @@ TEST(QuantizeRefine, DegenerateInputsAreConservative) {
   EXPECT_EQ(quantize_refine(b, 1).cone_angle, kNoCone);
   b.cone_angle = float(kPi / 2) - 1e-6f;
   EXPECT_EQ(quantize_refine(b, 1).cone_angle, kNoCone) << "rounded up to pi/2: a half-space";
+}
+
+TEST(QuantizeRefine, OnlyQuantizerOutputIsCanonical) {
+  RefineBounds b;
+  b.radius = 0.3f;
+  b.axis[0] = 1;
+  b.axis[2] = 0;
+  b.cone_angle = 0.2f;
+  const RefineInfo good = quantize_refine(b, 1);
+  ASSERT_TRUE(is_canonical(good));
+  RefineInfo bad = good;
+  bad.radius |= 1;  // a dropped mantissa bit
+  EXPECT_FALSE(is_canonical(bad));
+  bad = good;
+  bad.mu = 0x7C10;  // NaN
+  EXPECT_FALSE(is_canonical(bad));
+  bad = good;
+  bad.cone_x = uint16_t(int16_t(-kAxisSteps - 1));
+  EXPECT_FALSE(is_canonical(bad));
+  bad = good;
+  bad.cone_angle = kConeSteps + 1;
+  EXPECT_FALSE(is_canonical(bad));
+  bad = good;
+  bad.cone_angle = kNoCone;  // without a cone the axis must be +z, (0, 0)
+  EXPECT_FALSE(is_canonical(bad));
 }
 
 TEST(QuantizeRefine, ScaleOfZeroKeepsBoundsUnscaled) {

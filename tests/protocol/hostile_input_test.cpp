@@ -190,7 +190,7 @@ TEST(HostileInput, CatalogueCountIsBoundedByBytes) {
 
 // BASE with one root at the origin of a unit box and the given header fields.
 Payload base_payload(uint32_t roots, uint32_t faces, uint8_t tree_bits, uint8_t position_bits, float bbox_min0 = 0,
-                     std::initializer_list<uint32_t> corners = {}, uint16_t radius = 0) {
+                     std::initializer_list<uint32_t> corners = {}, uint32_t radius_code = 0, uint32_t axis_code = 1023) {
   Writer w(MessageType::base);
   w.string("m", kMaxNameBytes, "model");
   for (float v : {bbox_min0, 0.0f, 0.0f, 1.0f, 1.0f, 1.0f, 1.0f}) w.f32(v);
@@ -202,7 +202,10 @@ Payload base_payload(uint32_t roots, uint32_t faces, uint8_t tree_bits, uint8_t 
   w.u32(faces);
   for (uint32_t r = 0; r < std::min(roots, 4u); ++r) {
     for (int k = 0; k < 3; ++k) w.bits(position_bits == 32 ? 0x7FC00000 : 0, position_bits);  // NaN when raw
-    for (uint16_t v : {radius, uint16_t(0), uint16_t(0), uint16_t(0), uint16_t(0), uint16_t(0)}) w.u16(v);
+    // RefineInfo as sent (docs/protocol.md): 3 lengths of 11 bits, a cone angle of 0, the axis (1023 is 0).
+    for (uint32_t v : {radius_code, 0u, 0u}) w.bits(v, 11);
+    w.bits(0, 10);
+    for (uint32_t v : {axis_code, 1023u}) w.bits(v, 11);
   }
   for (uint32_t v : corners) w.bits(v, tree_bits);
   return payload_of(w.finish(), MessageType::base);
@@ -223,9 +226,11 @@ TEST(HostileInput, BaseFields) {
   expect_rejected([&] { decode_base(base_payload(0, 0, 1, 8)); }, ErrorCode::bad_message, "no roots");
   expect_rejected([&] { decode_base(base_payload(1, 0, 1, 32)); }, ErrorCode::bad_message,
                   "BASE: root 0: position: is not finite");
-  expect_rejected([&] { decode_base(base_payload(1, 0, 1, 8, 0, {}, 0x8001)); }, ErrorCode::bad_message,
-                  "BASE: root 0: refine info: a length");
-  expect_rejected([&] { decode_base(base_payload(1, 0, 1, 8, 0, {}, 0x7C01)); }, ErrorCode::bad_message, "NaN");
+  EXPECT_NO_THROW(decode_base(base_payload(1, 0, 1, 8, 0, {}, 0x7C0)));  // +inf: "always refine"
+  expect_rejected([&] { decode_base(base_payload(1, 0, 1, 8, 0, {}, 0x7C1)); }, ErrorCode::bad_message,
+                  "BASE: root 0: refine info: a length is NaN");
+  expect_rejected([&] { decode_base(base_payload(1, 0, 1, 8, 0, {}, 0, 2047)); }, ErrorCode::bad_message,
+                  "cone axis or angle is out of range");
 }
 
 // VSPLITS with one packet written field by field (small_context widths: tree 4, depth 3 bits).
@@ -236,6 +241,7 @@ struct RawPacket {
   uint32_t cut_tree = 1, cut_depth = 2;
   uint64_t cut_path = 3;
   uint32_t count = 1;
+  uint32_t trailing_zero_bytes = 0;  // so a packet shorter than the smallest valid one passes the count check
 };
 Payload vsplits_payload(const RawPacket& p, const StreamContext& c) {
   Writer w(MessageType::vsplits);
@@ -253,7 +259,11 @@ Payload vsplits_payload(const RawPacket& p, const StreamContext& c) {
     w.bits(p.cut_path, p.cut_depth);
   }
   for (int k = 0; k < 3; ++k) w.bits(c.grid.bits == 32 ? 0x7F800000 : 0, c.grid.bits);  // +inf when raw
-  for (int k = 0; k < 12; ++k) w.u16(0);
+  for (int info = 0; info < 2; ++info) {  // info_t, info_u: lengths 0, no cone (docs/protocol.md)
+    w.bits(0, 33);
+    w.bits(1023, 10);
+  }
+  for (uint32_t k = 0; k < p.trailing_zero_bytes; ++k) w.u8(0);
   return payload_of(w.finish(), MessageType::vsplits);
 }
 
@@ -279,6 +289,7 @@ TEST(HostileInput, VSplitsIds) {
                   "v_s: <0,32> is at the deepest level");
   p = {};
   p.cuts = 0;
+  p.trailing_zero_bytes = 4;
   expect_rejected([&] { decode_vsplits(vsplits_payload(p, c), c); }, ErrorCode::bad_message, "cut flags: neither");
   p = {};
   p.cuts = 2;

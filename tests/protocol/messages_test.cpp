@@ -269,7 +269,8 @@ TEST(Messages, VSplitsRoundTrip) {
         if (c.has_colors) {
           EXPECT_EQ(std::memcmp(b.color_t, a.color_t, 4), 0);
         }
-        EXPECT_EQ(packet_bits(a, c).refinement, c.has_refinement ? 192u : 0u);
+        const uint32_t info_bits = (a.info_t.cone_angle == kNoCone ? 43u : 65u) + (a.info_u.cone_angle == kNoCone ? 43u : 65u);
+        EXPECT_EQ(packet_bits(a, c).refinement, c.has_refinement ? info_bits : 0u);
         bits += packet_bits(a, c).total();
       }
       // packet_bits is exact: header (4 + 1 + 4 bytes) + the packets' bits, padded once.
@@ -280,6 +281,15 @@ TEST(Messages, VSplitsRoundTrip) {
       }
     }
   }
+}
+
+TEST(Messages, EncoderRefusesRefinementInfoFinerThanStored) {
+  Rng rng(5);
+  StreamContext c = test::random_context(rng);
+  VSplits m;
+  m.splits.push_back(test::random_split(rng, c));
+  m.splits[0].info_u.radius |= 1;  // a bit the wire does not carry: the two ends would disagree
+  EXPECT_THROW(encode(m, c), Error);
 }
 
 TEST(Messages, DispatchByDirection) {

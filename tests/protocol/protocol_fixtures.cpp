@@ -93,9 +93,20 @@ std::string random_name(Rng& rng, size_t max_size) {
 }
 
 RefineInfo random_refine(Rng& rng) {
-  std::uniform_int_distribution<int> any(0, 0xFFFF), length(0, 0x7C00);  // 0 .. +inf, no sign, no NaN
-  return {uint16_t(length(rng)), uint16_t(length(rng)), uint16_t(length(rng)),
-          uint16_t(any(rng)),    uint16_t(any(rng)),    uint16_t(any(rng))};
+  // Lengths 0 .. +inf at the stored precision; a cone with any in-range axis, or none (pm.h).
+  std::uniform_int_distribution<int> length(0, 0x7C00 >> kLengthDroppedBits), axis(-kAxisSteps, kAxisSteps),
+      angle(0, kConeSteps + 1);
+  RefineInfo info{};
+  for (uint16_t* half : {&info.radius, &info.mu, &info.delta}) *half = uint16_t(length(rng) << kLengthDroppedBits);
+  const int a = angle(rng);
+  if (a > kConeSteps) {
+    info.cone_angle = kNoCone;
+    return info;
+  }
+  info.cone_angle = uint16_t(a);
+  info.cone_x = uint16_t(int16_t(axis(rng)));
+  info.cone_y = uint16_t(int16_t(axis(rng)));
+  return info;
 }
 
 protocol::StreamContext random_context(Rng& rng) {
