@@ -85,7 +85,67 @@ RefineBounds to_bounds(double radius, const Cone& cone, double mu, double delta)
 
 Cone cone_of(const RefineBounds& b) { return {normalized(V3{b.axis[0], b.axis[1], b.axis[2]}), b.cone_angle}; }
 
+// Rounding a bound to float must not shrink it.
+float float_at_least(double value) {
+  const float f = float(value);
+  return double(f) < value ? std::nextafter(f, INFINITY) : f;
+}
+
 }  // namespace
+
+// The faces around the surviving vertex right after the collapse: the surface the node's leaves are
+// measured against (bounded, as a fan is; a huge fan only makes the bound larger, never smaller).
+struct RefinementInfoBuilder::Fan {
+  struct Tri {
+    V3 a, b, c, n;
+    double d;
+    V3 rest;  // the two corners other than the fan's centre u, summed
+  };
+  static constexpr uint32_t kMax = 32;
+  Tri tri[kMax];
+  uint32_t size = 0;
+
+  // Error vector from p to its closest point on the fan.
+  V3 residual(V3 p) const {
+    double best = INFINITY;
+    V3 best_error;
+    for (uint32_t f = 0; f < size; ++f) {
+      const double plane = dot(tri[f].n, p) - tri[f].d;
+      if (plane * plane >= best) continue;  // the plane distance bounds the triangle distance from below
+      const V3 error = p - closest_point_on_triangle(p, tri[f].a, tri[f].b, tri[f].c);
+      const double d2 = dot(error, error);
+      if (d2 < best) {
+        best = d2;
+        best_error = error;
+      }
+    }
+    return best_error;
+  }
+};
+
+// Hoppe 1997 §4.3: the deviation space D(mu, delta) holding every residual, delta along `axis`.
+struct RefinementInfoBuilder::DeviationSpace {
+  V3 axis;
+  double mu = 0, delta = 0;
+  void add(V3 error) {
+    const double along = dot(error, axis);
+    delta = std::max(delta, std::abs(along));
+    mu = std::max(mu, length(error - axis * along));
+  }
+  // Hoppe's bound over the whole residual surface, not only the samples: a leaf below a child lies
+  // within the child's space of the child's surface, and this collapse moved that surface by at most
+  // (about) its own sampled deviation `own`, so the leaf lies within their sum of the new surface
+  // (triangle inequality). The child's space is first seen from this axis: a vector with perpendicular
+  // part <= mu_c and axial part <= delta_c about an axis at angle theta has an axial part
+  // <= delta_c cos + mu_c sin about this one, and a perpendicular part <= mu_c + delta_c sin. Never
+  // below the child's own numbers either: a parent's bounds contain its children's.
+  void add_child(const RefineBounds& child, const DeviationSpace& own) {
+    const V3 child_axis = normalized(V3{child.axis[0], child.axis[1], child.axis[2]});
+    const double sin_t = length(cross(child_axis, axis)), cos_t = std::abs(dot(child_axis, axis));
+    delta = std::max({delta, double(child.delta), child.delta * cos_t + child.mu * sin_t + own.delta});
+    mu = std::max(mu, child.mu + child.delta * sin_t + own.mu);
+  }
+};
 
 RefinementInfoBuilder::RefinementInfoBuilder(const Mesh& mesh, size_t max_nodes)
     : positions_(mesh.positions), scale_(bounds_of(mesh.positions).diagonal()) {
@@ -162,51 +222,46 @@ void RefinementInfoBuilder::compute(uint32_t s, uint32_t t_node, uint32_t u_node
   const double shift = length(load(leaf_position(survivor_[t_node])) - load(leaf_position(survivor_[s])));
   // v_u sits where v_s sits, so only v_t's sphere moves.
   const double radius = std::max<double>(bu.radius, bt.radius + shift) * (1 + 1e-6);
-  const Cone cone = merge_cones(cone_of(bt), cone_of(bu));
-  const float axis[3] = {float(cone.axis.x), float(cone.axis.y), float(cone.axis.z)};
-  float mu = 0, delta = 0;
-  deviation(mesh, u, axis, mu, delta);
-  info_[s] = quantize_refine(to_bounds(radius, cone, std::max({mu, bt.mu, bu.mu}), std::max({delta, bt.delta, bu.delta})),
-                             scale_);
+  RefineBounds bounds = to_bounds(radius, merge_cones(cone_of(bt), cone_of(bu)), 0, 0);
+  // delta is measured along the axis every consumer decodes; without a cone none is stored, and the
+  // whole residual has to count as mu (delta is kept, which only refines more).
+  const RefineBounds frame = dequantize_refine(quantize_refine(bounds, scale_), scale_);
+  const bool has_axis = frame.cone_angle < kPi / 2;
+  DeviationSpace space{has_axis ? normalized(V3{frame.axis[0], frame.axis[1], frame.axis[2]}) : V3{0, 0, 1}};
+  const Fan fan = fan_around(mesh, u);
+  if (fan.size > 0) add_samples(fan, u, survivor_[t_node], space);
+  const DeviationSpace own = space;
+  space.add_child(bt, own);
+  space.add_child(bu, own);
+  bounds.mu = float_at_least(has_axis ? space.mu : std::hypot(space.mu, space.delta));
+  bounds.delta = float_at_least(space.delta);
+  info_[s] = quantize_refine(bounds, scale_);
 }
 
-void RefinementInfoBuilder::deviation(const CollapseMesh& mesh, uint32_t u, const float axis_f[3], float& mu,
-                                      float& delta) const {
-  struct Tri {
-    V3 a, b, c, n;
-    double d;
-  };
-  Tri fan[32];
-  uint32_t fan_size = 0;
+RefinementInfoBuilder::Fan RefinementInfoBuilder::fan_around(const CollapseMesh& mesh, uint32_t u) {
+  Fan fan;
   mesh.for_each_live_face(u, [&](uint32_t f, uint32_t) {
-    if (fan_size == 32) return;
+    if (fan.size == Fan::kMax) return;
     const uint32_t* t = mesh.face(f);
-    Tri tri{load(mesh.position(t[0])), load(mesh.position(t[1])), load(mesh.position(t[2])), {}, 0};
+    Fan::Tri tri{load(mesh.position(t[0])), load(mesh.position(t[1])), load(mesh.position(t[2])), {}, 0, {}};
+    for (int k = 0; k < 3; ++k)
+      if (t[k] != u) tri.rest = tri.rest + load(mesh.position(t[k]));
     tri.n = normalized(cross(tri.b - tri.a, tri.c - tri.a));
     tri.d = dot(tri.n, tri.a);
-    fan[fan_size++] = tri;
+    fan.tri[fan.size++] = tri;
   });
-  if (fan_size == 0) return;
-  const V3 axis{axis_f[0], axis_f[1], axis_f[2]};
-  double max_mu = 0, max_delta = 0;
+  return fan;
+}
+
+// The sampled leaves of u's subtree, and where this collapse moved the surface: a vertex lying on the
+// coarse surface does not mean its faces do (v_t on a flat fan with a bumpy ring measures 0), so each
+// fan face (u, a, b) is also sampled at the centroid of (v_t, a, b), the face it was if it was v_t's
+// (if it was u's, a point between the two surfaces: a little more, never less).
+void RefinementInfoBuilder::add_samples(const Fan& fan, uint32_t u, uint32_t t_leaf, DeviationSpace& space) const {
+  const V3 p_t = load(leaf_position(t_leaf));  // v_t's position: the leaf that carries it
   const uint32_t* samples = &samples_[kSamples * size_t(u)];
-  for (uint32_t i = 0; i < sample_count_[u]; ++i) {
-    const V3 p = load(leaf_position(samples[i]));
-    double best = INFINITY;
-    V3 best_error;
-    for (uint32_t f = 0; f < fan_size; ++f) {
-      const double plane = dot(fan[f].n, p) - fan[f].d;
-      if (plane * plane >= best) continue;  // the plane distance bounds the triangle distance from below
-      const V3 error = p - closest_point_on_triangle(p, fan[f].a, fan[f].b, fan[f].c);
-      const double d2 = dot(error, error);
-      if (d2 < best) { best = d2; best_error = error; }
-    }
-    const double along = dot(best_error, axis);
-    max_delta = std::max(max_delta, std::abs(along));
-    max_mu = std::max(max_mu, length(best_error - axis * along));
-  }
-  mu = float(max_mu);
-  delta = float(max_delta);
+  for (uint32_t i = 0; i < sample_count_[u]; ++i) space.add(fan.residual(load(leaf_position(samples[i]))));
+  for (uint32_t f = 0; f < fan.size; ++f) space.add(fan.residual((fan.tri[f].rest + p_t) * (1.0 / 3)));
 }
 
 }  // namespace pms

@@ -1,6 +1,7 @@
 // Hoppe 1997 §4 refinement info, computed while collapsing: bounding-sphere radius over the input
-// faces below a node, normal cone of those faces, and the deviation space (mu, delta) of the
-// node's leaf positions against the surface around it right after its collapse.
+// faces below a node, normal cone of those faces, and the deviation space (mu, delta) of the input
+// surface below the node against the surface around it right after its collapse: sampled leaves and
+// the faces the collapse changed, plus each child's space grown by the collapse's own deviation.
 #pragma once
 #include <cstdint>
 #include <vector>
@@ -34,7 +35,10 @@ class RefinementInfoBuilder {
 
  private:
   const float* leaf_position(uint32_t leaf) const { return &positions_[3 * size_t(leaf)]; }
-  void deviation(const CollapseMesh& mesh, uint32_t u, const float axis[3], float& mu, float& delta) const;
+  struct Fan;             // the faces around a vertex right after its collapse
+  struct DeviationSpace;  // (mu, delta) about an axis, Hoppe 1997 §4.3
+  static Fan fan_around(const CollapseMesh& mesh, uint32_t u);
+  void add_samples(const Fan& fan, uint32_t u, uint32_t t_leaf, DeviationSpace& space) const;
 
   const std::vector<float>& positions_;
   float scale_ = 1;

@@ -43,6 +43,20 @@ const BuiltModel& built_terrain() {
   return m;
 }
 
+const BuiltModel& built_studded_plane() {
+  static const BuiltModel m = [] {
+    constexpr int kCells = 48, kStudEvery = 6;
+    Mesh mesh = make_grid(kCells, kCells);
+    for (int y = 0; y <= kCells; ++y)
+      for (int x = 0; x <= kCells; ++x) {
+        const bool stud = x % kStudEvery == kStudEvery / 2 && y % kStudEvery == kStudEvery / 2;
+        mesh.positions[3 * size_t(y * (kCells + 1) + x) + 2] = stud ? 0.01f : 0.0f;
+      }
+    return build("studded plane", std::move(mesh), 2);
+  }();
+  return m;
+}
+
 const BuiltModel* built_bunny() {
   static const std::unique_ptr<BuiltModel> m = [] {
     const auto path = shared_model("bunny.ply.xz");

@@ -90,9 +90,24 @@ struct Quality {
   ImageMetrics metrics;
 };
 
-Quality quality_of(const MeshArrays& mesh, const ViewParams& view, const Image& reference, Renderer& renderer) {
+// The reference dimmed, every pixel the image gets wrong in red: where the error is (issue 3's diagnosis
+// of the τ = 0 failures started from these).
+void save_diff_png(const fs::path& path, const Image& image, const Image& reference) {
+  Image diff = reference;
+  for (size_t p = 0; p < diff.rgb.size(); p += 3) {
+    const bool differs = !std::equal(&image.rgb[p], &image.rgb[p] + 3, &reference.rgb[p]);
+    const uint8_t marked[3] = {255, 0, 0};
+    for (int k = 0; k < 3; ++k) diff.rgb[p + k] = differs ? marked[k] : uint8_t(reference.rgb[p + k] / 3);
+  }
+  save_png(path.string(), diff);
+}
+
+// Renders `mesh`, compares it with the reference and writes the diff image to `diff_png`.
+Quality quality_of(const MeshArrays& mesh, const ViewParams& view, const Image& reference, Renderer& renderer,
+                   const fs::path& diff_png) {
   Image image;
   renderer.render(as_render(mesh), view, image);
+  save_diff_png(diff_png, image, reference);
   return {mesh.indices.size() / 3, compare_images(image, reference)};
 }
 
@@ -181,9 +196,14 @@ void run_refine_group(BenchContext& context) {
     const ViewParams view = make_view(vp.camera, model.bbox_min, model.bbox_max);
     Image reference;
     renderer.render(as_render(full), view, reference);
-    const Quality t0 = quality_of(refine_for_view(model, vp.camera, 0.0f).mesh, view, reference, renderer);
-    const Quality t1 = quality_of(refine_for_view(model, vp.camera, 1.0f).mesh, view, reference, renderer);
-    const Quality vi = quality_of(view_independent(model, t1.faces), view, reference, renderer);
+    const auto diff_png = [&](const char* what) {
+      return context.options.out_dir / (std::string("refine-") + vp.label + "-" + what + "-diff.png");
+    };
+    const MeshArrays tau0 = refine_for_view(model, vp.camera, 0.0f).mesh;
+    const Quality t0 = quality_of(tau0, view, reference, renderer, diff_png("tau0"));
+    const MeshArrays tau1 = refine_for_view(model, vp.camera, 1.0f).mesh;
+    const Quality t1 = quality_of(tau1, view, reference, renderer, diff_png("tau1"));
+    const Quality vi = quality_of(view_independent(model, t1.faces), view, reference, renderer, diff_png("vi"));
     const double full_faces = double(full.indices.size() / 3);
     quality.add_row({vp.label, thousands(uint64_t(full_faces)), thousands(t0.faces), fixed(100 * double(t0.faces) / full_faces, 1),
                      psnr_text(t0.metrics.psnr), thousands(t0.metrics.error_pixels), fixed(100 * t0.metrics.error_fraction, 3),
@@ -204,7 +224,8 @@ void run_refine_group(BenchContext& context) {
              adapt.markdown() + "\nEngine ops/s: every vsplit in PM order, then every ecol in reverse, one core.\n\n";
   section += "Renderer: " + thousands(uint64_t(triangles_per_second)) + " triangles/s on the full mesh.\n\n";
   section += "### Image quality against the full mesh\n\n" + quality.markdown() +
-             "\nVI = the first K splits in stream order with at least the τ = 1 px mesh's face count.\n\n";
+             "\nVI = the first K splits in stream order with at least the τ = 1 px mesh's face count. "
+             "refine-VIEW-{tau0,tau1,vi}-diff.png mark the pixels that differ in red.\n\n";
   write_text_file(context.options.out_dir / "refine.json", out.dump(2) + "\n");
   context.report += section;
 }
