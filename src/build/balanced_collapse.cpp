@@ -4,6 +4,7 @@
 // subtree by at most one level; the cost is weighted by the height the new node would have, so
 // short subtrees merge first and node ids stay short.
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <thread>
 
@@ -26,6 +27,17 @@ constexpr int kHeightBaseLog2 = 2;  // base 4
 // hierarchy, i.e. one more bit to every node id, for a handful of vertices.
 constexpr double kMinRoundShare = 0.10;
 constexpr size_t kPrefetchDistance = 8;
+constexpr uint32_t kTabulatedHeights = 64;  // far above any real hierarchy: ids must fit 64 bits
+
+// 4^height, as ldexp would scale by it (exactly: a power of two), without a libm call per edge.
+double height_weight(uint32_t height) {
+  static const auto table = [] {
+    std::array<double, kTabulatedHeights> t;
+    for (uint32_t h = 0; h < kTabulatedHeights; ++h) t[h] = std::ldexp(1.0, kHeightBaseLog2 * int(h));
+    return t;
+  }();
+  return height < kTabulatedHeights ? table[height] : std::ldexp(1.0, kHeightBaseLog2 * int(height));
+}
 
 struct Entry {
   double key;
@@ -50,8 +62,7 @@ void collect_range(const CollapseMesh& mesh, const CollapseRecorder& recorder, d
     const uint32_t height_t = recorder.height(t);
     for (uint32_t u : neighbours) {
       const double cost = mesh.quadric(t).error_sum(mesh.quadric(u), mesh.position(u));
-      const int height = int(std::max(height_t, recorder.height(u)));
-      const Entry e{std::ldexp(cost + epsilon, kHeightBaseLog2 * height), t, u};
+      const Entry e{(cost + epsilon) * height_weight(std::max(height_t, recorder.height(u))), t, u};
       int i;
       if (kept < kTargetsPerVertex) {
         i = kept++;
@@ -82,10 +93,10 @@ class CandidateCollector {
       workers.emplace_back([&, i] {
         collect_range(mesh, recorder, epsilon, chunk(n, i), chunk(n, i + 1), marks_[i], parts_[i]);
       });
-    collect_range(mesh, recorder, epsilon, 0, chunk(n, 1), marks_[0], parts_[0]);
+    // The first chunk goes straight to `out` (parts_[0] stays empty): one copy of it less per round.
+    collect_range(mesh, recorder, epsilon, 0, chunk(n, 1), marks_[0], out);
     for (std::thread& w : workers) w.join();
-    out.clear();
-    for (const auto& part : parts_) out.insert(out.end(), part.begin(), part.end());
+    for (unsigned i = 1; i < threads; ++i) out.insert(out.end(), parts_[i].begin(), parts_[i].end());
   }
 
  private:

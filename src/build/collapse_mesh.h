@@ -81,6 +81,8 @@ class CollapseMesh {
   void compact(std::vector<uint32_t>& new_index);
 
  private:
+  bool has_two_live_faces(uint32_t v) const;
+
   static constexpr uint32_t kEnd = UINT32_MAX;
   BigVector<float> positions_;
   BigVector<uint32_t> faces_;

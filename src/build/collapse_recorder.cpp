@@ -14,9 +14,12 @@ CollapseRecorder::CollapseRecorder(const Mesh& mesh, CollapseMesh& collapse_mesh
     : mesh_(collapse_mesh), refinement_(mesh, 2 * mesh.vertex_count()) {
   const uint32_t n = uint32_t(mesh.vertex_count());
   forest_.leaf_count = n;
-  node_of_vertex_.resize(n);
-  for (uint32_t v = 0; v < n; ++v) node_of_vertex_[v] = v;
-  height_.assign(2 * size_t(n), 0);
+  current_.resize(n);
+  for (uint32_t v = 0; v < n; ++v) current_[v] = {v, 0, v};
+  // At most n - 1 collapses: reserving spares the copies (and page faults) of repeated growth.
+  for (auto* per_collapse : {&forest_.child_t, &forest_.child_u, &forest_.cut_l, &forest_.cut_r})
+    per_collapse->reserve(n);
+  forest_.survivor_leaf.reserve(2 * size_t(n));
   forest_.survivor_leaf.resize(n);
   for (uint32_t v = 0; v < n; ++v) forest_.survivor_leaf[v] = v;
 }
@@ -27,18 +30,17 @@ void CollapseRecorder::apply(uint32_t t, uint32_t u, const CollapseSite& site) {
     if (face == UINT32_MAX) return UINT32_MAX;
     return mesh_.original_corner(3 * face + slot_of(mesh_.face(face), apex));
   };
-  const uint32_t node_t = node_of_vertex_[t], node_u = node_of_vertex_[u];
+  const CurrentNode before_t = current_[t], before_u = current_[u];
   const uint32_t s = forest_.node_count();
-  forest_.child_t.push_back(node_t);
-  forest_.child_u.push_back(node_u);
+  forest_.child_t.push_back(before_t.node);
+  forest_.child_u.push_back(before_u.node);
   forest_.cut_l.push_back(cut_leaf(site.face_l, site.l));
   forest_.cut_r.push_back(cut_leaf(site.face_r, site.r));
-  forest_.survivor_leaf.push_back(forest_.survivor_leaf[node_u]);
+  forest_.survivor_leaf.push_back(before_u.survivor_leaf);
   mesh_.collapse(t, u, site);
-  node_of_vertex_[u] = s;
-  height_[s] = std::max(height_[node_t], height_[node_u]) + 1;
-  refinement_.merge_leaves(s, node_t, node_u, t, u);
-  pending_.push_back({s, node_t, node_u, u});
+  current_[u] = {s, std::max(before_t.height, before_u.height) + 1, before_u.survivor_leaf};
+  refinement_.merge_leaves(s, before_t.node, before_u.node, t, u);
+  pending_.push_back({s, before_t.node, before_u.node, u});
 }
 
 void CollapseRecorder::flush() {
@@ -68,8 +70,8 @@ void CollapseRecorder::compact(std::vector<uint32_t>& new_index) {
   mesh_.compact(new_index);
   uint32_t live = 0;
   for (uint32_t v = 0; v < new_index.size(); ++v)
-    if (new_index[v] != UINT32_MAX) node_of_vertex_[live++] = node_of_vertex_[v];
-  node_of_vertex_.resize(live);
+    if (new_index[v] != UINT32_MAX) current_[live++] = current_[v];
+  current_.resize(live);
   refinement_.compact(new_index);
 }
 
@@ -79,7 +81,7 @@ CollapseForest CollapseRecorder::finish() {
   for (uint32_t v = 0; v < mesh_.vertex_count(); ++v) {
     if (!mesh_.alive(v)) continue;
     root_index[v] = uint32_t(forest_.root_node.size());
-    forest_.root_node.push_back(node_of_vertex_[v]);
+    forest_.root_node.push_back(current_[v].node);
   }
   for (uint32_t f = 0; f < mesh_.face_count(); ++f) {
     if (!mesh_.face_alive(f)) continue;

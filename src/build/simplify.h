@@ -36,7 +36,7 @@ class CollapseRecorder {
   // They must be independent (no vertex in two of them), as in one balanced round.
   void flush();
   // Height of the subtree whose root is vertex v's current node (0 for an input vertex).
-  uint32_t height(uint32_t v) const { return height_[node_of_vertex_[v]]; }
+  uint32_t height(uint32_t v) const { return current_[v].height; }
   uint64_t collapses() const { return forest_.child_t.size(); }
 
   CollapseForest finish();
@@ -49,8 +49,14 @@ class CollapseRecorder {
   CollapseMesh& mesh_;
   CollapseForest forest_;
   RefinementInfoBuilder refinement_;
-  std::vector<uint32_t> node_of_vertex_;
-  std::vector<uint32_t> height_;
+  // What a collapse reads about its two vertices, in one place: the collapse loop visits vertices
+  // in cost order, i.e. at random, and per-node arrays would cost a cache miss each.
+  struct CurrentNode {
+    uint32_t node;           // temporary node the working-mesh vertex carries now
+    uint32_t height;         // of that node's subtree
+    uint32_t survivor_leaf;  // of that node
+  };
+  std::vector<CurrentNode> current_;  // per working-mesh vertex
   struct Pending {
     uint32_t s, t_node, u_node, u;
   };
