@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <span>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "pm/pm.h"
@@ -113,9 +114,11 @@ struct MeshArrays {
 };
 
 // The selectively refined mesh over the active slots of a VertexHierarchy (SelVSplit / SelECol,
-// kim-lee-kobbelt §5.3; Kim & Lee 2001). Triangles are flat corner arrays with a free list; half-edge
-// h = 3 * face + k runs from corner k to corner k + 1 and twin_[h] is the opposite half-edge (kNone on
-// the boundary); every active vertex keeps one outgoing half-edge, so its CCW fan can be walked.
+// kim-lee-kobbelt §5.3; Kim & Lee 2001). Triangles are flat corner triples with a free list; every
+// active vertex lists its incident faces in its own cache-line record (a pool block for long fans), so
+// an operation reads a fan as one short array instead of a chain of dependent twin lookups. A face keeps
+// its index while its corners move up and down the hierarchy; the faces one split created know each
+// other (partner_).
 class SelectiveMesh {
  public:
   // `base_faces`: 3 tree-ids (= root indices) per face, CCW. Every root of `hierarchy` must be used and
@@ -140,7 +143,7 @@ class SelectiveMesh {
   // an oriented 2-manifold without isolated vertices (link condition).
   bool ecol(uint32_t parent_slot);
 
-  bool is_active(uint32_t slot) const { return slot < out_.size() && out_[slot] != kNone; }
+  bool is_active(uint32_t slot) const { return slot < vertex_.size() && vertex_[slot].capacity != 0; }
   std::span<const uint32_t> active_vertices() const { return active_; }
   size_t vertex_count() const { return active_.size(); }
   size_t face_count() const { return face_count_; }
@@ -152,39 +155,66 @@ class SelectiveMesh {
 
   // Vertices in active_vertices() order.
   void extract(MeshArrays& out) const;
-  // Audit for tests: twins symmetric, each directed edge once, one fan per active vertex with >= 1 face,
-  // the active set a front of the hierarchy that respects the partial order (no performed split whose
-  // cut vertices share an active ancestor). On failure `why` (if given) says what.
+  // Audit for tests: each directed edge once, partners symmetric, every active vertex lists exactly its
+  // faces and they form one fan, the active set a front of the hierarchy that respects the partial order
+  // (no performed split whose cut vertices share an active ancestor). On failure `why` (if given) says what.
   bool check_invariants(std::string* why) const;
 
  private:
-  static uint32_t next_edge(uint32_t h) { return h % 3 == 2 ? h - 2 : h + 1; }
-  static uint32_t prev_edge(uint32_t h) { return h % 3 == 0 ? h + 2 : h - 1; }
-  uint32_t head(uint32_t h) const { return corner_[next_edge(h)]; }
+  // v's corner of `face` seen from v: the face reads (v, next, prev) CCW; corner_[3 * face + k] == v.
+  struct Corner {
+    uint32_t face, k, next, prev;
+  };
+  // Per slot, one cache line: a copy of the node's id (a neighbour's id costs no extra miss) and its
+  // incident faces, inline up to kInlineFaces, else in a pool_ block of `capacity` (a power of two)
+  // entries whose start inline_faces[0] holds. capacity == 0: inactive.
+  static constexpr uint32_t kInlineFaces = 10;
+  struct alignas(64) VertexRecord {
+    uint64_t node = 0;
+    uint32_t tree = 0;
+    uint32_t size = 0, capacity = 0, active_pos = kNone;
+    uint32_t inline_faces[kInlineFaces] = {};
+  };
+  static_assert(sizeof(VertexRecord) == 64);
 
   void sync_slots();
-  bool gather_fan(uint32_t v, std::vector<uint32_t>& fan) const;
+  void load_corners(uint32_t v, std::vector<Corner>& corners) const;
+  static bool order_fan(std::vector<Corner>& fan, std::vector<Corner>& ordered, std::vector<uint32_t>& successor);
+  static bool is_closed(std::vector<Corner>& fan);
+  static void prepare_lookup(std::vector<Corner>& fan);
+  static uint32_t find_next(const std::vector<Corner>& fan, uint32_t w);  // index of the corner with `next` w
   uint32_t cut_ancestor(VertexId cut, uint32_t slot) const;  // over fan_ (slot)
-  void split_fan(uint32_t s, uint32_t l, uint32_t r, bool closed);  // over fan_ (s)
-  bool breaks_split_order(uint32_t t, uint32_t u) const;  // over fan_ (t)
-  bool link_condition(uint32_t t, uint32_t l, uint32_t r);  // over fan_ (t) and fan_u_ (u)
+  void split_fan(uint32_t s, uint32_t l, uint32_t r);         // over fan_ (s)
+  bool breaks_split_order(uint32_t u) const;                  // over fan_ (t)
+  bool link_condition(uint32_t t, uint32_t l, uint32_t r);    // over fan_ (t) and fan_u_ (u)
   uint32_t new_face(uint32_t a, uint32_t b, uint32_t c);
   void free_face(uint32_t f);
-  void link(uint32_t a, uint32_t b);
-  void activate(uint32_t v, uint32_t out);
+  uint32_t alloc_block(uint32_t capacity);
+  void free_block(uint32_t begin, uint32_t capacity);
+  uint32_t* faces_of(VertexRecord& v) { return v.capacity <= kInlineFaces ? v.inline_faces : &pool_[v.inline_faces[0]]; }
+  const uint32_t* faces_of(const VertexRecord& v) const {
+    return v.capacity <= kInlineFaces ? v.inline_faces : &pool_[v.inline_faces[0]];
+  }
+  VertexId id_of(uint32_t v) const { return {vertex_[v].tree, vertex_[v].node}; }
+  uint32_t* assign_faces(uint32_t v, uint32_t count);  // a fresh list of `count` entries for v
+  void append_face(uint32_t v, uint32_t f);
+  void remove_face(uint32_t v, uint32_t f);
+  void activate(uint32_t v);
   void deactivate(uint32_t v);
+  bool pool_blocks_disjoint(std::vector<std::pair<uint32_t, uint32_t>>& blocks) const;  // audit
 
   const VertexHierarchy* hierarchy_;
   std::vector<uint32_t> corner_;      // 3 slots per face; a dead face holds kNone, next free face
-  std::vector<uint32_t> twin_;        // per half-edge
+  std::vector<uint32_t> partner_;     // per face: the other face of the split that made it (f_l <-> f_r)
   uint32_t free_face_ = kNone;
   size_t face_count_ = 0;
-  std::vector<uint32_t> out_;         // per slot: an outgoing half-edge; kNone = inactive
+  std::vector<VertexRecord> vertex_;  // per slot
+  std::vector<uint32_t> pool_;        // incident-face blocks; a free block holds the next free one
+  uint32_t free_block_[32];           // per log2(capacity): first free block
   std::vector<uint32_t> active_;      // active slots
-  std::vector<uint32_t> active_pos_;  // per slot: index in active_
-  std::vector<uint32_t> mark_;        // per slot: link-condition stamps
-  uint32_t stamp_ = 0;
-  std::vector<uint32_t> fan_, fan_u_, stack_;  // scratch, kept to avoid allocating per operation
+  std::vector<Corner> fan_, fan_u_, ordered_;  // scratch, kept to avoid allocating per operation
+  std::vector<uint32_t> chain_;    // vsplit's forced chain
+  std::vector<uint32_t> successor_;  // order_fan's
 };
 
 }  // namespace pms

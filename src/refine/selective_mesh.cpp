@@ -5,10 +5,14 @@
 //   Kim, Lee & Kobbelt 2005, "View-dependent streaming of progressive meshes" §4–5 (ActiveAncestor on
 //     <tree-id, node-id> ids with only part of the hierarchy known; the partial order of SelStreamVSplit
 //     when ActiveAncestor(v̂_l) == ActiveAncestor(v̂_r));
-//   Hoppe 1997 (vsplit / ecol on a half-edge mesh); Dey et al. 1999 (link condition for collapses).
-// Fan order and v_t / v_u roles follow docs/internals.md.
+//   Hoppe 1997 (vsplit / ecol); Dey et al. 1999 (link condition for collapses).
+// Fan order and v_t / v_u roles follow docs/internals.md. Layout: faces are corner triples that keep their
+// index while their corners move; each active vertex lists its incident faces in a pooled block, and an
+// operation reads those lists into small scratch arrays (one cache line per fan, not a chain of
+// dependent twin lookups), works there, and writes back.
 #include <algorithm>
 #include <bit>
+#include <iterator>
 
 #include "common/error.h"
 #include "refine/refine.h"
@@ -17,76 +21,139 @@ namespace pms {
 namespace {
 
 constexpr const char* kWhere = "selective mesh";
-constexpr int kMaxClimb = 3;  // breaks_split_order: parent steps before a hash probe is cheaper
+constexpr uint32_t kMinPoolCapacity = 16;
+constexpr uint32_t kMaxFanCapacity = 1u << 30;
+constexpr uint32_t kScannedFan = 16;  // find_next: longer fans are sorted and bisected
+constexpr uint32_t kNextCorner[3] = {1, 2, 0}, kPrevCorner[3] = {2, 0, 1};
 
 }  // namespace
 
 SelectiveMesh::SelectiveMesh(const VertexHierarchy& hierarchy, std::span<const uint32_t> base_faces)
     : hierarchy_(&hierarchy) {
+  std::fill(std::begin(free_block_), std::end(free_block_), kNone);
   if (base_faces.size() % 3 != 0) fail("base mesh", "face array length is not a multiple of 3");
   if (base_faces.size() >= kNone) fail("base mesh", "too many faces");
-  const uint32_t half_edges = uint32_t(base_faces.size());
-  corner_.resize(half_edges);
-  twin_.assign(half_edges, kNone);
-  face_count_ = half_edges / 3;
-  for (uint32_t h = 0; h < half_edges; ++h) {
-    if (base_faces[h] >= hierarchy.root_count())
-      fail("base mesh", "face " + std::to_string(h / 3) + " uses unknown root " + std::to_string(base_faces[h]));
-    corner_[h] = hierarchy.root_slot(base_faces[h]);
+  const uint32_t corners = uint32_t(base_faces.size());
+  corner_.resize(corners);
+  partner_.assign(corners / 3, kNone);
+  face_count_ = corners / 3;
+  for (uint32_t c = 0; c < corners; ++c) {
+    if (base_faces[c] >= hierarchy.root_count())
+      fail("base mesh", "face " + std::to_string(c / 3) + " uses unknown root " + std::to_string(base_faces[c]));
+    corner_[c] = hierarchy.root_slot(base_faces[c]);
   }
-  // Twins by sorting directed edges: a repeated one means a non-manifold edge or flipped neighbours.
-  std::vector<std::pair<uint64_t, uint32_t>> edges(half_edges);
-  for (uint32_t h = 0; h < half_edges; ++h) {
-    if (corner_[h] == head(h)) fail("base mesh", "face " + std::to_string(h / 3) + " is degenerate");
-    edges[h] = {uint64_t(corner_[h]) << 32 | head(h), h};
+  // A repeated directed edge means a non-manifold edge or flipped neighbours.
+  std::vector<uint64_t> edges(corners);
+  for (uint32_t c = 0; c < corners; ++c) {
+    const uint32_t head = corner_[c - c % 3 + kNextCorner[c % 3]];
+    if (corner_[c] == head) fail("base mesh", "face " + std::to_string(c / 3) + " is degenerate");
+    edges[c] = uint64_t(corner_[c]) << 32 | head;
   }
   std::sort(edges.begin(), edges.end());
-  for (size_t i = 0; i + 1 < edges.size(); ++i)
-    if (edges[i].first == edges[i + 1].first)
-      fail("base mesh", "edge used twice in the same direction (non-manifold or inconsistent orientation)");
-  for (uint32_t h = 0; h < half_edges; ++h) {
-    const uint64_t reverse = uint64_t(head(h)) << 32 | corner_[h];
-    auto it = std::lower_bound(edges.begin(), edges.end(), std::pair<uint64_t, uint32_t>{reverse, 0});
-    if (it != edges.end() && it->first == reverse) twin_[h] = it->second;
-  }
+  if (std::adjacent_find(edges.begin(), edges.end()) != edges.end())
+    fail("base mesh", "edge used twice in the same direction (non-manifold or inconsistent orientation)");
   sync_slots();
-  std::vector<uint32_t> corners(hierarchy.size(), 0);
-  for (uint32_t h = 0; h < half_edges; ++h) {
-    out_[corner_[h]] = h;
-    ++corners[corner_[h]];
+  std::vector<uint32_t> count(hierarchy.size(), 0);
+  for (uint32_t c = 0; c < corners; ++c) ++count[corner_[c]];
+  for (uint32_t r = 0; r < hierarchy.root_count(); ++r) {
+    const uint32_t slot = hierarchy.root_slot(r);
+    if (count[slot] == 0) fail("base mesh", "root " + to_string(hierarchy.id(slot)) + " has no face");
+    assign_faces(slot, count[slot]);
+  }
+  for (uint32_t c = 0; c < corners; ++c) {
+    const uint32_t v = corner_[c];
+    faces_of(vertex_[v])[--count[v]] = c / 3;
   }
   for (uint32_t r = 0; r < hierarchy.root_count(); ++r) {
     const uint32_t slot = hierarchy.root_slot(r);
-    const std::string name = "root " + to_string(hierarchy.id(slot));
-    if (out_[slot] == kNone) fail("base mesh", name + " has no face");
-    activate(slot, out_[slot]);
-    gather_fan(slot, fan_);
-    if (fan_.size() != corners[slot]) fail("base mesh", name + " is non-manifold (its faces form several fans)");
+    activate(slot);
+    load_corners(slot, fan_);
+    order_fan(fan_, ordered_, successor_);
+    if (ordered_.size() != fan_.size())
+      fail("base mesh", "root " + to_string(hierarchy.id(slot)) + " is non-manifold (its faces form several fans)");
   }
 }
 
 void SelectiveMesh::sync_slots() {
-  // The hierarchy grows as packets arrive; per-slot arrays follow lazily.
-  const size_t n = hierarchy_->size();
-  if (out_.size() >= n) return;
-  out_.resize(n, kNone);
-  active_pos_.resize(n, kNone);
-  mark_.resize(n, 0);
+  // The hierarchy grows as packets arrive; per-slot records follow lazily.
+  const uint32_t old_size = uint32_t(vertex_.size());
+  if (old_size >= hierarchy_->size()) return;
+  vertex_.resize(hierarchy_->size());
+  for (uint32_t v = old_size; v < vertex_.size(); ++v) {
+    const VertexId id = hierarchy_->id(v);
+    vertex_[v].tree = id.tree;
+    vertex_[v].node = id.node;
+  }
 }
 
-void SelectiveMesh::activate(uint32_t v, uint32_t out) {
-  out_[v] = out;
-  active_pos_[v] = uint32_t(active_.size());
+// Lists longer than kInlineFaces live in pool blocks of power-of-two sizes, recycled per size: a list
+// moves only when it outgrows its block, and split/collapse mostly reuse the block just freed.
+uint32_t SelectiveMesh::alloc_block(uint32_t capacity) {
+  const int size_class = std::countr_zero(capacity);
+  if (const uint32_t begin = free_block_[size_class]; begin != kNone) {
+    free_block_[size_class] = pool_[begin];
+    return begin;
+  }
+  if (pool_.size() + capacity >= kNone) fail(kWhere, "too many incident faces");
+  const uint32_t begin = uint32_t(pool_.size());
+  pool_.resize(pool_.size() + capacity);
+  return begin;
+}
+
+void SelectiveMesh::free_block(uint32_t begin, uint32_t capacity) {
+  const int size_class = std::countr_zero(capacity);
+  pool_[begin] = free_block_[size_class];
+  free_block_[size_class] = begin;
+}
+
+uint32_t* SelectiveMesh::assign_faces(uint32_t v, uint32_t count) {
+  if (count > kMaxFanCapacity) fail(kWhere, "vertex " + to_string(hierarchy_->id(v)) + " has too many faces");
+  VertexRecord& record = vertex_[v];
+  record.size = count;
+  record.capacity = kInlineFaces;
+  if (count > kInlineFaces) {
+    record.capacity = std::bit_ceil(std::max(count, kMinPoolCapacity));
+    record.inline_faces[0] = alloc_block(record.capacity);
+  }
+  return faces_of(record);
+}
+
+void SelectiveMesh::append_face(uint32_t v, uint32_t f) {
+  VertexRecord& record = vertex_[v];
+  if (record.size == record.capacity) {  // full: move to the next larger pool block
+    if (record.capacity >= kMaxFanCapacity) fail(kWhere, "vertex " + to_string(hierarchy_->id(v)) + " has too many faces");
+    const uint32_t capacity = std::bit_ceil(std::max(record.capacity + 1, kMinPoolCapacity));  // a size class
+    const uint32_t begin = alloc_block(capacity);  // may move pool_: read the old list after it
+    std::copy_n(faces_of(record), record.size, pool_.begin() + begin);
+    if (record.capacity > kInlineFaces) free_block(record.inline_faces[0], record.capacity);
+    record.inline_faces[0] = begin;
+    record.capacity = capacity;
+  }
+  faces_of(record)[record.size++] = f;
+}
+
+void SelectiveMesh::remove_face(uint32_t v, uint32_t f) {
+  VertexRecord& record = vertex_[v];
+  uint32_t* list = faces_of(record);
+  uint32_t i = 0;
+  while (i < record.size && list[i] != f) ++i;
+  if (i == record.size) fail(kWhere, "face list of " + to_string(hierarchy_->id(v)) + " lacks face " + std::to_string(f));
+  list[i] = list[--record.size];
+}
+
+void SelectiveMesh::activate(uint32_t v) {
+  vertex_[v].active_pos = uint32_t(active_.size());
   active_.push_back(v);
 }
 
 void SelectiveMesh::deactivate(uint32_t v) {
-  const uint32_t pos = active_pos_[v];
-  active_[pos] = active_.back();
-  active_pos_[active_[pos]] = pos;
+  VertexRecord& record = vertex_[v];
+  active_[record.active_pos] = active_.back();
+  vertex_[active_.back()].active_pos = record.active_pos;
   active_.pop_back();
-  active_pos_[v] = kNone;
-  out_[v] = kNone;
+  if (record.capacity > kInlineFaces) free_block(record.inline_faces[0], record.capacity);
+  record.size = record.capacity = 0;
+  record.active_pos = kNone;
 }
 
 uint32_t SelectiveMesh::new_face(uint32_t a, uint32_t b, uint32_t c) {
@@ -97,13 +164,13 @@ uint32_t SelectiveMesh::new_face(uint32_t a, uint32_t b, uint32_t c) {
     if (corner_.size() + 3 >= kNone) fail(kWhere, "too many faces");
     f = face_capacity();
     corner_.resize(corner_.size() + 3);
-    twin_.resize(twin_.size() + 3);
+    partner_.push_back(kNone);
   }
   uint32_t* corner = &corner_[3 * size_t(f)];
   corner[0] = a;
   corner[1] = b;
   corner[2] = c;
-  std::fill_n(&twin_[3 * size_t(f)], 3, kNone);
+  partner_[f] = kNone;
   ++face_count_;
   return f;
 }
@@ -111,41 +178,68 @@ uint32_t SelectiveMesh::new_face(uint32_t a, uint32_t b, uint32_t c) {
 void SelectiveMesh::free_face(uint32_t f) {
   corner_[3 * size_t(f)] = kNone;
   corner_[3 * size_t(f) + 1] = free_face_;
+  partner_[f] = kNone;
   free_face_ = f;
   --face_count_;
 }
 
-void SelectiveMesh::link(uint32_t a, uint32_t b) {
-  if (a != kNone) twin_[a] = b;
-  if (b != kNone) twin_[b] = a;
+void SelectiveMesh::load_corners(uint32_t v, std::vector<Corner>& corners) const {
+  const VertexRecord& record = vertex_[v];
+  corners.resize(record.size);
+  const uint32_t* list = faces_of(record);
+  for (uint32_t i = 0; i < record.size; ++i) {
+    const uint32_t* c = &corner_[3 * size_t(list[i])];
+    const uint32_t k = uint32_t(c[1] == v) + 2 * uint32_t(c[2] == v);  // branch-free: c was a cache miss
+    corners[i] = {list[i], k, c[kNextCorner[k]], c[kPrevCorner[k]]};
+  }
 }
 
-// Outgoing half-edges of active vertex v in CCW fan order (face (v, a, b) is followed by (v, b, c),
-// whose v->b is the twin of b->v); an open fan starts after its gap. Returns whether the fan is closed.
-bool SelectiveMesh::gather_fan(uint32_t v, std::vector<uint32_t>& fan) const {
-  fan.clear();
-  const uint32_t start = out_[v];
-  // No fan is longer than the face count: a longer walk means corrupted links, not a slow mesh.
-  const size_t limit = face_capacity();
-  uint32_t h = start;
-  for (;;) {
-    fan.push_back(h);
-    const uint32_t next = twin_[prev_edge(h)];
-    if (next == start) return true;
-    if (next == kNone) break;
-    if (fan.size() > limit) fail(kWhere, "corrupted fan around " + to_string(hierarchy_->id(v)));
-    h = next;
+// Corner lookups by `next`: directed edges v -> a are unique in a manifold, so `next` is a key. Fans
+// are short (5-7 faces), where a scan beats sorting; a long one (a coarse base mesh) is sorted by
+// prepare_lookup and searched by halves, so no fan costs quadratic time.
+void SelectiveMesh::prepare_lookup(std::vector<Corner>& fan) {
+  if (fan.size() > kScannedFan)
+    std::sort(fan.begin(), fan.end(), [](const Corner& a, const Corner& b) { return a.next < b.next; });
+}
+
+uint32_t SelectiveMesh::find_next(const std::vector<Corner>& fan, uint32_t w) {
+  const uint32_t n = uint32_t(fan.size());
+  if (n <= kScannedFan) {
+    for (uint32_t i = 0; i < n; ++i)
+      if (fan[i].next == w) return i;
+    return kNone;
   }
-  // Open: collect the part clockwise of `start` and put it in front.
-  const size_t ccw = fan.size();
-  for (h = start; twin_[h] != kNone;) {
-    h = next_edge(twin_[h]);
-    fan.push_back(h);
-    if (fan.size() > limit) fail(kWhere, "corrupted fan around " + to_string(hierarchy_->id(v)));
+  const auto it = std::lower_bound(fan.begin(), fan.end(), w, [](const Corner& c, uint32_t x) { return c.next < x; });
+  return it != fan.end() && it->next == w ? uint32_t(it - fan.begin()) : kNone;
+}
+
+// Puts a vertex's corners (`fan`, any order) in CCW fan order into `ordered`: face (v, a, b) is followed
+// by (v, b, c), and an open fan starts after its gap. Returns whether the fan is closed. When the faces
+// form several fans (a bad base mesh), `ordered` ends up shorter than `fan`.
+bool SelectiveMesh::order_fan(std::vector<Corner>& fan, std::vector<Corner>& ordered, std::vector<uint32_t>& successor) {
+  const uint32_t n = uint32_t(fan.size());
+  prepare_lookup(fan);
+  successor.resize(n);
+  uint64_t reached = 0;  // sum of the indices some corner leads to
+  uint32_t ends = 0;
+  for (uint32_t i = 0; i < n; ++i) {
+    successor[i] = find_next(fan, fan[i].prev);
+    if (successor[i] == kNone) ++ends;
+    else reached += successor[i];
   }
-  std::reverse(fan.begin() + ccw, fan.end());
-  std::rotate(fan.begin(), fan.begin() + ccw, fan.end());
-  return false;
+  // One open fan has one last face and one first face, the only index nothing leads to.
+  const uint64_t first = ends == 0 ? 0 : uint64_t(n) * (n - 1) / 2 - reached;
+  ordered.clear();
+  if (ends > 1 || first >= n) return false;
+  for (uint32_t i = uint32_t(first); i != kNone && ordered.size() < n; i = successor[i]) ordered.push_back(fan[i]);
+  return ends == 0;
+}
+
+bool SelectiveMesh::is_closed(std::vector<Corner>& fan) {
+  prepare_lookup(fan);
+  for (const Corner& c : fan)
+    if (find_next(fan, c.prev) == kNone) return false;
+  return true;
 }
 
 // ActiveAncestor by the <tree-id, node-id> path (kim-lee-kobbelt §4). The right-shift climb from v
@@ -163,17 +257,17 @@ uint32_t SelectiveMesh::active_ancestor(VertexId v) const {
   }
 }
 
-// ActiveAncestor of a cut vertex of `slot`, which fan_ holds. When the packets agree with the mesh the
-// answer is a neighbour of v_s (it becomes an apex of f_l or f_r), and an active vertex whose id is a
-// prefix of the cut's is its only active ancestor; so one id per neighbour replaces the walk down from
-// the root (one dependent load per level). The walk remains for the rest: the forced chain (v_l == v_r
-// need not be adjacent to v_s) and the error.
+// ActiveAncestor of a cut vertex of `slot`, whose corners fan_ holds. When the packets agree with the
+// mesh the answer is a neighbour of v_s (it becomes an apex of f_l or f_r), and an active vertex whose id
+// is a prefix of the cut's is its only active ancestor; so one id per neighbour replaces the walk down
+// from the root (one dependent load per level). The walk remains for the rest: the forced chain
+// (v_l == v_r need not be adjacent to v_s) and the error.
 uint32_t SelectiveMesh::cut_ancestor(VertexId cut, uint32_t slot) const {
   if (!is_vertex(cut)) return kNone;
-  for (uint32_t h : fan_) {
-    const uint32_t w = head(h);
-    if (is_ancestor_or_self(hierarchy_->id(w), cut)) return w;
-  }
+  for (const Corner& c : fan_)
+    if (is_ancestor_or_self(id_of(c.next), cut)) return c.next;
+  for (const Corner& c : fan_)  // the far end of an open fan is no corner's `next`
+    if (is_ancestor_or_self(id_of(c.prev), cut)) return c.prev;
   const uint32_t a = active_ancestor(cut);
   if (a == kNone)
     fail(kWhere, "vertex " + to_string(hierarchy_->id(slot)) + ": no active ancestor for cut vertex " + to_string(cut));
@@ -186,48 +280,53 @@ uint32_t SelectiveMesh::cut_ancestor(VertexId cut, uint32_t slot) const {
 // the fan, with no face (v_s, ·, v_r) they run to its end, and with neither (or a one-sided split whose
 // only side is a border) v_t keeps only the new faces. Everything is checked before the first write,
 // so inconsistent packets leave the mesh as it was.
-void SelectiveMesh::split_fan(uint32_t s, uint32_t l, uint32_t r, bool closed) {  // fan_: s's fan
+void SelectiveMesh::split_fan(uint32_t s, uint32_t l, uint32_t r) {  // fan_: s's corners
   const uint32_t t = hierarchy_->first_child(s), u = t + 1;
-  const uint32_t n = uint32_t(fan_.size());
-  // Half-edges between s and the cut vertices, kNone on a border: s->l (becomes t->l), l->s (l->u),
-  // r->s (r->t), s->r (u->r). ia / ib: fan positions of the faces holding s->l / r->s.
-  uint32_t ia = kNone, ib = kNone, la = kNone, rb = kNone;
-  for (uint32_t i = 0; i < n; ++i) {
-    const uint32_t h = fan_[i], p = prev_edge(h);
-    if (head(h) == l) ia = i;
-    if (head(h) == r) rb = h;
-    if (corner_[p] == l) la = p;
-    if (corner_[p] == r) ib = i;
-  }
   const auto reject = [&](const std::string& why) { fail(kWhere, "vsplit " + to_string(hierarchy_->id(s)) + ": " + why); };
-  for (auto [v, found] : {std::pair{l, ia != kNone || la != kNone}, std::pair{r, ib != kNone || rb != kNone}})
+  const bool closed = order_fan(fan_, ordered_, successor_);
+  if (ordered_.size() != fan_.size()) reject("corrupted fan");
+  const uint32_t n = uint32_t(ordered_.size());
+  // ia / ib: fan positions of the faces (s, l, ·) and (s, ·, r), kNone on a border.
+  uint32_t ia = kNone, ib = kNone;
+  bool l_found = false, r_found = false;
+  for (uint32_t i = 0; i < n; ++i) {
+    const Corner& c = ordered_[i];
+    if (c.next == l) ia = i;
+    if (c.prev == r) ib = i;
+    l_found |= c.next == l || c.prev == l;
+    r_found |= c.next == r || c.prev == r;
+  }
+  for (auto [v, found] : {std::pair{l, l_found}, std::pair{r, r_found}})
     if (v != kNone && !found) reject("cut vertex " + to_string(hierarchy_->id(v)) + " is not a neighbour");
   if ((l == kNone || r == kNone || (ia == kNone && ib == kNone)) && closed) reject("boundary split of an interior vertex");
 
-  const uint32_t ha = ia != kNone ? fan_[ia] : kNone;
-  const uint32_t gb = ib != kNone ? prev_edge(fan_[ib]) : kNone;
-  for (uint32_t h : fan_) corner_[h] = u;
-  if (ia != kNone || ib != kNone) {
-    const uint32_t first = ia != kNone ? ia : 0, last = ib != kNone ? ib : n - 1;
-    for (uint32_t i = first;; i = i + 1 == n ? 0 : i + 1) {
-      corner_[fan_[i]] = t;
-      if (i == last) break;
-    }
-  }
+  // v_t's faces: the cyclic range [first, last] of the ordered fan (empty when neither side is found).
+  const bool any = ia != kNone || ib != kNone;
+  const uint32_t first = ia != kNone ? ia : 0, last = ib != kNone ? ib : n - 1;
+  const auto goes_to_t = [&](uint32_t i) { return any && (first <= last ? first <= i && i <= last : i >= first || i <= last); };
+  const uint32_t t_count = !any ? 0 : first <= last ? last - first + 1 : n - first + last + 1;
   const uint32_t fl = l != kNone ? new_face(t, u, l) : kNone;
   const uint32_t fr = r != kNone ? new_face(u, t, r) : kNone;
-  if (fl != kNone) {  // half-edges t->u, u->l, l->t
-    link(3 * fl + 1, la);
-    link(3 * fl + 2, ha);
+  if (fl != kNone && fr != kNone) {
+    partner_[fl] = fr;
+    partner_[fr] = fl;
   }
-  if (fr != kNone) {  // half-edges u->t, t->r, r->u
-    link(3 * fr + 1, gb);
-    link(3 * fr + 2, rb);
-  }
-  if (fl != kNone && fr != kNone) link(3 * fl, 3 * fr);
+  const uint32_t added = (fl != kNone) + (fr != kNone);
   deactivate(s);
-  activate(t, fl != kNone ? 3 * fl : 3 * fr + 1);
-  activate(u, fl != kNone ? 3 * fl + 1 : 3 * fr);
+  for (uint32_t child : {t, u}) {
+    uint32_t* list = assign_faces(child, (child == t ? t_count : n - t_count) + added);
+    for (uint32_t i = 0; i < n; ++i) {
+      if (goes_to_t(i) != (child == t)) continue;
+      corner_[3 * size_t(ordered_[i].face) + ordered_[i].k] = child;
+      *list++ = ordered_[i].face;
+    }
+    if (fl != kNone) *list++ = fl;
+    if (fr != kNone) *list++ = fr;
+  }
+  if (fl != kNone) append_face(l, fl);
+  if (fr != kNone) append_face(r, fr);
+  activate(t);
+  activate(u);
 }
 
 VSplitResult SelectiveMesh::vsplit(uint32_t slot) {
@@ -237,22 +336,22 @@ VSplitResult SelectiveMesh::vsplit(uint32_t slot) {
   // SelStreamVSplit (kim-lee-kobbelt §5.3) without recursion: v_l == v_r must be split first, and that
   // split may in turn wait for another. Every stacked vertex is active and distinct unless the packets
   // are cyclic, which the size bound catches.
-  stack_.clear();
-  stack_.push_back(slot);
-  while (!stack_.empty()) {
-    const uint32_t s = stack_.back();
+  chain_.clear();
+  chain_.push_back(slot);
+  while (!chain_.empty()) {
+    const uint32_t s = chain_.back();
     if (!is_active(s)) fail(kWhere, "cyclic split order at " + to_string(hierarchy_->id(s)));
     if (hierarchy_->is_leaf(s)) return {false, s};
-    const bool closed = gather_fan(s, fan_);
+    load_corners(s, fan_);
     const uint32_t l = cut_ancestor(hierarchy_->cut_left(s), s);
     const uint32_t r = cut_ancestor(hierarchy_->cut_right(s), s);
     if (l != kNone && l == r) {
-      if (stack_.size() > active_.size()) fail(kWhere, "cyclic split order at " + to_string(hierarchy_->id(s)));
-      stack_.push_back(l);
+      if (chain_.size() > active_.size()) fail(kWhere, "cyclic split order at " + to_string(hierarchy_->id(s)));
+      chain_.push_back(l);
       continue;
     }
-    split_fan(s, l, r, closed);
-    stack_.pop_back();
+    split_fan(s, l, r);
+    chain_.pop_back();
   }
   return {true, kNone};
 }
@@ -260,49 +359,29 @@ VSplitResult SelectiveMesh::vsplit(uint32_t slot) {
 // Link condition: the common neighbours of t and u are exactly the apexes of the faces on edge t-u;
 // any other common neighbour would end up on a doubled edge and pinch the surface.
 bool SelectiveMesh::link_condition(uint32_t t, uint32_t l, uint32_t r) {
-  if (++stamp_ == 0) {  // wrapped: clear so stale marks cannot match
-    std::fill(mark_.begin(), mark_.end(), 0);
-    stamp_ = 1;
-  }
-  for (uint32_t h : fan_) mark_[head(h)] = mark_[corner_[prev_edge(h)]] = stamp_;
-  for (uint32_t h : fan_u_) {
-    for (uint32_t w : {head(h), corner_[prev_edge(h)]})
-      if (w != t && w != l && w != r && mark_[w] == stamp_) return false;
+  // Every neighbour of t is some corner's `next` but for the far end of an open fan.
+  prepare_lookup(fan_);
+  uint32_t far_end = kNone;
+  for (const Corner& c : fan_)
+    if (find_next(fan_, c.prev) == kNone) far_end = c.prev;
+  for (const Corner& c : fan_u_) {
+    for (uint32_t w : {c.next, c.prev})
+      if (w != t && w != l && w != r && (w == far_end || find_next(fan_, w) != kNone)) return false;
   }
   return true;
 }
 
 // The partial order of §5.3 read backwards. A performed split q whose cut vertices have the active
 // ancestors t and u would see v_l == v_r once they merge: a front no sequence of vsplits can reach, in
-// which q's own collapse is stuck for good. So q's subtree must collapse first. In the dual view q's
-// f_l and f_r appear as faces (A, B, ·) and (B', A', ·) with A, A' below q's v_t and B, B' below its
-// v_u; the one whose apex is t lies in t's fan (fan_), so checking that fan finds every such q.
-bool SelectiveMesh::breaks_split_order(uint32_t t, uint32_t u) const {
-  const VertexHierarchy& h = *hierarchy_;
-  const VertexId id_t = h.id(t), id_u = h.id(u);
-  for (uint32_t e : fan_) {
-    const VertexId a = h.id(head(e)), b = h.id(corner_[prev_edge(e)]);
-    if (a.tree != b.tree) continue;
-    // Lowest common ancestor of two distinct front vertices: the longest common prefix of their ids.
-    const int da = a.depth(), db = b.depth(), d = std::min(da, db);
-    const uint64_t pa = a.node >> (da - d), pb = b.node >> (db - d);
-    if (pa == pb) continue;  // one above the other: not a front, cannot happen
-    const int below = std::bit_width(pa ^ pb);  // levels from the common ancestor q down to depth d
-    // q is (da - d) + below parents up from A: a short climb beats a hash probe (two cache misses),
-    // a long one (dozens of levels) does not.
-    uint32_t q = head(e);
-    if (da - d + below <= kMaxClimb) {
-      for (int k = da - d + below; k > 0; --k) q = h.parent(q);
-    } else {
-      q = h.find({a.tree, pa >> below});
-      if (q == kNone) continue;  // cannot happen: q is an ancestor of a front vertex
-    }
-    // A below q's v_t: the face is (A, B, t) = f_l(q), else (B, A, t) = f_r(q).
-    const bool a_first = ((pa >> (below - 1)) & 1) == 0;
-    const VertexId cut_t = a_first ? h.cut_left(q) : h.cut_right(q);
-    const VertexId cut_u = a_first ? h.cut_right(q) : h.cut_left(q);
-    if (is_vertex(cut_t) && is_vertex(cut_u) && is_ancestor_or_self(id_t, cut_t) && is_ancestor_or_self(id_u, cut_u))
-      return true;
+// which q's own collapse is stuck for good. So q's subtree must collapse first. In the dual view the apex
+// corner (k = 2) of q's f_l / f_r always holds the active ancestor of v̂_l / v̂_r, and the face of q
+// whose apex is t lies in t's fan (fan_): so q shows up as a face there with apex t whose partner's apex
+// is u, without reading a single id.
+bool SelectiveMesh::breaks_split_order(uint32_t u) const {
+  for (const Corner& c : fan_) {
+    if (c.k != 2) continue;
+    const uint32_t other = partner_[c.face];
+    if (other != kNone && corner_[3 * size_t(other) + 2] == u) return true;
   }
   return false;
 }
@@ -312,57 +391,46 @@ bool SelectiveMesh::ecol(uint32_t p) {
   if (p >= hierarchy_->size() || hierarchy_->is_leaf(p)) fail(kWhere, "ecol of a node with no known children");
   const uint32_t t = hierarchy_->first_child(p), u = t + 1;
   if (!is_active(t) || !is_active(u)) return false;
-  const bool t_closed = gather_fan(t, fan_);
-  uint32_t el = kNone, er = kNone;  // t->u in f_l = (t, u, l); t->r in f_r = (u, t, r)
-  for (uint32_t h : fan_) {
-    if (head(h) == u) el = h;
-    if (corner_[prev_edge(h)] == u) er = h;
+  load_corners(t, fan_);
+  uint32_t fl = kNone, fr = kNone, l = kNone, r = kNone;  // f_l = (t, u, l), f_r = (u, t, r)
+  for (const Corner& c : fan_) {
+    if (c.next == u) fl = c.face, l = c.prev;
+    if (c.prev == u) fr = c.face, r = c.next;
   }
   // The faces on t-u must be those vsplit(p) would create here: same sides, apexes ActiveAncestor(v̂)
   // (an active vertex is the active ancestor of v̂ exactly when its id is a prefix of v̂'s).
   const VertexId cut_l = hierarchy_->cut_left(p), cut_r = hierarchy_->cut_right(p);
-  if ((el != kNone) != is_vertex(cut_l) || (er != kNone) != is_vertex(cut_r)) return false;
-  const uint32_t l = el != kNone ? corner_[prev_edge(el)] : kNone, r = er != kNone ? head(er) : kNone;
-  if (l != kNone && !is_ancestor_or_self(hierarchy_->id(l), cut_l)) return false;
-  if (r != kNone && !is_ancestor_or_self(hierarchy_->id(r), cut_r)) return false;
+  if ((fl != kNone) != is_vertex(cut_l) || (fr != kNone) != is_vertex(cut_r)) return false;
+  if (l != kNone && !is_ancestor_or_self(id_of(l), cut_l)) return false;
+  if (r != kNone && !is_ancestor_or_self(id_of(r), cut_r)) return false;
   if (l == r) return false;  // both kNone cannot pass the checks above, so l == r means one apex twice
-  if (breaks_split_order(t, u)) return false;
+  if (breaks_split_order(u)) return false;
+  load_corners(u, fan_u_);
   // Seen with a virtual vertex joined to every border vertex, an interior edge between two border
   // vertices fails the link condition too: merging them would pinch the surface at one vertex.
-  const bool u_closed = gather_fan(u, fan_u_);
-  if (el != kNone && er != kNone && !t_closed && !u_closed) return false;
+  if (fl != kNone && fr != kNone && !is_closed(fan_) && !is_closed(fan_u_)) return false;
   if (!link_condition(t, l, r)) return false;
   // No vertex may be left without faces: an apex whose only face is the one removed, or p itself.
-  const uint32_t removed = (el != kNone) + (er != kNone);
-  if (fan_.size() + fan_u_.size() == 2 * removed) return false;
-  if (el != kNone && twin_[next_edge(el)] == kNone && twin_[prev_edge(el)] == kNone) return false;
-  if (er != kNone && twin_[er] == kNone && twin_[next_edge(er)] == kNone) return false;
+  const uint32_t removed = (fl != kNone) + (fr != kNone);
+  const uint32_t count = uint32_t(fan_.size() + fan_u_.size()) - 2 * removed;
+  if (count == 0) return false;
+  if ((fl != kNone && vertex_[l].size == 1) || (fr != kNone && vertex_[r].size == 1)) return false;
 
-  // Glue the two edges of each removed face that become one, and keep the apexes' half-edges alive.
-  if (el != kNone) {
-    const uint32_t a = twin_[next_edge(el)], b = twin_[prev_edge(el)];  // l->u and t->l
-    link(a, b);
-    if (out_[l] / 3 == el / 3) out_[l] = a != kNone ? a : next_edge(b);
-  }
-  if (er != kNone) {
-    const uint32_t c = twin_[er], d = twin_[next_edge(er)];  // r->t and u->r
-    link(c, d);
-    if (out_[r] / 3 == er / 3) out_[r] = c != kNone ? c : next_edge(d);
-  }
-  const uint32_t fl = el != kNone ? el / 3 : kNone, fr = er != kNone ? er / 3 : kNone;
-  uint32_t out = kNone;
-  for (const std::vector<uint32_t>* fan : {&fan_, &fan_u_}) {
-    for (uint32_t h : *fan) {
-      if (h / 3 == fl || h / 3 == fr) continue;
-      corner_[h] = p;
-      out = h;
+  if (fl != kNone) remove_face(l, fl);
+  if (fr != kNone) remove_face(r, fr);
+  deactivate(t);
+  deactivate(u);
+  uint32_t* list = assign_faces(p, count);
+  for (const std::vector<Corner>* fan : {&fan_, &fan_u_}) {
+    for (const Corner& c : *fan) {
+      if (c.face == fl || c.face == fr) continue;
+      corner_[3 * size_t(c.face) + c.k] = p;
+      *list++ = c.face;
     }
   }
   if (fl != kNone) free_face(fl);
   if (fr != kNone) free_face(fr);
-  deactivate(t);
-  deactivate(u);
-  activate(p, out);
+  activate(p);
   return true;
 }
 

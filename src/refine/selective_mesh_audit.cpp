@@ -1,6 +1,7 @@
 // Reading a SelectiveMesh out: flat arrays for renderers and exporters, and the connectivity audit the
 // property tests run after every operation (DESIGN.md §6 property 2).
 #include <algorithm>
+#include <bit>
 
 #include "common/error.h"
 #include "refine/refine.h"
@@ -18,12 +19,12 @@ void SelectiveMesh::extract(MeshArrays& out) const {
     if (h.has_normals()) std::copy_n(h.normal(active_[i]), 3, &out.normals[3 * i]);
     if (h.has_colors()) std::copy_n(h.color(active_[i]), 4, &out.colors[4 * i]);
   }
-  // active_pos_ is exactly the output numbering.
+  // active_pos is exactly the output numbering.
   out.indices.clear();
   out.indices.reserve(3 * face_count_);
   for (uint32_t f = 0; f < face_capacity(); ++f) {
     if (!face_alive(f)) continue;
-    for (int k = 0; k < 3; ++k) out.indices.push_back(active_pos_[corner_[3 * size_t(f) + k]]);
+    for (int k = 0; k < 3; ++k) out.indices.push_back(vertex_[corner_[3 * size_t(f) + k]].active_pos);
   }
 }
 
@@ -36,9 +37,28 @@ bool fail_with(std::string* why, const std::string& what) {
 
 }  // namespace
 
+// The blocks in use (`blocks`) and the free ones, walked per size class, tile part of the pool without
+// overlapping: a list written past its block would corrupt its neighbour's.
+bool SelectiveMesh::pool_blocks_disjoint(std::vector<std::pair<uint32_t, uint32_t>>& blocks) const {
+  for (int size_class = 0; size_class < 32; ++size_class) {
+    const uint32_t capacity = 1u << size_class;
+    size_t walked = 0;
+    for (uint32_t b = free_block_[size_class]; b != kNone; b = pool_[b]) {
+      if (b >= pool_.size() || ++walked > pool_.size() / capacity) return false;
+      blocks.push_back({b, capacity});
+    }
+  }
+  std::sort(blocks.begin(), blocks.end());
+  for (size_t i = 0; i < blocks.size(); ++i) {
+    const uint64_t end = uint64_t(blocks[i].first) + blocks[i].second;
+    if (end > pool_.size() || (i + 1 < blocks.size() && end > blocks[i + 1].first)) return false;
+  }
+  return true;
+}
+
 bool SelectiveMesh::check_invariants(std::string* why) const {
   const VertexHierarchy& h = *hierarchy_;
-  const uint32_t slots = uint32_t(out_.size());
+  const uint32_t slots = uint32_t(vertex_.size());
   if (slots > h.size()) return fail_with(why, "more vertex slots than hierarchy nodes");
   const auto name = [&](uint32_t v) { return to_string(h.id(v)); };
 
@@ -57,55 +77,59 @@ bool SelectiveMesh::check_invariants(std::string* why) const {
   }
   if (alive != face_count_ || alive + dead != face_capacity()) return fail_with(why, "face count does not match");
 
-  // Half-edges: twins symmetric and reversed; each directed edge once; a boundary half-edge has no
-  // reverse anywhere (otherwise a twin link is missing).
+  // Each directed edge once; the faces of one split name each other.
   std::vector<uint64_t> edges;
   edges.reserve(3 * alive);
-  for (uint32_t e = 0; e < corner_.size(); ++e) {
-    if (!face_alive(e / 3)) continue;
-    edges.push_back(uint64_t(corner_[e]) << 32 | head(e));
-    const uint32_t tw = twin_[e];
-    if (tw == kNone) continue;
-    if (tw >= twin_.size() || !face_alive(tw / 3) || twin_[tw] != e || corner_[tw] != head(e) || head(tw) != corner_[e])
-      return fail_with(why, "half-edge " + std::to_string(e) + " has an inconsistent twin");
+  for (uint32_t f = 0; f < face_capacity(); ++f) {
+    if (!face_alive(f)) continue;
+    const uint32_t* c = face(f);
+    for (int k = 0; k < 3; ++k) edges.push_back(uint64_t(c[k]) << 32 | c[(k + 1) % 3]);
+    const uint32_t other = partner_[f];
+    if (other != kNone && (other >= face_capacity() || !face_alive(other) || partner_[other] != f))
+      return fail_with(why, "face " + std::to_string(f) + " has an inconsistent partner");
   }
   std::sort(edges.begin(), edges.end());
   if (std::adjacent_find(edges.begin(), edges.end()) != edges.end())
     return fail_with(why, "a directed edge occurs twice");
-  for (uint32_t e = 0; e < corner_.size(); ++e) {
-    if (!face_alive(e / 3) || twin_[e] != kNone) continue;
-    if (std::binary_search(edges.begin(), edges.end(), uint64_t(head(e)) << 32 | corner_[e]))
-      return fail_with(why, "boundary half-edge " + std::to_string(e) + " has an unlinked reverse");
-  }
 
-  // Vertices: an active vertex has faces forming one fan reachable from its half-edge; the active set
-  // is a front (no active vertex has an active ancestor) listed once in active_.
+  // Vertices: an active vertex lists exactly the faces it is a corner of, once each, and they form one
+  // fan; the active set is a front (no active vertex has an active ancestor) listed once in active_.
   std::vector<uint32_t> corners(slots, 0);
-  for (uint32_t e = 0; e < corner_.size(); ++e)
-    if (face_alive(e / 3)) ++corners[corner_[e]];
+  for (uint32_t c = 0; c < corner_.size(); ++c)
+    if (face_alive(c / 3)) ++corners[corner_[c]];
   size_t active_count = 0;
-  std::vector<uint32_t> fan;
+  std::vector<uint32_t> listed, successor;
+  std::vector<std::pair<uint32_t, uint32_t>> blocks;  // pool blocks in use: (begin, capacity)
+  std::vector<Corner> fan, ordered;
   for (uint32_t v = 0; v < slots; ++v) {
     if (!is_active(v)) {
       if (corners[v] != 0) return fail_with(why, "inactive vertex " + name(v) + " has faces");
       continue;
     }
     ++active_count;
-    const uint32_t o = out_[v];
-    if (o >= corner_.size() || !face_alive(o / 3) || corner_[o] != v)
-      return fail_with(why, "vertex " + name(v) + " has an invalid outgoing half-edge");
-    try {
-      gather_fan(v, fan);
-    } catch (const Error& e) {
-      return fail_with(why, e.what());
+    const VertexRecord& record = vertex_[v];
+    if (id_of(v) != h.id(v)) return fail_with(why, "vertex " + name(v) + " has a stale id copy");
+    if (record.size > record.capacity || (record.capacity != kInlineFaces && !std::has_single_bit(record.capacity)))
+      return fail_with(why, "vertex " + name(v) + " has an invalid face list");
+    if (record.capacity > kInlineFaces) blocks.push_back({record.inline_faces[0], record.capacity});
+    listed.assign(faces_of(record), faces_of(record) + record.size);
+    std::sort(listed.begin(), listed.end());
+    if (std::adjacent_find(listed.begin(), listed.end()) != listed.end() || listed.size() != corners[v])
+      return fail_with(why, "vertex " + name(v) + " lists a face twice or misses one");
+    for (uint32_t f : listed) {
+      if (f >= face_capacity() || !face_alive(f) || std::count(face(f), face(f) + 3, v) != 1)
+        return fail_with(why, "vertex " + name(v) + " lists face " + std::to_string(f) + " it is no corner of");
     }
-    if (fan.size() != corners[v]) return fail_with(why, "vertex " + name(v) + " is non-manifold (several fans)");
-    if (active_pos_[v] >= active_.size() || active_[active_pos_[v]] != v)
+    load_corners(v, fan);
+    order_fan(fan, ordered, successor);
+    if (ordered.size() != fan.size()) return fail_with(why, "vertex " + name(v) + " is non-manifold (several fans)");
+    if (record.active_pos >= active_.size() || active_[record.active_pos] != v)
       return fail_with(why, "vertex " + name(v) + " is missing from the active list");
     for (uint32_t a = h.parent(v); a != kNone; a = h.parent(a))
       if (is_active(a)) return fail_with(why, "vertex " + name(v) + " and its ancestor " + name(a) + " are both active");
   }
   if (active_count != active_.size()) return fail_with(why, "active list has stale entries");
+  if (!pool_blocks_disjoint(blocks)) return fail_with(why, "face-list pool blocks overlap or run past the pool");
 
   // The partial order (kim-lee-kobbelt §5.3): every performed split (a known node above the front)
   // still has distinct active ancestors for its two cut vertices.

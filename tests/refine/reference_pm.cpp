@@ -276,6 +276,23 @@ TestMesh make_open_cylinder(int rings, int segments) {
   return m;
 }
 
+TestMesh make_bipyramid(int ring) {
+  TestMesh m;
+  const float pi = 3.14159265f;
+  for (int j = 0; j < ring; ++j) {
+    const float a = 2 * pi * float(j) / float(ring);
+    add_vertex(m, std::cos(a), std::sin(a), 0);
+  }
+  const uint32_t top = uint32_t(ring), bottom = top + 1;
+  for (float z : {1.0f, -1.0f}) add_vertex(m, 0, 0, z);
+  for (int j = 0; j < ring; ++j) {
+    const uint32_t a = uint32_t(j), b = uint32_t((j + 1) % ring);
+    add_face(m, top, a, b);
+    add_face(m, bottom, b, a);
+  }
+  return m;
+}
+
 ReferenceModel build_reference_model(const TestMesh& mesh, uint32_t seed, uint32_t min_vertices) {
   Collapser c(mesh);
   std::mt19937 rng(seed);

@@ -22,7 +22,8 @@ struct Case {
   ReferenceModel model;
 };
 
-// Closed and open, genus 0 and 1, one and two boundary loops; built once, the collapser is slow.
+// Closed and open, genus 0 and 1, one and two boundary loops, long fans (the bipyramid's apexes outgrow
+// a vertex's inline face list); built once, the collapser is slow.
 const std::vector<Case>& cases() {
   static const std::vector<Case> all = [] {
     std::vector<Case> c;
@@ -33,6 +34,7 @@ const std::vector<Case>& cases() {
     c.push_back({"grid", test::build_reference_model(test::make_open_grid(10, 8), 3)});
     c.push_back({"torus", test::build_reference_model(test::make_torus_mesh(12, 8), 4)});
     c.push_back({"cylinder", test::build_reference_model(test::make_open_cylinder(6, 10), 5)});
+    c.push_back({"bipyramid", test::build_reference_model(test::make_bipyramid(40), 6)});
     return c;
   }();
   return all;
