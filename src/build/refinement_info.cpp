@@ -225,7 +225,8 @@ void RefinementInfoBuilder::compute(uint32_t s, uint32_t t_node, uint32_t u_node
   RefineBounds bounds = to_bounds(radius, merge_cones(cone_of(bt), cone_of(bu)), 0, 0);
   // delta is measured along the axis every consumer decodes; without a cone none is stored, and the
   // whole residual has to count as mu (delta is kept, which only refines more).
-  const RefineBounds frame = dequantize_refine(quantize_refine(bounds, scale_), scale_);
+  RefineInfo info = quantize_refine(bounds, scale_);
+  const RefineBounds frame = dequantize_refine(info, scale_);
   const bool has_axis = frame.cone_angle < kPi / 2;
   DeviationSpace space{has_axis ? normalized(V3{frame.axis[0], frame.axis[1], frame.axis[2]}) : V3{0, 0, 1}};
   const Fan fan = fan_around(mesh, u);
@@ -235,7 +236,15 @@ void RefinementInfoBuilder::compute(uint32_t s, uint32_t t_node, uint32_t u_node
   space.add_child(bu, own);
   bounds.mu = float_at_least(has_axis ? space.mu : std::hypot(space.mu, space.delta));
   bounds.delta = float_at_least(space.delta);
-  info_[s] = quantize_refine(bounds, scale_);
+  // Only the deviation is new: quantize it alone (no cone: no second axis search) into the info above.
+  RefineBounds deviation;
+  deviation.mu = bounds.mu;
+  deviation.delta = bounds.delta;
+  deviation.cone_angle = kPi;
+  const RefineInfo lengths = quantize_refine(deviation, scale_);
+  info.mu = lengths.mu;
+  info.delta = lengths.delta;
+  info_[s] = info;
 }
 
 RefinementInfoBuilder::Fan RefinementInfoBuilder::fan_around(const CollapseMesh& mesh, uint32_t u) {
