@@ -221,15 +221,9 @@ TEST(Adapt, ZeroToleranceKeepsEveryVisibleFaceBunny) {
 // gives back the whole input.
 TEST(Adapt, ZeroToleranceFromAboveGivesTheFullTerrain) {
   const BuiltModel& model = test::built_terrain();
-  const ModelView m = model.view();
-  const ViewParams view = test::view_for(model, test::framing_camera(model, {0.05f, 0.02f, 1}, 1.2f, 5));
-  const VertexHierarchy h = test::complete_hierarchy(m);
-  SelectiveMesh mesh(h, m.base_faces);
-  SelectiveRefinement refinement(mesh, m.scale, AdaptOptions{0, 0, 0});
-  refinement.set_view(view);
-  refinement.converge();
-  EXPECT_EQ(mesh.vertex_count(), model.input.vertex_count());
-  EXPECT_EQ(test::leaf_input_faces(mesh, model), test::canonical_input_faces(model.input));
+  const test::RefinedFromAbove refined(model);
+  EXPECT_EQ(refined.mesh.vertex_count(), model.input.vertex_count());
+  EXPECT_EQ(test::leaf_input_faces(refined.mesh, model), test::canonical_input_faces(model.input));
 }
 
 // A chain of forced splits that stops at an unknown packet reports that leaf; what the chain already

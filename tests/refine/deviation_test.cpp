@@ -6,7 +6,6 @@
 
 #include <algorithm>
 
-#include "refine/adapt.h"
 #include "view_models.h"
 
 namespace pms {
@@ -14,14 +13,8 @@ namespace {
 
 TEST(Deviation, ZeroToleranceKeepsEveryFaceThatLeavesThePlane) {
   const test::BuiltModel& model = test::built_studded_plane();
-  const ModelView m = model.view();
-  // From high above with a narrow lens: every face is in view and faces the eye.
-  const ViewParams view = test::view_for(model, test::framing_camera(model, {0.05f, 0.02f, 1}, 1.2f, 5));
-  const VertexHierarchy h = test::complete_hierarchy(m);
-  SelectiveMesh mesh(h, m.base_faces);
-  SelectiveRefinement refinement(mesh, m.scale, AdaptOptions{0, 0, 0});
-  refinement.set_view(view);
-  refinement.converge();
+  const test::RefinedFromAbove refined(model);
+  const SelectiveMesh& mesh = refined.mesh;
   const auto kept = test::leaf_input_faces(mesh, model);
   const Mesh& input = model.input;
   size_t off_plane = 0;

@@ -159,4 +159,12 @@ std::vector<IdFace> naive_refinement(const BuiltModel& model, const ViewParams& 
   return id_faces(mesh);
 }
 
+RefinedFromAbove::RefinedFromAbove(const BuiltModel& model)
+    : hierarchy(complete_hierarchy(model.view())), mesh(hierarchy, model.view().base_faces) {
+  const ViewParams view = view_for(model, framing_camera(model, {0.05f, 0.02f, 1}, 1.2f, 5));
+  SelectiveRefinement refinement(mesh, model.view().scale, AdaptOptions{0, 0, 0});
+  refinement.set_view(view);
+  refinement.converge();
+}
+
 }  // namespace pms::test

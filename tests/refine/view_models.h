@@ -46,6 +46,14 @@ std::vector<std::array<uint32_t, 3>> canonical_input_faces(const Mesh& mesh);
 // Every internal node's vsplit packet, breadth-first.
 VertexHierarchy complete_hierarchy(const ModelView& view);
 
+// A model refined through the engine at τ = 0 px, seen from high above with a narrow lens (z up): every
+// face is in view and faces the eye, so only the deviation bounds decide what stays coarse.
+struct RefinedFromAbove {
+  VertexHierarchy hierarchy;
+  SelectiveMesh mesh;  // over `hierarchy`: the struct stays where it was made
+  explicit RefinedFromAbove(const BuiltModel& model);
+};
+
 // The target mesh the simplest way: from the base, split every active vertex that qrefine wants, until
 // nothing changes (no collapses, complete hierarchy). By construction the least fixed point.
 std::vector<IdFace> naive_refinement(const BuiltModel& model, const ViewParams& view, float tolerance);
