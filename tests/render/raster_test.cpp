@@ -223,26 +223,24 @@ TEST(Raster, TriangleCrossingTheCameraPlaneIsClippedNotDroppedOrExploded) {
   const Image image = render({positions, indices, {}}, view);
 
   size_t checked = 0, covered = 0;
-  for (uint32_t y = 0; y < camera.height; ++y)
-    for (uint32_t x = 0; x < camera.width; ++x) {
-      double dir[3], bary[3], t;
-      test::pixel_ray(camera, x + 0.5, y + 0.5, dir);
-      const int hit = test::ray_triangle(camera.eye, dir, &positions[0], &positions[3], &positions[6], 1e-3, bary, t);
-      const size_t p = size_t(y) * camera.width + x;
-      if (y < camera.height / 2) {
-        EXPECT_EQ(image.face_id[p], kNone) << "above the horizon: " << x << "," << y;
-      }
-      if (hit == 0) continue;
-      ++checked;
-      EXPECT_EQ(image.face_id[p], hit > 0 ? 0u : kNone) << x << "," << y;
-      if (hit > 0 && image.face_id[p] == 0) {
-        ++covered;
-        // NDC depth of eye distance t * |forward component| (forward = -z, dir z = -1).
-        const double d = t, n = view.near_plane, f = view.far_plane;
-        const double z_ndc = (f + n) / (f - n) - 2 * f * n / ((f - n) * d);
-        EXPECT_NEAR(image.depth[p], z_ndc, 1e-4) << x << "," << y;
-      }
+  test::for_each_pixel_ray(camera, positions, 1e-3, [&](const test::PixelRay& ray) {
+    const uint32_t x = ray.x, y = ray.y;
+    const size_t p = ray.pixel;
+    const int hit = ray.hit;
+    if (y < camera.height / 2) {
+      EXPECT_EQ(image.face_id[p], kNone) << "above the horizon: " << x << "," << y;
     }
+    if (hit == 0) return;
+    ++checked;
+    EXPECT_EQ(image.face_id[p], hit > 0 ? 0u : kNone) << x << "," << y;
+    if (hit > 0 && image.face_id[p] == 0) {
+      ++covered;
+      // NDC depth of eye distance t * |forward component| (forward = -z, dir z = -1).
+      const double d = ray.t, n = view.near_plane, f = view.far_plane;
+      const double z_ndc = (f + n) / (f - n) - 2 * f * n / ((f - n) * d);
+      EXPECT_NEAR(image.depth[p], z_ndc, 1e-4) << x << "," << y;
+    }
+  });
   EXPECT_GT(checked, size_t(camera.width) * camera.height * 9 / 10);
   EXPECT_GT(covered, 500u);
   // The bottom row looks down at 45 degrees and meets the floor one unit ahead: covered across the width
@@ -265,21 +263,17 @@ TEST(Raster, NearPlaneCutsWhatIsCloserThanIt) {
   const std::vector<uint32_t> indices = {0, 1, 2};
   const Image image = render({positions, indices, {}}, view);
   size_t cut = 0, shown = 0;
-  for (uint32_t y = 0; y < camera.height; ++y)
-    for (uint32_t x = 0; x < camera.width; ++x) {
-      double dir[3], bary[3], t;
-      test::pixel_ray(camera, x + 0.5, y + 0.5, dir);
-      if (test::ray_triangle(camera.eye, dir, &positions[0], &positions[3], &positions[6], 1e-3, bary, t) != 1)
-        continue;
-      const uint32_t id = image.face_id[size_t(y) * camera.width + x];
-      if (t < view.near_plane * 0.99) {
-        EXPECT_EQ(id, kNone) << x << "," << y << " at distance " << t;
-        ++cut;
-      } else if (t > view.near_plane * 1.01) {
-        EXPECT_EQ(id, 0u) << x << "," << y << " at distance " << t;
-        ++shown;
-      }
+  test::for_each_pixel_ray(camera, positions, 1e-3, [&](const test::PixelRay& ray) {
+    if (ray.hit != 1) return;
+    const uint32_t id = image.face_id[ray.pixel];
+    if (ray.t < view.near_plane * 0.99) {
+      EXPECT_EQ(id, kNone) << ray.x << "," << ray.y << " at distance " << ray.t;
+      ++cut;
+    } else if (ray.t > view.near_plane * 1.01) {
+      EXPECT_EQ(id, 0u) << ray.x << "," << ray.y << " at distance " << ray.t;
+      ++shown;
     }
+  });
   EXPECT_GT(cut, 50u);
   EXPECT_GT(shown, 50u);
 }
@@ -298,16 +292,12 @@ TEST(Raster, HugeTriangleIsClippedToTheGuardBand) {
   const ViewParams view = make_view(camera, lo, hi);
   const Image image = render({positions, indices, {}}, view);
   size_t covered = 0;
-  for (uint32_t y = 0; y < camera.height; ++y)
-    for (uint32_t x = 0; x < camera.width; ++x) {
-      double dir[3], bary[3], t;
-      test::pixel_ray(camera, x + 0.5, y + 0.5, dir);
-      const int hit = test::ray_triangle(camera.eye, dir, &positions[0], &positions[3], &positions[6], 1e-4, bary, t);
-      if (hit == 0) continue;
-      const uint32_t id = image.face_id[size_t(y) * camera.width + x];
-      EXPECT_EQ(id, hit > 0 ? 0u : kNone) << x << "," << y;
-      covered += id == 0;
-    }
+  test::for_each_pixel_ray(camera, positions, 1e-4, [&](const test::PixelRay& ray) {
+    if (ray.hit == 0) return;
+    const uint32_t id = image.face_id[ray.pixel];
+    EXPECT_EQ(id, ray.hit > 0 ? 0u : kNone) << ray.x << "," << ray.y;
+    covered += id == 0;
+  });
   EXPECT_GT(covered, 500u);
 }
 

@@ -110,4 +110,26 @@ inline int ray_triangle(const float eye[3], const double dir[3], const float* a,
   return 1;
 }
 
+// What one pixel centre's ray meets on the triangle of positions[0, 9), as ray_triangle says.
+struct PixelRay {
+  uint32_t x = 0, y = 0;
+  size_t pixel = 0;  // y * width + x
+  int hit = 0;       // ray_triangle: 1 hit, -1 missed, 0 too close to an edge to call
+  double bary[3] = {0, 0, 0}, t = 0;
+};
+
+// Casts every pixel centre's ray of `camera` at that triangle, row by row, and calls visit(ray).
+template <class Visit>
+void for_each_pixel_ray(const Camera& camera, const std::vector<float>& positions, double margin, Visit visit) {
+  for (uint32_t y = 0; y < camera.height; ++y)
+    for (uint32_t x = 0; x < camera.width; ++x) {
+      PixelRay ray;
+      ray.x = x, ray.y = y, ray.pixel = size_t(y) * camera.width + x;
+      double dir[3];
+      pixel_ray(camera, x + 0.5, y + 0.5, dir);
+      ray.hit = ray_triangle(camera.eye, dir, &positions[0], &positions[3], &positions[6], margin, ray.bary, ray.t);
+      visit(ray);
+    }
+}
+
 }  // namespace pms::test

@@ -72,23 +72,19 @@ TEST(Shading, VertexColoursArePerspectiveCorrect) {
   const double cosine = std::sqrt(0.5);  // floor normal (0, 1, 0) against forward (0, -1, -1) / sqrt 2
   size_t checked = 0;
   int worst = 0;
-  for (uint32_t y = 0; y < camera.height; ++y)
-    for (uint32_t x = 0; x < camera.width; ++x) {
-      double dir[3], bary[3], t;
-      test::pixel_ray(camera, x + 0.5, y + 0.5, dir);
-      if (test::ray_triangle(camera.eye, dir, &positions[0], &positions[3], &positions[6], 1e-3, bary, t) != 1)
-        continue;
-      const size_t p = size_t(y) * camera.width + x;
-      ASSERT_EQ(image.face_id[p], 0u) << x << "," << y;
-      for (int k = 0; k < 3; ++k) {
-        double want = 0;  // vertex colours are lit (and rounded) at the vertices, then interpolated
-        for (int v = 0; v < 3; ++v) want += bary[v] * expected_shade(colors[4 * v + k], cosine);
-        const int diff = std::abs(int(image.rgb[3 * p + k]) - int(std::lround(want)));
-        worst = std::max(worst, diff);
-        EXPECT_LE(diff, 1) << x << "," << y << " channel " << k;
-      }
-      ++checked;
+  test::for_each_pixel_ray(camera, positions, 1e-3, [&](const test::PixelRay& ray) {
+    if (ray.hit != 1) return;
+    const size_t p = ray.pixel;
+    ASSERT_EQ(image.face_id[p], 0u) << ray.x << "," << ray.y;
+    for (int k = 0; k < 3; ++k) {
+      double want = 0;  // vertex colours are lit (and rounded) at the vertices, then interpolated
+      for (int v = 0; v < 3; ++v) want += ray.bary[v] * expected_shade(colors[4 * v + k], cosine);
+      const int diff = std::abs(int(image.rgb[3 * p + k]) - int(std::lround(want)));
+      worst = std::max(worst, diff);
+      EXPECT_LE(diff, 1) << ray.x << "," << ray.y << " channel " << k;
     }
+    ++checked;
+  });
   EXPECT_GT(checked, 300u);
   EXPECT_LE(worst, 1);
 }
