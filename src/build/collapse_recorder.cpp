@@ -1,7 +1,7 @@
 #include <algorithm>
-#include <thread>
 
 #include "build/simplify.h"
+#include "common/parallel.h"
 
 namespace pms {
 namespace {
@@ -48,20 +48,13 @@ void CollapseRecorder::flush() {
   // samples they read are neighbours in memory. Every record of one round reads only the
   // previous rounds' info and the round's final mesh, so the order does not change the result.
   std::sort(pending_.begin(), pending_.end(), [](const Pending& a, const Pending& b) { return a.u < b.u; });
-  auto run = [this](size_t begin, size_t end) {
-    for (size_t i = begin; i < end; ++i)
-      refinement_.compute(pending_[i].s, pending_[i].t_node, pending_[i].u_node, mesh_, pending_[i].u);
-  };
-  const unsigned threads = std::clamp(std::thread::hardware_concurrency(), 1u, 8u);
-  if (pending_.size() < 4096 || threads == 1) {  // starting threads costs more than small batches
-    run(0, pending_.size());
-  } else {
-    std::vector<std::thread> workers;
-    for (unsigned i = 1; i < threads; ++i)
-      workers.emplace_back(run, pending_.size() * i / threads, pending_.size() * (i + 1) / threads);
-    run(0, pending_.size() / threads);
-    for (std::thread& w : workers) w.join();
-  }
+  // Starting threads costs more than small batches.
+  for_each_range(pending_.size(), 4096, [this](size_t begin, size_t end) {
+    for (size_t i = begin; i < end; ++i) {
+      const Pending& p = pending_[i];
+      refinement_.compute(p.s, p.t_node, p.u_node, mesh_, p.u);
+    }
+  });
   pending_.clear();
 }
 

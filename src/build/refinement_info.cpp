@@ -4,6 +4,7 @@
 #include "build/refinement_info.h"
 
 #include "build/bounds.h"
+#include "common/parallel.h"
 
 #include <algorithm>
 #include <cmath>
@@ -134,16 +135,16 @@ struct RefinementInfoBuilder::DeviationSpace {
   }
   // Hoppe's bound over the whole residual surface, not only the samples: a leaf below a child lies
   // within the child's space of the child's surface, and this collapse moved that surface by at most
-  // (about) its own sampled deviation `own`, so the leaf lies within their sum of the new surface
-  // (triangle inequality). The child's space is first seen from this axis: a vector with perpendicular
-  // part <= mu_c and axial part <= delta_c about an axis at angle theta has an axial part
-  // <= delta_c cos + mu_c sin about this one, and a perpendicular part <= mu_c + delta_c sin. Never
-  // below the child's own numbers either: a parent's bounds contain its children's.
-  void add_child(const RefineBounds& child, const DeviationSpace& own) {
+  // (about) `moved`, so the leaf lies within their sum of the new surface (triangle inequality). The
+  // child's space is first seen from this axis: a vector with perpendicular part <= mu_c and axial
+  // part <= delta_c about an axis at angle theta has an axial part <= delta_c cos + mu_c sin about this
+  // one, and a perpendicular part <= mu_c + delta_c sin. Never below the child's own numbers either:
+  // a parent's bounds contain its children's.
+  void add_child(const RefineBounds& child, const DeviationSpace& moved) {
     const V3 child_axis = normalized(V3{child.axis[0], child.axis[1], child.axis[2]});
     const double sin_t = length(cross(child_axis, axis)), cos_t = std::abs(dot(child_axis, axis));
-    delta = std::max({delta, double(child.delta), child.delta * cos_t + child.mu * sin_t + own.delta});
-    mu = std::max(mu, child.mu + child.delta * sin_t + own.mu);
+    delta = std::max({delta, double(child.delta), child.delta * cos_t + child.mu * sin_t + moved.delta});
+    mu = std::max(mu, child.mu + child.delta * sin_t + moved.mu);
   }
 };
 
@@ -176,12 +177,15 @@ RefinementInfoBuilder::RefinementInfoBuilder(const Mesh& mesh, size_t max_nodes)
       const uint32_t v = mesh.indices[3 * f + k];
       cone_angle[v] = std::max(cone_angle[v], angle_between(normalized(normal_sum[v]), face_normal[f]));
     }
-  for (uint32_t v = 0; v < n; ++v) {
-    const Cone cone{normalized(normal_sum[v]), cone_angle[v] + 1e-6};
-    info_[v] = quantize_refine(to_bounds(radius[v], cone, 0, 0), scale_);
-    survivor_[v] = v;
-    samples_[kSamples * size_t(v)] = v;
-  }
+  // Quantizing searches the octahedral grid around each axis: the costly part, and per vertex.
+  for_each_range(n, 1 << 14, [&](size_t begin, size_t end) {
+    for (uint32_t v = uint32_t(begin); v < end; ++v) {
+      const Cone cone{normalized(normal_sum[v]), cone_angle[v] + 1e-6};
+      info_[v] = quantize_refine(to_bounds(radius[v], cone, 0, 0), scale_);
+      survivor_[v] = v;
+      samples_[kSamples * size_t(v)] = v;
+    }
+  });
 }
 
 void RefinementInfoBuilder::merge_leaves(uint32_t s, uint32_t, uint32_t u_node, uint32_t t, uint32_t u) {
@@ -230,10 +234,13 @@ void RefinementInfoBuilder::compute(uint32_t s, uint32_t t_node, uint32_t u_node
   const bool has_axis = frame.cone_angle < kPi / 2;
   DeviationSpace space{has_axis ? normalized(V3{frame.axis[0], frame.axis[1], frame.axis[2]}) : V3{0, 0, 1}};
   const Fan fan = fan_around(mesh, u);
-  if (fan.size > 0) add_samples(fan, u, survivor_[t_node], space);
-  const DeviationSpace own = space;
-  space.add_child(bt, own);
-  space.add_child(bu, own);
+  DeviationSpace moved{space.axis};
+  if (fan.size > 0) {
+    add_leaf_samples(fan, u, space);
+    add_moved_surface(fan, survivor_[t_node], moved);
+  }
+  space.add_child(bt, moved);
+  space.add_child(bu, moved);
   bounds.mu = float_at_least(has_axis ? space.mu : std::hypot(space.mu, space.delta));
   bounds.delta = float_at_least(space.delta);
   // Only the deviation is new: quantize it alone (no cone: no second axis search) into the info above.
@@ -262,14 +269,21 @@ RefinementInfoBuilder::Fan RefinementInfoBuilder::fan_around(const CollapseMesh&
   return fan;
 }
 
-// The sampled leaves of u's subtree, and where this collapse moved the surface: a vertex lying on the
-// coarse surface does not mean its faces do (v_t on a flat fan with a bumpy ring measures 0), so each
-// fan face (u, a, b) is also sampled at the centroid of (v_t, a, b), the face it was if it was v_t's
-// (if it was u's, a point between the two surfaces: a little more, never less).
-void RefinementInfoBuilder::add_samples(const Fan& fan, uint32_t u, uint32_t t_leaf, DeviationSpace& space) const {
-  const V3 p_t = load(leaf_position(t_leaf));  // v_t's position: the leaf that carries it
+// Hoppe's own measure: sampled leaves of u's subtree against the new fan. It sees what the chain of
+// add_child() misses, such as a child's surface changed by its neighbours' collapses after its bounds
+// were computed.
+void RefinementInfoBuilder::add_leaf_samples(const Fan& fan, uint32_t u, DeviationSpace& space) const {
   const uint32_t* samples = &samples_[kSamples * size_t(u)];
   for (uint32_t i = 0; i < sample_count_[u]; ++i) space.add(fan.residual(load(leaf_position(samples[i]))));
+}
+
+// How far this collapse moved the surface: v_t itself, and each fan face (u, a, b) at the centroid of
+// (v_t, a, b), the face it was if it was v_t's (if it was u's, a point between the two surfaces: a
+// little more, never less). A vertex lying on the coarse surface does not mean its faces do: v_t on a
+// flat fan with a bumpy ring measures 0.
+void RefinementInfoBuilder::add_moved_surface(const Fan& fan, uint32_t t_leaf, DeviationSpace& space) const {
+  const V3 p_t = load(leaf_position(t_leaf));  // v_t's position: the leaf that carries it
+  space.add(fan.residual(p_t));
   for (uint32_t f = 0; f < fan.size; ++f) space.add(fan.residual((fan.tri[f].rest + p_t) * (1.0 / 3)));
 }
 

@@ -1,7 +1,7 @@
 // Hoppe 1997 §4 refinement info, computed while collapsing: bounding-sphere radius over the input
 // faces below a node, normal cone of those faces, and the deviation space (mu, delta) of the input
-// surface below the node against the surface around it right after its collapse: sampled leaves and
-// the faces the collapse changed, plus each child's space grown by the collapse's own deviation.
+// surface below the node against the surface around it right after its collapse: the larger of the
+// sampled leaves' residuals and each child's space grown by how far the collapse moved the surface.
 #pragma once
 #include <cstdint>
 #include <vector>
@@ -38,7 +38,8 @@ class RefinementInfoBuilder {
   struct Fan;             // the faces around a vertex right after its collapse
   struct DeviationSpace;  // (mu, delta) about an axis, Hoppe 1997 §4.3
   static Fan fan_around(const CollapseMesh& mesh, uint32_t u);
-  void add_samples(const Fan& fan, uint32_t u, uint32_t t_leaf, DeviationSpace& space) const;
+  void add_leaf_samples(const Fan& fan, uint32_t u, DeviationSpace& space) const;
+  void add_moved_surface(const Fan& fan, uint32_t t_leaf, DeviationSpace& space) const;
 
   const std::vector<float>& positions_;
   float scale_ = 1;
