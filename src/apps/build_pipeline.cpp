@@ -1,7 +1,11 @@
 #include "apps/build_pipeline.h"
 
+#include <climits>
 #include <cstdlib>
 #include <filesystem>
+#if defined(__GLIBC__)
+#include <malloc.h>
+#endif
 #include <string_view>
 
 #include "apps/resource_usage.h"
@@ -64,6 +68,18 @@ bool parse_terrain_spec(const std::string& spec, uint64_t& faces) {
   return true;
 }
 
+// A build goes through phases (load, clean, simplify, pack, write) that each allocate and free arrays
+// of tens of MB. By default glibc maps each from the kernel and unmaps it when freed, so every phase
+// pays fresh page faults (a fifth of the dragon's system time). Kept and reused instead: about 35 %
+// fewer faults for a few MB more peak memory.
+void keep_freed_memory_for_reuse() {
+#if defined(__GLIBC__)
+  mallopt(M_MMAP_THRESHOLD, 32 << 20);  // glibc's largest: bigger arrays are still mapped
+  mallopt(M_TRIM_THRESHOLD, INT_MAX);
+  mallopt(M_TOP_PAD, 64 << 20);
+#endif
+}
+
 }  // namespace
 
 Mesh load_input(const std::string& in_path, const ProgressFn& progress) {
@@ -73,6 +89,7 @@ Mesh load_input(const std::string& in_path, const ProgressFn& progress) {
 }
 
 BuildRun build_file(const std::string& in_path, const std::string& out_path, const BuildOptions& options) {
+  keep_freed_memory_for_reuse();
   Stopwatch load_time;
   Mesh mesh = load_input(in_path, options.progress);
   const double load_seconds = load_time.seconds();
