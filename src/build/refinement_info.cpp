@@ -106,14 +106,16 @@ struct RefinementInfoBuilder::Fan {
   Tri tri[kMax];
   uint32_t size = 0;
 
-  // Error vector from p to its closest point on the fan.
-  V3 residual(V3 p) const {
+  // Error vector from p to its closest point on the fan. Starting with the face p is probably
+  // closest to (`first`) lets the plane test skip most of the others.
+  V3 residual(V3 p, uint32_t first = 0) const {
     double best = INFINITY;
     V3 best_error;
-    for (uint32_t f = 0; f < size; ++f) {
-      const double plane = dot(tri[f].n, p) - tri[f].d;
+    for (uint32_t i = 0; i < size; ++i) {
+      const Tri& tri = this->tri[(first + i) % size];
+      const double plane = dot(tri.n, p) - tri.d;
       if (plane * plane >= best) continue;  // the plane distance bounds the triangle distance from below
-      const V3 error = p - closest_point_on_triangle(p, tri[f].a, tri[f].b, tri[f].c);
+      const V3 error = p - closest_point_on_triangle(p, tri.a, tri.b, tri.c);
       const double d2 = dot(error, error);
       if (d2 < best) {
         best = d2;
@@ -284,7 +286,7 @@ void RefinementInfoBuilder::add_leaf_samples(const Fan& fan, uint32_t u, Deviati
 void RefinementInfoBuilder::add_moved_surface(const Fan& fan, uint32_t t_leaf, DeviationSpace& space) const {
   const V3 p_t = load(leaf_position(t_leaf));  // v_t's position: the leaf that carries it
   space.add(fan.residual(p_t));
-  for (uint32_t f = 0; f < fan.size; ++f) space.add(fan.residual((fan.tri[f].rest + p_t) * (1.0 / 3)));
+  for (uint32_t f = 0; f < fan.size; ++f) space.add(fan.residual((fan.tri[f].rest + p_t) * (1.0 / 3), f));
 }
 
 }  // namespace pms
