@@ -5,7 +5,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "build/huge_pages.h"
+#include "common/huge_pages.h"
 #include "build/quadric.h"
 #include "io/mesh.h"
 

@@ -9,6 +9,7 @@
 #include <utility>
 #include <vector>
 
+#include "common/huge_pages.h"
 #include "pm/pm.h"
 
 namespace pms {
@@ -204,14 +205,19 @@ class SelectiveMesh {
   bool pool_blocks_disjoint(std::vector<std::pair<uint32_t, uint32_t>>& blocks) const;  // audit
 
   const VertexHierarchy* hierarchy_;
-  std::vector<uint32_t> corner_;      // 3 slots per face; a dead face holds kNone, next free face
-  std::vector<uint32_t> partner_;     // per face: the other face of the split that made it (f_l <-> f_r)
+  // The big arrays are on huge pages (common/huge_pages.h): operations read them at random.
+  BigVector<uint32_t> corner_;   // 3 slots per face; a dead face holds kNone, next free face
+  BigVector<uint32_t> partner_;  // per face: the other face of the split that made it (f_l <-> f_r)
   uint32_t free_face_ = kNone;
   size_t face_count_ = 0;
-  std::vector<VertexRecord> vertex_;  // per slot
-  std::vector<uint32_t> pool_;        // incident-face blocks; a free block holds the next free one
-  uint32_t free_block_[32];           // per log2(capacity): first free block
-  std::vector<uint32_t> active_;      // active slots
+  BigVector<VertexRecord> vertex_;  // per slot
+  // Per slot, the hierarchy's first child and cut vertex (v_t: v̂_l, v_u: v̂_r), copied: every operation
+  // starts from them, and here they lie on huge pages (the hierarchy's arrays need not).
+  BigVector<uint32_t> first_child_;
+  BigVector<VertexId> cut_;
+  BigVector<uint32_t> pool_;    // incident-face blocks; a free block holds the next free one
+  uint32_t free_block_[32];      // per log2(capacity): first free block
+  BigVector<uint32_t> active_;  // active slots
   std::vector<Corner> fan_, fan_u_, ordered_;  // scratch, kept to avoid allocating per operation
   std::vector<uint32_t> chain_;    // vsplit's forced chain
   std::vector<uint32_t> successor_;  // order_fan's

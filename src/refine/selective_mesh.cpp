@@ -75,14 +75,23 @@ SelectiveMesh::SelectiveMesh(const VertexHierarchy& hierarchy, std::span<const u
 }
 
 void SelectiveMesh::sync_slots() {
-  // The hierarchy grows as packets arrive; per-slot records follow lazily.
+  // The hierarchy grows as packets arrive; per-slot records follow lazily. A new pair of children also
+  // sets its parent's first_child_.
   const uint32_t old_size = uint32_t(vertex_.size());
   if (old_size >= hierarchy_->size()) return;
-  vertex_.resize(hierarchy_->size());
+  const VertexHierarchy& h = *hierarchy_;
+  vertex_.resize(h.size());
+  first_child_.resize(h.size(), kNone);
+  cut_.resize(h.size(), kNoVertex);
   for (uint32_t v = old_size; v < vertex_.size(); ++v) {
-    const VertexId id = hierarchy_->id(v);
+    const VertexId id = h.id(v);
     vertex_[v].tree = id.tree;
     vertex_[v].node = id.node;
+    if (const uint32_t p = h.parent(v); p != kNone) {
+      const bool left = h.first_child(p) == v;  // children come as a pair: v_t, then v_u
+      if (left) first_child_[p] = v;
+      cut_[v] = left ? h.cut_left(p) : h.cut_right(p);
+    }
   }
 }
 
@@ -281,7 +290,7 @@ uint32_t SelectiveMesh::cut_ancestor(VertexId cut, uint32_t slot) const {
 // only side is a border) v_t keeps only the new faces. Everything is checked before the first write,
 // so inconsistent packets leave the mesh as it was.
 void SelectiveMesh::split_fan(uint32_t s, uint32_t l, uint32_t r) {  // fan_: s's corners
-  const uint32_t t = hierarchy_->first_child(s), u = t + 1;
+  const uint32_t t = first_child_[s], u = t + 1;
   const auto reject = [&](const std::string& why) { fail(kWhere, "vsplit " + to_string(hierarchy_->id(s)) + ": " + why); };
   const bool closed = order_fan(fan_, ordered_, successor_);
   if (ordered_.size() != fan_.size()) reject("corrupted fan");
@@ -341,10 +350,11 @@ VSplitResult SelectiveMesh::vsplit(uint32_t slot) {
   while (!chain_.empty()) {
     const uint32_t s = chain_.back();
     if (!is_active(s)) fail(kWhere, "cyclic split order at " + to_string(hierarchy_->id(s)));
-    if (hierarchy_->is_leaf(s)) return {false, s};
+    const uint32_t t = first_child_[s];
+    if (t == kNone) return {false, s};
     load_corners(s, fan_);
-    const uint32_t l = cut_ancestor(hierarchy_->cut_left(s), s);
-    const uint32_t r = cut_ancestor(hierarchy_->cut_right(s), s);
+    const uint32_t l = cut_ancestor(cut_[t], s);
+    const uint32_t r = cut_ancestor(cut_[t + 1], s);
     if (l != kNone && l == r) {
       if (chain_.size() > active_.size()) fail(kWhere, "cyclic split order at " + to_string(hierarchy_->id(s)));
       chain_.push_back(l);
@@ -388,8 +398,8 @@ bool SelectiveMesh::breaks_split_order(uint32_t u) const {
 
 bool SelectiveMesh::ecol(uint32_t p) {
   sync_slots();
-  if (p >= hierarchy_->size() || hierarchy_->is_leaf(p)) fail(kWhere, "ecol of a node with no known children");
-  const uint32_t t = hierarchy_->first_child(p), u = t + 1;
+  if (p >= first_child_.size() || first_child_[p] == kNone) fail(kWhere, "ecol of a node with no known children");
+  const uint32_t t = first_child_[p], u = t + 1;
   if (!is_active(t) || !is_active(u)) return false;
   load_corners(t, fan_);
   uint32_t fl = kNone, fr = kNone, l = kNone, r = kNone;  // f_l = (t, u, l), f_r = (u, t, r)
@@ -399,7 +409,7 @@ bool SelectiveMesh::ecol(uint32_t p) {
   }
   // The faces on t-u must be those vsplit(p) would create here: same sides, apexes ActiveAncestor(v̂)
   // (an active vertex is the active ancestor of v̂ exactly when its id is a prefix of v̂'s).
-  const VertexId cut_l = hierarchy_->cut_left(p), cut_r = hierarchy_->cut_right(p);
+  const VertexId cut_l = cut_[t], cut_r = cut_[u];
   if ((fl != kNone) != is_vertex(cut_l) || (fr != kNone) != is_vertex(cut_r)) return false;
   if (l != kNone && !is_ancestor_or_self(id_of(l), cut_l)) return false;
   if (r != kNone && !is_ancestor_or_self(id_of(r), cut_r)) return false;

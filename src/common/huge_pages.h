@@ -1,7 +1,9 @@
-// Storage for the builder's big per-vertex and per-face arrays, backed by transparent huge pages.
-// The collapse loop visits vertices in cost order, i.e. at random over arrays of hundreds of MB:
-// with 4 KiB pages nearly every visit also misses the TLB. 2 MiB pages cut the 8 M-face terrain's
-// build time by about a fifth. Linux only asks (madvise); elsewhere this is a plain allocator.
+// Storage for big arrays read at random, backed by transparent huge pages: the builder's collapse loop
+// visits vertices in cost order over hundreds of MB, the refinement engine's operations touch records
+// and faces megabytes apart. With 4 KiB pages nearly every such read also misses the TLB (a nested page
+// walk under a hypervisor). 2 MiB pages cut the 8 M-face terrain's build time by about a fifth and
+// raised the engine's operations per second by 8-15 %. Linux only asks (madvise, before the first
+// write: THP "madvise" mode gives huge pages at fault time); elsewhere this is a plain allocator.
 #pragma once
 #include <cstddef>
 #include <cstdlib>
