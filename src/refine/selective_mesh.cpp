@@ -74,6 +74,32 @@ SelectiveMesh::SelectiveMesh(const VertexHierarchy& hierarchy, std::span<const u
   }
 }
 
+void SelectiveMesh::prefetch_vertex(uint32_t v, int stage) const {
+  const VertexRecord& record = vertex_[v];
+  if (stage == 0) {
+    __builtin_prefetch(&record);
+    return;
+  }
+  if (record.capacity == 0 || record.capacity > kInlineFaces) return;  // inactive, or a long fan: rare
+  for (uint32_t i = 0; i < record.size; ++i) __builtin_prefetch(&corner_[3 * size_t(record.inline_faces[i])]);
+}
+
+void SelectiveMesh::prefetch_vsplit(uint32_t s, int stage) const {
+  if (s >= vertex_.size()) return;
+  if (stage == 0) __builtin_prefetch(&first_child_[s]);
+  prefetch_vertex(s, stage);
+}
+
+void SelectiveMesh::prefetch_ecol(uint32_t p, int stage) const {
+  // v_t = first_child_[p] is a load, not a prefetch: out-of-order execution overlaps it with the
+  // operations before this one.
+  if (p >= first_child_.size() || first_child_[p] == kNone) return;
+  const uint32_t t = first_child_[p];
+  if (stage == 0) __builtin_prefetch(&cut_[t]);
+  prefetch_vertex(t, stage);
+  prefetch_vertex(t + 1, stage);
+}
+
 void SelectiveMesh::sync_slots() {
   // The hierarchy grows as packets arrive; per-slot records follow lazily. A new pair of children also
   // sets its parent's first_child_.
