@@ -158,32 +158,34 @@ RefinementInfoBuilder::RefinementInfoBuilder(const Mesh& mesh, size_t max_nodes)
   samples_.resize(kSamples * n);
   sample_count_.assign(n, 1);
   leaf_count_.assign(n, 1);
-  std::vector<V3> normal_sum(n);
-  std::vector<double> radius(n, 0);
+  std::vector<V3> axis(n);
+  std::vector<double> radius_squared(n, 0);
   const size_t faces = mesh.face_count();
   std::vector<V3> face_normal(faces);
   for (size_t f = 0; f < faces; ++f) {
     const uint32_t* t = &mesh.indices[3 * f];
     const V3 a = load(leaf_position(t[0])), b = load(leaf_position(t[1])), c = load(leaf_position(t[2]));
     face_normal[f] = normalized(cross(b - a, c - a));
-    const V3 corners[3] = {a, b, c};
+    // Edge k is opposite corner k; a corner's sphere reaches the far ends of its two edges.
+    const double edge[3] = {dot(c - b, c - b), dot(a - c, a - c), dot(b - a, b - a)};
     for (int k = 0; k < 3; ++k) {
-      normal_sum[t[k]] = normal_sum[t[k]] + face_normal[f];
-      radius[t[k]] = std::max({radius[t[k]], length(corners[(k + 1) % 3] - corners[k]),
-                               length(corners[(k + 2) % 3] - corners[k])});
+      axis[t[k]] = axis[t[k]] + face_normal[f];
+      radius_squared[t[k]] = std::max({radius_squared[t[k]], edge[(k + 1) % 3], edge[(k + 2) % 3]});
     }
   }
-  std::vector<double> cone_angle(n, 0);
+  for (V3& a : axis) a = normalized(a);
+  // The widest normal is the one with the smallest cosine: one acos per vertex instead of one per corner.
+  std::vector<double> min_cos(n, 1);
   for (size_t f = 0; f < faces; ++f)
     for (int k = 0; k < 3; ++k) {
       const uint32_t v = mesh.indices[3 * f + k];
-      cone_angle[v] = std::max(cone_angle[v], angle_between(normalized(normal_sum[v]), face_normal[f]));
+      min_cos[v] = std::min(min_cos[v], dot(axis[v], face_normal[f]));
     }
   // Quantizing searches the octahedral grid around each axis: the costly part, and per vertex.
   for_each_range(n, 1 << 14, [&](size_t begin, size_t end) {
     for (uint32_t v = uint32_t(begin); v < end; ++v) {
-      const Cone cone{normalized(normal_sum[v]), cone_angle[v] + 1e-6};
-      info_[v] = quantize_refine(to_bounds(radius[v], cone, 0, 0), scale_);
+      const Cone cone{axis[v], std::acos(std::clamp(min_cos[v], -1.0, 1.0)) + 1e-6};
+      info_[v] = quantize_refine(to_bounds(std::sqrt(radius_squared[v]), cone, 0, 0), scale_);
       survivor_[v] = v;
       samples_[kSamples * size_t(v)] = v;
     }
