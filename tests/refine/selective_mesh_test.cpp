@@ -277,6 +277,32 @@ TEST(SelectiveMesh, ExtractGivesTheCurrentMesh) {
   EXPECT_EQ(test::canonical(faces), test::canonical_input(model.input));
 }
 
+// Prefetching is a hint for any slot a caller may name: known or not, active or not, split or not, even
+// past the end of what the mesh has seen of a growing hierarchy. It reads nothing out of bounds (the
+// sanitizer build checks) and changes nothing.
+TEST(SelectiveMesh, PrefetchAnySlotChangesNothing) {
+  const ReferenceModel& model = cases()[1].model;
+  const ModelView view = model.view();
+  const VertexHierarchy h = complete_hierarchy(view);
+  SelectiveMesh mesh(h, view.base_faces);
+  const size_t half = view.split_order.size() / 2;
+  for (size_t i = 0; i < half; ++i) ASSERT_TRUE(mesh.vsplit(h.find(view.id(view.split_order[i]))).done);
+  const Faces before = test::mesh_faces(mesh);
+  for (uint32_t slot = 0; slot < h.size() + 4; ++slot)
+    for (int stage = 0; stage < 2; ++stage) {
+      mesh.prefetch_vsplit(slot, stage);
+      mesh.prefetch_ecol(slot, stage);
+    }
+  EXPECT_EQ(test::mesh_faces(mesh), before);
+  EXPECT_EQ(invariants(mesh), "ok");
+  // The rest in PM order with prefetching ahead, as the bench does: the same finest mesh.
+  for (size_t i = half; i < view.split_order.size(); ++i) {
+    if (i + 4 < view.split_order.size()) mesh.prefetch_vsplit(h.find(view.id(view.split_order[i + 4])), 1);
+    ASSERT_TRUE(mesh.vsplit(h.find(view.id(view.split_order[i]))).done);
+  }
+  EXPECT_EQ(test::leaf_faces(mesh, model), test::canonical_input(model.input));
+}
+
 TEST(SelectiveMesh, RejectsBadBaseMeshes) {
   VertexHierarchy h;
   const float p[3] = {0, 0, 0};
