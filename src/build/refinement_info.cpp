@@ -111,8 +111,8 @@ struct RefinementInfoBuilder::Fan {
   V3 residual(V3 p, uint32_t first = 0) const {
     double best = INFINITY;
     V3 best_error;
-    for (uint32_t i = 0; i < size; ++i) {
-      const Tri& tri = this->tri[(first + i) % size];
+    for (uint32_t i = 0, f = first; i < size; ++i, f = f + 1 == size ? 0 : f + 1) {  // no division per face
+      const Tri& tri = this->tri[f];
       const double plane = dot(tri.n, p) - tri.d;
       if (plane * plane >= best) continue;  // the plane distance bounds the triangle distance from below
       const V3 error = p - closest_point_on_triangle(p, tri.a, tri.b, tri.c);
