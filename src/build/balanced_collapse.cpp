@@ -83,6 +83,9 @@ class CandidateCollector {
  public:
   CandidateCollector(size_t vertices, unsigned threads) : marks_(threads), parts_(threads) {
     for (NeighbourScratch& m : marks_) m.resize(vertices);
+    // The first round fills them: reserved here, on the main heap, rather than grown by doubling in
+    // the workers' own arenas (copies, and page faults on memory the build cannot reuse).
+    for (unsigned i = 1; i < threads; ++i) parts_[i].reserve(kTargetsPerVertex * (vertices / threads + 1));
   }
 
   void collect(const CollapseMesh& mesh, const CollapseRecorder& recorder, double epsilon, std::vector<Entry>& out) {
@@ -117,6 +120,7 @@ CollapseForest simplify_balanced(const Mesh& input, const BuildOptions& options)
   const double epsilon = 1e-10 * diagonal * diagonal;
 
   std::vector<Entry> entries;
+  entries.reserve(kTargetsPerVertex * size_t(mesh.vertex_count()));
   CandidateCollector collector(mesh.vertex_count(), std::clamp(std::thread::hardware_concurrency(), 1u, 8u));
   std::vector<uint8_t> touched(mesh.vertex_count(), 0);
   std::vector<uint32_t> new_index;
