@@ -82,6 +82,7 @@ class CollapseMesh {
 
  private:
   bool has_two_live_faces(uint32_t v) const;
+  std::vector<uint32_t> vertices_with_boundary_edge() const;
 
   static constexpr uint32_t kEnd = UINT32_MAX;
   BigVector<float> positions_;

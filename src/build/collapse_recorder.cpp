@@ -11,7 +11,7 @@ uint32_t slot_of(const uint32_t* face, uint32_t v) { return face[0] == v ? 0 : f
 }  // namespace
 
 CollapseRecorder::CollapseRecorder(const Mesh& mesh, CollapseMesh& collapse_mesh)
-    : mesh_(collapse_mesh), refinement_(mesh, 2 * mesh.vertex_count()) {
+    : mesh_(collapse_mesh), refinement_(mesh, collapse_mesh, 2 * mesh.vertex_count()) {
   const uint32_t n = uint32_t(mesh.vertex_count());
   forest_.leaf_count = n;
   current_.resize(n);

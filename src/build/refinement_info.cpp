@@ -150,7 +150,7 @@ struct RefinementInfoBuilder::DeviationSpace {
   }
 };
 
-RefinementInfoBuilder::RefinementInfoBuilder(const Mesh& mesh, size_t max_nodes)
+RefinementInfoBuilder::RefinementInfoBuilder(const Mesh& mesh, const CollapseMesh& connectivity, size_t max_nodes)
     : positions_(mesh.positions), scale_(bounds_of(mesh.positions).diagonal()) {
   const size_t n = mesh.vertex_count();
   info_.resize(max_nodes);
@@ -158,34 +158,36 @@ RefinementInfoBuilder::RefinementInfoBuilder(const Mesh& mesh, size_t max_nodes)
   samples_.resize(kSamples * n);
   sample_count_.assign(n, 1);
   leaf_count_.assign(n, 1);
-  std::vector<V3> axis(n);
-  std::vector<double> radius_squared(n, 0);
   const size_t faces = mesh.face_count();
-  std::vector<V3> face_normal(faces);
-  for (size_t f = 0; f < faces; ++f) {
-    const uint32_t* t = &mesh.indices[3 * f];
-    const V3 a = load(leaf_position(t[0])), b = load(leaf_position(t[1])), c = load(leaf_position(t[2]));
-    face_normal[f] = normalized(cross(b - a, c - a));
-    // Edge k is opposite corner k; a corner's sphere reaches the far ends of its two edges.
-    const double edge[3] = {dot(c - b, c - b), dot(a - c, a - c), dot(b - a, b - a)};
-    for (int k = 0; k < 3; ++k) {
-      axis[t[k]] = axis[t[k]] + face_normal[f];
-      radius_squared[t[k]] = std::max({radius_squared[t[k]], edge[(k + 1) % 3], edge[(k + 2) % 3]});
+  BigVector<V3> face_normal(faces);
+  for_each_range(faces, 1 << 14, [&](size_t begin, size_t end) {
+    for (size_t f = begin; f < end; ++f) {
+      const uint32_t* t = &mesh.indices[3 * f];
+      const V3 a = load(leaf_position(t[0])), b = load(leaf_position(t[1])), c = load(leaf_position(t[2]));
+      face_normal[f] = normalized(cross(b - a, c - a));
     }
-  }
-  for (V3& a : axis) a = normalized(a);
-  // The widest normal is the one with the smallest cosine: one acos per vertex instead of one per corner.
-  std::vector<double> min_cos(n, 1);
-  for (size_t f = 0; f < faces; ++f)
-    for (int k = 0; k < 3; ++k) {
-      const uint32_t v = mesh.indices[3 * f + k];
-      min_cos[v] = std::min(min_cos[v], dot(axis[v], face_normal[f]));
-    }
-  // Quantizing searches the octahedral grid around each axis: the costly part, and per vertex.
+  });
+  // Each leaf gathers over its own faces (in face order), so vertices run in parallel. The widest
+  // normal is the one with the smallest cosine: one acos per vertex. Quantizing searches the
+  // octahedral grid around the axis: the costly part.
   for_each_range(n, 1 << 14, [&](size_t begin, size_t end) {
     for (uint32_t v = uint32_t(begin); v < end; ++v) {
-      const Cone cone{axis[v], std::acos(std::clamp(min_cos[v], -1.0, 1.0)) + 1e-6};
-      info_[v] = quantize_refine(to_bounds(std::sqrt(radius_squared[v]), cone, 0, 0), scale_);
+      V3 axis;
+      double radius_squared = 0;
+      const V3 p = load(leaf_position(v));
+      connectivity.for_each_live_face(v, [&](uint32_t f, uint32_t slot) {
+        axis = axis + face_normal[f];
+        // v's sphere reaches the far ends of its two edges.
+        for (uint32_t k = 1; k <= 2; ++k) {
+          const V3 e = load(leaf_position(mesh.indices[3 * size_t(f) + (slot + k) % 3])) - p;
+          radius_squared = std::max(radius_squared, dot(e, e));
+        }
+      });
+      axis = normalized(axis);
+      double min_cos = 1;
+      connectivity.for_each_live_face(v, [&](uint32_t f, uint32_t) { min_cos = std::min(min_cos, dot(axis, face_normal[f])); });
+      const Cone cone{axis, std::acos(std::clamp(min_cos, -1.0, 1.0)) + 1e-6};
+      info_[v] = quantize_refine(to_bounds(std::sqrt(radius_squared), cone, 0, 0), scale_);
       survivor_[v] = v;
       samples_[kSamples * size_t(v)] = v;
     }

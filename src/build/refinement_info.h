@@ -14,8 +14,9 @@ namespace pms {
 
 class RefinementInfoBuilder {
  public:
-  // Leaves get their 1-ring bounds; `max_nodes` = leaves + the most collapses that can follow.
-  RefinementInfoBuilder(const Mesh& mesh, size_t max_nodes);
+  // Leaves get their 1-ring bounds (`connectivity`: the untouched CollapseMesh of `mesh`, for its
+  // faces around each vertex); `max_nodes` = leaves + the most collapses that can follow.
+  RefinementInfoBuilder(const Mesh& mesh, const CollapseMesh& connectivity, size_t max_nodes);
 
   float scale() const { return scale_; }
 
