@@ -185,7 +185,9 @@ RefinementInfoBuilder::RefinementInfoBuilder(const Mesh& mesh, const CollapseMes
       });
       axis = normalized(axis);
       double min_cos = 1;
-      connectivity.for_each_live_face(v, [&](uint32_t f, uint32_t) { min_cos = std::min(min_cos, dot(axis, face_normal[f])); });
+      connectivity.for_each_live_face(v, [&](uint32_t f, uint32_t) {
+        min_cos = std::min(min_cos, dot(axis, face_normal[f]));
+      });
       const Cone cone{axis, std::acos(std::clamp(min_cos, -1.0, 1.0)) + 1e-6};
       info_[v] = quantize_refine(to_bounds(std::sqrt(radius_squared), cone, 0, 0), scale_);
       survivor_[v] = v;

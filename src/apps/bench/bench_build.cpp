@@ -3,7 +3,8 @@
 // tools (OpenMesh-mkbalancedpm, then OpenMesh-Analyzer for the view-dependent refinement info) on
 // the same decompressed file; then a scaling series on the procedural terrain, to read off whether
 // the cost per face grows no faster than log n. Every build runs in its own process so its peak RSS
-// is its own (wait4 rusage).
+// is its own (wait4 rusage). These machines' speed swings by tens of percent within minutes, so each
+// measurement is the median of a few runs, ours and OpenMesh's taken in turn.
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -30,6 +31,8 @@ constexpr size_t kQuickTerrainSteps = 2;
 constexpr double kStepTimeoutSeconds = 3600;
 constexpr const char* kMkBalancedPm = "OpenMesh-mkbalancedpm";
 constexpr const char* kAnalyzer = "OpenMesh-Analyzer";
+// Runs per measurement (one with --quick); the median run is reported, every time is in the JSON.
+constexpr size_t kRuns = 3;
 
 struct PaperRow {
   const char* model;
@@ -64,9 +67,25 @@ struct ModelResult {
   std::string name;
   fs::path file;
   std::string error;  // the input could not be prepared: nothing ran
-  OurBuild ours;
-  std::optional<OpenMeshBuild> openmesh;  // absent when the tools are not installed
+  OurBuild ours;      // the median run
+  std::optional<OpenMeshBuild> openmesh;  // the median run; absent when the tools are not installed
+  std::vector<double> ours_seconds, openmesh_seconds;  // every run's wall time (OpenMesh: both tools)
 };
+
+size_t runs(const BenchContext& context) { return context.options.quick ? 1 : kRuns; }
+
+double openmesh_seconds(const OpenMeshBuild& build) {
+  return build.mkbalancedpm.wall_seconds + build.analyzer.wall_seconds;
+}
+
+// The run with the median time (the upper one of an even count).
+template <class Run>
+Run median_run(std::vector<Run>& all, const std::vector<double>& seconds) {
+  std::vector<size_t> order(all.size());
+  for (size_t i = 0; i < order.size(); ++i) order[i] = i;
+  std::sort(order.begin(), order.end(), [&](size_t a, size_t b) { return seconds[a] < seconds[b]; });
+  return std::move(all[order[order.size() / 2]]);
+}
 
 // Progress goes to stderr so stdout carries only the tables.
 void progress_begin(const std::string& what) {
@@ -166,7 +185,7 @@ OpenMeshBuild run_openmesh(const std::string& label, const fs::path& mesh, const
 
 ModelResult run_model(const BenchContext& context, const std::string& name, const fs::path& file, bool openmesh,
                       const std::string& label) {
-  ModelResult result{name, file, "", {}, std::nullopt};
+  ModelResult result{name, file, "", {}, std::nullopt, {}, {}};
   fs::path mesh;
   try {
     progress_begin(label + " decompress " + file.filename().string());
@@ -179,10 +198,25 @@ ModelResult run_model(const BenchContext& context, const std::string& name, cons
     return result;
   }
   const fs::path work_stem = context.temp_dir / name;
-  progress_begin(label + " pmstream build");
-  result.ours = run_our_build(context, mesh.string(), work_stem.string() + ".pms");
-  progress_end(result.ours.error.empty() ? step_outcome(result.ours.run) : "FAILED (" + result.ours.error + ")");
-  if (openmesh) result.openmesh = run_openmesh(label, mesh, work_stem);
+  std::vector<OurBuild> ours;
+  std::vector<OpenMeshBuild> theirs;
+  for (size_t run = 0; run < runs(context); ++run) {
+    const std::string step = label + (runs(context) > 1 ? " run " + std::to_string(run + 1) : "");
+    progress_begin(step + " pmstream build");
+    ours.push_back(run_our_build(context, mesh.string(), work_stem.string() + ".pms"));
+    progress_end(ours.back().error.empty() ? step_outcome(ours.back().run) : "FAILED (" + ours.back().error + ")");
+    if (openmesh) theirs.push_back(run_openmesh(step, mesh, work_stem));
+    if (!ours.back().error.empty() || (openmesh && !theirs.back().error.empty())) {
+      // Report the failure itself, not a median of what came before it.
+      ours = {std::move(ours.back())};
+      if (openmesh) theirs = {std::move(theirs.back())};
+      break;
+    }
+  }
+  for (const OurBuild& build : ours) result.ours_seconds.push_back(build.run.wall_seconds);
+  for (const OpenMeshBuild& build : theirs) result.openmesh_seconds.push_back(openmesh_seconds(build));
+  result.ours = median_run(ours, result.ours_seconds);
+  if (openmesh) result.openmesh = median_run(theirs, result.openmesh_seconds);
   std::error_code ignored;  // scratch files can be large (the dragon's PLY, .pm and .spm): drop them now
   if (mesh != file) fs::remove(mesh, ignored);
   for (const char* extension : {".pms", ".pm", ".spm"}) fs::remove(work_stem.string() + extension, ignored);
@@ -235,7 +269,7 @@ std::vector<std::string> e12_row(const ModelResult& r) {
   }
   if (r.openmesh && r.openmesh->error.empty()) {
     const OpenMeshBuild& om = *r.openmesh;
-    const double total = om.mkbalancedpm.wall_seconds + om.analyzer.wall_seconds;
+    const double total = openmesh_seconds(om);
     cells[6] = fixed(om.mkbalancedpm.wall_seconds, 2);
     cells[7] = fixed(om.analyzer.wall_seconds, 2);
     cells[8] = fixed(total, 2);
@@ -319,6 +353,7 @@ json model_json(const ModelResult& r) {
   json j = {{"model", r.name}, {"file", r.file.string()}};
   if (!r.error.empty()) j["error"] = r.error;
   j["pmstream"] = r.ours.error.empty() ? r.ours.stats : json{{"error", r.ours.error}};
+  j["pmstream_runs_seconds"] = r.ours_seconds;
   if (r.openmesh) {
     const OpenMeshBuild& om = *r.openmesh;
     // The analyzer runs only on a .pm that parsed.
@@ -332,8 +367,8 @@ json model_json(const ModelResult& r) {
                  {"tree_id_bits", om.pm->tree_id_bits},
                  {"node_id_bits", om.pm->max_depth},
                  {"mkbalancedpm_reported_bits", om.reported_bits}};
-    if (om.error.empty() && !r.ours.stats.is_null())
-      o["speedup"] = (om.mkbalancedpm.wall_seconds + om.analyzer.wall_seconds) / r.ours.run.wall_seconds;
+    o["runs_seconds"] = r.openmesh_seconds;
+    if (om.error.empty() && !r.ours.stats.is_null()) o["speedup"] = openmesh_seconds(om) / r.ours.run.wall_seconds;
     j["openmesh"] = std::move(o);
   } else {
     j["openmesh"] = nullptr;
@@ -428,7 +463,8 @@ std::string run_models(const BenchContext& context, json& out) {
   out["paper_table1"] = paper_json();
 
   section += "Each build runs as its own process on the same decompressed file; seconds are wall time and peak MB "
-             "is the child's ru_maxrss (wait4). \"ours s\" is the whole `pmstream build` (load, clean, build, "
+             "is the child's ru_maxrss (wait4), of the median of " + std::to_string(runs(context)) +
+             " runs (ours and OpenMesh's in turn; every run's time is in build.json). \"ours s\" is the whole `pmstream build` (load, clean, build, "
              "write); \"ours build s\" excludes loading. OpenMesh s = mkbalancedpm + Analyzer (the analyzer adds "
              "the view-dependent refinement information, which our build includes). speedup = OpenMesh s / ours s.\n\n";
   section += e12.markdown() + "\n";
@@ -461,13 +497,27 @@ std::string run_scaling(const BenchContext& context, json& out) {
   double first_faces = 0, first_seconds_per_face = 0;  // the reference row, n₀
   for (size_t i = 0; i < steps; ++i) {
     const std::string input = "terrain:" + std::to_string(kTerrainFaces[i]);
-    progress_begin("[" + input + " " + std::to_string(i + 1) + "/" + std::to_string(steps) + "] pmstream build");
+    progress_begin("[" + input + " " + std::to_string(i + 1) + "/" + std::to_string(steps) +
+                   "] pmstream build, median of " + std::to_string(runs(context)));
     const fs::path output = context.temp_dir / ("terrain-" + std::to_string(kTerrainFaces[i]) + ".pms");
-    const OurBuild build = run_our_build(context, input, output);
+    std::vector<OurBuild> all;
+    std::vector<double> all_seconds;
+    for (size_t run = 0; run < runs(context); ++run) {
+      all.push_back(run_our_build(context, input, output));
+      all_seconds.push_back(all.back().run.wall_seconds);
+      if (!all.back().error.empty()) {
+        all = {std::move(all.back())};
+        all_seconds = {all_seconds.back()};
+        break;
+      }
+    }
+    const OurBuild build = median_run(all, all_seconds);
     progress_end(build.error.empty() ? step_outcome(build.run) : "FAILED (" + build.error + ")");
     std::error_code ignored;
     fs::remove(output, ignored);
-    out["scaling"].push_back({{"input", input}, {"pmstream", build.error.empty() ? build.stats : json{{"error", build.error}}}});
+    out["scaling"].push_back({{"input", input},
+                              {"pmstream", build.error.empty() ? build.stats : json{{"error", build.error}}},
+                              {"runs_seconds", all_seconds}});
     if (!build.error.empty()) {
       notes += "- " + input + ": **failed**: " + build.error + "\n";
       print(table.add_row({thousands(kTerrainFaces[i]), "", "", "", "", "", ""}));
@@ -490,7 +540,8 @@ std::string run_scaling(const BenchContext& context, json& out) {
   }
 
   std::string section = "### Scaling: procedural terrain\n\n";
-  section += "`pmstream build terrain:FACES` in a child process; seconds are wall time (terrain generation "
+  section += "`pmstream build terrain:FACES` in a child process, median of " + std::to_string(runs(context)) +
+             " runs; seconds are wall time (terrain generation "
              "included, it is the \"load\"), \"build s\" excludes it. n₀ is the first row: the build grows no "
              "faster than n log n while (s/face) / (s/face)₀ stays at or below log2 n / log2 n₀.\n\n";
   section += table.markdown() + "\n";
