@@ -146,10 +146,13 @@ class SelectiveMesh {
   // an oriented 2-manifold without isolated vertices (link condition).
   bool ecol(uint32_t parent_slot);
 
-  // An operation is a chain of dependent cache misses: the record, then its faces' corners, then the
-  // neighbours' records. A caller that knows its next operations overlaps those chains in two stages:
-  // stage 0 (records) about eight operations ahead, stage 1 (face corners, read from the records then
-  // in cache) about four. (A third stage for the neighbours' records measured slower.)
+  // An operation is a chain of dependent cache misses: the node's child and record, then its faces'
+  // corners, then the neighbours' records. A caller that knows its next operations overlaps those
+  // chains: for each operation i it runs stage k for operation i + kPrefetchAhead[k], every stage
+  // (ecol: the collapse order's next ones). Any slot is allowed; a hint changes nothing. Dragon, every
+  // split then every collapse: about +40 % operations per second over no prefetching.
+  static constexpr int kPrefetchStages = 4;
+  static constexpr uint32_t kPrefetchAhead[kPrefetchStages] = {16, 8, 4, 2};
   void prefetch_vsplit(uint32_t slot, int stage) const;
   void prefetch_ecol(uint32_t parent_slot, int stage) const;
 
@@ -188,7 +191,8 @@ class SelectiveMesh {
   static_assert(sizeof(VertexRecord) == 64);
 
   void sync_slots();
-  void prefetch_vertex(uint32_t v, int stage) const;
+  void prefetch_record(uint32_t v) const;
+  void prefetch_fan(uint32_t v, bool neighbours, bool partners) const;
   void load_corners(uint32_t v, std::vector<Corner>& corners) const;
   static bool order_fan(std::vector<Corner>& fan, std::vector<Corner>& ordered, std::vector<uint32_t>& successor);
   static bool is_closed(std::vector<Corner>& fan);

@@ -74,30 +74,78 @@ SelectiveMesh::SelectiveMesh(const VertexHierarchy& hierarchy, std::span<const u
   }
 }
 
-void SelectiveMesh::prefetch_vertex(uint32_t v, int stage) const {
+// The prefetch helpers are always inlined: GCC deems a function that only prefetches free of side
+// effects and deletes calls to it (as a plain call this prefetched nothing). Each reads only what an
+// earlier stage brought in, and checks bounds: a slot's state may have changed since.
+[[gnu::always_inline]] inline void SelectiveMesh::prefetch_record(uint32_t v) const {
+  if (v < vertex_.size()) __builtin_prefetch(&vertex_[v]);
+}
+
+// Stage "corners" (`neighbours` false) or "neighbours' records" (true) of v's fan; long fans are rare.
+[[gnu::always_inline]] inline void SelectiveMesh::prefetch_fan(uint32_t v, bool neighbours, bool partners) const {
+  if (v >= vertex_.size()) return;
   const VertexRecord& record = vertex_[v];
-  if (stage == 0) {
-    __builtin_prefetch(&record);
-    return;
+  if (record.capacity == 0 || record.capacity > kInlineFaces) return;
+  for (uint32_t i = 0; i < record.size; ++i) {
+    const uint32_t face = record.inline_faces[i];
+    const uint32_t* corner = &corner_[3 * size_t(face)];
+    if (!neighbours) {
+      __builtin_prefetch(corner);
+      continue;
+    }
+    for (uint32_t k = 0; k < 3; ++k)
+      if (corner[k] != v) prefetch_record(corner[k]);
+    if (partners) __builtin_prefetch(&partner_[face]);
   }
-  if (record.capacity == 0 || record.capacity > kInlineFaces) return;  // inactive, or a long fan: rare
-  for (uint32_t i = 0; i < record.size; ++i) __builtin_prefetch(&corner_[3 * size_t(record.inline_faces[i])]);
 }
 
 void SelectiveMesh::prefetch_vsplit(uint32_t s, int stage) const {
   if (s >= vertex_.size()) return;
-  if (stage == 0) __builtin_prefetch(&first_child_[s]);
-  prefetch_vertex(s, stage);
+  switch (stage) {
+    case 0:
+      __builtin_prefetch(&first_child_[s]);
+      prefetch_record(s);
+      break;
+    case 1:
+      if (const uint32_t t = first_child_[s]; t != kNone) {
+        prefetch_record(t);  // written by the split
+        prefetch_record(t + 1);
+        __builtin_prefetch(&cut_[t]);
+      }
+      prefetch_fan(s, false, false);
+      break;
+    case 2:
+      prefetch_fan(s, true, false);  // cut vertices' active ancestors are among them
+      break;
+    default:
+      break;
+  }
 }
 
 void SelectiveMesh::prefetch_ecol(uint32_t p, int stage) const {
-  // v_t = first_child_[p] is a load, not a prefetch: out-of-order execution overlaps it with the
-  // operations before this one.
-  if (p >= first_child_.size() || first_child_[p] == kNone) return;
+  if (p >= first_child_.size()) return;
+  if (stage == 0) {
+    __builtin_prefetch(&first_child_[p]);
+    return;
+  }
   const uint32_t t = first_child_[p];
-  if (stage == 0) __builtin_prefetch(&cut_[t]);
-  prefetch_vertex(t, stage);
-  prefetch_vertex(t + 1, stage);
+  if (t == kNone || t + 1 >= vertex_.size()) return;
+  switch (stage) {
+    case 1:
+      prefetch_record(t);
+      prefetch_record(t + 1);
+      __builtin_prefetch(&cut_[t]);
+      break;
+    case 2:
+      prefetch_fan(t, false, false);
+      prefetch_fan(t + 1, false, false);
+      break;
+    case 3:
+      prefetch_fan(t, true, true);  // the apexes l and r, and the partners breaks_split_order reads
+      break;
+    default:
+      break;
+  }
 }
 
 void SelectiveMesh::sync_slots() {

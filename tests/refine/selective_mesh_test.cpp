@@ -289,18 +289,29 @@ TEST(SelectiveMesh, PrefetchAnySlotChangesNothing) {
   for (size_t i = 0; i < half; ++i) ASSERT_TRUE(mesh.vsplit(h.find(view.id(view.split_order[i]))).done);
   const Faces before = test::mesh_faces(mesh);
   for (uint32_t slot = 0; slot < h.size() + 4; ++slot)
-    for (int stage = 0; stage < 2; ++stage) {
+    for (int stage = 0; stage < SelectiveMesh::kPrefetchStages; ++stage) {
       mesh.prefetch_vsplit(slot, stage);
       mesh.prefetch_ecol(slot, stage);
     }
   EXPECT_EQ(test::mesh_faces(mesh), before);
   EXPECT_EQ(invariants(mesh), "ok");
-  // The rest in PM order with prefetching ahead, as the bench does: the same finest mesh.
-  for (size_t i = half; i < view.split_order.size(); ++i) {
-    if (i + 4 < view.split_order.size()) mesh.prefetch_vsplit(h.find(view.id(view.split_order[i + 4])), 1);
-    ASSERT_TRUE(mesh.vsplit(h.find(view.id(view.split_order[i]))).done);
+  // The rest in PM order with every stage prefetched ahead, as the bench does: the same finest mesh;
+  // then every collapse in reverse, prefetched the same way: the base mesh.
+  const auto slot_at = [&](size_t i) { return h.find(view.id(view.split_order[i])); };
+  const auto& ahead = SelectiveMesh::kPrefetchAhead;
+  const size_t n = view.split_order.size();
+  for (size_t i = half; i < n; ++i) {
+    for (int stage = 0; stage < SelectiveMesh::kPrefetchStages; ++stage)
+      if (i + ahead[stage] < n) mesh.prefetch_vsplit(slot_at(i + ahead[stage]), stage);
+    ASSERT_TRUE(mesh.vsplit(slot_at(i)).done);
   }
   EXPECT_EQ(test::leaf_faces(mesh, model), test::canonical_input(model.input));
+  for (size_t i = n; i-- > 0;) {
+    for (int stage = 0; stage < SelectiveMesh::kPrefetchStages; ++stage)
+      if (i >= ahead[stage]) mesh.prefetch_ecol(slot_at(i - ahead[stage]), stage);
+    ASSERT_TRUE(mesh.ecol(slot_at(i)));
+  }
+  EXPECT_EQ(mesh.face_count(), view.base_faces.size() / 3);
 }
 
 TEST(SelectiveMesh, RejectsBadBaseMeshes) {

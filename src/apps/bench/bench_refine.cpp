@@ -75,17 +75,18 @@ double engine_ops_per_second(const ModelView& model, uint64_t& ops) {
   slots.reserve(model.split_order.size());
   for (uint32_t node : model.split_order) slots.push_back(h.find(model.id(node)));
   // As a client applying a received batch would: it knows the next operations, so it prefetches them.
-  constexpr size_t kAhead[2] = {8, 4};  // SelectiveMesh::prefetch_vsplit's stages
+  constexpr int kStages = SelectiveMesh::kPrefetchStages;
+  const auto& ahead = SelectiveMesh::kPrefetchAhead;
   const size_t n = slots.size();
   Stopwatch clock;
   for (size_t i = 0; i < n; ++i) {
-    for (int stage = 0; stage < 2; ++stage)
-      if (i + kAhead[stage] < n) mesh.prefetch_vsplit(slots[i + kAhead[stage]], stage);
+    for (int stage = 0; stage < kStages; ++stage)
+      if (i + ahead[stage] < n) mesh.prefetch_vsplit(slots[i + ahead[stage]], stage);
     mesh.vsplit(slots[i]);
   }
   for (size_t i = n; i-- > 0;) {
-    for (int stage = 0; stage < 2; ++stage)
-      if (i >= kAhead[stage]) mesh.prefetch_ecol(slots[i - kAhead[stage]], stage);
+    for (int stage = 0; stage < kStages; ++stage)
+      if (i >= ahead[stage]) mesh.prefetch_ecol(slots[i - ahead[stage]], stage);
     mesh.ecol(slots[i]);
   }
   const double seconds = clock.seconds();
