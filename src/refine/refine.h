@@ -192,7 +192,8 @@ class SelectiveMesh {
 
   void sync_slots();
   void prefetch_record(uint32_t v) const;
-  void prefetch_fan(uint32_t v, bool neighbours, bool partners) const;
+  enum class FanStage { corners, split_neighbours, collapse_reads };
+  void prefetch_fan(uint32_t v, FanStage stage) const;
   void load_corners(uint32_t v, std::vector<Corner>& corners) const;
   static bool order_fan(std::vector<Corner>& fan, std::vector<Corner>& ordered, std::vector<uint32_t>& successor);
   static bool is_closed(std::vector<Corner>& fan);
@@ -224,6 +225,7 @@ class SelectiveMesh {
   BigVector<uint32_t> partner_;  // per face: the other face of the split that made it (f_l <-> f_r)
   uint32_t free_face_ = kNone;
   size_t face_count_ = 0;
+  size_t base_face_count_ = 0;
   BigVector<VertexRecord> vertex_;  // per slot
   // Per slot, the hierarchy's first child and cut vertex (v_t: v̂_l, v_u: v̂_r), copied: every operation
   // starts from them, and here they lie on huge pages (the hierarchy's arrays need not).

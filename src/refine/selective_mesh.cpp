@@ -36,7 +36,7 @@ SelectiveMesh::SelectiveMesh(const VertexHierarchy& hierarchy, std::span<const u
   const uint32_t corners = uint32_t(base_faces.size());
   corner_.resize(corners);
   partner_.assign(corners / 3, kNone);
-  face_count_ = corners / 3;
+  face_count_ = base_face_count_ = corners / 3;
   for (uint32_t c = 0; c < corners; ++c) {
     if (base_faces[c] >= hierarchy.root_count())
       fail("base mesh", "face " + std::to_string(c / 3) + " uses unknown root " + std::to_string(base_faces[c]));
@@ -81,21 +81,31 @@ SelectiveMesh::SelectiveMesh(const VertexHierarchy& hierarchy, std::span<const u
   if (v < vertex_.size()) __builtin_prefetch(&vertex_[v]);
 }
 
-// Stage "corners" (`neighbours` false) or "neighbours' records" (true) of v's fan; long fans are rare.
-[[gnu::always_inline]] inline void SelectiveMesh::prefetch_fan(uint32_t v, bool neighbours, bool partners) const {
+// One stage over v's fan (long fans are rare and skipped): its faces' corners; or, those in cache, the
+// records a split reads (every neighbour's: the cut vertices' active ancestors are among them); or those
+// a collapse into v's sibling u reads (the apexes of the faces on edge v-u, and the partners of faces
+// with apex v, for breaks_split_order).
+[[gnu::always_inline]] inline void SelectiveMesh::prefetch_fan(uint32_t v, FanStage stage) const {
   if (v >= vertex_.size()) return;
   const VertexRecord& record = vertex_[v];
   if (record.capacity == 0 || record.capacity > kInlineFaces) return;
   for (uint32_t i = 0; i < record.size; ++i) {
     const uint32_t face = record.inline_faces[i];
     const uint32_t* corner = &corner_[3 * size_t(face)];
-    if (!neighbours) {
+    if (stage == FanStage::corners) {
       __builtin_prefetch(corner);
       continue;
     }
-    for (uint32_t k = 0; k < 3; ++k)
-      if (corner[k] != v) prefetch_record(corner[k]);
-    if (partners) __builtin_prefetch(&partner_[face]);
+    const uint32_t k = uint32_t(corner[1] == v) + 2 * uint32_t(corner[2] == v);
+    const uint32_t next = corner[kNextCorner[k]], prev = corner[kPrevCorner[k]];
+    if (stage == FanStage::split_neighbours) {
+      prefetch_record(next);  // each neighbour is the corner after v in one face (but an open fan's far end)
+      continue;
+    }
+    const uint32_t u = v + 1;
+    if (next == u) prefetch_record(prev);
+    if (prev == u) prefetch_record(next);
+    if (k == 2) __builtin_prefetch(&partner_[face]);
   }
 }
 
@@ -112,10 +122,10 @@ void SelectiveMesh::prefetch_vsplit(uint32_t s, int stage) const {
         prefetch_record(t + 1);
         __builtin_prefetch(&cut_[t]);
       }
-      prefetch_fan(s, false, false);
+      prefetch_fan(s, FanStage::corners);
       break;
     case 2:
-      prefetch_fan(s, true, false);  // cut vertices' active ancestors are among them
+      prefetch_fan(s, FanStage::split_neighbours);
       break;
     default:
       break;
@@ -137,11 +147,11 @@ void SelectiveMesh::prefetch_ecol(uint32_t p, int stage) const {
       __builtin_prefetch(&cut_[t]);
       break;
     case 2:
-      prefetch_fan(t, false, false);
-      prefetch_fan(t + 1, false, false);
+      prefetch_fan(t, FanStage::corners);
+      prefetch_fan(t + 1, FanStage::corners);
       break;
     case 3:
-      prefetch_fan(t, true, true);  // the apexes l and r, and the partners breaks_split_order reads
+      prefetch_fan(t, FanStage::collapse_reads);
       break;
     default:
       break;
@@ -157,6 +167,14 @@ void SelectiveMesh::sync_slots() {
   vertex_.resize(h.size());
   first_child_.resize(h.size(), kNone);
   cut_.resize(h.size(), kNoVertex);
+  // Each known split adds at most two faces: room for all of them now, so no split reallocates the
+  // face arrays (growing geometrically, as the hierarchy grows a packet at a time).
+  const size_t face_bound = base_face_count_ + (h.size() - h.root_count());
+  if (3 * face_bound > corner_.capacity()) {
+    const size_t faces = std::max(face_bound, corner_.capacity() / 3 * 2);
+    corner_.reserve(3 * faces);
+    partner_.reserve(faces);
+  }
   for (uint32_t v = old_size; v < vertex_.size(); ++v) {
     const VertexId id = h.id(v);
     vertex_[v].tree = id.tree;
@@ -288,9 +306,11 @@ void SelectiveMesh::prepare_lookup(std::vector<Corner>& fan) {
 uint32_t SelectiveMesh::find_next(const std::vector<Corner>& fan, uint32_t w) {
   const uint32_t n = uint32_t(fan.size());
   if (n <= kScannedFan) {
-    for (uint32_t i = 0; i < n; ++i)
-      if (fan[i].next == w) return i;
-    return kNone;
+    // Every corner compared, no early exit: where the match lies is data, and a mispredicted exit
+    // cost more than the few compares it saved.
+    uint32_t match = 0;
+    for (uint32_t i = 0; i < n; ++i) match |= uint32_t(fan[i].next == w) << i;
+    return match != 0 ? uint32_t(std::countr_zero(match)) : kNone;
   }
   const auto it = std::lower_bound(fan.begin(), fan.end(), w, [](const Corner& c, uint32_t x) { return c.next < x; });
   return it != fan.end() && it->next == w ? uint32_t(it - fan.begin()) : kNone;
