@@ -90,20 +90,19 @@ uint32_t VertexHierarchy::add_root(VertexId id, const float position[3], const R
 }
 
 uint32_t VertexHierarchy::add_split(const SplitRecord& split) {
-  const std::string what = "vsplit " + to_string(split.vs);
+  // The message is built only on failure: this runs for every packet a client receives.
+  const auto reject = [&](const std::string& why) { fail(kWhere, "vsplit " + to_string(split.vs) + ": " + why); };
   const uint32_t s = find(split.vs);
-  if (s == kNone) fail(kWhere, what + ": unknown node");
-  if (!is_leaf(s)) fail(kWhere, what + ": node already split");
-  if (split.vs.depth() >= 63) fail(kWhere, what + ": node too deep for 64-bit node ids");
-  if (!is_vertex(split.cut_l) && !is_vertex(split.cut_r)) fail(kWhere, what + ": no fundamental cut vertex");
+  if (s == kNone) reject("unknown node");
+  if (!is_leaf(s)) reject("node already split");
+  if (split.vs.depth() >= 63) reject("node too deep for 64-bit node ids");
+  if (!is_vertex(split.cut_l) && !is_vertex(split.cut_r)) reject("no fundamental cut vertex");
   for (VertexId cut : {split.cut_l, split.cut_r}) {
     if (!is_vertex(cut)) continue;
     // A cut vertex is a corner of f_l / f_r that does not collapse into v_s.
-    if (cut.tree >= root_count() || is_ancestor_or_self(split.vs, cut))
-      fail(kWhere, what + ": invalid cut vertex " + to_string(cut));
+    if (cut.tree >= root_count() || is_ancestor_or_self(split.vs, cut)) reject("invalid cut vertex " + to_string(cut));
   }
-  if ((has_normals_ && !split.has_normal) || (has_colors_ && !split.has_color))
-    fail(kWhere, what + ": packet lacks attributes");
+  if ((has_normals_ && !split.has_normal) || (has_colors_ && !split.has_color)) reject("packet lacks attributes");
 
   // v_u inherits v_s's geometry; copy before push_slot() may reallocate the arrays.
   float position_u[3], normal_u[3] = {0, 0, 0};
