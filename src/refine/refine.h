@@ -196,13 +196,13 @@ class SelectiveMesh {
   void prefetch_fan(uint32_t v, FanStage stage) const;
   void load_corners(uint32_t v, std::vector<Corner>& corners) const;
   static bool order_fan(std::vector<Corner>& fan, std::vector<Corner>& ordered, std::vector<uint32_t>& successor);
-  static bool is_closed(std::vector<Corner>& fan);
+  static uint32_t open_end(std::vector<Corner>& fan);  // an open fan's far end (no corner's next), else kNone
   static void prepare_lookup(std::vector<Corner>& fan);
   static uint32_t find_next(const std::vector<Corner>& fan, uint32_t w);  // index of the corner with `next` w
   uint32_t cut_ancestor(VertexId cut, uint32_t slot) const;  // over fan_ (slot)
   void split_fan(uint32_t s, uint32_t l, uint32_t r);         // over fan_ (s)
   bool breaks_split_order(uint32_t u) const;                  // over fan_ (t)
-  bool link_condition(uint32_t t, uint32_t l, uint32_t r);    // over fan_ (t) and fan_u_ (u)
+  bool link_condition(uint32_t t, uint32_t l, uint32_t r, uint32_t far_end);  // over fan_ (t), fan_u_ (u)
   uint32_t new_face(uint32_t a, uint32_t b, uint32_t c);
   void free_face(uint32_t f);
   uint32_t alloc_block(uint32_t capacity);

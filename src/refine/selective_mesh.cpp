@@ -338,11 +338,12 @@ bool SelectiveMesh::order_fan(std::vector<Corner>& fan, std::vector<Corner>& ord
   return ends == 0;
 }
 
-bool SelectiveMesh::is_closed(std::vector<Corner>& fan) {
+uint32_t SelectiveMesh::open_end(std::vector<Corner>& fan) {
   prepare_lookup(fan);
+  uint32_t end = kNone;
   for (const Corner& c : fan)
-    if (find_next(fan, c.prev) == kNone) return false;
-  return true;
+    if (find_next(fan, c.prev) == kNone) end = c.prev;
+  return end;
 }
 
 // ActiveAncestor by the <tree-id, node-id> path (kim-lee-kobbelt §4). The right-shift climb from v
@@ -462,12 +463,8 @@ VSplitResult SelectiveMesh::vsplit(uint32_t slot) {
 
 // Link condition: the common neighbours of t and u are exactly the apexes of the faces on edge t-u;
 // any other common neighbour would end up on a doubled edge and pinch the surface.
-bool SelectiveMesh::link_condition(uint32_t t, uint32_t l, uint32_t r) {
-  // Every neighbour of t is some corner's `next` but for the far end of an open fan.
-  prepare_lookup(fan_);
-  uint32_t far_end = kNone;
-  for (const Corner& c : fan_)
-    if (find_next(fan_, c.prev) == kNone) far_end = c.prev;
+// Every neighbour of t is some corner's `next` but for the far end of an open fan (`far_end`).
+bool SelectiveMesh::link_condition(uint32_t t, uint32_t l, uint32_t r, uint32_t far_end) {
   for (const Corner& c : fan_u_) {
     for (uint32_t w : {c.next, c.prev})
       if (w != t && w != l && w != r && (w == far_end || find_next(fan_, w) != kNone)) return false;
@@ -512,8 +509,9 @@ bool SelectiveMesh::ecol(uint32_t p) {
   load_corners(u, fan_u_);
   // Seen with a virtual vertex joined to every border vertex, an interior edge between two border
   // vertices fails the link condition too: merging them would pinch the surface at one vertex.
-  if (fl != kNone && fr != kNone && !is_closed(fan_) && !is_closed(fan_u_)) return false;
-  if (!link_condition(t, l, r)) return false;
+  const uint32_t t_far_end = open_end(fan_);
+  if (fl != kNone && fr != kNone && t_far_end != kNone && open_end(fan_u_) != kNone) return false;
+  if (!link_condition(t, l, r, t_far_end)) return false;
   // No vertex may be left without faces: an apex whose only face is the one removed, or p itself.
   const uint32_t removed = (fl != kNone) + (fr != kNone);
   const uint32_t count = uint32_t(fan_.size() + fan_u_.size()) - 2 * removed;
