@@ -303,7 +303,7 @@ void SelectiveMesh::prepare_lookup(std::vector<Corner>& fan) {
     std::sort(fan.begin(), fan.end(), [](const Corner& a, const Corner& b) { return a.next < b.next; });
 }
 
-uint32_t SelectiveMesh::find_next(const std::vector<Corner>& fan, uint32_t w) {
+[[gnu::always_inline]] inline uint32_t SelectiveMesh::find_next(const std::vector<Corner>& fan, uint32_t w) {
   const uint32_t n = uint32_t(fan.size());
   if (n <= kScannedFan) {
     // Every corner compared, no early exit: where the match lies is data, and a mispredicted exit
