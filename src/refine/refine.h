@@ -202,7 +202,8 @@ class SelectiveMesh {
   uint32_t cut_ancestor(VertexId cut, uint32_t slot) const;  // over fan_ (slot)
   void split_fan(uint32_t s, uint32_t l, uint32_t r);         // over fan_ (s)
   bool breaks_split_order(uint32_t u) const;                  // over fan_ (t)
-  bool link_condition(uint32_t t, uint32_t l, uint32_t r, uint32_t far_end);  // over fan_ (t), fan_u_ (u)
+  // Over fan_ (t) and fan_u_ (u), whose open ends (kNone: closed) are given.
+  bool link_condition(uint32_t t, uint32_t l, uint32_t r, uint32_t t_end, uint32_t u_end);
   uint32_t new_face(uint32_t a, uint32_t b, uint32_t c);
   void free_face(uint32_t f);
   uint32_t alloc_block(uint32_t capacity);

@@ -340,6 +340,11 @@ bool SelectiveMesh::order_fan(std::vector<Corner>& fan, std::vector<Corner>& ord
 
 uint32_t SelectiveMesh::open_end(std::vector<Corner>& fan) {
   prepare_lookup(fan);
+  // One fan is closed exactly when its `next` and `prev` corners are the same set; an open one has one
+  // of each unmatched, and they differ (the fan's two ends), so the sums tell without a lookup.
+  uint64_t nexts = 0, prevs = 0;
+  for (const Corner& c : fan) nexts += c.next, prevs += c.prev;
+  if (nexts == prevs) return kNone;
   uint32_t end = kNone;
   for (const Corner& c : fan)
     if (find_next(fan, c.prev) == kNone) end = c.prev;
@@ -463,13 +468,15 @@ VSplitResult SelectiveMesh::vsplit(uint32_t slot) {
 
 // Link condition: the common neighbours of t and u are exactly the apexes of the faces on edge t-u;
 // any other common neighbour would end up on a doubled edge and pinch the surface.
-// Every neighbour of t is some corner's `next` but for the far end of an open fan (`far_end`).
-bool SelectiveMesh::link_condition(uint32_t t, uint32_t l, uint32_t r, uint32_t far_end) {
-  for (const Corner& c : fan_u_) {
-    for (uint32_t w : {c.next, c.prev})
-      if (w != t && w != l && w != r && (w == far_end || find_next(fan_, w) != kNone)) return false;
-  }
-  return true;
+// Every neighbour of t is some corner's `next` but for the far end of an open fan (`t_end`).
+bool SelectiveMesh::link_condition(uint32_t t, uint32_t l, uint32_t r, uint32_t t_end, uint32_t u_end) {
+  const auto shared = [&](uint32_t w) {
+    return w != t && w != l && w != r && (w == t_end || find_next(fan_, w) != kNone);
+  };
+  // u's neighbours: each corner's `next`, and an open fan's far end.
+  for (const Corner& c : fan_u_)
+    if (shared(c.next)) return false;
+  return u_end == kNone || !shared(u_end);
 }
 
 // The partial order of §5.3 read backwards. A performed split q whose cut vertices have the active
@@ -509,9 +516,9 @@ bool SelectiveMesh::ecol(uint32_t p) {
   load_corners(u, fan_u_);
   // Seen with a virtual vertex joined to every border vertex, an interior edge between two border
   // vertices fails the link condition too: merging them would pinch the surface at one vertex.
-  const uint32_t t_far_end = open_end(fan_);
-  if (fl != kNone && fr != kNone && t_far_end != kNone && open_end(fan_u_) != kNone) return false;
-  if (!link_condition(t, l, r, t_far_end)) return false;
+  const uint32_t t_end = open_end(fan_), u_end = open_end(fan_u_);
+  if (fl != kNone && fr != kNone && t_end != kNone && u_end != kNone) return false;
+  if (!link_condition(t, l, r, t_end, u_end)) return false;
   // No vertex may be left without faces: an apex whose only face is the one removed, or p itself.
   const uint32_t removed = (fl != kNone) + (fr != kNone);
   const uint32_t count = uint32_t(fan_.size() + fan_u_.size()) - 2 * removed;
