@@ -8,13 +8,10 @@
 //
 // Linked into the executable only (tests and fuzzers keep the standard operators), and left out
 // under sanitizers, which bring their own.
-#include <cstdint>
 #include <cstdlib>
 #include <new>
 
-#if defined(__linux__)
-#include <sys/mman.h>
-#endif
+#include "common/huge_pages.h"
 
 #if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
 #define PMS_SANITIZED 1
@@ -24,19 +21,13 @@
 #endif
 #endif
 
-#if defined(__linux__) && defined(MADV_HUGEPAGE) && !defined(PMS_SANITIZED)
+#if defined(__linux__) && !defined(PMS_SANITIZED)
 
 namespace {
 
-constexpr size_t kHugePage = size_t(2) << 20;
-
 void* allocate(size_t bytes) {
-  if (bytes < kHugePage) return std::malloc(bytes == 0 ? 1 : bytes);
-  const size_t rounded = (bytes + kHugePage - 1) & ~(kHugePage - 1);
-  if (rounded < bytes) return nullptr;  // wrapped: no such block exists
-  void* p = std::aligned_alloc(kHugePage, rounded);
-  if (p) madvise(p, rounded, MADV_HUGEPAGE);  // advice only: failure leaves ordinary pages
-  return p;
+  if (bytes < pms::kHugePage) return std::malloc(bytes == 0 ? 1 : bytes);
+  return pms::allocate_on_huge_pages(bytes);
 }
 
 void* allocate_or_throw(size_t bytes) {

@@ -16,10 +16,23 @@
 
 namespace pms {
 
+constexpr size_t kHugePage = size_t(2) << 20;
+
+// At least `bytes` (>= kHugePage) aligned to 2 MiB, asked for huge pages; nullptr when out of memory.
+// Malloc's memory: free() releases it.
+inline void* allocate_on_huge_pages(size_t bytes) {
+  const size_t rounded = (bytes + kHugePage - 1) & ~(kHugePage - 1);
+  if (rounded < bytes) return nullptr;  // wrapped: no such block exists
+  void* p = std::aligned_alloc(kHugePage, rounded);
+#if defined(__linux__) && defined(MADV_HUGEPAGE)
+  if (p) madvise(p, rounded, MADV_HUGEPAGE);  // advice only: failure leaves ordinary pages
+#endif
+  return p;
+}
+
 template <class T>
 struct HugePageAllocator {
   using value_type = T;
-  static constexpr size_t kHugePage = size_t(2) << 20;
 
   HugePageAllocator() = default;
   template <class U>
@@ -28,12 +41,8 @@ struct HugePageAllocator {
   T* allocate(size_t n) {
     const size_t bytes = n * sizeof(T);
     if (bytes < kHugePage) return std::allocator<T>().allocate(n);
-    const size_t rounded = (bytes + kHugePage - 1) / kHugePage * kHugePage;
-    void* p = std::aligned_alloc(kHugePage, rounded);
+    void* p = allocate_on_huge_pages(bytes);
     if (!p) throw std::bad_alloc();
-#if defined(__linux__) && defined(MADV_HUGEPAGE)
-    madvise(p, rounded, MADV_HUGEPAGE);  // advice only: failure leaves ordinary pages
-#endif
     return static_cast<T*>(p);
   }
   void deallocate(T* p, size_t n) {
