@@ -53,8 +53,7 @@ CollapseMesh::CollapseMesh(const Mesh& mesh)
   }
   // A directed edge v->a is on the boundary when no face holds a->v. Finding the vertices with one
   // reads every fan and runs on all cores; their quadrics are then added in vertex order, as ever.
-  std::vector<uint32_t> boundary = vertices_with_boundary_edge();
-  for (uint32_t v : boundary) {
+  for (const uint32_t v : vertices_with_boundary_edge()) {
     NeighbourScratch& marks = scratch_marks_;
     const uint32_t stamp = marks.next();
     for_each_live_face(v, [&](uint32_t f, uint32_t slot) {

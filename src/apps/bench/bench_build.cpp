@@ -464,8 +464,8 @@ std::string run_models(const BenchContext& context, json& out) {
 
   section += "Each build runs as its own process on the same decompressed file; seconds are wall time and peak MB "
              "is the child's ru_maxrss (wait4), of the median of " + std::to_string(runs(context)) +
-             " runs (ours and OpenMesh's in turn; every run's time is in build.json). \"ours s\" is the whole `pmstream build` (load, clean, build, "
-             "write); \"ours build s\" excludes loading. OpenMesh s = mkbalancedpm + Analyzer (the analyzer adds "
+             " runs (ours and OpenMesh's in turn; every run's time is in build.json). \"ours s\" is the whole "
+             "`pmstream build` (load, clean, build, write); \"ours build s\" excludes loading. OpenMesh s = mkbalancedpm + Analyzer (the analyzer adds "
              "the view-dependent refinement information, which our build includes). speedup = OpenMesh s / ours s.\n\n";
   section += e12.markdown() + "\n";
   section += "E1: base #v, #details (vertex splits) and the bits of a <tree-id, node-id> (tree-id bits = "
