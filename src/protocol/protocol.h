@@ -22,8 +22,9 @@
 
 namespace pms::protocol {
 
-// 2: refinement info at the .pms version-2 precision, 43 or 65 bits per node (1 sent 6 x u16).
-constexpr uint16_t kProtocolVersion = 2;
+// 3: a node with mu = delta = 0 sends its refinement info as one flag bit (2 sent 43 or 65 bits for
+// every node, 1 sent 6 x u16).
+constexpr uint16_t kProtocolVersion = 3;
 constexpr char kMagic[4] = {'P', 'M', 'S', 'T'};
 constexpr size_t kFrameHeaderBytes = 5;                 // u32 payload length + u8 type
 constexpr uint32_t kDefaultMaxMessage = 16u << 20;      // payload bytes a reader accepts by default
@@ -262,6 +263,38 @@ ServerMessage decode_server_message(const Frame& frame, const StreamContext* con
 StreamContext stream_context(const Base& base);  // throws pms::Error for widths a decoder would reject
 Base make_base(const ModelView& model, const std::string& name, uint32_t position_bits = kDefaultPositionBits);
 ModelInfo model_info(const ModelView& model, const std::string& name);  // counts from the hierarchy itself
+
+// ---- a server's packets, encoded once ------------------------------------------------------------------
+
+// Every vsplit packet of a model as a sender-driven session sends it, encoded once and shared by all
+// sessions: a VSPLITS batch is then its packets' bits copied back to back, with none of the per-packet
+// reads of ids, positions and refinement info scattered over the model (the cache misses that dominated a
+// server answering hundreds of first views). ~25 bytes per internal node and 8 per node on the real models.
+class PacketTable {
+ public:
+  PacketTable() = default;
+  // Throws pms::Error for a model the context cannot carry (as encode(VSplits) would).
+  PacketTable(const ModelView& model, const StreamContext& context);
+  bool empty() const { return where_.empty(); }
+  size_t memory_bytes() const { return (bits_.capacity() + where_.capacity()) * sizeof(uint64_t); }
+
+  // The same frame encode(VSplits{frame, final, splits of `nodes`}, context) gives; pms::Error for a node
+  // that is not an internal node of the table's model.
+  std::vector<uint8_t> encode(uint32_t frame, bool final, std::span<const uint32_t> nodes) const;
+
+ private:
+  static constexpr unsigned kLengthBits = 10;  // a packet is < 1024 bits (3 ids of <= 101 bits, info, attributes)
+  std::vector<uint64_t> bits_;   // the packets back to back
+  std::vector<uint64_t> where_;  // per node: bit offset << kLengthBits | bit count; 0 for a leaf
+};
+
+// ---- refinement info on the wire ------------------------------------------------------------------------
+
+// What a receiver decodes for `info`. A node with mu = delta = 0 (every real leaf, about half of any
+// hierarchy, and flat interior nodes) never asks to be refined whatever its radius and cone (criteria.h
+// screen_error_exceeds), so its info travels as one flag bit and decodes with radius 0 and no cone; any
+// other info arrives exactly as stored.
+RefineInfo as_sent(const RefineInfo& info);
 
 // ---- packet size accounting (kim-lee-kobbelt Table 2; bench E2) ----------------------------------------
 

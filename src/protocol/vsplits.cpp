@@ -14,7 +14,6 @@
 namespace pms::protocol {
 namespace {
 
-constexpr uint8_t kFlagFinal = 1;
 constexpr unsigned kCutLeft = 1, kCutRight = 2;  // the 2-bit cut flags
 constexpr uint32_t kCutFlagBits = 2;
 
@@ -54,34 +53,6 @@ VertexId read_id(Reader& r, const StreamContext& c, const char* field) {
   return v;
 }
 
-void write_packet(Writer& w, const SplitRecord& s, const StreamContext& c) {
-  if (s.has_normal != c.has_normals || s.has_color != c.has_colors)
-    fail("VSPLITS", "split of " + to_string(s.vs) + ": normal/color presence differs from the model's");
-  if (uint32_t(s.vs.depth()) >= c.node_id_bits)
-    fail("VSPLITS", "split of " + to_string(s.vs) + ": its children would be deeper than node_id_bits");
-  write_id(w, s.vs, c, "v_s");
-  const unsigned cuts = (is_vertex(s.cut_l) ? kCutLeft : 0) | (is_vertex(s.cut_r) ? kCutRight : 0);
-  if (cuts == 0) fail("VSPLITS", "split of " + to_string(s.vs) + " has no cut vertex");
-  w.bits(cuts, kCutFlagBits);
-  if (cuts & kCutLeft) write_id(w, s.cut_l, c, "v_l");
-  if (cuts & kCutRight) write_id(w, s.cut_r, c, "v_r");
-  uint32_t q[3];
-  quantize_position(c.grid, s.position_t, q);
-  for (uint32_t v : q) w.bits(v, c.grid.bits);
-  if (c.has_refinement) {
-    write_refine(w, s.info_t, "VSPLITS info_t");
-    write_refine(w, s.info_u, "VSPLITS info_u");
-  }
-  if (c.has_normals) {
-    uint16_t n[2];
-    encode_normal(s.normal_t, n);
-    w.u16(n[0]);
-    w.u16(n[1]);
-  }
-  if (c.has_colors)
-    for (uint8_t v : s.color_t) w.u8(v);
-}
-
 void read_packet(Reader& r, const StreamContext& c, SplitRecord& s) {
   s.vs = read_id(r, c, "v_s");
   if (uint32_t(s.vs.depth()) >= c.node_id_bits)
@@ -118,6 +89,41 @@ void read_packet(Reader& r, const StreamContext& c, SplitRecord& s) {
 
 }  // namespace
 
+void write_packet(Writer& w, const SplitRecord& s, const StreamContext& c) {
+  if (s.has_normal != c.has_normals || s.has_color != c.has_colors)
+    fail("VSPLITS", "split of " + to_string(s.vs) + ": normal/color presence differs from the model's");
+  if (uint32_t(s.vs.depth()) >= c.node_id_bits)
+    fail("VSPLITS", "split of " + to_string(s.vs) + ": its children would be deeper than node_id_bits");
+  write_id(w, s.vs, c, "v_s");
+  const unsigned cuts = (is_vertex(s.cut_l) ? kCutLeft : 0) | (is_vertex(s.cut_r) ? kCutRight : 0);
+  if (cuts == 0) fail("VSPLITS", "split of " + to_string(s.vs) + " has no cut vertex");
+  w.bits(cuts, kCutFlagBits);
+  if (cuts & kCutLeft) write_id(w, s.cut_l, c, "v_l");
+  if (cuts & kCutRight) write_id(w, s.cut_r, c, "v_r");
+  uint32_t q[3];
+  quantize_position(c.grid, s.position_t, q);
+  for (uint32_t v : q) w.bits(v, c.grid.bits);
+  if (c.has_refinement) {
+    write_refine(w, s.info_t, "VSPLITS info_t");
+    write_refine(w, s.info_u, "VSPLITS info_u");
+  }
+  if (c.has_normals) {
+    uint16_t n[2];
+    encode_normal(s.normal_t, n);
+    w.u16(n[0]);
+    w.u16(n[1]);
+  }
+  if (c.has_colors)
+    for (uint8_t v : s.color_t) w.u8(v);
+}
+
+void write_vsplits_header(Writer& w, uint32_t frame, bool final, size_t count) {
+  if (count > UINT32_MAX) fail("VSPLITS", "too many packets in one batch");
+  w.u32(frame);
+  w.u8(final ? kFlagFinal : 0);
+  w.u32(uint32_t(count));
+}
+
 uint32_t depth_field_bits(uint32_t node_id_bits) {
   return node_id_bits == 0 ? 1 : uint32_t(std::bit_width(node_id_bits));
 }
@@ -141,9 +147,8 @@ std::vector<uint8_t> encode(const VSplits& m, const StreamContext& c) {
   if (const std::string why = check_context(c); !why.empty()) fail("VSPLITS", "stream context: " + why);
   if (m.splits.size() > UINT32_MAX) fail("VSPLITS", "too many packets in one batch");
   Writer w(MessageType::vsplits);
-  w.u32(m.frame);
-  w.u8(m.final ? kFlagFinal : 0);
-  w.u32(uint32_t(m.splits.size()));
+  w.reserve_payload(9 + m.splits.size() * min_packet_bits(c) / 8);
+  write_vsplits_header(w, m.frame, m.final, m.splits.size());
   for (const SplitRecord& s : m.splits) write_packet(w, s, c);
   return w.finish();
 }

@@ -13,19 +13,16 @@ Writer::Writer(MessageType type) : type_(type) {
   out_[4] = uint8_t(type);
 }
 
-void Writer::bits(uint64_t value, unsigned n) {
-  if (n > 32) {  // keeps acc_ below 64 bits: at most 7 pending + 32 new
-    bits(value & 0xFFFFFFFFu, 32);
-    bits(value >> 32, n - 32);
-    return;
-  }
-  if (n < 64) value &= (uint64_t(1) << n) - 1;
-  acc_ |= value << fill_;
-  fill_ += n;
-  while (fill_ >= 8) {
-    out_.push_back(uint8_t(acc_));
-    acc_ >>= 8;
-    fill_ -= 8;
+void Writer::bits_from(std::span<const uint64_t> pool, uint64_t at, uint64_t n) {
+  while (n > 0) {
+    const unsigned take = unsigned(std::min<uint64_t>(n, 32));
+    const uint64_t word = at / 64;
+    const unsigned shift = unsigned(at % 64);
+    uint64_t value = pool[word] >> shift;
+    if (shift + take > 64) value |= pool[word + 1] << (64 - shift);
+    bits(value, take);
+    at += take;
+    n -= take;
   }
 }
 
@@ -40,7 +37,8 @@ void Writer::string(const std::string& s, size_t max, const char* field) {
 }
 
 void Writer::align() {
-  if (fill_ > 0) bits(0, 8 - fill_);
+  if (fill_ % 8) bits(0, 8 - fill_ % 8);
+  for (; fill_ > 0; fill_ -= 8, acc_ >>= 8) out_.push_back(uint8_t(acc_));
 }
 
 std::vector<uint8_t> Writer::finish() {
@@ -119,8 +117,12 @@ void Reader::fail(ErrorCode code, const char* field, const std::string& what) co
 // exists when there is a cone (the angle field's top value means "no cone").
 constexpr uint32_t kNoConeOnWire = (1u << kConeAngleBits) - 1;
 
+bool never_refines(const RefineInfo& info) { return info.mu == 0 && info.delta == 0; }
+
 void write_refine(Writer& w, const RefineInfo& info, const char* field) {
   if (!is_canonical(info)) fail(field, "refinement info is not at the stored precision (pms-format.md RINF)");
+  w.bits(never_refines(info), 1);
+  if (never_refines(info)) return;
   for (uint16_t half : {info.radius, info.mu, info.delta}) w.bits(half >> kLengthDroppedBits, kLengthBits);
   if (info.cone_angle == kNoCone) {
     w.bits(kNoConeOnWire, kConeAngleBits);
@@ -131,13 +133,17 @@ void write_refine(Writer& w, const RefineInfo& info, const char* field) {
 }
 
 uint32_t refine_bits(const RefineInfo& info) {
-  return 3 * kLengthBits + kConeAngleBits + (info.cone_angle == kNoCone ? 0 : 2 * kAxisBits);
+  if (never_refines(info)) return 1;
+  return 1 + 3 * kLengthBits + kConeAngleBits + (info.cone_angle == kNoCone ? 0 : 2 * kAxisBits);
 }
 
 RefineInfo read_refine(Reader& r, const char* field) {
+  if (r.bits(1, field)) return as_sent(RefineInfo{});
   RefineInfo info{};
   for (uint16_t* half : {&info.radius, &info.mu, &info.delta})
     *half = uint16_t(r.bits(kLengthBits, field) << kLengthDroppedBits);
+  // The flag is the one encoding of mu = delta = 0, so each info has exactly one.
+  if (never_refines(info)) r.fail(ErrorCode::bad_message, field, "mu = delta = 0 sent in full");
   const auto angle = uint32_t(r.bits(kConeAngleBits, field));
   if (angle == kNoConeOnWire) {
     info.cone_angle = kNoCone;
@@ -150,6 +156,13 @@ RefineInfo read_refine(Reader& r, const char* field) {
   // qrefine's comparisons or mean nothing.
   if (!is_canonical(info)) r.fail(ErrorCode::bad_message, field, "a length is NaN, or the cone axis or angle is out of range");
   return info;
+}
+
+RefineInfo as_sent(const RefineInfo& info) {
+  if (!never_refines(info)) return info;
+  RefineInfo zero{};
+  zero.cone_angle = kNoCone;
+  return zero;
 }
 
 std::string check_context(const StreamContext& c) {

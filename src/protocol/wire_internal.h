@@ -16,7 +16,16 @@ namespace pms::protocol {
 class Writer {
  public:
   explicit Writer(MessageType type);
-  void bits(uint64_t value, unsigned n);  // n <= 64; value must fit (checked by the callers' ids)
+  void bits(uint64_t value, unsigned n) {  // n <= 64; value must fit (checked by the callers' ids)
+    if (n > 32) {  // keeps acc_ within 64 bits: at most 31 pending + 32 new
+      bits(value & 0xFFFFFFFFu, 32);
+      bits(value >> 32, n - 32);
+      return;
+    }
+    acc_ |= (value & ((uint64_t(1) << n) - 1)) << fill_;
+    fill_ += n;
+    if (fill_ >= 32) flush_word();
+  }
   void u8(uint8_t v) { bits(v, 8); }
   void u16(uint16_t v) { bits(v, 16); }
   void u32(uint32_t v) { bits(v, 32); }
@@ -24,14 +33,25 @@ class Writer {
   void f32(float v);
   // u16 length + bytes; throws pms::Error naming `field` when longer than `max`.
   void string(const std::string& s, size_t max, const char* field);
+  // `n` bits of `pool` (LSB-first 64-bit words) from bit `at` on, as if written one by one.
+  void bits_from(std::span<const uint64_t> pool, uint64_t at, uint64_t n);
   void align();  // zero bits up to the next byte
+  void reserve_payload(size_t bytes) { out_.reserve(kFrameHeaderBytes + bytes); }
+  // The payload written so far; only after align().
+  std::span<const uint8_t> payload() const { return std::span<const uint8_t>(out_).subspan(kFrameHeaderBytes); }
   std::vector<uint8_t> finish();
 
  private:
+  void flush_word() {
+    for (int i = 0; i < 4; ++i) out_.push_back(uint8_t(acc_ >> (8 * i)));
+    acc_ >>= 32;
+    fill_ -= 32;
+  }
+
   MessageType type_;
   std::vector<uint8_t> out_;
-  uint64_t acc_ = 0;
-  unsigned fill_ = 0;
+  uint64_t acc_ = 0;   // pending bits, flushed 32 at a time
+  unsigned fill_ = 0;  // < 32 between calls
 };
 
 // Reads one payload; every read is bounds-checked and every failure names the message, the item (e.g.
@@ -69,13 +89,20 @@ class Reader {
   uint64_t item_index_ = 0;
 };
 
-// RefineInfo at its stored precision (pm.h): 3 lengths of kLengthBits, the cone angle, and the cone
-// axis only when there is a cone: 65 bits, or 43 without a cone (docs/protocol.md). The writer throws
-// for values the quantizer never produces, the reader rejects them (the .pms reader does the same).
+// RefineInfo at its stored precision (pm.h): a flag bit, set when mu = delta = 0 (nothing follows: the
+// info decodes as as_sent() says); otherwise 3 lengths of kLengthBits, the cone angle, and the cone axis
+// only when there is a cone: 1, 66 or 44 bits (docs/protocol.md). The writer throws for values the
+// quantizer never produces, the reader rejects them (the .pms reader does the same).
 void write_refine(Writer& w, const RefineInfo& info, const char* field);
 uint32_t refine_bits(const RefineInfo& info);
-constexpr uint32_t kMinRefineBits = 3 * kLengthBits + kConeAngleBits;
+constexpr uint32_t kMinRefineBits = 1;
 RefineInfo read_refine(Reader& r, const char* field);
+
+// VSPLITS: frame, flags, count, then the packets (docs/protocol.md).
+constexpr uint8_t kFlagFinal = 1;
+void write_vsplits_header(Writer& w, uint32_t frame, bool final, size_t count);
+// One vsplit packet; throws pms::Error for values the context cannot carry.
+void write_packet(Writer& w, const SplitRecord& s, const StreamContext& c);
 
 // Unit normals as octahedral 2 x 16-bit snorm (Meyer et al. 2010): 32 bits instead of 96, ~1e-4 rad.
 void encode_normal(const float n[3], uint16_t q[2]);

@@ -122,7 +122,7 @@ void Session::on_view(const protocol::View& m) {
   }
   // A new VIEW replaces the one being answered: what was not sent yet is judged again under the new one.
   const std::vector<NodeCriteria>& criteria = model_->criteria;
-  streamer_.start(model, tags_, [this, &criteria](uint32_t node) { return visible_error(view_, criteria[node]); });
+  streamer_.start(model, model_->climb_starts, tags_, [this, &criteria](uint32_t node) { return visible_error(view_, criteria[node]); });
 }
 
 // The shortest prefix of split_order whose front satisfies the view. SelectiveStreaming on a copy of the
@@ -140,7 +140,7 @@ uint64_t Session::prefix_for_view() const {
   std::vector<uint32_t> wanted;
   for (;;) {
     wanted.clear();
-    selective_streaming(model, front, importance, SIZE_MAX, wanted);
+    selective_streaming(model, model_->climb_starts, front, importance, SIZE_MAX, wanted);
     if (wanted.empty()) return end;
     uint64_t furthest = end;
     for (uint32_t node : wanted) furthest = std::max<uint64_t>(furthest, uint64_t(model_->split_rank[node]) + 1);
@@ -183,12 +183,7 @@ bool Session::pump() {
   if (!streamer_.active()) return false;
   batch_.clear();
   const bool served = streamer_.step(limits_.batch_splits, batch_);
-  protocol::VSplits message;
-  message.frame = view_frame_;
-  message.final = served;
-  message.splits.reserve(batch_.size());
-  for (uint32_t node : batch_) message.splits.push_back(split_record(model_->view(), node));
-  queue(protocol::encode(message, context_));
+  queue(model_->packets.encode(view_frame_, served, batch_));
   splits_sent_ += batch_.size();
   if (served) streamer_.stop();
   return true;

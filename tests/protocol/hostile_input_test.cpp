@@ -202,8 +202,10 @@ Payload base_payload(uint32_t roots, uint32_t faces, uint8_t tree_bits, uint8_t 
   w.u32(faces);
   for (uint32_t r = 0; r < std::min(roots, 4u); ++r) {
     for (int k = 0; k < 3; ++k) w.bits(position_bits == 32 ? 0x7FC00000 : 0, position_bits);  // NaN when raw
-    // RefineInfo as sent (docs/protocol.md): 3 lengths of 11 bits, a cone angle of 0, the axis (1023 is 0).
-    for (uint32_t v : {radius_code, 0u, 0u}) w.bits(v, 11);
+    // RefineInfo as sent (docs/protocol.md): the flag (0: sent in full), 3 lengths of 11 bits (mu 1), a
+    // cone angle of 0, the axis (1023 is 0).
+    w.bits(0, 1);
+    for (uint32_t v : {radius_code, 1u, 0u}) w.bits(v, 11);
     w.bits(0, 10);
     for (uint32_t v : {axis_code, 1023u}) w.bits(v, 11);
   }
@@ -259,10 +261,7 @@ Payload vsplits_payload(const RawPacket& p, const StreamContext& c) {
     w.bits(p.cut_path, p.cut_depth);
   }
   for (int k = 0; k < 3; ++k) w.bits(c.grid.bits == 32 ? 0x7F800000 : 0, c.grid.bits);  // +inf when raw
-  for (int info = 0; info < 2; ++info) {  // info_t, info_u: lengths 0, no cone (docs/protocol.md)
-    w.bits(0, 33);
-    w.bits(1023, 10);
-  }
+  for (int info = 0; info < 2; ++info) w.bits(1, 1);  // info_t, info_u: mu = delta = 0 (docs/protocol.md)
   for (uint32_t k = 0; k < p.trailing_zero_bytes; ++k) w.u8(0);
   return payload_of(w.finish(), MessageType::vsplits);
 }

@@ -259,8 +259,8 @@ TEST(Messages, VSplitsRoundTrip) {
         float snapped[3];
         snap_position(c.grid, a.position_t, snapped);
         EXPECT_EQ(std::memcmp(b.position_t, snapped, sizeof snapped), 0);
-        EXPECT_EQ(b.info_t, c.has_refinement ? a.info_t : RefineInfo{});
-        EXPECT_EQ(b.info_u, c.has_refinement ? a.info_u : RefineInfo{});
+        EXPECT_EQ(b.info_t, c.has_refinement ? as_sent(a.info_t) : RefineInfo{});
+        EXPECT_EQ(b.info_u, c.has_refinement ? as_sent(a.info_u) : RefineInfo{});
         EXPECT_EQ(b.has_normal, c.has_normals);
         if (c.has_normals) {
           EXPECT_LT(angle_between(b.normal_t, a.normal_t), 1e-4);
@@ -269,8 +269,12 @@ TEST(Messages, VSplitsRoundTrip) {
         if (c.has_colors) {
           EXPECT_EQ(std::memcmp(b.color_t, a.color_t, 4), 0);
         }
-        const uint32_t info_bits = (a.info_t.cone_angle == kNoCone ? 43u : 65u) + (a.info_u.cone_angle == kNoCone ? 43u : 65u);
-        EXPECT_EQ(packet_bits(a, c).refinement, c.has_refinement ? info_bits : 0u);
+        const auto info_bits = [](const RefineInfo& info) {  // docs/protocol.md: flag, lengths, angle, axis
+          if (info.mu == 0 && info.delta == 0) return 1u;
+          return info.cone_angle == kNoCone ? 44u : 66u;
+        };
+        const uint32_t info_bits_sum = info_bits(a.info_t) + info_bits(a.info_u);
+        EXPECT_EQ(packet_bits(a, c).refinement, c.has_refinement ? info_bits_sum : 0u);
         bits += packet_bits(a, c).total();
       }
       // packet_bits is exact: header (4 + 1 + 4 bytes) + the packets' bits, padded once.

@@ -95,8 +95,8 @@ void expect_same_packets(const ModelView& model, const Received& got) {
     snap_position(c.grid, want.position_t, snapped);
     ASSERT_EQ(std::memcmp(s.position_t, snapped, sizeof snapped), 0)
         << "packet " << i << ": client and server positions differ";
-    ASSERT_EQ(s.info_t, want.info_t);
-    ASSERT_EQ(s.info_u, want.info_u);
+    ASSERT_EQ(s.info_t, as_sent(want.info_t));
+    ASSERT_EQ(s.info_u, as_sent(want.info_u));
     ASSERT_EQ(s.has_normal, want.has_normal);
     ASSERT_EQ(s.has_color, want.has_color);
     if (s.has_color) {
@@ -175,6 +175,39 @@ TEST(ModelStream, Bunny) {
   const test::BuiltModel* bunny = test::bunny_model();
   ASSERT_NE(bunny, nullptr);
   check_model(*bunny);
+}
+
+// The server's encoded-once packets make the very frames the encoder makes, in any order and batch size.
+void check_packet_table(const test::BuiltModel& built, uint32_t position_bits) {
+  const ModelView model = built.view();
+  StreamContext c = stream_context(make_base(model, built.name, position_bits));
+  c.has_refinement = true;
+  const PacketTable table(model, c);
+  test::Rng rng(position_bits);
+  for (int round = 0; round < 40; ++round) {
+    VSplits m;
+    m.frame = uint32_t(rng());
+    m.final = rng() & 1;
+    std::vector<uint32_t> nodes;
+    const size_t count = round == 0 ? 0 : rng() % 300;
+    while (nodes.size() < count) {
+      const uint32_t node = model.split_order[rng() % model.split_order.size()];
+      nodes.push_back(node);
+      m.splits.push_back(split_record(model, node));
+    }
+    ASSERT_EQ(table.encode(m.frame, m.final, nodes), encode(m, c)) << "round " << round;
+  }
+  const uint32_t leaf = uint32_t(model.node_count() - 1);  // nothing follows it to be its children
+  ASSERT_TRUE(model.is_leaf(leaf));
+  EXPECT_THROW(table.encode(1, true, std::vector<uint32_t>{leaf}), Error);
+  EXPECT_THROW(table.encode(1, true, std::vector<uint32_t>{uint32_t(model.node_count())}), Error);
+}
+
+TEST(ModelStream, PacketTableMakesTheEncodersFrames) {
+  check_packet_table(test::sphere_model(), kDefaultPositionBits);
+  check_packet_table(test::terrain_model(), kDefaultPositionBits);
+  check_packet_table(test::terrain_model(), 32);
+  check_packet_table(test::terrain_model(), 10);
 }
 
 TEST(ModelStream, BunnyTopologyBitsPerPacket) {
