@@ -15,11 +15,11 @@ Writer::Writer(MessageType type) : type_(type) {
 
 void Writer::bits_from(std::span<const uint64_t> pool, uint64_t at, uint64_t n) {
   while (n > 0) {
-    const unsigned take = unsigned(std::min<uint64_t>(n, 32));
+    const unsigned take = unsigned(std::min<uint64_t>(n, 64));
     const uint64_t word = at / 64;
     const unsigned shift = unsigned(at % 64);
     uint64_t value = pool[word] >> shift;
-    if (shift + take > 64) value |= pool[word + 1] << (64 - shift);
+    if (shift > 0 && shift + take > 64) value |= pool[word + 1] << (64 - shift);
     bits(value, take);
     at += take;
     n -= take;
@@ -53,6 +53,13 @@ uint64_t Reader::bits(unsigned n, const char* field) {
   if (n > bits_left())
     fail(ErrorCode::bad_message, field,
          "truncated (needs " + std::to_string(n) + " bits, " + std::to_string(bits_left()) + " left)");
+  if (n <= 56 && (pos_ >> 3) + 8 <= data_.size()) {  // one unaligned 8-byte load covers offset + n bits
+    uint64_t word = 0;
+    for (int i = 0; i < 8; ++i) word |= uint64_t(data_[(pos_ >> 3) + size_t(i)]) << (8 * i);
+    const uint64_t value = (word >> (pos_ & 7)) & ((uint64_t(1) << n) - 1);
+    pos_ += n;
+    return value;
+  }
   uint64_t value = 0;
   unsigned got = 0;
   while (got < n) {

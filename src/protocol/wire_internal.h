@@ -17,14 +17,15 @@ class Writer {
  public:
   explicit Writer(MessageType type);
   void bits(uint64_t value, unsigned n) {  // n <= 64; value must fit (checked by the callers' ids)
-    if (n > 32) {  // keeps acc_ within 64 bits: at most 31 pending + 32 new
-      bits(value & 0xFFFFFFFFu, 32);
-      bits(value >> 32, n - 32);
+    if (n < 64) value &= (uint64_t(1) << n) - 1;
+    acc_ |= value << fill_;  // fill_ < 64
+    if (fill_ + n < 64) {
+      fill_ += n;
       return;
     }
-    acc_ |= (value & ((uint64_t(1) << n) - 1)) << fill_;
-    fill_ += n;
-    if (fill_ >= 32) flush_word();
+    flush_word();
+    acc_ = fill_ ? value >> (64 - fill_) : 0;  // the bits that did not fit
+    fill_ = fill_ + n - 64;
   }
   void u8(uint8_t v) { bits(v, 8); }
   void u16(uint16_t v) { bits(v, 16); }
@@ -43,15 +44,15 @@ class Writer {
 
  private:
   void flush_word() {
-    for (int i = 0; i < 4; ++i) out_.push_back(uint8_t(acc_ >> (8 * i)));
-    acc_ >>= 32;
-    fill_ -= 32;
+    const size_t at = out_.size();
+    out_.resize(at + 8);
+    for (int i = 0; i < 8; ++i) out_[at + size_t(i)] = uint8_t(acc_ >> (8 * i));
   }
 
   MessageType type_;
   std::vector<uint8_t> out_;
-  uint64_t acc_ = 0;   // pending bits, flushed 32 at a time
-  unsigned fill_ = 0;  // < 32 between calls
+  uint64_t acc_ = 0;   // pending bits, flushed 64 at a time
+  unsigned fill_ = 0;  // < 64 between calls
 };
 
 // Reads one payload; every read is bounds-checked and every failure names the message, the item (e.g.

@@ -3,6 +3,7 @@
 // kim-lee-kobbelt 2005 §5.3: qrefine() is false for a real leaf, whatever the view.
 #include "refine/criteria.h"
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 
@@ -47,7 +48,7 @@ NodeCriteria node_criteria(const float position[3], const RefineBounds& bounds) 
   return n;
 }
 
-bool outside_frustum(const ViewCriteria& view, const NodeCriteria& node) {
+[[gnu::always_inline]] inline bool outside_frustum_inline(const ViewCriteria& view, const NodeCriteria& node) {
   float d[3];
   for (int k = 0; k < 3; ++k) d[k] = node.p[k] - view.eye[k];
   const float slack = node.radius + kCullSlack * std::sqrt(dot3(d, d));
@@ -59,7 +60,7 @@ bool outside_frustum(const ViewCriteria& view, const NodeCriteria& node) {
 // With d = p − e, θ = angle(a, d) and α the cone half-angle, min over the cone of n·d is
 // ‖d‖ cos(θ + α) = (a·d) cos α − ‖a × d‖ sin α, and min over the sphere of n·(q − e) is n·d − r.
 // Hoppe's test (a·d > 0 ∧ (a·d)² > ‖d‖² sin²α) is this with r = 0.
-bool back_facing(const ViewCriteria& view, const NodeCriteria& node) {
+[[gnu::always_inline]] inline bool back_facing_inline(const ViewCriteria& view, const NodeCriteria& node) {
   if (node.cos_a <= 0) return false;
   float d[3];
   for (int k = 0; k < 3; ++k) d[k] = node.p[k] - view.eye[k];
@@ -72,7 +73,7 @@ bool back_facing(const ViewCriteria& view, const NodeCriteria& node) {
   return along * node.cos_a - across * node.sin_a > node.radius + kCullSlack * distance;
 }
 
-bool screen_error_exceeds(const ViewCriteria& view, const NodeCriteria& node) {
+[[gnu::always_inline]] inline bool screen_error_exceeds_inline(const ViewCriteria& view, const NodeCriteria& node) {
   float d[3];
   for (int k = 0; k < 3; ++k) d[k] = node.p[k] - view.eye[k];
   const float d2 = dot3(d, d);
@@ -82,8 +83,29 @@ bool screen_error_exceeds(const ViewCriteria& view, const NodeCriteria& node) {
   return node.delta2 * (d2 - along * along) > bound * d2;
 }
 
-bool qrefine(const ViewCriteria& view, const NodeCriteria& node) {
-  return screen_error_exceeds(view, node) && !outside_frustum(view, node) && !back_facing(view, node);
+[[gnu::always_inline]] inline bool qrefine_inline(const ViewCriteria& view, const NodeCriteria& node) {
+  return screen_error_exceeds_inline(view, node) && !outside_frustum_inline(view, node) &&
+         !back_facing_inline(view, node);
 }
+
+[[gnu::always_inline]] inline float priority_inline(const ViewCriteria& view, const NodeCriteria& node) {
+  if (!qrefine_inline(view, node)) return 0;
+  float d[3];
+  for (int k = 0; k < 3; ++k) d[k] = node.p[k] - view.eye[k];
+  const float d2 = std::max(dot3(d, d), 1e-30f);
+  const float along = dot3(d, node.axis);
+  const float error = std::max(node.mu2 * d2, node.delta2 * (d2 - along * along)) / (d2 * d2);
+  return std::max(error, 1e-30f);  // qrefine held: stay > 0 even when it underflows
+}
+
+bool outside_frustum(const ViewCriteria& view, const NodeCriteria& node) { return outside_frustum_inline(view, node); }
+bool back_facing(const ViewCriteria& view, const NodeCriteria& node) { return back_facing_inline(view, node); }
+bool screen_error_exceeds(const ViewCriteria& view, const NodeCriteria& node) {
+  return screen_error_exceeds_inline(view, node);
+}
+bool qrefine(const ViewCriteria& view, const NodeCriteria& node) { return qrefine_inline(view, node); }
+
+float refinement_priority(const ViewCriteria& view, const NodeCriteria& node) { return priority_inline(view, node); }
+
 
 }  // namespace pms

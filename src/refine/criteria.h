@@ -54,4 +54,9 @@ inline bool qrefine(const ViewCriteria& view, const float position[3], const Ref
   return qrefine(view, node_criteria(position, bounds));
 }
 
+// How visible a node's error is when qrefine wants it split (0 when it does not): the larger of Hoppe's
+// two deviation terms over the squared eye distance, > 0 whenever qrefine holds. A sender fixes the most
+// visible error first.
+float refinement_priority(const ViewCriteria& view, const NodeCriteria& node);
+
 }  // namespace pms

@@ -54,7 +54,7 @@ std::unique_ptr<ServedModel> open_model(const std::string& path, uint32_t positi
   model->criteria = decode_criteria(view, model->context.grid);
   model->split_rank.assign(view.node_count(), kNone);
   for (uint32_t i = 0; i < view.split_order.size(); ++i) model->split_rank[view.split_order[i]] = i;
-  model->climb_starts = ClimbStarts(view);
+  model->dependencies = DependencyFilter(view);
   protocol::StreamContext sender = model->context;
   sender.has_refinement = true;
   model->packets = protocol::PacketTable(view, sender);

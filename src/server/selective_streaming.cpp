@@ -18,7 +18,7 @@ void stream_vsplit(const ModelView& model, ActiveTags& tags, uint32_t node, std:
 
 // SelStreamVSplit(v) without recursion: v's split waits on the stack while the ancestor shared by
 // its cut vertices is split first, and so on down the chain.
-void sel_stream_vsplit(const ModelView& model, const ClimbStarts& starts, ActiveTags& tags, uint32_t node,
+void sel_stream_vsplit(const ModelView& model, const DependencyFilter& dependencies, ActiveTags& tags, uint32_t node,
                        std::vector<uint32_t>& out, std::vector<uint32_t>& stack) {
   stack.clear();
   stack.push_back(node);
@@ -28,12 +28,14 @@ void sel_stream_vsplit(const ModelView& model, const ClimbStarts& starts, Active
       stack.pop_back();
       continue;
     }
-    const uint32_t cut_l = model.cut_left[v], cut_r = model.cut_right[v];
-    if (cut_l != kNone && cut_r != kNone) {
-      const uint32_t left = active_ancestor(model, tags, cut_l, starts.of(model, v, 0));
-      if (left == active_ancestor(model, tags, cut_r, starts.of(model, v, 1))) {
-        stack.push_back(left);
-        continue;
+    if (dependencies.may_wait(v)) {
+      const uint32_t cut_l = model.cut_left[v], cut_r = model.cut_right[v];
+      if (cut_l != kNone && cut_r != kNone) {
+        const uint32_t left = active_ancestor(model, tags, cut_l);
+        if (left == active_ancestor(model, tags, cut_r)) {
+          stack.push_back(left);
+          continue;
+        }
       }
     }
     stream_vsplit(model, tags, v, out);
@@ -48,49 +50,41 @@ bool less_important(const std::pair<float, uint32_t>& a, const std::pair<float, 
 
 }  // namespace
 
-ClimbStarts::ClimbStarts(const ModelView& model) {
-  const size_t internal = (model.node_count() - model.root_count) / 2;
-  starts_.assign(2 * kLevels * internal, kNone);
+DependencyFilter::DependencyFilter(const ModelView& model) {
+  bits_.assign((model.node_count() + 63) / 64, 0);
   const auto depth = [&](uint32_t n) { return VertexId{0, model.node_id[n]}.depth(); };
-  for_each_range(model.node_count(), 1 << 16, [&](size_t begin, size_t end) {
-    for (size_t v = begin; v < end; ++v) {
-      if (model.is_leaf(uint32_t(v))) continue;
-      const int below = depth(uint32_t(v)) + 1;
-      uint32_t* out = &starts_[(size_t(model.first_child[v]) - model.root_count) * kLevels];
-      for (int side = 0; side < 2; ++side, out += kLevels) {
-        uint32_t n = side == 0 ? model.cut_left[v] : model.cut_right[v];
-        if (n == kNone) continue;
-        for (int d = depth(n); d > below; --d) n = model.parent[n];
-        for (int level = 0; level < kLevels && n != kNone; ++level, n = model.parent[n]) out[level] = n;
+  const auto ancestor_at = [&](uint32_t n, int d) {
+    while (n != kNone && depth(n) > d) n = model.parent[n];
+    return n;
+  };
+  // Ranges of whole words, so threads never share one.
+  const size_t words = bits_.size();
+  for_each_range(words, 1024, [&](size_t begin, size_t end) {
+    for (size_t v = begin * 64; v < std::min<size_t>(end * 64, model.node_count()); ++v) {
+      uint32_t l = model.cut_left[v], r = model.cut_right[v];
+      if (model.is_leaf(uint32_t(v)) || l == kNone || r == kNone || model.tree_id[l] != model.tree_id[r]) continue;
+      const int common = std::min(depth(l), depth(r));
+      l = ancestor_at(l, common);
+      r = ancestor_at(r, common);
+      while (l != r) {
+        l = model.parent[l];
+        r = model.parent[r];
       }
+      const bool above_v = depth(l) < depth(uint32_t(v)) && ancestor_at(uint32_t(v), depth(l)) == l;
+      if (!above_v) bits_[v / 64] |= uint64_t(1) << (v % 64);
     }
   });
 }
 
-uint32_t active_ancestor(const ModelView& model, const ActiveTags& tags, uint32_t leaf, const uint32_t* starts) {
-  uint32_t up = kNone;  // the next ancestor above the starts
-  if (starts) {
-    for (int level = 0; level < ClimbStarts::kLevels && starts[level] != kNone; ++level) {
-      if (tags.is_active(starts[level])) return starts[level];
-      up = starts[level];
-    }
-    if (up != kNone) up = model.parent[up];
-  }
-  // Two independent chains of loads, so the misses of one overlap the other's.
-  for (uint32_t low = leaf;;) {
-    if (up != kNone) {
-      if (tags.is_active(up)) return up;
-      up = model.parent[up];
-    }
-    if (low == kNone || tags.is_active(low)) return low;
-    low = model.parent[low];
-  }
+uint32_t active_ancestor(const ModelView& model, const ActiveTags& tags, uint32_t node) {
+  while (node != kNone && !tags.is_active(node)) node = model.parent[node];
+  return node;
 }
 
-void SelectiveStreamer::start(const ModelView& model, const ClimbStarts& starts, ActiveTags& tags,
+void SelectiveStreamer::start(const ModelView& model, const DependencyFilter& dependencies, ActiveTags& tags,
                               Importance importance) {
   model_ = &model;
-  starts_ = &starts;
+  dependencies_ = &dependencies;
   tags_ = &tags;
   importance_ = std::move(importance);
   heap_.clear();
@@ -113,7 +107,7 @@ bool SelectiveStreamer::step(size_t max_splits, std::vector<uint32_t>& out) {
     heap_.pop_back();
     if (!tags_->is_active(v)) continue;  // split earlier as a dependency
     const size_t before = out.size();
-    sel_stream_vsplit(model, *starts_, *tags_, v, out, stack_);
+    sel_stream_vsplit(model, *dependencies_, *tags_, v, out, stack_);
     // Children of every split just made may want refining too; forced splits' children included.
     for (size_t i = before; i < out.size(); ++i) {
       const uint32_t child = model.first_child[out[i]];
@@ -131,17 +125,17 @@ bool SelectiveStreamer::step(size_t max_splits, std::vector<uint32_t>& out) {
 
 void SelectiveStreamer::stop() {
   model_ = nullptr;
-  starts_ = nullptr;
+  dependencies_ = nullptr;
   tags_ = nullptr;
   importance_ = nullptr;
   std::vector<std::pair<float, uint32_t>>().swap(heap_);
   std::vector<uint32_t>().swap(stack_);
 }
 
-bool selective_streaming(const ModelView& model, const ClimbStarts& starts, ActiveTags& tags,
+bool selective_streaming(const ModelView& model, const DependencyFilter& dependencies, ActiveTags& tags,
                          const Importance& importance, size_t max_splits, std::vector<uint32_t>& out) {
   SelectiveStreamer streamer;
-  streamer.start(model, starts, tags, importance);
+  streamer.start(model, dependencies, tags, importance);
   return streamer.step(max_splits, out);
 }
 

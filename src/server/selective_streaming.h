@@ -13,30 +13,21 @@
 
 namespace pms {
 
-// Where ActiveAncestor starts climbing for a split's fundamental cut vertices: the cut vertex's ancestors
-// one level below the node being split and at its level. The cut vertices are leaves, ~6 levels below
-// the active node they stand for, and in a model of a million nodes every level is a cache miss; the
-// front is rarely more than a level or two from the split node's (dragon: 62 % at these two levels, 91 %
-// within two levels). Built once per model, shared by its sessions: 16 bytes per internal node, one
-// aligned block with both sides' starts.
-class ClimbStarts {
+// Which splits SelStreamVSplit's partial-order check can ever stop (kim-lee-kobbelt §5.3): v_s waits when
+// ActiveAncestor(v̂_l) = ActiveAncestor(v̂_r). Both climbs miss the cache at every level of a large model,
+// yet the answer is known for most splits from the hierarchy alone. When v̂_l and v̂_r lie in different
+// trees, or their deepest common ancestor w is a strict ancestor of v_s, w is split whenever v_s is active,
+// so the two active ancestors lie below w on different branches and differ. Only the rest are checked
+// (dragon: 6 % of splits). One bit per node, built once per model and shared by its sessions.
+class DependencyFilter {
  public:
-  static constexpr int kLevels = 2;  // per side: the ancestor below v's level, then its parent
-  ClimbStarts() = default;           // no starts: every climb begins at the cut vertex itself
-  explicit ClimbStarts(const ModelView& model);
-  // kLevels ancestors-or-self of the `side` (0 left, 1 right) cut vertex of internal `node`, nearest the
-  // cut first; nullptr when there are no starts or no such cut vertex.
-  const uint32_t* of(const ModelView& model, uint32_t node, int side) const {
-    const uint32_t cut = side == 0 ? model.cut_left[node] : model.cut_right[node];
-    if (starts_.empty() || cut == kNone) return nullptr;
-    // Children come in adjacent pairs tiling [root_count, node_count) (pms_validate), so a split node's
-    // first child numbers the internal nodes densely.
-    return &starts_[(size_t(model.first_child[node]) - model.root_count) * kLevels + size_t(side) * kLevels];
-  }
-  size_t memory_bytes() const { return starts_.capacity() * sizeof(uint32_t); }
+  DependencyFilter() = default;  // nothing known: every split is checked
+  explicit DependencyFilter(const ModelView& model);
+  bool may_wait(uint32_t node) const { return bits_.empty() || ((bits_[node / 64] >> (node % 64)) & 1); }
+  size_t memory_bytes() const { return bits_.capacity() * sizeof(uint64_t); }
 
  private:
-  std::vector<uint32_t> starts_;
+  std::vector<uint64_t> bits_;
 };
 
 // importance(node) > 0 when qrefine(node) holds for the view; larger = more visible error.
@@ -46,7 +37,7 @@ using Importance = std::function<float(uint32_t node)>;
 // start() ranks the front once; each step() hands out the next most important splits.
 class SelectiveStreamer {
  public:
-  void start(const ModelView& model, const ClimbStarts& starts, ActiveTags& tags, Importance importance);
+  void start(const ModelView& model, const DependencyFilter& dependencies, ActiveTags& tags, Importance importance);
   // Appends up to `max_splits` nodes to split to `out`, each after every split it depends on, and
   // updates the tags as if they were sent. Returns true once the view is fully served.
   bool step(size_t max_splits, std::vector<uint32_t>& out);
@@ -56,7 +47,7 @@ class SelectiveStreamer {
 
  private:
   const ModelView* model_ = nullptr;
-  const ClimbStarts* starts_ = nullptr;
+  const DependencyFilter* dependencies_ = nullptr;
   ActiveTags* tags_ = nullptr;
   Importance importance_;
   std::vector<std::pair<float, uint32_t>> heap_;
@@ -64,12 +55,10 @@ class SelectiveStreamer {
 };
 
 // The whole answer at once (tests and tools): returns whether the view is served within max_splits.
-bool selective_streaming(const ModelView& model, const ClimbStarts& starts, ActiveTags& tags,
+bool selective_streaming(const ModelView& model, const DependencyFilter& dependencies, ActiveTags& tags,
                          const Importance& importance, size_t max_splits, std::vector<uint32_t>& out);
 
-// ActiveAncestor (kim-lee-kobbelt §4) on the server: the active node on the path from `leaf` to its root.
-// `starts` (ClimbStarts::of, or nullptr) are tried first, then a climb from above them runs beside the one
-// from the leaf; whichever meets the front first answers.
-uint32_t active_ancestor(const ModelView& model, const ActiveTags& tags, uint32_t leaf, const uint32_t* starts);
+// ActiveAncestor (kim-lee-kobbelt §4) on the server: walk up from `node` to the active node.
+uint32_t active_ancestor(const ModelView& model, const ActiveTags& tags, uint32_t node);
 
 }  // namespace pms

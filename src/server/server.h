@@ -29,7 +29,7 @@ struct ServedModel {
   std::shared_ptr<const std::vector<uint8_t>> base_frame;
   std::vector<NodeCriteria> criteria;  // per node
   std::vector<uint32_t> split_rank;    // per node: its index in split_order (view-independent mode); leaves kNone
-  ClimbStarts climb_starts;
+  DependencyFilter dependencies;
   protocol::PacketTable packets;  // sender-driven packets (with refinement info)
   const ModelView& view() const { return file->view(); }
 };

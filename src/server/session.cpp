@@ -16,19 +16,6 @@ namespace {
 using protocol::ErrorCode;
 using protocol::ProtocolError;
 
-// Screen-space error (squared, in units of pixel_angle²·τ²-free radians²) of a node that qrefine
-// wants split: the larger of Hoppe's two deviation terms over the squared eye distance. Orders a
-// VIEW's answer so the most visible error is fixed first.
-float visible_error(const ViewCriteria& view, const NodeCriteria& node) {
-  if (!qrefine(view, node)) return 0;
-  float d[3];
-  for (int k = 0; k < 3; ++k) d[k] = node.p[k] - view.eye[k];
-  const float d2 = std::max(d[0] * d[0] + d[1] * d[1] + d[2] * d[2], 1e-30f);
-  const float along = d[0] * node.axis[0] + d[1] * node.axis[1] + d[2] * node.axis[2];
-  const float error = std::max(node.mu2 * d2, node.delta2 * (d2 - along * along)) / (d2 * d2);
-  return std::max(error, 1e-30f);  // qrefine held: stay > 0 even when it underflows
-}
-
 }  // namespace
 
 Session::Session(std::shared_ptr<const Catalogue> catalogue, const ServerLimits& limits)
@@ -122,7 +109,8 @@ void Session::on_view(const protocol::View& m) {
   }
   // A new VIEW replaces the one being answered: what was not sent yet is judged again under the new one.
   const std::vector<NodeCriteria>& criteria = model_->criteria;
-  streamer_.start(model, model_->climb_starts, tags_, [this, &criteria](uint32_t node) { return visible_error(view_, criteria[node]); });
+  streamer_.start(model, model_->dependencies, tags_,
+                  [this, &criteria](uint32_t node) { return refinement_priority(view_, criteria[node]); });
 }
 
 // The shortest prefix of split_order whose front satisfies the view. SelectiveStreaming on a copy of the
@@ -134,13 +122,13 @@ uint64_t Session::prefix_for_view() const {
   const ModelView& model = model_->view();
   const std::vector<NodeCriteria>& criteria = model_->criteria;
   const ViewCriteria& view = view_;
-  const Importance importance = [&](uint32_t node) { return visible_error(view, criteria[node]); };
+  const Importance importance = [&](uint32_t node) { return refinement_priority(view, criteria[node]); };
   ActiveTags front = tags_;
   uint64_t end = sent_;
   std::vector<uint32_t> wanted;
   for (;;) {
     wanted.clear();
-    selective_streaming(model, model_->climb_starts, front, importance, SIZE_MAX, wanted);
+    selective_streaming(model, model_->dependencies, front, importance, SIZE_MAX, wanted);
     if (wanted.empty()) return end;
     uint64_t furthest = end;
     for (uint32_t node : wanted) furthest = std::max<uint64_t>(furthest, uint64_t(model_->split_rank[node]) + 1);

@@ -67,7 +67,7 @@ void deliver(const ModelView& model, const std::vector<uint32_t>& batch, Client&
 TEST(SelectiveStreaming, BatchesApplyInOrderAndTheFrontMatchesTheServer) {
   const BuildResult built = build_progressive_mesh(make_terrain(20000, 3), BuildOptions{});
   const ModelView model = view_of(built.hierarchy);
-  const ClimbStarts starts(model);
+  const DependencyFilter dependencies(model);
   for (uint32_t seed = 1; seed <= 3; ++seed) {
     SCOPED_TRACE(seed);
     ActiveTags tags(model.root_count), tags_from_leaves(model.root_count);
@@ -81,10 +81,10 @@ TEST(SelectiveStreaming, BatchesApplyInOrderAndTheFrontMatchesTheServer) {
         return (h % 5 < 2) ? float(h % 1000 + 1) : 0.0f;
       };
       batch.clear();
-      ASSERT_TRUE(selective_streaming(model, starts, tags, importance, SIZE_MAX, batch));
-      // Where ActiveAncestor starts climbing changes what it costs, never the answer.
+      ASSERT_TRUE(selective_streaming(model, dependencies, tags, importance, SIZE_MAX, batch));
+      // Skipping the partial-order checks that cannot fire changes what a split costs, never the answer.
       batch_from_leaves.clear();
-      ASSERT_TRUE(selective_streaming(model, ClimbStarts(), tags_from_leaves, importance, SIZE_MAX, batch_from_leaves));
+      ASSERT_TRUE(selective_streaming(model, DependencyFilter(), tags_from_leaves, importance, SIZE_MAX, batch_from_leaves));
       ASSERT_EQ(batch, batch_from_leaves);
       deliver(model, batch, client);
       EXPECT_FALSE(batch.empty()) << "view " << view << " sent nothing";
@@ -109,8 +109,8 @@ TEST(SelectiveStreaming, EverythingWantedStreamsTheWholeModelOnce) {
   const Importance everything = [](uint32_t) { return 1.0f; };
   // In bounded batches, as a server does per VIEW; the last step reports the view served.
   SelectiveStreamer streamer;
-  const ClimbStarts starts(model);
-  streamer.start(model, starts, tags, everything);
+  const DependencyFilter dependencies(model);
+  streamer.start(model, dependencies, tags, everything);
   bool served = false;
   for (int call = 0; call < 10000 && !served; ++call) {
     const size_t before = batch.size();
@@ -124,7 +124,7 @@ TEST(SelectiveStreaming, EverythingWantedStreamsTheWholeModelOnce) {
   EXPECT_EQ(tags.active_count(), built.stats.input_vertices);
   // A second pass finds nothing to send.
   const size_t total = batch.size();
-  EXPECT_TRUE(selective_streaming(model, starts, tags, everything, SIZE_MAX, batch));
+  EXPECT_TRUE(selective_streaming(model, dependencies, tags, everything, SIZE_MAX, batch));
   EXPECT_EQ(batch.size(), total);
 }
 
