@@ -43,10 +43,14 @@ void sel_stream_vsplit(const ModelView& model, const DependencyFilter& dependenc
   }
 }
 
-// Max-heap on importance; ties broken by node index, so the batch is the same on every run.
-bool less_important(const std::pair<float, uint32_t>& a, const std::pair<float, uint32_t>& b) {
-  return a.first < b.first || (a.first == b.first && a.second > b.second);
-}
+// Max-heap on importance; ties broken by node index, so the batch is the same on every run. A function
+// object, not a function pointer, so the heap algorithms inline it.
+struct LessImportant {
+  bool operator()(const std::pair<float, uint32_t>& a, const std::pair<float, uint32_t>& b) const {
+    return a.first < b.first || (a.first == b.first && a.second > b.second);
+  }
+};
+constexpr LessImportant less_important;
 
 }  // namespace
 

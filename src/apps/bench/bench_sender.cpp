@@ -203,6 +203,7 @@ struct E11 {
   double server_cpu = 0, server_rss_mb = 0, seconds = 0;
   uint64_t bytes_out = 0;
   double p50 = 0, p99 = 0;
+  double first_p50 = 0, first_p99 = 0, later_p99 = 0;  // a client's first VIEW (from the base mesh) and the rest
   std::string error;
 };
 
@@ -280,10 +281,18 @@ E11 run_e11(const BenchContext& context, const Model& m, uint32_t clients) {
   e.server_rss_mb = server_run.peak_rss_mb;
   const size_t at = server_run.out.find("bytes in, ");
   if (at != std::string::npos) e.bytes_out = std::strtoull(server_run.out.c_str() + at + 10, nullptr, 10);
-  std::vector<double> all;
-  for (const auto& l : latencies) all.insert(all.end(), l.begin(), l.end());
+  std::vector<double> all, first, later;
+  for (const auto& l : latencies) {
+    all.insert(all.end(), l.begin(), l.end());
+    if (l.empty()) continue;
+    first.push_back(l.front());
+    later.insert(later.end(), l.begin() + 1, l.end());
+  }
   e.p50 = percentile(all, 0.5);
   e.p99 = percentile(all, 0.99);
+  e.first_p50 = percentile(first, 0.5);
+  e.first_p99 = percentile(first, 0.99);
+  e.later_p99 = percentile(later, 0.99);
   return e;
 }
 
@@ -357,17 +366,20 @@ void run_sender_group(BenchContext& context) {
   // E11 on the largest model asked for.
   const Model& big = models.back();
   Table e11({{"clients", true}, {"failed", true}, {"server CPU s", true}, {"server peak RSS MB", true},
-             {"bytes out", true}, {"latency p50 ms", true}, {"p99 ms", true}, {"wall s", true}});
+             {"bytes out", true}, {"latency p50 ms", true}, {"p99 ms", true}, {"first VIEW p50 ms", true},
+             {"first p99 ms", true}, {"later p99 ms", true}, {"wall s", true}});
   json e11_json = json::array();
   for (uint32_t n : quick ? kQuickClientCounts : kClientCounts) {
     std::fprintf(stderr, "bench: E11 %u clients on %s ... ", n, big.name.c_str());
     const E11 e = run_e11(context, big, n);
     std::fprintf(stderr, "%.1f s\n", e.seconds);
     e11.add_row({std::to_string(n), std::to_string(e.failed), fixed(e.server_cpu, 2), fixed(e.server_rss_mb, 0),
-                 thousands(e.bytes_out), fixed(e.p50, 2), fixed(e.p99, 2), fixed(e.seconds, 1)});
+                 thousands(e.bytes_out), fixed(e.p50, 2), fixed(e.p99, 2), fixed(e.first_p50, 2), fixed(e.first_p99, 2),
+                 fixed(e.later_p99, 2), fixed(e.seconds, 1)});
     e11_json.push_back({{"clients", n}, {"failed", e.failed}, {"error", e.error}, {"server_cpu_seconds", e.server_cpu},
                         {"server_peak_rss_mb", e.server_rss_mb}, {"bytes_out", e.bytes_out}, {"p50_ms", e.p50},
-                        {"p99_ms", e.p99}, {"seconds", e.seconds}});
+                        {"p99_ms", e.p99}, {"first_view_p50_ms", e.first_p50}, {"first_view_p99_ms", e.first_p99},
+                        {"later_views_p99_ms", e.later_p99}, {"seconds", e.seconds}});
   }
   out["e11"] = e11_json;
   print("\nE11: clients against one server process on " + big.name + " (" + std::to_string(kE11Frames) +
