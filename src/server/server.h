@@ -39,6 +39,7 @@ struct ServerLimits {
   uint32_t max_client_message = 4u << 20;  // a resume front of millions of leaves is ~2 bits each
   uint32_t max_server_message = protocol::kDefaultMaxMessage;
   size_t send_queue_bytes = 64u << 10;     // back-pressure: no new batch while more than this waits
+  size_t send_burst_bytes = 1u << 20;      // sent at once by one handler before other sessions get a turn
   uint32_t batch_splits = 1024;            // vsplit packets per VSPLITS message
   uint32_t idle_timeout_ms = 300000;
   uint32_t position_bits = protocol::kDefaultPositionBits;
