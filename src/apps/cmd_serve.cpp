@@ -42,10 +42,12 @@ void run_serve(const ServeArgs& args) {
   sigwait(&signals, &received);
   tcp.stop();
   const server::ServerStats& s = tcp.stats();
-  std::printf("stopped: %llu sessions (%llu refused), %llu bytes in, %llu bytes out, %llu vsplits sent\n",
+  std::printf("stopped: %llu sessions (%llu refused), %llu bytes in, %llu bytes out, %llu vsplits sent, "
+              "peak session state %llu bytes (%llu without its active tags)\n",
               (unsigned long long)s.sessions_opened.load(), (unsigned long long)s.sessions_rejected.load(),
               (unsigned long long)s.bytes_in.load(), (unsigned long long)s.bytes_out.load(),
-              (unsigned long long)s.splits_sent.load());
+              (unsigned long long)s.splits_sent.load(), (unsigned long long)s.peak_state_bytes.load(),
+              (unsigned long long)s.peak_buffer_bytes.load());
 }
 
 }  // namespace

@@ -16,7 +16,12 @@ void ActiveTags::activate(uint32_t node) {
     words_.insert(words_.begin(), size_t(first_word_ - w), 0);
     first_word_ = w;
   }
-  if (w >= first_word_ + words_.size()) words_.resize(size_t(w - first_word_ + 1), 0);
+  if (w >= first_word_ + words_.size()) {
+    // Grow by an eighth, not by doubling: the bits held stay within ~12 % of the window (amortized O(1)).
+    const size_t size = size_t(w - first_word_ + 1);
+    if (size > words_.capacity()) words_.reserve(std::max(size, words_.capacity() + words_.capacity() / 8 + 8));
+    words_.resize(size, 0);
+  }
   uint64_t& word = words_[w - first_word_];
   const uint64_t bit = uint64_t(1) << (node % 64);
   active_ += (word & bit) == 0;

@@ -91,20 +91,52 @@ void SelectiveStreamer::start(const ModelView& model, const DependencyFilter& de
   dependencies_ = &dependencies;
   tags_ = &tags;
   importance_ = std::move(importance);
+  heap_.reserve(kMaxRanked);
+  rank_front();
+}
+
+bool SelectiveStreamer::rank_front() {
+  // The kMaxRanked most important in one pass: a min-heap on importance while scanning, then a max-heap.
+  const auto more_important = [](const std::pair<float, uint32_t>& a, const std::pair<float, uint32_t>& b) {
+    return less_important(b, a);
+  };
   heap_.clear();
-  for (uint32_t v = tags.next_active(0); v != UINT32_MAX; v = tags.next_active(v + 1)) {
+  overflow_ = false;
+  const ModelView& model = *model_;
+  for (uint32_t v = tags_->next_active(0); v != UINT32_MAX; v = tags_->next_active(v + 1)) {
     if (model.is_leaf(v)) continue;
-    const float error = importance_(v);
-    if (error > 0) heap_.emplace_back(error, v);
+    const std::pair<float, uint32_t> entry{importance_(v), v};
+    if (entry.first <= 0) continue;
+    if (heap_.size() < kMaxRanked) {
+      heap_.push_back(entry);
+      std::push_heap(heap_.begin(), heap_.end(), more_important);
+      continue;
+    }
+    overflow_ = true;
+    if (!more_important(entry, heap_.front())) continue;
+    std::pop_heap(heap_.begin(), heap_.end(), more_important);
+    heap_.back() = entry;
+    std::push_heap(heap_.begin(), heap_.end(), more_important);
   }
   std::make_heap(heap_.begin(), heap_.end(), less_important);
+  return !heap_.empty();
+}
+
+void SelectiveStreamer::rank(uint32_t node, float importance) {
+  if (heap_.size() >= kMaxRanked) {
+    overflow_ = true;
+    return;
+  }
+  heap_.emplace_back(importance, node);
+  std::push_heap(heap_.begin(), heap_.end(), less_important);
 }
 
 bool SelectiveStreamer::step(size_t max_splits, std::vector<uint32_t>& out) {
   if (!model_) return true;
   const ModelView& model = *model_;
   const size_t start = out.size();
-  while (!heap_.empty()) {
+  for (;;) {
+    if (heap_.empty() && (!overflow_ || !rank_front())) return true;
     if (out.size() - start >= max_splits) return false;
     std::pop_heap(heap_.begin(), heap_.end(), less_important);
     const uint32_t v = heap_.back().second;
@@ -118,13 +150,10 @@ bool SelectiveStreamer::step(size_t max_splits, std::vector<uint32_t>& out) {
       for (uint32_t c : {child, child + 1}) {
         if (!tags_->is_active(c) || model.is_leaf(c)) continue;
         const float error = importance_(c);
-        if (error <= 0) continue;
-        heap_.emplace_back(error, c);
-        std::push_heap(heap_.begin(), heap_.end(), less_important);
+        if (error > 0) rank(c, error);
       }
     }
   }
-  return true;
 }
 
 void SelectiveStreamer::stop() {

@@ -34,9 +34,13 @@ class DependencyFilter {
 using Importance = std::function<float(uint32_t node)>;
 
 // One VIEW's answer, produced in batches so a session holds encoded bytes for one batch at a time:
-// start() ranks the front once; each step() hands out the next most important splits.
+// start() ranks the front; each step() hands out the next most important splits. The ranking is bounded
+// (kMaxRanked nodes, 8 KB) so a session's memory stays its tags plus a few KB whatever the view: a child
+// that finds it full waits for the next scan of the front, made when the ranking runs dry.
 class SelectiveStreamer {
  public:
+  static constexpr size_t kMaxRanked = 1024;
+
   void start(const ModelView& model, const DependencyFilter& dependencies, ActiveTags& tags, Importance importance);
   // Appends up to `max_splits` nodes to split to `out`, each after every split it depends on, and
   // updates the tags as if they were sent. Returns true once the view is fully served.
@@ -44,13 +48,20 @@ class SelectiveStreamer {
   bool active() const { return model_ != nullptr; }
   // Frees the ranking (a served view keeps no memory in the session).
   void stop();
+  size_t memory_bytes() const { return heap_.capacity() * sizeof(heap_[0]) + stack_.capacity() * sizeof(uint32_t); }
 
  private:
   const ModelView* model_ = nullptr;
   const DependencyFilter* dependencies_ = nullptr;
   ActiveTags* tags_ = nullptr;
   Importance importance_;
-  std::vector<std::pair<float, uint32_t>> heap_;
+  // Ranks the front afresh: its kMaxRanked most important wanted nodes; false when it wants none.
+  bool rank_front();
+  // Ranks `node` if there is room; otherwise it waits for the next rank_front().
+  void rank(uint32_t node, float importance);
+
+  std::vector<std::pair<float, uint32_t>> heap_;  // max-heap, at most kMaxRanked
+  bool overflow_ = false;                         // a wanted node is in neither the heap nor done
   std::vector<uint32_t> stack_;
 };
 

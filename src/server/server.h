@@ -116,7 +116,8 @@ class Session {
 struct ServerStats {
   std::atomic<uint64_t> sessions_opened{0}, sessions_active{0}, sessions_rejected{0};
   std::atomic<uint64_t> bytes_in{0}, bytes_out{0}, splits_sent{0}, errors_sent{0};
-  std::atomic<uint64_t> peak_state_bytes{0};  // the largest Session::state_bytes() seen
+  std::atomic<uint64_t> peak_state_bytes{0};   // the largest Session::state_bytes() seen
+  std::atomic<uint64_t> peak_buffer_bytes{0};  // the same without the active tags
 };
 
 // TCP transport: `threads` I/O threads, one strand per connection, every read bounded by the frame

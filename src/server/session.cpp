@@ -178,7 +178,7 @@ bool Session::pump() {
 }
 
 size_t Session::state_bytes() const {
-  return sizeof(*this) + tags_.memory_bytes() + batch_.capacity() * sizeof(uint32_t);
+  return sizeof(*this) + tags_.memory_bytes() + streamer_.memory_bytes() + batch_.capacity() * sizeof(uint32_t);
 }
 
 }  // namespace pms::server

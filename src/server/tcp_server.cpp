@@ -160,6 +160,7 @@ void Connection::pump_and_write() {
     queued_bytes_ -= front_written_;
     while (queued_bytes_ <= limits_.send_queue_bytes && session_.pump()) queued_bytes_ += outbox.back()->size();
     update_max(stats_.peak_state_bytes, session_.state_bytes());
+    update_max(stats_.peak_buffer_bytes, session_.state_bytes() - session_.tags().memory_bytes());
     if (writing_ || closed_ || outbox.empty() || burst >= limits_.send_burst_bytes || !write_now(burst)) break;
   }
   write_next();

@@ -8,6 +8,7 @@
 #include <cmath>
 #include <csignal>
 #include <cstdio>
+#include <cstring>
 #include <fstream>
 #include <thread>
 
@@ -202,6 +203,8 @@ struct E11 {
   uint32_t clients = 0, failed = 0;
   double server_cpu = 0, server_rss_mb = 0, seconds = 0;
   uint64_t bytes_out = 0;
+  uint64_t session_state_bytes = 0;   // the largest one session held (tags, a VIEW's ranking, scratch)
+  uint64_t session_buffer_bytes = 0;  // the same without the tags
   double p50 = 0, p99 = 0;
   double first_p50 = 0, first_p99 = 0, later_p99 = 0;  // a client's first VIEW (from the base mesh) and the rest
   std::string error;
@@ -281,6 +284,13 @@ E11 run_e11(const BenchContext& context, const Model& m, uint32_t clients) {
   e.server_rss_mb = server_run.peak_rss_mb;
   const size_t at = server_run.out.find("bytes in, ");
   if (at != std::string::npos) e.bytes_out = std::strtoull(server_run.out.c_str() + at + 10, nullptr, 10);
+  const std::string state = "peak session state ";
+  const size_t state_at = server_run.out.find(state);
+  if (state_at != std::string::npos) {
+    char* end = nullptr;
+    e.session_state_bytes = std::strtoull(server_run.out.c_str() + state_at + state.size(), &end, 10);
+    if (std::strncmp(end, " bytes (", 8) == 0) e.session_buffer_bytes = std::strtoull(end + 8, nullptr, 10);
+  }
   std::vector<double> all, first, later;
   for (const auto& l : latencies) {
     all.insert(all.end(), l.begin(), l.end());
@@ -366,6 +376,7 @@ void run_sender_group(BenchContext& context) {
   // E11 on the largest model asked for.
   const Model& big = models.back();
   Table e11({{"clients", true}, {"failed", true}, {"server CPU s", true}, {"server peak RSS MB", true},
+             {"peak session KB", true}, {"without tags KB", true},
              {"bytes out", true}, {"latency p50 ms", true}, {"p99 ms", true}, {"first VIEW p50 ms", true},
              {"first p99 ms", true}, {"later p99 ms", true}, {"wall s", true}});
   json e11_json = json::array();
@@ -374,10 +385,13 @@ void run_sender_group(BenchContext& context) {
     const E11 e = run_e11(context, big, n);
     std::fprintf(stderr, "%.1f s\n", e.seconds);
     e11.add_row({std::to_string(n), std::to_string(e.failed), fixed(e.server_cpu, 2), fixed(e.server_rss_mb, 0),
+                 fixed(double(e.session_state_bytes) / 1024, 1), fixed(double(e.session_buffer_bytes) / 1024, 1),
                  thousands(e.bytes_out), fixed(e.p50, 2), fixed(e.p99, 2), fixed(e.first_p50, 2), fixed(e.first_p99, 2),
                  fixed(e.later_p99, 2), fixed(e.seconds, 1)});
     e11_json.push_back({{"clients", n}, {"failed", e.failed}, {"error", e.error}, {"server_cpu_seconds", e.server_cpu},
-                        {"server_peak_rss_mb", e.server_rss_mb}, {"bytes_out", e.bytes_out}, {"p50_ms", e.p50},
+                        {"server_peak_rss_mb", e.server_rss_mb}, {"peak_session_state_bytes", e.session_state_bytes},
+                        {"peak_session_bytes_without_tags", e.session_buffer_bytes},
+                        {"bytes_out", e.bytes_out}, {"p50_ms", e.p50},
                         {"p99_ms", e.p99}, {"first_view_p50_ms", e.first_p50}, {"first_view_p99_ms", e.first_p99},
                         {"later_views_p99_ms", e.later_p99}, {"seconds", e.seconds}});
   }
