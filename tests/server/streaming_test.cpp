@@ -10,9 +10,11 @@
 
 #include <algorithm>
 #include <array>
+#include <chrono>
 #include <cmath>
 #include <filesystem>
 #include <map>
+#include <optional>
 #include <thread>
 
 #include "build/build.h"
@@ -372,6 +374,62 @@ TEST(Streaming, HostileInputGetsAnErrorWhileAGoodSessionGoesOn) {
   for (uint32_t t = 0; t < roots; ++t) resume_vi.resume.push_back({t, 1});
   EXPECT_EQ(send_raw(port, {hello, protocol::encode(resume_vi)}), ErrorCode::bad_message);
   good.join();
+}
+
+// HELLO, OPEN and one VIEW on a raw connection, then the answer read `chunk` bytes at a time with `pause`
+// between reads; returns the ids of the splits, in order, up to the VIEW's final batch.
+std::vector<VertexId> raw_answer(uint16_t port, const Camera& camera, float tolerance, size_t chunk,
+                                 std::chrono::milliseconds pause) {
+  namespace asio = boost::asio;
+  asio::io_context io;
+  asio::ip::tcp::socket socket(io);
+  socket.open(asio::ip::tcp::v4());
+  socket.set_option(asio::socket_base::receive_buffer_size(int(chunk)));  // before connect: a small window
+  socket.connect({asio::ip::make_address("127.0.0.1"), port});
+  for (const auto& m : {protocol::encode(protocol::Hello{protocol::kProtocolVersion, "raw"}),
+                        protocol::encode(protocol::Open{"terrain", {}}),
+                        protocol::encode(protocol::View{camera, tolerance, 1})})
+    asio::write(socket, asio::buffer(m));
+  protocol::FrameReader reader;
+  std::optional<protocol::StreamContext> context;
+  std::vector<VertexId> ids;
+  std::vector<uint8_t> buffer(chunk);
+  for (;;) {
+    std::this_thread::sleep_for(pause);
+    const size_t n = socket.read_some(asio::buffer(buffer));
+    reader.feed(buffer.data(), n);
+    protocol::Frame frame;
+    while (reader.next(frame)) {
+      if (frame.type == protocol::MessageType::base) context = protocol::stream_context(protocol::decode_base(frame.payload));
+      if (frame.type != protocol::MessageType::vsplits) continue;
+      const protocol::VSplits batch = protocol::decode_vsplits(frame.payload, *context);
+      for (const SplitRecord& split : batch.splits) ids.push_back(split.vs);
+      if (batch.final) return ids;
+    }
+  }
+}
+
+TEST(Streaming, ASlowReaderGetsItsWholeAnswerAndStallsNobody) {
+  const Fixture& f = terrain();
+  server::ServerLimits limits;
+  limits.threads = 1;              // an I/O thread blocked on a full socket would stall every session
+  limits.send_queue_bytes = 2048;  // back-pressure after a frame or two,
+  limits.send_burst_bytes = 4096;  // and short bursts straight into the socket
+  Server server(f.catalogue, limits);
+  const uint16_t port = server.tcp.port();
+  const Camera close = orbit_path(f.hierarchy, 8, 0.4f).back();
+  std::vector<VertexId> slow;
+  std::thread reader([&] { slow = raw_answer(port, close, 0.25f, 4096, std::chrono::milliseconds(2)); });
+  // Meanwhile another session streams a whole path on the same, single I/O thread.
+  client::StreamingClient client("127.0.0.1", port, client::ClientOptions{1.0f});
+  client.open("terrain");
+  for (const Camera& camera : orbit_path(f.hierarchy, 8, 2.0f)) client.frame(camera);
+  EXPECT_GT(client.session().splits_received(), 0u);
+  reader.join();
+  // The same answer as a reader that takes everything at once.
+  const std::vector<VertexId> fast = raw_answer(port, close, 0.25f, 1 << 20, std::chrono::milliseconds(0));
+  EXPECT_GT(slow.size(), 2000u) << "the answer should be many times the socket buffers";
+  EXPECT_TRUE(slow == fast);
 }
 
 TEST(Streaming, ServerLossIsAClearError) {
