@@ -8,67 +8,59 @@
 namespace pms::protocol {
 namespace {
 
-// Nodes are encoded in blocks, each starting on a word of its own, so blocks fill the pool in parallel.
+// Nodes are encoded in blocks, each into a bit stream of its own on some core; the streams are then laid
+// end to end, each from a word boundary.
 constexpr size_t kBlockNodes = 4096;
 
-// Runs fn(block) over all blocks on every core; the first exception is rethrown here.
-template <class Fn>
-void for_each_block(size_t blocks, Fn&& fn) {
+struct Block {
+  std::vector<uint8_t> bytes;          // the block's packets back to back, padded to a byte
+  std::vector<uint64_t> where;         // per node of the block: bit offset in the block << kLengthBits | count
+};
+
+}  // namespace
+
+PacketTable::PacketTable(const ModelView& model, const StreamContext& context) {
+  if (const std::string why = check_context(context); !why.empty()) fail("VSPLITS", "stream context: " + why);
+  const size_t n = model.node_count();
+  std::vector<Block> blocks((n + kBlockNodes - 1) / kBlockNodes);
   std::exception_ptr failure;
   std::mutex failure_mutex;
-  for_each_range(blocks, 2, [&](size_t begin, size_t end) {
+  for_each_range(blocks.size(), 2, [&](size_t begin, size_t end) {
     try {
-      for (size_t b = begin; b < end; ++b) fn(b);
+      for (size_t b = begin; b < end; ++b) {
+        Writer w(MessageType::vsplits);
+        Block& block = blocks[b];
+        for (size_t v = b * kBlockNodes; v < std::min(n, (b + 1) * kBlockNodes); ++v) {
+          if (model.is_leaf(uint32_t(v))) {
+            block.where.push_back(0);
+            continue;
+          }
+          const uint64_t at = w.payload_bits();
+          write_packet(w, split_record(model, uint32_t(v)), context);
+          const uint64_t length = w.payload_bits() - at;
+          if (length >= (uint64_t(1) << kLengthBits)) fail("VSPLITS", "a packet of " + std::to_string(length) + " bits");
+          block.where.push_back(at << kLengthBits | length);
+        }
+        w.align();
+        block.bytes.assign(w.payload().begin(), w.payload().end());
+      }
     } catch (...) {
       std::lock_guard<std::mutex> lock(failure_mutex);
       if (!failure) failure = std::current_exception();
     }
   });
   if (failure) std::rethrow_exception(failure);
-}
-
-}  // namespace
-
-PacketTable::PacketTable(const ModelView& model, const StreamContext& context) {
-  if (const std::string why = check_context(context); !why.empty()) fail("VSPLITS", "stream context: " + why);
-  const size_t n = model.node_count(), blocks = (n + kBlockNodes - 1) / kBlockNodes;
-  // Pass 1: every packet's length, from the same accounting the encoder is tested against.
-  where_.assign(n, 0);
-  for_each_block(blocks, [&](size_t b) {
-    for (size_t v = b * kBlockNodes; v < std::min(n, (b + 1) * kBlockNodes); ++v)
-      if (!model.is_leaf(uint32_t(v))) where_[v] = packet_bits(split_record(model, uint32_t(v)), context).total();
-  });
-  // Offsets: packets back to back within a block, blocks word-aligned.
-  uint64_t at = 0;
-  for (size_t b = 0; b < blocks; ++b) {
-    at = (at + 63) / 64 * 64;
-    for (size_t v = b * kBlockNodes; v < std::min(n, (b + 1) * kBlockNodes); ++v) {
-      const uint64_t length = where_[v];
-      if (length >= (uint64_t(1) << kLengthBits)) fail("VSPLITS", "a packet of " + std::to_string(length) + " bits");
-      if (length) where_[v] = at << kLengthBits | length;
-      at += length;
-    }
+  size_t words = 1;  // +1: bits_from may read the word after a packet's last one
+  for (const Block& block : blocks) words += (block.bytes.size() + 7) / 8;
+  bits_.assign(words, 0);
+  where_.reserve(n);
+  size_t word = 0;
+  for (Block& block : blocks) {
+    for (size_t i = 0; i < block.bytes.size(); ++i) bits_[word + i / 8] |= uint64_t(block.bytes[i]) << (8 * (i % 8));
+    for (uint64_t w : block.where) where_.push_back(w ? w + (uint64_t(64 * word) << kLengthBits) : 0);
+    word += (block.bytes.size() + 7) / 8;
+    std::vector<uint8_t>().swap(block.bytes);
   }
-  bits_.assign((at + 63) / 64 + 1, 0);  // +1: bits_from may read the word after a packet's last one
-  // Pass 2: each packet through the encoder, its bits copied into place.
-  for_each_block(blocks, [&](size_t b) {
-    for (size_t v = b * kBlockNodes; v < std::min(n, (b + 1) * kBlockNodes); ++v) {
-      if (!where_[v]) continue;
-      Writer w(MessageType::vsplits);
-      write_packet(w, split_record(model, uint32_t(v)), context);
-      w.align();
-      const std::span<const uint8_t> bytes = w.payload();
-      uint64_t bit = where_[v] >> kLengthBits;
-      const uint64_t end = bit + (where_[v] & ((1u << kLengthBits) - 1));
-      for (size_t i = 0; bit < end; ++i) {
-        const unsigned take = unsigned(std::min<uint64_t>(8, end - bit));
-        const uint64_t value = bytes[i] & ((1u << take) - 1);
-        bits_[bit / 64] |= value << (bit % 64);
-        if (bit % 64 + take > 64) bits_[bit / 64 + 1] |= value >> (64 - bit % 64);
-        bit += take;
-      }
-    }
-  });
 }
 
 std::vector<uint8_t> PacketTable::encode(uint32_t frame, bool final, std::span<const uint32_t> nodes) const {

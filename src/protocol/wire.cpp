@@ -124,7 +124,7 @@ void Reader::fail(ErrorCode code, const char* field, const std::string& what) co
 // exists when there is a cone (the angle field's top value means "no cone").
 constexpr uint32_t kNoConeOnWire = (1u << kConeAngleBits) - 1;
 
-bool never_refines(const RefineInfo& info) { return info.mu == 0 && info.delta == 0; }
+static bool never_refines(const RefineInfo& info) { return info.mu == 0 && info.delta == 0; }
 
 void write_refine(Writer& w, const RefineInfo& info, const char* field) {
   if (!is_canonical(info)) fail(field, "refinement info is not at the stored precision (pms-format.md RINF)");

@@ -40,6 +40,7 @@ class Writer {
   void reserve_payload(size_t bytes) { out_.reserve(kFrameHeaderBytes + bytes); }
   // The payload written so far; only after align().
   std::span<const uint8_t> payload() const { return std::span<const uint8_t>(out_).subspan(kFrameHeaderBytes); }
+  uint64_t payload_bits() const { return 8 * uint64_t(out_.size() - kFrameHeaderBytes) + fill_; }
   std::vector<uint8_t> finish();
 
  private:
