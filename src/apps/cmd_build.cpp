@@ -1,4 +1,4 @@
-// pmstream build IN -o OUT.pms [--greedy] [--base-vertices N] [--json]
+// pmstream build IN -o OUT.pms [--greedy] [--base-vertices N] [--deviation bound|estimate] [--json]
 #include <cstdio>
 
 #include "apps/build_pipeline.h"
@@ -13,6 +13,7 @@ struct BuildArgs {
   std::string input, output;
   bool greedy = false, json = false;
   uint64_t base_vertices = BuildOptions{}.base_vertices;
+  std::string deviation = "bound";
 };
 
 void run_build(const BuildArgs& args) {
@@ -21,6 +22,7 @@ void run_build(const BuildArgs& args) {
   BuildOptions options;
   options.greedy = args.greedy;
   options.base_vertices = args.base_vertices;
+  options.deviation = args.deviation == "estimate" ? Deviation::estimate : Deviation::bound;
   options.progress = bar.callback();
   const BuildRun run = build_file(args.input, args.output, options);
   bar.finish();
@@ -53,6 +55,12 @@ void add_build_command(CLI::App& app) {
   cmd->add_option("-o,--output", args->output, "Output .pms file")->required();
   cmd->add_flag("--greedy", args->greedy, "Classic one-at-a-time PM order (view-independent baseline)");
   cmd->add_option("--base-vertices", args->base_vertices, "Stop when the base mesh has this many vertices (0: as coarse as the mesh allows)")
+      ->capture_default_str();
+  cmd->add_option("--deviation", args->deviation,
+                  "Error each node claims: 'bound' covers the input surface below it, so the screen-space error never "
+                  "exceeds the tolerance; 'estimate' is Hoppe 1997's sampled estimate: fewer splits for the same "
+                  "tolerance, an error that may exceed it")
+      ->check(CLI::IsMember({"bound", "estimate"}))
       ->capture_default_str();
   cmd->add_flag("--json", args->json, "Print one JSON object with the statistics");
   cmd->callback([args] { run_build(*args); });

@@ -112,7 +112,7 @@ class CandidateCollector {
 
 CollapseForest simplify_balanced(const Mesh& input, const BuildOptions& options) {
   CollapseMesh mesh(input);
-  CollapseRecorder recorder(input, mesh);
+  CollapseRecorder recorder(input, mesh, options.deviation);
   const uint32_t start = mesh.alive_vertex_count();
   const uint32_t target = uint32_t(std::clamp<uint64_t>(options.base_vertices, 1, start));  // 0 -> 1: no limit
   const double diagonal = bounds_of(input.positions).diagonal();

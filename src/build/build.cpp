@@ -91,6 +91,7 @@ BuildResult build_progressive_mesh(const Mesh& mesh, const BuildOptions& options
   BuildStats& s = result.stats;
   s.options = options.greedy ? "greedy" : "balanced";
   s.options += " base_vertices=" + std::to_string(options.base_vertices);
+  if (options.deviation == Deviation::estimate) s.options += " deviation=estimate";
   s.input_vertices = mesh.vertex_count();
   s.input_faces = mesh.face_count();
   s.base_vertices = h.root_count;

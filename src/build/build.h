@@ -10,12 +10,21 @@
 
 namespace pms {
 
+// What a node's deviation space (mu, delta) holds (docs/internals.md, "Refinement info").
+enum class Deviation {
+  bound,     // a bound on the whole input surface below the node: sampled leaves, and each child's space
+             // plus how far this collapse moved the surface (triangle inequality). τ px is never exceeded.
+  estimate,  // Hoppe 1997's estimate: sampled leaves and the moved surface, at least each child's space.
+             // Fewer splits for the same τ (a close view of bunny: 0.7x), an error that may exceed τ.
+};
+
 struct BuildOptions {
   bool greedy = false;         // classic one-at-a-time PM order (the view-independent baseline)
   // Stop once the base mesh has this many vertices, or earlier when no valid collapse is left
   // (0: as coarse as the mesh allows). The default keeps the base a few KB and ids short: the last
   // few rounds below it add a level to the hierarchy each while removing only a handful of vertices.
   uint64_t base_vertices = 64;
+  Deviation deviation = Deviation::bound;
   ProgressFn progress;
 };
 

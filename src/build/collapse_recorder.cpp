@@ -10,8 +10,8 @@ uint32_t slot_of(const uint32_t* face, uint32_t v) { return face[0] == v ? 0 : f
 
 }  // namespace
 
-CollapseRecorder::CollapseRecorder(const Mesh& mesh, CollapseMesh& collapse_mesh)
-    : mesh_(collapse_mesh), refinement_(mesh, collapse_mesh, 2 * mesh.vertex_count()) {
+CollapseRecorder::CollapseRecorder(const Mesh& mesh, CollapseMesh& collapse_mesh, Deviation deviation)
+    : mesh_(collapse_mesh), refinement_(mesh, collapse_mesh, 2 * mesh.vertex_count(), deviation) {
   const uint32_t n = uint32_t(mesh.vertex_count());
   forest_.leaf_count = n;
   current_.resize(n);

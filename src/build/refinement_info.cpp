@@ -142,6 +142,10 @@ struct RefinementInfoBuilder::DeviationSpace {
   // part <= delta_c about an axis at angle theta has an axial part <= delta_c cos + mu_c sin about this
   // one, and a perpendicular part <= mu_c + delta_c sin. Never below the child's own numbers either:
   // a parent's bounds contain its children's.
+  void add(const DeviationSpace& other) {  // same axis
+    delta = std::max(delta, other.delta);
+    mu = std::max(mu, other.mu);
+  }
   void add_child(const RefineBounds& child, const DeviationSpace& moved) {
     const V3 child_axis = normalized(V3{child.axis[0], child.axis[1], child.axis[2]});
     const double sin_t = length(cross(child_axis, axis)), cos_t = std::abs(dot(child_axis, axis));
@@ -150,8 +154,9 @@ struct RefinementInfoBuilder::DeviationSpace {
   }
 };
 
-RefinementInfoBuilder::RefinementInfoBuilder(const Mesh& mesh, const CollapseMesh& connectivity, size_t max_nodes)
-    : positions_(mesh.positions), scale_(bounds_of(mesh.positions).diagonal()) {
+RefinementInfoBuilder::RefinementInfoBuilder(const Mesh& mesh, const CollapseMesh& connectivity, size_t max_nodes,
+                                             Deviation deviation)
+    : positions_(mesh.positions), deviation_(deviation), scale_(bounds_of(mesh.positions).diagonal()) {
   const size_t n = mesh.vertex_count();
   info_.resize(max_nodes);
   survivor_.resize(max_nodes);
@@ -247,8 +252,15 @@ void RefinementInfoBuilder::compute(uint32_t s, uint32_t t_node, uint32_t u_node
     add_leaf_samples(fan, u, space);
     add_moved_surface(fan, survivor_[t_node], moved);
   }
-  space.add_child(bt, moved);
-  space.add_child(bu, moved);
+  if (deviation_ == Deviation::bound) {
+    space.add_child(bt, moved);
+    space.add_child(bu, moved);
+  } else {  // the moved surface counts once, not on top of each child's space
+    space.add(moved);
+    const DeviationSpace unmoved{space.axis};
+    space.add_child(bt, unmoved);
+    space.add_child(bu, unmoved);
+  }
   bounds.mu = float_at_least(has_axis ? space.mu : std::hypot(space.mu, space.delta));
   bounds.delta = float_at_least(space.delta);
   // Only the deviation is new: quantize it alone (no cone: no second axis search) into the info above.

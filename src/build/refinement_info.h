@@ -1,11 +1,13 @@
 // Hoppe 1997 §4 refinement info, computed while collapsing: bounding-sphere radius over the input
 // faces below a node, normal cone of those faces, and the deviation space (mu, delta) of the input
 // surface below the node against the surface around it right after its collapse: the larger of the
-// sampled leaves' residuals and each child's space grown by how far the collapse moved the surface.
+// sampled leaves' residuals and each child's space grown by how far the collapse moved the surface
+// (Deviation::bound), or the moved surface counted once beside the children's spaces (::estimate).
 #pragma once
 #include <cstdint>
 #include <vector>
 
+#include "build/build.h"
 #include "build/collapse_mesh.h"
 #include "io/mesh.h"
 #include "pm/pm.h"
@@ -16,7 +18,7 @@ class RefinementInfoBuilder {
  public:
   // Leaves get their 1-ring bounds (`connectivity`: the untouched CollapseMesh of `mesh`, for its
   // faces around each vertex); `max_nodes` = leaves + the most collapses that can follow.
-  RefinementInfoBuilder(const Mesh& mesh, const CollapseMesh& connectivity, size_t max_nodes);
+  RefinementInfoBuilder(const Mesh& mesh, const CollapseMesh& connectivity, size_t max_nodes, Deviation deviation);
 
   float scale() const { return scale_; }
 
@@ -43,6 +45,7 @@ class RefinementInfoBuilder {
   void add_moved_surface(const Fan& fan, uint32_t t_leaf, DeviationSpace& space) const;
 
   const std::vector<float>& positions_;
+  Deviation deviation_;
   float scale_ = 1;
   std::vector<RefineInfo> info_;
   BigVector<uint32_t> survivor_;   // per node: leaf carrying its position

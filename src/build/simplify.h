@@ -27,7 +27,7 @@ struct CollapseForest {
 
 class CollapseRecorder {
  public:
-  CollapseRecorder(const Mesh& mesh, CollapseMesh& collapse_mesh);
+  CollapseRecorder(const Mesh& mesh, CollapseMesh& collapse_mesh, Deviation deviation);
 
   // Collapses t into u (check_collapse() must have accepted it) and records the new node. Its
   // refinement info is computed by the next flush().

@@ -129,6 +129,36 @@ TEST(Hierarchy, SphereBalanced) {
   EXPECT_LE(built.stats.base_vertices, 8u) << "a closed sphere simplifies to a handful of vertices";
 }
 
+// The estimate drops only the chain's growth: the same hierarchy, spheres and cones, and a deviation space
+// inside the bound's at every node (the chain's sum is at least the estimate's maximum, by induction).
+TEST(Hierarchy, EstimatedDeviationIsInsideTheBound) {
+  const Mesh mesh = make_terrain(8000);
+  BuildOptions options;
+  const BuildResult bound = build_progressive_mesh(mesh, options);
+  options.deviation = Deviation::estimate;
+  const BuildResult estimate = build_progressive_mesh(mesh, options);
+  expect_valid_hierarchy(mesh, estimate);
+  const Hierarchy &b = bound.hierarchy, &e = estimate.hierarchy;
+  ASSERT_EQ(b.parent, e.parent);
+  ASSERT_EQ(b.first_child, e.first_child);
+  size_t smaller = 0, internal = 0;
+  for (uint32_t i = 0; i < b.node_count(); ++i) {
+    const RefineInfo &x = b.refine[i], &y = e.refine[i];
+    EXPECT_EQ(x.radius, y.radius);
+    EXPECT_EQ(x.cone_angle, y.cone_angle);
+    EXPECT_EQ(x.cone_x, y.cone_x);
+    EXPECT_EQ(x.cone_y, y.cone_y);
+    EXPECT_LE(y.mu, x.mu) << "node " << i;  // half-float bits of non-negative values order as the values
+    EXPECT_LE(y.delta, x.delta) << "node " << i;
+    if (b.is_leaf(i)) continue;
+    ++internal;
+    EXPECT_TRUE(y.mu > 0 || y.delta > 0) << "internal node " << i << " claims no error";
+    smaller += y.mu < x.mu || y.delta < x.delta;
+  }
+  EXPECT_GT(smaller, internal / 2) << "the estimate should be tighter than the bound for most nodes";
+  EXPECT_NE(estimate.stats.options.find("deviation=estimate"), std::string::npos);
+}
+
 TEST(Hierarchy, TorusGreedy) {
   const Mesh mesh = make_torus(24, 16, 1.0f, 0.3f);
   BuildOptions options;

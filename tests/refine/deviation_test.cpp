@@ -11,8 +11,10 @@
 namespace pms {
 namespace {
 
-TEST(Deviation, ZeroToleranceKeepsEveryFaceThatLeavesThePlane) {
-  const test::BuiltModel& model = test::built_studded_plane();
+class DeviationMeasure : public ::testing::TestWithParam<pms::Deviation> {};
+
+TEST_P(DeviationMeasure, ZeroToleranceKeepsEveryFaceThatLeavesThePlane) {
+  const test::BuiltModel& model = test::built_studded_plane(GetParam());
   const test::RefinedFromAbove refined(model);
   const SelectiveMesh& mesh = refined.mesh;
   const auto kept = test::leaf_input_faces(mesh, model);
@@ -29,6 +31,9 @@ TEST(Deviation, ZeroToleranceKeepsEveryFaceThatLeavesThePlane) {
   EXPECT_GT(off_plane, 0u);
   EXPECT_LT(mesh.face_count(), input.face_count()) << "the flat part should stay coarse";
 }
+
+INSTANTIATE_TEST_SUITE_P(BothMeasures, DeviationMeasure, ::testing::Values(pms::Deviation::bound, pms::Deviation::estimate),
+                         [](const auto& info) { return info.param == pms::Deviation::bound ? "bound" : "estimate"; });
 
 }  // namespace
 }  // namespace pms

@@ -14,11 +14,11 @@
 namespace pms::test {
 namespace {
 
-BuiltModel build(const std::string& name, Mesh mesh, int up_axis) {
+BuiltModel build(const std::string& name, Mesh mesh, int up_axis, const BuildOptions& options = {}) {
   BuiltModel m;
   m.name = name;
   clean_mesh(mesh);
-  BuildResult built = build_progressive_mesh(mesh);
+  BuildResult built = build_progressive_mesh(mesh, options);
   m.input = std::move(mesh);
   m.h = std::move(built.hierarchy);
   m.up_axis = up_axis;
@@ -43,8 +43,8 @@ const BuiltModel& built_terrain() {
   return m;
 }
 
-const BuiltModel& built_studded_plane() {
-  static const BuiltModel m = [] {
+const BuiltModel& built_studded_plane(Deviation deviation) {
+  auto make = [](Deviation measure) {
     constexpr int kCells = 48, kStudEvery = 6;
     Mesh mesh = make_grid(kCells, kCells);
     for (int y = 0; y <= kCells; ++y)
@@ -52,9 +52,12 @@ const BuiltModel& built_studded_plane() {
         const bool stud = x % kStudEvery == kStudEvery / 2 && y % kStudEvery == kStudEvery / 2;
         mesh.positions[3 * size_t(y * (kCells + 1) + x) + 2] = stud ? 0.01f : 0.0f;
       }
-    return build("studded plane", std::move(mesh), 2);
-  }();
-  return m;
+    BuildOptions options;
+    options.deviation = measure;
+    return build("studded plane", std::move(mesh), 2, options);
+  };
+  static const BuiltModel bound = make(Deviation::bound), estimate = make(Deviation::estimate);
+  return deviation == Deviation::bound ? bound : estimate;
 }
 
 const BuiltModel* built_bunny() {
