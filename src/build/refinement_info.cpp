@@ -135,6 +135,10 @@ struct RefinementInfoBuilder::DeviationSpace {
     delta = std::max(delta, std::abs(along));
     mu = std::max(mu, length(error - axis * along));
   }
+  void add(const DeviationSpace& other) {  // same axis
+    delta = std::max(delta, other.delta);
+    mu = std::max(mu, other.mu);
+  }
   // Hoppe's bound over the whole residual surface, not only the samples: a leaf below a child lies
   // within the child's space of the child's surface, and this collapse moved that surface by at most
   // (about) `moved`, so the leaf lies within their sum of the new surface (triangle inequality). The
@@ -142,10 +146,6 @@ struct RefinementInfoBuilder::DeviationSpace {
   // part <= delta_c about an axis at angle theta has an axial part <= delta_c cos + mu_c sin about this
   // one, and a perpendicular part <= mu_c + delta_c sin. Never below the child's own numbers either:
   // a parent's bounds contain its children's.
-  void add(const DeviationSpace& other) {  // same axis
-    delta = std::max(delta, other.delta);
-    mu = std::max(mu, other.mu);
-  }
   void add_child(const RefineBounds& child, const DeviationSpace& moved) {
     const V3 child_axis = normalized(V3{child.axis[0], child.axis[1], child.axis[2]});
     const double sin_t = length(cross(child_axis, axis)), cos_t = std::abs(dot(child_axis, axis));
