@@ -131,9 +131,11 @@ void run_bench(const BenchArgs& args) {
     std::fprintf(stderr, "bench: group %s (%s)\n", group->name, group->experiments);
     group->run(context);
   }
-  // Linux counts the pages a child inherits at fork in its ru_maxrss: this bounds that share.
+  // Linux counts the pages a child inherits at fork in its ru_maxrss: this bounds that share where a
+  // table could not use the child's own report.
   const std::string footer = "\n---\nThe bench process itself peaked at " + fixed(peak_rss_mb(), 0) +
-                             " MB RSS; a child's peak RSS includes at most that much inherited at fork.\n";
+                             " MB RSS. pmstream's children report their own peak (VmHWM); other tools' peak RSS "
+                             "(wait4) includes at most that much inherited at fork.\n";
   write_text_file(context.options.out_dir / "report.md", report_header(context) + "\n" + context.report + footer);
   std::printf("\nbench: wrote %s\n", (context.options.out_dir / "report.md").string().c_str());
 }

@@ -5,6 +5,7 @@
 #include <pthread.h>
 
 #include "apps/commands.h"
+#include "apps/resource_usage.h"
 #include "common/error.h"
 #include "server/server.h"
 
@@ -43,11 +44,11 @@ void run_serve(const ServeArgs& args) {
   tcp.stop();
   const server::ServerStats& s = tcp.stats();
   std::printf("stopped: %llu sessions (%llu refused), %llu bytes in, %llu bytes out, %llu vsplits sent, "
-              "peak session state %llu bytes (%llu without its active tags)\n",
+              "peak session state %llu bytes (%llu without its active tags), peak RSS %.0f MB\n",
               (unsigned long long)s.sessions_opened.load(), (unsigned long long)s.sessions_rejected.load(),
               (unsigned long long)s.bytes_in.load(), (unsigned long long)s.bytes_out.load(),
               (unsigned long long)s.splits_sent.load(), (unsigned long long)s.peak_state_bytes.load(),
-              (unsigned long long)s.peak_buffer_bytes.load());
+              (unsigned long long)s.peak_buffer_bytes.load(), peak_rss_mb());
 }
 
 }  // namespace
