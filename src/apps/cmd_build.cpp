@@ -57,8 +57,8 @@ void add_build_command(CLI::App& app) {
   cmd->add_option("--base-vertices", args->base_vertices, "Stop when the base mesh has this many vertices (0: as coarse as the mesh allows)")
       ->capture_default_str();
   cmd->add_option("--deviation", args->deviation,
-                  "Error each node claims: 'bound' covers the input surface below it, so the screen-space error never "
-                  "exceeds the tolerance; 'estimate' is Hoppe 1997's sampled estimate: fewer splits for the same "
+                  "Error each node claims: 'bound' covers the input surface below it (the default: a view keeps its "
+                  "screen-space error within the tolerance); 'estimate' is Hoppe 1997's sampled estimate: fewer splits for the same "
                   "tolerance, an error that may exceed it")
       ->check(CLI::IsMember({"bound", "estimate"}))
       ->capture_default_str();

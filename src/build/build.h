@@ -13,7 +13,7 @@ namespace pms {
 // What a node's deviation space (mu, delta) holds (docs/internals.md, "Refinement info").
 enum class Deviation {
   bound,     // a bound on the whole input surface below the node: sampled leaves, and each child's space
-             // plus how far this collapse moved the surface (triangle inequality). τ px is never exceeded.
+             // plus how far this collapse moved the surface (triangle inequality; the move is sampled).
   estimate,  // Hoppe 1997's estimate: sampled leaves and the moved surface, at least each child's space.
              // Fewer splits for the same τ (a close view of bunny: 0.7x), an error that may exceed τ.
 };
