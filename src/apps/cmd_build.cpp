@@ -1,4 +1,4 @@
-// pmstream build IN -o OUT.pms [--greedy] [--base-vertices N] [--deviation bound|estimate] [--json]
+// pmstream build IN -o OUT.pms [--greedy] [--base-vertices N] [--deviation estimate|bound] [--json]
 #include <cstdio>
 
 #include "apps/build_pipeline.h"
@@ -13,7 +13,7 @@ struct BuildArgs {
   std::string input, output;
   bool greedy = false, json = false;
   uint64_t base_vertices = BuildOptions{}.base_vertices;
-  std::string deviation = "bound";
+  std::string deviation = "estimate";
 };
 
 void run_build(const BuildArgs& args) {
@@ -22,7 +22,7 @@ void run_build(const BuildArgs& args) {
   BuildOptions options;
   options.greedy = args.greedy;
   options.base_vertices = args.base_vertices;
-  options.deviation = args.deviation == "estimate" ? Deviation::estimate : Deviation::bound;
+  options.deviation = args.deviation == "bound" ? Deviation::bound : Deviation::estimate;
   options.progress = bar.callback();
   const BuildRun run = build_file(args.input, args.output, options);
   bar.finish();
@@ -57,9 +57,9 @@ void add_build_command(CLI::App& app) {
   cmd->add_option("--base-vertices", args->base_vertices, "Stop when the base mesh has this many vertices (0: as coarse as the mesh allows)")
       ->capture_default_str();
   cmd->add_option("--deviation", args->deviation,
-                  "Error each node claims: 'bound' covers the input surface below it (the default: a view keeps its "
-                  "screen-space error within the tolerance); 'estimate' is Hoppe 1997's sampled estimate: fewer splits for the same "
-                  "tolerance, an error that may exceed it")
+                  "Error each node claims: 'estimate' is Hoppe 1997's, measured at points of the input surface below it "
+                  "(the default); 'bound' covers that surface with a margin summed level by level: ~1.4x the splits for the "
+                  "same tolerance, which the view then keeps within it")
       ->check(CLI::IsMember({"bound", "estimate"}))
       ->capture_default_str();
   cmd->add_flag("--json", args->json, "Print one JSON object with the statistics");

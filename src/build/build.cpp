@@ -78,6 +78,13 @@ Hierarchy pack(const Mesh& mesh, const CollapseForest& forest, float scale) {
 
 }  // namespace
 
+std::string options_text(const BuildOptions& options) {
+  std::string text = options.greedy ? "greedy" : "balanced";
+  text += " base_vertices=" + std::to_string(options.base_vertices);
+  text += options.deviation == Deviation::bound ? " deviation=bound" : " deviation=estimate";
+  return text;
+}
+
 BuildResult build_progressive_mesh(const Mesh& mesh, const BuildOptions& options) {
   if (mesh.face_count() == 0) fail("", "mesh has no faces");
   const auto start = std::chrono::steady_clock::now();
@@ -89,9 +96,7 @@ BuildResult build_progressive_mesh(const Mesh& mesh, const BuildOptions& options
 
   const Hierarchy& h = result.hierarchy;
   BuildStats& s = result.stats;
-  s.options = options.greedy ? "greedy" : "balanced";
-  s.options += " base_vertices=" + std::to_string(options.base_vertices);
-  if (options.deviation == Deviation::estimate) s.options += " deviation=estimate";
+  s.options = options_text(options);
   s.input_vertices = mesh.vertex_count();
   s.input_faces = mesh.face_count();
   s.base_vertices = h.root_count;

@@ -156,13 +156,13 @@ struct RefinementInfoBuilder::DeviationSpace {
 
 RefinementInfoBuilder::RefinementInfoBuilder(const Mesh& mesh, const CollapseMesh& connectivity, size_t max_nodes,
                                              Deviation deviation)
-    : positions_(mesh.positions), deviation_(deviation), scale_(bounds_of(mesh.positions).diagonal()) {
+    : positions_(mesh.positions),
+      deviation_(deviation),
+      scale_(bounds_of(mesh.positions).diagonal()),
+      samples_(uint32_t(mesh.vertex_count())) {
   const size_t n = mesh.vertex_count();
   info_.resize(max_nodes);
   survivor_.resize(max_nodes);
-  samples_.resize(kSamples * n);
-  sample_count_.assign(n, 1);
-  leaf_count_.assign(n, 1);
   const size_t faces = mesh.face_count();
   BigVector<V3> face_normal(faces);
   for_each_range(faces, 1 << 14, [&](size_t begin, size_t end) {
@@ -196,41 +196,16 @@ RefinementInfoBuilder::RefinementInfoBuilder(const Mesh& mesh, const CollapseMes
       const Cone cone{axis, std::acos(std::clamp(min_cos, -1.0, 1.0)) + 1e-6};
       info_[v] = quantize_refine(to_bounds(std::sqrt(radius_squared), cone, 0, 0), scale_);
       survivor_[v] = v;
-      samples_[kSamples * size_t(v)] = v;
     }
   });
 }
 
 void RefinementInfoBuilder::merge_leaves(uint32_t s, uint32_t, uint32_t u_node, uint32_t t, uint32_t u) {
   survivor_[s] = survivor_[u_node];
-  const uint32_t total = leaf_count_[t] + leaf_count_[u];
-  const uint32_t have_t = sample_count_[t], have_u = sample_count_[u];
-  // Take from t in proportion to its share of the leaves, at least one from each side.
-  uint32_t from_t = have_t + have_u <= kSamples
-                        ? have_t
-                        : std::clamp<uint32_t>(uint32_t(uint64_t(kSamples) * leaf_count_[t] / total), 1, kSamples - 1);
-  from_t = std::min(from_t, have_t);
-  const uint32_t from_u = std::min(have_u, kSamples - from_t);
-  uint32_t* out = &samples_[kSamples * size_t(u)];
-  // u's first samples stay in place; t's go after them.
-  std::copy_n(&samples_[kSamples * size_t(t)], from_t, out + from_u);
-  sample_count_[u] = uint8_t(from_t + from_u);
-  leaf_count_[u] = total;
+  samples_.merge(t, u);
 }
 
-void RefinementInfoBuilder::compact(const std::vector<uint32_t>& new_index) {
-  uint32_t live = 0;
-  for (uint32_t v = 0; v < new_index.size(); ++v) {
-    if (new_index[v] == UINT32_MAX) continue;
-    std::copy_n(&samples_[kSamples * size_t(v)], kSamples, &samples_[kSamples * size_t(live)]);
-    sample_count_[live] = sample_count_[v];
-    leaf_count_[live] = leaf_count_[v];
-    ++live;
-  }
-  samples_.resize(kSamples * size_t(live));
-  sample_count_.resize(live);
-  leaf_count_.resize(live);
-}
+void RefinementInfoBuilder::compact(const std::vector<uint32_t>& new_index) { samples_.compact(new_index); }
 
 void RefinementInfoBuilder::compute(uint32_t s, uint32_t t_node, uint32_t u_node, const CollapseMesh& mesh,
                                     uint32_t u) {
@@ -293,8 +268,7 @@ RefinementInfoBuilder::Fan RefinementInfoBuilder::fan_around(const CollapseMesh&
 // add_child() misses, such as a child's surface changed by its neighbours' collapses after its bounds
 // were computed.
 void RefinementInfoBuilder::add_leaf_samples(const Fan& fan, uint32_t u, DeviationSpace& space) const {
-  const uint32_t* samples = &samples_[kSamples * size_t(u)];
-  for (uint32_t i = 0; i < sample_count_[u]; ++i) space.add(fan.residual(load(leaf_position(samples[i]))));
+  for (const uint32_t leaf : samples_.of(u)) space.add(fan.residual(load(leaf_position(leaf))));
 }
 
 // How far this collapse moved the surface: v_t itself, and each fan face (u, a, b) at the centroid of

@@ -9,6 +9,7 @@
 
 #include "build/build.h"
 #include "build/collapse_mesh.h"
+#include "build/leaf_samples.h"
 #include "io/mesh.h"
 #include "pm/pm.h"
 
@@ -49,13 +50,7 @@ class RefinementInfoBuilder {
   float scale_ = 1;
   std::vector<RefineInfo> info_;
   BigVector<uint32_t> survivor_;   // per node: leaf carrying its position
-  // Per current vertex: up to kSamples leaves spread over the subtree it carries, and the subtree's
-  // leaf count. A parent's samples are drawn from its children's in proportion to their sizes, so
-  // nothing walks a subtree (that walk was n * depth cache misses on big meshes).
-  static constexpr uint32_t kSamples = 8;
-  BigVector<uint32_t> samples_;     // kSamples per vertex
-  BigVector<uint8_t> sample_count_;
-  BigVector<uint32_t> leaf_count_;  // per vertex
+  LeafSamples samples_;  // per current vertex, leaves of its subtree (Hoppe's points)
 };
 
 }  // namespace pms

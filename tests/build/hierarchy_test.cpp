@@ -134,9 +134,9 @@ TEST(Hierarchy, SphereBalanced) {
 TEST(Hierarchy, EstimatedDeviationIsInsideTheBound) {
   const Mesh mesh = make_terrain(8000);
   BuildOptions options;
+  const BuildResult estimate = build_progressive_mesh(mesh, options);  // the default
+  options.deviation = Deviation::bound;
   const BuildResult bound = build_progressive_mesh(mesh, options);
-  options.deviation = Deviation::estimate;
-  const BuildResult estimate = build_progressive_mesh(mesh, options);
   expect_valid_hierarchy(mesh, estimate);
   const Hierarchy &b = bound.hierarchy, &e = estimate.hierarchy;
   ASSERT_EQ(b.parent, e.parent);
@@ -157,6 +157,7 @@ TEST(Hierarchy, EstimatedDeviationIsInsideTheBound) {
   }
   EXPECT_GT(smaller, internal / 2) << "the estimate should be tighter than the bound for most nodes";
   EXPECT_NE(estimate.stats.options.find("deviation=estimate"), std::string::npos);
+  EXPECT_NE(bound.stats.options.find("deviation=bound"), std::string::npos);
 }
 
 TEST(Hierarchy, TorusGreedy) {

@@ -29,7 +29,7 @@ const BuiltModel& built_terrain();  // make_terrain, ~20k faces, z up
 const BuiltModel* built_bunny();    // ../shared/models/bunny.ply.xz, nullptr when absent
 // A flat square (z = 0, z up) with a stud every few vertices: collapses in the flat part change
 // nothing, while a flat vertex next to a stud lies on the coarse surface although its faces do not.
-const BuiltModel& built_studded_plane(Deviation deviation = Deviation::bound);
+const BuiltModel& built_studded_plane(Deviation deviation = Deviation::estimate);
 
 // Looks at the model's bounding-box centre from `direction` (need not be unit) at `distance` times the
 // distance that just frames its bounding sphere; up is the model's up axis.
