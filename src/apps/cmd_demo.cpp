@@ -1,6 +1,6 @@
 // pmstream demo: the main job on the built-in model — a procedural terrain (the flight-simulator
-// scene of kim-lee-kobbelt §3) built into a view-dependent progressive mesh, then refined.
-// Later stages (streaming server + headless client) grow from here; this stays the single entry point.
+// scene of kim-lee-kobbelt §3) — or on the user's own (--model): built into a view-dependent progressive
+// mesh (cached), refined, then streamed to a headless client over loopback (apps/demo_flight.h).
 #include <cstdio>
 #include <filesystem>
 
@@ -18,41 +18,69 @@ namespace {
 constexpr uint64_t kDemoFaces = 600'000;
 constexpr double kRefinedShare = 0.1;  // the partly refined mesh applies this share of the splits
 
+namespace fs = std::filesystem;
+
 struct DemoArgs {
+  std::string model;  // empty: the built-in terrain
   std::string out_dir = "demo-out";
   bool rebuild = false;
   uint32_t frames = 240;
   float tolerance = 1;
 };
 
-// The cached build is reused only if it was made from the same generator input by this version.
-bool cache_is_current(const std::string& path, const std::string& input_name) {
-  if (!std::filesystem::exists(path)) return false;
+// The cached build is reused only if it was made from the same input with the same options by this
+// version, and (for a file) after the input last changed.
+bool cache_is_current(const std::string& path, const std::string& input_name, const std::string& input_file) {
+  if (!fs::exists(path)) return false;
   try {
+    if (!input_file.empty() && fs::last_write_time(path) < fs::last_write_time(input_file)) return false;
     const auto file = PmsFile::open(path);
-    return file->stats().input_name == input_name && file->stats().tool_version == PMSTREAM_VERSION;
+    const BuildStats& stats = file->stats();
+    return stats.input_name == input_name && stats.tool_version == PMSTREAM_VERSION &&
+           stats.options == options_text(BuildOptions{});
   } catch (const Error&) {
     return false;  // corrupt or older format: build again
   }
 }
 
-void run_demo(const DemoArgs& args) {
-  std::filesystem::create_directories(args.out_dir);
-  const std::string input_name = "terrain:" + std::to_string(kDemoFaces);
-  const std::string pms_path = args.out_dir + "/terrain.pms";
-  if (args.rebuild || !cache_is_current(pms_path, input_name)) {
-    std::printf("building the built-in terrain (%llu faces) into %s\n", (unsigned long long)kDemoFaces, pms_path.c_str());
+// "bunny" for bunny.ply.xz: the name the server gives the built file.
+std::string model_name_of(const fs::path& file) {
+  fs::path name = file.filename();
+  if (name.extension() == ".gz" || name.extension() == ".xz") name = name.stem();
+  return name.stem().string();
+}
+
+// The .pms to stream: the user's own file as it is, or a build of their mesh or of the built-in terrain,
+// cached in the output directory.
+std::string prepare_model(const DemoArgs& args) {
+  if (!args.model.empty() && fs::path(args.model).extension() == ".pms") return args.model;
+  if (!args.model.empty() && !fs::is_regular_file(args.model)) fail(args.model, "no such file");
+  const bool own = !args.model.empty();
+  // What the build records as its input: a file's name (its date decides, as for make), or the generator.
+  const std::string input_name = own ? fs::path(args.model).filename().string() : "terrain:" + std::to_string(kDemoFaces);
+  const std::string pms_path = args.out_dir + "/" + (own ? model_name_of(args.model) : "terrain") + ".pms";
+  if (args.rebuild || !cache_is_current(pms_path, input_name, own ? args.model : "")) {
+    if (own)
+      std::printf("building %s into %s\n", args.model.c_str(), pms_path.c_str());
+    else
+      std::printf("building the built-in terrain (%llu faces) into %s\n", (unsigned long long)kDemoFaces, pms_path.c_str());
     Stopwatch clock;
     ProgressBar bar(true);
     BuildOptions options;
     options.progress = bar.callback();
-    const BuildRun run = build_file(input_name, pms_path, options);
+    const BuildRun run = build_file(own ? args.model : input_name, pms_path, options);
     bar.finish();
-    std::printf("  built in %.2f s (generate %.2f, clean %.2f, build+write %.2f), peak RSS %.0f MB\n", clock.seconds(),
+    std::printf("  built in %.2f s (load %.2f, clean %.2f, build+write %.2f), peak RSS %.0f MB\n", clock.seconds(),
                 run.load_seconds, run.clean_seconds, run.build_seconds, peak_rss_mb());
   } else {
     std::printf("using the cached build %s (--rebuild to build again)\n", pms_path.c_str());
   }
+  return pms_path;
+}
+
+void run_demo(const DemoArgs& args) {
+  fs::create_directories(args.out_dir);
+  const std::string pms_path = prepare_model(args);
   const auto file = PmsFile::open(pms_path);
   const ModelView& model = file->view();
   const BuildStats& s = file->stats();
@@ -77,7 +105,7 @@ void run_demo(const DemoArgs& args) {
   flight.out_dir = args.out_dir;
   flight.frames = args.frames;
   flight.tolerance = args.tolerance;
-  run_demo_flight(pms_path, "terrain", flight);
+  run_demo_flight(pms_path, model_name_of(pms_path), flight);
 }
 
 }  // namespace
@@ -85,6 +113,9 @@ void run_demo(const DemoArgs& args) {
 void add_demo_command(CLI::App& app) {
   auto args = std::make_shared<DemoArgs>();
   CLI::App* cmd = app.add_subcommand("demo", "Build the built-in terrain and stream it to a headless client over loopback (no input needed)");
+  cmd->add_option("--model", args->model,
+                  "Your own model instead of the terrain: a .pms file, or a mesh file (PLY, OBJ, OFF, STL, glTF/GLB; may "
+                  "end in .gz or .xz) built into the output directory first (cached)");
   cmd->add_option("--out", args->out_dir, "Output directory")->capture_default_str();
   cmd->add_flag("--rebuild", args->rebuild, "Ignore the cached build");
   cmd->add_option("--frames", args->frames, "Frames of the flight")->check(CLI::Range(1u, 100000u))->capture_default_str();

@@ -6,7 +6,9 @@
 
 #include <array>
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <string>
 
 #include "io/mesh.h"
@@ -52,6 +54,35 @@ TEST(Cli, BuildInfoRefineRoundTrip) {
   const RunResult base = run("refine " + pms_path + " --splits 0 -o " + coarse);
   ASSERT_EQ(base.exit_code, 0) << base.err;
   EXPECT_EQ(load_mesh(coarse).face_count(), stats["base_faces"].get<size_t>());
+}
+
+// `demo --model`: the user's own mesh is built (then reused), streamed over loopback, and compared with
+// the view-independent flight; the report carries the table.
+TEST(Cli, DemoStreamsTheUsersOwnModel) {
+  const auto dir = test::temp_dir();
+  const std::string ply = (dir / "torus.ply").string(), out = (dir / "demo").string();
+  save_ply(make_torus(60, 24, 2.0f, 0.5f), ply);
+  const RunResult first = run("demo --model " + ply + " --out " + out + " --frames 12");
+  ASSERT_EQ(first.exit_code, 0) << first.err;
+  EXPECT_NE(first.out.find("building " + ply), std::string::npos) << first.out;
+  EXPECT_NE(first.out.find("server:    torus on 127.0.0.1:"), std::string::npos) << first.out;
+  EXPECT_NE(first.out.find("view-independent bytes down"), std::string::npos) << first.out;
+  std::ifstream report(dir / "demo" / "report.md");
+  const std::string text((std::istreambuf_iterator<char>(report)), std::istreambuf_iterator<char>());
+  EXPECT_NE(text.find("| 12 |"), std::string::npos) << text;
+  EXPECT_TRUE(std::filesystem::exists(dir / "demo" / "snapshots" / "frame_0000.png"));
+
+  const RunResult again = run("demo --model " + ply + " --out " + out + " --frames 2");
+  ASSERT_EQ(again.exit_code, 0) << again.err;
+  EXPECT_NE(again.out.find("using the cached build"), std::string::npos) << again.out;
+
+  const RunResult served = run("demo --model " + (dir / "demo" / "torus.pms").string() + " --out " + out + " --frames 2");
+  ASSERT_EQ(served.exit_code, 0) << served.err;
+  EXPECT_EQ(served.out.find("building"), std::string::npos) << "a .pms is streamed as it is";
+
+  const RunResult missing = run("demo --model " + (dir / "nope.ply").string() + " --out " + out);
+  EXPECT_NE(missing.exit_code, 0);
+  EXPECT_NE(missing.err.find("nope.ply: no such file"), std::string::npos) << missing.err;
 }
 
 TEST(Cli, ErrorsAreOneLineNamingTheFile) {
