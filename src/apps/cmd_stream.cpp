@@ -1,5 +1,5 @@
 // pmstream stream --server HOST:PORT --model NAME --path PATH.json --mode sender|vi --tolerance PX
-//                 [--laps K] [--save-mesh OUT.ply] [--snapshots DIR] [--json]
+//                 [--laps K] [--reconnect N] [--save-mesh OUT.ply] [--snapshots DIR] [--json]
 // The headless viewer: follows a camera path, streaming what each frame needs, and reports per frame.
 #include <cstdio>
 #include <filesystem>
@@ -21,7 +21,7 @@ namespace {
 struct StreamArgs {
   std::string server, model, path, mode = "sender", save_mesh, snapshots;
   float tolerance = 1;
-  uint32_t laps = 1, morph_frames = 0, max_ops = 0;
+  uint32_t laps = 1, morph_frames = 0, max_ops = 0, reconnect = 0;
   bool json = false;
 };
 
@@ -68,6 +68,10 @@ void run_stream(const StreamArgs& args) {
   options.morph_frames = args.morph_frames;
   options.max_ops = args.max_ops;
   if (args.mode == "vi") options.mode = protocol::StreamMode::view_independent;
+  options.reconnect_attempts = args.reconnect;
+  options.on_reconnect = [&](const std::string& reason, uint32_t attempt) {
+    std::fprintf(stderr, "\n%s; reconnecting and resuming the session (%u/%u)\n", reason.c_str(), attempt, args.reconnect);
+  };
   client::StreamingClient client(host, port, options);
   client.open(args.model);
 
@@ -128,6 +132,10 @@ void add_stream_command(CLI::App& app) {
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
   cmd->add_option("--laps", args->laps, "Times the path is flown")->check(CLI::Range(1u, 1000u))->capture_default_str();
+  cmd->add_option("--reconnect", args->reconnect,
+                  "On a lost connection, reconnect and resume the session up to N times (0.5 s apart, doubling)")
+      ->check(CLI::Range(0u, 100u))
+      ->capture_default_str();
   cmd->add_option("--geomorph-frames", args->morph_frames, "Blend splits and collapses over N frames (0 = off)")
       ->capture_default_str();
   cmd->add_option("--max-ops", args->max_ops, "vsplits + ecols per frame (0 = no cap)")->capture_default_str();

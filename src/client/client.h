@@ -8,12 +8,14 @@
 #include <condition_variable>
 #include <cstdint>
 #include <deque>
+#include <functional>
 #include <memory>
 #include <mutex>
 #include <optional>
 #include <string>
 #include <vector>
 
+#include "common/error.h"
 #include "protocol/protocol.h"
 #include "refine/adapt.h"
 #include "refine/camera.h"
@@ -65,21 +67,28 @@ struct LinkCounters {
   uint64_t payload_down() const { return bytes_down - frames_down * protocol::kFrameHeaderBytes; }
 };
 
+// The connection could not be made or is gone (refused, closed, reset, silent past the answer timeout):
+// the session can be resumed on a new one. Any other pms::Error (an ERROR from the server, a malformed
+// message) is final.
+struct ConnectionError : Error {
+  using Error::Error;
+};
+
 // How a client reaches a server: frames out, frames in. TCP here (Link); the browser's WebSocket and
 // the bench's in-process pipe are others.
 class Transport {
  public:
   virtual ~Transport() = default;
   virtual void send(const std::vector<uint8_t>& frame) = 0;
-  // The next frame from the server; std::nullopt after `timeout`. Throws pms::Error once the connection
-  // is gone (with the reason) and nothing is left to read.
+  // The next frame from the server; std::nullopt after `timeout`. Throws ConnectionError once the
+  // connection is gone (with the reason) and nothing is left to read.
   virtual std::optional<protocol::Frame> receive(std::chrono::milliseconds timeout) = 0;
   virtual LinkCounters counters() const = 0;
 };
 
 // A TCP connection whose reads run on their own thread into a bounded queue of frames (the socket is
 // not read while the queue is full, so a slow consumer back-pressures the server instead of growing
-// memory). Connection loss and protocol errors surface as pms::Error from receive().
+// memory). A failed connect or a lost connection surfaces as ConnectionError.
 class Link : public Transport {
  public:
   Link(const std::string& host, uint16_t port, size_t max_queued_bytes = 64u << 20,
@@ -119,6 +128,11 @@ struct ClientOptions {
   // refinement info and are applied as they come; qrefine never runs here, so the client sends VIEW every
   // frame (it cannot know what it lacks) and the server decides how much of the PM order the view needs.
   protocol::StreamMode mode = protocol::StreamMode::sender_driven;
+  // A frame that loses a TCP connection reconnects and resumes the session (kim-lee-kobbelt §5.3) up to
+  // this many times, waiting reconnect_delay, then twice that, and so on (capped at 8 s); 0 = fail at once.
+  uint32_t reconnect_attempts = 0;
+  std::chrono::milliseconds reconnect_delay{500};
+  std::function<void(const std::string& reason, uint32_t attempt)> on_reconnect = {};  // told before each try
 };
 
 class StreamingClient {
@@ -140,7 +154,7 @@ class StreamingClient {
   // One frame of the path: adapt to the camera; when the front needs packets it lacks, send VIEW, wait
   // for the whole answer and adapt again, until the view is satisfied. View-independent: VIEW, and apply
   // the answer's splits in order.
-  FrameReport frame(const Camera& camera);
+  FrameReport frame(const Camera& camera);  // see ClientOptions::reconnect_attempts
   // Frames at the last camera until nothing changes and nothing moves (geomorphs).
   void settle(const Camera& camera);
 
@@ -149,6 +163,8 @@ class StreamingClient {
 
  private:
   protocol::Frame expect(protocol::MessageType type);
+  FrameReport frame_once(const Camera& camera);
+  void reconnect(std::string reason, uint32_t& attempts);
   size_t request(const Camera& camera, FrameReport& report);
   void adapt_and_request(const Camera& camera, FrameReport& report);  // sender-driven frame
   void greet(std::unique_ptr<Transport> transport);
@@ -158,6 +174,8 @@ class StreamingClient {
   LinkCounters past_;  // counters of closed links
   ClientSession session_;
   std::string model_;
+  std::string host_;  // empty: the transport was given, there is nothing to reconnect to
+  uint16_t port_ = 0;
   uint32_t frame_ = 0;
 };
 

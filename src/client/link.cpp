@@ -75,7 +75,7 @@ Link::Link(const std::string& host, uint16_t port, size_t max_queued_bytes, uint
     asio::connect(impl_->socket, resolver.resolve(host, std::to_string(port)));
     impl_->socket.set_option(tcp::no_delay(true));
   } catch (const boost::system::system_error& e) {
-    fail(where, std::string("cannot connect: ") + e.code().message());
+    throw ConnectionError(where + ": cannot connect: " + e.code().message());
   }
   impl_->read();
   impl_->thread = std::thread([this] { impl_->io.run(); });
@@ -98,7 +98,7 @@ void Link::close() {
 void Link::send(const std::vector<uint8_t>& frame) {
   {
     std::lock_guard<std::mutex> lock(impl_->mutex);
-    if (impl_->gone) fail("server", "connection lost: " + impl_->reason);
+    if (impl_->gone) throw ConnectionError("server: connection lost: " + impl_->reason);
     impl_->counters.bytes_up += frame.size();
     impl_->counters.frames_up++;
   }
@@ -107,7 +107,7 @@ void Link::send(const std::vector<uint8_t>& frame) {
   asio::write(impl_->socket, asio::buffer(frame), ec);
   if (ec) {
     impl_->lost(ec.message());
-    fail("server", "connection lost: " + ec.message());
+    throw ConnectionError("server: connection lost: " + ec.message());
   }
 }
 
@@ -115,7 +115,7 @@ std::optional<protocol::Frame> Link::receive(std::chrono::milliseconds timeout) 
   std::unique_lock<std::mutex> lock(impl_->mutex);
   if (!impl_->changed.wait_for(lock, timeout, [this] { return !impl_->queue.empty() || impl_->gone; }))
     return std::nullopt;
-  if (impl_->queue.empty()) fail("server", "connection lost: " + impl_->reason);
+  if (impl_->queue.empty()) throw ConnectionError("server: connection lost: " + impl_->reason);
   protocol::Frame frame = std::move(impl_->queue.front());
   impl_->queue.pop_front();
   impl_->queued_bytes -= frame.payload.size();

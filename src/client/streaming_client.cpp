@@ -1,6 +1,8 @@
 // The headless streaming client: ClientSession over a Link. A frame adapts the mesh to the camera and,
 // only when the front needs vsplit packets the client does not have (kim-lee-kobbelt §5.3: never for a
 // real leaf), sends VIEW and applies the answer's batches as they arrive.
+#include <algorithm>
+#include <thread>
 #include <variant>
 
 #include "client/client.h"
@@ -25,7 +27,10 @@ void add(LinkCounters& total, const LinkCounters& more) {
 }  // namespace
 
 StreamingClient::StreamingClient(const std::string& host, uint16_t port, const ClientOptions& options)
-    : StreamingClient(std::make_unique<Link>(host, port), options) {}
+    : StreamingClient(std::make_unique<Link>(host, port), options) {
+  host_ = host;
+  port_ = port;
+}
 
 StreamingClient::StreamingClient(std::unique_ptr<Transport> transport, const ClientOptions& options)
     : options_(options) {
@@ -52,7 +57,7 @@ void StreamingClient::greet(std::unique_ptr<Transport> transport) {
 // The next frame, which must be of `type`; an ERROR from the server becomes a pms::Error with its text.
 protocol::Frame StreamingClient::expect(protocol::MessageType type) {
   std::optional<protocol::Frame> frame = link_->receive(options_.answer_timeout);
-  if (!frame) fail("server", "no answer within " + std::to_string(options_.answer_timeout.count()) + " ms");
+  if (!frame) throw ConnectionError("server: no answer within " + std::to_string(options_.answer_timeout.count()) + " ms");
   if (frame->type == protocol::MessageType::error) {
     const protocol::ErrorMessage e = protocol::decode_error(frame->payload);
     fail("server", protocol::to_string(e.code) + ": " + e.text);
@@ -105,6 +110,36 @@ size_t StreamingClient::request(const Camera& camera, FrameReport& report) {
 }
 
 FrameReport StreamingClient::frame(const Camera& camera) {
+  uint32_t attempts = 0;  // over the whole frame: a server that takes the session and drops it again ends too
+  for (;;) {
+    try {
+      return frame_once(camera);
+    } catch (const ConnectionError& lost) {
+      if (host_.empty()) throw;
+      reconnect(lost.what(), attempts);
+    }
+  }
+}
+
+// Resumes the session on a new connection, waiting longer before each attempt; throws the last reason
+// once the attempts are used up.
+void StreamingClient::reconnect(std::string reason, uint32_t& attempts) {
+  for (;;) {
+    if (attempts >= options_.reconnect_attempts) throw ConnectionError(reason);
+    ++attempts;
+    if (options_.on_reconnect) options_.on_reconnect(reason, attempts);
+    const auto delay = options_.reconnect_delay * (1 << std::min<uint32_t>(attempts - 1, 10));
+    std::this_thread::sleep_for(std::min<std::chrono::milliseconds>(delay, std::chrono::seconds(8)));
+    try {
+      resume(host_, port_);
+      return;
+    } catch (const ConnectionError& e) {
+      reason = e.what();
+    }
+  }
+}
+
+FrameReport StreamingClient::frame_once(const Camera& camera) {
   if (!session_.has_model()) fail("stream", "no model open");
   FrameReport report;
   report.frame = frame_ + 1;

@@ -9,6 +9,7 @@
 #include <boost/asio.hpp>
 
 #include <algorithm>
+#include <atomic>
 #include <array>
 #include <chrono>
 #include <cmath>
@@ -111,8 +112,9 @@ Faces local_faces(const Hierarchy& snapped, const Camera& camera, float toleranc
 }
 
 struct Server {
-  explicit Server(std::shared_ptr<const server::Catalogue> catalogue, server::ServerLimits limits = {})
-      : tcp(std::move(catalogue), limits, "127.0.0.1", 0) {
+  explicit Server(std::shared_ptr<const server::Catalogue> catalogue, server::ServerLimits limits = {},
+                  uint16_t port = 0)
+      : tcp(std::move(catalogue), limits, "127.0.0.1", port) {
     tcp.start();
   }
   server::TcpServer tcp;
@@ -442,9 +444,47 @@ TEST(Streaming, ServerLossIsAClearError) {
   try {
     for (const Camera& camera : orbit_path(f.hierarchy, 6, 0.0f)) client.frame(camera);
     FAIL() << "no error after the server went away";
-  } catch (const Error& e) {
+  } catch (const client::ConnectionError& e) {
     EXPECT_NE(std::string(e.what()).find("connection"), std::string::npos) << e.what();
   }
+}
+
+// With reconnect attempts, a frame that finds the server gone waits for one on the same port, resumes with
+// its leaves (kim-lee-kobbelt §5.3) and the path ends where an unbroken session does.
+TEST(Streaming, ReconnectResumesOnARestartedServer) {
+  const Fixture& f = terrain();
+  auto server = std::make_unique<Server>(f.catalogue);
+  const uint16_t port = server->tcp.port();
+  const std::vector<Camera> path = orbit_path(f.hierarchy, 10, 1.1f);
+  const size_t half = path.size() / 2;
+  client::ClientOptions options{0.5f};
+  options.reconnect_attempts = 8;
+  options.reconnect_delay = std::chrono::milliseconds(20);
+  std::vector<uint32_t> attempts;
+  std::vector<std::string> reasons;
+  std::atomic<size_t> told{0};
+  options.on_reconnect = [&](const std::string& reason, uint32_t attempt) {
+    reasons.push_back(reason);
+    attempts.push_back(attempt);
+    ++told;
+  };
+  client::StreamingClient client("127.0.0.1", port, options);
+  client.open("terrain");
+  for (size_t i = 0; i < half; ++i) client.frame(path[i]);
+  server.reset();
+  // Back on the same port once the client has been refused at least once.
+  std::thread restart([&] {
+    while (told < 2) std::this_thread::sleep_for(std::chrono::milliseconds(2));
+    server = std::make_unique<Server>(f.catalogue, server::ServerLimits{}, port);
+  });
+  client.frame(path[half]);
+  restart.join();
+  for (size_t i = half + 1; i < path.size(); ++i) client.frame(path[i]);
+  ASSERT_GE(attempts.size(), 2u);
+  for (size_t i = 0; i < attempts.size(); ++i) EXPECT_EQ(attempts[i], i + 1);
+  EXPECT_NE(reasons[0].find("server: connection lost"), std::string::npos) << reasons[0];
+  EXPECT_NE(reasons[1].find("cannot connect"), std::string::npos) << "then why the last attempt failed: " << reasons[1];
+  EXPECT_EQ(faces_by_id(client.session().mesh()), local_faces(f.snapped, path.back(), 0.5f));
 }
 
 }  // namespace
