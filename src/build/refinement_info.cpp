@@ -107,11 +107,12 @@ struct RefinementInfoBuilder::Fan {
   uint32_t size = 0;
 
   // Error vector from p to its closest point on the fan. Starting with the face p is probably
-  // closest to (`first`) lets the plane test skip most of the others.
-  V3 residual(V3 p, uint32_t first = 0) const {
+  // closest to (`nearest`, then set to the face found) lets the plane test skip most of the others.
+  V3 residual(V3 p, uint32_t& nearest) const {
     double best = INFINITY;
     V3 best_error;
-    for (uint32_t i = 0, f = first; i < size; ++i, f = f + 1 == size ? 0 : f + 1) {  // no division per face
+    uint32_t best_face = nearest;
+    for (uint32_t i = 0, f = nearest; i < size; ++i, f = f + 1 == size ? 0 : f + 1) {  // no division per face
       const Tri& tri = this->tri[f];
       const double plane = dot(tri.n, p) - tri.d;
       if (plane * plane >= best) continue;  // the plane distance bounds the triangle distance from below
@@ -120,8 +121,10 @@ struct RefinementInfoBuilder::Fan {
       if (d2 < best) {
         best = d2;
         best_error = error;
+        best_face = f;
       }
     }
+    nearest = best_face;
     return best_error;
   }
 };
@@ -268,7 +271,8 @@ RefinementInfoBuilder::Fan RefinementInfoBuilder::fan_around(const CollapseMesh&
 // add_child() misses, such as a child's surface changed by its neighbours' collapses after its bounds
 // were computed.
 void RefinementInfoBuilder::add_leaf_samples(const Fan& fan, uint32_t u, DeviationSpace& space) const {
-  for (const uint32_t leaf : samples_.of(u)) space.add(fan.residual(load(leaf_position(leaf))));
+  uint32_t nearest = 0;  // samples come in runs from one child's side: the last face found is a good start
+  for (const uint32_t leaf : samples_.of(u)) space.add(fan.residual(load(leaf_position(leaf)), nearest));
 }
 
 // How far this collapse moved the surface: v_t itself, and each fan face (u, a, b) at the centroid of
@@ -277,8 +281,12 @@ void RefinementInfoBuilder::add_leaf_samples(const Fan& fan, uint32_t u, Deviati
 // flat fan with a bumpy ring measures 0.
 void RefinementInfoBuilder::add_moved_surface(const Fan& fan, uint32_t t_leaf, DeviationSpace& space) const {
   const V3 p_t = load(leaf_position(t_leaf));  // v_t's position: the leaf that carries it
-  space.add(fan.residual(p_t));
-  for (uint32_t f = 0; f < fan.size; ++f) space.add(fan.residual((fan.tri[f].rest + p_t) * (1.0 / 3), f));
+  uint32_t nearest = 0;
+  space.add(fan.residual(p_t, nearest));
+  for (uint32_t f = 0; f < fan.size; ++f) {
+    nearest = f;  // the face it came from
+    space.add(fan.residual((fan.tri[f].rest + p_t) * (1.0 / 3), nearest));
+  }
 }
 
 }  // namespace pms
