@@ -377,7 +377,8 @@ void run_sender_group(BenchContext& context) {
              "≈ window / (64 × front): at most 10 % needs a front of at least a sixth of the window (peak columns, "
              "as a share of the hierarchy's nodes). A front that mixes unrefined coarse nodes with leaves spans "
              "most nodes in any parents-first order: PM order instead of breadth-first shrank the window by a third at "
-             "most on bunny and dragon.\n\n";
+             "most on bunny and dragon. Within a level, sibling pairs come largest parent deviation first, which "
+             "ends the window sooner (docs/internals.md).\n\n";
   section += "### E5: bytes to satisfy τ = 1 px from a close view\n\n" + e5.markdown() +
              "\nVI = a view-independent session (`stream --mode vi`) to the same view: the base mesh plus the plain "
              "PM-order prefix (packets without refinement info) up to the last split the view needs, bytes down until "
