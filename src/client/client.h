@@ -140,7 +140,10 @@ struct ClientOptions {
   float tolerance = 1;
   uint32_t morph_frames = 0;
   uint32_t max_ops = 0;  // per frame, 0 = no cap
+  // The read deadline: a server silent this long while an answer is due (or stuck mid-frame) is lost.
   std::chrono::milliseconds answer_timeout{30000};
+  std::chrono::milliseconds connect_timeout{5000};  // each connection, reconnects included
+  std::chrono::milliseconds write_timeout{10000};   // a server that stops reading our frames is lost
   std::string name = "pmstream-client";
   // view_independent: the baseline of kim-lee-kobbelt §8 Fig. 9. Splits arrive in PM order without
   // refinement info and are applied as they come; qrefine never runs here, so the client sends VIEW every
