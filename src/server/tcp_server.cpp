@@ -8,6 +8,9 @@
 
 #include <boost/asio.hpp>
 
+#include <linux/sockios.h>
+#include <sys/ioctl.h>
+
 #include <array>
 #include <cstdio>
 #include <mutex>
@@ -61,10 +64,16 @@ class Connection : public std::enable_shared_from_this<Connection> {
   void read();
   void on_read(const boost::system::error_code& ec, size_t n);
   void receive_frames(Clock::time_point turn_end);
-  // Non-blocking writes until the outbox is empty (true), the socket is full or the burst is used (false).
+  // Non-blocking gathered writes until the outbox is empty (true), the socket is full or the burst is
+  // used (false).
   bool write_now();
-  void recount_queue();
+  // Adds the frames queued since `before` (the outbox's size then) to the queue's byte count.
+  void count_queued(size_t before);
   bool queue_full() const { return queued_bytes_ > limits_.send_queue_bytes; }
+  // Bytes the peer has taken: what went into the socket less what the kernel still holds for it. The kernel
+  // accepts megabytes for a peer that reads nothing, so a write that succeeds is no sign of progress.
+  uint64_t bytes_taken() const;
+  void start_write_wait();
   // Deadlines: one timer, set to the earliest that applies; a check when it fires.
   Clock::time_point next_deadline() const;
   void arm_timer();
@@ -82,12 +91,16 @@ class Connection : public std::enable_shared_from_this<Connection> {
   Registry& registry_;
   uint64_t id_;
   std::string peer_;
-  Clock::time_point connected_, last_activity_, frame_started_, write_waiting_since_, close_by_;
+  Clock::time_point connected_, last_activity_, frame_started_, close_by_;
+  Clock::time_point write_waiting_since_;  // answer bytes wait (here or in the kernel) and none taken since
+  uint64_t written_ = 0, taken_ = 0;       // bytes into the socket; bytes the peer had taken when last seen
+  bool write_waiting_ = false;
   Clock::time_point timer_at_ = Clock::time_point::max();
   size_t queued_bytes_ = 0;
   size_t front_written_ = 0;  // bytes of the outbox's first frame already in the socket
   bool reading_ = false, waiting_write_ = false, turn_posted_ = false, closed_ = false;
   bool timed_out_ = false;
+  bool reset_ = false;  // close with RST: the peer left bytes untaken past a deadline
 };
 
 // The live connections, so stop() can close them; counts sessions for the limit.
@@ -162,16 +175,35 @@ void Connection::receive_frames(Clock::time_point turn_end) {
       return;
     }
     last_activity_ = Clock::now();
+    const size_t before = session_.outbox().size();
     session_.receive(std::move(frame));
-    recount_queue();
+    count_queued(before);
   }
 }
 
-void Connection::recount_queue() {
-  size_t bytes = 0;
-  for (const Buffer& b : session_.outbox()) bytes += b->size();
-  if (queued_bytes_ == 0 && bytes > 0) write_waiting_since_ = Clock::now();
-  queued_bytes_ = bytes - front_written_;
+void Connection::count_queued(size_t before) {
+  const auto& outbox = session_.outbox();
+  if (outbox.size() < before) {  // the session dropped what it had queued (no memory left for it)
+    queued_bytes_ = 0;
+    front_written_ = 0;
+    before = 0;
+  }
+  for (size_t i = before; i < outbox.size(); ++i) queued_bytes_ += outbox[i]->size();
+  if (outbox.size() > before) start_write_wait();
+}
+
+void Connection::start_write_wait() {
+  if (write_waiting_) return;
+  write_waiting_ = true;
+  write_waiting_since_ = Clock::now();
+  taken_ = bytes_taken();
+  arm_timer();
+}
+
+uint64_t Connection::bytes_taken() const {
+  int unsent = 0;
+  if (::ioctl(const_cast<tcp::socket&>(socket_).native_handle(), SIOCOUTQ, &unsent) != 0) unsent = 0;
+  return written_ - std::min<uint64_t>(written_, uint64_t(std::max(unsent, 0)));
 }
 
 void Connection::serve() {
@@ -197,8 +229,9 @@ void Connection::serve_turn(Clock::time_point turn_end) {
   bool drained = true;
   for (;;) {
     while (!queue_full() && session_.has_work() && Clock::now() < turn_end) {
+      const size_t before = session_.outbox().size();
       session_.pump();
-      recount_queue();
+      count_queued(before);
     }
     if (waiting_write_ || closed_) break;
     drained = write_now();
@@ -212,7 +245,8 @@ void Connection::serve_turn(Clock::time_point turn_end) {
       close_by_ = Clock::now() + milliseconds(std::min<uint32_t>(1000, limits_.write_timeout_ms));
       arm_timer();
     }
-    if (session_.outbox().empty()) return close();
+    // Closed once the peer has taken the ERROR, or at close_by_.
+    if (session_.outbox().empty() && bytes_taken() == written_) return close();
   }
   if (!session_.outbox().empty() && !waiting_write_) {
     if (!drained && !turn_posted_) {
@@ -245,24 +279,34 @@ void Connection::serve_turn(Clock::time_point turn_end) {
 bool Connection::write_now() {
   auto& outbox = session_.outbox();
   size_t burst = 0;
+  std::array<asio::const_buffer, 64> gather;  // small frames (CATALOGUE, ERROR) go out many per syscall
   while (!outbox.empty()) {
     if (burst >= limits_.send_burst_bytes) return true;  // the rest in the next turn
-    const Buffer& front = outbox.front();
+    size_t count = 0;
+    for (; count < gather.size() && count < outbox.size(); ++count)
+      gather[count] = asio::buffer(*outbox[count]) + (count == 0 ? front_written_ : 0);
     boost::system::error_code ec;
-    const size_t n = socket_.write_some(asio::buffer(*front) + front_written_, ec);
+    size_t n = socket_.write_some(std::span(gather.data(), count), ec);
     if (ec == asio::error::would_block || ec == asio::error::try_again) return false;
     if (ec) {
       close();
       return false;
     }
-    if (n > 0) last_activity_ = write_waiting_since_ = Clock::now();  // the peer takes its answer
+    if (n > 0) last_activity_ = Clock::now();
     stats_.bytes_out += n;
+    written_ += n;
     burst += n;
-    front_written_ += n;
     queued_bytes_ -= std::min(queued_bytes_, n);
-    if (front_written_ < front->size()) return false;  // the socket's buffer is full
-    outbox.pop_front();
-    front_written_ = 0;
+    while (n > 0) {
+      const size_t rest = outbox.front()->size() - front_written_;
+      if (n < rest) {
+        front_written_ += n;
+        return false;  // the socket's buffer is full
+      }
+      n -= rest;
+      outbox.pop_front();
+      front_written_ = 0;
+    }
   }
   return true;
 }
@@ -271,7 +315,7 @@ Clock::time_point Connection::next_deadline() const {
   Clock::time_point at = last_activity_ + milliseconds(limits_.idle_timeout_ms);
   if (!session_.opened()) at = std::min(at, connected_ + milliseconds(limits_.handshake_timeout_ms));
   if (reader_.mid_frame()) at = std::min(at, frame_started_ + milliseconds(limits_.frame_timeout_ms));
-  if (!session_.outbox().empty()) at = std::min(at, write_waiting_since_ + milliseconds(limits_.write_timeout_ms));
+  if (write_waiting_) at = std::min(at, write_waiting_since_ + milliseconds(limits_.write_timeout_ms));
   if (close_by_ != Clock::time_point()) at = std::min(at, close_by_);
   return at;
 }
@@ -292,10 +336,21 @@ void Connection::on_timer(const boost::system::error_code& ec) {
   timer_at_ = Clock::time_point::max();
   const Clock::time_point now = Clock::now();
   const auto past = [&](Clock::time_point since, uint32_t ms) { return now >= since + milliseconds(ms); };
-  if (close_by_ != Clock::time_point() && now >= close_by_) return close();  // its ERROR could not be delivered
-  if (!session_.outbox().empty() && past(write_waiting_since_, limits_.write_timeout_ms)) {
-    timed_out_ = true;
-    return close();  // it does not read, so an ERROR would never arrive either
+  if (close_by_ != Clock::time_point() && now >= close_by_) {  // its ERROR could not be delivered in time
+    reset_ = !session_.outbox().empty() || bytes_taken() < written_;
+    return close();
+  }
+  if (write_waiting_) {
+    const uint64_t taken = bytes_taken();
+    if (taken > taken_) {  // the peer reads: the wait starts again
+      taken_ = taken;
+      write_waiting_since_ = now;
+    }
+    if (session_.outbox().empty() && taken == written_) write_waiting_ = false;  // all of it is across
+    if (write_waiting_ && past(write_waiting_since_, limits_.write_timeout_ms)) {
+      timed_out_ = reset_ = true;
+      return close();  // it does not read, so an ERROR would never arrive either
+    }
   }
   if (reader_.mid_frame() && past(frame_started_, limits_.frame_timeout_ms))
     return time_out("a message took longer than " + std::to_string(limits_.frame_timeout_ms) + " ms to arrive");
@@ -328,6 +383,8 @@ void Connection::close() {
   }
   if (session_.error()) stats_.errors_sent++;
   boost::system::error_code ignored;
+  // Bytes the peer did not take would keep the socket (and its kernel buffer) alive after the close: reset.
+  if (reset_) socket_.set_option(asio::socket_base::linger(true, 0), ignored);
   timer_.cancel();
   socket_.shutdown(tcp::socket::shutdown_both, ignored);
   socket_.close(ignored);
