@@ -1,8 +1,11 @@
-// pmstream serve FILES_OR_DIRS... [--port 7300] [--host 0.0.0.0] [--max-sessions N] ...
-// Runs the sender-driven TCP server until SIGINT or SIGTERM.
+// pmstream serve FILES_OR_DIRS... [--port 7300] [--host 0.0.0.0] [--max-sessions N] [--json] ...
+// Runs the sender-driven TCP server until SIGINT or SIGTERM; SIGUSR1 prints the totals so far.
 #include <csignal>
 #include <cstdio>
+#include <ctime>
 #include <pthread.h>
+
+#include <nlohmann/json.hpp>
 
 #include "apps/commands.h"
 #include "apps/resource_usage.h"
@@ -17,8 +20,67 @@ struct ServeArgs {
   std::string host = "0.0.0.0";
   uint16_t port = 7300;
   uint16_t http_port = 0;
+  bool json = false;
   server::ServerLimits limits;
 };
+
+uint64_t rss_bytes() {
+  unsigned long long kb = 0;
+  if (std::FILE* status = std::fopen("/proc/self/status", "r")) {
+    char line[256];
+    while (std::fgets(line, sizeof line, status))
+      if (std::sscanf(line, "VmRSS: %llu kB", &kb) == 1) break;
+    std::fclose(status);
+  }
+  return uint64_t(kb) << 10;
+}
+
+double cpu_seconds() {
+  timespec t{};
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t);
+  return double(t.tv_sec) + 1e-9 * double(t.tv_nsec);
+}
+
+// One line a program can read: the event, then every counter (docs/operating.md lists them).
+nlohmann::json stats_json(const char* event, const server::ServerStats& s, const Stopwatch& uptime) {
+  return {{"event", event},
+          {"uptime_s", uptime.seconds()},
+          {"sessions_opened", s.sessions_opened.load()},
+          {"sessions_active", s.sessions_active.load()},
+          {"sessions_refused", s.sessions_refused.load()},
+          {"sessions_timed_out", s.sessions_timed_out.load()},
+          {"sessions_failed", s.sessions_failed.load()},
+          {"protocol_errors", s.protocol_errors.load()},
+          {"accept_failures", s.accept_failures.load()},
+          {"longest_turn_us", s.longest_turn_us.load()},
+          {"bytes_in", s.bytes_in.load()},
+          {"bytes_out", s.bytes_out.load()},
+          {"splits_sent", s.splits_sent.load()},
+          {"errors_sent", s.errors_sent.load()},
+          {"peak_state_bytes", s.peak_state_bytes.load()},
+          {"peak_buffer_bytes", s.peak_buffer_bytes.load()},
+          {"rss_bytes", rss_bytes()},
+          {"peak_rss_bytes", uint64_t(peak_rss_mb() * 1024 * 1024)},
+          {"cpu_s", cpu_seconds()}};
+}
+
+void print_line(const std::string& line) {
+  std::printf("%s\n", line.c_str());
+  std::fflush(stdout);
+}
+
+void print_totals(const server::ServerStats& s) {
+  std::printf("stopped: %llu sessions (%llu refused, %llu timed out, %llu failed), %llu protocol errors, "
+              "%llu bytes in, %llu bytes out, %llu vsplits sent, "
+              "peak session state %llu bytes (%llu without its active tags), peak RSS %.0f MB\n",
+              (unsigned long long)s.sessions_opened.load(), (unsigned long long)s.sessions_refused.load(),
+              (unsigned long long)s.sessions_timed_out.load(), (unsigned long long)s.sessions_failed.load(),
+              (unsigned long long)s.protocol_errors.load(), (unsigned long long)s.bytes_in.load(),
+              (unsigned long long)s.bytes_out.load(), (unsigned long long)s.splits_sent.load(),
+              (unsigned long long)s.peak_state_bytes.load(), (unsigned long long)s.peak_buffer_bytes.load(),
+              peak_rss_mb());
+  std::fflush(stdout);
+}
 
 void run_serve(const ServeArgs& args) {
   if (args.http_port != 0)
@@ -28,47 +90,83 @@ void run_serve(const ServeArgs& args) {
   sigemptyset(&signals);
   sigaddset(&signals, SIGINT);
   sigaddset(&signals, SIGTERM);
+  sigaddset(&signals, SIGUSR1);
   pthread_sigmask(SIG_BLOCK, &signals, nullptr);
 
+  const Stopwatch uptime;
   const auto catalogue = server::Catalogue::open(args.paths, args.limits.position_bits);
   server::TcpServer tcp(catalogue, args.limits, args.host, args.port);
   tcp.start();
-  for (const auto& model : catalogue->models())
-    std::printf("serving %s: %llu faces, %u base vertices, %llu vsplits (%s)\n", model->name.c_str(),
-                (unsigned long long)model->info.input_faces, model->info.base_vertices,
-                (unsigned long long)model->info.vsplits, model->path.c_str());
-  std::printf("listening on %s:%u (TCP, sender-driven); Ctrl-C stops\n", args.host.c_str(), unsigned(tcp.port()));
-  std::fflush(stdout);
-  int received = 0;
-  sigwait(&signals, &received);
+  if (args.json) {
+    nlohmann::json models = nlohmann::json::array();
+    for (const auto& model : catalogue->models())
+      models.push_back({{"name", model->name}, {"path", model->path}, {"faces", model->info.input_faces},
+                        {"base_vertices", model->info.base_vertices}, {"vsplits", model->info.vsplits}});
+    print_line(nlohmann::json{{"event", "listening"}, {"host", args.host}, {"port", tcp.port()}, {"models", models}}
+                   .dump());
+  } else {
+    for (const auto& model : catalogue->models())
+      std::printf("serving %s: %llu faces, %u base vertices, %llu vsplits (%s)\n", model->name.c_str(),
+                  (unsigned long long)model->info.input_faces, model->info.base_vertices,
+                  (unsigned long long)model->info.vsplits, model->path.c_str());
+    print_line("listening on " + args.host + ":" + std::to_string(tcp.port()) +
+               " (TCP, sender-driven); Ctrl-C stops, SIGUSR1 prints the totals so far");
+  }
+  for (;;) {
+    int received = 0;
+    sigwait(&signals, &received);
+    if (received != SIGUSR1) break;
+    if (args.json) {
+      print_line(stats_json("stats", tcp.stats(), uptime).dump());
+    } else {
+      print_totals(tcp.stats());
+    }
+  }
   tcp.stop();
-  const server::ServerStats& s = tcp.stats();
-  std::printf("stopped: %llu sessions (%llu refused), %llu bytes in, %llu bytes out, %llu vsplits sent, "
-              "peak session state %llu bytes (%llu without its active tags), peak RSS %.0f MB\n",
-              (unsigned long long)s.sessions_opened.load(), (unsigned long long)s.sessions_rejected.load(),
-              (unsigned long long)s.bytes_in.load(), (unsigned long long)s.bytes_out.load(),
-              (unsigned long long)s.splits_sent.load(), (unsigned long long)s.peak_state_bytes.load(),
-              (unsigned long long)s.peak_buffer_bytes.load(), peak_rss_mb());
+  if (args.json) {
+    print_line(stats_json("stopped", tcp.stats(), uptime).dump());
+  } else {
+    print_totals(tcp.stats());
+  }
+}
+
+void add_limit(CLI::App* cmd, const char* name, uint32_t& value, const char* help) {
+  cmd->add_option(name, value, help)->capture_default_str();
 }
 
 }  // namespace
 
 void add_serve_command(CLI::App& app) {
   auto args = std::make_shared<ServeArgs>();
+  server::ServerLimits& limits = args->limits;
   CLI::App* cmd = app.add_subcommand("serve", "Serve .pms models to streaming clients (sender-driven, TCP)");
   cmd->add_option("paths", args->paths, ".pms files or directories holding them")->required();
   cmd->add_option("--host", args->host, "Address to listen on")->capture_default_str();
-  cmd->add_option("--port", args->port, "TCP port")->capture_default_str();
+  cmd->add_option("--port", args->port, "TCP port (0: any free port, printed at start)")->capture_default_str();
   cmd->add_option("--http-port", args->http_port, "HTTP + WebSocket port (receiver-driven mode; later)");
-  cmd->add_option("--max-sessions", args->limits.max_sessions, "Concurrent sessions")->capture_default_str();
-  cmd->add_option("--threads", args->limits.threads, "I/O threads (0 = one per core)")->capture_default_str();
-  cmd->add_option("--idle-timeout-ms", args->limits.idle_timeout_ms, "Close a silent session after this")
+  cmd->add_flag("--json", args->json, "Print one JSON object per line: listening, stats (SIGUSR1), stopped");
+  add_limit(cmd, "--max-sessions", limits.max_sessions, "Concurrent sessions; more are refused (server_full)");
+  add_limit(cmd, "--threads", limits.threads, "I/O threads (0 = one per core)");
+  add_limit(cmd, "--idle-timeout-ms", limits.idle_timeout_ms,
+            "Close a session that sends nothing and takes no answer byte for this long");
+  add_limit(cmd, "--handshake-timeout-ms", limits.handshake_timeout_ms,
+            "Close a connection that has not said HELLO and OPEN within this");
+  add_limit(cmd, "--frame-timeout-ms", limits.frame_timeout_ms, "A message, once begun, must arrive whole within this");
+  add_limit(cmd, "--write-timeout-ms", limits.write_timeout_ms,
+            "Close a peer that leaves answer bytes waiting and takes none for this long");
+  add_limit(cmd, "--accept-backoff-ms", limits.accept_backoff_ms,
+            "Longest pause after a failed accept (out of file descriptors), doubling from 10 ms");
+  add_limit(cmd, "--turn-us", limits.turn_us, "One session's turn on an I/O thread, in microseconds");
+  add_limit(cmd, "--max-client-message", limits.max_client_message, "Largest message payload a client may send (bytes)");
+  add_limit(cmd, "--max-server-message", limits.max_server_message,
+            "Largest message payload the server sends (bytes); a model whose BASE is larger is refused at start");
+  cmd->add_option("--send-queue-bytes", limits.send_queue_bytes,
+                  "Answer bytes queued per session before it waits for the peer to read")
       ->capture_default_str();
-  cmd->add_option("--batch", args->limits.batch_splits, "vsplit packets per VSPLITS message")
+  cmd->add_option("--batch", limits.batch_splits, "vsplit packets per VSPLITS message")
       ->check(CLI::Range(1u, 1u << 16))
       ->capture_default_str();
-  cmd->add_option("--position-bits", args->limits.position_bits, "Bits per coordinate on the wire (1-24, or 32)")
-      ->capture_default_str();
+  add_limit(cmd, "--position-bits", limits.position_bits, "Bits per coordinate on the wire (1-24, or 32)");
   cmd->callback([args] { run_serve(*args); });
 }
 

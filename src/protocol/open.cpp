@@ -41,24 +41,6 @@ struct FrontWriter {
   }
 };
 
-struct FrontReader {
-  Reader& r;
-  uint64_t max_leaves;
-  std::vector<VertexId>& leaves;
-
-  void subtree(VertexId node) {
-    if (r.bits(1, "resume") == 0) {
-      if (leaves.size() >= max_leaves)
-        r.fail(ErrorCode::too_large, "resume", "more than " + std::to_string(max_leaves) + " leaves");
-      leaves.push_back(node);
-      return;
-    }
-    if (node.depth() >= kMaxDepth) r.fail(ErrorCode::bad_id, "resume", "a split below depth 63");
-    subtree(node.child(0));
-    subtree(node.child(1));
-  }
-};
-
 }  // namespace
 
 std::vector<uint8_t> encode(const Open& m) {
@@ -82,21 +64,67 @@ std::vector<uint8_t> encode(const Open& m) {
   return w.finish();
 }
 
-Open decode_open(std::span<const uint8_t> payload, uint64_t max_resume_leaves) {
+OpenHeader decode_open_header(std::span<const uint8_t> payload) {
   Reader r(payload, MessageType::open);
-  Open m;
+  OpenHeader m;
   m.model = r.string(kMaxNameBytes, "model");
   const uint8_t flags = r.u8("flags");
   if (flags & ~(kFlagResume | kFlagViewIndependent)) r.fail(ErrorCode::bad_message, "flags", "unknown bits set");
   if (flags & kFlagViewIndependent) m.mode = StreamMode::view_independent;
   if (flags & kFlagResume) {
-    const uint32_t trees = r.u32("resume tree count");
-    if (trees == 0) r.fail(ErrorCode::bad_message, "resume tree count", "is 0");
-    r.check_count(trees, 1, "resume tree count");  // each tree takes at least one bit
-    FrontReader front{r, max_resume_leaves, m.resume};
-    for (uint32_t t = 0; t < trees; ++t) front.subtree({t, 1});
+    m.resume = true;
+    m.resume_trees = r.u32("resume tree count");
+    if (m.resume_trees == 0) r.fail(ErrorCode::bad_message, "resume tree count", "is 0");
+    r.check_count(m.resume_trees, 1, "resume tree count");  // each tree takes at least one bit
+  } else {
+    r.expect_end();
   }
-  r.expect_end();
+  m.front_bit = r.position();
+  return m;
+}
+
+FrontDecoder::FrontDecoder(std::span<const uint8_t> payload, const OpenHeader& header, uint64_t max_leaves)
+    : payload_(payload), bit_(header.front_bit), trees_(header.resume ? header.resume_trees : 0),
+      max_leaves_(max_leaves) {
+  stack_.reserve(kMaxDepth + 1);
+  done_ = trees_ == 0;
+}
+
+bool FrontDecoder::next(size_t max_leaves, std::vector<VertexId>& out) {
+  if (done_) return true;
+  Reader r(payload_, MessageType::open, bit_);
+  for (size_t taken = 0; taken < max_leaves;) {
+    if (stack_.empty()) {
+      if (tree_ == trees_) {
+        r.expect_end();
+        done_ = true;
+        break;
+      }
+      stack_.push_back({tree_++, 1});
+    }
+    const VertexId node = stack_.back();
+    stack_.pop_back();
+    if (r.bits(1, "resume") == 0) {
+      if (leaves_ >= max_leaves_)
+        r.fail(ErrorCode::too_large, "resume", "more than " + std::to_string(max_leaves_) + " leaves");
+      ++leaves_;
+      ++taken;
+      out.push_back(node);
+      continue;
+    }
+    if (node.depth() >= kMaxDepth) r.fail(ErrorCode::bad_id, "resume", "a split below depth 63");
+    stack_.push_back(node.child(1));  // preorder: the left subtree first
+    stack_.push_back(node.child(0));
+  }
+  bit_ = r.position();
+  return done_;
+}
+
+Open decode_open(std::span<const uint8_t> payload, uint64_t max_resume_leaves) {
+  const OpenHeader header = decode_open_header(payload);
+  Open m{header.model, {}, header.mode};
+  FrontDecoder front(payload, header, max_resume_leaves);
+  while (!front.next(SIZE_MAX, m.resume)) {}
   return m;
 }
 

@@ -167,6 +167,38 @@ struct View {
 };
 struct Close {};
 
+// OPEN up to its resume front. A front may list millions of leaves; a server decodes it with FrontDecoder a
+// slice at a time instead of all at once inside one message handler.
+struct OpenHeader {
+  std::string model;
+  StreamMode mode = StreamMode::sender_driven;
+  bool resume = false;
+  uint32_t resume_trees = 0;  // trees 0..resume_trees-1 are covered
+  uint64_t front_bit = 0;     // where the front's code starts in the payload
+};
+
+// The preorder split/leaf code of a resume front, decoded incrementally: each next() call reads at most
+// `max_leaves` leaves (and the split bits above them, at most 63 per leaf), so its work is bounded. The
+// payload must outlive the decoder.
+class FrontDecoder {
+ public:
+  FrontDecoder(std::span<const uint8_t> payload, const OpenHeader& header,
+               uint64_t max_leaves = kDefaultMaxResumeLeaves);
+  // Appends the next leaves, in preorder tree by tree; true once the front is complete and the payload
+  // ends with it. Throws ProtocolError (bad_message, bad_id for a split below depth 63, too_large).
+  bool next(size_t max_leaves, std::vector<VertexId>& out);
+  uint64_t leaves() const { return leaves_; }
+  bool done() const { return done_; }
+
+ private:
+  std::span<const uint8_t> payload_;
+  uint64_t bit_;
+  uint32_t trees_, tree_ = 0;
+  uint64_t max_leaves_, leaves_ = 0;
+  std::vector<VertexId> stack_;  // nodes whose bit is still to read, the next on top (at most 64)
+  bool done_ = false;
+};
+
 // ---- server -> client ----------------------------------------------------------------------------------
 
 struct HelloOk {
@@ -243,6 +275,7 @@ std::vector<uint8_t> encode(const ErrorMessage& m);
 Hello decode_hello(std::span<const uint8_t> payload);  // checks the magic; the version is the server's call
 List decode_list(std::span<const uint8_t> payload);
 Open decode_open(std::span<const uint8_t> payload, uint64_t max_resume_leaves = kDefaultMaxResumeLeaves);
+OpenHeader decode_open_header(std::span<const uint8_t> payload);  // the front is left to a FrontDecoder
 View decode_view(std::span<const uint8_t> payload);  // also rejects cameras make_view() would refuse
 Close decode_close(std::span<const uint8_t> payload);
 HelloOk decode_hello_ok(std::span<const uint8_t> payload);

@@ -60,7 +60,8 @@ class Writer {
 // "packet 12") and the field.
 class Reader {
  public:
-  Reader(std::span<const uint8_t> payload, MessageType type) : data_(payload), type_(type) {}
+  Reader(std::span<const uint8_t> payload, MessageType type, uint64_t start_bit = 0)
+      : data_(payload), pos_(start_bit), type_(type) {}
 
   uint64_t bits(unsigned n, const char* field);  // n <= 64
   uint8_t u8(const char* field) { return uint8_t(bits(8, field)); }
@@ -71,6 +72,7 @@ class Reader {
   float finite_f32(const char* field);  // rejects NaN and infinities
   std::string string(size_t max, const char* field);
   uint64_t bits_left() const { return 8 * uint64_t(data_.size()) - pos_; }
+  uint64_t position() const { return pos_; }  // in bits
   // `count` items of at least `min_bits` each must fit in what is left: checked before any allocation.
   void check_count(uint64_t count, uint64_t min_bits, const char* field);
   // Padding bits up to the byte boundary must be zero and nothing may follow: one encoding per message.

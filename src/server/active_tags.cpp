@@ -9,6 +9,12 @@ ActiveTags::ActiveTags(uint32_t root_count) : words_((size_t(root_count) + 63) /
   if (root_count % 64) words_.back() = (uint64_t(1) << (root_count % 64)) - 1;
 }
 
+void ActiveTags::reserve_window(uint32_t lo, uint32_t hi) {
+  if (active_ != 0 || lo > hi) return;
+  first_word_ = lo / 64;
+  words_.assign(size_t(hi / 64 - first_word_ + 1), 0);
+}
+
 void ActiveTags::activate(uint32_t node) {
   const uint64_t w = node / 64;
   if (words_.empty()) first_word_ = w;

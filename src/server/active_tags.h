@@ -22,6 +22,9 @@ class ActiveTags {
     if (w < first_word_ || w >= first_word_ + words_.size()) return false;
     return (words_[w - first_word_] >> (node % 64)) & 1;
   }
+  // Sizes an empty set's window for nodes [lo, hi] at once: a resume then activates its leaves in any
+  // order without growing the window on the left.
+  void reserve_window(uint32_t lo, uint32_t hi);
   void activate(uint32_t node);
   void deactivate(uint32_t node);
 

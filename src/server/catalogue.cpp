@@ -73,8 +73,26 @@ std::shared_ptr<const Catalogue> Catalogue::open(const std::vector<std::string>&
   if (catalogue->models_.empty()) fail("serve", "no .pms models found in the paths given");
   protocol::Catalogue message;
   for (const auto& model : catalogue->models_) message.models.push_back(model->info);
-  catalogue->catalogue_frame_ = protocol::encode(message);
+  catalogue->catalogue_frame_ = std::make_shared<const std::vector<uint8_t>>(protocol::encode(message));
   return catalogue;
+}
+
+void Catalogue::check_limits(const ServerLimits& limits) const {
+  const auto payload = [](const std::vector<uint8_t>& frame) { return frame.size() - protocol::kFrameHeaderBytes; };
+  const std::string limit = " bytes, over --max-server-message " + std::to_string(limits.max_server_message) +
+                            " (raise it, or serve the model with fewer base vertices)";
+  for (const auto& model : models_)
+    if (payload(*model->base_frame) > limits.max_server_message)
+      fail(model->path, "its BASE message is " + std::to_string(payload(*model->base_frame)) + limit);
+  if (payload(*catalogue_frame_) > limits.max_server_message)
+    fail("serve", "the CATALOGUE of " + std::to_string(models_.size()) + " models is " +
+                      std::to_string(payload(*catalogue_frame_)) + limit);
+  // A vsplit packet is under 1024 bits (PacketTable), a VSPLITS header 9 bytes.
+  const uint64_t batch = uint64_t(limits.batch_splits) * 128 + 16;
+  if (batch > limits.max_server_message)
+    fail("serve", "--batch " + std::to_string(limits.batch_splits) + ": a VSPLITS message may take " +
+                      std::to_string(batch) + limit);
+  if (limits.batch_splits == 0 || limits.slice_work == 0) fail("serve", "--batch and the slice work must be >= 1");
 }
 
 const ServedModel* Catalogue::find(const std::string& name) const {

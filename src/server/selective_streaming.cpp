@@ -2,6 +2,7 @@
 #include "server/selective_streaming.h"
 
 #include <algorithm>
+#include <stdexcept>
 
 #include "common/parallel.h"
 
@@ -32,6 +33,8 @@ void sel_stream_vsplit(const ModelView& model, const DependencyFilter& dependenc
       const uint32_t cut_l = model.cut_left[v], cut_r = model.cut_right[v];
       if (cut_l != kNone && cut_r != kNone) {
         const uint32_t left = active_ancestor(model, tags, cut_l);
+        // A front of the whole forest always holds an ancestor of every node; waiting on none would loop.
+        if (left == kNone) throw std::logic_error("SelStreamVSplit: a cut vertex has no active ancestor");
         if (left == active_ancestor(model, tags, cut_r)) {
           stack.push_back(left);
           continue;
@@ -92,18 +95,28 @@ void SelectiveStreamer::start(const ModelView& model, const DependencyFilter& de
   tags_ = &tags;
   importance_ = std::move(importance);
   heap_.reserve(kMaxRanked);
-  rank_front();
+  begin_scan();
 }
 
-bool SelectiveStreamer::rank_front() {
-  // The kMaxRanked most important in one pass: a min-heap on importance while scanning, then a max-heap.
+void SelectiveStreamer::begin_scan() {
+  heap_.clear();
+  overflow_ = false;
+  scan_ = tags_->next_active(0);
+}
+
+// While scanning, heap_ is a min-heap on importance: its front is the least important of the best so far.
+bool SelectiveStreamer::continue_scan(uint64_t budget, uint64_t& work) {
   const auto more_important = [](const std::pair<float, uint32_t>& a, const std::pair<float, uint32_t>& b) {
     return less_important(b, a);
   };
-  heap_.clear();
-  overflow_ = false;
   const ModelView& model = *model_;
-  for (uint32_t v = tags_->next_active(0); v != UINT32_MAX; v = tags_->next_active(v + 1)) {
+  const uint64_t stop = work + budget;
+  for (uint32_t v = scan_; v != UINT32_MAX; v = tags_->next_active(v + 1)) {
+    if (work >= stop) {
+      scan_ = v;
+      return false;
+    }
+    ++work;  // leaves too: a front of a fine mesh is mostly leaves, each a lookup
     if (model.is_leaf(v)) continue;
     const std::pair<float, uint32_t> entry{importance_(v), v};
     if (entry.first <= 0) continue;
@@ -118,8 +131,9 @@ bool SelectiveStreamer::rank_front() {
     heap_.back() = entry;
     std::push_heap(heap_.begin(), heap_.end(), more_important);
   }
+  scan_ = kNotScanning;
   std::make_heap(heap_.begin(), heap_.end(), less_important);
-  return !heap_.empty();
+  return true;
 }
 
 void SelectiveStreamer::rank(uint32_t node, float importance) {
@@ -131,24 +145,32 @@ void SelectiveStreamer::rank(uint32_t node, float importance) {
   std::push_heap(heap_.begin(), heap_.end(), less_important);
 }
 
-bool SelectiveStreamer::step(size_t max_splits, std::vector<uint32_t>& out) {
+bool SelectiveStreamer::step(size_t max_splits, uint64_t budget, std::vector<uint32_t>& out, uint64_t& work) {
   if (!model_) return true;
   const ModelView& model = *model_;
   const size_t start = out.size();
+  const uint64_t stop = work + budget;
   for (;;) {
-    if (heap_.empty() && (!overflow_ || !rank_front())) return true;
-    if (out.size() - start >= max_splits) return false;
+    if (scan_ != kNotScanning && !continue_scan(stop > work ? stop - work : 0, work)) return false;
+    if (heap_.empty()) {
+      if (!overflow_) return true;
+      begin_scan();
+      continue;
+    }
+    if (out.size() - start >= max_splits || work >= stop) return false;
     std::pop_heap(heap_.begin(), heap_.end(), less_important);
     const uint32_t v = heap_.back().second;
     heap_.pop_back();
     if (!tags_->is_active(v)) continue;  // split earlier as a dependency
     const size_t before = out.size();
     sel_stream_vsplit(model, *dependencies_, *tags_, v, out, stack_);
+    work += out.size() - before;
     // Children of every split just made may want refining too; forced splits' children included.
     for (size_t i = before; i < out.size(); ++i) {
       const uint32_t child = model.first_child[out[i]];
       for (uint32_t c : {child, child + 1}) {
         if (!tags_->is_active(c) || model.is_leaf(c)) continue;
+        ++work;
         const float error = importance_(c);
         if (error > 0) rank(c, error);
       }
@@ -161,6 +183,7 @@ void SelectiveStreamer::stop() {
   dependencies_ = nullptr;
   tags_ = nullptr;
   importance_ = nullptr;
+  scan_ = kNotScanning;
   std::vector<std::pair<float, uint32_t>>().swap(heap_);
   std::vector<uint32_t>().swap(stack_);
 }
@@ -169,7 +192,8 @@ bool selective_streaming(const ModelView& model, const DependencyFilter& depende
                          const Importance& importance, size_t max_splits, std::vector<uint32_t>& out) {
   SelectiveStreamer streamer;
   streamer.start(model, dependencies, tags, importance);
-  return streamer.step(max_splits, out);
+  uint64_t work = 0;
+  return streamer.step(max_splits, UINT64_MAX / 2, out, work);
 }
 
 }  // namespace pms

@@ -1,12 +1,15 @@
 // TCP transport of the sender-driven protocol on Boost.Asio (asio's examples: one object per
-// connection owning its socket and buffers, shared_from_this at the session boundary only, every read
-// bounded, every wait timed). A small pool of I/O threads runs all connections; each connection's
-// handlers run on its own strand, so a Session is only ever touched by one thread at a time.
+// connection owning its socket and buffers, shared_from_this at the session boundary only). A small pool
+// of I/O threads runs all connections; each connection's handlers run on its own strand, so a Session is
+// only ever touched by one thread at a time.
+// Every peer is presumed hostile: a connection's turn on a thread is bounded in time (turn_us), its
+// memory by the frame limit and the send queue, and every wait by a deadline (docs/operating.md).
 #include <utility>  // before asio with C++20 (DESIGN.md §8)
 
 #include <boost/asio.hpp>
 
 #include <array>
+#include <cstdio>
 #include <mutex>
 #include <set>
 #include <thread>
@@ -20,68 +23,79 @@ namespace {
 namespace asio = boost::asio;
 using asio::ip::tcp;
 using protocol::ErrorCode;
+using Clock = std::chrono::steady_clock;
+using std::chrono::milliseconds;
 
 void update_max(std::atomic<uint64_t>& target, uint64_t value) {
   uint64_t seen = target.load(std::memory_order_relaxed);
   while (value > seen && !target.compare_exchange_weak(seen, value, std::memory_order_relaxed)) {}
 }
 
+void log_line(const std::string& line) { std::fprintf(stderr, "pmstream serve: %s\n", line.c_str()); }
+
 class Registry;
 
 class Connection : public std::enable_shared_from_this<Connection> {
  public:
   Connection(tcp::socket socket, std::shared_ptr<const Catalogue> catalogue, const ServerLimits& limits,
-             ServerStats& stats, Registry& registry)
+             ServerStats& stats, Registry& registry, uint64_t id)
       : socket_(std::move(socket)),
-        idle_(socket_.get_executor()),
+        timer_(socket_.get_executor()),
         reader_(limits.max_client_message),
         session_(std::move(catalogue), limits),
         limits_(limits),
         stats_(stats),
-        registry_(registry) {}
+        registry_(registry),
+        id_(id) {}
 
   void start();
   // Closes from any thread (server stop).
   void shutdown() {
     asio::post(socket_.get_executor(), [self = shared_from_this()] { self->close(); });
   }
-  // Refuses a connection over the session limit with an ERROR, then closes.
-  void refuse() {
-    session_.abort_with(ErrorCode::server_full, "the server is at its session limit; try again later");
-    write_next();
-  }
 
  private:
+  // One turn: frames in, pump, bytes out, then what comes next (a read, a write wait or another turn).
+  void serve();
+  void serve_turn(Clock::time_point turn_end);
   void read();
   void on_read(const boost::system::error_code& ec, size_t n);
-  void pump_and_write();
-  // Non-blocking writes until the outbox is empty (true) or the socket is full; adds what it wrote to `sent`.
-  bool write_now(size_t& sent);
-  void write_next();
-  void arm_idle_timer();
+  void receive_frames(Clock::time_point turn_end);
+  // Non-blocking writes until the outbox is empty (true), the socket is full or the burst is used (false).
+  bool write_now();
+  void recount_queue();
+  bool queue_full() const { return queued_bytes_ > limits_.send_queue_bytes; }
+  // Deadlines: one timer, set to the earliest that applies; a check when it fires.
+  Clock::time_point next_deadline() const;
+  void arm_timer();
+  void on_timer(const boost::system::error_code& ec);
+  void time_out(const std::string& why);
   void close();
 
   tcp::socket socket_;
-  asio::steady_timer idle_;
+  asio::steady_timer timer_;
   std::array<uint8_t, 4096> read_buffer_;
   protocol::FrameReader reader_;
   Session session_;
   const ServerLimits& limits_;
   ServerStats& stats_;
   Registry& registry_;
+  uint64_t id_;
+  std::string peer_;
+  Clock::time_point connected_, last_activity_, frame_started_, write_waiting_since_, close_by_;
+  Clock::time_point timer_at_ = Clock::time_point::max();
   size_t queued_bytes_ = 0;
   size_t front_written_ = 0;  // bytes of the outbox's first frame already in the socket
-  bool writing_ = false, reading_paused_ = false, closed_ = false;
+  bool reading_ = false, waiting_write_ = false, turn_posted_ = false, closed_ = false;
+  bool timed_out_ = false;
 };
 
 // The live connections, so stop() can close them; counts sessions for the limit.
 class Registry {
  public:
-  bool add(const std::shared_ptr<Connection>& c, uint32_t max_sessions) {
+  void add(const std::shared_ptr<Connection>& c) {
     std::lock_guard<std::mutex> lock(mutex_);
-    if (live_.size() >= max_sessions) return false;
     live_.insert(c);
-    return true;
   }
   void remove(const std::shared_ptr<Connection>& c) {
     std::lock_guard<std::mutex> lock(mutex_);
@@ -102,23 +116,18 @@ class Registry {
 };
 
 void Connection::start() {
-  socket_.set_option(tcp::no_delay(true));
-  socket_.non_blocking(true);  // write_now() must never block an I/O thread
-  arm_idle_timer();
+  boost::system::error_code ec;
+  socket_.set_option(tcp::no_delay(true), ec);
+  socket_.non_blocking(true, ec);  // write_now() must never block an I/O thread
+  const tcp::endpoint peer = socket_.remote_endpoint(ec);
+  peer_ = ec ? "unknown peer" : peer.address().to_string() + ":" + std::to_string(peer.port());
+  connected_ = last_activity_ = Clock::now();
+  arm_timer();
   read();
 }
 
-void Connection::arm_idle_timer() {
-  idle_.expires_after(std::chrono::milliseconds(limits_.idle_timeout_ms));
-  idle_.async_wait([self = shared_from_this()](const boost::system::error_code& ec) {
-    if (ec || self->closed_) return;
-    self->session_.abort_with(ErrorCode::timeout, "no message for " +
-                                                      std::to_string(self->limits_.idle_timeout_ms) + " ms");
-    self->pump_and_write();
-  });
-}
-
 void Connection::read() {
+  reading_ = true;
   socket_.async_read_some(asio::buffer(read_buffer_),
                           [self = shared_from_this()](const boost::system::error_code& ec, size_t n) {
                             self->on_read(ec, n);
@@ -126,49 +135,118 @@ void Connection::read() {
 }
 
 void Connection::on_read(const boost::system::error_code& ec, size_t n) {
+  reading_ = false;
   if (closed_) return;
   if (ec) return close();  // peer gone or reset: nothing to answer
   stats_.bytes_in += n;
-  arm_idle_timer();
+  const bool was_mid_frame = reader_.mid_frame();
+  const size_t ready = reader_.ready();
   try {
     reader_.feed(read_buffer_.data(), n);
-    protocol::Frame frame;
-    while (!session_.closing() && reader_.next(frame)) session_.receive(frame);
-  } catch (const protocol::ProtocolError& e) {
-    session_.abort_with(e.code, e.what());
+  } catch (const std::exception& e) {  // out of memory for the frame: this session's fault only
+    session_.abort_with(ErrorCode::internal, std::string("internal error: ") + e.what());
   }
-  pump_and_write();
-  if (session_.closing()) return;  // the ERROR or CLOSE flushes, then the socket closes
-  // Back-pressure: a client that does not read its answers is not read either.
-  if (queued_bytes_ > limits_.send_queue_bytes) {
-    reading_paused_ = true;
-    return;
-  }
-  read();
+  // A frame's deadline runs from its first byte; a read that completes frames starts the next one anew.
+  if (reader_.mid_frame() && (!was_mid_frame || reader_.ready() > ready)) frame_started_ = Clock::now();
+  serve();
 }
 
-void Connection::pump_and_write() {
-  auto& outbox = session_.outbox();
-  // Encode while the outbox is under the cap, and hand the bytes to the socket at once while it takes
-  // them: an answer that fits the kernel's buffer then goes out in this one handler, rather than one trip
-  // through the I/O threads' queue per outbox-full, behind every other busy session (E11's tail latency).
-  // A burst is bounded, so one large answer does not hold an I/O thread from every other session.
-  size_t burst = 0;
+void Connection::receive_frames(Clock::time_point turn_end) {
+  protocol::Frame frame;
+  // Checked per frame: a client that does not read its answers gets no more frames handled.
+  while (!session_.closing() && !queue_full() && Clock::now() < turn_end) {
+    try {
+      if (!reader_.next(frame)) return;
+    } catch (const protocol::ProtocolError& e) {
+      session_.abort_with(e.code, e.what());
+      return;
+    }
+    last_activity_ = Clock::now();
+    session_.receive(frame);
+    recount_queue();
+  }
+}
+
+void Connection::recount_queue() {
+  size_t bytes = 0;
+  for (const Buffer& b : session_.outbox()) bytes += b->size();
+  if (queued_bytes_ == 0 && bytes > 0) write_waiting_since_ = Clock::now();
+  queued_bytes_ = bytes - front_written_;
+}
+
+void Connection::serve() {
+  if (closed_) return;
+  const Clock::time_point begin = Clock::now();
+  try {
+    serve_turn(begin + std::chrono::microseconds(limits_.turn_us));
+    const auto took = std::chrono::duration_cast<std::chrono::microseconds>(Clock::now() - begin).count();
+    update_max(stats_.longest_turn_us, uint64_t(took));
+  } catch (const std::exception& e) {  // the transport's own fault (e.g. no memory): this session ends
+    if (!closed_) {
+      log_line("session " + std::to_string(id_) + " (" + peer_ + "): internal error: " + e.what());
+      stats_.sessions_failed++;
+      close();
+    }
+  }
+}
+
+void Connection::serve_turn(Clock::time_point turn_end) {
+  receive_frames(turn_end);
+  // Encode while the outbox is under the cap and the turn lasts, and hand the bytes to the socket at once
+  // while it takes them: an answer that fits the kernel's buffer then goes out in this one handler.
+  bool drained = true;
   for (;;) {
-    queued_bytes_ = 0;
-    for (const Buffer& b : outbox) queued_bytes_ += b->size();
-    queued_bytes_ -= front_written_;
-    while (queued_bytes_ <= limits_.send_queue_bytes && session_.pump()) queued_bytes_ += outbox.back()->size();
-    update_max(stats_.peak_state_bytes, session_.state_bytes());
-    update_max(stats_.peak_buffer_bytes, session_.state_bytes() - session_.tags().memory_bytes());
-    if (writing_ || closed_ || outbox.empty() || burst >= limits_.send_burst_bytes || !write_now(burst)) break;
+    while (!queue_full() && session_.has_work() && Clock::now() < turn_end) {
+      session_.pump();
+      recount_queue();
+    }
+    if (waiting_write_ || closed_) break;
+    drained = write_now();
+    if (closed_ || !drained || queue_full() || !session_.has_work() || Clock::now() >= turn_end) break;
   }
-  write_next();
+  if (closed_) return;
+  update_max(stats_.peak_state_bytes, session_.state_bytes());
+  update_max(stats_.peak_buffer_bytes, session_.state_bytes() - session_.tags().memory_bytes());
+  if (session_.closing()) {
+    if (close_by_ == Clock::time_point()) {  // the ERROR (or nothing, after CLOSE) gets a moment to leave
+      close_by_ = Clock::now() + milliseconds(std::min<uint32_t>(1000, limits_.write_timeout_ms));
+      arm_timer();
+    }
+    if (session_.outbox().empty()) return close();
+  }
+  if (!session_.outbox().empty() && !waiting_write_) {
+    if (!drained && !turn_posted_) {
+      // The socket is full: wait until it takes more.
+      waiting_write_ = true;
+      socket_.async_wait(tcp::socket::wait_write, [self = shared_from_this()](const boost::system::error_code& ec) {
+        self->waiting_write_ = false;
+        if (ec) return self->close();
+        self->serve();
+      });
+    }
+  }
+  if (closed_ || session_.closing()) return;
+  if (queue_full()) return arm_timer();  // back-pressure: neither read nor handle frames until it drains
+  const bool more = session_.has_work() || reader_.ready() > 0 || (drained && !session_.outbox().empty());
+  if (more) {  // this session's turn is over: others go first
+    if (!turn_posted_) {
+      turn_posted_ = true;
+      asio::post(socket_.get_executor(), [self = shared_from_this()] {
+        self->turn_posted_ = false;
+        self->serve();
+      });
+    }
+  } else if (!reading_) {
+    read();
+  }
+  arm_timer();
 }
 
-bool Connection::write_now(size_t& sent) {
+bool Connection::write_now() {
   auto& outbox = session_.outbox();
+  size_t burst = 0;
   while (!outbox.empty()) {
+    if (burst >= limits_.send_burst_bytes) return true;  // the rest in the next turn
     const Buffer& front = outbox.front();
     boost::system::error_code ec;
     const size_t n = socket_.write_some(asio::buffer(*front) + front_written_, ec);
@@ -177,9 +255,11 @@ bool Connection::write_now(size_t& sent) {
       close();
       return false;
     }
+    if (n > 0) last_activity_ = write_waiting_since_ = Clock::now();  // the peer takes its answer
     stats_.bytes_out += n;
-    sent += n;
+    burst += n;
     front_written_ += n;
+    queued_bytes_ -= std::min(queued_bytes_, n);
     if (front_written_ < front->size()) return false;  // the socket's buffer is full
     outbox.pop_front();
     front_written_ = 0;
@@ -187,73 +267,143 @@ bool Connection::write_now(size_t& sent) {
   return true;
 }
 
-void Connection::write_next() {
-  auto& outbox = session_.outbox();
-  if (writing_ || closed_) return;
-  if (outbox.empty()) {
-    if (session_.closing()) close();
-    return;
+Clock::time_point Connection::next_deadline() const {
+  Clock::time_point at = last_activity_ + milliseconds(limits_.idle_timeout_ms);
+  if (!session_.opened()) at = std::min(at, connected_ + milliseconds(limits_.handshake_timeout_ms));
+  if (reader_.mid_frame()) at = std::min(at, frame_started_ + milliseconds(limits_.frame_timeout_ms));
+  if (!session_.outbox().empty()) at = std::min(at, write_waiting_since_ + milliseconds(limits_.write_timeout_ms));
+  if (close_by_ != Clock::time_point()) at = std::min(at, close_by_);
+  return at;
+}
+
+// Deadlines move later with activity; the timer is only moved when one comes earlier than it is set for,
+// and a timer that fires early just sets itself again.
+void Connection::arm_timer() {
+  if (closed_) return;
+  const Clock::time_point at = next_deadline();
+  if (at >= timer_at_) return;
+  timer_at_ = at;
+  timer_.expires_at(at);
+  timer_.async_wait([self = shared_from_this()](const boost::system::error_code& ec) { self->on_timer(ec); });
+}
+
+void Connection::on_timer(const boost::system::error_code& ec) {
+  if (ec == asio::error::operation_aborted || closed_) return;  // moved earlier, or done
+  timer_at_ = Clock::time_point::max();
+  const Clock::time_point now = Clock::now();
+  const auto past = [&](Clock::time_point since, uint32_t ms) { return now >= since + milliseconds(ms); };
+  if (close_by_ != Clock::time_point() && now >= close_by_) return close();  // its ERROR could not be delivered
+  if (!session_.outbox().empty() && past(write_waiting_since_, limits_.write_timeout_ms)) {
+    timed_out_ = true;
+    return close();  // it does not read, so an ERROR would never arrive either
   }
-  writing_ = true;
-  const Buffer front = outbox.front();
-  asio::async_write(socket_, asio::buffer(*front) + front_written_,
-                    [self = shared_from_this(), front](const boost::system::error_code& ec, size_t n) {
-                      self->writing_ = false;
-                      if (ec) return self->close();
-                      self->stats_.bytes_out += n;
-                      self->session_.outbox().pop_front();
-                      self->front_written_ = 0;
-                      self->pump_and_write();
-                      if (self->reading_paused_ && !self->session_.closing() &&
-                          self->queued_bytes_ <= self->limits_.send_queue_bytes) {
-                        self->reading_paused_ = false;
-                        self->read();
-                      }
-                    });
+  if (reader_.mid_frame() && past(frame_started_, limits_.frame_timeout_ms))
+    return time_out("a message took longer than " + std::to_string(limits_.frame_timeout_ms) + " ms to arrive");
+  if (!session_.opened() && past(connected_, limits_.handshake_timeout_ms))
+    return time_out("no HELLO and OPEN within " + std::to_string(limits_.handshake_timeout_ms) + " ms");
+  if (past(last_activity_, limits_.idle_timeout_ms))
+    return time_out("no message for " + std::to_string(limits_.idle_timeout_ms) + " ms");
+  arm_timer();
+}
+
+void Connection::time_out(const std::string& why) {
+  timed_out_ = true;
+  session_.abort_with(ErrorCode::timeout, why);
+  serve();
 }
 
 void Connection::close() {
   if (closed_) return;
   closed_ = true;
   stats_.splits_sent += session_.splits_sent();
+  if (timed_out_) {
+    stats_.sessions_timed_out++;
+  } else if (const auto error = session_.error()) {
+    if (*error == ErrorCode::internal) {
+      stats_.sessions_failed++;
+      log_line("session " + std::to_string(id_) + " (" + peer_ + "): " + session_.error_text());
+    } else {
+      stats_.protocol_errors++;
+    }
+  }
+  if (session_.error()) stats_.errors_sent++;
   boost::system::error_code ignored;
-  idle_.cancel();
+  timer_.cancel();
   socket_.shutdown(tcp::socket::shutdown_both, ignored);
   socket_.close(ignored);
   stats_.sessions_active--;
   registry_.remove(shared_from_this());
 }
 
+// The answer to a connection over the session limit, encoded once.
+const std::vector<uint8_t>& server_full_frame() {
+  static const std::vector<uint8_t> frame = protocol::encode(
+      protocol::ErrorMessage{ErrorCode::server_full, "the server is at its session limit; try again later"});
+  return frame;
+}
+
 }  // namespace
 
 struct TcpServer::Impl {
   Impl(std::shared_ptr<const Catalogue> c, const ServerLimits& l)
-      : catalogue(std::move(c)), limits(l), acceptor(io) {}
+      : catalogue(std::move(c)), limits(l), acceptor(io), backoff(io) {}
 
   void accept() {
     acceptor.async_accept(asio::make_strand(io), [this](const boost::system::error_code& ec, tcp::socket socket) {
-      if (ec) {
-        if (ec != asio::error::operation_aborted) accept();
-        return;
-      }
-      auto connection = std::make_shared<Connection>(std::move(socket), catalogue, limits, stats, registry);
-      stats.sessions_active++;
-      if (registry.add(connection, limits.max_sessions)) {
-        stats.sessions_opened++;
-        connection->start();
-      } else {
-        stats.sessions_rejected++;
-        registry.add(connection, UINT32_MAX);  // tracked until its ERROR is written
-        connection->refuse();
-      }
+      if (ec == asio::error::operation_aborted) return;  // stopped
+      if (ec) return accept_failed(ec);
+      backoff_ms = 0;
+      admit(std::move(socket));
       accept();
     });
+  }
+
+  // Out of descriptors or memory, accepting again at once would fail again at once: wait, longer each time.
+  void accept_failed(const boost::system::error_code& ec) {
+    stats.accept_failures++;
+    backoff_ms = std::min<uint32_t>(std::max<uint32_t>(1, limits.accept_backoff_ms),
+                                    backoff_ms ? backoff_ms * 2 : 10);
+    if (backoff_ms >= limits.accept_backoff_ms || stats.accept_failures.load() == 1)
+      log_line("accept: " + ec.message() + "; retrying in " + std::to_string(backoff_ms) + " ms");
+    backoff.expires_after(milliseconds(backoff_ms));
+    backoff.async_wait([this](const boost::system::error_code& wait_ec) {
+      if (!wait_ec) accept();
+    });
+  }
+
+  // Only this accept chain adds to the registry, so a count read here can only have fallen since.
+  void admit(tcp::socket socket) {
+    if (registry.size() >= limits.max_sessions) return refuse(socket);
+    try {
+      auto connection =
+          std::make_shared<Connection>(std::move(socket), catalogue, limits, stats, registry, ++next_id);
+      registry.add(connection);
+      stats.sessions_opened++;
+      stats.sessions_active++;
+      connection->start();
+    } catch (const std::exception& e) {
+      log_line(std::string("accept: internal error: ") + e.what());
+    }
+  }
+
+  // Answered without a session and closed at once: a refused peer holds nothing here. The ERROR fits any
+  // socket buffer, so one non-blocking write delivers it.
+  void refuse(tcp::socket& socket) {
+    stats.sessions_refused++;
+    boost::system::error_code ignored;
+    socket.non_blocking(true, ignored);
+    socket.write_some(asio::buffer(server_full_frame()), ignored);
+    socket.shutdown(tcp::socket::shutdown_both, ignored);
+    socket.close(ignored);
   }
 
   std::shared_ptr<const Catalogue> catalogue;
   ServerLimits limits;
   asio::io_context io;
   tcp::acceptor acceptor;
+  asio::steady_timer backoff;
+  uint32_t backoff_ms = 0;
+  uint64_t next_id = 0;
   ServerStats stats;
   Registry registry;
   std::vector<std::thread> threads;
@@ -265,6 +415,7 @@ struct TcpServer::Impl {
 TcpServer::TcpServer(std::shared_ptr<const Catalogue> catalogue, const ServerLimits& limits, const std::string& host,
                      uint16_t port)
     : impl_(std::make_unique<Impl>(std::move(catalogue), limits)) {
+  impl_->catalogue->check_limits(limits);
   boost::system::error_code ec;
   const auto address = asio::ip::make_address(host, ec);
   if (ec) fail(host, "not an IP address: " + ec.message());
@@ -283,7 +434,18 @@ uint16_t TcpServer::port() const { return impl_->acceptor.local_endpoint().port(
 void TcpServer::start() {
   impl_->accept();
   unsigned n = impl_->limits.threads ? impl_->limits.threads : std::max(1u, std::thread::hardware_concurrency());
-  for (unsigned i = 0; i < n; ++i) impl_->threads.emplace_back([this] { impl_->io.run(); });
+  for (unsigned i = 0; i < n; ++i)
+    impl_->threads.emplace_back([this] {
+      // A handler that throws ends its own session (Connection catches); this only keeps the thread alive.
+      for (;;) {
+        try {
+          impl_->io.run();
+          return;
+        } catch (const std::exception& e) {
+          log_line(std::string("I/O thread: ") + e.what());
+        }
+      }
+    });
 }
 
 void TcpServer::stop() {
@@ -295,10 +457,11 @@ void TcpServer::stop() {
   asio::post(impl_->io, [this] {
     boost::system::error_code ignored;
     impl_->acceptor.close(ignored);
+    impl_->backoff.cancel();
   });
   for (const auto& c : impl_->registry.all()) c->shutdown();
-  // Let the closes run, then end the loop.
-  for (int i = 0; i < 200 && impl_->registry.size() > 0; ++i) std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  // Let the closes run (each handler is at most one turn), then end the loop.
+  for (int i = 0; i < 100 && impl_->registry.size() > 0; ++i) std::this_thread::sleep_for(milliseconds(5));
   impl_->io.stop();
   for (std::thread& t : impl_->threads)
     if (t.joinable()) t.join();

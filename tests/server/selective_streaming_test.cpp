@@ -2,6 +2,7 @@
 // batch it decides is applicable, in order, by a client that knows only what it was sent.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <random>
 #include <set>
 
@@ -107,17 +108,24 @@ TEST(SelectiveStreaming, EverythingWantedStreamsTheWholeModelOnce) {
   Client client(model);
   std::vector<uint32_t> batch;
   const Importance everything = [](uint32_t) { return 1.0f; };
-  // In bounded batches, as a server does per VIEW; the last step reports the view served.
+  // In bounded slices, as a server does per VIEW; the last step reports the view served.
   SelectiveStreamer streamer;
   const DependencyFilter dependencies(model);
   streamer.start(model, dependencies, tags, everything);
   bool served = false;
-  for (int call = 0; call < 10000 && !served; ++call) {
+  constexpr uint64_t kBudget = 64;
+  uint64_t most_work = 0;
+  for (int call = 0; call < 100000 && !served; ++call) {
     const size_t before = batch.size();
-    served = streamer.step(100, batch);
+    uint64_t work = 0;
+    served = streamer.step(100, kBudget, batch, work);
+    ASSERT_LE(batch.size() - before, 100u);
+    most_work = std::max(most_work, work);
     deliver(model, std::vector<uint32_t>(batch.begin() + ptrdiff_t(before), batch.end()), client);
   }
   ASSERT_TRUE(served);
+  // A slice ends within one dependency chain (its splits and their children's evaluations) of the budget.
+  EXPECT_LE(most_work, kBudget + 3 * 64);
   EXPECT_EQ(batch.size(), model.split_order.size());
   EXPECT_EQ(std::set<uint32_t>(batch.begin(), batch.end()).size(), batch.size()) << "a split was sent twice";
   EXPECT_EQ(client.mesh.face_count(), built.stats.input_faces);
