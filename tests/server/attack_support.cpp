@@ -254,7 +254,6 @@ bool Peer::read_available() {
       return false;
     }
     if (ec) return true;  // would block: all read
-    received_ += n;
     reader_.feed(buffer.data(), n);
   }
 }
@@ -278,19 +277,8 @@ bool Peer::read_until(const std::function<bool(const protocol::Frame&)>& done, C
 }
 
 bool Peer::wait_closed(Clock::time_point deadline) {
-  while (!closed_)
-    if (!receive(deadline) && !closed_) return false;
-  return true;
-}
-
-bool Peer::wait_hangup(Clock::time_point deadline) {
-  for (;;) {
-    pollfd fd{socket_.native_handle(), POLLRDHUP, 0};
-    const int ready = ::poll(&fd, 1, milliseconds_left(deadline));
-    if (ready < 0 && errno == EINTR) continue;
-    if (ready <= 0) return false;
-    if (fd.revents & (POLLRDHUP | POLLHUP | POLLERR)) return true;
-  }
+  while (receive(deadline)) {}  // the frames that came before the end count (an ERROR, most of all)
+  return closed_;
 }
 
 bool Peer::drip(std::span<const uint8_t> bytes, milliseconds interval) {
@@ -325,10 +313,20 @@ std::vector<uint8_t> frame_header(uint32_t length, uint8_t type) {
   return header;
 }
 
+void append(std::vector<uint8_t>& bytes, const std::vector<uint8_t>& more) {
+  bytes.insert(bytes.end(), more.begin(), more.end());
+}
+
+std::vector<uint8_t> joined(std::initializer_list<std::vector<uint8_t>> frames) {
+  std::vector<uint8_t> out;
+  for (const std::vector<uint8_t>& frame : frames) append(out, frame);
+  return out;
+}
+
 std::vector<uint8_t> repeated(const std::vector<uint8_t>& frame, size_t count) {
   std::vector<uint8_t> out;
   out.reserve(frame.size() * count);
-  for (size_t i = 0; i < count; ++i) out.insert(out.end(), frame.begin(), frame.end());
+  for (size_t i = 0; i < count; ++i) append(out, frame);
   return out;
 }
 
@@ -356,7 +354,7 @@ std::vector<uint8_t> open_with_front(const std::string& model, const FrontCode& 
   frame.resize(start + (front.bits.size() + 7) / 8, 0);
   for (size_t i = 0; i < front.bits.size(); ++i)  // LSB first: bit i is bit i % 8 of byte i / 8
     if (front.bits[i]) frame[start + i / 8] |= uint8_t(1u << (i % 8));
-  frame.insert(frame.end(), extra.begin(), extra.end());
+  append(frame, extra);
   const std::vector<uint8_t> header =
       frame_header(uint32_t(frame.size() - protocol::kFrameHeaderBytes), uint8_t(protocol::MessageType::open));
   std::copy(header.begin(), header.end(), frame.begin());

@@ -11,6 +11,7 @@
 #include <chrono>
 #include <cstdint>
 #include <functional>
+#include <initializer_list>
 #include <optional>
 #include <span>
 #include <string>
@@ -98,15 +99,12 @@ class Peer {
   bool read_until(const std::function<bool(const protocol::Frame&)>& done, Clock::time_point deadline);
   // Reads (and drops) until the server ends the connection; false when the deadline passes first.
   bool wait_closed(Clock::time_point deadline);
-  // Without reading a byte: true once the server has shut its side (FIN or RST) before the deadline.
-  bool wait_hangup(Clock::time_point deadline);
   // Closes at once with an RST (SO_LINGER 0), as a crashing client does.
   void reset();
 
   bool closed() const { return closed_; }
   // The ERROR codes read so far, in order.
   const std::vector<protocol::ErrorCode>& errors() const { return errors_; }
-  uint64_t received_bytes() const { return received_; }
 
  private:
   ptrdiff_t send_some(std::span<const uint8_t> bytes);  // what the socket takes now; -1 once it is gone
@@ -116,7 +114,6 @@ class Peer {
   boost::asio::ip::tcp::socket socket_;
   protocol::FrameReader reader_;
   std::vector<protocol::ErrorCode> errors_;
-  uint64_t received_ = 0;
   bool closed_ = false;
 };
 
@@ -125,6 +122,9 @@ std::vector<uint8_t> open_frame(const std::string& model);
 std::vector<uint8_t> view_frame(const Camera& camera, float tolerance, uint32_t frame);
 // Little-endian u32 length and a type: the five bytes that start a frame (to announce what never comes).
 std::vector<uint8_t> frame_header(uint32_t length, uint8_t type);
+void append(std::vector<uint8_t>& bytes, const std::vector<uint8_t>& more);
+// Frames back to back, to go out in one write.
+std::vector<uint8_t> joined(std::initializer_list<std::vector<uint8_t>> frames);
 // `count` copies of `frame` back to back: a flood in one write.
 std::vector<uint8_t> repeated(const std::vector<uint8_t>& frame, size_t count);
 
