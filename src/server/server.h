@@ -88,10 +88,11 @@ class Session {
   Session(const Session&) = delete;
   Session& operator=(const Session&) = delete;
 
-  // One complete frame from the client. Protocol errors queue an ERROR and mark the session closing.
+  // One complete frame from the client (taken, not copied: a resume front keeps its payload).
+  // Protocol errors queue an ERROR and mark the session closing.
   // A VIEW replaces the one being answered (what was not sent yet is judged again under the new one), so
   // any number of VIEWs in a row cost one answer.
-  void receive(const protocol::Frame& frame);
+  void receive(protocol::Frame frame);
   // A transport-level failure (oversized frame, timeout, fault): queue ERROR and close.
   void abort_with(protocol::ErrorCode code, const std::string& text);
   // One slice of the pending work; queues a VSPLITS (or BASE, after a resume) when one is complete.
@@ -120,9 +121,9 @@ class Session {
  private:
   struct Resume;      // an OPEN's resume front, checked and applied a slice at a time
   struct ViewPrefix;  // view-independent: the prefix of the PM order a VIEW needs, found a slice at a time
-  void handle(const protocol::Frame& frame);
+  void handle(protocol::Frame& frame);
   void on_hello(const protocol::Hello& m);
-  void on_open(const protocol::OpenHeader& m, const protocol::Frame& frame);
+  void on_open(const protocol::OpenHeader& m, protocol::Frame& frame);
   void on_view(const protocol::View& m);
   void finish_open();
   void queue(std::vector<uint8_t> frame);

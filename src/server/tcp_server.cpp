@@ -162,7 +162,7 @@ void Connection::receive_frames(Clock::time_point turn_end) {
       return;
     }
     last_activity_ = Clock::now();
-    session_.receive(frame);
+    session_.receive(std::move(frame));
     recount_queue();
   }
 }
