@@ -291,7 +291,7 @@ bool Peer::drip(std::span<const uint8_t> bytes, milliseconds interval) {
   return true;
 }
 
-void Peer::reset() {
+void Peer::abort() {
   boost::system::error_code ignored;
   socket_.set_option(asio::socket_base::linger(true, 0), ignored);
   socket_.close(ignored);

@@ -100,7 +100,7 @@ class Peer {
   // Reads (and drops) until the server ends the connection; false when the deadline passes first.
   bool wait_closed(Clock::time_point deadline);
   // Closes at once with an RST (SO_LINGER 0), as a crashing client does.
-  void reset();
+  void abort();
 
   bool closed() const { return closed_; }
   // The ERROR codes read so far, in order.
