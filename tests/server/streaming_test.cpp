@@ -25,91 +25,17 @@
 #include "refine/adapt.h"
 #include "refine/stream_order.h"
 #include "server/server.h"
+#include "streaming_fixture.h"
 #include "test_support.h"
 
 namespace pms {
 namespace {
 
-namespace fs = std::filesystem;
-using Faces = std::vector<std::array<VertexId, 3>>;
-
-struct Fixture {
-  Hierarchy hierarchy;  // as built
-  Hierarchy snapped;    // positions as clients receive them
-  std::string path;     // the .pms file served
-  std::shared_ptr<const server::Catalogue> catalogue;
-  std::string name;
-};
-
-Fixture make_fixture(const Mesh& mesh, const std::string& name) {
-  Fixture f;
-  BuildResult built = build_progressive_mesh(mesh, BuildOptions{});
-  f.hierarchy = std::move(built.hierarchy);
-  f.name = name;
-  f.path = (test::temp_dir() / (name + ".pms")).string();
-  write_pms(f.path, f.hierarchy, built.stats);
-  f.catalogue = server::Catalogue::open({f.path});
-  f.snapped = f.hierarchy;
-  const protocol::PositionGrid grid = f.catalogue->find(name)->context.grid;
-  for (size_t n = 0; n < f.snapped.node_count(); ++n)
-    protocol::snap_position(grid, &f.hierarchy.position[3 * n], &f.snapped.position[3 * n]);
-  return f;
-}
-
-// Frames circling the model and closing in on it, so later frames need detail earlier ones did not.
-std::vector<Camera> orbit_path(const Hierarchy& h, int frames, float phase) {
-  float centre[3], extent = 0;
-  for (int k = 0; k < 3; ++k) {
-    centre[k] = 0.5f * (h.bbox_min[k] + h.bbox_max[k]);
-    extent = std::max(extent, h.bbox_max[k] - h.bbox_min[k]);
-  }
-  std::vector<Camera> path;
-  for (int i = 0; i < frames; ++i) {
-    const float t = float(i) / float(std::max(1, frames - 1));
-    const float angle = phase + 2.5f * t;
-    const float distance = extent * (2.2f - 1.5f * t);
-    Camera c;
-    c.eye[0] = centre[0] + distance * std::cos(angle);
-    c.eye[1] = centre[1] + 0.4f * extent;
-    c.eye[2] = centre[2] + distance * std::sin(angle);
-    std::copy_n(centre, 3, c.target);
-    c.width = 320;
-    c.height = 240;
-    path.push_back(c);
-  }
-  return path;
-}
-
-Faces faces_by_id(SelectiveMesh& mesh) {
-  Faces faces;
-  const VertexHierarchy& h = mesh.hierarchy();
-  for (uint32_t f = 0; f < mesh.face_capacity(); ++f) {
-    if (!mesh.face_alive(f)) continue;
-    std::array<VertexId, 3> face = {h.id(mesh.face(f)[0]), h.id(mesh.face(f)[1]), h.id(mesh.face(f)[2])};
-    auto less = [](VertexId a, VertexId b) { return a.tree < b.tree || (a.tree == b.tree && a.node < b.node); };
-    std::rotate(face.begin(), std::min_element(face.begin(), face.end(), less), face.end());
-    faces.push_back(face);
-  }
-  std::sort(faces.begin(), faces.end(), [](const auto& a, const auto& b) {
-    for (int k = 0; k < 3; ++k) {
-      if (a[k].tree != b[k].tree) return a[k].tree < b[k].tree;
-      if (a[k].node != b[k].node) return a[k].node < b[k].node;
-    }
-    return false;
-  });
-  return faces;
-}
-
-// Local refinement of the same model (positions as the wire carries them) for one view.
-Faces local_faces(const Hierarchy& snapped, const Camera& camera, float tolerance) {
-  const ModelView model = view_of(snapped);
-  VertexHierarchy hierarchy = VertexHierarchy::from_model(model);
-  SelectiveMesh mesh(hierarchy, model.base_faces);
-  SelectiveRefinement refinement(mesh, model.scale, AdaptOptions{tolerance, 0, 0});
-  refinement.set_view(make_view(camera, model.bbox_min, model.bbox_max));
-  refinement.converge([&](std::span<const uint32_t> leaves) { return add_model_splits(hierarchy, model, leaves); });
-  return faces_by_id(mesh);
-}
+using test::Fixture;
+using test::faces_by_id;
+using test::local_faces;
+using test::make_fixture;
+using test::orbit_path;
 
 struct Server {
   explicit Server(std::shared_ptr<const server::Catalogue> catalogue, server::ServerLimits limits = {},

@@ -1,0 +1,40 @@
+// What the server tests share: a model built and written as a .pms file, camera paths over it, and the mesh
+// a client should end with (local refinement of the same view, on the positions the wire carries).
+#pragma once
+#include <array>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "io/mesh.h"
+#include "pm/pm.h"
+#include "refine/camera.h"
+#include "refine/refine.h"
+#include "server/server.h"
+
+namespace pms::test {
+
+using Faces = std::vector<std::array<VertexId, 3>>;
+
+struct Fixture {
+  Hierarchy hierarchy;  // as built
+  Hierarchy snapped;    // positions as clients receive them
+  std::string path;     // the .pms file served
+  std::shared_ptr<const server::Catalogue> catalogue;
+  std::string name;
+};
+
+// Builds `mesh` and writes it to NAME.pms in a fresh temp_dir().
+Fixture make_fixture(const Mesh& mesh, const std::string& name);
+
+// Frames circling the model and closing in on it, so later frames need detail earlier ones did not.
+std::vector<Camera> orbit_path(const Hierarchy& h, int frames, float phase);
+
+// The mesh's faces as vertex ids, each rotated to start at its smallest id, sorted: equal iff the same
+// front and the same faces with the same orientation.
+Faces faces_by_id(SelectiveMesh& mesh);
+
+// Local refinement of the same model (positions as the wire carries them) for one view.
+Faces local_faces(const Hierarchy& snapped, const Camera& camera, float tolerance);
+
+}  // namespace pms::test
