@@ -138,6 +138,11 @@ void run_bench(const BenchArgs& args) {
                              "(wait4) includes at most that much inherited at fork.\n";
   write_text_file(context.options.out_dir / "report.md", report_header(context) + "\n" + context.report + footer);
   std::printf("\nbench: wrote %s\n", (context.options.out_dir / "report.md").string().c_str());
+  if (!context.failures.empty()) {
+    std::string list;
+    for (const std::string& f : context.failures) list += (list.empty() ? "" : "; ") + f;
+    fail("bench", std::to_string(context.failures.size()) + " figure(s) could not be measured: " + list);
+  }
 }
 
 }  // namespace

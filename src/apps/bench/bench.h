@@ -23,6 +23,9 @@ struct BenchContext {
   std::filesystem::path temp_dir;    // scratch for this run, removed afterwards
   std::string self_exe;              // this binary, run as a child for our own builds
   std::string report;                // report.md so far; groups append their sections
+  // One line per figure that could not be measured (a server that did not report): the report says so
+  // where the figure would be, and the bench exits non-zero once report.md is written.
+  std::vector<std::string> failures;
 };
 
 using BenchGroupFn = void (*)(BenchContext&);
