@@ -52,6 +52,7 @@ nlohmann::json stats_json(const char* event, const server::ServerStats& s, const
           {"sessions_failed", s.sessions_failed.load()},
           {"protocol_errors", s.protocol_errors.load()},
           {"accept_failures", s.accept_failures.load()},
+          {"longest_turn_us", s.longest_turn_us.load()},
           {"bytes_in", s.bytes_in.load()},
           {"bytes_out", s.bytes_out.load()},
           {"splits_sent", s.splits_sent.load()},

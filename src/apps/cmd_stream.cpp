@@ -1,5 +1,6 @@
 // pmstream stream --server HOST:PORT --model NAME --path PATH.json --mode sender|vi --tolerance PX
-//                 [--laps K] [--reconnect N] [--save-mesh OUT.ply] [--snapshots DIR] [--json]
+//                 [--laps K] [--reconnect N] [--timeout-ms N] [--connect-timeout-ms N] [--save-mesh OUT.ply]
+//                 [--snapshots DIR] [--json]
 // The headless viewer: follows a camera path, streaming what each frame needs, and reports per frame.
 #include <cstdio>
 #include <filesystem>
@@ -22,6 +23,7 @@ struct StreamArgs {
   std::string server, model, path, mode = "sender", save_mesh, snapshots;
   float tolerance = 1;
   uint32_t laps = 1, morph_frames = 0, max_ops = 0, reconnect = 0;
+  uint32_t timeout_ms = 30000, connect_timeout_ms = 5000;
   bool json = false;
 };
 
@@ -69,6 +71,8 @@ void run_stream(const StreamArgs& args) {
   options.max_ops = args.max_ops;
   if (args.mode == "vi") options.mode = protocol::StreamMode::view_independent;
   options.reconnect_attempts = args.reconnect;
+  options.answer_timeout = std::chrono::milliseconds(args.timeout_ms);
+  options.connect_timeout = std::chrono::milliseconds(args.connect_timeout_ms);
   options.on_reconnect = [&](const std::string& reason, uint32_t attempt) {
     std::fprintf(stderr, "\n%s; reconnecting and resuming the session (%u/%u)\n", reason.c_str(), attempt, args.reconnect);
   };
@@ -135,6 +139,13 @@ void add_stream_command(CLI::App& app) {
   cmd->add_option("--reconnect", args->reconnect,
                   "On a lost connection, reconnect and resume the session up to N times (0.5 s apart, doubling)")
       ->check(CLI::Range(0u, 100u))
+      ->capture_default_str();
+  cmd->add_option("--timeout-ms", args->timeout_ms,
+                  "A server silent this long while an answer is due, or stuck mid-message, is lost")
+      ->check(CLI::Range(1u, 3600000u))
+      ->capture_default_str();
+  cmd->add_option("--connect-timeout-ms", args->connect_timeout_ms, "Give up a connection attempt after this long")
+      ->check(CLI::Range(1u, 3600000u))
       ->capture_default_str();
   cmd->add_option("--geomorph-frames", args->morph_frames, "Blend splits and collapses over N frames (0 = off)")
       ->capture_default_str();

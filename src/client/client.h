@@ -1,7 +1,7 @@
 // The sender-driven streaming client (kim-lee-kobbelt 2005 §5.3): it keeps the partial vertex hierarchy
 // and the selectively refined mesh, runs SelectiveRefinement every frame, and sends VIEW only when the
 // front needs vsplit packets it does not have. ClientSession is the protocol logic without I/O (shared
-// with the browser build); Link is the TCP transport (its own I/O thread, a bounded receive queue);
+// with the browser build); Link is the TCP transport (its own I/O thread, bounded queues, deadlines);
 // StreamingClient puts the two together for the headless viewer, the demo, tests and benches.
 #pragma once
 #include <chrono>
@@ -67,9 +67,9 @@ struct LinkCounters {
   uint64_t payload_down() const { return bytes_down - frames_down * protocol::kFrameHeaderBytes; }
 };
 
-// The connection could not be made or is gone (refused, closed, reset, silent past the answer timeout):
-// the session can be resumed on a new one. Any other pms::Error (an ERROR from the server, a malformed
-// message) is final.
+// The connection could not be made or is gone (refused, closed, reset, or past a connect, write or answer
+// deadline): the session can be resumed on a new one. Any other pms::Error (an ERROR from the server, a
+// malformed message) is final.
 struct ConnectionError : Error {
   using Error::Error;
 };
@@ -79,6 +79,8 @@ struct ConnectionError : Error {
 class Transport {
  public:
   virtual ~Transport() = default;
+  // Hands the frame over for sending (it may still be on its way when this returns); throws
+  // ConnectionError once the connection is gone.
   virtual void send(const std::vector<uint8_t>& frame) = 0;
   // The next frame from the server; std::nullopt after `timeout`. Throws ConnectionError once the
   // connection is gone (with the reason) and nothing is left to read.
@@ -86,12 +88,28 @@ class Transport {
   virtual LinkCounters counters() const = 0;
 };
 
-// A TCP connection whose reads run on their own thread into a bounded queue of frames (the socket is
-// not read while the queue is full, so a slow consumer back-pressures the server instead of growing
-// memory). A failed connect or a lost connection surfaces as ConnectionError.
+// A Link's limits. Every wait on the server has one: a peer that stops answering, reading or sending
+// mid-frame is a ConnectionError after its deadline, never a hang.
+struct LinkOptions {
+  std::chrono::milliseconds connect_timeout{5000};  // resolve + TCP handshake
+  std::chrono::milliseconds write_timeout{10000};   // a queued frame's bytes make no progress this long
+  std::chrono::milliseconds read_timeout{30000};    // a frame that has begun arriving is not complete
+  size_t max_queued_bytes = 64u << 20;              // received payloads waiting for receive()
+  uint32_t max_message = protocol::kDefaultMaxMessage;
+  // Frames waiting to be written; one more frame over it means the server stopped reading. A frame
+  // into an empty queue always fits, so this bounds the backlog, not a single (OPEN) frame.
+  size_t max_send_queue_bytes = 16u << 20;
+};
+
+// A TCP connection owned by its own I/O thread: connect, reads and writes all run there (asio's
+// chat_client shape). Received frames wait in a bounded queue (the socket is not read while it is full,
+// so a slow consumer back-pressures the server instead of growing memory); sent frames wait in a bounded
+// queue and go out one after another. A failed connect, a lost connection or a missed deadline surfaces
+// as ConnectionError; close() and the destructor stop and join the thread without waiting on the server.
 class Link : public Transport {
  public:
-  Link(const std::string& host, uint16_t port, size_t max_queued_bytes = 64u << 20,
+  Link(const std::string& host, uint16_t port, const LinkOptions& options = {});
+  Link(const std::string& host, uint16_t port, size_t max_queued_bytes,
        uint32_t max_message = protocol::kDefaultMaxMessage);
   ~Link() override;
   Link(const Link&) = delete;
@@ -122,7 +140,10 @@ struct ClientOptions {
   float tolerance = 1;
   uint32_t morph_frames = 0;
   uint32_t max_ops = 0;  // per frame, 0 = no cap
+  // The read deadline: a server silent this long while an answer is due (or stuck mid-frame) is lost.
   std::chrono::milliseconds answer_timeout{30000};
+  std::chrono::milliseconds connect_timeout{5000};  // each connection, reconnects included
+  std::chrono::milliseconds write_timeout{10000};   // a server that stops reading our frames is lost
   std::string name = "pmstream-client";
   // view_independent: the baseline of kim-lee-kobbelt §8 Fig. 9. Splits arrive in PM order without
   // refinement info and are applied as they come; qrefine never runs here, so the client sends VIEW every

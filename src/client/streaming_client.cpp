@@ -24,10 +24,20 @@ void add(LinkCounters& total, const LinkCounters& more) {
   total.frames_down += more.frames_down;
 }
 
+// Every connection, the first and each reconnect, gets the client's deadlines; the answer timeout is
+// also how long a frame may take once it has begun to arrive.
+std::unique_ptr<Link> open_link(const std::string& host, uint16_t port, const ClientOptions& options) {
+  LinkOptions link;
+  link.connect_timeout = options.connect_timeout;
+  link.write_timeout = options.write_timeout;
+  link.read_timeout = options.answer_timeout;
+  return std::make_unique<Link>(host, port, link);
+}
+
 }  // namespace
 
 StreamingClient::StreamingClient(const std::string& host, uint16_t port, const ClientOptions& options)
-    : StreamingClient(std::make_unique<Link>(host, port), options) {
+    : StreamingClient(open_link(host, port, options), options) {
   host_ = host;
   port_ = port;
 }
@@ -82,7 +92,7 @@ void StreamingClient::open(const std::string& model) {
 
 void StreamingClient::resume(const std::string& host, uint16_t port) {
   if (!session_.has_model()) fail("resume", "no session to resume: open a model first");
-  resume(std::make_unique<Link>(host, port));
+  resume(open_link(host, port, options_));
 }
 
 void StreamingClient::resume(std::unique_ptr<Transport> transport) {

@@ -116,8 +116,8 @@ bool SelectiveStreamer::continue_scan(uint64_t budget, uint64_t& work) {
       scan_ = v;
       return false;
     }
+    ++work;  // leaves too: a front of a fine mesh is mostly leaves, each a lookup
     if (model.is_leaf(v)) continue;
-    ++work;
     const std::pair<float, uint32_t> entry{importance_(v), v};
     if (entry.first <= 0) continue;
     if (heap_.size() < kMaxRanked) {

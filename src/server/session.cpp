@@ -24,8 +24,8 @@ using protocol::ProtocolError;
 // over the coded front: the first checks every leaf and finds the window it spans, the second sets the
 // tags in a window sized once (leaves come in preorder, whose node indices jump back and forth).
 struct Session::Resume {
-  Resume(const protocol::Frame& frame, const protocol::OpenHeader& h, uint64_t max_leaves)
-      : payload(frame.payload), header(h), decoder(payload, header, max_leaves) {}
+  Resume(std::vector<uint8_t> front, const protocol::OpenHeader& h, uint64_t max_leaves)
+      : payload(std::move(front)), header(h), decoder(payload, header, max_leaves) {}
 
   std::vector<uint8_t> payload;
   protocol::OpenHeader header;
@@ -85,7 +85,7 @@ void Session::fault(const char* what) {
   }
 }
 
-void Session::receive(const protocol::Frame& frame) {
+void Session::receive(protocol::Frame frame) {
   last_work_ = 0;
   if (closing_) return;
   try {
@@ -99,7 +99,7 @@ void Session::receive(const protocol::Frame& frame) {
   }
 }
 
-void Session::handle(const protocol::Frame& frame) {
+void Session::handle(protocol::Frame& frame) {
   if (frame.type == protocol::MessageType::open) {  // its front is decoded by pump(), a slice at a time
     if (!greeted_) throw ProtocolError(ErrorCode::out_of_order, "OPEN before HELLO");
     on_open(protocol::decode_open_header(frame.payload), frame);
@@ -134,7 +134,7 @@ void Session::on_hello(const protocol::Hello& m) {
   queue(protocol::encode(ok));
 }
 
-void Session::on_open(const protocol::OpenHeader& m, const protocol::Frame& frame) {
+void Session::on_open(const protocol::OpenHeader& m, protocol::Frame& frame) {
   if (model_) throw ProtocolError(ErrorCode::out_of_order, "OPEN: a model is already open in this session");
   const ServedModel* model = catalogue_->find(m.model);
   if (!model) throw ProtocolError(ErrorCode::unknown_model, "OPEN: no model named '" + m.model + "'");
@@ -150,7 +150,7 @@ void Session::on_open(const protocol::OpenHeader& m, const protocol::Frame& fram
   context_ = model->context;
   context_.has_refinement = mode_ == protocol::StreamMode::sender_driven;
   if (m.resume) {
-    resume_ = std::make_unique<Resume>(frame, m, protocol::kDefaultMaxResumeLeaves);
+    resume_ = std::make_unique<Resume>(std::move(frame.payload), m, protocol::kDefaultMaxResumeLeaves);
     return;
   }
   tags_ = ActiveTags(roots);

@@ -162,7 +162,7 @@ void Connection::receive_frames(Clock::time_point turn_end) {
       return;
     }
     last_activity_ = Clock::now();
-    session_.receive(frame);
+    session_.receive(std::move(frame));
     recount_queue();
   }
 }
@@ -176,8 +176,11 @@ void Connection::recount_queue() {
 
 void Connection::serve() {
   if (closed_) return;
+  const Clock::time_point begin = Clock::now();
   try {
-    serve_turn(Clock::now() + std::chrono::microseconds(limits_.turn_us));
+    serve_turn(begin + std::chrono::microseconds(limits_.turn_us));
+    const auto took = std::chrono::duration_cast<std::chrono::microseconds>(Clock::now() - begin).count();
+    update_max(stats_.longest_turn_us, uint64_t(took));
   } catch (const std::exception& e) {  // the transport's own fault (e.g. no memory): this session ends
     if (!closed_) {
       log_line("session " + std::to_string(id_) + " (" + peer_ + "): internal error: " + e.what());

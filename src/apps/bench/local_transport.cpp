@@ -14,7 +14,7 @@ void LocalTransport::send(const std::vector<uint8_t>& frame) {
   counters_.frames_up++;
   to_server_.feed(frame.data(), frame.size());
   protocol::Frame f;
-  while (to_server_.next(f)) session_->receive(f);
+  while (to_server_.next(f)) session_->receive(std::move(f));
 }
 
 std::optional<protocol::Frame> LocalTransport::receive(std::chrono::milliseconds) {
