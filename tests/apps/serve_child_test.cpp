@@ -22,7 +22,7 @@ using nlohmann::json;
 json full_stats_line() {
   json line = {{"event", "stats"}, {"uptime_s", 1.5}, {"cpu_s", 0.25}};
   for (const char* name : {"sessions_opened", "sessions_active", "sessions_refused", "sessions_timed_out",
-                           "sessions_failed", "protocol_errors", "accept_failures", "bytes_in", "bytes_out",
+                           "sessions_failed", "protocol_errors", "accept_failures", "longest_turn_us", "bytes_in", "bytes_out",
                            "splits_sent", "errors_sent", "peak_state_bytes", "peak_buffer_bytes", "rss_bytes",
                            "peak_rss_bytes"})
     line[name] = 7;

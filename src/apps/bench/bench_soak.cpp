@@ -242,7 +242,8 @@ std::string summary(const SoakRun& run, const SoakFigures& f, const std::string&
     text += "- vsplits: the server sent " + thousands(run.stopped->splits_sent) + ", the clients received " +
             thousands(f.splits_received) + " (each checked to extend a leaf its client held); server CPU " +
             fixed(run.stopped->cpu_s, 1) + " s, peak RSS " + fixed(mb(run.stopped->peak_rss_bytes), 1) +
-            " MB, peak session state " + thousands(run.stopped->peak_state_bytes) + " bytes.\n";
+            " MB, peak session state " + thousands(run.stopped->peak_state_bytes) + " bytes, longest turn " +
+            thousands(run.stopped->longest_turn_us) + " µs.\n";
   text += "- server RSS at the end of minute 1: " + rss_of(f.first) + ", at the end: " + rss_of(f.last) + ", growth " +
           (f.rss_growth ? fixed(100 * *f.rss_growth, 2) + " %" : na) + ".\n";
   text += "- p99 latency, last minute / first: " + fixed(f.p99_last, 2) + " / " + fixed(f.p99_first, 2) + " ms = " +

@@ -41,6 +41,7 @@ ServeStats parse_serve_stats(const json& line) {
   s.sessions_failed = counter(line, "sessions_failed");
   s.protocol_errors = counter(line, "protocol_errors");
   s.accept_failures = counter(line, "accept_failures");
+  s.longest_turn_us = counter(line, "longest_turn_us");
   s.bytes_in = counter(line, "bytes_in");
   s.bytes_out = counter(line, "bytes_out");
   s.splits_sent = counter(line, "splits_sent");

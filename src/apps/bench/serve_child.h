@@ -23,7 +23,7 @@ namespace pms::app {
 struct ServeStats {
   double uptime_s = 0, cpu_s = 0;
   uint64_t sessions_opened = 0, sessions_active = 0, sessions_refused = 0, sessions_timed_out = 0;
-  uint64_t sessions_failed = 0, protocol_errors = 0, accept_failures = 0;
+  uint64_t sessions_failed = 0, protocol_errors = 0, accept_failures = 0, longest_turn_us = 0;
   uint64_t bytes_in = 0, bytes_out = 0, splits_sent = 0, errors_sent = 0;
   uint64_t peak_state_bytes = 0, peak_buffer_bytes = 0;
   uint64_t rss_bytes = 0, peak_rss_bytes = 0;
