@@ -1,4 +1,5 @@
 // pmstream bench [--quick] [--models bunny,horse,...] [--only build,...] [--shared DIR] [--out DIR]
+//                [--soak-clients N] [--soak-minutes M]
 #include <stdlib.h>
 #include <unistd.h>
 
@@ -22,6 +23,8 @@ constexpr BenchGroup kGroups[] = {
     {"refine", "adaptation time and ops/s on a scan path, renderer speed, image quality at far/mid/close", run_refine_group},
     {"sender", "E2 packet bits, E3 server memory, E4 two laps, E5 bytes to satisfy tolerance, E11 many clients",
      run_sender_group},
+    {"soak", "many clients resuming and reconnecting for minutes: server RSS over time, failures, latency per minute",
+     run_soak_group},
 };
 
 std::span<const BenchGroup> bench_groups() { return kGroups; }
@@ -32,7 +35,11 @@ struct BenchArgs {
   bool quick = false;
   std::vector<std::string> models, only;
   std::string shared, out = "bench-out";
+  uint32_t soak_clients = 100, soak_minutes = 10;
 };
+
+// --quick's soak, unless the sizes are given.
+constexpr uint32_t kQuickSoakClients = 10, kQuickSoakMinutes = 1;
 
 std::string group_names() {
   std::string names;
@@ -115,7 +122,7 @@ std::string report_header(const BenchContext& context) {
 void run_bench(const BenchArgs& args) {
   const std::vector<const BenchGroup*> groups = select_groups(args.only);
   BenchContext context;
-  context.options = {args.quick, args.models, args.out, command_line()};
+  context.options = {args.quick, args.models, args.out, command_line(), args.soak_clients, args.soak_minutes};
   std::error_code error;
   fs::create_directories(context.options.out_dir, error);
   if (error) fail(args.out, "cannot create the output directory: " + error.message());
@@ -138,6 +145,11 @@ void run_bench(const BenchArgs& args) {
                              "(wait4) includes at most that much inherited at fork.\n";
   write_text_file(context.options.out_dir / "report.md", report_header(context) + "\n" + context.report + footer);
   std::printf("\nbench: wrote %s\n", (context.options.out_dir / "report.md").string().c_str());
+  if (!context.failures.empty()) {
+    std::string list;
+    for (const std::string& f : context.failures) list += (list.empty() ? "" : "; ") + f;
+    fail("bench", std::to_string(context.failures.size()) + " figure(s) could not be measured: " + list);
+  }
 }
 
 }  // namespace
@@ -155,7 +167,17 @@ void add_bench_command(CLI::App& app) {
   cmd->add_option("--shared", args->shared, "Directory holding models/ (default: $PMSTREAM_SHARED_DIR, else ../shared "
                                             "or ../../shared from here or from the binary)");
   cmd->add_option("--out", args->out, "Output directory")->capture_default_str();
-  cmd->callback([args] { run_bench(*args); });
+  CLI::Option* clients = cmd->add_option("--soak-clients", args->soak_clients, "Clients of the soak group (--quick: 10)")
+                             ->check(CLI::Range(1u, 10000u))
+                             ->capture_default_str();
+  CLI::Option* minutes = cmd->add_option("--soak-minutes", args->soak_minutes, "Minutes the soak runs (--quick: 1)")
+                             ->check(CLI::Range(1u, 24u * 60u))
+                             ->capture_default_str();
+  cmd->callback([args, clients, minutes] {
+    if (args->quick && clients->count() == 0) args->soak_clients = kQuickSoakClients;
+    if (args->quick && minutes->count() == 0) args->soak_minutes = kQuickSoakMinutes;
+    run_bench(*args);
+  });
 }
 
 }  // namespace pms::app

@@ -15,6 +15,8 @@ struct BenchOptions {
   std::vector<std::string> models;  // short names ("bunny"); empty: each group's default list
   std::filesystem::path out_dir;
   std::string command_line;         // as typed, for the report
+  uint32_t soak_clients = 100;      // the soak group's load (--soak-clients, --soak-minutes)
+  uint32_t soak_minutes = 10;
 };
 
 struct BenchContext {
@@ -23,6 +25,9 @@ struct BenchContext {
   std::filesystem::path temp_dir;    // scratch for this run, removed afterwards
   std::string self_exe;              // this binary, run as a child for our own builds
   std::string report;                // report.md so far; groups append their sections
+  // One line per figure that could not be measured (a server that did not report): the report says so
+  // where the figure would be, and the bench exits non-zero once report.md is written.
+  std::vector<std::string> failures;
 };
 
 using BenchGroupFn = void (*)(BenchContext&);
@@ -42,6 +47,8 @@ void run_build_group(BenchContext& context);
 void run_refine_group(BenchContext& context);
 // E2, E3, E4, E5 and E11 of the sender-driven mode (bench_sender.cpp).
 void run_sender_group(BenchContext& context);
+// Requirement 8's soak: many resuming clients against one server for minutes (bench_soak.cpp).
+void run_soak_group(BenchContext& context);
 
 // The directory holding models/: `explicit_dir` (--shared) if given, else $PMSTREAM_SHARED_DIR, else
 // ../shared or ../../shared relative to the working directory and then to `exe_dir`. An explicit

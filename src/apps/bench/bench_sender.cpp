@@ -6,20 +6,17 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
-#include <csignal>
 #include <cstdio>
-#include <cstring>
-#include <fstream>
+#include <mutex>
+#include <optional>
 #include <thread>
 
-#include <utility>  // before asio with C++20
-
-#include <boost/asio.hpp>
-
 #include "apps/bench/bench.h"
-#include "apps/bench/child_process.h"
+#include "apps/bench/bench_model.h"
+#include "apps/bench/load_client.h"
 #include "apps/bench/local_transport.h"
 #include "apps/bench/report.h"
+#include "apps/bench/serve_child.h"
 #include "apps/camera_path.h"
 #include "apps/percentile.h"
 #include "apps/resource_usage.h"
@@ -51,42 +48,13 @@ void print(const std::string& text) {
   std::fflush(stdout);
 }
 
-struct Model {
-  std::string name;
-  fs::path pms;
-  std::shared_ptr<const server::Catalogue> catalogue;
-  const server::ServedModel* served = nullptr;
-};
-
-// `deviation` as `pmstream build --deviation` takes it.
-Model prepare(const BenchContext& context, const std::string& model, const std::string& deviation = "estimate") {
-  const std::string name = deviation == "estimate" ? model : model + "-" + deviation;
-  Model m;
-  m.name = name;
-  m.pms = context.temp_dir / (name + ".pms");
-  std::fprintf(stderr, "bench: building %s ... ", name.c_str());
-  const ChildResult run = run_child({context.self_exe, "build", find_model(context.models_dir, model).string(), "-o",
-                                     m.pms.string(), "--deviation", deviation, "--json"});
-  if (!run.ok()) fail(name, "pmstream build: " + run.failure());
-  std::fprintf(stderr, "%.2f s\n", run.wall_seconds);
-  m.catalogue = server::Catalogue::open({m.pms.string()});
-  m.served = m.catalogue->find(name);
-  return m;
-}
-
-std::vector<Camera> path_of(const Model& m, PathKind kind, uint32_t frames) {
-  PathOptions options;
-  options.frames = frames;
-  return make_camera_path(kind, m.served->view(), options);
-}
-
 // ---- E2 ------------------------------------------------------------------------------------------------
 
 struct E2 {
   double topology = 0, position = 0, refinement = 0, total = 0;  // mean bits per packet
 };
 
-E2 packet_bits_of(const Model& m) {
+E2 packet_bits_of(const BenchModel& m) {
   const ModelView& view = m.served->view();
   E2 e;
   uint64_t n = 0;
@@ -122,7 +90,7 @@ struct Laps {
   json frames = json::array();
 };
 
-Laps run_laps(const Model& m, const std::vector<Camera>& path) {
+Laps run_laps(const BenchModel& m, const std::vector<Camera>& path) {
   auto transport = std::make_unique<LocalTransport>(m.catalogue);
   LocalTransport& local = *transport;
   client::StreamingClient client(std::move(transport), client::ClientOptions{kTolerance});
@@ -167,13 +135,13 @@ struct E5 {
 };
 
 // A close view: the first orbit camera moved halfway to its target (the model overflows the screen).
-Camera close_view(const Model& m) {
+Camera close_view(const BenchModel& m) {
   Camera c = path_of(m, PathKind::orbit, 1)[0];
   for (int k = 0; k < 3; ++k) c.eye[k] = 0.5f * (c.eye[k] + c.target[k]);
   return c;
 }
 
-E5 run_e5(const Model& m, const Camera& camera) {
+E5 run_e5(const BenchModel& m, const Camera& camera) {
   E5 e;
   client::StreamingClient client(std::make_unique<LocalTransport>(m.catalogue), client::ClientOptions{kTolerance});
   client.open(m.name);
@@ -195,12 +163,6 @@ E5 run_e5(const Model& m, const Camera& camera) {
 
 // ---- E11 -----------------------------------------------------------------------------------------------
 
-uint16_t free_port() {
-  boost::asio::io_context io;
-  boost::asio::ip::tcp::acceptor acceptor(io, {boost::asio::ip::make_address("127.0.0.1"), 0});
-  return acceptor.local_endpoint().port();
-}
-
 struct E11 {
   uint32_t clients = 0, failed = 0;
   double server_cpu = 0, server_rss_mb = 0, seconds = 0;
@@ -209,92 +171,61 @@ struct E11 {
   uint64_t session_buffer_bytes = 0;  // the same without the tags
   double p50 = 0, p99 = 0;
   double first_p50 = 0, first_p99 = 0, later_p99 = 0;  // a client's first VIEW (from the base mesh) and the rest
-  std::string error;
+  std::string error;         // the first client's failure
+  std::string server_error;  // the server's figures could not be read: the row has none
+  bool ran = false;          // the clients ran (the server started)
 };
 
-E11 run_e11(const BenchContext& context, const Model& m, uint32_t clients) {
-  E11 e;
-  e.clients = clients;
-  const uint16_t port = free_port();
-  std::atomic<pid_t> server_pid{0};
-  ChildResult server_run;
-  ChildOptions options;
-  options.timeout_seconds = 1800;
-  options.on_start = [&](pid_t pid) { server_pid = pid; };
-  std::thread server([&] {
-    server_run = run_child({context.self_exe, "serve", m.pms.string(), "--host", "127.0.0.1", "--port",
-                            std::to_string(port), "--max-sessions", std::to_string(clients + 16)},
-                           options);
-  });
-  // Ready once it accepts.
-  for (int attempt = 0; attempt < 600; ++attempt) {
-    try {
-      client::Link probe("127.0.0.1", port);
-      break;
-    } catch (const Error&) {
-      std::this_thread::sleep_for(std::chrono::milliseconds(50));
-    }
-  }
+// Each client flies its own part of one orbit, a VIEW per frame, as fast as the answers come.
+std::vector<std::vector<double>> e11_latencies(const BenchModel& m, uint16_t port, uint32_t clients, E11& e) {
   const std::vector<Camera> orbit = path_of(m, PathKind::orbit, 360);
   std::vector<std::vector<double>> latencies(clients);
   std::atomic<uint32_t> failed{0};
-  std::string first_error;
   std::mutex error_mutex;
-  Stopwatch clock;
   std::vector<std::thread> threads;
-  // Load clients, as wrk is for HTTP: each speaks the protocol (HELLO, OPEN, a VIEW per frame along its
-  // own part of the orbit, every batch read and decoded) but does no refinement of its own, so the
-  // machine's two cores go to the server and latency is the server's, not client scheduling.
   for (uint32_t i = 0; i < clients; ++i)
     threads.emplace_back([&, i] {
       try {
-        client::Link link("127.0.0.1", port, 64u << 20);
-        auto expect = [&](protocol::MessageType type) {
-          std::optional<protocol::Frame> f = link.receive(std::chrono::seconds(120));
-          if (!f) fail("E11", "no answer within 120 s");
-          if (f->type == protocol::MessageType::error) fail("E11", protocol::decode_error(f->payload).text);
-          if (f->type != type) fail("E11", "unexpected " + protocol::to_string(f->type));
-          return std::move(*f);
-        };
-        link.send(protocol::encode(protocol::Hello{protocol::kProtocolVersion, "bench"}));
-        expect(protocol::MessageType::hello_ok);
-        link.send(protocol::encode(protocol::Open{m.name, {}}));
-        const protocol::StreamContext context = protocol::stream_context(protocol::decode_base(expect(protocol::MessageType::base).payload));
+        LoadClient client("127.0.0.1", port, m.name);
+        client.open(false);
         const size_t start = size_t(i) * 97 % orbit.size();
-        for (uint32_t f = 0; f < kE11Frames; ++f) {
-          const Stopwatch sent;
-          link.send(protocol::encode(protocol::View{orbit[(start + f * 3) % orbit.size()], kTolerance, f + 1}));
-          for (;;) {
-            const protocol::VSplits batch = protocol::decode_vsplits(expect(protocol::MessageType::vsplits).payload, context);
-            if (batch.final && batch.frame == f + 1) break;
-          }
-          latencies[i].push_back(1000 * sent.seconds());
-        }
+        for (uint32_t f = 0; f < kE11Frames; ++f)
+          latencies[i].push_back(client.view(orbit[(start + f * 3) % orbit.size()], kTolerance));
       } catch (const Error& err) {
         failed++;
-        std::lock_guard<std::mutex> lock(error_mutex);
-        if (first_error.empty()) first_error = err.what();
+        const std::lock_guard<std::mutex> lock(error_mutex);
+        if (e.error.empty()) e.error = err.what();
       }
     });
   for (std::thread& t : threads) t.join();
-  e.seconds = clock.seconds();
-  if (server_pid) ::kill(server_pid, SIGINT);
-  server.join();
   e.failed = failed;
-  e.error = first_error;
-  e.server_cpu = server_run.user_seconds + server_run.system_seconds;
-  // The server's own peak as it reports it; wait4's also counts this bench's pages inherited at fork.
-  const size_t rss_at = server_run.out.find("peak RSS ");
-  e.server_rss_mb = rss_at != std::string::npos ? std::strtod(server_run.out.c_str() + rss_at + 9, nullptr)
-                                                : server_run.peak_rss_mb;
-  const size_t at = server_run.out.find("bytes in, ");
-  if (at != std::string::npos) e.bytes_out = std::strtoull(server_run.out.c_str() + at + 10, nullptr, 10);
-  const std::string state = "peak session state ";
-  const size_t state_at = server_run.out.find(state);
-  if (state_at != std::string::npos) {
-    char* end = nullptr;
-    e.session_state_bytes = std::strtoull(server_run.out.c_str() + state_at + state.size(), &end, 10);
-    if (std::strncmp(end, " bytes (", 8) == 0) e.session_buffer_bytes = std::strtoull(end + 8, nullptr, 10);
+  return latencies;
+}
+
+E11 run_e11(const BenchContext& context, const BenchModel& m, uint32_t clients) {
+  E11 e;
+  e.clients = clients;
+  std::optional<ServeChild> server;
+  try {
+    server.emplace(context.self_exe, std::vector<std::string>{m.pms.string(), "--max-sessions", std::to_string(clients + 16)});
+  } catch (const Error& err) {
+    e.server_error = err.what();
+    return e;
+  }
+  const Stopwatch clock;
+  const std::vector<std::vector<double>> latencies = e11_latencies(m, server->port(), clients, e);
+  e.seconds = clock.seconds();
+  e.ran = true;
+  try {
+    // The server's own figures (its VmHWM: wait4's peak would also count this bench's pages inherited at fork).
+    const ServeStats stopped = server->stop();
+    e.server_cpu = stopped.cpu_s;
+    e.server_rss_mb = double(stopped.peak_rss_bytes) / (1024.0 * 1024.0);
+    e.bytes_out = stopped.bytes_out;
+    e.session_state_bytes = stopped.peak_state_bytes;
+    e.session_buffer_bytes = stopped.peak_buffer_bytes;
+  } catch (const Error& err) {
+    e.server_error = err.what();
   }
   std::vector<double> all, first, later;
   for (const auto& l : latencies) {
@@ -332,9 +263,9 @@ void run_sender_group(BenchContext& context) {
              {"peak front B", true}, {"front / nodes", true}, {"window / nodes", true}});
   Table e5({{"model", false}, {"VD bytes", true}, {"VD faces", true}, {"VI bytes", true}, {"VI splits", true},
             {"VD / VI", true}, {"paper VD / VI", true}});
-  std::vector<Model> models;
+  std::vector<BenchModel> models;
   for (const std::string& name : names) {
-    Model m = prepare(context, name);
+    BenchModel m = prepare_model(context, name);
     json record = {{"model", name}};
     const E2 bits = packet_bits_of(m);
     const std::vector<Camera> path = path_of(m, PathKind::orbit, quick ? kQuickPathFrames : kPathFrames);
@@ -351,7 +282,7 @@ void run_sender_group(BenchContext& context) {
       if (name == p.model) paper = fixed(double(p.view_dependent) / double(p.view_independent), 2);
     const E5 vd = run_e5(m, close_view(m));
     // The same model built with the deviation bound (build --deviation bound).
-    const Model bounded = prepare(context, name, "bound");
+    const BenchModel bounded = prepare_model(context, name, "bound");
     const E5 vb = run_e5(bounded, close_view(bounded));
     for (const auto& [label, e] : {std::pair{name, vd}, std::pair{name + ", bound", vb}})
       e5.add_row({label, thousands(e.vd_bytes), thousands(e.vd_faces), thousands(e.vi_bytes), thousands(e.vi_splits),
@@ -387,31 +318,45 @@ void run_sender_group(BenchContext& context) {
              "sampled estimate (the criteria the paper uses).\n\n";
 
   // E11 on the largest model asked for.
-  const Model& big = models.back();
+  const BenchModel& big = models.back();
   Table e11({{"clients", true}, {"failed", true}, {"server CPU s", true}, {"server peak RSS MB", true},
              {"peak session KB", true}, {"without tags KB", true},
              {"bytes out", true}, {"latency p50 ms", true}, {"p99 ms", true}, {"first VIEW p50 ms", true},
              {"first p99 ms", true}, {"later p99 ms", true}, {"wall s", true}});
   json e11_json = json::array();
+  std::string e11_notes;
   for (uint32_t n : quick ? kQuickClientCounts : kClientCounts) {
     std::fprintf(stderr, "bench: E11 %u clients on %s ... ", n, big.name.c_str());
     const E11 e = run_e11(context, big, n);
     std::fprintf(stderr, "%.1f s\n", e.seconds);
-    e11.add_row({std::to_string(n), std::to_string(e.failed), fixed(e.server_cpu, 2), fixed(e.server_rss_mb, 0),
-                 fixed(double(e.session_state_bytes) / 1024, 1), fixed(double(e.session_buffer_bytes) / 1024, 1),
-                 thousands(e.bytes_out), fixed(e.p50, 2), fixed(e.p99, 2), fixed(e.first_p50, 2), fixed(e.first_p99, 2),
-                 fixed(e.later_p99, 2), fixed(e.seconds, 1)});
-    e11_json.push_back({{"clients", n}, {"failed", e.failed}, {"error", e.error}, {"server_cpu_seconds", e.server_cpu},
-                        {"server_peak_rss_mb", e.server_rss_mb}, {"peak_session_state_bytes", e.session_state_bytes},
-                        {"peak_session_bytes_without_tags", e.session_buffer_bytes},
-                        {"bytes_out", e.bytes_out}, {"p50_ms", e.p50},
-                        {"p99_ms", e.p99}, {"first_view_p50_ms", e.first_p50}, {"first_view_p99_ms", e.first_p99},
-                        {"later_views_p99_ms", e.later_p99}, {"seconds", e.seconds}});
+    // Without the server's own report its cells say so: a 0 there would read as a measurement.
+    const bool server = e.server_error.empty();
+    const auto from_server = [&](const std::string& cell) { return server ? cell : std::string("no report"); };
+    const auto from_clients = [&](const std::string& cell) { return e.ran ? cell : std::string("not run"); };
+    e11.add_row({std::to_string(n), from_clients(std::to_string(e.failed)), from_server(fixed(e.server_cpu, 2)),
+                 from_server(fixed(e.server_rss_mb, 0)), from_server(fixed(double(e.session_state_bytes) / 1024, 1)),
+                 from_server(fixed(double(e.session_buffer_bytes) / 1024, 1)), from_server(thousands(e.bytes_out)),
+                 from_clients(fixed(e.p50, 2)), from_clients(fixed(e.p99, 2)), from_clients(fixed(e.first_p50, 2)),
+                 from_clients(fixed(e.first_p99, 2)), from_clients(fixed(e.later_p99, 2)), from_clients(fixed(e.seconds, 1))});
+    json row = {{"clients", n}, {"failed", e.failed}, {"error", e.error}, {"p50_ms", e.p50}, {"p99_ms", e.p99},
+                {"first_view_p50_ms", e.first_p50}, {"first_view_p99_ms", e.first_p99},
+                {"later_views_p99_ms", e.later_p99}, {"seconds", e.seconds}};
+    if (server) {
+      row.update({{"server_cpu_seconds", e.server_cpu}, {"server_peak_rss_mb", e.server_rss_mb},
+                  {"peak_session_state_bytes", e.session_state_bytes},
+                  {"peak_session_bytes_without_tags", e.session_buffer_bytes}, {"bytes_out", e.bytes_out}});
+    } else {
+      row["server_error"] = e.server_error;
+      e11_notes += "- " + std::to_string(n) + " clients: **no server report**: " + e.server_error + "\n";
+      context.failures.push_back("E11 " + std::to_string(n) + " clients: " + e.server_error);
+    }
+    e11_json.push_back(row);
   }
   out["e11"] = e11_json;
   print("\nE11: clients against one server process on " + big.name + " (" + std::to_string(kE11Frames) +
         " frames each, loopback TCP)\n" + e11.markdown());
-  section += "### E11: many clients, one server (" + big.name + ")\n\n" + e11.markdown() + "\n";
+  section += "### E11: many clients, one server (" + big.name + ")\n\n" + e11.markdown() + "\n" +
+             (e11_notes.empty() ? "" : e11_notes + "\n");
   write_text_file(context.options.out_dir / "sender.json", out.dump(2) + "\n");
   context.report += section;
 }

@@ -107,6 +107,7 @@ bool drain(Fd& out, Fd& err, ChildResult& result, const ChildOptions& options, c
         continue;
       }
       std::string& sink = *sinks[i];
+      if (&sink == &result.out && options.on_stdout) options.on_stdout(std::string_view(buffer, size_t(got)));
       if (sink.size() < options.max_captured_bytes)
         sink.append(buffer, std::min(size_t(got), options.max_captured_bytes - sink.size()));
     }

@@ -6,6 +6,7 @@
 #include <cstddef>
 #include <functional>
 #include <string>
+#include <string_view>
 #include <sys/types.h>
 #include <vector>
 
@@ -18,6 +19,9 @@ struct ChildOptions {
   // Called in the parent once the child runs, with its pid: a long-running child (a server) can be
   // signalled from another thread while run_child waits for it.
   std::function<void(pid_t)> on_start;
+  // Called with each piece of stdout as it arrives (it is captured as well), on the thread that runs
+  // run_child: a caller can act on a line (a server's "listening") while the child keeps running.
+  std::function<void(std::string_view)> on_stdout;
 };
 
 struct ChildResult {

@@ -1,0 +1,119 @@
+// The server benches' plumbing against a real `pmstream serve --json`: its counters agree with what a
+// LoadClient received, a resume re-sends nothing, and a server that does not report is an error that
+// says why (E11 and the soak read the server only through ServeChild).
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <functional>
+#include <string>
+
+#include "apps/bench/load_client.h"
+#include "apps/bench/serve_child.h"
+#include "apps/camera_path.h"
+#include "common/error.h"
+#include "pm/pm.h"
+#include "test_support.h"
+
+namespace pms::app {
+namespace {
+
+using nlohmann::json;
+
+json full_stats_line() {
+  json line = {{"event", "stats"}, {"uptime_s", 1.5}, {"cpu_s", 0.25}};
+  for (const char* name : {"sessions_opened", "sessions_active", "sessions_refused", "sessions_timed_out",
+                           "sessions_failed", "protocol_errors", "accept_failures", "longest_turn_us", "bytes_in", "bytes_out",
+                           "splits_sent", "errors_sent", "peak_state_bytes", "peak_buffer_bytes", "rss_bytes",
+                           "peak_rss_bytes"})
+    line[name] = 7;
+  return line;
+}
+
+std::string error_of(const std::function<void()>& f) {
+  try {
+    f();
+  } catch (const Error& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(ServeStats, EveryCounterIsRequired) {
+  json line = full_stats_line();
+  const ServeStats s = parse_serve_stats(line);
+  EXPECT_EQ(s.bytes_out, 7u);
+  EXPECT_EQ(s.peak_rss_bytes, 7u);
+  EXPECT_DOUBLE_EQ(s.cpu_s, 0.25);
+  line.erase("peak_state_bytes");
+  EXPECT_NE(error_of([&] { parse_serve_stats(line); }).find("no counter peak_state_bytes"), std::string::npos);
+  line = full_stats_line();
+  line["bytes_out"] = "12";  // a string is not a count
+  EXPECT_NE(error_of([&] { parse_serve_stats(line); }).find("bytes_out"), std::string::npos);
+  line = full_stats_line();
+  line["splits_sent"] = -1;
+  EXPECT_NE(error_of([&] { parse_serve_stats(line); }).find("splits_sent"), std::string::npos);
+}
+
+// A small model built by the binary, as the benches build theirs.
+std::filesystem::path small_model(const std::filesystem::path& dir) {
+  const std::string pms = (dir / "terrain.pms").string();
+  const test::CliRun build = test::run_pmstream("build terrain:20000 -o " + pms);
+  EXPECT_EQ(build.exit_code, 0) << build.err;
+  return pms;
+}
+
+TEST(ServeChild, CountersAgreeWithWhatTheClientReceived) {
+  const auto pms = small_model(test::temp_dir());
+  const auto file = PmsFile::open(pms.string());
+  ServeChild server(PMSTREAM_BINARY, {pms.string()});
+  EXPECT_GT(server.port(), 0);
+  ASSERT_EQ(server.listening()["models"].size(), 1u);
+  EXPECT_EQ(server.listening()["models"][0]["name"], "terrain");
+  EXPECT_EQ(server.stats().sessions_opened, 0u);
+
+  LoadClientOptions options;
+  options.model = &file->view();
+  LoadClient client("127.0.0.1", server.port(), "terrain", options);
+  PathOptions path_options;
+  path_options.frames = 8;
+  const std::vector<Camera> path = make_camera_path(PathKind::zoom, file->view(), path_options);
+  client.open(false);
+  client.view(path[4], 1);
+  const uint64_t first = client.splits_received();
+  EXPECT_GT(first, 0u);
+  // Resumed on the leaves it holds, the same view needs nothing; a closer one only what it adds. A split
+  // sent twice would have thrown (it would no longer be of a held leaf).
+  client.drop();
+  client.open(true);
+  client.view(path[4], 1);
+  EXPECT_EQ(client.splits_received(), first);
+  client.view(path[7], 1);
+  EXPECT_GT(client.splits_received(), first);
+  const ServeStats during = server.stats();
+  EXPECT_EQ(during.sessions_opened, 2u);
+  EXPECT_GT(during.rss_bytes, 0u);
+  client.drop();
+
+  const ServeStats stopped = server.stop();
+  EXPECT_EQ(stopped.line["event"], "stopped");
+  EXPECT_EQ(stopped.splits_sent, client.splits_received());
+  EXPECT_GE(stopped.peak_rss_bytes, during.rss_bytes);
+  EXPECT_GT(stopped.bytes_out, stopped.bytes_in);
+  EXPECT_EQ(stopped.sessions_failed + stopped.protocol_errors, 0u);
+}
+
+TEST(ServeChild, AServerThatDoesNotStartSaysWhy) {
+  const std::string error =
+      error_of([] { ServeChild server(PMSTREAM_BINARY, {(test::temp_dir() / "missing.pms").string()}); });
+  EXPECT_NE(error.find("without its \"listening\" line"), std::string::npos) << error;
+  EXPECT_NE(error.find("missing.pms"), std::string::npos) << error;  // serve's own one-line error
+}
+
+TEST(ServeChild, ALineThatIsNotJsonIsAnError) {
+  // echo prints its arguments ("serve x --json ...") as a plain text line, as a serve without --json would.
+  const std::string error = error_of([] { ServeChild server("/bin/echo", {"x"}); });
+  EXPECT_NE(error.find("not a JSON object: serve x --json"), std::string::npos) << error;
+}
+
+}  // namespace
+}  // namespace pms::app
