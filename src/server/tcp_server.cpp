@@ -241,10 +241,9 @@ void Connection::serve_turn(Clock::time_point turn_end) {
   update_max(stats_.peak_state_bytes, session_.state_bytes());
   update_max(stats_.peak_buffer_bytes, session_.state_bytes() - session_.tags().memory_bytes());
   if (session_.closing()) {
-    if (close_by_ == Clock::time_point()) {  // the ERROR (or nothing, after CLOSE) gets a moment to leave
+    if (close_by_ == Clock::time_point())  // the ERROR (or nothing, after CLOSE) gets a moment to leave
       close_by_ = Clock::now() + milliseconds(std::min<uint32_t>(1000, limits_.write_timeout_ms));
-      arm_timer();
-    }
+    arm_timer();
     // Closed once the peer has taken the ERROR, or at close_by_.
     if (session_.outbox().empty() && bytes_taken() == written_) return close();
   }
@@ -312,11 +311,12 @@ bool Connection::write_now() {
 }
 
 Clock::time_point Connection::next_deadline() const {
+  // Closing: look every 10 ms whether the peer has taken the last bytes, until close_by_.
+  if (close_by_ != Clock::time_point()) return std::min(close_by_, Clock::now() + milliseconds(10));
   Clock::time_point at = last_activity_ + milliseconds(limits_.idle_timeout_ms);
   if (!session_.opened()) at = std::min(at, connected_ + milliseconds(limits_.handshake_timeout_ms));
   if (reader_.mid_frame()) at = std::min(at, frame_started_ + milliseconds(limits_.frame_timeout_ms));
   if (write_waiting_) at = std::min(at, write_waiting_since_ + milliseconds(limits_.write_timeout_ms));
-  if (close_by_ != Clock::time_point()) at = std::min(at, close_by_);
   return at;
 }
 
@@ -336,8 +336,10 @@ void Connection::on_timer(const boost::system::error_code& ec) {
   timer_at_ = Clock::time_point::max();
   const Clock::time_point now = Clock::now();
   const auto past = [&](Clock::time_point since, uint32_t ms) { return now >= since + milliseconds(ms); };
-  if (close_by_ != Clock::time_point() && now >= close_by_) {  // its ERROR could not be delivered in time
-    reset_ = !session_.outbox().empty() || bytes_taken() < written_;
+  if (close_by_ != Clock::time_point()) {
+    const bool delivered = session_.outbox().empty() && bytes_taken() == written_;
+    if (!delivered && now < close_by_) return arm_timer();
+    reset_ = !delivered;  // its ERROR could not be delivered in time
     return close();
   }
   if (write_waiting_) {
