@@ -34,6 +34,9 @@ void update_max(std::atomic<uint64_t>& target, uint64_t value) {
   while (value > seen && !target.compare_exchange_weak(seen, value, std::memory_order_relaxed)) {}
 }
 
+// What a peer must take per write deadline for it to count as reading (or all it was sent, if less).
+constexpr uint64_t kMinProgressBytes = 1024;
+
 void log_line(const std::string& line) { std::fprintf(stderr, "pmstream serve: %s\n", line.c_str()); }
 
 class Registry;
@@ -93,6 +96,7 @@ class Connection : public std::enable_shared_from_this<Connection> {
   std::string peer_;
   Clock::time_point connected_, last_activity_, frame_started_, close_by_;
   Clock::time_point write_waiting_since_;  // answer bytes wait (here or in the kernel) and none taken since
+  Clock::time_point write_checked_;        // when the peer's progress was last looked at
   uint64_t written_ = 0, taken_ = 0;       // bytes into the socket; bytes the peer had taken when last seen
   bool write_waiting_ = false;
   Clock::time_point timer_at_ = Clock::time_point::max();
@@ -195,7 +199,7 @@ void Connection::count_queued(size_t before) {
 void Connection::start_write_wait() {
   if (write_waiting_) return;
   write_waiting_ = true;
-  write_waiting_since_ = Clock::now();
+  write_waiting_since_ = write_checked_ = Clock::now();
   taken_ = bytes_taken();
   arm_timer();
 }
@@ -316,7 +320,11 @@ Clock::time_point Connection::next_deadline() const {
   Clock::time_point at = last_activity_ + milliseconds(limits_.idle_timeout_ms);
   if (!session_.opened()) at = std::min(at, connected_ + milliseconds(limits_.handshake_timeout_ms));
   if (reader_.mid_frame()) at = std::min(at, frame_started_ + milliseconds(limits_.frame_timeout_ms));
-  if (write_waiting_) at = std::min(at, write_waiting_since_ + milliseconds(limits_.write_timeout_ms));
+  // Progress is only seen when looked for, so look four times per deadline: a peer is then closed within
+  // 1.25 deadlines of the last bytes it took.
+  if (write_waiting_)
+    at = std::min({at, write_waiting_since_ + milliseconds(limits_.write_timeout_ms),
+                   write_checked_ + milliseconds(std::max<uint32_t>(1, limits_.write_timeout_ms / 4))});
   return at;
 }
 
@@ -343,8 +351,11 @@ void Connection::on_timer(const boost::system::error_code& ec) {
     return close();
   }
   if (write_waiting_) {
+    // The peer reads: the wait starts again. A trickle does not count: a kernel that has merged its full
+    // receive queue takes a few bytes now and then from a peer that never reads.
+    write_checked_ = now;
     const uint64_t taken = bytes_taken();
-    if (taken > taken_) {  // the peer reads: the wait starts again
+    if (taken >= taken_ + std::min<uint64_t>(kMinProgressBytes, written_ - taken_)) {
       taken_ = taken;
       write_waiting_since_ = now;
     }
