@@ -51,17 +51,19 @@ struct Fixture {
   uint64_t quiet_pumps = 0;  // pumps after the last input before the session must have nothing left to do
 };
 
-Fixture make_fixture() {
+Fixture make_fixture(const BuildOptions& options) {
   Fixture f;
   f.limits.max_client_message = 8192;  // a front of the whole model is ~700 bytes
   f.limits.max_server_message = 4096;
   f.limits.send_queue_bytes = 4096;
   f.limits.batch_splits = 16;
   f.limits.slice_work = 64;
-  const BuildResult built = build_progressive_mesh(make_terrain(kTerrainFaces), BuildOptions{});
-  // The served name is the file's stem. The file can go once mapped; a directory per process keeps
-  // parallel fuzzing jobs apart.
-  const auto dir = std::filesystem::temp_directory_path() / ("pmstream-fuzz-session-" + std::to_string(getpid()));
+  const BuildResult built = build_progressive_mesh(make_terrain(kTerrainFaces), options);
+  // The served name is the file's stem. The file can go once mapped; a directory per process and model
+  // keeps parallel fuzzing jobs apart.
+  static int made = 0;
+  const auto dir = std::filesystem::temp_directory_path() /
+                   ("pmstream-fuzz-session-" + std::to_string(getpid()) + "-" + std::to_string(made++));
   std::filesystem::create_directories(dir);
   const std::string path = (dir / "terrain.pms").string();
   write_pms(path, built.hierarchy, built.stats);
@@ -76,6 +78,8 @@ Fixture make_fixture() {
     extent2 += (model.bbox_max[i] - model.bbox_min[i]) * (model.bbox_max[i] - model.bbox_min[i]);
   }
   f.diagonal = std::sqrt(extent2);
+  trace("model: " + std::to_string(model.node_count()) + " nodes, " + std::to_string(model.root_count) + " trees, depth " +
+        std::to_string(f.served->context.node_id_bits));
   // A slice may finish the dependency chain in hand (SelectiveStreamer::step): its splits, and the two
   // children each one ranks. Taken as 64 splits, a hierarchy's depth.
   f.work_bound = f.limits.slice_work + 2 * 64;
@@ -547,8 +551,13 @@ class Harness {
 }  // namespace pms::fuzz
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
-  static const pms::fuzz::Fixture fixture = pms::fuzz::make_fixture();
+  using pms::fuzz::Fixture, pms::fuzz::make_fixture;
+  // The default build (balanced rounds down to 64 roots: depth 6 here), and one as deep as the real scans'
+  // hierarchies (one collapse at a time down to 8 roots: depth 12), where dependency chains are long.
+  static const Fixture fixtures[2] = {make_fixture(pms::BuildOptions{}),
+                                      make_fixture(pms::BuildOptions{.greedy = true, .base_vertices = 8})};
   pms::fuzz::Input in(data, size);
+  const Fixture& fixture = fixtures[in.byte() & 1];
   pms::fuzz::Harness(fixture).run(in);
   return 0;
 }
