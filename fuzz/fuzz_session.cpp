@@ -78,8 +78,10 @@ Fixture make_fixture(const BuildOptions& options) {
     extent2 += (model.bbox_max[i] - model.bbox_min[i]) * (model.bbox_max[i] - model.bbox_min[i]);
   }
   f.diagonal = std::sqrt(extent2);
-  trace("model: " + std::to_string(model.node_count()) + " nodes, " + std::to_string(model.root_count) + " trees, depth " +
-        std::to_string(f.served->context.node_id_bits));
+  trace([&] {
+    return "model: " + std::to_string(model.node_count()) + " nodes, " + std::to_string(model.root_count) +
+           " trees, depth " + std::to_string(f.served->context.node_id_bits);
+  });
   // A slice may finish the dependency chain in hand (SelectiveStreamer::step): its splits, and the two
   // children each one ranks. Taken as 64 splits, a hierarchy's depth.
   f.work_bound = f.limits.slice_work + 2 * 64;
@@ -412,7 +414,7 @@ class Harness {
     }
     protocol::Open open{f_.served->name, {}, client_.has_front() ? client_.mode() : mode};
     if (client_.has_front() && open.mode == StreamMode::sender_driven) open.resume = client_.leaves();
-    trace("reconnect, resuming from " + std::to_string(open.resume.size()) + " leaves");
+    trace([&] { return "reconnect, resuming from " + std::to_string(open.resume.size()) + " leaves"; });
     c_ = std::make_unique<Connection>(f_);
     client_.reconnect();
     send(protocol::encode(protocol::Hello{protocol::kProtocolVersion, "fuzz"}));
@@ -442,7 +444,9 @@ class Harness {
     while (!c_->inbound.empty() && !c_->stream_dead && !s.closing() && !queue_full()) {
       const Frame frame = std::move(c_->inbound.front());
       c_->inbound.pop_front();
-      trace("-> " + protocol::to_string(frame.type) + ", " + std::to_string(frame.payload.size()) + " bytes");
+      trace([&] {
+        return "-> " + protocol::to_string(frame.type) + ", " + std::to_string(frame.payload.size()) + " bytes";
+      });
       if (frame.payload.size() > f_.limits.max_client_message) {
         c_->stream_dead = true;
         c_->expect.aborted(ErrorCode::too_large);
@@ -460,7 +464,7 @@ class Harness {
       const bool work = s.has_work();
       bool did = false;
       call([&] { did = s.pump(); });
-      trace("pump: " + std::to_string(s.last_work()) + " units");
+      trace([&] { return "pump: " + std::to_string(s.last_work()) + " units"; });
       if (did != work) fail(work ? "has_work() but pump() did nothing" : "pump() did something with no work");
       if (!work) break;
     }

@@ -30,10 +30,12 @@ inline void check(bool ok, const char* why) {
   if (!ok) fail(why);
 }
 
-// PMSTREAM_FUZZ_TRACE=1 prints what a run does, to read a reproducer's story without a debugger.
-inline void trace(const std::string& line) {
+// PMSTREAM_FUZZ_TRACE=1 prints what a run does, to read a reproducer's story without a debugger. The line is
+// only built when tracing: an allocation per call would cost more under ASan than the session's own work.
+template <class Line>
+void trace(Line&& line) {
   static const bool on = std::getenv("PMSTREAM_FUZZ_TRACE") != nullptr;
-  if (on) std::fprintf(stderr, "  %s\n", line.c_str());
+  if (on) std::fprintf(stderr, "  %s\n", std::string(line()).c_str());
 }
 
 class SimulatedClient {
@@ -126,19 +128,19 @@ class SimulatedClient {
   };
 
   void on(const protocol::HelloOk& m) {
-    trace("<- HELLO_OK");
+    trace([] { return "<- HELLO_OK"; });
     check(s_.greeted && s_.hello_oks++ == 0, "a HELLO_OK that answers no HELLO");
     check(m.version == protocol::kProtocolVersion, "HELLO_OK with another version");
     check(m.max_client_message == limits_.max_client_message && m.max_server_message == limits_.max_server_message,
           "HELLO_OK announces other limits than the server's");
   }
   void on(const protocol::Catalogue& m) {
-    trace("<- CATALOGUE");
+    trace([] { return "<- CATALOGUE"; });
     check(++s_.catalogues <= s_.lists, "a CATALOGUE that answers no LIST");
     check(m.models.size() == 1, "the CATALOGUE does not list the one model served");
   }
   void on(const protocol::Base& m) {
-    trace("<- BASE");
+    trace([] { return "<- BASE"; });
     check(s_.front.has_value(), "a BASE for an OPEN the session should have refused");
     check(!s_.context, "a second BASE");
     check(m.root_count() == model_.root_count, "BASE with another root count than the model's");
@@ -151,8 +153,10 @@ class SimulatedClient {
     front_mode_ = s_.mode;
   }
   void on(const protocol::VSplits& m) {
-    trace("<- VSPLITS frame " + std::to_string(m.frame) + (m.final ? " final, " : ", ") +
-          std::to_string(m.splits.size()) + " splits");
+    trace([&] {
+      return "<- VSPLITS frame " + std::to_string(m.frame) + (m.final ? " final, " : ", ") +
+             std::to_string(m.splits.size()) + " splits";
+    });
     check(!s_.views.empty() && std::find(s_.views.begin(), s_.views.end(), m.frame) != s_.views.end(),
           "a VSPLITS for a frame no VIEW named");
     check(!(s_.frames_distinct && s_.last_answered), "a VSPLITS after the last VIEW's answer was final");
@@ -163,7 +167,7 @@ class SimulatedClient {
     if (m.final && m.frame == s_.views.back()) s_.last_answered = true;
   }
   void on(const protocol::ErrorMessage& m) {
-    trace("<- ERROR " + protocol::to_string(m.code) + ": " + m.text);
+    trace([&] { return "<- ERROR " + protocol::to_string(m.code) + ": " + m.text; });
     check(m.code != protocol::ErrorCode::internal, "ERROR internal: the server's own fault");
     s_.error = m.code;
     s_.error_text = m.text;
@@ -250,6 +254,13 @@ class Expectation {
     if (std::holds_alternative<protocol::List>(message)) return client.list_sent();
     if (const auto* open = std::get_if<protocol::Open>(&message)) return opened(*open, client);
     if (const auto* view = std::get_if<protocol::View>(&message)) {
+      const Camera& c = view->camera;
+      trace([&] {
+        return "   VIEW " + std::to_string(view->frame) + ": eye " + std::to_string(c.eye[0]) + " " +
+               std::to_string(c.eye[1]) + " " + std::to_string(c.eye[2]) + ", target " + std::to_string(c.target[0]) +
+               " " + std::to_string(c.target[1]) + " " + std::to_string(c.target[2]) + ", tolerance " +
+               std::to_string(view->tolerance) + " px";
+      });
       if (!open_) return allow(ErrorCode::out_of_order);
       return client.view_sent(view->frame);
     }
