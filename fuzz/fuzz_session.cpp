@@ -78,12 +78,9 @@ Fixture make_fixture(const BuildOptions& options) {
     extent2 += (model.bbox_max[i] - model.bbox_min[i]) * (model.bbox_max[i] - model.bbox_min[i]);
   }
   f.diagonal = std::sqrt(extent2);
-  trace([&] {
-    return "model: " + std::to_string(model.node_count()) + " nodes, " + std::to_string(model.root_count) +
-           " trees, depth " + std::to_string(f.served->context.node_id_bits);
-  });
-  // A slice may finish the dependency chain in hand (SelectiveStreamer::step): its splits, and the two
-  // children each one ranks. Taken as 64 splits, a hierarchy's depth.
+  // A slice may finish the dependency chain in hand (SelectiveStreamer::step): a unit per split in it and one
+  // per child it ranks, so 2 x 64 on top cover a chain of 42 splits, far longer than a chain up these
+  // hierarchies (depth 6 and 12) can be.
   f.work_bound = f.limits.slice_work + 2 * 64;
   // A window over every node, one bit each, and what growing it may leave unused (doubling at worst).
   f.tags_bound = 2 * (model.node_count() / 8 + 8 * sizeof(uint64_t)) + 64;
@@ -95,6 +92,12 @@ Fixture make_fixture(const BuildOptions& options) {
   f.outbox_bound = f.limits.send_queue_bytes + 2 * (f.limits.max_server_message + protocol::kFrameHeaderBytes);
   // Generous: a VIEW wanting the whole model touches each node a few times, in slices and batches.
   f.quiet_pumps = 4 * model.node_count() + 256;
+  trace([&] {
+    return "model: " + std::to_string(model.node_count()) + " nodes, " + std::to_string(model.root_count) +
+           " trees, depth " + std::to_string(f.served->context.node_id_bits) + "; bounds: work " +
+           std::to_string(f.work_bound) + ", state " + std::to_string(f.state_bound) + " bytes, outbox " +
+           std::to_string(f.outbox_bound) + " bytes";
+  });
   return f;
 }
 
@@ -464,7 +467,10 @@ class Harness {
       const bool work = s.has_work();
       bool did = false;
       call([&] { did = s.pump(); });
-      trace([&] { return "pump: " + std::to_string(s.last_work()) + " units"; });
+      trace([&] {
+        return "pump: " + std::to_string(s.last_work()) + " units, state " + std::to_string(s.state_bytes()) +
+               " bytes, " + std::to_string(queued_bytes()) + " bytes queued";
+      });
       if (did != work) fail(work ? "has_work() but pump() did nothing" : "pump() did something with no work");
       if (!work) break;
     }
