@@ -4,10 +4,6 @@
 // asks for blocks that large).
 #include <gtest/gtest.h>
 
-#include <utility>  // before asio with C++20
-
-#include <boost/asio.hpp>
-
 #include <atomic>
 #include <cstdlib>
 #include <cstring>
@@ -18,6 +14,7 @@
 #include "client/client.h"
 #include "io/shapes.h"
 #include "server/server.h"
+#include "streaming_fixture.h"
 #include "test_support.h"
 
 namespace {
@@ -51,14 +48,6 @@ struct Armed {
   ~Armed() { fail_from = SIZE_MAX; }
 };
 
-std::shared_ptr<const server::Catalogue> terrain_catalogue(Hierarchy& hierarchy) {
-  BuildResult built = build_progressive_mesh(make_terrain(20000, 3), BuildOptions{});
-  hierarchy = std::move(built.hierarchy);
-  const std::string path = (test::temp_dir() / "terrain.pms").string();
-  write_pms(path, hierarchy, built.stats);
-  return server::Catalogue::open({path});
-}
-
 protocol::Frame frame_of(const std::vector<uint8_t>& bytes) {
   protocol::FrameReader reader;
   reader.feed(bytes.data(), bytes.size());
@@ -76,9 +65,9 @@ std::vector<uint8_t> big_open(const Hierarchy& h) {
 }
 
 TEST(Fault, AnAllocationFailureInsideASessionEndsItWithInternal) {
-  Hierarchy h;
-  const auto catalogue = terrain_catalogue(h);
-  server::Session session(catalogue, server::ServerLimits{});
+  const test::Fixture f = test::make_fixture(make_terrain(20000, 3), "terrain");
+  const Hierarchy& h = f.hierarchy;
+  server::Session session(f.catalogue, server::ServerLimits{});
   session.receive(frame_of(protocol::encode(protocol::Hello{protocol::kProtocolVersion, "test"})));
   session.receive(frame_of(big_open(h)));
   {
@@ -94,11 +83,10 @@ TEST(Fault, AnAllocationFailureInsideASessionEndsItWithInternal) {
 }
 
 TEST(Fault, AnAllocationFailureOnTheWireEndsOnlyThatSession) {
-  Hierarchy h;
-  const auto catalogue = terrain_catalogue(h);
+  const test::Fixture f = test::make_fixture(make_terrain(20000, 3), "terrain");
   server::ServerLimits limits;
   limits.threads = 1;  // the good session shares the thread the fault happens on
-  server::TcpServer tcp(catalogue, limits, "127.0.0.1", 0);
+  server::TcpServer tcp(f.catalogue, limits, "127.0.0.1", 0);
   tcp.start();
   client::StreamingClient good("127.0.0.1", tcp.port(), client::ClientOptions{1.0f});
   good.open("terrain");
@@ -109,37 +97,17 @@ TEST(Fault, AnAllocationFailureOnTheWireEndsOnlyThatSession) {
   const uint32_t length = 3u << 20;
   std::memcpy(open.data(), &length, 4);
   open[4] = uint8_t(protocol::MessageType::open);
+  const std::vector<std::vector<uint8_t>> messages = {
+      protocol::encode(protocol::Hello{protocol::kProtocolVersion, "raw"}), std::move(open)};
   std::optional<protocol::ErrorCode> code;
   {
     const Armed armed(1u << 20);
-    namespace asio = boost::asio;
-    asio::io_context io;
-    asio::ip::tcp::socket socket(io);
-    socket.connect({asio::ip::make_address("127.0.0.1"), tcp.port()});
-    boost::system::error_code ec;
-    asio::write(socket, asio::buffer(protocol::encode(protocol::Hello{protocol::kProtocolVersion, "raw"})), ec);
-    asio::write(socket, asio::buffer(open), ec);
-    protocol::FrameReader reader;
-    std::array<uint8_t, 4096> buffer;
-    for (;;) {
-      const size_t n = socket.read_some(asio::buffer(buffer), ec);
-      if (ec) break;
-      reader.feed(buffer.data(), n);
-      protocol::Frame frame;
-      while (reader.next(frame))
-        if (frame.type == protocol::MessageType::error) code = protocol::decode_error(frame.payload).code;
-    }
+    code = test::send_raw(tcp.port(), messages);
   }
   EXPECT_GT(failures.load(), 0);
   EXPECT_EQ(code, protocol::ErrorCode::internal);
   // The other session and the server go on.
-  Camera camera;
-  for (int k = 0; k < 3; ++k) camera.target[k] = 0.5f * (h.bbox_min[k] + h.bbox_max[k]);
-  std::copy_n(camera.target, 3, camera.eye);
-  camera.eye[1] += h.bbox_max[0] - h.bbox_min[0];
-  camera.eye[2] += 0.5f * (h.bbox_max[0] - h.bbox_min[0]);
-  camera.width = 320;
-  camera.height = 240;
+  const Camera camera = test::orbit_path(f.hierarchy, 4, 0.0f).back();
   EXPECT_GT(good.frame(camera).vsplits, 0u);
   EXPECT_EQ(tcp.stats().sessions_failed.load(), 1u);
   client::StreamingClient later("127.0.0.1", tcp.port(), client::ClientOptions{1.0f});

@@ -1,7 +1,12 @@
 // Helpers the server tests share (streaming_fixture.h).
 #include "streaming_fixture.h"
 
+#include <utility>  // before asio with C++20
+
+#include <boost/asio.hpp>
+
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <span>
 #include <utility>
@@ -79,6 +84,27 @@ Faces local_faces(const Hierarchy& snapped, const Camera& camera, float toleranc
   refinement.set_view(make_view(camera, model.bbox_min, model.bbox_max));
   refinement.converge([&](std::span<const uint32_t> leaves) { return add_model_splits(hierarchy, model, leaves); });
   return faces_by_id(mesh);
+}
+
+std::optional<protocol::ErrorCode> send_raw(uint16_t port, const std::vector<std::vector<uint8_t>>& messages) {
+  namespace asio = boost::asio;
+  asio::io_context io;
+  asio::ip::tcp::socket socket(io);
+  socket.connect({asio::ip::make_address("127.0.0.1"), port});
+  boost::system::error_code ec;
+  for (const auto& m : messages) asio::write(socket, asio::buffer(m), ec);
+  protocol::FrameReader reader;
+  std::array<uint8_t, 4096> buffer;
+  std::optional<protocol::ErrorCode> code;
+  for (;;) {
+    const size_t n = socket.read_some(asio::buffer(buffer), ec);
+    if (ec) break;
+    reader.feed(buffer.data(), n);
+    protocol::Frame frame;
+    while (reader.next(frame))
+      if (frame.type == protocol::MessageType::error) code = protocol::decode_error(frame.payload).code;
+  }
+  return code;
 }
 
 }  // namespace pms::test

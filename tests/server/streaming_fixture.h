@@ -3,11 +3,13 @@
 #pragma once
 #include <array>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "io/mesh.h"
 #include "pm/pm.h"
+#include "protocol/protocol.h"
 #include "refine/camera.h"
 #include "refine/refine.h"
 #include "server/server.h"
@@ -36,5 +38,9 @@ Faces faces_by_id(SelectiveMesh& mesh);
 
 // Local refinement of the same model (positions as the wire carries them) for one view.
 Faces local_faces(const Hierarchy& snapped, const Camera& camera, float tolerance);
+
+// A raw connection to 127.0.0.1:port that sends `messages` and reads until the server closes; the code of
+// the ERROR it got, if any.
+std::optional<protocol::ErrorCode> send_raw(uint16_t port, const std::vector<std::vector<uint8_t>>& messages);
 
 }  // namespace pms::test

@@ -36,6 +36,7 @@ using test::faces_by_id;
 using test::local_faces;
 using test::make_fixture;
 using test::orbit_path;
+using test::send_raw;
 
 struct Server {
   explicit Server(std::shared_ptr<const server::Catalogue> catalogue, server::ServerLimits limits = {},
@@ -239,27 +240,6 @@ TEST(Streaming, ViewIndependentNeedsAtLeastTheBytesOfSenderDriven) {
   EXPECT_GE(vi.session().splits_received(), sender.session().splits_received());
 }
 
-// A raw connection that sends bytes and reads until the server closes; returns the ERROR's code.
-std::optional<protocol::ErrorCode> send_raw(uint16_t port, const std::vector<std::vector<uint8_t>>& messages) {
-  namespace asio = boost::asio;
-  asio::io_context io;
-  asio::ip::tcp::socket socket(io);
-  socket.connect({asio::ip::make_address("127.0.0.1"), port});
-  boost::system::error_code ec;
-  for (const auto& m : messages) asio::write(socket, asio::buffer(m), ec);
-  protocol::FrameReader reader;
-  std::array<uint8_t, 4096> buffer;
-  std::optional<protocol::ErrorCode> code;
-  for (;;) {
-    const size_t n = socket.read_some(asio::buffer(buffer), ec);
-    if (ec) break;
-    reader.feed(buffer.data(), n);
-    protocol::Frame frame;
-    while (reader.next(frame))
-      if (frame.type == protocol::MessageType::error) code = protocol::decode_error(frame.payload).code;
-  }
-  return code;
-}
 
 TEST(Streaming, HostileInputGetsAnErrorWhileAGoodSessionGoesOn) {
   const Fixture& f = terrain();
