@@ -157,6 +157,8 @@ void add_serve_command(CLI::App& app) {
   add_limit(cmd, "--accept-backoff-ms", limits.accept_backoff_ms,
             "Longest pause after a failed accept (out of file descriptors), doubling from 10 ms");
   add_limit(cmd, "--turn-us", limits.turn_us, "One session's turn on an I/O thread, in microseconds");
+  add_limit(cmd, "--max-message-rate", limits.max_message_rate,
+            "Messages per second a session may send (bursts of as many); more wait, unread (0 = no limit)");
   add_limit(cmd, "--max-client-message", limits.max_client_message, "Largest message payload a client may send (bytes)");
   add_limit(cmd, "--max-server-message", limits.max_server_message,
             "Largest message payload the server sends (bytes); a model whose BASE is larger is refused at start");

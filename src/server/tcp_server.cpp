@@ -47,6 +47,7 @@ class Connection : public std::enable_shared_from_this<Connection> {
              ServerStats& stats, Registry& registry, uint64_t id)
       : socket_(std::move(socket)),
         timer_(socket_.get_executor()),
+        throttle_(socket_.get_executor()),
         reader_(limits.max_client_message),
         session_(std::move(catalogue), limits),
         limits_(limits),
@@ -67,6 +68,9 @@ class Connection : public std::enable_shared_from_this<Connection> {
   void read();
   void on_read(const boost::system::error_code& ec, size_t n);
   void receive_frames(Clock::time_point turn_end);
+  // Message rate (a token bucket of max_message_rate per second): false when the next frame must wait, and
+  // then the throttle timer resumes the session when it may go on.
+  bool may_handle_a_frame();
   // Non-blocking gathered writes until the outbox is empty (true), the socket is full or the burst is
   // used (false).
   bool write_now();
@@ -86,6 +90,11 @@ class Connection : public std::enable_shared_from_this<Connection> {
 
   tcp::socket socket_;
   asio::steady_timer timer_;
+  asio::steady_timer throttle_;
+  double tokens_ = 0;
+  Clock::time_point refilled_;
+  bool throttled_ = false;
+  bool paused_ = false;  // not reading (throttled, or back-pressure): a frame's time is not running
   std::array<uint8_t, 4096> read_buffer_;
   protocol::FrameReader reader_;
   Session session_;
@@ -138,7 +147,8 @@ void Connection::start() {
   socket_.non_blocking(true, ec);  // write_now() must never block an I/O thread
   const tcp::endpoint peer = socket_.remote_endpoint(ec);
   peer_ = ec ? "unknown peer" : peer.address().to_string() + ":" + std::to_string(peer.port());
-  connected_ = last_activity_ = Clock::now();
+  connected_ = last_activity_ = refilled_ = Clock::now();
+  tokens_ = limits_.max_message_rate;
   arm_timer();
   read();
 }
@@ -171,7 +181,7 @@ void Connection::on_read(const boost::system::error_code& ec, size_t n) {
 void Connection::receive_frames(Clock::time_point turn_end) {
   protocol::Frame frame;
   // Checked per frame: a client that does not read its answers gets no more frames handled.
-  while (!session_.closing() && !queue_full() && Clock::now() < turn_end) {
+  while (!session_.closing() && !queue_full() && Clock::now() < turn_end && may_handle_a_frame()) {
     try {
       if (!reader_.next(frame)) return;
     } catch (const protocol::ProtocolError& e) {
@@ -183,6 +193,25 @@ void Connection::receive_frames(Clock::time_point turn_end) {
     session_.receive(std::move(frame));
     count_queued(before);
   }
+}
+
+bool Connection::may_handle_a_frame() {
+  if (limits_.max_message_rate == 0 || reader_.ready() == 0 || throttled_) return !throttled_;
+  const Clock::time_point now = Clock::now();
+  const double rate = limits_.max_message_rate;
+  tokens_ = std::min(rate, tokens_ + rate * std::chrono::duration<double>(now - refilled_).count());
+  refilled_ = now;
+  if (tokens_ >= 1) {
+    tokens_ -= 1;
+    return true;
+  }
+  throttled_ = paused_ = true;  // no reads either meanwhile: the kernel's buffers push back on the peer
+  throttle_.expires_after(std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>((1 - tokens_) / rate)));
+  throttle_.async_wait([self = shared_from_this()](const boost::system::error_code& ec) {
+    self->throttled_ = false;
+    if (!ec) self->serve();
+  });
+  return false;
 }
 
 void Connection::count_queued(size_t before) {
@@ -263,8 +292,12 @@ void Connection::serve_turn(Clock::time_point turn_end) {
     }
   }
   if (closed_ || session_.closing()) return;
-  if (queue_full()) return arm_timer();  // back-pressure: neither read nor handle frames until it drains
-  const bool more = session_.has_work() || reader_.ready() > 0 || (drained && !session_.outbox().empty());
+  if (queue_full()) {  // back-pressure: neither read nor handle frames until it drains
+    paused_ = true;
+    return arm_timer();
+  }
+  const bool more =
+      session_.has_work() || (reader_.ready() > 0 && !throttled_) || (drained && !session_.outbox().empty());
   if (more) {  // this session's turn is over: others go first
     if (!turn_posted_) {
       turn_posted_ = true;
@@ -273,7 +306,8 @@ void Connection::serve_turn(Clock::time_point turn_end) {
         self->serve();
       });
     }
-  } else if (!reading_) {
+  } else if (!reading_ && reader_.ready() == 0) {
+    if (std::exchange(paused_, false) && reader_.mid_frame()) frame_started_ = Clock::now();
     read();
   }
   arm_timer();
@@ -319,7 +353,7 @@ Clock::time_point Connection::next_deadline() const {
   if (close_by_ != Clock::time_point()) return std::min(close_by_, Clock::now() + milliseconds(10));
   Clock::time_point at = last_activity_ + milliseconds(limits_.idle_timeout_ms);
   if (!session_.opened()) at = std::min(at, connected_ + milliseconds(limits_.handshake_timeout_ms));
-  if (reader_.mid_frame()) at = std::min(at, frame_started_ + milliseconds(limits_.frame_timeout_ms));
+  if (reader_.mid_frame() && !paused_) at = std::min(at, frame_started_ + milliseconds(limits_.frame_timeout_ms));
   // Progress is only seen when looked for, so look four times per deadline: a peer is then closed within
   // 1.25 deadlines of the last bytes it took.
   if (write_waiting_)
@@ -365,7 +399,7 @@ void Connection::on_timer(const boost::system::error_code& ec) {
       return close();  // it does not read, so an ERROR would never arrive either
     }
   }
-  if (reader_.mid_frame() && past(frame_started_, limits_.frame_timeout_ms))
+  if (reader_.mid_frame() && !paused_ && past(frame_started_, limits_.frame_timeout_ms))
     return time_out("a message took longer than " + std::to_string(limits_.frame_timeout_ms) + " ms to arrive");
   if (!session_.opened() && past(connected_, limits_.handshake_timeout_ms))
     return time_out("no HELLO and OPEN within " + std::to_string(limits_.handshake_timeout_ms) + " ms");
@@ -399,6 +433,7 @@ void Connection::close() {
   // Bytes the peer did not take would keep the socket (and its kernel buffer) alive after the close: reset.
   if (reset_) socket_.set_option(asio::socket_base::linger(true, 0), ignored);
   timer_.cancel();
+  throttle_.cancel();
   socket_.shutdown(tcp::socket::shutdown_both, ignored);
   socket_.close(ignored);
   stats_.sessions_active--;

@@ -448,18 +448,22 @@ TEST_F(Attack, AListFloodIsBoundedByBackPressureAndTheWriteTimeout) {
   const nlohmann::json before = server_->stats();
   std::atomic<uint64_t> unread_lists{0};
   fly_during(4, [&](int i) {
-    constexpr size_t kLists = 10000;
-    if (i == 3) {  // one that reads every CATALOGUE: each LIST is answered
+    // The server's default --max-message-rate: a session's messages beyond it wait, unread.
+    constexpr size_t kRate = 500, kLists = 2000;
+    if (i == 3) {  // one that reads every CATALOGUE: each LIST is answered, at the message rate
       std::unique_ptr<Peer> peer = opened_peer(port());
       size_t catalogues = 0;
       auto count = [&](const protocol::Frame& frame) { catalogues += frame.type == protocol::MessageType::catalogue; };
-      const Clock::time_point deadline = after(milliseconds(20000));
+      const Clock::time_point started = Clock::now();
+      const Clock::time_point deadline = after(milliseconds(1000 * kLists / kRate + 5000));
       EXPECT_TRUE(peer->send_reading(repeated(list_frame(), kLists), count, deadline));
       if (catalogues < kLists) peer->read_until([&](const protocol::Frame& frame) {
         count(frame);
         return catalogues == kLists;
       }, deadline);
       EXPECT_EQ(catalogues, kLists);
+      // A burst of kRate (less HELLO and OPEN), then kRate a second.
+      EXPECT_GE(seconds_since(started), 0.9 * double(kLists - kRate) / double(kRate)) << "faster than the rate";
       return;
     }
     const std::vector<uint8_t> lists = repeated(list_frame(), 1000);
