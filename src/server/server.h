@@ -132,7 +132,7 @@ class Session {
   bool pump_resume(uint64_t& work);
   bool pump_sender(uint64_t& work);
   bool pump_view_independent(uint64_t& work);
-  void emit_batch(bool final);
+  void emit_batch(size_t count, bool final);
   const Importance& importance();
 
   std::shared_ptr<const Catalogue> catalogue_;

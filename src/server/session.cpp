@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstdint>
 #include <new>
+#include <span>
 #include <variant>
 
 #include "server/server.h"
@@ -214,10 +215,12 @@ bool Session::pump_resume(uint64_t& work) {
   return true;
 }
 
-void Session::emit_batch(bool final) {
-  queue(model_->packets.encode(*view_frame_, final, batch_));
-  splits_sent_ += batch_.size();
-  batch_.clear();
+// The first `count` splits of the batch (a VSPLITS never holds more than batch_splits: a dependency chain
+// can carry the batch past it, and the rest waits for the next frame, in order).
+void Session::emit_batch(size_t count, bool final) {
+  queue(model_->packets.encode(*view_frame_, final, std::span(batch_).first(count)));
+  splits_sent_ += count;
+  batch_.erase(batch_.begin(), batch_.begin() + ptrdiff_t(count));
 }
 
 const Importance& Session::importance() {
@@ -235,14 +238,14 @@ bool Session::pump_sender(uint64_t& work) {
     restart_ = false;
     streamer_.start(model_->view(), model_->dependencies, tags_, importance());
   }
-  const size_t room = limits_.batch_splits - batch_.size();
+  const size_t limit = limits_.batch_splits;
+  const size_t room = batch_.size() < limit ? limit - batch_.size() : 0;
   const bool served = streamer_.step(room, limits_.slice_work, batch_, work);
+  while (batch_.size() > limit || (batch_.size() == limit && !served)) emit_batch(limit, false);
   if (served) {
     streamer_.stop();
     view_pending_ = false;
-    emit_batch(true);
-  } else if (batch_.size() >= limits_.batch_splits) {
-    emit_batch(false);
+    emit_batch(batch_.size(), true);
   }
   return true;
 }
