@@ -296,8 +296,9 @@ void Connection::serve_turn(Clock::time_point turn_end) {
     paused_ = true;
     return arm_timer();
   }
-  const bool more =
-      session_.has_work() || (reader_.ready() > 0 && !throttled_) || (drained && !session_.outbox().empty());
+  // A stream that failed (a bad header) has nothing ready, yet its ERROR is still to be raised.
+  const bool frames_waiting = (reader_.ready() > 0 || reader_.failed()) && !throttled_;
+  const bool more = session_.has_work() || frames_waiting || (drained && !session_.outbox().empty());
   if (more) {  // this session's turn is over: others go first
     if (!turn_posted_) {
       turn_posted_ = true;

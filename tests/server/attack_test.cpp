@@ -28,7 +28,7 @@ using namespace test;
 using protocol::ErrorCode;
 using Errors = std::vector<ErrorCode>;
 
-constexpr float kTolerance = 0.25f;
+constexpr float kTolerance = 0.1f;
 constexpr int kPathFrames = 200;
 constexpr uint32_t kMaxClientMessage = 4u << 20;  // the server's default, announced in HELLO_OK
 const milliseconds kDeadline(1000);               // handshake, frame and write timeouts
@@ -39,7 +39,7 @@ const milliseconds kIdleTimeout(3000);
 const milliseconds kPace(5);
 
 const Fixture& terrain() {
-  static const Fixture f = make_fixture(make_terrain(100000, 7), "terrain");
+  static const Fixture f = make_fixture(make_terrain(200000, 7), "terrain");
   return f;
 }
 
@@ -49,8 +49,8 @@ const std::vector<Camera>& good_path() {
   static const std::vector<Camera> path = [] {
     std::vector<Camera> cameras = orbit_path(terrain().hierarchy, kPathFrames, 0.3f);
     for (Camera& c : cameras) {
-      c.width = 800;
-      c.height = 600;
+      c.width = 1280;
+      c.height = 960;
     }
     return cameras;
   }();
