@@ -1,7 +1,8 @@
 // Issue 14: hostile, slow and broken clients cannot hurt the server. Each test runs the real `pmstream serve
 // --json` as a child process on loopback, flies a good client along a path once in quiet, then again while
 // one kind of attacker works on the server from raw sockets, and asks of every attack the same: the good
-// client ends with the mesh local refinement gives and its p99 latency stays within 3x of the quiet flight;
+// client ends with the mesh local refinement gives and its p99 latency stays within 3x of the quiet flight
+// (asserted in the release build; a sanitizer build reports it);
 // within 3 s of the attack's end the server is back under 10 % of a core with every session slot free; SIGTERM
 // ends it within 1 s with its totals. The deadlines are cut to a second (the idle timeout to three) so each
 // attack meets them within the test.
@@ -20,6 +21,7 @@
 #include "attack_support.h"
 #include "client/client.h"
 #include "io/shapes.h"
+#include "test_support.h"
 
 namespace pms {
 namespace {
@@ -128,6 +130,7 @@ class Attack : public ::testing::Test {
     const Clock::time_point deadline = attack_end_ + milliseconds(3000);
     const double quiet_p99 = percentile(quiet_.latency_ms, 99), attacked_p99 = percentile(attacked_.latency_ms, 99);
     EXPECT_EQ(attacked_.mesh, good_mesh()) << "the attacked flight does not end with local refinement's mesh";
+    if (!test::kSanitized)
     EXPECT_LE(attacked_p99, 3 * quiet_p99) << "p99 over " << attacked_.latency_ms.size() << " answers";
     const double cpu = server_->wait_for_idle(0.10, remaining(deadline));
     EXPECT_LT(cpu, 0.10) << "server CPU (share of one core over a second) within 3 s of the attack's end";
@@ -142,7 +145,7 @@ class Attack : public ::testing::Test {
     EXPECT_TRUE(exit.stopped.has_value()) << "no \"stopped\" line with the totals";
     std::printf("[ attack   ] %s: p99 quiet %.1f ms (p50 %.1f, %zu answers, %.1f s, server CPU %.2f s), attacked %.1f ms "
                 "(p50 %.1f, %zu, %.1f s, server CPU %.2f s); CPU after %.1f %%; sessions after %llu; SIGTERM %.3f s; "
-                "timed out %llu, protocol errors %llu, refused %llu, longest turn %llu us\n",
+                "timed out %llu, protocol errors %llu, refused %llu, longest turn %llu us%s\n",
                 attack, quiet_p99, percentile(quiet_.latency_ms, 50), quiet_.latency_ms.size(), quiet_.seconds, quiet_cpu_,
                 attacked_p99, percentile(attacked_.latency_ms, 50), attacked_.latency_ms.size(), attacked_.seconds,
                 attacked_cpu_, 100 * cpu,
@@ -150,7 +153,8 @@ class Attack : public ::testing::Test {
                 (unsigned long long)stats.at("sessions_timed_out").get<uint64_t>(),
                 (unsigned long long)stats.at("protocol_errors").get<uint64_t>(),
                 (unsigned long long)stats.at("sessions_refused").get<uint64_t>(),
-                (unsigned long long)stats.value("longest_turn_us", uint64_t(0)));
+                (unsigned long long)stats.value("longest_turn_us", uint64_t(0)),
+                test::kSanitized ? " (sanitizer build: the p99 bound is the release run's)" : "");
   }
 
   static milliseconds remaining(Clock::time_point deadline) {
