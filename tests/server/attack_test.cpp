@@ -130,8 +130,9 @@ class Attack : public ::testing::Test {
     const Clock::time_point deadline = attack_end_ + milliseconds(3000);
     const double quiet_p99 = percentile(quiet_.latency_ms, 99), attacked_p99 = percentile(attacked_.latency_ms, 99);
     EXPECT_EQ(attacked_.mesh, good_mesh()) << "the attacked flight does not end with local refinement's mesh";
-    if (!test::kSanitized)
+    if (!test::kSanitized) {
     EXPECT_LE(attacked_p99, 3 * quiet_p99) << "p99 over " << attacked_.latency_ms.size() << " answers";
+  }
     const double cpu = server_->wait_for_idle(0.10, remaining(deadline));
     EXPECT_LT(cpu, 0.10) << "server CPU (share of one core over a second) within 3 s of the attack's end";
     const uint64_t sessions = server_->wait_for_sessions(0, remaining(deadline));
