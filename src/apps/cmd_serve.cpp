@@ -1,5 +1,6 @@
 // pmstream serve FILES_OR_DIRS... [--port 7300] [--host 0.0.0.0] [--max-sessions N] [--json] ...
 // Runs the sender-driven TCP server until SIGINT or SIGTERM; SIGUSR1 prints the totals so far.
+#include <algorithm>
 #include <csignal>
 #include <cstdio>
 #include <ctime>
@@ -43,6 +44,13 @@ double cpu_seconds() {
 
 // One line a program can read: the event, then every counter (docs/operating.md lists them).
 nlohmann::json stats_json(const char* event, const server::ServerStats& s, const Stopwatch& uptime) {
+  // The kernel syncs a thread's RSS count into VmHWM lazily (pages at a time), so VmHWM read now can be
+  // below a VmRSS printed earlier: the peak printed is never below any RSS this server printed.
+  // Only the thread that waits for signals prints these lines.
+  static uint64_t highest_rss = 0;
+  const uint64_t rss = rss_bytes();
+  highest_rss = std::max(highest_rss, rss);
+  const uint64_t peak_rss = std::max(uint64_t(peak_rss_mb() * 1024 * 1024), highest_rss);
   return {{"event", event},
           {"uptime_s", uptime.seconds()},
           {"sessions_opened", s.sessions_opened.load()},
@@ -59,8 +67,8 @@ nlohmann::json stats_json(const char* event, const server::ServerStats& s, const
           {"errors_sent", s.errors_sent.load()},
           {"peak_state_bytes", s.peak_state_bytes.load()},
           {"peak_buffer_bytes", s.peak_buffer_bytes.load()},
-          {"rss_bytes", rss_bytes()},
-          {"peak_rss_bytes", uint64_t(peak_rss_mb() * 1024 * 1024)},
+          {"rss_bytes", rss},
+          {"peak_rss_bytes", peak_rss},
           {"cpu_s", cpu_seconds()}};
 }
 
