@@ -1,15 +1,15 @@
-// libFuzzer target for the .pms reader (DESIGN.md §6.5): any bytes either open or throw
-// pms::Error; crashes, hangs, sanitizer reports and huge allocations are findings.
+// libFuzzer target for the .pms reader (docs/architecture.md, "Correctness properties", 5): any bytes
+// either open or throw pms::Error; crashes, hangs, sanitizer reports and huge allocations are findings.
 // Seed corpus: files written by `pmstream build` or by the pm tests.
 #include <xxhash.h>
-
 #include <cstddef>
 #include <cstdint>
 #include <cstring>
 #include <vector>
 
 #include "common/error.h"
-#include "pm/pm.h"
+#include "pm/hierarchy.h"
+#include "pm/pms_file.h"
 #include "pm/pms_format_internal.h"
 
 namespace {

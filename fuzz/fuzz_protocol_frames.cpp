@@ -1,15 +1,21 @@
-// libFuzzer target for the frame reader and the two direction dispatchers (DESIGN.md §6.5): a byte
-// stream cut into chunks (sizes from the input) must frame exactly as it would in one piece, frames never
-// exceed the limit, and every frame decodes or throws ProtocolError. A BASE that decodes becomes the
-// context of later VSPLITS, as in a client session; an OPEN before it in view-independent mode takes the
-// refinement info out of that context.
+// libFuzzer target for the frame reader and the two direction dispatchers (docs/architecture.md,
+// "Correctness properties", 5): a byte stream cut into chunks (sizes from the input) must frame exactly as
+// it would in one piece, frames never exceed the limit, and every frame decodes or throws ProtocolError. A
+// BASE that decodes becomes the context of later VSPLITS, as in a client session; an OPEN before it in
+// view-independent mode takes the refinement info out of that context.
 #include <algorithm>
 #include <cstddef>
 #include <cstdint>
 #include <optional>
 #include <vector>
 
-#include "protocol/protocol.h"
+#include "protocol/client_messages.h"
+#include "protocol/dispatch.h"
+#include "protocol/framing.h"
+#include "protocol/message_types.h"
+#include "protocol/model_messages.h"
+#include "protocol/server_messages.h"
+#include "protocol/stream_context.h"
 
 namespace {
 

@@ -1,14 +1,19 @@
-// libFuzzer target for every protocol message decoder (DESIGN.md §6.5): the first byte picks the
-// decoder, VSPLITS takes its stream context from the next 8 bytes, the rest is the payload. Any bytes
-// must decode or throw ProtocolError — never crash, hang, over-allocate or throw anything else — and what
-// decodes must re-encode and decode to the same message (byte for byte where no quantization is involved).
+// libFuzzer target for every protocol message decoder (docs/architecture.md, "Correctness properties", 5): the
+// first byte picks the decoder, VSPLITS takes its stream context from the next 8 bytes, the rest is the
+// payload. Any bytes must decode or throw ProtocolError — never crash, hang, over-allocate or throw anything
+// else — and what decodes must re-encode and decode to the same message (byte for byte where no quantization
+// is involved).
 #include <cstddef>
 #include <cstdint>
 #include <cstring>
 #include <span>
 #include <vector>
 
-#include "protocol/protocol.h"
+#include "pm/split_record.h"
+#include "protocol/client_messages.h"
+#include "protocol/message_types.h"
+#include "protocol/server_messages.h"
+#include "protocol/stream_context.h"
 
 namespace {
 

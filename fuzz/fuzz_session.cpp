@@ -9,7 +9,6 @@
 // Small limits (slices of 64 nodes, batches of 16 splits, a 4 KB send queue) so slicing, batching and
 // back-pressure happen on a model small enough for hundreds of runs a second under ASan.
 #include <unistd.h>
-
 #include <bit>
 #include <cfloat>
 #include <cmath>
@@ -22,9 +21,19 @@
 #include <string>
 #include <vector>
 
-#include "build/build.h"
+#include "builder/build.h"
 #include "io/shapes.h"
+#include "pm/hierarchy.h"
+#include "pm/pms_file.h"
+#include "pm/vertex_id.h"
+#include "protocol/client_messages.h"
+#include "protocol/framing.h"
+#include "protocol/message_types.h"
+#include "protocol/server_messages.h"
 #include "protocol/wire_internal.h"
+#include "server/catalogue.h"
+#include "server/limits.h"
+#include "server/session.h"
 #include "session_client.h"
 
 namespace pms::fuzz {

@@ -13,10 +13,20 @@
 #include <variant>
 #include <vector>
 
-#include "pm/pm.h"
-#include "protocol/protocol.h"
-#include "refine/refine.h"
-#include "server/server.h"
+#include "pm/hierarchy.h"
+#include "pm/split_record.h"
+#include "pm/vertex_id.h"
+#include "protocol/client_messages.h"
+#include "protocol/dispatch.h"
+#include "protocol/framing.h"
+#include "protocol/message_types.h"
+#include "protocol/model_messages.h"
+#include "protocol/position_grid.h"
+#include "protocol/server_messages.h"
+#include "protocol/stream_context.h"
+#include "server/catalogue.h"
+#include "server/limits.h"
+#include "server/session.h"
 
 namespace pms::fuzz {
 

@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # One entry point for a fresh Debian 12 machine: installs what is missing, builds, then
 #   setup.sh demo   -> runs `pmstream demo`
-#   setup.sh test   -> runs the test suite (release build, then an ASan+UBSan build of the unit tests)
+#   setup.sh test   -> runs the test suite (the layering check, a release build, an ASan+UBSan build of the
+#                      unit tests, then short runs of every fuzz target)
 #   setup.sh build  -> only builds (build/pmstream)
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -14,7 +15,7 @@ packages=(build-essential cmake ninja-build pkg-config git xz-utils
           libcli11-dev nlohmann-json3-dev libfmt-dev libassimp-dev zlib1g-dev liblzma-dev libxxhash-dev
           libfast-float-dev libzstd-dev libboost-dev libstb-dev libpng-dev
           libgtest-dev libgmock-dev libbenchmark-dev clang libclang-rt-14-dev
-          libopenmesh-apps gnuplot-nox)
+          libopenmesh-apps gnuplot-nox graphviz)
 
 install_packages() {
   local missing=()
@@ -53,6 +54,8 @@ case "$mode" in
     ./build/pmstream demo "$@"
     ;;
   test)
+    # First, before anything builds: no include goes up or sideways in the layers (docs/architecture.md).
+    bash scripts/check_layers.sh
     configure_and_build build
     (cd build && ctest --output-on-failure -j "$jobs" --timeout 900)
     # Second configuration: the unit tests under AddressSanitizer + UndefinedBehaviorSanitizer.

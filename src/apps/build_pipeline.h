@@ -3,8 +3,9 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
-#include "build/build.h"
+#include "builder/build.h"
 #include "io/mesh.h"
+#include "pm/pms_file.h"
 
 namespace pms::app {
 
@@ -28,7 +29,7 @@ Mesh load_input(const std::string& in_path, const ProgressFn& progress);
 // Loads IN (see load_input) then as above.
 BuildRun build_file(const std::string& in_path, const std::string& out_path, const BuildOptions& options);
 
-// The DESIGN.md §5 `build --json` object.
+// The `build --json` object (docs/cli.md, "build").
 nlohmann::json build_json(const BuildRun& run, double seconds, double peak_rss_mb);
 nlohmann::json stats_json(const BuildStats& stats);
 

@@ -1,4 +1,4 @@
-// CAM.json and PATH.json (DESIGN.md §5, contract):
+// CAM.json and PATH.json (docs/cli.md, "CAM.json and PATH.json", contract):
 //   CAM  = {"eye":[x,y,z],"target":[x,y,z],"up":[x,y,z],"fovy_deg":f,"width":w,"height":h}
 //   PATH = {"frames":[CAM, ...]}
 #pragma once

@@ -5,6 +5,7 @@
 #include <numbers>
 
 #include "common/error.h"
+#include "pm/hierarchy.h"
 
 namespace pms::app {
 namespace {

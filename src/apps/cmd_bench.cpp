@@ -17,7 +17,7 @@
 namespace pms::app {
 namespace fs = std::filesystem;
 
-// The experiment groups of DESIGN.md §7: a new group is one function and one line here.
+// The experiment groups (docs/architecture.md, "Experiments"): a new group is one function and one line here.
 constexpr BenchGroup kGroups[] = {
     {"build", "E12 build time and memory, E1 hierarchy statistics, terrain scaling", run_build_group},
     {"refine", "adaptation time and ops/s on a scan path, renderer speed, image quality at far/mid/close", run_refine_group},
@@ -156,8 +156,8 @@ void run_bench(const BenchArgs& args) {
 
 void add_bench_command(CLI::App& app) {
   auto args = std::make_shared<BenchArgs>();
-  CLI::App* cmd = app.add_subcommand("bench", "Run the experiments (DESIGN.md §7): tables on stdout, report.md, "
-                                              "JSON and PNG in --out");
+  CLI::App* cmd = app.add_subcommand("bench", "Run the experiments (docs/architecture.md, \"Experiments\"): tables "
+                                              "on stdout, report.md, JSON and PNG in --out");
   cmd->add_flag("--quick", args->quick, "Only the small end of every series (a smoke run)");
   cmd->add_option("--models", args->models, "Comma-separated model names in ../shared/models (default per group; "
                                             "build: bunny,horse,feline,skull,dragon)")

@@ -56,7 +56,7 @@ void add_compare_command(CLI::App& app) {
   CLI::App* cmd = app.add_subcommand("compare", "Render two meshes with one camera and compare the images");
   cmd->add_option("mesh_a", args->a, "Mesh file, terrain:FACES, or .pms model")->required();
   cmd->add_option("mesh_b", args->b, "Mesh file, terrain:FACES, or .pms model")->required();
-  cmd->add_option("--camera", args->camera, "Camera JSON (DESIGN.md §5 CAM.json)")->required();
+  cmd->add_option("--camera", args->camera, "Camera JSON (CAM.json, docs/cli.md)")->required();
   cmd->add_option("--width", args->width, "Image width (overrides the camera's)")->check(CLI::Range(1, 16384));
   cmd->add_option("--height", args->height, "Image height (overrides the camera's)")->check(CLI::Range(1, 16384));
   cmd->add_flag("--json", args->json, "Print one JSON object: psnr error_pixels error_fraction");

@@ -3,7 +3,8 @@
 
 #include "apps/build_pipeline.h"
 #include "apps/commands.h"
-#include "pm/pm.h"
+#include "pm/hierarchy.h"
+#include "pm/pms_file.h"
 
 namespace pms::app {
 namespace {

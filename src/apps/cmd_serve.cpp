@@ -5,13 +5,15 @@
 #include <cstdio>
 #include <ctime>
 #include <pthread.h>
-
 #include <nlohmann/json.hpp>
 
 #include "apps/commands.h"
 #include "apps/resource_usage.h"
 #include "common/error.h"
-#include "server/server.h"
+#include "server/catalogue.h"
+#include "server/limits.h"
+#include "server/stats.h"
+#include "server/tcp_server.h"
 
 namespace pms::app {
 namespace {

@@ -1,19 +1,23 @@
-// pmstream stream --server HOST:PORT --model NAME --path PATH.json --mode sender|vi --tolerance PX
+// pmstream stream --server HOST:PORT --model NAME --path PATH.json --mode MODE --tolerance PX
 //                 [--laps K] [--reconnect N] [--timeout-ms N] [--connect-timeout-ms N] [--save-mesh OUT.ply]
 //                 [--snapshots DIR] [--json]
 // The headless viewer: follows a camera path, streaming what each frame needs, and reports per frame.
 #include <cstdio>
 #include <filesystem>
-
+#include <optional>
 #include <nlohmann/json.hpp>
 
 #include "apps/camera_json.h"
 #include "apps/commands.h"
 #include "apps/refine_pipeline.h"
 #include "apps/resource_usage.h"
-#include "client/client.h"
+#include "client/streaming_client.h"
+#include "client/transport.h"
 #include "common/error.h"
 #include "io/mesh.h"
+#include "protocol/client_messages.h"
+#include "protocol/stream_mode.h"
+#include "refine/selective_mesh.h"
 #include "render/render.h"
 
 namespace pms::app {
@@ -56,8 +60,8 @@ void snapshot(client::StreamingClient& client, const Camera& camera, const std::
 }
 
 void run_stream(const StreamArgs& args) {
-  if (args.mode != "sender" && args.mode != "vi")
-    fail("--mode", "'" + args.mode + "': this build streams in sender and vi modes (receiver and dag come with their issues)");
+  const std::optional<protocol::StreamMode> mode = protocol::mode_named(args.mode);
+  if (!mode) fail("--mode", "'" + args.mode + "': this build streams in the modes " + protocol::mode_names());
   std::string host;
   uint16_t port = 0;
   split_host_port(args.server, host, port);
@@ -69,7 +73,7 @@ void run_stream(const StreamArgs& args) {
   options.tolerance = args.tolerance;
   options.morph_frames = args.morph_frames;
   options.max_ops = args.max_ops;
-  if (args.mode == "vi") options.mode = protocol::StreamMode::view_independent;
+  options.mode = *mode;
   options.reconnect_attempts = args.reconnect;
   options.answer_timeout = std::chrono::milliseconds(args.timeout_ms);
   options.connect_timeout = std::chrono::milliseconds(args.connect_timeout_ms);
@@ -130,7 +134,7 @@ void add_stream_command(CLI::App& app) {
   cmd->add_option("--server", args->server, "HOST:PORT of the server's TCP port")->required();
   cmd->add_option("--model", args->model, "Model name in the server's catalogue")->required();
   cmd->add_option("--path", args->path, "PATH.json (pmstream path ...)")->required();
-  cmd->add_option("--mode", args->mode, "sender (view-dependent) or vi (plain PM order until the view is satisfied)")
+  cmd->add_option("--mode", args->mode, "Streaming mode: sender (view-dependent) or vi (plain PM order until the view is satisfied); docs/cli.md")
       ->capture_default_str();
   cmd->add_option("--tolerance", args->tolerance, "Screen-space error tolerance in pixels")
       ->check(CLI::NonNegativeNumber)

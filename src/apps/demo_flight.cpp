@@ -12,10 +12,16 @@
 #include "apps/camera_path.h"
 #include "apps/percentile.h"
 #include "apps/resource_usage.h"
-#include "client/client.h"
+#include "client/streaming_client.h"
+#include "client/transport.h"
 #include "common/error.h"
+#include "pm/hierarchy.h"
+#include "protocol/client_messages.h"
+#include "refine/selective_mesh.h"
 #include "render/render.h"
-#include "server/server.h"
+#include "server/catalogue.h"
+#include "server/limits.h"
+#include "server/tcp_server.h"
 
 namespace pms::app {
 namespace {
@@ -75,6 +81,81 @@ uint64_t view_independent_bytes(uint16_t port, const std::string& model_name, co
   return client.counters().bytes_down;
 }
 
+struct Flight {
+  std::vector<double> latencies;  // of the frames that sent a VIEW
+  uint64_t face_sum = 0, requests = 0;
+  double seconds = 0;
+};
+
+// A live line on a terminal; a line per snapshot interval in a log.
+void print_progress(client::StreamingClient& client, const client::FrameReport& r, size_t frame, size_t frames,
+                    bool interactive) {
+  const client::LinkCounters c = client.counters();
+  std::printf("%sflight:    frame %3zu/%zu  faces %7llu  vsplits %8llu  down %9llu B  up %7llu B%s",
+              interactive ? "\r" : "", frame + 1, frames, (unsigned long long)r.faces,
+              (unsigned long long)client.session().splits_received(), (unsigned long long)c.bytes_down,
+              (unsigned long long)c.bytes_up, interactive ? "" : "\n");
+  std::fflush(stdout);
+}
+
+Flight fly(client::StreamingClient& client, const std::vector<Camera>& path, const FlightOptions& options,
+           const std::string& snapshots) {
+  Renderer renderer;
+  Image image;
+  Flight flight;
+  Stopwatch clock;
+  const bool interactive = isatty(fileno(stdout));
+  for (size_t i = 0; i < path.size(); ++i) {
+    const client::FrameReport r = client.frame(path[i]);
+    flight.face_sum += r.faces;
+    if (r.requested) {
+      flight.latencies.push_back(r.latency_ms);
+      ++flight.requests;
+    }
+    const bool snapshot_frame = options.snapshot_every && (i % options.snapshot_every == 0 || i + 1 == path.size());
+    if (interactive || snapshot_frame) print_progress(client, r, i, path.size(), interactive);
+    if (snapshot_frame) {
+      char name[64];
+      std::snprintf(name, sizeof name, "/frame_%04zu.png", i);
+      snapshot(client, path[i], snapshots + name, renderer, image);
+    }
+  }
+  flight.seconds = clock.seconds();
+  if (interactive) std::printf("\n");
+  return flight;
+}
+
+std::string summary_table(client::StreamingClient& client, const Flight& flight, size_t frames, uint64_t base_bytes,
+                          uint64_t all_splits, uint64_t vi_bytes) {
+  const client::LinkCounters c = client.counters();
+  const double share = all_splits ? double(client.session().splits_received()) / double(all_splits) : 0;
+  char table[2048];
+  std::snprintf(table, sizeof table,
+                "| frames | faces (last / mean) | vsplits received | bytes down | bytes up | VIEW requests | latency p50 / p99 "
+                "| view-independent bytes down |\n"
+                "|---|---|---|---|---|---|---|---|\n"
+                "| %zu | %llu / %.0f | %llu (%.1f %% of %llu) | %llu (base %llu) | %llu | %llu | %.2f / %.2f ms | %llu (%.2fx) |\n",
+                frames, (unsigned long long)client.session().mesh().face_count(), double(flight.face_sum) / double(frames),
+                (unsigned long long)client.session().splits_received(), 100 * share, (unsigned long long)all_splits,
+                (unsigned long long)c.bytes_down, (unsigned long long)base_bytes, (unsigned long long)c.bytes_up,
+                (unsigned long long)flight.requests, percentile(flight.latencies, 0.5), percentile(flight.latencies, 0.99),
+                (unsigned long long)vi_bytes, double(vi_bytes) / double(std::max<uint64_t>(c.bytes_down, 1)));
+  return table;
+}
+
+void write_report(const std::string& report, const std::string& model_name, size_t frames, float tolerance,
+                  const std::string& table) {
+  std::ofstream out(report);
+  out << "# pmstream demo: sender-driven streaming of " << model_name << "\n\n"
+      << "A client flew " << frames << " frames over the model at tolerance " << tolerance
+      << " px, asking the server (in-process, loopback TCP) only when its own hierarchy could not satisfy the view.\n\n"
+      << table
+      << "\nView-independent: a second client flew the same path in `vi` mode (kim-lee-kobbelt §8's baseline: the "
+         "plain PM order, coarse to fine, until each view is satisfied); the factor is its bytes down over the "
+         "view-dependent client's.\n\nSnapshots: `snapshots/`.\n";
+  if (!out) fail(report, "cannot write the report");
+}
+
 }  // namespace
 
 void run_demo_flight(const std::string& pms_path, const std::string& model_name, const FlightOptions& options) {
@@ -90,74 +171,23 @@ void run_demo_flight(const std::string& pms_path, const std::string& model_name,
   client::StreamingClient client("127.0.0.1", tcp.port(), client_options);
   client.open(model_name);
   const uint64_t base_bytes = client.counters().bytes_down;
-
   const std::string snapshots = options.out_dir + "/snapshots";
   if (options.snapshot_every) std::filesystem::create_directories(snapshots);
-  Renderer renderer;
-  Image image;
-  std::vector<double> latencies;
-  uint64_t face_sum = 0, requests = 0;
-  Stopwatch clock;
-  const bool interactive = isatty(fileno(stdout));
-  for (size_t i = 0; i < path.size(); ++i) {
-    const client::FrameReport r = client.frame(path[i]);
-    face_sum += r.faces;
-    if (r.requested) {
-      latencies.push_back(r.latency_ms);
-      ++requests;
-    }
-    // A live line on a terminal; a line per snapshot interval in a log.
-    const bool snapshot_frame = options.snapshot_every && (i % options.snapshot_every == 0 || i + 1 == path.size());
-    if (interactive || snapshot_frame) {
-      const client::LinkCounters c = client.counters();
-      std::printf("%sflight:    frame %3zu/%zu  faces %7llu  vsplits %8llu  down %9llu B  up %7llu B%s",
-                  interactive ? "\r" : "", i + 1, path.size(), (unsigned long long)r.faces,
-                  (unsigned long long)client.session().splits_received(), (unsigned long long)c.bytes_down,
-                  (unsigned long long)c.bytes_up, interactive ? "" : "\n");
-      std::fflush(stdout);
-    }
-    if (snapshot_frame) {
-      char name[64];
-      std::snprintf(name, sizeof name, "/frame_%04zu.png", i);
-      snapshot(client, path[i], snapshots + name, renderer, image);
-    }
-  }
-  const double seconds = clock.seconds();
-  if (interactive) std::printf("\n");
+  const Flight flight = fly(client, path, options, snapshots);
+
   std::printf("baseline:  the same flight, view-independent (plain PM order) ...");
   std::fflush(stdout);
   const uint64_t vi_bytes = view_independent_bytes(tcp.port(), model_name, path, options.tolerance);
   std::printf(" %llu B down\n", (unsigned long long)vi_bytes);
   tcp.stop();
 
-  const client::LinkCounters c = client.counters();
   const uint64_t all_splits = served.info.vsplits;
-  const double share = all_splits ? double(client.session().splits_received()) / double(all_splits) : 0;
-  char table[2048];
-  std::snprintf(table, sizeof table,
-                "| frames | faces (last / mean) | vsplits received | bytes down | bytes up | VIEW requests | latency p50 / p99 "
-                "| view-independent bytes down |\n"
-                "|---|---|---|---|---|---|---|---|\n"
-                "| %zu | %llu / %.0f | %llu (%.1f %% of %llu) | %llu (base %llu) | %llu | %llu | %.2f / %.2f ms | %llu (%.2fx) |\n",
-                path.size(), (unsigned long long)client.session().mesh().face_count(), double(face_sum) / double(path.size()),
-                (unsigned long long)client.session().splits_received(), 100 * share, (unsigned long long)all_splits,
-                (unsigned long long)c.bytes_down, (unsigned long long)base_bytes, (unsigned long long)c.bytes_up,
-                (unsigned long long)requests, percentile(latencies, 0.5), percentile(latencies, 0.99),
-                (unsigned long long)vi_bytes, double(vi_bytes) / double(std::max<uint64_t>(c.bytes_down, 1)));
-  std::printf("\n%s\n", table);
+  const std::string table = summary_table(client, flight, path.size(), base_bytes, all_splits, vi_bytes);
+  std::printf("\n%s\n", table.c_str());
   std::printf("streamed in %.2f s; every vsplit crossed the wire at most once (%llu of the model's %llu were needed)\n",
-              seconds, (unsigned long long)client.session().splits_received(), (unsigned long long)all_splits);
-
+              flight.seconds, (unsigned long long)client.session().splits_received(), (unsigned long long)all_splits);
   const std::string report = options.out_dir + "/report.md";
-  std::ofstream out(report);
-  out << "# pmstream demo: sender-driven streaming of " << model_name << "\n\n"
-      << "A client flew " << path.size() << " frames over the model at tolerance " << options.tolerance
-      << " px, asking the server (in-process, loopback TCP) only when its own hierarchy could not satisfy the view.\n\n"
-      << table
-      << "\nView-independent: a second client flew the same path in `vi` mode (kim-lee-kobbelt §8's baseline: the "
-         "plain PM order, coarse to fine, until each view is satisfied); the factor is its bytes down over the "
-         "view-dependent client's.\n\nSnapshots: `snapshots/`.\n";
-  if (!out) fail(report, "cannot write the report");
+  write_report(report, model_name, path.size(), options.tolerance, table);
   std::printf("wrote:     %s, %s/\n", report.c_str(), snapshots.c_str());
 }
 

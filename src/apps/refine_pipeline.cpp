@@ -1,6 +1,8 @@
 #include "apps/refine_pipeline.h"
 
+#include "pm/hierarchy.h"
 #include "refine/adapt.h"
+#include "refine/selective_mesh.h"
 #include "refine/stream_order.h"
 
 namespace pms::app {

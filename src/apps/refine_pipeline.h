@@ -4,9 +4,9 @@
 #include <cstdint>
 
 #include "io/mesh.h"
-#include "pm/pm.h"
+#include "pm/hierarchy.h"
 #include "refine/camera.h"
-#include "refine/refine.h"
+#include "refine/selective_mesh.h"
 
 namespace pms::app {
 

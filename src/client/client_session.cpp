@@ -1,9 +1,16 @@
 // The client's protocol logic (kim-lee-kobbelt §5.3): BASE builds the base mesh and the roots of the
-// partial hierarchy; every VSPLITS packet is attached below its v_s (UpdateVHierarchy). In view-independent
-// mode (kim-lee-kobbelt §8, Fig. 9) every packet is also applied at once, in arrival (PM) order.
-#include "client/client.h"
+// partial hierarchy; every VSPLITS packet is attached below its v_s (UpdateVHierarchy).
+
+#include "client/client_session.h"
 
 #include "common/error.h"
+#include "pm/split_record.h"
+#include "pm/vertex_id.h"
+#include "protocol/client_messages.h"
+#include "protocol/model_messages.h"
+#include "protocol/server_messages.h"
+#include "refine/selective_mesh.h"
+#include "refine/vertex_hierarchy.h"
 
 namespace pms::client {
 
@@ -16,7 +23,7 @@ void ClientSession::on_base(const protocol::Base& base) {
   }
   base_ = base;
   context_ = protocol::stream_context(base);
-  context_.has_refinement = mode == protocol::StreamMode::sender_driven;
+  context_.has_refinement = refinement_info;
   hierarchy_ = std::make_unique<VertexHierarchy>(base.has_normals, base.has_colors);
   hierarchy_->reserve(base.root_count());
   for (uint32_t r = 0; r < base.root_count(); ++r)
@@ -29,13 +36,7 @@ void ClientSession::on_base(const protocol::Base& base) {
 
 void ClientSession::on_vsplits(const protocol::VSplits& batch) {
   if (!has_model()) fail("VSPLITS", "received before BASE");
-  const bool apply = mode == protocol::StreamMode::view_independent;
-  for (const SplitRecord& split : batch.splits) {
-    hierarchy_->add_split(split);
-    // PM order: the split's ancestors and cut-vertex splits came earlier, so it can be made now.
-    if (apply && !mesh_->vsplit(hierarchy_->find(split.vs)).done)
-      fail("VSPLITS", "split of " + to_string(split.vs) + " arrived before a split it needs (not in PM order)");
-  }
+  for (const SplitRecord& split : batch.splits) hierarchy_->add_split(split);
   splits_received_ += batch.splits.size();
 }
 

@@ -2,16 +2,16 @@
 // connect, the reads into a FrameReader, the writes of queued frames one after another, and the deadlines
 // on all three (asio's chat_client shape, with the timeouts of its timeouts/ examples). The caller's
 // threads only touch what the mutex guards and hand frames over with asio::post.
-#include <utility>  // before asio with C++20 (DESIGN.md §8)
-
+#include <utility>  // before asio with C++20 (docs/architecture.md, "Stack")
 #include <boost/asio.hpp>
-
 #include <array>
 #include <functional>
 #include <thread>
 
-#include "client/client.h"
+#include "client/link.h"
+#include "client/transport.h"
 #include "common/error.h"
+#include "protocol/framing.h"
 
 namespace pms::client {
 

@@ -1,12 +1,17 @@
-// The headless streaming client: ClientSession over a Link. A frame adapts the mesh to the camera and,
-// only when the front needs vsplit packets the client does not have (kim-lee-kobbelt §5.3: never for a
-// real leaf), sends VIEW and applies the answer's batches as they arrive.
+// The headless streaming client: a ClientSession and a ClientMode over a ServerConnection, reconnecting and
+// resuming when a connection is lost.
 #include <algorithm>
 #include <thread>
 #include <variant>
 
-#include "client/client.h"
+#include "client/link.h"
+#include "client/streaming_client.h"
+#include "client/transport.h"
 #include "common/error.h"
+#include "protocol/client_messages.h"
+#include "protocol/framing.h"
+#include "protocol/message_types.h"
+#include "protocol/server_messages.h"
 
 namespace pms::client {
 namespace {
@@ -47,47 +52,28 @@ StreamingClient::StreamingClient(std::unique_ptr<Transport> transport, const Cli
   session_.adapt_options.tolerance = options.tolerance;
   session_.adapt_options.morph_frames = options.morph_frames;
   session_.adapt_options.max_ops = options.max_ops;
-  session_.mode = options.mode;
+  mode_ = make_client_mode(options.mode);
+  mode_->prepare(session_);
   greet(std::move(transport));
 }
 
 StreamingClient::~StreamingClient() = default;
 
 void StreamingClient::greet(std::unique_ptr<Transport> transport) {
-  if (link_) {
-    add(past_, link_->counters());
-    link_.reset();
+  if (server_) {
+    add(past_, server_->counters());
+    server_.reset();
   }
-  link_ = std::move(transport);
-  link_->send(protocol::encode(protocol::Hello{protocol::kProtocolVersion, options_.name}));
-  const protocol::Frame frame = expect(protocol::MessageType::hello_ok);
-  protocol::decode_hello_ok(frame.payload);
+  server_ = std::make_unique<ServerConnection>(std::move(transport), options_.name, options_.answer_timeout);
 }
 
-// The next frame, which must be of `type`; an ERROR from the server becomes a pms::Error with its text.
-protocol::Frame StreamingClient::expect(protocol::MessageType type) {
-  std::optional<protocol::Frame> frame = link_->receive(options_.answer_timeout);
-  if (!frame) throw ConnectionError("server: no answer within " + std::to_string(options_.answer_timeout.count()) + " ms");
-  if (frame->type == protocol::MessageType::error) {
-    const protocol::ErrorMessage e = protocol::decode_error(frame->payload);
-    fail("server", protocol::to_string(e.code) + ": " + e.text);
-  }
-  if (frame->type != type)
-    fail("server", "expected " + protocol::to_string(type) + ", got " + protocol::to_string(frame->type));
-  return std::move(*frame);
-}
-
-protocol::Catalogue StreamingClient::list() {
-  link_->send(protocol::encode(protocol::List{}));
-  return protocol::decode_catalogue(expect(protocol::MessageType::catalogue).payload);
-}
+protocol::Catalogue StreamingClient::list() { return server_->list(); }
 
 void StreamingClient::open(const std::string& model) {
   model_ = model;
-  protocol::Open message{model, {}, options_.mode};
+  protocol::Open message{model, {}, mode_->wire_mode()};
   if (session_.has_model()) message.resume = session_.known_leaves();
-  link_->send(protocol::encode(message));
-  session_.on_base(protocol::decode_base(expect(protocol::MessageType::base).payload));
+  session_.on_base(server_->open(message));
 }
 
 void StreamingClient::resume(const std::string& host, uint16_t port) {
@@ -101,17 +87,16 @@ void StreamingClient::resume(std::unique_ptr<Transport> transport) {
   open(model_);
 }
 
-// Sends VIEW for the camera and applies every batch of its answer; returns the packets received.
-size_t StreamingClient::request(const Camera& camera, FrameReport& report) {
+size_t StreamingClient::request_view(const Camera& camera, const BatchHandler& on_batch, FrameReport& report) {
   const uint32_t frame = ++frame_;
   const Clock::time_point sent = Clock::now();
-  link_->send(protocol::encode(protocol::View{camera, options_.tolerance, frame}));
+  server_->send_view(camera, options_.tolerance, frame);
   report.requested = true;
   size_t received = 0;
   for (;;) {
-    const protocol::Frame message = expect(protocol::MessageType::vsplits);
-    const protocol::VSplits batch = protocol::decode_vsplits(message.payload, session_.context());
+    const protocol::VSplits batch = server_->next_batch(session_.context());
     session_.on_vsplits(batch);
+    if (on_batch) on_batch(batch);
     received += batch.splits.size();
     if (batch.frame == frame && batch.final) break;  // earlier VIEWs' batches are applied too
   }
@@ -153,45 +138,23 @@ FrameReport StreamingClient::frame_once(const Camera& camera) {
   if (!session_.has_model()) fail("stream", "no model open");
   FrameReport report;
   report.frame = frame_ + 1;
-  const LinkCounters before = link_->counters();
-  if (options_.mode == protocol::StreamMode::view_independent) {
-    report.vsplits = request(camera, report);  // the splits are applied as they arrive
-  } else {
-    adapt_and_request(camera, report);
-  }
-  const LinkCounters after = link_->counters();
+  const LinkCounters before = server_->counters();
+  mode_->frame(camera, session_, *this, report);
+  const LinkCounters after = server_->counters();
   report.up_bytes = after.bytes_up - before.bytes_up;
   report.down_bytes = after.bytes_down - before.bytes_down;
   report.faces = session_.mesh().face_count();
   return report;
 }
 
-void StreamingClient::adapt_and_request(const Camera& camera, FrameReport& report) {
-  SelectiveRefinement& refinement = session_.refinement();
-  refinement.set_view(session_.view_params(camera));
-  // The server answers a VIEW with every split the view wants over its front, so one request per frame
-  // normally suffices; a second only if the answer was cut short.
-  for (int round = 0; round < 4; ++round) {
-    FrameStats stats = refinement.adapt();
-    // Without a cap one adapt() reaches the view's mesh for what is known; extra passes only finish
-    // collapses that waited for a geomorph. Bounded, whatever the loop does.
-    for (int pass = 0; pass < 64 && !stats.capped && stats.ops() > 0 && refinement.missing().empty(); ++pass)
-      stats = refinement.adapt();
-    if (refinement.missing().empty()) break;
-    const size_t received = request(camera, report);
-    report.vsplits += received;
-    if (received == 0) break;  // the server has nothing more for this view
-  }
-}
-
 void StreamingClient::settle(const Camera& camera) {
   frame(camera);
-  if (options_.mode == protocol::StreamMode::sender_driven) session_.refinement().converge();
+  mode_->settle(session_);
 }
 
 LinkCounters StreamingClient::counters() const {
   LinkCounters total = past_;
-  if (link_) add(total, link_->counters());
+  if (server_) add(total, server_->counters());
   return total;
 }
 

@@ -3,7 +3,9 @@
 #include <algorithm>
 
 #include "common/error.h"
+#include "pm/hierarchy.h"
 #include "pm/hierarchy_internal.h"
+#include "pm/vertex_id.h"
 
 namespace pms {
 namespace detail {
@@ -90,6 +92,14 @@ ModelView view_of(const Hierarchy& h) {
   v.bbox_max = h.bbox_max;
   v.scale = h.scale;
   return v;
+}
+
+void check_node_arrays(const ModelView& view) {
+  const size_t n = view.node_count();
+  if (view.root_count > n || view.first_child.size() < n || view.position.size() < 3 * n || view.refine.size() < n ||
+      view.cut_left.size() < n || view.cut_right.size() < n || view.tree_id.size() < n || view.node_id.size() < n ||
+      (!view.normals.empty() && view.normals.size() < 3 * n) || (!view.colors.empty() && view.colors.size() < 4 * n))
+    fail("model", "node arrays shorter than the node count");
 }
 
 }  // namespace pms

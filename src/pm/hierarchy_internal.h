@@ -3,12 +3,12 @@
 #include <span>
 #include <string>
 
-#include "pm/pm.h"
+#include "pm/vertex_id.h"
 
 namespace pms::detail {
 
 // Fills tree_id/node_id (sized like first_child) in array order: parents precede their children,
-// so a node's id is final before its children's are derived from it (DESIGN.md §2).
+// so a node's id is final before its children's are derived from it (docs/internals.md, "Vertex ids").
 // Throws pms::Error prefixed by `where` for a child index that breaks that order or a node
 // deeper than 63 levels (its node-id would not fit 64 bits).
 void compute_ids(uint32_t root_count, std::span<const uint32_t> first_child, std::span<uint32_t> tree_id,

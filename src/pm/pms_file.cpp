@@ -1,16 +1,18 @@
-// Opening a .pms file (DESIGN.md §3): map it read-only, check the container (pms_layout.cpp), the
-// HEAD counts and the model (pms_validate.cpp), then serve spans straight into the mapping, so
-// a server holding many models pays for pages it touches, not for parsing.
+// Opening a .pms file (docs/pms-format.md, "Reader behaviour"): map it read-only, check the container
+// (pms_layout.cpp), the HEAD counts and the model (pms_validate.cpp), then serve spans straight into the
+// mapping, so a server holding many models pays for pages it touches, not for parsing.
 #include <fcntl.h>
 #include <sys/mman.h>
 #include <sys/stat.h>
 #include <unistd.h>
-
 #include <cerrno>
 #include <cstring>
 
 #include "common/error.h"
+#include "pm/hierarchy.h"
+#include "pm/pms_file.h"
 #include "pm/pms_format_internal.h"
+#include "pm/refine_info.h"
 
 namespace pms {
 namespace {

@@ -9,7 +9,9 @@
 #include <string_view>
 #include <vector>
 
-#include "pm/pm.h"
+#include "pm/hierarchy.h"
+#include "pm/pms_file.h"
+#include "pm/refine_info.h"
 
 namespace pms::format {
 

@@ -3,6 +3,7 @@
 #include <nlohmann/json.hpp>
 
 #include "common/error.h"
+#include "pm/pms_file.h"
 #include "pm/pms_format_internal.h"
 
 namespace pms::format {

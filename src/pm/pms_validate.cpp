@@ -5,8 +5,11 @@
 #include <cmath>
 
 #include "common/error.h"
+#include "pm/hierarchy.h"
 #include "pm/hierarchy_internal.h"
 #include "pm/pms_format_internal.h"
+#include "pm/refine_info.h"
+#include "pm/vertex_id.h"
 
 namespace pms::format {
 

@@ -4,13 +4,15 @@
 #include <fcntl.h>
 #include <unistd.h>
 #include <xxhash.h>
-
 #include <algorithm>
 #include <cerrno>
 #include <cstring>
 
 #include "common/error.h"
+#include "pm/hierarchy.h"
+#include "pm/pms_file.h"
 #include "pm/pms_format_internal.h"
+#include "pm/vertex_id.h"
 
 namespace pms {
 namespace {

@@ -9,7 +9,7 @@
 #include <cmath>
 #include <numbers>
 
-#include "pm/pm.h"
+#include "pm/refine_info.h"
 
 namespace pms {
 namespace {

@@ -3,6 +3,13 @@
 // and the stream context both ends derive from it. Also the catalogue entry of a model.
 #include <cmath>
 
+#include "pm/hierarchy.h"
+#include "pm/vertex_id.h"
+#include "protocol/message_types.h"
+#include "protocol/model_messages.h"
+#include "protocol/position_grid.h"
+#include "protocol/server_messages.h"
+#include "protocol/stream_context.h"
 #include "protocol/wire_internal.h"
 
 namespace pms::protocol {

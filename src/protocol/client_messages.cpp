@@ -1,6 +1,8 @@
-// Client -> server messages other than OPEN (open.cpp): HELLO, LIST, VIEW, CLOSE (DESIGN.md §4).
+// Client -> server messages other than OPEN (open.cpp): HELLO, LIST, VIEW, CLOSE (docs/protocol.md).
 #include <cstring>
 
+#include "protocol/client_messages.h"
+#include "protocol/message_types.h"
 #include "protocol/wire_internal.h"
 
 namespace pms::protocol {

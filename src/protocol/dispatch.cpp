@@ -1,6 +1,12 @@
+
+#include "protocol/client_messages.h"
+#include "protocol/dispatch.h"
+#include "protocol/framing.h"
+#include "protocol/message_types.h"
+#include "protocol/server_messages.h"
+#include "protocol/stream_context.h"
 // One entry point per direction: a frame's type picks the decoder, and a message that belongs to the
 // other direction is as malformed as garbage.
-#include "protocol/protocol.h"
 
 namespace pms::protocol {
 namespace {

@@ -1,8 +1,9 @@
-// Framing (DESIGN.md §4): u32 LE payload length | u8 type | payload, read incrementally from a byte
+// Framing (docs/protocol.md, "Conventions"): u32 LE payload length | u8 type | payload, read incrementally from a byte
 // stream that arrives in arbitrary chunks (TCP segments, WebSocket messages, 1-byte test feeds).
 #include <algorithm>
 
-#include "protocol/protocol.h"
+#include "protocol/framing.h"
+#include "protocol/message_types.h"
 
 namespace pms::protocol {
 namespace {

@@ -3,9 +3,12 @@
 // roots arrive with BASE and every split adds both children. A front is coded in preorder, one bit per
 // node: 1 = split (both children follow), 0 = a listed leaf, trees in tree-id order. That is 2F - R bits
 // for F leaves in R trees — the server's active tags of kim-lee-kobbelt §6.1, rebuilt from the client
-// alone (DESIGN.md §9 resume) — instead of a ~40-bit <tree-id, node-id> per leaf.
+// alone (docs/architecture.md, "Scale-out": resume) — instead of a ~40-bit <tree-id, node-id> per leaf.
 #include <algorithm>
 
+#include "pm/vertex_id.h"
+#include "protocol/client_messages.h"
+#include "protocol/message_types.h"
 #include "protocol/wire_internal.h"
 
 namespace pms::protocol {

@@ -3,6 +3,12 @@
 #include <mutex>
 
 #include "common/parallel.h"
+#include "pm/hierarchy.h"
+#include "pm/refine_info.h"
+#include "pm/split_record.h"
+#include "protocol/message_types.h"
+#include "protocol/packet_table.h"
+#include "protocol/stream_context.h"
 #include "protocol/wire_internal.h"
 
 namespace pms::protocol {

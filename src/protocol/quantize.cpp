@@ -1,5 +1,6 @@
-// Quantized geometry on the wire: positions on a per-axis grid over the model's bounding box (DESIGN.md
-// §2 "geometry"), normals octahedral (Meyer et al. 2010, "On floating-point normal vectors").
+// Quantized geometry on the wire: positions on a per-axis grid over the model's bounding box
+// (docs/internals.md, "Geometry"; docs/protocol.md, "Quantization"), normals octahedral (Meyer et al. 2010,
+// "On floating-point normal vectors").
 // Client and server must agree bit for bit on dequantized positions (they feed qrefine), so
 // dequantization is a fixed sequence of double operations, one per statement: no compiler may fuse
 // them into an FMA (clang's default -ffp-contract=on contracts only within an expression), and IEEE
@@ -8,6 +9,7 @@
 #include <bit>
 #include <cmath>
 
+#include "protocol/position_grid.h"
 #include "protocol/wire_internal.h"
 
 namespace pms::protocol {

@@ -9,6 +9,14 @@
 #include <bit>
 #include <cmath>
 
+#include "pm/refine_info.h"
+#include "pm/split_record.h"
+#include "pm/vertex_id.h"
+#include "protocol/message_types.h"
+#include "protocol/packet_bits.h"
+#include "protocol/position_grid.h"
+#include "protocol/server_messages.h"
+#include "protocol/stream_context.h"
 #include "protocol/wire_internal.h"
 
 namespace pms::protocol {

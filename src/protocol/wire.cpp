@@ -4,6 +4,11 @@
 #include <cmath>
 #include <cstring>
 
+#include "pm/refine_info.h"
+#include "protocol/message_types.h"
+#include "protocol/position_grid.h"
+#include "protocol/server_messages.h"
+#include "protocol/stream_context.h"
 #include "protocol/wire_internal.h"
 
 namespace pms::protocol {

@@ -8,7 +8,10 @@
 #include <string>
 #include <vector>
 
-#include "protocol/protocol.h"
+#include "pm/refine_info.h"
+#include "pm/split_record.h"
+#include "protocol/message_types.h"
+#include "protocol/stream_context.h"
 
 namespace pms::protocol {
 

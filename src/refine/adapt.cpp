@@ -17,6 +17,12 @@
 #include <cmath>
 
 #include "common/error.h"
+#include "pm/hierarchy.h"
+#include "pm/refine_info.h"
+#include "pm/split_record.h"
+#include "pm/vertex_id.h"
+#include "refine/selective_mesh.h"
+#include "refine/vertex_hierarchy.h"
 
 namespace pms {
 namespace {

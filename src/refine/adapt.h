@@ -9,11 +9,13 @@
 #include <span>
 #include <vector>
 
-#include "pm/pm.h"
+#include "pm/hierarchy.h"
+#include "pm/vertex_id.h"
 #include "refine/camera.h"
 #include "refine/criteria.h"
 #include "refine/geomorph.h"
-#include "refine/refine.h"
+#include "refine/selective_mesh.h"
+#include "refine/vertex_hierarchy.h"
 
 namespace pms {
 

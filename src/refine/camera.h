@@ -1,4 +1,4 @@
-// The view model every mode shares: a camera as DESIGN.md §5 writes it (CAM.json) and the derived
+// The view model every mode shares: a camera as CAM.json writes it (docs/cli.md) and the derived
 // transforms the criteria (Hoppe 1997 §4) and the renderer evaluate. One derivation for both, so the
 // refined mesh for a view and the image of that view agree on what "in view" means.
 // Shared with the browser build: plain arithmetic, single-threaded.

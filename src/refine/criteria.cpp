@@ -8,6 +8,7 @@
 #include <numbers>
 
 #include "common/error.h"
+#include "pm/refine_info.h"
 
 namespace pms {
 namespace {

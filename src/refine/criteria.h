@@ -6,12 +6,12 @@
 // evaluates this one function on the same decoded numbers — RefineBounds from dequantize_refine() of the
 // RefineInfo every mode shares, the node position every mode holds, and a ViewCriteria made by
 // make_criteria() from the same make_view() — so they agree on the refined mesh of a view
-// (DESIGN.md §6 property 3).
+// (property 3 of docs/architecture.md, "Correctness properties").
 // Shared with the browser build: plain arithmetic, single-threaded.
 #pragma once
 #include <cstdint>
 
-#include "pm/pm.h"
+#include "pm/refine_info.h"
 #include "refine/camera.h"
 
 namespace pms {

@@ -4,6 +4,10 @@
 
 #include <algorithm>
 
+#include "pm/vertex_id.h"
+#include "refine/selective_mesh.h"
+#include "refine/vertex_hierarchy.h"
+
 namespace pms {
 
 void Geomorphs::set_frames(uint32_t frames) {

@@ -9,7 +9,9 @@
 #include <cstdint>
 #include <vector>
 
-#include "refine/refine.h"
+#include "pm/vertex_id.h"
+#include "refine/selective_mesh.h"
+#include "refine/vertex_hierarchy.h"
 
 namespace pms {
 

@@ -15,7 +15,9 @@
 #include <iterator>
 
 #include "common/error.h"
-#include "refine/refine.h"
+#include "pm/vertex_id.h"
+#include "refine/selective_mesh.h"
+#include "refine/vertex_hierarchy.h"
 
 namespace pms {
 namespace {

@@ -1,10 +1,12 @@
 // Reading a SelectiveMesh out: flat arrays for renderers and exporters, and the connectivity audit the
-// property tests run after every operation (DESIGN.md §6 property 2).
+// property tests run after every operation (property 2 of docs/architecture.md, "Correctness properties").
 #include <algorithm>
 #include <bit>
 
 #include "common/error.h"
-#include "refine/refine.h"
+#include "pm/vertex_id.h"
+#include "refine/selective_mesh.h"
+#include "refine/vertex_hierarchy.h"
 
 namespace pms {
 

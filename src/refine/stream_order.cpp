@@ -4,6 +4,10 @@
 #include <string>
 
 #include "common/error.h"
+#include "pm/hierarchy.h"
+#include "pm/split_record.h"
+#include "refine/selective_mesh.h"
+#include "refine/vertex_hierarchy.h"
 
 namespace pms {
 

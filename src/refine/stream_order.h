@@ -3,8 +3,8 @@
 #pragma once
 #include <cstdint>
 
-#include "pm/pm.h"
-#include "refine/refine.h"
+#include "pm/hierarchy.h"
+#include "refine/selective_mesh.h"
 
 namespace pms {
 

@@ -3,7 +3,11 @@
 #include <algorithm>
 
 #include "common/error.h"
-#include "refine/refine.h"
+#include "pm/hierarchy.h"
+#include "pm/refine_info.h"
+#include "pm/split_record.h"
+#include "pm/vertex_id.h"
+#include "refine/vertex_hierarchy.h"
 
 namespace pms {
 namespace {
@@ -17,15 +21,6 @@ uint64_t hash_id(VertexId id) {
 }
 
 }  // namespace
-
-std::string to_string(VertexId v) {
-  std::string s(1, '<');  // appended piecewise: g++ 12 flags "<" + std::string with a bogus -Wrestrict
-  s += std::to_string(v.tree);
-  s += ',';
-  s += std::to_string(v.node);
-  s += '>';
-  return s;
-}
 
 VertexHierarchy::VertexHierarchy(bool has_normals, bool has_colors)
     : has_normals_(has_normals), has_colors_(has_colors) {}
@@ -118,16 +113,6 @@ uint32_t VertexHierarchy::add_split(const SplitRecord& split) {
   return t;
 }
 
-// A ModelView from a validated .pms file is consistent; this only keeps a hand-made one from being
-// read past its ends.
-static void check_node_arrays(const ModelView& view) {
-  const size_t n = view.node_count();
-  if (view.root_count > n || view.first_child.size() < n || view.position.size() < 3 * n || view.refine.size() < n ||
-      view.cut_left.size() < n || view.cut_right.size() < n || view.tree_id.size() < n || view.node_id.size() < n ||
-      (!view.normals.empty() && view.normals.size() < 3 * n) || (!view.colors.empty() && view.colors.size() < 4 * n))
-    fail("model", "node arrays shorter than the node count");
-}
-
 VertexHierarchy VertexHierarchy::from_model(const ModelView& view) {
   check_node_arrays(view);
   const bool normals = !view.normals.empty(), colors = !view.colors.empty();
@@ -137,29 +122,6 @@ VertexHierarchy VertexHierarchy::from_model(const ModelView& view) {
     h.add_root(view.id(r), &view.position[3 * size_t(r)], view.refine[r], normals ? &view.normals[3 * size_t(r)] : nullptr,
                colors ? &view.colors[4 * size_t(r)] : nullptr);
   return h;
-}
-
-SplitRecord split_record(const ModelView& view, uint32_t node) {
-  check_node_arrays(view);
-  const size_t n = view.node_count();
-  if (node >= n || view.is_leaf(node)) fail("model", "node " + std::to_string(node) + " is not an internal node");
-  const uint32_t t = view.first_child[node];
-  if (t + size_t(1) >= n) fail("model", "node " + std::to_string(node) + ": child index out of range");
-  SplitRecord split;
-  split.vs = view.id(node);
-  for (auto [cut, index] : {std::pair{&split.cut_l, view.cut_left[node]}, std::pair{&split.cut_r, view.cut_right[node]}}) {
-    if (index == kNone) continue;
-    if (index >= n) fail("model", "node " + std::to_string(node) + ": cut vertex index out of range");
-    *cut = view.id(index);
-  }
-  std::copy_n(&view.position[3 * size_t(t)], 3, split.position_t);
-  split.info_t = view.refine[t];
-  split.info_u = view.refine[t + 1];
-  split.has_normal = !view.normals.empty();
-  if (split.has_normal) std::copy_n(&view.normals[3 * size_t(t)], 3, split.normal_t);
-  split.has_color = !view.colors.empty();
-  if (split.has_color) std::copy_n(&view.colors[4 * size_t(t)], 4, split.color_t);
-  return split;
 }
 
 }  // namespace pms

@@ -6,6 +6,7 @@
 // the tile or the bounding box starts, so the image is the same for any tile schedule.
 #include <cmath>
 
+#include "pm/vertex_id.h"
 #include "render/raster_internal.h"
 
 namespace pms::render_detail {

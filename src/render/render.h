@@ -9,8 +9,7 @@
 #include <string>
 #include <vector>
 
-#include "pm/pm.h"          // kNone
-#include "refine/camera.h"  // ViewParams
+#include "refine/camera.h"  // ViewParam"
 
 namespace pms {
 

@@ -27,6 +27,12 @@ class ActiveTags {
   void reserve_window(uint32_t lo, uint32_t hi);
   void activate(uint32_t node);
   void deactivate(uint32_t node);
+  // A split moves the front below `node`: it leaves, its children (first_child, first_child + 1) come in.
+  void split(uint32_t node, uint32_t first_child) {
+    deactivate(node);
+    activate(first_child);
+    activate(first_child + 1);
+  }
 
   // Lowest and highest active node; win_min > win_max when nothing is active.
   uint32_t win_min() const;

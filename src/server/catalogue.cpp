@@ -3,7 +3,18 @@
 #include <filesystem>
 
 #include "common/error.h"
-#include "server/server.h"
+#include "pm/hierarchy.h"
+#include "pm/pms_file.h"
+#include "pm/refine_info.h"
+#include "pm/vertex_id.h"
+#include "protocol/message_types.h"
+#include "protocol/model_messages.h"
+#include "protocol/packet_table.h"
+#include "protocol/position_grid.h"
+#include "protocol/server_messages.h"
+#include "protocol/stream_context.h"
+#include "server/catalogue.h"
+#include "server/limits.h"
 
 namespace pms::server {
 namespace {

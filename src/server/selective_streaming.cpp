@@ -5,15 +5,15 @@
 #include <stdexcept>
 
 #include "common/parallel.h"
+#include "pm/hierarchy.h"
+#include "pm/vertex_id.h"
 
 namespace pms {
 namespace {
 
 // StreamVSplit: the client will have v's children, so the server's front moves below v.
 void stream_vsplit(const ModelView& model, ActiveTags& tags, uint32_t node, std::vector<uint32_t>& out) {
-  tags.deactivate(node);
-  tags.activate(model.first_child[node]);
-  tags.activate(model.first_child[node] + 1);
+  tags.split(node, model.first_child[node]);
   out.push_back(node);
 }
 

@@ -8,7 +8,7 @@
 #include <functional>
 #include <vector>
 
-#include "pm/pm.h"
+#include "pm/hierarchy.h"
 #include "server/active_tags.h"
 
 namespace pms {

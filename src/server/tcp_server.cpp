@@ -4,13 +4,10 @@
 // only ever touched by one thread at a time.
 // Every peer is presumed hostile: a connection's turn on a thread is bounded in time (turn_us), its
 // memory by the frame limit and the send queue, and every wait by a deadline (docs/operating.md).
-#include <utility>  // before asio with C++20 (DESIGN.md §8)
-
+#include <utility>  // before asio with C++20 (docs/architecture.md, "Stack")
 #include <boost/asio.hpp>
-
 #include <linux/sockios.h>
 #include <sys/ioctl.h>
-
 #include <array>
 #include <cstdio>
 #include <mutex>
@@ -18,7 +15,14 @@
 #include <thread>
 
 #include "common/error.h"
-#include "server/server.h"
+#include "protocol/framing.h"
+#include "protocol/message_types.h"
+#include "protocol/server_messages.h"
+#include "server/catalogue.h"
+#include "server/limits.h"
+#include "server/session.h"
+#include "server/stats.h"
+#include "server/tcp_server.h"
 
 namespace pms::server {
 namespace {
@@ -62,6 +66,34 @@ class Connection : public std::enable_shared_from_this<Connection> {
   }
 
  private:
+  // draining: the session is closing, and its last bytes (an ERROR, or nothing after CLOSE) get until
+  // close_by_ to leave. closed: the socket is gone, and a handler that runs after it does nothing.
+  enum class Phase { open, draining, closed };
+
+  // What was asked of asio and has not called back yet, at most one of each: a turn starts only what is
+  // not pending already.
+  struct Pending {
+    bool read = false;      // async_read_some
+    bool writable = false;  // async_wait for the socket to take more: it was full
+    bool turn = false;      // a posted serve(): the turn ended with work left and others go first
+    bool throttle = false;  // the token bucket's timer: no frame is handled until it fires
+  };
+
+  // Runs while answer bytes wait (here or in the kernel), and starts again each time the peer takes enough
+  // of them: a write succeeding is no sign of progress (see bytes_taken).
+  struct WriteDeadline {
+    bool running = false;
+    Clock::time_point since;    // bytes wait, and the peer has taken too few of them since
+    Clock::time_point checked;  // when the peer's progress was last looked at
+    uint64_t taken = 0;         // bytes the peer had taken then
+  };
+
+  bool closed() const { return phase_ == Phase::closed; }
+  // A frame's deadline does not run while reads are paused: the peer could not send the rest.
+  bool frame_clock_running() const { return reader_.mid_frame() && !reads_paused_; }
+  bool all_delivered() const { return session_.outbox().empty() && bytes_taken() == written_; }
+  bool queue_full() const { return queued_bytes_ > limits_.send_queue_bytes; }
+
   // One turn: frames in, pump, bytes out, then what comes next (a read, a write wait or another turn).
   void serve();
   void serve_turn(Clock::time_point turn_end);
@@ -71,30 +103,45 @@ class Connection : public std::enable_shared_from_this<Connection> {
   // Message rate (a token bucket of max_message_rate per second): false when the next frame must wait, and
   // then the throttle timer resumes the session when it may go on.
   bool may_handle_a_frame();
-  // Non-blocking gathered writes until the outbox is empty (true), the socket is full or the burst is
-  // used (false).
+  void throttle_until_a_token();
+  // Pumps and writes until the socket is full (true), the queue is, the work is done or the turn is over.
+  bool encode_and_send(Clock::time_point turn_end);
+  void encode(Clock::time_point turn_end);
+  // Non-blocking gathered writes until the outbox is empty, the burst is used, or the socket is full (true).
   bool write_now();
+  bool pop_written(size_t n);
+  void record_peaks();
+  void start_draining();
+  void wait_until_writable();
+  void pause_reads();
+  void schedule_next(bool socket_full);
+  void post_turn();
+  void resume_reading();
   // Adds the frames queued since `before` (the outbox's size then) to the queue's byte count.
   void count_queued(size_t before);
-  bool queue_full() const { return queued_bytes_ > limits_.send_queue_bytes; }
   // Bytes the peer has taken: what went into the socket less what the kernel still holds for it. The kernel
   // accepts megabytes for a peer that reads nothing, so a write that succeeds is no sign of progress.
   uint64_t bytes_taken() const;
-  void start_write_wait();
+  void start_write_deadline();
   // Deadlines: one timer, set to the earliest that applies; a check when it fires.
   Clock::time_point next_deadline() const;
   void arm_timer();
   void on_timer(const boost::system::error_code& ec);
+  void on_close_deadline(Clock::time_point now);
+  bool peer_stopped_reading(Clock::time_point now);
+  std::string missed_deadline(Clock::time_point now) const;
   void time_out(const std::string& why);
   void close();
+  void count_outcome();
 
   tcp::socket socket_;
   asio::steady_timer timer_;
   asio::steady_timer throttle_;
+  Phase phase_ = Phase::open;
+  Pending pending_;
   double tokens_ = 0;
   Clock::time_point refilled_;
-  bool throttled_ = false;
-  bool paused_ = false;  // not reading (throttled, or back-pressure): a frame's time is not running
+  bool reads_paused_ = false;  // throttled, or back-pressure: the kernel's buffers push back on the peer
   std::array<uint8_t, 4096> read_buffer_;
   protocol::FrameReader reader_;
   Session session_;
@@ -104,14 +151,11 @@ class Connection : public std::enable_shared_from_this<Connection> {
   uint64_t id_;
   std::string peer_;
   Clock::time_point connected_, last_activity_, frame_started_, close_by_;
-  Clock::time_point write_waiting_since_;  // answer bytes wait (here or in the kernel) and none taken since
-  Clock::time_point write_checked_;        // when the peer's progress was last looked at
-  uint64_t written_ = 0, taken_ = 0;       // bytes into the socket; bytes the peer had taken when last seen
-  bool write_waiting_ = false;
+  WriteDeadline write_deadline_;
+  uint64_t written_ = 0;  // bytes into the socket
   Clock::time_point timer_at_ = Clock::time_point::max();
   size_t queued_bytes_ = 0;
   size_t front_written_ = 0;  // bytes of the outbox's first frame already in the socket
-  bool reading_ = false, waiting_write_ = false, turn_posted_ = false, closed_ = false;
   bool timed_out_ = false;
   bool reset_ = false;  // close with RST: the peer left bytes untaken past a deadline
 };
@@ -154,7 +198,7 @@ void Connection::start() {
 }
 
 void Connection::read() {
-  reading_ = true;
+  pending_.read = true;
   socket_.async_read_some(asio::buffer(read_buffer_),
                           [self = shared_from_this()](const boost::system::error_code& ec, size_t n) {
                             self->on_read(ec, n);
@@ -162,8 +206,8 @@ void Connection::read() {
 }
 
 void Connection::on_read(const boost::system::error_code& ec, size_t n) {
-  reading_ = false;
-  if (closed_) return;
+  pending_.read = false;
+  if (closed()) return;
   if (ec) return close();  // peer gone or reset: nothing to answer
   stats_.bytes_in += n;
   const bool was_mid_frame = reader_.mid_frame();
@@ -196,22 +240,29 @@ void Connection::receive_frames(Clock::time_point turn_end) {
 }
 
 bool Connection::may_handle_a_frame() {
-  if (limits_.max_message_rate == 0 || reader_.ready() == 0 || throttled_) return !throttled_;
+  if (pending_.throttle) return false;
+  if (limits_.max_message_rate == 0 || reader_.ready() == 0) return true;
   const Clock::time_point now = Clock::now();
   const double rate = limits_.max_message_rate;
   tokens_ = std::min(rate, tokens_ + rate * std::chrono::duration<double>(now - refilled_).count());
   refilled_ = now;
-  if (tokens_ >= 1) {
-    tokens_ -= 1;
-    return true;
+  if (tokens_ < 1) {
+    throttle_until_a_token();
+    return false;
   }
-  throttled_ = paused_ = true;  // no reads either meanwhile: the kernel's buffers push back on the peer
+  tokens_ -= 1;
+  return true;
+}
+
+// No reads either meanwhile: the kernel's buffers push back on the peer.
+void Connection::throttle_until_a_token() {
+  pending_.throttle = reads_paused_ = true;
+  const double rate = limits_.max_message_rate;
   throttle_.expires_after(std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>((1 - tokens_) / rate)));
   throttle_.async_wait([self = shared_from_this()](const boost::system::error_code& ec) {
-    self->throttled_ = false;
+    self->pending_.throttle = false;
     if (!ec) self->serve();
   });
-  return false;
 }
 
 void Connection::count_queued(size_t before) {
@@ -222,14 +273,14 @@ void Connection::count_queued(size_t before) {
     before = 0;
   }
   for (size_t i = before; i < outbox.size(); ++i) queued_bytes_ += outbox[i]->size();
-  if (outbox.size() > before) start_write_wait();
+  if (outbox.size() > before) start_write_deadline();
 }
 
-void Connection::start_write_wait() {
-  if (write_waiting_) return;
-  write_waiting_ = true;
-  write_waiting_since_ = write_checked_ = Clock::now();
-  taken_ = bytes_taken();
+void Connection::start_write_deadline() {
+  if (write_deadline_.running) return;
+  write_deadline_.running = true;
+  write_deadline_.since = write_deadline_.checked = Clock::now();
+  write_deadline_.taken = bytes_taken();
   arm_timer();
 }
 
@@ -240,14 +291,14 @@ uint64_t Connection::bytes_taken() const {
 }
 
 void Connection::serve() {
-  if (closed_) return;
+  if (closed()) return;
   const Clock::time_point begin = Clock::now();
   try {
     serve_turn(begin + std::chrono::microseconds(limits_.turn_us));
     const auto took = std::chrono::duration_cast<std::chrono::microseconds>(Clock::now() - begin).count();
     update_max(stats_.longest_turn_us, uint64_t(took));
   } catch (const std::exception& e) {  // the transport's own fault (e.g. no memory): this session ends
-    if (!closed_) {
+    if (!closed()) {
       log_line("session " + std::to_string(id_) + " (" + peer_ + "): internal error: " + e.what());
       stats_.sessions_failed++;
       close();
@@ -257,61 +308,40 @@ void Connection::serve() {
 
 void Connection::serve_turn(Clock::time_point turn_end) {
   receive_frames(turn_end);
-  // Encode while the outbox is under the cap and the turn lasts, and hand the bytes to the socket at once
-  // while it takes them: an answer that fits the kernel's buffer then goes out in this one handler.
-  bool drained = true;
-  for (;;) {
-    while (!queue_full() && session_.has_work() && Clock::now() < turn_end) {
-      const size_t before = session_.outbox().size();
-      session_.pump();
-      count_queued(before);
-    }
-    if (waiting_write_ || closed_) break;
-    drained = write_now();
-    if (closed_ || !drained || queue_full() || !session_.has_work() || Clock::now() >= turn_end) break;
-  }
-  if (closed_) return;
-  update_max(stats_.peak_state_bytes, session_.state_bytes());
-  update_max(stats_.peak_buffer_bytes, session_.state_bytes() - session_.tags().memory_bytes());
+  const bool socket_full = encode_and_send(turn_end);
+  if (closed()) return;
+  record_peaks();
   if (session_.closing()) {
-    if (close_by_ == Clock::time_point())  // the ERROR (or nothing, after CLOSE) gets a moment to leave
-      close_by_ = Clock::now() + milliseconds(std::min<uint32_t>(1000, limits_.write_timeout_ms));
-    arm_timer();
+    start_draining();
     // Closed once the peer has taken the ERROR, or at close_by_.
-    if (session_.outbox().empty() && bytes_taken() == written_) return close();
+    if (all_delivered()) return close();
   }
-  if (!session_.outbox().empty() && !waiting_write_) {
-    if (!drained && !turn_posted_) {
-      // The socket is full: wait until it takes more.
-      waiting_write_ = true;
-      socket_.async_wait(tcp::socket::wait_write, [self = shared_from_this()](const boost::system::error_code& ec) {
-        self->waiting_write_ = false;
-        if (ec) return self->close();
-        self->serve();
-      });
-    }
+  // A posted turn writes again before a write wait could fire.
+  if (socket_full && !pending_.turn) wait_until_writable();
+  if (session_.closing()) return;
+  if (queue_full()) return pause_reads();
+  schedule_next(socket_full);
+}
+
+// Encode while the outbox is under the cap and the turn lasts, and hand the bytes to the socket at once
+// while it takes them: an answer that fits the kernel's buffer then goes out in this one handler.
+bool Connection::encode_and_send(Clock::time_point turn_end) {
+  bool socket_full = false;
+  for (;;) {
+    encode(turn_end);
+    if (pending_.writable || closed()) return socket_full;
+    socket_full = write_now();
+    if (closed() || socket_full || queue_full() || !session_.has_work() || Clock::now() >= turn_end)
+      return socket_full;
   }
-  if (closed_ || session_.closing()) return;
-  if (queue_full()) {  // back-pressure: neither read nor handle frames until it drains
-    paused_ = true;
-    return arm_timer();
+}
+
+void Connection::encode(Clock::time_point turn_end) {
+  while (!queue_full() && session_.has_work() && Clock::now() < turn_end) {
+    const size_t before = session_.outbox().size();
+    session_.pump();
+    count_queued(before);
   }
-  // A stream that failed (a bad header) has nothing ready, yet its ERROR is still to be raised.
-  const bool frames_waiting = (reader_.ready() > 0 || reader_.failed()) && !throttled_;
-  const bool more = session_.has_work() || frames_waiting || (drained && !session_.outbox().empty());
-  if (more) {  // this session's turn is over: others go first
-    if (!turn_posted_) {
-      turn_posted_ = true;
-      asio::post(socket_.get_executor(), [self = shared_from_this()] {
-        self->turn_posted_ = false;
-        self->serve();
-      });
-    }
-  } else if (!reading_ && reader_.ready() == 0) {
-    if (std::exchange(paused_, false) && reader_.mid_frame()) frame_started_ = Clock::now();
-    read();
-  }
-  arm_timer();
 }
 
 bool Connection::write_now() {
@@ -319,13 +349,13 @@ bool Connection::write_now() {
   size_t burst = 0;
   std::array<asio::const_buffer, 64> gather;  // small frames (CATALOGUE, ERROR) go out many per syscall
   while (!outbox.empty()) {
-    if (burst >= limits_.send_burst_bytes) return true;  // the rest in the next turn
+    if (burst >= limits_.send_burst_bytes) return false;  // the rest in the next turn
     size_t count = 0;
     for (; count < gather.size() && count < outbox.size(); ++count)
       gather[count] = asio::buffer(*outbox[count]) + (count == 0 ? front_written_ : 0);
     boost::system::error_code ec;
-    size_t n = socket_.write_some(std::span(gather.data(), count), ec);
-    if (ec == asio::error::would_block || ec == asio::error::try_again) return false;
+    const size_t n = socket_.write_some(std::span(gather.data(), count), ec);
+    if (ec == asio::error::would_block || ec == asio::error::try_again) return true;
     if (ec) {
       close();
       return false;
@@ -335,38 +365,104 @@ bool Connection::write_now() {
     written_ += n;
     burst += n;
     queued_bytes_ -= std::min(queued_bytes_, n);
-    while (n > 0) {
-      const size_t rest = outbox.front()->size() - front_written_;
-      if (n < rest) {
-        front_written_ += n;
-        return false;  // the socket's buffer is full
-      }
-      n -= rest;
-      outbox.pop_front();
-      front_written_ = 0;
+    if (!pop_written(n)) return true;
+  }
+  return false;
+}
+
+// Drops the frames the socket took whole; false when it took only part of one: its buffer is full.
+bool Connection::pop_written(size_t n) {
+  auto& outbox = session_.outbox();
+  while (n > 0) {
+    const size_t rest = outbox.front()->size() - front_written_;
+    if (n < rest) {
+      front_written_ += n;
+      return false;
     }
+    n -= rest;
+    outbox.pop_front();
+    front_written_ = 0;
   }
   return true;
 }
 
+void Connection::record_peaks() {
+  update_max(stats_.peak_state_bytes, session_.state_bytes());
+  update_max(stats_.peak_buffer_bytes, session_.state_bytes() - session_.front_bytes());
+}
+
+// The ERROR (or nothing, after CLOSE) gets a moment to leave.
+void Connection::start_draining() {
+  if (phase_ == Phase::open) {
+    phase_ = Phase::draining;
+    close_by_ = Clock::now() + milliseconds(std::min<uint32_t>(1000, limits_.write_timeout_ms));
+  }
+  arm_timer();
+}
+
+void Connection::wait_until_writable() {
+  pending_.writable = true;
+  socket_.async_wait(tcp::socket::wait_write, [self = shared_from_this()](const boost::system::error_code& ec) {
+    self->pending_.writable = false;
+    if (ec) return self->close();
+    self->serve();
+  });
+}
+
+// Back-pressure: neither read nor handle frames until the queue drains.
+void Connection::pause_reads() {
+  reads_paused_ = true;
+  arm_timer();
+}
+
+// This session's turn is over. With work left, others go first and a posted turn comes back to it; with
+// none, it reads.
+void Connection::schedule_next(bool socket_full) {
+  // A stream that failed (a bad header) has nothing ready, yet its ERROR is still to be raised.
+  const bool frames_waiting = (reader_.ready() > 0 || reader_.failed()) && !pending_.throttle;
+  // Bytes left although the socket was not full: the burst was used, or a write wait is pending.
+  const bool unsent = !socket_full && !session_.outbox().empty();
+  if (session_.has_work() || frames_waiting || unsent) {
+    post_turn();
+  } else if (!pending_.read && reader_.ready() == 0) {
+    resume_reading();
+  }
+  arm_timer();
+}
+
+void Connection::post_turn() {
+  if (pending_.turn) return;
+  pending_.turn = true;
+  asio::post(socket_.get_executor(), [self = shared_from_this()] {
+    self->pending_.turn = false;
+    self->serve();
+  });
+}
+
+// A frame's time stood still while reads were paused: it runs again from now.
+void Connection::resume_reading() {
+  if (std::exchange(reads_paused_, false) && reader_.mid_frame()) frame_started_ = Clock::now();
+  read();
+}
+
 Clock::time_point Connection::next_deadline() const {
-  // Closing: look every 10 ms whether the peer has taken the last bytes, until close_by_.
-  if (close_by_ != Clock::time_point()) return std::min(close_by_, Clock::now() + milliseconds(10));
+  // Draining: look every 10 ms whether the peer has taken the last bytes, until close_by_.
+  if (phase_ == Phase::draining) return std::min(close_by_, Clock::now() + milliseconds(10));
   Clock::time_point at = last_activity_ + milliseconds(limits_.idle_timeout_ms);
   if (!session_.opened()) at = std::min(at, connected_ + milliseconds(limits_.handshake_timeout_ms));
-  if (reader_.mid_frame() && !paused_) at = std::min(at, frame_started_ + milliseconds(limits_.frame_timeout_ms));
+  if (frame_clock_running()) at = std::min(at, frame_started_ + milliseconds(limits_.frame_timeout_ms));
   // Progress is only seen when looked for, so look four times per deadline: a peer is then closed within
   // 1.25 deadlines of the last bytes it took.
-  if (write_waiting_)
-    at = std::min({at, write_waiting_since_ + milliseconds(limits_.write_timeout_ms),
-                   write_checked_ + milliseconds(std::max<uint32_t>(1, limits_.write_timeout_ms / 4))});
+  if (write_deadline_.running)
+    at = std::min({at, write_deadline_.since + milliseconds(limits_.write_timeout_ms),
+                   write_deadline_.checked + milliseconds(std::max<uint32_t>(1, limits_.write_timeout_ms / 4))});
   return at;
 }
 
 // Deadlines move later with activity; the timer is only moved when one comes earlier than it is set for,
 // and a timer that fires early just sets itself again.
 void Connection::arm_timer() {
-  if (closed_) return;
+  if (closed()) return;
   const Clock::time_point at = next_deadline();
   if (at >= timer_at_) return;
   timer_at_ = at;
@@ -375,38 +471,50 @@ void Connection::arm_timer() {
 }
 
 void Connection::on_timer(const boost::system::error_code& ec) {
-  if (ec == asio::error::operation_aborted || closed_) return;  // moved earlier, or done
+  if (ec == asio::error::operation_aborted || closed()) return;  // moved earlier, or done
   timer_at_ = Clock::time_point::max();
   const Clock::time_point now = Clock::now();
-  const auto past = [&](Clock::time_point since, uint32_t ms) { return now >= since + milliseconds(ms); };
-  if (close_by_ != Clock::time_point()) {
-    const bool delivered = session_.outbox().empty() && bytes_taken() == written_;
-    if (!delivered && now < close_by_) return arm_timer();
-    reset_ = !delivered;  // its ERROR could not be delivered in time
-    return close();
+  if (phase_ == Phase::draining) return on_close_deadline(now);
+  if (write_deadline_.running && peer_stopped_reading(now)) {
+    timed_out_ = reset_ = true;
+    return close();  // it does not read, so an ERROR would never arrive either
   }
-  if (write_waiting_) {
-    // The peer reads: the wait starts again. A trickle does not count: a kernel that has merged its full
-    // receive queue takes a few bytes now and then from a peer that never reads.
-    write_checked_ = now;
-    const uint64_t taken = bytes_taken();
-    if (taken >= taken_ + std::min<uint64_t>(kMinProgressBytes, written_ - taken_)) {
-      taken_ = taken;
-      write_waiting_since_ = now;
-    }
-    if (session_.outbox().empty() && taken == written_) write_waiting_ = false;  // all of it is across
-    if (write_waiting_ && past(write_waiting_since_, limits_.write_timeout_ms)) {
-      timed_out_ = reset_ = true;
-      return close();  // it does not read, so an ERROR would never arrive either
-    }
-  }
-  if (reader_.mid_frame() && !paused_ && past(frame_started_, limits_.frame_timeout_ms))
-    return time_out("a message took longer than " + std::to_string(limits_.frame_timeout_ms) + " ms to arrive");
-  if (!session_.opened() && past(connected_, limits_.handshake_timeout_ms))
-    return time_out("no HELLO and OPEN within " + std::to_string(limits_.handshake_timeout_ms) + " ms");
-  if (past(last_activity_, limits_.idle_timeout_ms))
-    return time_out("no message for " + std::to_string(limits_.idle_timeout_ms) + " ms");
+  const std::string missed = missed_deadline(now);
+  if (!missed.empty()) return time_out(missed);
   arm_timer();
+}
+
+void Connection::on_close_deadline(Clock::time_point now) {
+  const bool delivered = all_delivered();
+  if (!delivered && now < close_by_) return arm_timer();
+  reset_ = !delivered;  // its ERROR could not be delivered in time
+  close();
+}
+
+// The peer reads: the wait starts again. A trickle does not count: a kernel that has merged its full
+// receive queue takes a few bytes now and then from a peer that never reads.
+bool Connection::peer_stopped_reading(Clock::time_point now) {
+  WriteDeadline& w = write_deadline_;
+  w.checked = now;
+  const uint64_t taken = bytes_taken();
+  if (taken >= w.taken + std::min<uint64_t>(kMinProgressBytes, written_ - w.taken)) {
+    w.taken = taken;
+    w.since = now;
+  }
+  if (session_.outbox().empty() && taken == written_) w.running = false;  // all of it is across
+  return w.running && now >= w.since + milliseconds(limits_.write_timeout_ms);
+}
+
+// The text of the ERROR for the first deadline an open session has missed; empty while it missed none.
+std::string Connection::missed_deadline(Clock::time_point now) const {
+  const auto past = [&](Clock::time_point since, uint32_t ms) { return now >= since + milliseconds(ms); };
+  if (frame_clock_running() && past(frame_started_, limits_.frame_timeout_ms))
+    return "a message took longer than " + std::to_string(limits_.frame_timeout_ms) + " ms to arrive";
+  if (!session_.opened() && past(connected_, limits_.handshake_timeout_ms))
+    return "no HELLO and OPEN within " + std::to_string(limits_.handshake_timeout_ms) + " ms";
+  if (past(last_activity_, limits_.idle_timeout_ms))
+    return "no message for " + std::to_string(limits_.idle_timeout_ms) + " ms";
+  return {};
 }
 
 void Connection::time_out(const std::string& why) {
@@ -416,8 +524,21 @@ void Connection::time_out(const std::string& why) {
 }
 
 void Connection::close() {
-  if (closed_) return;
-  closed_ = true;
+  if (closed()) return;
+  phase_ = Phase::closed;
+  count_outcome();
+  boost::system::error_code ignored;
+  // Bytes the peer did not take would keep the socket (and its kernel buffer) alive after the close: reset.
+  if (reset_) socket_.set_option(asio::socket_base::linger(true, 0), ignored);
+  timer_.cancel();
+  throttle_.cancel();
+  socket_.shutdown(tcp::socket::shutdown_both, ignored);
+  socket_.close(ignored);
+  stats_.sessions_active--;
+  registry_.remove(shared_from_this());
+}
+
+void Connection::count_outcome() {
   stats_.splits_sent += session_.splits_sent();
   if (timed_out_) {
     stats_.sessions_timed_out++;
@@ -430,15 +551,6 @@ void Connection::close() {
     }
   }
   if (session_.error()) stats_.errors_sent++;
-  boost::system::error_code ignored;
-  // Bytes the peer did not take would keep the socket (and its kernel buffer) alive after the close: reset.
-  if (reset_) socket_.set_option(asio::socket_base::linger(true, 0), ignored);
-  timer_.cancel();
-  throttle_.cancel();
-  socket_.shutdown(tcp::socket::shutdown_both, ignored);
-  socket_.close(ignored);
-  stats_.sessions_active--;
-  registry_.remove(shared_from_this());
 }
 
 // The answer to a connection over the session limit, encoded once.

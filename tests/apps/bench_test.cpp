@@ -4,21 +4,21 @@
 #include <gtest/gtest.h>
 #include <signal.h>
 #include <sys/stat.h>
-
 #include <cstring>
 #include <fstream>
 #include <optional>
 
-#include "test_support.h"
-
-// The bench sources are part of the pmstream executable, not of a library this test links, so the
-// ones under test are compiled into this test directly.
 #include "apps/bench/bench.h"
-#include "common/error.h"
 #include "apps/bench/child_process.h"
 #include "apps/bench/gnuplot.h"
 #include "apps/bench/openmesh_pm.h"
 #include "apps/bench/report.h"
+#include "common/error.h"
+#include "protocol/packet_bits.h"
+#include "test_support.h"
+
+// The bench sources are part of the pmstream executable, not of a library this test links, so the
+// ones under test are compiled into this test directly.
 
 namespace pms::app {
 namespace {

@@ -1,4 +1,4 @@
-// The `pmstream` binary end to end (DESIGN.md §5 contracts): build/info/refine on a generated mesh,
+// The `pmstream` binary end to end (docs/cli.md contracts): build/info/refine on a generated mesh,
 // JSON fields, exact reconstruction through files, and one-line errors with a non-zero exit code.
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>

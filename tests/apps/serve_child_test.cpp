@@ -3,15 +3,14 @@
 // says why (E11 and the soak read the server only through ServeChild).
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
-
 #include <functional>
 #include <string>
 
-#include "apps/bench/load_client.h"
+#include "client/load_client.h"
 #include "apps/bench/serve_child.h"
 #include "apps/camera_path.h"
 #include "common/error.h"
-#include "pm/pm.h"
+#include "pm/pms_file.h"
 #include "test_support.h"
 
 namespace pms::app {
@@ -71,9 +70,9 @@ TEST(ServeChild, CountersAgreeWithWhatTheClientReceived) {
   EXPECT_EQ(server.listening()["models"][0]["name"], "terrain");
   EXPECT_EQ(server.stats().sessions_opened, 0u);
 
-  LoadClientOptions options;
+  client::LoadClientOptions options;
   options.model = &file->view();
-  LoadClient client("127.0.0.1", server.port(), "terrain", options);
+  client::LoadClient client("127.0.0.1", server.port(), "terrain", options);
   PathOptions path_options;
   path_options.frames = 8;
   const std::vector<Camera> path = make_camera_path(PathKind::zoom, file->view(), path_options);

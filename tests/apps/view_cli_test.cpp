@@ -1,4 +1,4 @@
-// `pmstream path` and `pmstream refine --camera` end to end (DESIGN.md §5 contracts): PATH.json and CAM.json
+// `pmstream path` and `pmstream refine --camera` end to end (docs/cli.md contracts): PATH.json and CAM.json
 // fields, deterministic paths with the geometry each kind promises, refine --camera JSON fields and a mesh
 // that matches them, and one-line errors with a non-zero exit code for bad inputs.
 #include <gtest/gtest.h>

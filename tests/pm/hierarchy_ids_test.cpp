@@ -1,8 +1,10 @@
-// <tree-id, node-id> (DESIGN.md §2): derived from the packed arrays, children by shifting,
+// <tree-id, node-id> (docs/internals.md, "Vertex ids"): derived from the packed arrays, children by shifting,
 // find() as the inverse of id(), and the id widths reported by build/info.
 #include <gtest/gtest.h>
 
 #include "common/error.h"
+#include "pm/hierarchy.h"
+#include "pm/vertex_id.h"
 #include "pm_fixtures.h"
 
 namespace pms {

@@ -3,6 +3,10 @@
 #include <algorithm>
 #include <cmath>
 
+#include "pm/hierarchy.h"
+#include "pm/refine_info.h"
+#include "pm/vertex_id.h"
+
 namespace pms::test {
 namespace {
 

@@ -2,7 +2,7 @@
 #pragma once
 #include <functional>
 
-#include "pm/pm.h"
+#include "pm/hierarchy.h"
 
 namespace pms::test {
 

@@ -1,15 +1,17 @@
-// Corrupt .pms files (DESIGN.md §3): every damage is a pms::Error "NAME: section TAG: problem"
-// (or "NAME: header: problem") — never a crash, a hang or a huge allocation. Structural damage
-// is made with checksums fixed up afterwards, so the validation itself has to catch it.
+// Corrupt .pms files (docs/pms-format.md, "Reader behaviour"): every damage is a pms::Error
+// "NAME: section TAG: problem" (or "NAME: header: problem") — never a crash, a hang or a huge allocation.
+// Structural damage is made with checksums fixed up afterwards, so the validation itself has to catch it.
 #include <gtest/gtest.h>
 #include <xxhash.h>
-
 #include <cmath>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
 
 #include "common/error.h"
+#include "pm/hierarchy.h"
+#include "pm/pms_file.h"
+#include "pm/vertex_id.h"
 #include "pm_fixtures.h"
 #include "test_support.h"
 

@@ -1,12 +1,14 @@
-// The .pms file (DESIGN.md §3): what is written is what is read, through mmap and from memory,
+// The .pms file (docs/pms-format.md, "Properties"): what is written is what is read, through mmap and from memory,
 // and writing is all-or-nothing.
 #include <gtest/gtest.h>
-
 #include <algorithm>
 #include <filesystem>
 #include <fstream>
 
 #include "common/error.h"
+#include "pm/hierarchy.h"
+#include "pm/pms_file.h"
+#include "pm/vertex_id.h"
 #include "pm_fixtures.h"
 #include "test_support.h"
 

@@ -1,12 +1,11 @@
 // Quantized refinement info must stay conservative: every decoded bound contains the exact one
 // (pm.h RefineInfo), and stays tight enough to be useful.
 #include <gtest/gtest.h>
-
 #include <cmath>
 #include <numbers>
 #include <random>
 
-#include "pm/pm.h"
+#include "pm/refine_info.h"
 
 namespace pms {
 namespace {

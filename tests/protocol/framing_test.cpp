@@ -2,6 +2,10 @@
 // enforced from the header alone, sticky failure, and a stream cut mid-frame.
 #include <gtest/gtest.h>
 
+#include "protocol/client_messages.h"
+#include "protocol/framing.h"
+#include "protocol/message_types.h"
+#include "protocol/server_messages.h"
 #include "protocol_fixtures.h"
 
 namespace pms::protocol {

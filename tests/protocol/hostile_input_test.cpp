@@ -1,11 +1,17 @@
 // Hostile input: every decoder rejects truncated, over-long and garbage payloads with a ProtocolError
 // that names the message and the field, and never allocates what a count merely claims.
 #include <gtest/gtest.h>
-
 #include <cmath>
 #include <cstring>
 #include <functional>
 
+#include "pm/split_record.h"
+#include "pm/vertex_id.h"
+#include "protocol/client_messages.h"
+#include "protocol/message_types.h"
+#include "protocol/model_messages.h"
+#include "protocol/server_messages.h"
+#include "protocol/stream_context.h"
 #include "protocol/wire_internal.h"
 #include "protocol_fixtures.h"
 

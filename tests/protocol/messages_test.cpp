@@ -2,11 +2,23 @@
 // and normals within their quantization bounds), and encoding is canonical: re-encoding what was decoded
 // gives the same bytes.
 #include <gtest/gtest.h>
-
 #include <algorithm>
 #include <cmath>
 #include <cstring>
 
+#include "pm/hierarchy.h"
+#include "pm/refine_info.h"
+#include "pm/split_record.h"
+#include "pm/vertex_id.h"
+#include "protocol/client_messages.h"
+#include "protocol/dispatch.h"
+#include "protocol/framing.h"
+#include "protocol/message_types.h"
+#include "protocol/model_messages.h"
+#include "protocol/packet_bits.h"
+#include "protocol/position_grid.h"
+#include "protocol/server_messages.h"
+#include "protocol/stream_context.h"
 #include "protocol_fixtures.h"
 
 namespace pms::protocol {

@@ -3,13 +3,27 @@
 // fed to the refine layer's client hierarchy, which must refine to the full input. Also the packet
 // sizes the bench (E2, kim-lee-kobbelt Table 2) reports: topology bits per packet <= 96.
 #include <gtest/gtest.h>
-
 #include <cmath>
 #include <cstdio>
 #include <cstring>
 
 #include "io/shapes.h"
+#include "pm/hierarchy.h"
+#include "pm/split_record.h"
+#include "pm/vertex_id.h"
+#include "protocol/client_messages.h"
+#include "protocol/dispatch.h"
+#include "protocol/framing.h"
+#include "protocol/message_types.h"
+#include "protocol/model_messages.h"
+#include "protocol/packet_bits.h"
+#include "protocol/packet_table.h"
+#include "protocol/position_grid.h"
+#include "protocol/server_messages.h"
+#include "protocol/stream_context.h"
 #include "protocol_fixtures.h"
+#include "refine/selective_mesh.h"
+#include "refine/vertex_hierarchy.h"
 #include "test_support.h"
 
 namespace pms::protocol {

@@ -6,6 +6,12 @@
 
 #include "io/mesh.h"
 #include "io/shapes.h"
+#include "pm/hierarchy.h"
+#include "pm/refine_info.h"
+#include "pm/split_record.h"
+#include "pm/vertex_id.h"
+#include "protocol/message_types.h"
+#include "protocol/stream_context.h"
 #include "test_support.h"
 
 namespace pms::test {

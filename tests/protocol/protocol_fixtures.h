@@ -2,15 +2,19 @@
 // helpers that strip frames and check rejections.
 #pragma once
 #include <gtest/gtest.h>
-
 #include <cstdint>
 #include <functional>
 #include <random>
 #include <string>
 #include <vector>
 
-#include "build/build.h"
-#include "protocol/protocol.h"
+#include "builder/build.h"
+#include "pm/hierarchy.h"
+#include "pm/refine_info.h"
+#include "pm/split_record.h"
+#include "pm/vertex_id.h"
+#include "protocol/message_types.h"
+#include "protocol/stream_context.h"
 
 namespace pms::test {
 

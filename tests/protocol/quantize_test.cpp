@@ -1,11 +1,11 @@
 // Position quantization: error bounds for every grid width, the box corners exact, clamping, raw float
 // bits, idempotence where the grid is coarser than float resolution, and octahedral normals.
 #include <gtest/gtest.h>
-
 #include <bit>
 #include <cmath>
 #include <cstring>
 
+#include "protocol/position_grid.h"
 #include "protocol/wire_internal.h"
 #include "protocol_fixtures.h"
 

@@ -1,15 +1,17 @@
 // The adaptation loop (Hoppe 1997 §5; kim-lee-kobbelt 2005 §5.3) on built models: it reaches the least
 // fixed point of the view (the naive split-only closure), whatever the order packets arrive in and
-// whatever the op cap (DESIGN.md §6 property 3), comes back from a close view to the far view's mesh,
+// whatever the op cap (property 3, docs/architecture.md), comes back from a close view to the far view's mesh,
 // keeps every visible input face at τ = 0, and stays a manifold through a path with geomorphs.
 #include <gtest/gtest.h>
-
 #include <algorithm>
 #include <cmath>
 #include <random>
 
+#include "pm/hierarchy.h"
 #include "refine/adapt.h"
 #include "refine/criteria.h"
+#include "refine/selective_mesh.h"
+#include "refine/vertex_hierarchy.h"
 #include "test_support.h"
 #include "view_models.h"
 

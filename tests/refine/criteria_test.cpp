@@ -1,14 +1,15 @@
 // qrefine (Hoppe 1997 §4): frustum, normal cone and screen-space error, each checked against a direct
 // computation; the cone test is checked to be conservative by sampling the sphere and the cone.
 #include <gtest/gtest.h>
-
 #include <cmath>
 #include <numbers>
 #include <random>
 
-#include "build/build.h"
+#include "builder/build.h"
 #include "common/error.h"
 #include "io/shapes.h"
+#include "pm/hierarchy.h"
+#include "pm/refine_info.h"
 #include "refine/criteria.h"
 
 namespace pms {

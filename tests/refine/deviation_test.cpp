@@ -3,9 +3,9 @@
 // stud looks free to collapse (it lies on the coarse surface, its faces up the stud do not), and τ = 0
 // left a visible facet there.
 #include <gtest/gtest.h>
-
 #include <algorithm>
 
+#include "refine/selective_mesh.h"
 #include "view_models.h"
 
 namespace pms {

@@ -2,10 +2,13 @@
 // places, before an ecol they glide to the parent, the last step lands exactly, and a morph interrupted by
 // the opposite operation continues from where the vertex is shown.
 #include <gtest/gtest.h>
-
 #include <cmath>
 
+#include "pm/hierarchy.h"
+#include "pm/vertex_id.h"
 #include "refine/geomorph.h"
+#include "refine/selective_mesh.h"
+#include "refine/vertex_hierarchy.h"
 #include "view_models.h"
 
 namespace pms {

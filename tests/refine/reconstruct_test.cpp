@@ -1,15 +1,19 @@
-// DESIGN.md §6 property 1 with the real builder: refining every split of a built .pms file gives
-// back the cleaned input (same positions, same faces up to renumbering, same orientation), in
-// stream order and in breadth-first order alike; no splits gives the base mesh.
+// Property 1 (docs/architecture.md, "Correctness properties") with the real builder: refining every split
+// of a built .pms file gives back the cleaned input (same positions, same faces up to renumbering, same
+// orientation), in stream order and in breadth-first order alike; no splits gives the base mesh.
 #include <gtest/gtest.h>
-
 #include <algorithm>
 #include <array>
 #include <vector>
 
-#include "build/build.h"
+#include "builder/build.h"
 #include "io/shapes.h"
+#include "pm/hierarchy.h"
+#include "pm/pms_file.h"
+#include "pm/split_record.h"
+#include "refine/selective_mesh.h"
 #include "refine/stream_order.h"
+#include "refine/vertex_hierarchy.h"
 #include "test_support.h"
 
 namespace pms {

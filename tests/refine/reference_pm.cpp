@@ -10,6 +10,12 @@
 #include <stdexcept>
 #include <tuple>
 
+#include "pm/hierarchy.h"
+#include "pm/refine_info.h"
+#include "pm/vertex_id.h"
+#include "refine/selective_mesh.h"
+#include "refine/vertex_hierarchy.h"
+
 namespace pms::test {
 namespace {
 

@@ -8,8 +8,10 @@
 #include <utility>
 #include <vector>
 
-#include "pm/pm.h"
-#include "refine/refine.h"
+#include "pm/hierarchy.h"
+#include "pm/vertex_id.h"
+#include "refine/selective_mesh.h"
+#include "refine/vertex_hierarchy.h"
 
 namespace pms::test {
 

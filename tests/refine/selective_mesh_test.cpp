@@ -1,15 +1,19 @@
 // SelVSplit / SelECol over partial hierarchies (kim-lee-kobbelt §4–5; Kim & Lee 2001), checked against
 // the dual view: whatever the order of splits and collapses, the mesh equals the input faces mapped to
-// their active ancestors (DESIGN.md §6 properties 1–3), and the connectivity stays an oriented manifold.
+// their active ancestors (properties 1–3, docs/architecture.md), and the connectivity stays an oriented manifold.
 #include <gtest/gtest.h>
-
 #include <algorithm>
 #include <random>
 #include <string>
 
 #include "common/error.h"
+#include "pm/hierarchy.h"
+#include "pm/refine_info.h"
+#include "pm/split_record.h"
+#include "pm/vertex_id.h"
 #include "reference_pm.h"
-#include "refine/refine.h"
+#include "refine/selective_mesh.h"
+#include "refine/vertex_hierarchy.h"
 
 namespace pms {
 namespace {

@@ -1,12 +1,15 @@
 // The client's partial hierarchy (UpdateVHierarchy, kim-lee-kobbelt §5.3): slots, ids, inheritance of
 // v_u's geometry, rejection of bad packets, and a round trip through split_record() on complete models.
 #include <gtest/gtest.h>
-
 #include <algorithm>
 
 #include "common/error.h"
+#include "pm/hierarchy.h"
+#include "pm/refine_info.h"
+#include "pm/split_record.h"
+#include "pm/vertex_id.h"
 #include "reference_pm.h"
-#include "refine/refine.h"
+#include "refine/vertex_hierarchy.h"
 
 namespace pms {
 namespace {

@@ -5,10 +5,16 @@
 #include <memory>
 #include <numbers>
 
-#include "build/build.h"
+#include "builder/build.h"
 #include "common/error.h"
 #include "io/shapes.h"
+#include "pm/hierarchy.h"
+#include "pm/refine_info.h"
+#include "pm/split_record.h"
+#include "pm/vertex_id.h"
 #include "refine/criteria.h"
+#include "refine/selective_mesh.h"
+#include "refine/vertex_hierarchy.h"
 #include "test_support.h"
 
 namespace pms::test {

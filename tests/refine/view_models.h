@@ -7,12 +7,13 @@
 #include <utility>
 #include <vector>
 
-#include "build/build.h"
+#include "builder/build.h"
 #include "io/mesh.h"
-#include "pm/pm.h"
+#include "pm/hierarchy.h"
 #include "refine/adapt.h"
 #include "refine/camera.h"
-#include "refine/refine.h"
+#include "refine/selective_mesh.h"
+#include "refine/vertex_hierarchy.h"
 
 namespace pms::test {
 

@@ -1,11 +1,11 @@
 // Coverage, fill rule, depth order and near-plane clipping of the rasterizer, on scenes small enough to
 // know every pixel by hand (render_fixtures.h: square_view maps z = 0 straight onto the pixel grid).
 #include <gtest/gtest.h>
-
 #include <cstring>
 #include <random>
 
 #include "common/error.h"
+#include "pm/vertex_id.h"
 #include "render/render.h"
 #include "render_fixtures.h"
 

@@ -1,4 +1,4 @@
-// `pmstream render` and `pmstream compare` end to end (DESIGN.md §5): PNG size and content, the JSON
+// `pmstream render` and `pmstream compare` end to end (docs/cli.md): PNG size and content, the JSON
 // fields, .pms input rendering the finest mesh, and one-line errors naming the file.
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>

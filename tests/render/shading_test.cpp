@@ -1,11 +1,11 @@
 // Shading (headlight Lambert, ambient, per-vertex colours, perspective-correct interpolation) and the
 // guarantee the experiments rely on: the same bits for any number of threads.
 #include <gtest/gtest.h>
-
 #include <cmath>
 #include <cstring>
 
 #include "io/shapes.h"
+#include "pm/vertex_id.h"
 #include "render/render.h"
 #include "render_fixtures.h"
 

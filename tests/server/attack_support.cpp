@@ -7,7 +7,6 @@
 #include <spawn.h>
 #include <sys/wait.h>
 #include <unistd.h>
-
 #include <algorithm>
 #include <cerrno>
 #include <cmath>
@@ -17,8 +16,12 @@
 #include <sstream>
 #include <thread>
 
-#include "client/client.h"
+#include "client/streaming_client.h"
 #include "common/error.h"
+#include "protocol/client_messages.h"
+#include "protocol/framing.h"
+#include "protocol/message_types.h"
+#include "protocol/server_messages.h"
 
 extern char** environ;
 

@@ -5,9 +5,7 @@
 // Every wait has a deadline: a server that hangs fails the test instead of hanging it.
 #pragma once
 #include <utility>  // before asio with C++20
-
 #include <boost/asio.hpp>
-
 #include <chrono>
 #include <cstdint>
 #include <functional>
@@ -17,10 +15,10 @@
 #include <string>
 #include <sys/types.h>
 #include <vector>
-
 #include <nlohmann/json.hpp>
 
-#include "protocol/protocol.h"
+#include "protocol/framing.h"
+#include "protocol/message_types.h"
 #include "refine/camera.h"
 #include "streaming_fixture.h"
 

@@ -7,7 +7,6 @@
 // ends it within 1 s with its totals. The deadlines are cut to a second (the idle timeout to three) so each
 // attack meets them within the test.
 #include <gtest/gtest.h>
-
 #include <algorithm>
 #include <atomic>
 #include <cstdio>
@@ -19,8 +18,14 @@
 #include <utility>
 
 #include "attack_support.h"
-#include "client/client.h"
+#include "client/client_session.h"
 #include "io/shapes.h"
+#include "pm/hierarchy.h"
+#include "pm/split_record.h"
+#include "protocol/client_messages.h"
+#include "protocol/framing.h"
+#include "protocol/message_types.h"
+#include "protocol/server_messages.h"
 #include "test_support.h"
 
 namespace pms {

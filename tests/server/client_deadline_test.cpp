@@ -4,11 +4,8 @@
 // attempts a stalled server still ends in one, in bounded time. Deadlines here are short (300 ms) and
 // every bound has two seconds of slack for a loaded machine.
 #include <gtest/gtest.h>
-
 #include <utility>  // before asio with C++20
-
 #include <boost/asio.hpp>
-
 #include <array>
 #include <chrono>
 #include <deque>
@@ -18,12 +15,20 @@
 #include <thread>
 #include <vector>
 
-#include "build/build.h"
-#include "client/client.h"
+#include "builder/build.h"
+#include "client/link.h"
+#include "client/streaming_client.h"
+#include "client/transport.h"
 #include "io/shapes.h"
-#include "pm/pm.h"
-#include "protocol/protocol.h"
-#include "server/server.h"
+#include "pm/hierarchy.h"
+#include "pm/pms_file.h"
+#include "protocol/client_messages.h"
+#include "protocol/framing.h"
+#include "protocol/message_types.h"
+#include "protocol/server_messages.h"
+#include "server/catalogue.h"
+#include "server/limits.h"
+#include "server/tcp_server.h"
 #include "test_support.h"
 
 namespace pms {

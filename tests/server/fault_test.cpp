@@ -3,17 +3,24 @@
 // test binary's operator new, armed for allocations of at least a given size (only the hostile session
 // asks for blocks that large).
 #include <gtest/gtest.h>
-
 #include <atomic>
 #include <cstdlib>
 #include <cstring>
 #include <new>
 #include <thread>
 
-#include "build/build.h"
-#include "client/client.h"
+#include "builder/build.h"
+#include "client/streaming_client.h"
 #include "io/shapes.h"
-#include "server/server.h"
+#include "pm/hierarchy.h"
+#include "pm/vertex_id.h"
+#include "protocol/client_messages.h"
+#include "protocol/framing.h"
+#include "protocol/message_types.h"
+#include "protocol/server_messages.h"
+#include "server/limits.h"
+#include "server/session.h"
+#include "server/tcp_server.h"
 #include "streaming_fixture.h"
 #include "test_support.h"
 

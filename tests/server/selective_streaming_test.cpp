@@ -1,14 +1,17 @@
 // Windowed active tags and SelectiveStreaming: the server's bookkeeping matches a plain set, and every
 // batch it decides is applicable, in order, by a client that knows only what it was sent.
 #include <gtest/gtest.h>
-
 #include <algorithm>
 #include <random>
 #include <set>
 
-#include "build/build.h"
+#include "builder/build.h"
 #include "io/shapes.h"
-#include "refine/refine.h"
+#include "pm/hierarchy.h"
+#include "pm/split_record.h"
+#include "pm/vertex_id.h"
+#include "refine/selective_mesh.h"
+#include "refine/vertex_hierarchy.h"
 #include "server/selective_streaming.h"
 
 namespace pms {

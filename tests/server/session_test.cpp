@@ -2,13 +2,24 @@
 // cover the model's trees, VIEW floods, and large fronts and answers that must be worked through in
 // bounded slices.
 #include <gtest/gtest.h>
-
 #include <algorithm>
 #include <set>
 
-#include "build/build.h"
+#include "builder/build.h"
 #include "io/shapes.h"
-#include "server/server.h"
+#include "pm/hierarchy.h"
+#include "pm/pms_file.h"
+#include "pm/vertex_id.h"
+#include "protocol/client_messages.h"
+#include "protocol/dispatch.h"
+#include "protocol/framing.h"
+#include "protocol/message_types.h"
+#include "protocol/model_messages.h"
+#include "protocol/server_messages.h"
+#include "protocol/stream_context.h"
+#include "server/catalogue.h"
+#include "server/limits.h"
+#include "server/session.h"
 #include "test_support.h"
 
 namespace pms {

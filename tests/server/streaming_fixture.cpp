@@ -2,18 +2,25 @@
 #include "streaming_fixture.h"
 
 #include <utility>  // before asio with C++20
-
 #include <boost/asio.hpp>
-
 #include <algorithm>
 #include <array>
 #include <cmath>
 #include <span>
 #include <utility>
 
-#include "build/build.h"
-#include "protocol/protocol.h"
+#include "builder/build.h"
+#include "pm/hierarchy.h"
+#include "pm/pms_file.h"
+#include "pm/vertex_id.h"
+#include "protocol/framing.h"
+#include "protocol/message_types.h"
+#include "protocol/position_grid.h"
+#include "protocol/server_messages.h"
 #include "refine/adapt.h"
+#include "refine/selective_mesh.h"
+#include "refine/vertex_hierarchy.h"
+#include "server/catalogue.h"
 #include "test_support.h"
 
 namespace pms::test {

@@ -8,11 +8,13 @@
 #include <vector>
 
 #include "io/mesh.h"
-#include "pm/pm.h"
-#include "protocol/protocol.h"
+#include "pm/hierarchy.h"
+#include "pm/vertex_id.h"
+#include "protocol/message_types.h"
+#include "protocol/server_messages.h"
 #include "refine/camera.h"
-#include "refine/refine.h"
-#include "server/server.h"
+#include "refine/selective_mesh.h"
+#include "server/catalogue.h"
 
 namespace pms::test {
 

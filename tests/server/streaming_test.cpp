@@ -1,13 +1,10 @@
-// Sender-driven streaming over real loopback TCP (DESIGN.md §6 properties 3 and 4): the client's mesh
+// Sender-driven streaming over real loopback TCP (properties 3 and 4, docs/architecture.md): the client's mesh
 // equals local refinement of the same view, a second lap costs nothing, a resumed session ends where an
 // unbroken one does, many clients at once all succeed, and hostile input only ends its own session.
 // The view-independent baseline (kim-lee-kobbelt §8 Fig. 9): PM order, prefix by prefix.
 #include <gtest/gtest.h>
-
 #include <utility>  // before asio with C++20
-
 #include <boost/asio.hpp>
-
 #include <algorithm>
 #include <atomic>
 #include <array>
@@ -18,13 +15,28 @@
 #include <optional>
 #include <thread>
 
-#include "build/build.h"
-#include "client/client.h"
+#include "builder/build.h"
+#include "client/link.h"
+#include "client/streaming_client.h"
+#include "client/transport.h"
 #include "io/mesh.h"
 #include "io/shapes.h"
+#include "pm/hierarchy.h"
+#include "pm/refine_info.h"
+#include "pm/split_record.h"
+#include "pm/vertex_id.h"
+#include "protocol/client_messages.h"
+#include "protocol/framing.h"
+#include "protocol/message_types.h"
+#include "protocol/model_messages.h"
+#include "protocol/server_messages.h"
+#include "protocol/stream_context.h"
 #include "refine/adapt.h"
+#include "refine/selective_mesh.h"
 #include "refine/stream_order.h"
-#include "server/server.h"
+#include "server/catalogue.h"
+#include "server/limits.h"
+#include "server/tcp_server.h"
 #include "streaming_fixture.h"
 #include "test_support.h"
 

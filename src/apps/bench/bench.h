@@ -1,4 +1,4 @@
-// `pmstream bench`: the experiments of DESIGN.md §7, in groups. Each group prints its tables to
+// `pmstream bench`: the experiments of docs/architecture.md ("Experiments"), in groups. Each group prints its tables to
 // stdout as they fill (progress lines go to stderr), appends a section to report.md and writes its
 // own GROUP.json and plots into the output directory.
 #pragma once

@@ -17,6 +17,7 @@
 #include "apps/bench/report.h"
 #include "apps/resource_usage.h"
 #include "common/error.h"
+#include "protocol/packet_bits.h"
 
 namespace pms::app {
 namespace fs = std::filesystem;
@@ -45,7 +46,7 @@ constexpr PaperRow kPaperTable1[] = {{"bunny", 62, 34'772, 6, 16},
                                      {"skull", 146, 98'160, 8, 23},
                                      {"Buddha", 65, 545'557, 7, 25}};
 
-// What `pmstream build --json` must print for the bench to use it (DESIGN.md §5).
+// What `pmstream build --json` must print for the bench to use it (docs/cli.md, "build").
 constexpr const char* kBuildFields[] = {"seconds",      "load_seconds",  "build_seconds",  "peak_rss_mb",
                                         "output_bytes", "base_vertices", "vsplits",        "tree_id_bits",
                                         "node_id_bits", "input_faces",   "input_vertices"};
@@ -487,59 +488,52 @@ Table scaling_table() {
                 {"log2 n / log2 n₀", true, 0}});
 }
 
-std::string run_scaling(const BenchContext& context, json& out) {
-  const size_t steps = context.options.quick ? kQuickTerrainSteps : kTerrainFaces.size();
-  Table table = scaling_table();
-  print("\nScaling: procedural terrain (pmstream build terrain:FACES)\n\n" + table.header());
-  Plot plot{"pmstream build on the procedural terrain", "faces", "seconds", "peak RSS (MB)", true, true, {}};
-  plot.series = {{"seconds (wall)", {}, {}, false}, {"peak RSS MB", {}, {}, true}};
-  std::string notes;
-  out["scaling"] = json::array();
-  double first_faces = 0, first_seconds_per_face = 0;  // the reference row, n₀
-  for (size_t i = 0; i < steps; ++i) {
-    const std::string input = "terrain:" + std::to_string(kTerrainFaces[i]);
-    progress_begin("[" + input + " " + std::to_string(i + 1) + "/" + std::to_string(steps) +
-                   "] pmstream build, median of " + std::to_string(runs(context)));
-    const fs::path output = context.temp_dir / ("terrain-" + std::to_string(kTerrainFaces[i]) + ".pms");
-    std::vector<OurBuild> all;
-    std::vector<double> all_seconds;
-    for (size_t run = 0; run < runs(context); ++run) {
-      all.push_back(run_our_build(context, input, output));
-      all_seconds.push_back(all.back().run.wall_seconds);
-      if (!all.back().error.empty()) {
-        all = {std::move(all.back())};
-        all_seconds = {all_seconds.back()};
-        break;
-      }
-    }
-    const OurBuild build = median_run(all, all_seconds);
-    progress_end(build.error.empty() ? step_outcome(build.run) : "FAILED (" + build.error + ")");
-    std::error_code ignored;
-    fs::remove(output, ignored);
-    out["scaling"].push_back({{"input", input},
-                              {"pmstream", build.error.empty() ? build.stats : json{{"error", build.error}}},
-                              {"runs_seconds", all_seconds}});
-    if (!build.error.empty()) {
-      notes += "- " + input + ": **failed**: " + build.error + "\n";
-      print(table.add_row({thousands(kTerrainFaces[i]), "", "", "", "", "", ""}));
-      continue;
-    }
-    const double faces = double(count(build.stats, "input_faces"));
-    const double seconds = build.run.wall_seconds;
-    const double per_face = seconds / faces;
-    if (first_faces == 0) {
-      first_faces = faces;
-      first_seconds_per_face = per_face;
-    }
-    print(table.add_row({thousands(uint64_t(faces)), fixed(seconds, 2), fixed(number(build.stats, "build_seconds"), 2),
-                         fixed(build.run.peak_rss_mb, 0), fixed(per_face * 1e6, 2),
-                         fixed(per_face / first_seconds_per_face, 2), fixed(std::log2(faces) / std::log2(first_faces), 2)}));
-    plot.series[0].x.push_back(faces);
-    plot.series[0].y.push_back(seconds);
-    plot.series[1].x.push_back(faces);
-    plot.series[1].y.push_back(build.run.peak_rss_mb);
-  }
+// One terrain size: the median of runs(context) builds, or the first that failed (the failure itself, not
+// a median of what came before it).
+struct TerrainStep {
+  std::string input;
+  OurBuild build;
+  std::vector<double> runs_seconds;
+};
 
+TerrainStep build_terrain(const BenchContext& context, size_t i, size_t steps) {
+  TerrainStep step;
+  step.input = "terrain:" + std::to_string(kTerrainFaces[i]);
+  progress_begin("[" + step.input + " " + std::to_string(i + 1) + "/" + std::to_string(steps) +
+                 "] pmstream build, median of " + std::to_string(runs(context)));
+  const fs::path output = context.temp_dir / ("terrain-" + std::to_string(kTerrainFaces[i]) + ".pms");
+  std::vector<OurBuild> all;
+  for (size_t run = 0; run < runs(context); ++run) {
+    all.push_back(run_our_build(context, step.input, output));
+    step.runs_seconds.push_back(all.back().run.wall_seconds);
+    if (!all.back().error.empty()) {
+      all = {std::move(all.back())};
+      step.runs_seconds = {step.runs_seconds.back()};
+      break;
+    }
+  }
+  step.build = median_run(all, step.runs_seconds);
+  progress_end(step.build.error.empty() ? step_outcome(step.build.run) : "FAILED (" + step.build.error + ")");
+  std::error_code ignored;
+  fs::remove(output, ignored);
+  return step;
+}
+
+// n₀, the first row that built: the others are read against it.
+struct FirstRow {
+  double faces = 0, seconds_per_face = 0;
+};
+
+std::vector<std::string> scaling_row(const OurBuild& build, const FirstRow& n0) {
+  const double faces = double(count(build.stats, "input_faces"));
+  const double seconds = build.run.wall_seconds;
+  const double per_face = seconds / faces;
+  return {thousands(uint64_t(faces)), fixed(seconds, 2), fixed(number(build.stats, "build_seconds"), 2),
+          fixed(build.run.peak_rss_mb, 0), fixed(per_face * 1e6, 2), fixed(per_face / n0.seconds_per_face, 2),
+          fixed(std::log2(faces) / std::log2(n0.faces), 2)};
+}
+
+std::string scaling_section(const BenchContext& context, const Table& table, const std::string& notes, const Plot& plot) {
   std::string section = "### Scaling: procedural terrain\n\n";
   section += "`pmstream build terrain:FACES` in a child process, median of " + std::to_string(runs(context)) +
              " runs; seconds are wall time (terrain generation "
@@ -555,6 +549,37 @@ std::string run_scaling(const BenchContext& context, json& out) {
     section += "No plot: " + skipped + ".\n\n";
   }
   return section;
+}
+
+std::string run_scaling(const BenchContext& context, json& out) {
+  const size_t steps = context.options.quick ? kQuickTerrainSteps : kTerrainFaces.size();
+  Table table = scaling_table();
+  print("\nScaling: procedural terrain (pmstream build terrain:FACES)\n\n" + table.header());
+  Plot plot{"pmstream build on the procedural terrain", "faces", "seconds", "peak RSS (MB)", true, true, {}};
+  plot.series = {{"seconds (wall)", {}, {}, false}, {"peak RSS MB", {}, {}, true}};
+  std::string notes;
+  out["scaling"] = json::array();
+  FirstRow n0;
+  for (size_t i = 0; i < steps; ++i) {
+    const TerrainStep step = build_terrain(context, i, steps);
+    const OurBuild& build = step.build;
+    out["scaling"].push_back({{"input", step.input},
+                              {"pmstream", build.error.empty() ? build.stats : json{{"error", build.error}}},
+                              {"runs_seconds", step.runs_seconds}});
+    if (!build.error.empty()) {
+      notes += "- " + step.input + ": **failed**: " + build.error + "\n";
+      print(table.add_row({thousands(kTerrainFaces[i]), "", "", "", "", "", ""}));
+      continue;
+    }
+    const double faces = double(count(build.stats, "input_faces"));
+    if (n0.faces == 0) n0 = {faces, build.run.wall_seconds / faces};
+    print(table.add_row(scaling_row(build, n0)));
+    plot.series[0].x.push_back(faces);
+    plot.series[0].y.push_back(build.run.wall_seconds);
+    plot.series[1].x.push_back(faces);
+    plot.series[1].y.push_back(build.run.peak_rss_mb);
+  }
+  return scaling_section(context, table, notes, plot);
 }
 
 }  // namespace

@@ -1,9 +1,14 @@
 #include "apps/bench/bench_model.h"
 
 #include <cstdio>
+#include <deque>
+#include <utility>
 
 #include "apps/bench/child_process.h"
 #include "common/error.h"
+#include "server/catalogue.h"
+#include "server/limits.h"
+#include "server/session.h"
 
 namespace pms::app {
 namespace fs = std::filesystem;
@@ -29,6 +34,22 @@ std::vector<Camera> path_of(const BenchModel& m, PathKind kind, uint32_t frames)
   PathOptions options;
   options.frames = frames;
   return make_camera_path(kind, m.served->view(), options);
+}
+
+InProcessSession in_process_session(const BenchModel& m) {
+  const server::ServerLimits limits;
+  auto session = std::make_shared<server::Session>(m.catalogue, limits);
+  client::LocalEndpoint endpoint;
+  endpoint.receive = [session](protocol::Frame frame) { session->receive(std::move(frame)); };
+  endpoint.next_frame = [session]() -> server::Buffer {
+    std::deque<server::Buffer>& outbox = session->outbox();
+    while (outbox.empty())
+      if (!session->pump()) return nullptr;
+    server::Buffer frame = std::move(outbox.front());
+    outbox.pop_front();
+    return frame;
+  };
+  return {session, std::make_unique<client::LocalTransport>(std::move(endpoint), limits.max_client_message)};
 }
 
 }  // namespace pms::app

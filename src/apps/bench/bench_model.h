@@ -8,7 +8,9 @@
 
 #include "apps/bench/bench.h"
 #include "apps/camera_path.h"
-#include "server/server.h"
+#include "client/local_transport.h"
+#include "server/catalogue.h"
+#include "server/session.h"
 
 namespace pms::app {
 
@@ -24,5 +26,13 @@ struct BenchModel {
 BenchModel prepare_model(const BenchContext& context, const std::string& model, const std::string& deviation = "estimate");
 
 std::vector<Camera> path_of(const BenchModel& m, PathKind kind, uint32_t frames);
+
+// A server Session of the model's catalogue in this process, and a client transport to it: the same
+// frames as over TCP, with the session's own state (its active tags) readable between frames.
+struct InProcessSession {
+  std::shared_ptr<server::Session> session;
+  std::unique_ptr<client::LocalTransport> transport;
+};
+InProcessSession in_process_session(const BenchModel& m);
 
 }  // namespace pms::app

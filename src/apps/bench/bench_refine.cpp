@@ -14,8 +14,13 @@
 #include "apps/percentile.h"
 #include "apps/resource_usage.h"
 #include "common/error.h"
+#include "pm/hierarchy.h"
+#include "pm/pms_file.h"
+#include "pm/split_record.h"
 #include "refine/adapt.h"
+#include "refine/selective_mesh.h"
 #include "refine/stream_order.h"
+#include "refine/vertex_hierarchy.h"
 #include "render/render.h"
 
 namespace pms::app {
@@ -137,31 +142,21 @@ MeshArrays view_independent(const ModelView& model, uint64_t faces) {
 
 std::string psnr_text(double psnr) { return std::isinf(psnr) ? "inf" : fixed(psnr, 2); }
 double psnr_json(double psnr) { return std::isinf(psnr) ? kPsnrIdenticalJson : psnr; }
+std::string face_share(uint64_t faces, double full_faces) { return fixed(100 * double(faces) / full_faces, 1); }
 
-}  // namespace
+// In a child process, as a user runs `pmstream build`; `deviation` as its --deviation takes it.
+std::unique_ptr<PmsFile> build_pms(const BenchContext& context, const std::string& name, const std::string& deviation) {
+  const fs::path pms = context.temp_dir / (name + "-" + deviation + ".pms");
+  std::fprintf(stderr, "bench: building %s (deviation %s) ... ", name.c_str(), deviation.c_str());
+  const ChildResult built = run_child({context.self_exe, "build", find_model(context.models_dir, name).string(), "-o",
+                                       pms.string(), "--deviation", deviation});
+  if (!built.ok()) fail(name, "pmstream build: " + built.failure());
+  std::fprintf(stderr, "%.2f s\n", built.wall_seconds);
+  return PmsFile::open(pms.string());
+}
 
-void run_refine_group(BenchContext& context) {
-  std::string section = "## refine: selective refinement, renderer and image quality\n\n";
-  if (context.models_dir.empty()) {
-    context.report += section + "Skipped: ../shared/models not found.\n\n";
-    return;
-  }
-  const bool quick = context.options.quick;
-  const std::string name = context.options.models.empty() ? (quick ? "bunny" : "dragon") : context.options.models[0];
-  const auto build = [&](const std::string& deviation) {
-    const fs::path pms = context.temp_dir / (name + "-" + deviation + ".pms");
-    std::fprintf(stderr, "bench: building %s (deviation %s) ... ", name.c_str(), deviation.c_str());
-    const ChildResult built = run_child({context.self_exe, "build", find_model(context.models_dir, name).string(), "-o",
-                                         pms.string(), "--deviation", deviation});
-    if (!built.ok()) fail(name, "pmstream build: " + built.failure());
-    std::fprintf(stderr, "%.2f s\n", built.wall_seconds);
-    return PmsFile::open(pms.string());
-  };
-  const auto file = build("estimate");  // the default
-  const ModelView& model = file->view();
-  json out = {{"command", context.options.command_line}, {"machine", machine_json()}, {"model", name}};
-
-  // Adaptation along the scan path.
+// The adaptation loop along the scan path at τ = 1 px, beside the engine's raw rate.
+std::string adaptation_section(const ModelView& model, const std::string& name, bool quick, json& out) {
   PathOptions scan_options;
   scan_options.frames = quick ? kQuickScanFrames : kScanFrames;
   const std::vector<Camera> scan = make_camera_path(PathKind::scan, model, scan_options);
@@ -178,87 +173,150 @@ void run_refine_group(BenchContext& context) {
   out["adapt"] = {{"frames", scan.size()}, {"frame_ms", run.frame_ms}, {"ops", run.ops}, {"adapt_seconds", run.adapt_seconds},
                   {"engine_ops", engine_ops}, {"engine_ops_per_second", engine_rate}, {"faces", run.faces}};
   print("\nAdaptation along a scan path at τ = 1 px (targets: median ≤ 4 ms, ≥ 3 M ops/s)\n" + adapt.markdown());
+  return "### Adaptation along a " + std::to_string(scan.size()) + "-frame scan path, τ = 1 px (" + name + ")\n\n" +
+         adapt.markdown() + "\nEngine ops/s: every vsplit in PM order, then every ecol in reverse, one core.\n\n";
+}
 
-  // Renderer throughput on the full mesh.
+std::string renderer_section(const ModelView& model, const MeshArrays& full, const Camera& camera, Renderer& renderer,
+                             json& out) {
+  Image image;
+  Stopwatch render_clock;
+  for (uint32_t i = 0; i < kRenderRepeats; ++i)
+    renderer.render(as_render(full), make_view(camera, model.bbox_min, model.bbox_max), image);
+  const double triangles_per_second = double(kRenderRepeats) * double(full.indices.size() / 3) / render_clock.seconds();
+  out["render_triangles_per_second"] = triangles_per_second;
+  print("\nRenderer: " + thousands(uint64_t(triangles_per_second)) + " triangles/s (" + thousands(full.indices.size() / 3) +
+        " faces, " + std::to_string(camera.width) + "x" + std::to_string(camera.height) + ")\n");
+  return "Renderer: " + thousands(uint64_t(triangles_per_second)) + " triangles/s on the full mesh.\n\n";
+}
+
+struct Viewpoint {
+  const char* label;
+  Camera camera;
+};
+
+// Far and close are the zoom path's ends; mid is the first orbit view moved halfway to its target.
+std::vector<Viewpoint> viewpoints(const std::vector<Camera>& zoom, const std::vector<Camera>& orbit) {
+  Camera mid = orbit[0];
+  for (int k = 0; k < 3; ++k) mid.eye[k] = 0.5f * (mid.eye[k] + mid.target[k]);
+  return {{"far", zoom[0]}, {"mid", mid}, {"close", zoom[2]}};
+}
+
+// One viewpoint's meshes, each against the full mesh's image there.
+struct ViewQuality {
+  Quality tau0, tau1, vi;        // the default model (Hoppe's estimate)
+  Quality bound_tau1, bound_vi;  // the model built with --deviation bound
+};
+
+ViewQuality view_quality(const ModelView& model, const ModelView& bounded, const MeshArrays& full, const Viewpoint& vp,
+                         Renderer& renderer, const fs::path& out_dir) {
+  const ViewParams view = make_view(vp.camera, model.bbox_min, model.bbox_max);
+  Image reference;
+  renderer.render(as_render(full), view, reference);
+  const auto against_full = [&](const MeshArrays& mesh, const char* what) {
+    return quality_of(mesh, view, reference, renderer, out_dir / (std::string("refine-") + vp.label + "-" + what + "-diff.png"));
+  };
+  ViewQuality q;
+  q.tau0 = against_full(refine_for_view(model, vp.camera, 0.0f).mesh, "tau0");
+  q.tau1 = against_full(refine_for_view(model, vp.camera, 1.0f).mesh, "tau1");
+  q.vi = against_full(view_independent(model, q.tau1.faces), "vi");
+  q.bound_tau1 = against_full(refine_for_view(bounded, vp.camera, 1.0f).mesh, "bound-tau1");
+  q.bound_vi = against_full(view_independent(bounded, q.bound_tau1.faces), "bound-vi");
+  return q;
+}
+
+Table quality_table() {
+  return Table({{"view", false}, {"full faces", true}, {"τ=0 faces", true}, {"τ=0 %", true}, {"τ=0 PSNR", true},
+                {"τ=0 err px", true}, {"τ=0 err %", true}, {"τ=1 faces", true}, {"τ=1 %", true}, {"τ=1 PSNR", true},
+                {"τ=1 err px", true}, {"VI PSNR", true}, {"VI err px", true}});
+}
+
+std::vector<std::string> quality_row(const char* label, double full_faces, const ViewQuality& q) {
+  return {label, thousands(uint64_t(full_faces)), thousands(q.tau0.faces), face_share(q.tau0.faces, full_faces),
+          psnr_text(q.tau0.metrics.psnr), thousands(q.tau0.metrics.error_pixels), fixed(100 * q.tau0.metrics.error_fraction, 3),
+          thousands(q.tau1.faces), face_share(q.tau1.faces, full_faces), psnr_text(q.tau1.metrics.psnr),
+          thousands(q.tau1.metrics.error_pixels), psnr_text(q.vi.metrics.psnr), thousands(q.vi.metrics.error_pixels)};
+}
+
+Table bound_table() {
+  return Table({{"view", false}, {"τ=1 faces", true}, {"τ=1 %", true}, {"τ=1 PSNR", true}, {"τ=1 err px", true},
+                {"VI PSNR", true}, {"VI err px", true}});
+}
+
+std::vector<std::string> bound_row(const char* label, double full_faces, const ViewQuality& q) {
+  return {label, thousands(q.bound_tau1.faces), face_share(q.bound_tau1.faces, full_faces),
+          psnr_text(q.bound_tau1.metrics.psnr), thousands(q.bound_tau1.metrics.error_pixels),
+          psnr_text(q.bound_vi.metrics.psnr), thousands(q.bound_vi.metrics.error_pixels)};
+}
+
+json quality_json(const Quality& q) {
+  return {{"faces", q.faces}, {"psnr", psnr_json(q.metrics.psnr)}, {"error_pixels", q.metrics.error_pixels}};
+}
+
+json view_quality_json(const char* label, double full_faces, const ViewQuality& q) {
+  return {{"view", label},
+          {"full_faces", full_faces},
+          {"tau0", quality_json(q.tau0)},
+          {"tau1", quality_json(q.tau1)},
+          {"vi", quality_json(q.vi)},
+          {"bound_tau1", quality_json(q.bound_tau1)},
+          {"bound_vi", quality_json(q.bound_vi)}};
+}
+
+// The quality table at three viewpoints, then the same views on the model built with the deviation bound
+// (build --deviation bound): more faces for τ = 1 px, and how that compares with the view-independent mesh
+// of that size.
+std::string quality_sections(const BenchContext& context, const std::string& name, const ModelView& model,
+                             const MeshArrays& full, const std::vector<Viewpoint>& views, Renderer& renderer, json& out) {
+  Table quality = quality_table();
+  json per_view = json::array();
+  const auto bounded_file = build_pms(context, name, "bound");
+  const ModelView& bounded = bounded_file->view();
+  Table bound = bound_table();
+  const double full_faces = double(full.indices.size() / 3);
+  for (const Viewpoint& vp : views) {
+    const ViewQuality q = view_quality(model, bounded, full, vp, renderer, context.options.out_dir);
+    quality.add_row(quality_row(vp.label, full_faces, q));
+    bound.add_row(bound_row(vp.label, full_faces, q));
+    per_view.push_back(view_quality_json(vp.label, full_faces, q));
+  }
+  out["quality"] = per_view;
+  print("\nImage quality against the full mesh (targets: τ=0 err ≤ 0.2 %, PSNR ≥ 35 dB, ≤ 60 % faces close; τ=1 ≤ 30 % faces "
+        "close, better than VI at mid and close)\n" +
+        quality.markdown());
+  print("\nThe same views, model built with --deviation bound (a bound on the surface below each node instead of Hoppe's "
+        "estimate)\n" + bound.markdown());
+  return "### Image quality against the full mesh\n\n" + quality.markdown() +
+         "\nVI = the first K splits in stream order with at least the τ = 1 px mesh's face count. "
+         "refine-VIEW-{tau0,tau1,vi}-diff.png mark the pixels that differ in red.\n\n" +
+         "### The same views, model built with `--deviation bound`\n\n" + bound.markdown() +
+         "\nA bound on the input surface below each node instead of the default, Hoppe's estimate: more faces for "
+         "τ = 1 px (and more bytes to stream them, sender E5), against the view-independent mesh of that size.\n\n";
+}
+
+}  // namespace
+
+void run_refine_group(BenchContext& context) {
+  std::string section = "## refine: selective refinement, renderer and image quality\n\n";
+  if (context.models_dir.empty()) {
+    context.report += section + "Skipped: ../shared/models not found.\n\n";
+    return;
+  }
+  const bool quick = context.options.quick;
+  const std::string name = context.options.models.empty() ? (quick ? "bunny" : "dragon") : context.options.models[0];
+  const auto file = build_pms(context, name, "estimate");  // the default
+  const ModelView& model = file->view();
+  json out = {{"command", context.options.command_line}, {"machine", machine_json()}, {"model", name}};
+  section += adaptation_section(model, name, quick, out);
+
   const MeshArrays full = refine_in_stream_order(model, model.split_order.size());
   Renderer renderer;
   PathOptions view_options;
   view_options.frames = 3;
   const std::vector<Camera> zoom = make_camera_path(PathKind::zoom, model, view_options);
   const std::vector<Camera> orbit = make_camera_path(PathKind::orbit, model, view_options);
-  Image image;
-  Stopwatch render_clock;
-  for (uint32_t i = 0; i < kRenderRepeats; ++i)
-    renderer.render(as_render(full), make_view(orbit[0], model.bbox_min, model.bbox_max), image);
-  const double triangles_per_second = double(kRenderRepeats) * double(full.indices.size() / 3) / render_clock.seconds();
-  out["render_triangles_per_second"] = triangles_per_second;
-  print("\nRenderer: " + thousands(uint64_t(triangles_per_second)) + " triangles/s (" + thousands(full.indices.size() / 3) +
-        " faces, " + std::to_string(orbit[0].width) + "x" + std::to_string(orbit[0].height) + ")\n");
-
-  // Quality at far / mid / close.
-  struct Viewpoint {
-    const char* label;
-    Camera camera;
-  };
-  Camera mid = orbit[0];
-  for (int k = 0; k < 3; ++k) mid.eye[k] = 0.5f * (mid.eye[k] + mid.target[k]);
-  const Viewpoint viewpoints[] = {{"far", zoom[0]}, {"mid", mid}, {"close", zoom[2]}};
-  Table quality({{"view", false}, {"full faces", true}, {"τ=0 faces", true}, {"τ=0 %", true}, {"τ=0 PSNR", true},
-                 {"τ=0 err px", true}, {"τ=0 err %", true}, {"τ=1 faces", true}, {"τ=1 %", true}, {"τ=1 PSNR", true},
-                 {"τ=1 err px", true}, {"VI PSNR", true}, {"VI err px", true}});
-  json quality_json = json::array();
-  // The same views on the model built with the deviation bound (build --deviation bound): more faces for
-  // τ = 1 px, and how that compares with the view-independent mesh of that size.
-  const auto bounded_file = build("bound");
-  const ModelView& bounded = bounded_file->view();
-  Table bound({{"view", false}, {"τ=1 faces", true}, {"τ=1 %", true}, {"τ=1 PSNR", true}, {"τ=1 err px", true},
-                  {"VI PSNR", true}, {"VI err px", true}});
-  for (const Viewpoint& vp : viewpoints) {
-    const ViewParams view = make_view(vp.camera, model.bbox_min, model.bbox_max);
-    Image reference;
-    renderer.render(as_render(full), view, reference);
-    const auto diff_png = [&](const char* what) {
-      return context.options.out_dir / (std::string("refine-") + vp.label + "-" + what + "-diff.png");
-    };
-    const MeshArrays tau0 = refine_for_view(model, vp.camera, 0.0f).mesh;
-    const Quality t0 = quality_of(tau0, view, reference, renderer, diff_png("tau0"));
-    const MeshArrays tau1 = refine_for_view(model, vp.camera, 1.0f).mesh;
-    const Quality t1 = quality_of(tau1, view, reference, renderer, diff_png("tau1"));
-    const Quality vi = quality_of(view_independent(model, t1.faces), view, reference, renderer, diff_png("vi"));
-    const double full_faces = double(full.indices.size() / 3);
-    quality.add_row({vp.label, thousands(uint64_t(full_faces)), thousands(t0.faces), fixed(100 * double(t0.faces) / full_faces, 1),
-                     psnr_text(t0.metrics.psnr), thousands(t0.metrics.error_pixels), fixed(100 * t0.metrics.error_fraction, 3),
-                     thousands(t1.faces), fixed(100 * double(t1.faces) / full_faces, 1), psnr_text(t1.metrics.psnr),
-                     thousands(t1.metrics.error_pixels), psnr_text(vi.metrics.psnr), thousands(vi.metrics.error_pixels)});
-    const Quality b1 = quality_of(refine_for_view(bounded, vp.camera, 1.0f).mesh, view, reference, renderer,
-                                  diff_png("bound-tau1"));
-    const Quality bvi = quality_of(view_independent(bounded, b1.faces), view, reference, renderer, diff_png("bound-vi"));
-    bound.add_row({vp.label, thousands(b1.faces), fixed(100 * double(b1.faces) / full_faces, 1), psnr_text(b1.metrics.psnr),
-                   thousands(b1.metrics.error_pixels), psnr_text(bvi.metrics.psnr), thousands(bvi.metrics.error_pixels)});
-    quality_json.push_back({{"view", vp.label},
-                            {"full_faces", full_faces},
-                            {"tau0", {{"faces", t0.faces}, {"psnr", psnr_json(t0.metrics.psnr)}, {"error_pixels", t0.metrics.error_pixels}}},
-                            {"tau1", {{"faces", t1.faces}, {"psnr", psnr_json(t1.metrics.psnr)}, {"error_pixels", t1.metrics.error_pixels}}},
-                            {"vi", {{"faces", vi.faces}, {"psnr", psnr_json(vi.metrics.psnr)}, {"error_pixels", vi.metrics.error_pixels}}},
-                            {"bound_tau1", {{"faces", b1.faces}, {"psnr", psnr_json(b1.metrics.psnr)}, {"error_pixels", b1.metrics.error_pixels}}},
-                            {"bound_vi", {{"faces", bvi.faces}, {"psnr", psnr_json(bvi.metrics.psnr)}, {"error_pixels", bvi.metrics.error_pixels}}}});
-  }
-  out["quality"] = quality_json;
-  print("\nImage quality against the full mesh (targets: τ=0 err ≤ 0.2 %, PSNR ≥ 35 dB, ≤ 60 % faces close; τ=1 ≤ 30 % faces "
-        "close, better than VI at mid and close)\n" +
-        quality.markdown());
-  print("\nThe same views, model built with --deviation bound (a bound on the surface below each node instead of Hoppe's "
-        "estimate)\n" + bound.markdown());
-
-  section += "### Adaptation along a " + std::to_string(scan.size()) + "-frame scan path, τ = 1 px (" + name + ")\n\n" +
-             adapt.markdown() + "\nEngine ops/s: every vsplit in PM order, then every ecol in reverse, one core.\n\n";
-  section += "Renderer: " + thousands(uint64_t(triangles_per_second)) + " triangles/s on the full mesh.\n\n";
-  section += "### Image quality against the full mesh\n\n" + quality.markdown() +
-             "\nVI = the first K splits in stream order with at least the τ = 1 px mesh's face count. "
-             "refine-VIEW-{tau0,tau1,vi}-diff.png mark the pixels that differ in red.\n\n";
-  section += "### The same views, model built with `--deviation bound`\n\n" + bound.markdown() +
-             "\nA bound on the input surface below each node instead of the default, Hoppe's estimate: more faces for "
-             "τ = 1 px (and more bytes to stream them, sender E5), against the view-independent mesh of that size.\n\n";
+  section += renderer_section(model, full, orbit[0], renderer, out);
+  section += quality_sections(context, name, model, full, viewpoints(zoom, orbit), renderer, out);
   write_text_file(context.options.out_dir / "refine.json", out.dump(2) + "\n");
   context.report += section;
 }

@@ -13,14 +13,18 @@
 
 #include "apps/bench/bench.h"
 #include "apps/bench/bench_model.h"
-#include "apps/bench/load_client.h"
-#include "apps/bench/local_transport.h"
+#include "client/load_client.h"
 #include "apps/bench/report.h"
 #include "apps/bench/serve_child.h"
 #include "apps/camera_path.h"
 #include "apps/percentile.h"
 #include "apps/resource_usage.h"
+#include "client/streaming_client.h"
 #include "common/error.h"
+#include "pm/hierarchy.h"
+#include "pm/split_record.h"
+#include "protocol/client_messages.h"
+#include "protocol/packet_bits.h"
 
 namespace pms::app {
 namespace fs = std::filesystem;
@@ -91,9 +95,8 @@ struct Laps {
 };
 
 Laps run_laps(const BenchModel& m, const std::vector<Camera>& path) {
-  auto transport = std::make_unique<LocalTransport>(m.catalogue);
-  LocalTransport& local = *transport;
-  client::StreamingClient client(std::move(transport), client::ClientOptions{kTolerance});
+  InProcessSession local = in_process_session(m);
+  client::StreamingClient client(std::move(local.transport), client::ClientOptions{kTolerance});
   client.open(m.name);
   Laps laps;
   double ratio_sum = 0;
@@ -103,7 +106,7 @@ Laps run_laps(const BenchModel& m, const std::vector<Camera>& path) {
       const client::FrameReport r = client.frame(camera);
       laps.lap_down[lap] += r.down_bytes;
       laps.lap_up[lap] += r.up_bytes;
-      const ActiveTags& tags = local.session().tags();
+      const ActiveTags& tags = local.session->tags();
       const double front = double(tags.active_count()) * kFrontEntryBytes;
       const double ratio = double(tags.memory_bytes()) / front;
       ratio_sum += ratio;
@@ -143,7 +146,7 @@ Camera close_view(const BenchModel& m) {
 
 E5 run_e5(const BenchModel& m, const Camera& camera) {
   E5 e;
-  client::StreamingClient client(std::make_unique<LocalTransport>(m.catalogue), client::ClientOptions{kTolerance});
+  client::StreamingClient client(in_process_session(m).transport, client::ClientOptions{kTolerance});
   client.open(m.name);
   client.frame(camera);
   e.vd_bytes = client.counters().bytes_down;
@@ -152,7 +155,7 @@ E5 run_e5(const BenchModel& m, const Camera& camera) {
   // prefix satisfies the same view: a real vi session, bytes down until that VIEW's final batch.
   client::ClientOptions vi_options{kTolerance};
   vi_options.mode = protocol::StreamMode::view_independent;
-  client::StreamingClient vi(std::make_unique<LocalTransport>(m.catalogue), vi_options);
+  client::StreamingClient vi(in_process_session(m).transport, vi_options);
   vi.open(m.name);
   vi.frame(camera);
   e.vi_bytes = vi.counters().bytes_down;
@@ -186,7 +189,7 @@ std::vector<std::vector<double>> e11_latencies(const BenchModel& m, uint16_t por
   for (uint32_t i = 0; i < clients; ++i)
     threads.emplace_back([&, i] {
       try {
-        LoadClient client("127.0.0.1", port, m.name);
+        client::LoadClient client("127.0.0.1", port, m.name);
         client.open(false);
         const size_t start = size_t(i) * 97 % orbit.size();
         for (uint32_t f = 0; f < kE11Frames; ++f)
@@ -200,6 +203,36 @@ std::vector<std::vector<double>> e11_latencies(const BenchModel& m, uint16_t por
   for (std::thread& t : threads) t.join();
   e.failed = failed;
   return latencies;
+}
+
+// The server's own figures (its VmHWM: wait4's peak would also count this bench's pages inherited at fork).
+void stop_server(ServeChild& server, E11& e) {
+  try {
+    const ServeStats stopped = server.stop();
+    e.server_cpu = stopped.cpu_s;
+    e.server_rss_mb = double(stopped.peak_rss_bytes) / (1024.0 * 1024.0);
+    e.bytes_out = stopped.bytes_out;
+    e.session_state_bytes = stopped.peak_state_bytes;
+    e.session_buffer_bytes = stopped.peak_buffer_bytes;
+  } catch (const Error& err) {
+    e.server_error = err.what();
+  }
+}
+
+// Over every VIEW, and apart: each client's first (from the base mesh) and the rest.
+void summarize_latencies(const std::vector<std::vector<double>>& latencies, E11& e) {
+  std::vector<double> all, first, later;
+  for (const auto& l : latencies) {
+    all.insert(all.end(), l.begin(), l.end());
+    if (l.empty()) continue;
+    first.push_back(l.front());
+    later.insert(later.end(), l.begin() + 1, l.end());
+  }
+  e.p50 = percentile(all, 0.5);
+  e.p99 = percentile(all, 0.99);
+  e.first_p50 = percentile(first, 0.5);
+  e.first_p99 = percentile(first, 0.99);
+  e.later_p99 = percentile(later, 0.99);
 }
 
 E11 run_e11(const BenchContext& context, const BenchModel& m, uint32_t clients) {
@@ -216,30 +249,141 @@ E11 run_e11(const BenchContext& context, const BenchModel& m, uint32_t clients) 
   const std::vector<std::vector<double>> latencies = e11_latencies(m, server->port(), clients, e);
   e.seconds = clock.seconds();
   e.ran = true;
-  try {
-    // The server's own figures (its VmHWM: wait4's peak would also count this bench's pages inherited at fork).
-    const ServeStats stopped = server->stop();
-    e.server_cpu = stopped.cpu_s;
-    e.server_rss_mb = double(stopped.peak_rss_bytes) / (1024.0 * 1024.0);
-    e.bytes_out = stopped.bytes_out;
-    e.session_state_bytes = stopped.peak_state_bytes;
-    e.session_buffer_bytes = stopped.peak_buffer_bytes;
-  } catch (const Error& err) {
-    e.server_error = err.what();
-  }
-  std::vector<double> all, first, later;
-  for (const auto& l : latencies) {
-    all.insert(all.end(), l.begin(), l.end());
-    if (l.empty()) continue;
-    first.push_back(l.front());
-    later.insert(later.end(), l.begin() + 1, l.end());
-  }
-  e.p50 = percentile(all, 0.5);
-  e.p99 = percentile(all, 0.99);
-  e.first_p50 = percentile(first, 0.5);
-  e.first_p99 = percentile(first, 0.99);
-  e.later_p99 = percentile(later, 0.99);
+  stop_server(*server, e);
+  summarize_latencies(latencies, e);
   return e;
+}
+
+Table e11_table() {
+  return Table({{"clients", true}, {"failed", true}, {"server CPU s", true}, {"server peak RSS MB", true},
+                {"peak session KB", true}, {"without tags KB", true},
+                {"bytes out", true}, {"latency p50 ms", true}, {"p99 ms", true}, {"first VIEW p50 ms", true},
+                {"first p99 ms", true}, {"later p99 ms", true}, {"wall s", true}});
+}
+
+// Without the server's own report its cells say so: a 0 there would read as a measurement.
+std::vector<std::string> e11_row(const E11& e) {
+  const bool server = e.server_error.empty();
+  const auto from_server = [&](const std::string& cell) { return server ? cell : std::string("no report"); };
+  const auto from_clients = [&](const std::string& cell) { return e.ran ? cell : std::string("not run"); };
+  return {std::to_string(e.clients), from_clients(std::to_string(e.failed)), from_server(fixed(e.server_cpu, 2)),
+          from_server(fixed(e.server_rss_mb, 0)), from_server(fixed(double(e.session_state_bytes) / 1024, 1)),
+          from_server(fixed(double(e.session_buffer_bytes) / 1024, 1)), from_server(thousands(e.bytes_out)),
+          from_clients(fixed(e.p50, 2)), from_clients(fixed(e.p99, 2)), from_clients(fixed(e.first_p50, 2)),
+          from_clients(fixed(e.first_p99, 2)), from_clients(fixed(e.later_p99, 2)), from_clients(fixed(e.seconds, 1))};
+}
+
+json e11_record(const E11& e) {
+  json row = {{"clients", e.clients}, {"failed", e.failed}, {"error", e.error}, {"p50_ms", e.p50}, {"p99_ms", e.p99},
+              {"first_view_p50_ms", e.first_p50}, {"first_view_p99_ms", e.first_p99},
+              {"later_views_p99_ms", e.later_p99}, {"seconds", e.seconds}};
+  if (e.server_error.empty()) {
+    row.update({{"server_cpu_seconds", e.server_cpu}, {"server_peak_rss_mb", e.server_rss_mb},
+                {"peak_session_state_bytes", e.session_state_bytes},
+                {"peak_session_bytes_without_tags", e.session_buffer_bytes}, {"bytes_out", e.bytes_out}});
+  } else {
+    row["server_error"] = e.server_error;
+  }
+  return row;
+}
+
+// E11 at each client count on `big`; a count whose server did not report is a failure of the run.
+std::string e11_section(BenchContext& context, const BenchModel& big, bool quick, json& out) {
+  Table e11 = e11_table();
+  json rows = json::array();
+  std::string notes;
+  for (uint32_t n : quick ? kQuickClientCounts : kClientCounts) {
+    std::fprintf(stderr, "bench: E11 %u clients on %s ... ", n, big.name.c_str());
+    const E11 e = run_e11(context, big, n);
+    std::fprintf(stderr, "%.1f s\n", e.seconds);
+    e11.add_row(e11_row(e));
+    rows.push_back(e11_record(e));
+    if (!e.server_error.empty()) {
+      notes += "- " + std::to_string(n) + " clients: **no server report**: " + e.server_error + "\n";
+      context.failures.push_back("E11 " + std::to_string(n) + " clients: " + e.server_error);
+    }
+  }
+  out["e11"] = rows;
+  print("\nE11: clients against one server process on " + big.name + " (" + std::to_string(kE11Frames) +
+        " frames each, loopback TCP)\n" + e11.markdown());
+  return "### E11: many clients, one server (" + big.name + ")\n\n" + e11.markdown() + "\n" +
+         (notes.empty() ? "" : notes + "\n");
+}
+
+// ---- E2–E5 per model ------------------------------------------------------------------------------------
+
+Table e2_table() {
+  return Table({{"model", false}, {"topology bits", true}, {"paper (Table 2)", true}, {"position bits", true},
+                {"refinement bits", true}, {"bytes/packet (wire)", true}});
+}
+
+Table e34_table() {
+  return Table({{"model", false}, {"frames", true}, {"lap 1 down B", true}, {"lap 1 up B", true}, {"lap 2 down B", true},
+                {"lap 2 up B", true}, {"tags / front (mean)", true}, {"(max)", true}, {"peak tags B", true},
+                {"peak front B", true}, {"front / nodes", true}, {"window / nodes", true}});
+}
+
+Table e5_table() {
+  return Table({{"model", false}, {"VD bytes", true}, {"VD faces", true}, {"VI bytes", true}, {"VI splits", true},
+                {"VD / VI", true}, {"paper VD / VI", true}});
+}
+
+// E2 and E3/E4 on one model: a row in each table and their entries in the model's record.
+void run_e2_to_e4(const BenchModel& m, bool quick, Table& e2, Table& e34, json& record) {
+  const E2 bits = packet_bits_of(m);
+  const std::vector<Camera> path = path_of(m, PathKind::orbit, quick ? kQuickPathFrames : kPathFrames);
+  const Laps laps = run_laps(m, path);
+  const double wire = laps.splits ? double(laps.payload_down) / double(laps.splits) : 0;
+  e2.add_row({m.name, fixed(bits.topology, 1), "96", fixed(bits.position, 1), fixed(bits.refinement, 1), fixed(wire, 1)});
+  e34.add_row({m.name, std::to_string(2 * path.size()), thousands(laps.lap_down[0]), thousands(laps.lap_up[0]),
+               thousands(laps.lap_down[1]), thousands(laps.lap_up[1]), fixed(100 * laps.mean_ratio, 1) + " %",
+               fixed(100 * laps.max_ratio, 1) + " %", thousands(laps.max_tag_bytes), thousands(laps.max_front_bytes),
+               percent_of(laps.max_front_nodes, m.served->view().node_count()),
+               percent_of(laps.max_window_nodes, m.served->view().node_count())});
+  record["e2"] = {{"topology_bits", bits.topology}, {"position_bits", bits.position},
+                  {"refinement_bits", bits.refinement}, {"wire_bytes_per_packet", wire}};
+  record["e3_e4"] = {{"lap_down", {laps.lap_down[0], laps.lap_down[1]}}, {"lap_up", {laps.lap_up[0], laps.lap_up[1]}},
+                     {"tags_over_front_mean", laps.mean_ratio}, {"tags_over_front_max", laps.max_ratio},
+                     {"frames", laps.frames}};
+}
+
+// E5 on one model and on the same model built with the deviation bound (build --deviation bound).
+void run_e5_pair(const BenchContext& context, const BenchModel& m, Table& e5, json& record) {
+  std::string paper = "";
+  for (const PaperE5& p : kPaperE5)
+    if (m.name == p.model) paper = fixed(double(p.view_dependent) / double(p.view_independent), 2);
+  const E5 vd = run_e5(m, close_view(m));
+  const BenchModel bounded = prepare_model(context, m.name, "bound");
+  const E5 vb = run_e5(bounded, close_view(bounded));
+  for (const auto& [label, e] : {std::pair{m.name, vd}, std::pair{m.name + ", bound", vb}})
+    e5.add_row({label, thousands(e.vd_bytes), thousands(e.vd_faces), thousands(e.vi_bytes), thousands(e.vi_splits),
+                fixed(double(e.vd_bytes) / double(std::max<uint64_t>(1, e.vi_bytes)), 2), paper});
+  for (const auto& [key, e] : {std::pair{"e5", vd}, std::pair{"e5_bound", vb}})
+    record[key] = {{"vd_bytes", e.vd_bytes}, {"vd_faces", e.vd_faces}, {"vi_bytes", e.vi_bytes}, {"vi_splits", e.vi_splits}};
+}
+
+// Prints the three tables and returns their part of the report.
+std::string e2_to_e5_sections(const Table& e2, const Table& e34, const Table& e5) {
+  print("\nE2: bits per vsplit packet (kim-lee-kobbelt Table 2: 96 topology bits)\n" + e2.markdown());
+  print("\nE3/E4: two laps of an orbit at τ = 1 px (Fig 6: tags ≈ 10 % of a stored front; Fig 7: lap 2 = 0)\n" + e34.markdown());
+  print("\nE5: bytes to satisfy τ = 1 px from a close view (Fig 9)\n" + e5.markdown());
+  std::string section = "### E2: bits per vsplit packet\n\n" + e2.markdown() +
+                        "\nTopology = ids of v_s, v̂_l, v̂_r and the cut flags, written with the model's tree/node id widths.\n\n";
+  section += "### E3/E4: two laps of one orbit path, τ = 1 px\n\n" + e34.markdown() +
+             "\nA stored front costs " + fixed(kFrontEntryBytes, 0) + " bytes per active node (one 64-bit id). The tags cost "
+             "a bit per node of the window, which spans from the coarsest active node to the finest, so tags / front "
+             "≈ window / (64 × front): at most 10 % needs a front of at least a sixth of the window (peak columns, "
+             "as a share of the hierarchy's nodes). A front that mixes unrefined coarse nodes with leaves spans "
+             "most nodes in any parents-first order: PM order instead of breadth-first shrank the window by a third at "
+             "most on bunny and dragon. Within a level, sibling pairs come largest parent deviation first, which "
+             "ends the window sooner (docs/internals.md).\n\n";
+  section += "### E5: bytes to satisfy τ = 1 px from a close view\n\n" + e5.markdown() +
+             "\nVI = a view-independent session (`stream --mode vi`) to the same view: the base mesh plus the plain "
+             "PM-order prefix (packets without refinement info) up to the last split the view needs, bytes down until "
+             "that VIEW's final batch. \"bound\" rows: the model built with `--deviation bound` (a bound on the input "
+             "surface below each node, whose chain over-refines a close view) instead of the default, Hoppe 1997's "
+             "sampled estimate (the criteria the paper uses).\n\n";
+  return section;
 }
 
 }  // namespace
@@ -256,107 +400,18 @@ void run_sender_group(BenchContext& context) {
   std::vector<std::string> names = context.options.models.empty() ? kDefaultModels : context.options.models;
   if (quick && context.options.models.empty()) names = {"bunny"};
 
-  Table e2({{"model", false}, {"topology bits", true}, {"paper (Table 2)", true}, {"position bits", true},
-            {"refinement bits", true}, {"bytes/packet (wire)", true}});
-  Table e34({{"model", false}, {"frames", true}, {"lap 1 down B", true}, {"lap 1 up B", true}, {"lap 2 down B", true},
-             {"lap 2 up B", true}, {"tags / front (mean)", true}, {"(max)", true}, {"peak tags B", true},
-             {"peak front B", true}, {"front / nodes", true}, {"window / nodes", true}});
-  Table e5({{"model", false}, {"VD bytes", true}, {"VD faces", true}, {"VI bytes", true}, {"VI splits", true},
-            {"VD / VI", true}, {"paper VD / VI", true}});
+  Table e2 = e2_table(), e34 = e34_table(), e5 = e5_table();
   std::vector<BenchModel> models;
   for (const std::string& name : names) {
     BenchModel m = prepare_model(context, name);
     json record = {{"model", name}};
-    const E2 bits = packet_bits_of(m);
-    const std::vector<Camera> path = path_of(m, PathKind::orbit, quick ? kQuickPathFrames : kPathFrames);
-    const Laps laps = run_laps(m, path);
-    const double wire = laps.splits ? double(laps.payload_down) / double(laps.splits) : 0;
-    e2.add_row({name, fixed(bits.topology, 1), "96", fixed(bits.position, 1), fixed(bits.refinement, 1), fixed(wire, 1)});
-    e34.add_row({name, std::to_string(2 * path.size()), thousands(laps.lap_down[0]), thousands(laps.lap_up[0]),
-                 thousands(laps.lap_down[1]), thousands(laps.lap_up[1]), fixed(100 * laps.mean_ratio, 1) + " %",
-                 fixed(100 * laps.max_ratio, 1) + " %", thousands(laps.max_tag_bytes), thousands(laps.max_front_bytes),
-                 percent_of(laps.max_front_nodes, m.served->view().node_count()),
-                 percent_of(laps.max_window_nodes, m.served->view().node_count())});
-    std::string paper = "";
-    for (const PaperE5& p : kPaperE5)
-      if (name == p.model) paper = fixed(double(p.view_dependent) / double(p.view_independent), 2);
-    const E5 vd = run_e5(m, close_view(m));
-    // The same model built with the deviation bound (build --deviation bound).
-    const BenchModel bounded = prepare_model(context, name, "bound");
-    const E5 vb = run_e5(bounded, close_view(bounded));
-    for (const auto& [label, e] : {std::pair{name, vd}, std::pair{name + ", bound", vb}})
-      e5.add_row({label, thousands(e.vd_bytes), thousands(e.vd_faces), thousands(e.vi_bytes), thousands(e.vi_splits),
-                  fixed(double(e.vd_bytes) / double(std::max<uint64_t>(1, e.vi_bytes)), 2), paper});
-    record["e2"] = {{"topology_bits", bits.topology}, {"position_bits", bits.position},
-                    {"refinement_bits", bits.refinement}, {"wire_bytes_per_packet", wire}};
-    record["e3_e4"] = {{"lap_down", {laps.lap_down[0], laps.lap_down[1]}}, {"lap_up", {laps.lap_up[0], laps.lap_up[1]}},
-                       {"tags_over_front_mean", laps.mean_ratio}, {"tags_over_front_max", laps.max_ratio},
-                       {"frames", laps.frames}};
-    for (const auto& [key, e] : {std::pair{"e5", vd}, std::pair{"e5_bound", vb}})
-      record[key] = {{"vd_bytes", e.vd_bytes}, {"vd_faces", e.vd_faces}, {"vi_bytes", e.vi_bytes}, {"vi_splits", e.vi_splits}};
+    run_e2_to_e4(m, quick, e2, e34, record);
+    run_e5_pair(context, m, e5, record);
     out["models"].push_back(record);
     models.push_back(std::move(m));
   }
-  print("\nE2: bits per vsplit packet (kim-lee-kobbelt Table 2: 96 topology bits)\n" + e2.markdown());
-  print("\nE3/E4: two laps of an orbit at τ = 1 px (Fig 6: tags ≈ 10 % of a stored front; Fig 7: lap 2 = 0)\n" + e34.markdown());
-  print("\nE5: bytes to satisfy τ = 1 px from a close view (Fig 9)\n" + e5.markdown());
-  section += "### E2: bits per vsplit packet\n\n" + e2.markdown() +
-             "\nTopology = ids of v_s, v̂_l, v̂_r and the cut flags, written with the model's tree/node id widths.\n\n";
-  section += "### E3/E4: two laps of one orbit path, τ = 1 px\n\n" + e34.markdown() +
-             "\nA stored front costs " + fixed(kFrontEntryBytes, 0) + " bytes per active node (one 64-bit id). The tags cost "
-             "a bit per node of the window, which spans from the coarsest active node to the finest, so tags / front "
-             "≈ window / (64 × front): at most 10 % needs a front of at least a sixth of the window (peak columns, "
-             "as a share of the hierarchy's nodes). A front that mixes unrefined coarse nodes with leaves spans "
-             "most nodes in any parents-first order: PM order instead of breadth-first shrank the window by a third at "
-             "most on bunny and dragon. Within a level, sibling pairs come largest parent deviation first, which "
-             "ends the window sooner (docs/internals.md).\n\n";
-  section += "### E5: bytes to satisfy τ = 1 px from a close view\n\n" + e5.markdown() +
-             "\nVI = a view-independent session (`stream --mode vi`) to the same view: the base mesh plus the plain "
-             "PM-order prefix (packets without refinement info) up to the last split the view needs, bytes down until "
-             "that VIEW's final batch. \"bound\" rows: the model built with `--deviation bound` (a bound on the input "
-             "surface below each node, whose chain over-refines a close view) instead of the default, Hoppe 1997's "
-             "sampled estimate (the criteria the paper uses).\n\n";
-
-  // E11 on the largest model asked for.
-  const BenchModel& big = models.back();
-  Table e11({{"clients", true}, {"failed", true}, {"server CPU s", true}, {"server peak RSS MB", true},
-             {"peak session KB", true}, {"without tags KB", true},
-             {"bytes out", true}, {"latency p50 ms", true}, {"p99 ms", true}, {"first VIEW p50 ms", true},
-             {"first p99 ms", true}, {"later p99 ms", true}, {"wall s", true}});
-  json e11_json = json::array();
-  std::string e11_notes;
-  for (uint32_t n : quick ? kQuickClientCounts : kClientCounts) {
-    std::fprintf(stderr, "bench: E11 %u clients on %s ... ", n, big.name.c_str());
-    const E11 e = run_e11(context, big, n);
-    std::fprintf(stderr, "%.1f s\n", e.seconds);
-    // Without the server's own report its cells say so: a 0 there would read as a measurement.
-    const bool server = e.server_error.empty();
-    const auto from_server = [&](const std::string& cell) { return server ? cell : std::string("no report"); };
-    const auto from_clients = [&](const std::string& cell) { return e.ran ? cell : std::string("not run"); };
-    e11.add_row({std::to_string(n), from_clients(std::to_string(e.failed)), from_server(fixed(e.server_cpu, 2)),
-                 from_server(fixed(e.server_rss_mb, 0)), from_server(fixed(double(e.session_state_bytes) / 1024, 1)),
-                 from_server(fixed(double(e.session_buffer_bytes) / 1024, 1)), from_server(thousands(e.bytes_out)),
-                 from_clients(fixed(e.p50, 2)), from_clients(fixed(e.p99, 2)), from_clients(fixed(e.first_p50, 2)),
-                 from_clients(fixed(e.first_p99, 2)), from_clients(fixed(e.later_p99, 2)), from_clients(fixed(e.seconds, 1))});
-    json row = {{"clients", n}, {"failed", e.failed}, {"error", e.error}, {"p50_ms", e.p50}, {"p99_ms", e.p99},
-                {"first_view_p50_ms", e.first_p50}, {"first_view_p99_ms", e.first_p99},
-                {"later_views_p99_ms", e.later_p99}, {"seconds", e.seconds}};
-    if (server) {
-      row.update({{"server_cpu_seconds", e.server_cpu}, {"server_peak_rss_mb", e.server_rss_mb},
-                  {"peak_session_state_bytes", e.session_state_bytes},
-                  {"peak_session_bytes_without_tags", e.session_buffer_bytes}, {"bytes_out", e.bytes_out}});
-    } else {
-      row["server_error"] = e.server_error;
-      e11_notes += "- " + std::to_string(n) + " clients: **no server report**: " + e.server_error + "\n";
-      context.failures.push_back("E11 " + std::to_string(n) + " clients: " + e.server_error);
-    }
-    e11_json.push_back(row);
-  }
-  out["e11"] = e11_json;
-  print("\nE11: clients against one server process on " + big.name + " (" + std::to_string(kE11Frames) +
-        " frames each, loopback TCP)\n" + e11.markdown());
-  section += "### E11: many clients, one server (" + big.name + ")\n\n" + e11.markdown() + "\n" +
-             (e11_notes.empty() ? "" : e11_notes + "\n");
+  section += e2_to_e5_sections(e2, e34, e5);
+  section += e11_section(context, models.back(), quick, out);  // on the largest model asked for
   write_text_file(context.options.out_dir / "sender.json", out.dump(2) + "\n");
   context.report += section;
 }

@@ -6,7 +6,7 @@
 #include <vector>
 
 #include "common/error.h"
-#include "pm/pm.h"
+#include "pm/hierarchy.h"
 
 namespace pms::app {
 namespace {

@@ -10,6 +10,8 @@
 #include <span>
 #include <string>
 
+#include "pm/hierarchy.h"
+
 namespace pms::app {
 
 struct OpenMeshPmStats {

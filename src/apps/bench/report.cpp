@@ -4,6 +4,7 @@
 #include <cstdio>
 
 #include "common/error.h"
+#include "protocol/packet_bits.h"
 
 namespace pms::app {
 namespace {

@@ -6,6 +6,8 @@
 #include <string>
 #include <vector>
 
+#include "protocol/packet_bits.h"
+
 namespace pms::app {
 
 struct Column {

@@ -4,7 +4,7 @@
 #include <random>
 #include <thread>
 
-#include "apps/bench/load_client.h"
+#include "client/load_client.h"
 #include "apps/bench/report.h"
 #include "common/error.h"
 
@@ -55,10 +55,10 @@ SoakClientLog run_soak_client(const SoakClientPlan& plan, uint32_t minutes) {
     const double m = std::max(0.0, seconds_between(plan.t0, t)) / 60;
     return log.minutes[std::min<size_t>(size_t(m), minutes - 1)];
   };
-  LoadClientOptions options;
+  client::LoadClientOptions options;
   options.answer_timeout = kAnswerTimeout;
   options.model = plan.view;
-  LoadClient client("127.0.0.1", plan.port, plan.model, options);
+  client::LoadClient client("127.0.0.1", plan.port, plan.model, options);
   const auto period = std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(1 / kSoakFramesPerSecond));
   Clock::time_point next_frame = plan.start;
   Clock::time_point next_drop = plan.start + first_drop_delay();

@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-#include "pm/pm.h"
+#include "pm/hierarchy.h"
 #include "refine/camera.h"
 
 namespace pms::app {

@@ -1,0 +1,170 @@
+// Kim, Lee, Kobbelt 2005 §6.2 (balanced vertex hierarchy); Xia & Varshney 1996 (independent sets of
+// collapses); Garland & Heckbert 1997 (quadric error). Each round takes the cheapest valid
+// half-edge collapses such that no vertex takes part in two of them, so a round raises any
+// subtree by at most one level; the cost is weighted by the height the new node would have, so
+// short subtrees merge first and node ids stay short.
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <thread>
+
+#include "builder/bounds.h"
+#include "builder/simplify.h"
+
+namespace pms {
+namespace {
+
+// Targets kept per vertex: the best one may be blocked this round while the next is fine.
+constexpr int kTargetsPerVertex = 3;
+// Share of the live vertices one round may remove: a lower share keeps the order closer to the
+// greedy quadric order (better intermediate meshes), a higher one gives fewer levels.
+constexpr double kRoundShare = 0.25;
+// Height weighting: key = (cost + epsilon) * 4^height. Exponential, because quadric
+// costs span orders of magnitude and a polynomial weight barely reorders them.
+constexpr int kHeightBaseLog2 = 2;  // base 4
+// A round removing fewer than this share of the live vertices ends the simplification: past that
+// point (components stuck at a few vertices) every further round would add a level to the
+// hierarchy, i.e. one more bit to every node id, for a handful of vertices.
+constexpr double kMinRoundShare = 0.10;
+constexpr size_t kPrefetchDistance = 8;
+constexpr uint32_t kTabulatedHeights = 64;  // far above any real hierarchy: ids must fit 64 bits
+
+// 4^height, as ldexp would scale by it (exactly: a power of two), without a libm call per edge.
+double height_weight(uint32_t height) {
+  static const auto table = [] {
+    std::array<double, kTabulatedHeights> t;
+    for (uint32_t h = 0; h < kTabulatedHeights; ++h) t[h] = std::ldexp(1.0, kHeightBaseLog2 * int(h));
+    return t;
+  }();
+  return height < kTabulatedHeights ? table[height] : std::ldexp(1.0, kHeightBaseLog2 * int(height));
+}
+
+struct Entry {
+  double key;
+  uint32_t t, u;
+};
+
+// Ties broken by vertex so the order, hence the hierarchy, is the same on every run.
+bool by_key(const Entry& a, const Entry& b) {
+  return a.key < b.key || (a.key == b.key && (a.t < b.t || (a.t == b.t && a.u < b.u)));
+}
+
+// Best targets of the vertices in [begin, end): read-only on the mesh, so chunks run in parallel.
+void collect_range(const CollapseMesh& mesh, const CollapseRecorder& recorder, double epsilon, uint32_t begin,
+                   uint32_t end, NeighbourScratch& marks, std::vector<Entry>& out) {
+  out.clear();
+  std::vector<uint32_t> neighbours;
+  for (uint32_t t = begin; t < end; ++t) {
+    if (!mesh.alive(t)) continue;
+    mesh.neighbours(t, neighbours, marks);
+    Entry best[kTargetsPerVertex];
+    int kept = 0;
+    const uint32_t height_t = recorder.height(t);
+    for (uint32_t u : neighbours) {
+      const double cost = mesh.quadric(t).error_sum(mesh.quadric(u), mesh.position(u));
+      const Entry e{(cost + epsilon) * height_weight(std::max(height_t, recorder.height(u))), t, u};
+      int i;
+      if (kept < kTargetsPerVertex) {
+        i = kept++;
+      } else if (e.key < best[kTargetsPerVertex - 1].key) {
+        i = kTargetsPerVertex - 1;
+      } else {
+        continue;
+      }
+      best[i] = e;
+      for (; i > 0 && best[i].key < best[i - 1].key; --i) std::swap(best[i], best[i - 1]);
+    }
+    out.insert(out.end(), best, best + kept);
+  }
+}
+
+// Candidates of every live vertex, in vertex order whatever the thread count.
+class CandidateCollector {
+ public:
+  CandidateCollector(size_t vertices, unsigned threads) : marks_(threads), parts_(threads) {
+    for (NeighbourScratch& m : marks_) m.resize(vertices);
+    // The first round fills them: reserved here, on the main heap, rather than grown by doubling in
+    // the workers' own arenas (copies, and page faults on memory the build cannot reuse).
+    for (unsigned i = 1; i < threads; ++i) parts_[i].reserve(kTargetsPerVertex * (vertices / threads + 1));
+  }
+
+  void collect(const CollapseMesh& mesh, const CollapseRecorder& recorder, double epsilon, std::vector<Entry>& out) {
+    const uint32_t n = mesh.vertex_count();
+    const unsigned threads = unsigned(parts_.size());
+    std::vector<std::thread> workers;
+    for (unsigned i = 1; i < threads; ++i)
+      workers.emplace_back([&, i] {
+        collect_range(mesh, recorder, epsilon, chunk(n, i), chunk(n, i + 1), marks_[i], parts_[i]);
+      });
+    // The first chunk goes straight to `out` (parts_[0] stays empty): one copy of it less per round.
+    collect_range(mesh, recorder, epsilon, 0, chunk(n, 1), marks_[0], out);
+    for (std::thread& w : workers) w.join();
+    for (unsigned i = 1; i < threads; ++i) out.insert(out.end(), parts_[i].begin(), parts_[i].end());
+  }
+
+ private:
+  uint32_t chunk(uint32_t n, unsigned i) const { return uint32_t(uint64_t(n) * i / parts_.size()); }
+  std::vector<NeighbourScratch> marks_;
+  std::vector<std::vector<Entry>> parts_;
+};
+
+}  // namespace
+
+CollapseForest simplify_balanced(const Mesh& input, const BuildOptions& options) {
+  CollapseMesh mesh(input);
+  CollapseRecorder recorder(input, mesh, options.deviation);
+  const uint32_t start = mesh.alive_vertex_count();
+  const uint32_t target = uint32_t(std::clamp<uint64_t>(options.base_vertices, 1, start));  // 0 -> 1: no limit
+  const double diagonal = bounds_of(input.positions).diagonal();
+  // Keeps zero-error collapses (flat regions) ordered by height too.
+  const double epsilon = 1e-10 * diagonal * diagonal;
+
+  std::vector<Entry> entries;
+  entries.reserve(kTargetsPerVertex * size_t(mesh.vertex_count()));
+  CandidateCollector collector(mesh.vertex_count(), std::clamp(std::thread::hardware_concurrency(), 1u, 8u));
+  std::vector<uint8_t> touched(mesh.vertex_count(), 0);
+  std::vector<uint32_t> new_index;
+  CollapseSite site;
+  while (mesh.alive_vertex_count() > target) {
+    collector.collect(mesh, recorder, epsilon, entries);
+    const uint32_t alive = mesh.alive_vertex_count();
+    const uint32_t quota = std::min<uint32_t>(alive - target, std::max<uint32_t>(1, uint32_t(alive * kRoundShare)));
+    std::fill(touched.begin(), touched.end(), 0);
+    // Usually the quota fills from the cheapest few quota-sized chunks: sort only what is walked.
+    uint32_t accepted = 0;
+    size_t sorted_end = 0;
+    for (size_t i = 0; i < entries.size() && accepted < quota; ++i) {
+      if (i == sorted_end) {
+        const size_t chunk_end = std::min(entries.size(), sorted_end + 2 * size_t(quota) + 1024);
+        std::nth_element(entries.begin() + sorted_end, entries.begin() + chunk_end - 1, entries.end(), by_key);
+        std::sort(entries.begin() + sorted_end, entries.begin() + chunk_end, by_key);
+        sorted_end = chunk_end;
+      }
+      // Entries come in cost order, i.e. scattered over the mesh: fetch a few ahead.
+      if (i + 2 * kPrefetchDistance < sorted_end) {
+        mesh.prefetch(entries[i + 2 * kPrefetchDistance].t);
+        mesh.prefetch(entries[i + 2 * kPrefetchDistance].u);
+      }
+      if (i + kPrefetchDistance < sorted_end) {
+        mesh.prefetch_fan(entries[i + kPrefetchDistance].t);
+        mesh.prefetch_fan(entries[i + kPrefetchDistance].u);
+      }
+      const Entry& e = entries[i];
+      if (touched[e.t] || touched[e.u]) continue;
+      if (!mesh.check_collapse(e.t, e.u, site)) continue;
+      recorder.apply(e.t, e.u, site);
+      touched[e.t] = touched[e.u] = 1;
+      ++accepted;
+    }
+    recorder.flush();
+    if (accepted == 0 || accepted < kMinRoundShare * alive) break;
+    if (mesh.alive_vertex_count() < mesh.vertex_count() / 2) {
+      recorder.compact(new_index);
+      touched.resize(mesh.vertex_count());
+    }
+    report(options.progress, "simplify", double(start - mesh.alive_vertex_count()) / double(start - target));
+  }
+  return recorder.finish();
+}
+
+}  // namespace pms

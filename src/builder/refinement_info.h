@@ -1,0 +1,56 @@
+// Hoppe 1997 §4 refinement info, computed while collapsing: bounding-sphere radius over the input
+// faces below a node, normal cone of those faces, and the deviation space (mu, delta) of the input
+// surface below the node against the surface around it right after its collapse: the larger of the
+// sampled leaves' residuals and each child's space grown by how far the collapse moved the surface
+// (Deviation::bound), or the moved surface counted once beside the children's spaces (::estimate).
+#pragma once
+#include <cstdint>
+#include <vector>
+
+#include "builder/build.h"
+#include "builder/collapse_mesh.h"
+#include "builder/leaf_samples.h"
+#include "io/mesh.h"
+#include "pm/refine_info.h"
+
+namespace pms {
+
+class RefinementInfoBuilder {
+ public:
+  // Leaves get their 1-ring bounds (`connectivity`: the untouched CollapseMesh of `mesh`, for its
+  // faces around each vertex); `max_nodes` = leaves + the most collapses that can follow.
+  RefinementInfoBuilder(const Mesh& mesh, const CollapseMesh& connectivity, size_t max_nodes, Deviation deviation);
+
+  float scale() const { return scale_; }
+
+  // Node s was made by collapsing vertex t (node t_node) into vertex u (node u_node): u's leaf
+  // samples become s's. Sequential.
+  void merge_leaves(uint32_t s, uint32_t t_node, uint32_t u_node, uint32_t t, uint32_t u);
+  // Bounds of s; the surviving vertex u of `mesh` carries s. Merged from the children's *decoded*
+  // values so every parent contains its children exactly as every consumer will see them.
+  // Reads the mesh only and writes only node s: independent collapses may run in parallel.
+  void compute(uint32_t s, uint32_t t_node, uint32_t u_node, const CollapseMesh& mesh, uint32_t u);
+
+  // Follows CollapseMesh::compact(): per-vertex arrays renumbered the same way.
+  void compact(const std::vector<uint32_t>& new_index);
+
+  const RefineInfo& info(uint32_t node) const { return info_[node]; }
+  std::vector<RefineInfo> take() { return std::move(info_); }
+
+ private:
+  const float* leaf_position(uint32_t leaf) const { return &positions_[3 * size_t(leaf)]; }
+  struct Fan;             // the faces around a vertex right after its collapse
+  struct DeviationSpace;  // (mu, delta) about an axis, Hoppe 1997 §4.3
+  static Fan fan_around(const CollapseMesh& mesh, uint32_t u);
+  void add_leaf_samples(const Fan& fan, uint32_t u, DeviationSpace& space) const;
+  void add_moved_surface(const Fan& fan, uint32_t t_leaf, DeviationSpace& space) const;
+
+  const std::vector<float>& positions_;
+  Deviation deviation_;
+  float scale_ = 1;
+  std::vector<RefineInfo> info_;
+  BigVector<uint32_t> survivor_;   // per node: leaf carrying its position
+  LeafSamples samples_;  // per current vertex, leaves of its subtree (Hoppe's points)
+};
+
+}  // namespace pms

@@ -1,0 +1,57 @@
+// What a streaming mode is on the client (docs/architecture.md, "Streaming modes"): what OPEN asks for,
+// what the client keeps beyond the session every mode shares (BASE, the partial hierarchy, the mesh:
+// ClientSession), and what one frame at a camera does. StreamingClient does the rest (connecting,
+// HELLO, OPEN, reconnects, counters). A mode lives in its own files and is chosen in one place,
+// make_client_mode() (client_modes.cpp).
+// Shared with the browser build: single-threaded, no std::ranges algorithms, std::format or coroutines.
+#pragma once
+#include <cstddef>
+#include <cstdint>
+#include <functional>
+#include <memory>
+
+#include "client/client_session.h"
+#include "protocol/client_messages.h"
+#include "protocol/server_messages.h"
+#include "refine/camera.h"
+
+namespace pms::client {
+
+struct FrameReport {
+  uint32_t frame = 0;
+  uint64_t up_bytes = 0, down_bytes = 0;  // this frame's traffic
+  uint64_t vsplits = 0;                   // packets received this frame
+  uint64_t faces = 0;
+  bool requested = false;                 // a VIEW was sent
+  double latency_ms = 0;                  // VIEW sent -> last split of its answer applied (0 if none)
+};
+
+// Called with each batch of an answer after the session attached it to the hierarchy.
+using BatchHandler = std::function<void(const protocol::VSplits& batch)>;
+
+// What a mode's frame may ask of the server.
+class ViewRequests {
+ public:
+  virtual ~ViewRequests() = default;
+  // VIEW for `camera`, then every batch up to its answer's final one (batches of earlier VIEWs too), each
+  // attached by the session and then handed to `on_batch`. Returns the splits received; fills the
+  // report's requested and latency.
+  virtual size_t request_view(const Camera& camera, const BatchHandler& on_batch, FrameReport& report) = 0;
+};
+
+class ClientMode {
+ public:
+  virtual ~ClientMode() = default;
+  // What OPEN asks the server to stream.
+  virtual protocol::StreamMode wire_mode() const = 0;
+  // Before BASE: how the session must read this mode's packets.
+  virtual void prepare(ClientSession& session) const = 0;
+  // One frame at `camera`: adapt and request as the mode does, until it has what the view needs.
+  virtual void frame(const Camera& camera, ClientSession& session, ViewRequests& server, FrameReport& report) = 0;
+  // After the last camera: finish what is still in motion (geomorphs).
+  virtual void settle(ClientSession& session) = 0;
+};
+
+std::unique_ptr<ClientMode> make_client_mode(protocol::StreamMode mode);
+
+}  // namespace pms::client

@@ -1,0 +1,18 @@
+// The one place a client's streaming modes are chosen: a new mode adds its case here and its own files.
+#include "client/client_mode.h"
+
+#include "client/sender_driven_client.h"
+#include "client/view_independent_client.h"
+#include "common/error.h"
+
+namespace pms::client {
+
+std::unique_ptr<ClientMode> make_client_mode(protocol::StreamMode mode) {
+  switch (mode) {
+    case protocol::StreamMode::sender_driven: return std::make_unique<SenderDrivenClient>();
+    case protocol::StreamMode::view_independent: return std::make_unique<ViewIndependentClient>();
+  }
+  fail("client", "a streaming mode this client does not know");
+}
+
+}  // namespace pms::client

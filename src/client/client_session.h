@@ -1,0 +1,53 @@
+// A streaming client's protocol logic without I/O (kim-lee-kobbelt 2005 §5.3): it keeps the partial vertex
+// hierarchy and the selectively refined mesh built from what the server sent.
+// Shared with the browser build: single-threaded, no std::ranges algorithms, std::format or coroutines.
+#pragma once
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+#include "pm/vertex_id.h"
+#include "protocol/client_messages.h"
+#include "protocol/server_messages.h"
+#include "protocol/stream_context.h"
+#include "refine/adapt.h"
+#include "refine/camera.h"
+#include "refine/selective_mesh.h"
+#include "refine/vertex_hierarchy.h"
+
+namespace pms::client {
+
+class ClientSession {
+ public:
+  // Builds the base mesh, hierarchy and refinement loop from a BASE. With `keep` (a resumed session whose
+  // hierarchy is already here) the BASE only has to match the model held.
+  void on_base(const protocol::Base& base);
+  // Attaches a batch's packets as leaves of the partial hierarchy (UpdateVHierarchy). Applying them to
+  // the mesh is the mode's business (client_mode.h).
+  void on_vsplits(const protocol::VSplits& batch);
+
+  bool has_model() const { return refinement_ != nullptr; }
+  const protocol::StreamContext& context() const { return context_; }
+  const protocol::Base& base() const { return base_; }
+  VertexHierarchy& hierarchy() { return *hierarchy_; }
+  SelectiveMesh& mesh() { return *mesh_; }
+  SelectiveRefinement& refinement() { return *refinement_; }
+  ViewParams view_params(const Camera& camera) const;
+  // The leaves of the partial hierarchy: what a resumed session sends in OPEN.
+  std::vector<VertexId> known_leaves() const;
+  uint64_t splits_received() const { return splits_received_; }
+
+  AdaptOptions adapt_options;
+  // Set before on_base, by the mode: whether its packets carry refinement info.
+  bool refinement_info = true;
+
+ private:
+  protocol::Base base_;
+  protocol::StreamContext context_;
+  std::unique_ptr<VertexHierarchy> hierarchy_;
+  std::unique_ptr<SelectiveMesh> mesh_;
+  std::unique_ptr<SelectiveRefinement> refinement_;
+  uint64_t splits_received_ = 0;
+};
+
+}  // namespace pms::client

@@ -1,0 +1,47 @@
+#include "client/server_connection.h"
+
+#include <optional>
+#include <utility>
+
+#include "common/error.h"
+
+namespace pms::client {
+
+ServerConnection::ServerConnection(std::unique_ptr<Transport> transport, const std::string& client_name,
+                                   std::chrono::milliseconds answer_timeout)
+    : transport_(std::move(transport)), answer_timeout_(answer_timeout) {
+  transport_->send(protocol::encode(protocol::Hello{protocol::kProtocolVersion, client_name}));
+  hello_ok_ = protocol::decode_hello_ok(expect(protocol::MessageType::hello_ok).payload);
+}
+
+protocol::Frame ServerConnection::expect(protocol::MessageType type) {
+  std::optional<protocol::Frame> frame = transport_->receive(answer_timeout_);
+  if (!frame) throw ConnectionError("server: no answer within " + std::to_string(answer_timeout_.count()) + " ms");
+  if (frame->type == protocol::MessageType::error) {
+    const protocol::ErrorMessage e = protocol::decode_error(frame->payload);
+    fail("server", protocol::to_string(e.code) + ": " + e.text);
+  }
+  if (frame->type != type)
+    fail("server", "expected " + protocol::to_string(type) + ", got " + protocol::to_string(frame->type));
+  return std::move(*frame);
+}
+
+protocol::Catalogue ServerConnection::list() {
+  transport_->send(protocol::encode(protocol::List{}));
+  return protocol::decode_catalogue(expect(protocol::MessageType::catalogue).payload);
+}
+
+protocol::Base ServerConnection::open(const protocol::Open& open) {
+  transport_->send(protocol::encode(open));
+  return protocol::decode_base(expect(protocol::MessageType::base).payload);
+}
+
+void ServerConnection::send_view(const Camera& camera, float tolerance, uint32_t frame) {
+  transport_->send(protocol::encode(protocol::View{camera, tolerance, frame}));
+}
+
+protocol::VSplits ServerConnection::next_batch(const protocol::StreamContext& context) {
+  return protocol::decode_vsplits(expect(protocol::MessageType::vsplits).payload, context);
+}
+
+}  // namespace pms::client

@@ -1,0 +1,43 @@
+// One connection to a streaming server, as every client mode and tool speaks it: HELLO, LIST, OPEN -> BASE,
+// VIEW -> VSPLITS batches, each answer awaited under a deadline. An ERROR from the server is a pms::Error
+// with its code and text; a silent or lost server is a ConnectionError (transport.h).
+#pragma once
+#include <chrono>
+#include <cstdint>
+#include <memory>
+#include <string>
+
+#include "client/transport.h"
+#include "protocol/client_messages.h"
+#include "protocol/framing.h"
+#include "protocol/message_types.h"
+#include "protocol/server_messages.h"
+#include "protocol/stream_context.h"
+#include "refine/camera.h"
+
+namespace pms::client {
+
+class ServerConnection {
+ public:
+  // Says HELLO over `transport` (already connected) and waits for HELLO_OK.
+  ServerConnection(std::unique_ptr<Transport> transport, const std::string& client_name,
+                   std::chrono::milliseconds answer_timeout);
+
+  protocol::Catalogue list();
+  protocol::Base open(const protocol::Open& open);
+  void send_view(const Camera& camera, float tolerance, uint32_t frame);
+  // The next VSPLITS batch (of this VIEW's answer or an earlier one's).
+  protocol::VSplits next_batch(const protocol::StreamContext& context);
+  // The next frame, which must be of `type`.
+  protocol::Frame expect(protocol::MessageType type);
+
+  LinkCounters counters() const { return transport_->counters(); }
+  const protocol::HelloOk& hello_ok() const { return hello_ok_; }
+
+ private:
+  std::unique_ptr<Transport> transport_;
+  std::chrono::milliseconds answer_timeout_;
+  protocol::HelloOk hello_ok_;
+};
+
+}  // namespace pms::client

@@ -1,0 +1,82 @@
+// A streaming client put together: protocol logic over a transport, frame by frame along a camera path,
+// for the headless viewer, the demo, tests and benches; it reconnects and resumes a lost session.
+#pragma once
+#include <chrono>
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <string>
+
+#include "client/client_mode.h"
+#include "client/client_session.h"
+#include "client/server_connection.h"
+#include "client/transport.h"
+#include "protocol/client_messages.h"
+#include "protocol/framing.h"
+#include "protocol/message_types.h"
+#include "protocol/server_messages.h"
+#include "refine/camera.h"
+
+namespace pms::client {
+
+struct ClientOptions {
+  float tolerance = 1;
+  uint32_t morph_frames = 0;
+  uint32_t max_ops = 0;  // per frame, 0 = no cap
+  // The read deadline: a server silent this long while an answer is due (or stuck mid-frame) is lost.
+  std::chrono::milliseconds answer_timeout{30000};
+  std::chrono::milliseconds connect_timeout{5000};  // each connection, reconnects included
+  std::chrono::milliseconds write_timeout{10000};   // a server that stops reading our frames is lost
+  std::string name = "pmstream-client";
+  // The streaming mode (client_mode.h): sender-driven, or the view-independent baseline.
+  protocol::StreamMode mode = protocol::StreamMode::sender_driven;
+  // A frame that loses a TCP connection reconnects and resumes the session (kim-lee-kobbelt §5.3) up to
+  // this many times, waiting reconnect_delay, then twice that, and so on (capped at 8 s); 0 = fail at once.
+  uint32_t reconnect_attempts = 0;
+  std::chrono::milliseconds reconnect_delay{500};
+  std::function<void(const std::string& reason, uint32_t attempt)> on_reconnect = {};  // told before each try
+};
+
+class StreamingClient : private ViewRequests {
+ public:
+  // Connects over TCP and says HELLO.
+  StreamingClient(const std::string& host, uint16_t port, const ClientOptions& options = {});
+  // Over any transport (already connected); says HELLO.
+  StreamingClient(std::unique_ptr<Transport> transport, const ClientOptions& options = {});
+  ~StreamingClient() override;
+
+  protocol::Catalogue list();
+  // OPEN; with `resume` (the leaves of a hierarchy held from an earlier session) the server rebuilds its
+  // tags from them. Waits for BASE.
+  void open(const std::string& model);
+  // Reconnects after a lost connection and resumes the session with the hierarchy held.
+  void resume(const std::string& host, uint16_t port);
+  void resume(std::unique_ptr<Transport> transport);
+
+  // One frame of the path, as the mode does it (sender-driven: adapt; when the front needs packets it
+  // lacks, VIEW, the whole answer, adapt again). See ClientOptions::reconnect_attempts.
+  FrameReport frame(const Camera& camera);
+  // Frames at the last camera until nothing changes and nothing moves (geomorphs).
+  void settle(const Camera& camera);
+
+  ClientSession& session() { return session_; }
+  LinkCounters counters() const;  // over every connection this client made
+
+ private:
+  FrameReport frame_once(const Camera& camera);
+  void reconnect(std::string reason, uint32_t& attempts);
+  size_t request_view(const Camera& camera, const BatchHandler& on_batch, FrameReport& report) override;
+  void greet(std::unique_ptr<Transport> transport);
+
+  ClientOptions options_;
+  std::unique_ptr<ClientMode> mode_;
+  std::unique_ptr<ServerConnection> server_;
+  LinkCounters past_;  // counters of closed links
+  ClientSession session_;
+  std::string model_;
+  std::string host_;  // empty: the transport was given, there is nothing to reconnect to
+  uint16_t port_ = 0;
+  uint32_t frame_ = 0;
+};
+
+}  // namespace pms::client

@@ -1,0 +1,19 @@
+// The messages a server derives from a model: its BASE, its catalogue entry and the session context.
+#pragma once
+#include <cstdint>
+#include <string>
+
+#include "pm/hierarchy.h"
+#include "protocol/message_types.h"
+#include "protocol/server_messages.h"
+#include "protocol/stream_context.h"
+
+namespace pms::protocol {
+
+// ---- building messages from a model --------------------------------------------------------------------
+
+StreamContext stream_context(const Base& base);  // throws pms::Error for widths a decoder would reject
+Base make_base(const ModelView& model, const std::string& name, uint32_t position_bits = kDefaultPositionBits);
+ModelInfo model_info(const ModelView& model, const std::string& name);  // counts from the hierarchy itself
+
+}  // namespace pms::protocol

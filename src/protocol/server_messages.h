@@ -1,0 +1,93 @@
+// What a server sends (docs/protocol.md): HELLO_OK, CATALOGUE, BASE, VSPLITS, ERROR, and their codecs.
+// Shared with the browser build: single-threaded, no std::ranges algorithms, std::format or coroutines.
+#pragma once
+#include <cstdint>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "pm/hierarchy.h"
+#include "pm/refine_info.h"
+#include "pm/split_record.h"
+#include "protocol/message_types.h"
+#include "protocol/stream_context.h"
+
+namespace pms::protocol {
+
+struct HelloOk {
+  uint16_t version = kProtocolVersion;
+  std::string server_name;
+  uint32_t max_client_message = kDefaultMaxMessage;  // largest payload the server accepts
+  uint32_t max_server_message = kDefaultMaxMessage;  // largest payload the server sends
+};
+
+struct ModelInfo {
+  std::string name;
+  uint64_t input_faces = 0;
+  uint32_t base_vertices = 0;
+  uint64_t vsplits = 0;
+  uint32_t tree_id_bits = 1;
+  uint32_t node_id_bits = 0;
+  bool has_normals = false;
+  bool has_colors = false;
+};
+struct Catalogue {
+  std::vector<ModelInfo> models;
+};
+
+// The base mesh with everything the client needs to refine it: roots (tree-id = index) with positions,
+// refinement info and attributes, faces as root triples. Positions are the exact ones when encoding (they
+// are quantized on the wire) and the dequantized ones after decoding.
+struct Base {
+  std::string model;
+  float bbox_min[3] = {0, 0, 0};
+  float bbox_max[3] = {0, 0, 0};
+  float scale = 1;  // refinement info is relative to it (pm.h)
+  uint32_t tree_id_bits = 1;
+  uint32_t node_id_bits = 0;
+  uint32_t position_bits = kDefaultPositionBits;
+  bool has_normals = false;
+  bool has_colors = false;
+  std::vector<float> positions;  // 3 per root
+  std::vector<RefineInfo> refine;
+  std::vector<float> normals;    // 3 per root when has_normals (octahedral 2 x 16 bits on the wire)
+  std::vector<uint8_t> colors;   // 4 per root when has_colors
+  std::vector<uint32_t> faces;   // 3 root indices per face, CCW
+  uint32_t root_count() const { return uint32_t(refine.size()); }
+};
+
+// One VIEW's answer may take several batches; the last has `final` set.
+struct VSplits {
+  uint32_t frame = 0;
+  bool final = false;
+  std::vector<SplitRecord> splits;  // in the order the client must apply them (parents and partial order first)
+};
+
+struct ErrorMessage {
+  ErrorCode code = ErrorCode::internal;
+  std::string text;
+};
+
+// ---- encoders: each returns a whole frame (header + payload) -------------------------------------------
+// They throw pms::Error for values the format cannot carry (a name over kMaxNameBytes, an id beyond the
+// context's widths, a resume list that is not a front).
+std::vector<uint8_t> encode(const HelloOk& m);
+std::vector<uint8_t> encode(const Catalogue& m);
+std::vector<uint8_t> encode(const Base& m);
+std::vector<uint8_t> encode(const VSplits& m, const StreamContext& context);
+std::vector<uint8_t> encode(const ErrorMessage& m);
+
+// ---- decoders: payload (without the frame header) -> message; throw ProtocolError ----------------------
+HelloOk decode_hello_ok(std::span<const uint8_t> payload);
+Catalogue decode_catalogue(std::span<const uint8_t> payload);
+Base decode_base(std::span<const uint8_t> payload);
+VSplits decode_vsplits(std::span<const uint8_t> payload, const StreamContext& context);
+ErrorMessage decode_error(std::span<const uint8_t> payload);  // codes this build does not know pass through
+
+// What a receiver decodes for `info`. A node with mu = delta = 0 (every real leaf, about half of any
+// hierarchy, and flat interior nodes) never asks to be refined whatever its radius and cone (criteria.h
+// screen_error_exceeds), so its info travels as one flag bit and decodes with radius 0 and no cone; any
+// other info arrives exactly as stored.
+RefineInfo as_sent(const RefineInfo& info);
+
+}  // namespace pms::protocol

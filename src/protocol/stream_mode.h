@@ -1,0 +1,21 @@
+// The streaming modes a session can be opened in, as OPEN names them and the CLI spells them.
+#pragma once
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <string_view>
+
+namespace pms::protocol {
+
+// sender_driven: kim-lee-kobbelt §5.3, the default: the server answers each VIEW with the splits the
+// client's front needs, with refinement info, and the client refines on its own in between.
+// view_independent: the baseline of kim-lee-kobbelt §8 (Fig. 9): the plain PM order, coarse to fine,
+// without refinement info, until the prefix sent satisfies the client's view.
+enum class StreamMode : uint8_t { sender_driven, view_independent };
+
+// The CLI's name of a mode ("sender", "vi"), and back; every name, comma-separated, for help texts.
+const char* mode_name(StreamMode mode);
+std::optional<StreamMode> mode_named(std::string_view name);
+std::string mode_names();
+
+}  // namespace pms::protocol

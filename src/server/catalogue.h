@@ -1,0 +1,57 @@
+// The models a server offers: memory-mapped .pms files and what every session shares of each, built once.
+#pragma once
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "pm/hierarchy.h"
+#include "pm/pms_file.h"
+#include "protocol/message_types.h"
+#include "protocol/packet_table.h"
+#include "protocol/server_messages.h"
+#include "protocol/stream_context.h"
+#include "refine/criteria.h"
+#include "server/limits.h"
+#include "server/selective_streaming.h"
+
+namespace pms::server {
+
+// One model as every session sees it: the mapped file, the BASE frame encoded once, and qrefine's
+// inputs per node decoded once (positions snapped to the wire grid, so the server evaluates exactly
+// the numbers its clients hold).
+struct ServedModel {
+  std::string name;  // file name without .pms
+  std::string path;
+  std::unique_ptr<PmsFile> file;
+  protocol::ModelInfo info;
+  protocol::StreamContext context;
+  std::shared_ptr<const std::vector<uint8_t>> base_frame;
+  std::vector<NodeCriteria> criteria;  // per node
+  std::vector<uint32_t> split_rank;    // per node: its index in split_order (view-independent mode); leaves kNone
+  DependencyFilter dependencies;
+  protocol::PacketTable packets;  // sender-driven packets (with refinement info)
+  const ModelView& view() const { return file->view(); }
+};
+
+class Catalogue {
+ public:
+  // Every FILE.pms given and every *.pms in the directories given; throws pms::Error naming the file
+  // for an unreadable or corrupt model, or two models with the same name.
+  static std::shared_ptr<const Catalogue> open(const std::vector<std::string>& paths,
+                                               uint32_t position_bits = protocol::kDefaultPositionBits);
+  const ServedModel* find(const std::string& name) const;
+  const std::vector<std::unique_ptr<ServedModel>>& models() const { return models_; }
+  // The CATALOGUE frame, encoded once and shared by every LIST's answer.
+  const std::shared_ptr<const std::vector<uint8_t>>& catalogue_frame() const { return catalogue_frame_; }
+  uint64_t mapped_bytes() const;
+  // pms::Error naming the model when a frame the server would send can exceed limits.max_server_message
+  // (a BASE, the CATALOGUE, a full VSPLITS batch), or the batch is too large to slice.
+  void check_limits(const ServerLimits& limits) const;
+
+ private:
+  std::vector<std::unique_ptr<ServedModel>> models_;
+  std::shared_ptr<const std::vector<uint8_t>> catalogue_frame_;
+};
+
+}  // namespace pms::server

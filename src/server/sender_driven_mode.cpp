@@ -1,0 +1,131 @@
+// The sender-driven mode: SelectiveStreaming over the session's active tags (kim-lee-kobbelt §5.3), and
+// the resume of §5.3 "Session close".
+#include "server/sender_driven_mode.h"
+
+#include <algorithm>
+#include <span>
+#include <string>
+#include <utility>
+#include <variant>
+
+#include "pm/hierarchy.h"
+#include "pm/vertex_id.h"
+#include "protocol/message_types.h"
+
+namespace pms::server {
+
+using protocol::ErrorCode;
+using protocol::ProtocolError;
+
+// The client's known leaves are the front. Two passes over the coded front: the first checks every leaf
+// and finds the window it spans, the second sets the tags in a window sized once (leaves come in preorder,
+// whose node indices jump back and forth).
+struct SenderDrivenMode::Resume {
+  Resume(std::vector<uint8_t> front, const protocol::OpenHeader& h, uint64_t max_leaves)
+      : payload(std::move(front)), header(h), decoder(payload, header, max_leaves) {}
+
+  std::vector<uint8_t> payload;
+  protocol::OpenHeader header;
+  protocol::FrontDecoder decoder;
+  bool checked = false;  // the first pass is done
+  uint32_t lo = UINT32_MAX, hi = 0;
+  ActiveTags tags;
+  std::vector<VertexId> leaves;  // one slice's
+};
+
+SenderDrivenMode::SenderDrivenMode(const protocol::OpenHeader& open, protocol::Frame& open_frame,
+                                   const ModeContext& context)
+    : context_(context), importance_(view_.importance(context.model.criteria)) {
+  const uint32_t roots = context_.model.view().root_count;
+  if (!open.resume) {
+    tags_ = ActiveTags(roots);
+    context_.outbox.push_back(context_.model.base_frame);
+    return;
+  }
+  if (open.resume_trees != roots)
+    throw ProtocolError(ErrorCode::bad_id, "OPEN: resume: the front covers " + std::to_string(open.resume_trees) +
+                                               " trees, the model has " + std::to_string(roots));
+  resume_ = std::make_unique<Resume>(std::move(open_frame.payload), open, protocol::kDefaultMaxResumeLeaves);
+}
+
+SenderDrivenMode::~SenderDrivenMode() = default;
+
+void SenderDrivenMode::receive(const protocol::ClientMessage& message) {
+  const auto* view = std::get_if<protocol::View>(&message);
+  if (!view) throw ProtocolError(ErrorCode::out_of_order, "a sender-driven session takes only VIEW after OPEN");
+  view_.record(*view, context_.model.view());
+}
+
+void SenderDrivenMode::pump(uint64_t& work) {
+  if (resume_) return pump_resume(work);
+  if (view_.pending) pump_answer(work);
+}
+
+void SenderDrivenMode::stop() {
+  streamer_.stop();
+  resume_.reset();
+  view_.pending = false;
+}
+
+void SenderDrivenMode::pump_resume(uint64_t& work) {
+  Resume& r = *resume_;
+  const ModelView& model = context_.model.view();
+  r.leaves.clear();
+  const bool decoded = r.decoder.next(context_.limits.slice_work, r.leaves);
+  work += r.leaves.size();
+  for (const VertexId& id : r.leaves) {
+    const uint32_t node = model.find(id);
+    if (!r.checked) {
+      if (node == kNone)
+        throw ProtocolError(ErrorCode::bad_id, "OPEN: resume id " + to_string(id) + " is not in the model");
+      r.lo = std::min(r.lo, node);
+      r.hi = std::max(r.hi, node);
+    } else {
+      r.tags.activate(node);
+    }
+  }
+  if (!decoded) return;
+  if (!r.checked) {  // every leaf is a node of the model: now set them
+    r.checked = true;
+    r.tags.reserve_window(r.lo, r.hi);
+    r.decoder = protocol::FrontDecoder(r.payload, r.header, protocol::kDefaultMaxResumeLeaves);
+    return;
+  }
+  tags_ = std::move(r.tags);
+  resume_.reset();
+  context_.outbox.push_back(context_.model.base_frame);
+}
+
+// A VIEW's answer: splits accumulate across slices into batches of batch_splits. Splits of an earlier
+// VIEW still in the batch go out with the new one's frame number (the client applies every batch).
+void SenderDrivenMode::pump_answer(uint64_t& work) {
+  if (std::exchange(view_.restart, false))
+    streamer_.start(context_.model.view(), context_.model.dependencies, tags_, importance_);
+  const size_t limit = context_.limits.batch_splits;
+  const size_t room = batch_.size() < limit ? limit - batch_.size() : 0;
+  const bool served = streamer_.step(room, context_.limits.slice_work, batch_, work);
+  while (batch_.size() > limit || (batch_.size() == limit && !served)) emit_batch(limit, false);
+  if (served) {
+    streamer_.stop();
+    view_.pending = false;
+    emit_batch(batch_.size(), true);
+  }
+}
+
+// The first `count` splits of the batch (a VSPLITS never holds more than batch_splits: a dependency chain
+// can carry the batch past it, and the rest waits for the next frame, in order).
+void SenderDrivenMode::emit_batch(size_t count, bool final) {
+  context_.queue(context_.model.packets.encode(view_.frame, final, std::span(batch_).first(count)));
+  splits_sent_ += count;
+  batch_.erase(batch_.begin(), batch_.begin() + ptrdiff_t(count));
+}
+
+size_t SenderDrivenMode::state_bytes() const {
+  size_t bytes = sizeof(*this) + tags_.memory_bytes() + streamer_.memory_bytes() + batch_.capacity() * sizeof(uint32_t);
+  if (resume_)
+    bytes += sizeof(Resume) + resume_->payload.capacity() + resume_->tags.memory_bytes() +
+             resume_->leaves.capacity() * sizeof(VertexId);
+  return bytes;
+}
+
+}  // namespace pms::server

@@ -1,0 +1,82 @@
+// One client's session on a streaming server, as protocol logic without I/O: frames in, frames out.
+// It does what every mode shares (HELLO, LIST, OPEN, CLOSE, errors) and hands the rest to the
+// SessionMode its OPEN chose (session_mode.h).
+#pragma once
+#include <cstddef>
+#include <cstdint>
+#include <deque>
+#include <memory>
+#include <optional>
+#include <string>
+
+#include "protocol/client_messages.h"
+#include "protocol/framing.h"
+#include "protocol/message_types.h"
+#include "server/active_tags.h"
+#include "server/catalogue.h"
+#include "server/limits.h"
+#include "server/session_mode.h"
+
+namespace pms::server {
+
+// The transport feeds the frames it reads, sends what is queued, and calls pump() while has_work() and
+// its send queue has room. No call does more than a bounded amount of work whatever the peer sends:
+// receive() only decodes and records (O(frame bytes)); the work a message asks for (a VIEW's answer, a
+// resume front) is done by pump(), one slice of at most limits.slice_work units at a time, so a transport
+// can share a thread among sessions.
+class Session {
+ public:
+  Session(std::shared_ptr<const Catalogue> catalogue, const ServerLimits& limits);
+  ~Session();
+  Session(const Session&) = delete;
+  Session& operator=(const Session&) = delete;
+
+  // One complete frame from the client (taken, not copied: a resume front keeps its payload).
+  // Protocol errors queue an ERROR and mark the session closing.
+  void receive(protocol::Frame frame);
+  // A transport-level failure (oversized frame, timeout, fault): queue ERROR and close.
+  void abort_with(protocol::ErrorCode code, const std::string& text);
+  // One slice of the pending work; queues what it completes. False when there was nothing to do.
+  bool pump();
+  bool has_work() const { return !closing_ && mode_ && mode_->has_work(); }
+  // Work units (nodes evaluated, split or resumed) the last receive() or pump() call did.
+  uint64_t last_work() const { return last_work_; }
+
+  std::deque<Buffer>& outbox() { return outbox_; }
+  const std::deque<Buffer>& outbox() const { return outbox_; }
+  bool closing() const { return closing_; }
+  bool greeted() const { return greeted_; }
+  bool opened() const { return mode_ && mode_->opened(); }  // BASE queued
+  // Bytes this session holds beyond the shared model (the outbox is the transport's and counted there),
+  // and the part of them that grows with the client's front.
+  size_t state_bytes() const { return sizeof(*this) + (mode_ ? mode_->state_bytes() : 0); }
+  size_t front_bytes() const { return mode_ ? mode_->front_bytes() : 0; }
+  // The client's front, for modes that keep one as active tags (empty otherwise).
+  const ActiveTags& tags() const;
+  const ServedModel* model() const { return model_; }
+  uint64_t splits_sent() const { return mode_ ? mode_->splits_sent() : 0; }
+  protocol::StreamMode mode() const { return mode_kind_; }
+  // The ERROR code this session ended with, if any (internal = a fault, not the peer's error).
+  std::optional<protocol::ErrorCode> error() const { return error_; }
+  const std::string& error_text() const { return error_text_; }
+
+ private:
+  void handle(protocol::Frame& frame);
+  void on_hello(const protocol::Hello& m);
+  void on_open(const protocol::OpenHeader& m, protocol::Frame& frame);
+  void queue(std::vector<uint8_t> frame);
+  void fault(const char* what);
+
+  std::shared_ptr<const Catalogue> catalogue_;
+  ServerLimits limits_;
+  bool greeted_ = false, closing_ = false;
+  std::optional<protocol::ErrorCode> error_;
+  std::string error_text_;
+  const ServedModel* model_ = nullptr;
+  protocol::StreamMode mode_kind_ = protocol::StreamMode::sender_driven;
+  std::unique_ptr<SessionMode> mode_;
+  uint64_t last_work_ = 0;
+  std::deque<Buffer> outbox_;
+};
+
+}  // namespace pms::server

@@ -1,0 +1,20 @@
+// A running server's counters, read by `serve --json` and the bench.
+#pragma once
+#include <atomic>
+#include <cstdint>
+
+namespace pms::server {
+
+struct ServerStats {
+  std::atomic<uint64_t> sessions_opened{0}, sessions_active{0}, sessions_refused{0};
+  std::atomic<uint64_t> sessions_timed_out{0};  // closed by a deadline (handshake, idle, frame, write)
+  std::atomic<uint64_t> sessions_failed{0};     // ended by an internal fault (ERROR internal)
+  std::atomic<uint64_t> protocol_errors{0};     // ERRORs for a peer's bad message or sequence
+  std::atomic<uint64_t> bytes_in{0}, bytes_out{0}, splits_sent{0}, errors_sent{0};
+  std::atomic<uint64_t> accept_failures{0};
+  std::atomic<uint64_t> longest_turn_us{0};    // the longest one session held an I/O thread in one go
+  std::atomic<uint64_t> peak_state_bytes{0};   // the largest Session::state_bytes() seen
+  std::atomic<uint64_t> peak_buffer_bytes{0};  // the same without the active tags
+};
+
+}  // namespace pms::server
