@@ -420,8 +420,10 @@ void Connection::pause_reads() {
 void Connection::schedule_next(bool socket_full) {
   // A stream that failed (a bad header) has nothing ready, yet its ERROR is still to be raised.
   const bool frames_waiting = (reader_.ready() > 0 || reader_.failed()) && !pending_.throttle;
-  // Bytes left although the socket was not full: the burst was used, or a write wait is pending.
-  const bool unsent = !socket_full && !session_.outbox().empty();
+  // Bytes left although the socket was not full: the burst was used. A pending write wait serves the
+  // connection itself once the socket takes more; posting turns meanwhile would spin on a peer that sends
+  // without reading.
+  const bool unsent = !socket_full && !pending_.writable && !session_.outbox().empty();
   if (session_.has_work() || frames_waiting || unsent) {
     post_turn();
   } else if (!pending_.read && reader_.ready() == 0) {
