@@ -59,6 +59,10 @@ std::filesystem::path locate_shared_dir(const std::string& explicit_dir, const s
 // available names when there is none.
 std::filesystem::path find_model(const std::filesystem::path& models_dir, const std::string& name);
 
+// A group that needs ../shared/models and finds none says so under its `section` heading in the report:
+// true when it must skip.
+bool skipped_without_models(BenchContext& context, const std::string& section);
+
 // "2 CPUs (nproc), <model name from /proc/cpuinfo>, 15.6 GiB RAM" for the report header.
 std::string machine_description();
 nlohmann::json machine_json();

@@ -298,10 +298,7 @@ std::string quality_sections(const BenchContext& context, const std::string& nam
 
 void run_refine_group(BenchContext& context) {
   std::string section = "## refine: selective refinement, renderer and image quality\n\n";
-  if (context.models_dir.empty()) {
-    context.report += section + "Skipped: ../shared/models not found.\n\n";
-    return;
-  }
+  if (skipped_without_models(context, section)) return;
   const bool quick = context.options.quick;
   const std::string name = context.options.models.empty() ? (quick ? "bunny" : "dragon") : context.options.models[0];
   const auto file = build_pms(context, name, "estimate");  // the default

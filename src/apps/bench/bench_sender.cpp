@@ -391,11 +391,7 @@ std::string e2_to_e5_sections(const Table& e2, const Table& e34, const Table& e5
 void run_sender_group(BenchContext& context) {
   json out = {{"command", context.options.command_line}, {"machine", machine_json()}, {"models", json::array()}};
   std::string section = "## sender: E2 packet bits, E3 server memory, E4 two laps, E5 bytes to satisfy τ, E11 many clients\n\n";
-  if (context.models_dir.empty()) {
-    section += "Skipped: ../shared/models not found.\n\n";
-    context.report += section;
-    return;
-  }
+  if (skipped_without_models(context, section)) return;
   const bool quick = context.options.quick;
   std::vector<std::string> names = context.options.models.empty() ? kDefaultModels : context.options.models;
   if (quick && context.options.models.empty()) names = {"bunny"};

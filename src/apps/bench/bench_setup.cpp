@@ -104,4 +104,10 @@ void write_text_file(const fs::path& path, const std::string& text) {
   if (!out) fail(path.string(), "cannot write");
 }
 
+bool skipped_without_models(BenchContext& context, const std::string& section) {
+  if (!context.models_dir.empty()) return false;
+  context.report += section + "Skipped: ../shared/models not found.\n\n";
+  return true;
+}
+
 }  // namespace pms::app

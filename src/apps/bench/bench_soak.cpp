@@ -327,10 +327,7 @@ json soak_json(const BenchContext& context, const SoakRun& run, const SoakFigure
 
 void run_soak_group(BenchContext& context) {
   std::string section = "## soak: many clients for minutes, with reconnects and resumes\n\n";
-  if (context.models_dir.empty()) {
-    context.report += section + "Skipped: ../shared/models not found.\n\n";
-    return;
-  }
+  if (skipped_without_models(context, section)) return;
   const uint32_t clients = context.options.soak_clients, minutes = context.options.soak_minutes;
   const std::string name = context.options.models.empty() ? kDefaultModel : context.options.models.back();
   const BenchModel m = prepare_model(context, name);
