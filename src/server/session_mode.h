@@ -37,6 +37,10 @@ struct ModeContext {
 // ProtocolError for the peer's, anything else is the server's fault (the Session turns either into ERROR).
 class SessionMode {
  public:
+  SessionMode() = default;
+  // A mode's importance function points into the mode itself (its LatestView): it stays where it was made.
+  SessionMode(const SessionMode&) = delete;
+  SessionMode& operator=(const SessionMode&) = delete;
   virtual ~SessionMode() = default;
 
   // A message after OPEN other than CLOSE (VIEW, for today's modes).
