@@ -42,7 +42,7 @@ void open_and_touch(const uint8_t* data, size_t size) {
   try {
     const auto file = pms::PmsFile::from_bytes("fuzz.pms", data, size);
     // What a consumer does first: ids must resolve to their own nodes.
-    const pms::ModelView& m = file->view();
+    const pms::ModelData& m = file->model();
     for (uint32_t n = 0; n < m.node_count(); ++n)
       if (m.find(m.id(n)) != n) __builtin_trap();
   } catch (const pms::Error&) {

@@ -80,7 +80,7 @@ Fixture make_fixture(const BuildOptions& options) {
   std::filesystem::remove_all(dir);
   f.catalogue->check_limits(f.limits);
   f.served = f.catalogue->find("terrain");
-  const ModelView& model = f.served->view();
+  const ModelData& model = f.served->model();
   float extent2 = 0;
   for (int i = 0; i < 3; ++i) {
     f.center[i] = 0.5f * (model.bbox_min[i] + model.bbox_max[i]);
@@ -160,7 +160,7 @@ struct FrontShape {
   std::vector<VertexId> leaves;
 };
 
-void grow_front(Input& in, const ModelView& model, VertexId id, uint32_t node, bool overreach, FrontShape& out) {
+void grow_front(Input& in, const ModelData& model, VertexId id, uint32_t node, bool overreach, FrontShape& out) {
   const bool splittable = node != kNone && !model.is_leaf(node);
   const bool split = (splittable || overreach) && in.bit();
   out.code.push_back(split);
@@ -174,7 +174,7 @@ void grow_front(Input& in, const ModelView& model, VertexId id, uint32_t node, b
   grow_front(in, model, id.child(1), child == kNone ? kNone : child + 1, overreach, out);
 }
 
-FrontShape shape_front(Input& in, const ModelView& model, uint32_t trees, bool overreach) {
+FrontShape shape_front(Input& in, const ModelData& model, uint32_t trees, bool overreach) {
   FrontShape out;
   // A count far over the model's is refused from the payload's length; its codes need not all be written.
   const uint32_t written = std::min<uint32_t>(trees, model.root_count + 64);
@@ -243,7 +243,7 @@ Camera wild_camera(Input& in) {
 
 // One connection: a session, what it was sent, and the client's frames the transport has not handed over.
 struct Connection {
-  explicit Connection(const Fixture& f) : session(f.catalogue, f.limits), expect(f.served->view(), f.served->name) {}
+  explicit Connection(const Fixture& f) : session(f.catalogue, f.limits), expect(f.served->model(), f.served->name) {}
   server::Session session;
   Expectation expect;
   std::deque<Frame> inbound;
@@ -253,7 +253,7 @@ struct Connection {
 class Harness {
  public:
   explicit Harness(const Fixture& f)
-      : f_(f), model_(f.served->view()), client_(model_, f.limits), c_(std::make_unique<Connection>(f)) {}
+      : f_(f), model_(f.served->model()), client_(model_, f.limits), c_(std::make_unique<Connection>(f)) {}
 
   void run(Input& in) {
     for (int op = 0; op < kMaxOps && !in.empty(); ++op) step(in);
@@ -559,7 +559,7 @@ class Harness {
   }
 
   const Fixture& f_;
-  const ModelView& model_;
+  const ModelData& model_;
   SimulatedClient client_;
   std::unique_ptr<Connection> c_;
   uint32_t next_frame_ = 0;

@@ -50,7 +50,7 @@ void trace(Line&& line) {
 
 class SimulatedClient {
  public:
-  SimulatedClient(const ModelView& model, const server::ServerLimits& limits)
+  SimulatedClient(const ModelData& model, const server::ServerLimits& limits)
       : model_(model), limits_(limits), held_(model.node_count(), 0) {}
 
   // A new connection: what the old one queued and the client did not read is lost; the leaves stay.
@@ -219,7 +219,7 @@ class SimulatedClient {
     return node;
   }
 
-  const ModelView& model_;
+  const ModelData& model_;
   const server::ServerLimits& limits_;
   std::vector<uint8_t> held_;  // per node: a leaf of the client's partial hierarchy
   bool has_front_ = false;     // a BASE arrived in this or an earlier session
@@ -235,7 +235,7 @@ class SimulatedClient {
 // bad OPEN still reach the session and may end it first.
 class Expectation {
  public:
-  Expectation(const ModelView& model, const std::string& name) : model_(model), name_(name) {}
+  Expectation(const ModelData& model, const std::string& name) : model_(model), name_(name) {}
 
   void received(const protocol::Frame& frame, SimulatedClient& client) {
     using protocol::ErrorCode;
@@ -311,7 +311,7 @@ class Expectation {
     return true;
   }
 
-  const ModelView& model_;
+  const ModelData& model_;
   std::string name_;
   bool greeted_ = false, open_ = false, closed_ = false;
   std::vector<protocol::ErrorCode> allowed_;

@@ -19,7 +19,7 @@ struct Frame3 {
   int up = 1, e1 = 2, e2 = 0;  // up axis and a right-handed horizontal pair: e1 x e2 = up
 };
 
-Frame3 frame_of(const ModelView& model) {
+Frame3 frame_of(const ModelData& model) {
   Frame3 f;
   float diag2 = 0;
   for (int k = 0; k < 3; ++k) {
@@ -68,7 +68,7 @@ float framing_distance(const PathOptions& options, const Frame3& f) {
 
 float parameter(uint32_t i, uint32_t frames) { return frames > 1 ? float(i) / float(frames - 1) : 0.0f; }
 
-std::vector<Camera> orbit(const ModelView&, const PathOptions& options, const Frame3& f) {
+std::vector<Camera> orbit(const ModelData&, const PathOptions& options, const Frame3& f) {
   const float distance = framing_distance(options, f);
   std::vector<Camera> path;
   for (uint32_t i = 0; i < options.frames; ++i) {
@@ -80,7 +80,7 @@ std::vector<Camera> orbit(const ModelView&, const PathOptions& options, const Fr
   return path;
 }
 
-std::vector<Camera> scan(const ModelView& model, const PathOptions& options, const Frame3& f) {
+std::vector<Camera> scan(const ModelData& model, const PathOptions& options, const Frame3& f) {
   const float height = f.extent[f.up];
   const float reach = height / (6 * std::tan(0.5f * options.fovy_deg * kDegree));  // a third of the height in view
   std::vector<Camera> path;
@@ -99,7 +99,7 @@ std::vector<Camera> scan(const ModelView& model, const PathOptions& options, con
   return path;
 }
 
-std::vector<Camera> zoom(const ModelView& model, const PathOptions& options, const Frame3& f) {
+std::vector<Camera> zoom(const ModelData& model, const PathOptions& options, const Frame3& f) {
   float dir[3];
   direction(f, 30 * kDegree, 20 * kDegree, dir);
   // The surface point seen head-on from there: the vertex farthest out along the direction (on the
@@ -139,7 +139,7 @@ PathKind parse_path_kind(const std::string& name) {
   fail("path", "unknown kind \"" + name + "\" (expected orbit, scan or zoom)");
 }
 
-std::vector<Camera> make_camera_path(PathKind kind, const ModelView& model, const PathOptions& options) {
+std::vector<Camera> make_camera_path(PathKind kind, const ModelData& model, const PathOptions& options) {
   if (options.frames == 0 || options.frames > 1000000) fail("path", "--frames must be in [1, 1000000]");
   if (!(options.fovy_deg > 0 && options.fovy_deg < 180)) fail("path", "--fovy must be in (0, 180) degrees");
   if (options.width == 0 || options.height == 0 || options.width > 16384 || options.height > 16384)

@@ -30,6 +30,6 @@ struct PathOptions {
 // while swinging 60° around it. Zoom: toward the model's most extreme surface vertex in the viewing
 // direction, from 6 framing distances (the model small on screen) to 2% of the box diagonal, geometric in
 // distance so the speed feels constant. pms::Error for no frames or bad camera settings.
-std::vector<Camera> make_camera_path(PathKind kind, const ModelView& model, const PathOptions& options);
+std::vector<Camera> make_camera_path(PathKind kind, const ModelData& model, const PathOptions& options);
 
 }  // namespace pms::app

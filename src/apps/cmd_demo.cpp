@@ -84,7 +84,7 @@ void run_demo(const DemoArgs& args) {
   fs::create_directories(args.out_dir);
   const std::string pms_path = prepare_model(args);
   const auto file = PmsFile::open(pms_path);
-  const ModelView& model = file->view();
+  const ModelData& model = file->model();
   const BuildStats& s = file->stats();
   std::printf("model:     %llu vertices, %llu faces; base %u vertices, %zu faces; %zu vsplits\n",
               (unsigned long long)s.input_vertices, (unsigned long long)s.input_faces, model.root_count,

@@ -11,7 +11,7 @@ namespace {
 
 void run_info(const std::string& path, bool json) {
   const auto file = PmsFile::open(path);
-  const ModelView& m = file->view();
+  const ModelData& m = file->model();
   // Structural numbers come from the arrays themselves, not from what the builder wrote.
   BuildStats s = file->stats();
   uint64_t leaves = 0;

@@ -18,7 +18,7 @@ struct PathArgs {
 void run_path(const PathArgs& args) {
   const PathKind kind = parse_path_kind(args.kind);
   const auto file = PmsFile::open(args.model);
-  const std::vector<Camera> frames = make_camera_path(kind, file->view(), args.options);
+  const std::vector<Camera> frames = make_camera_path(kind, file->model(), args.options);
   save_path(args.output, frames);
   std::printf("%s path over %s: %zu frames -> %s\n", args.kind.c_str(), args.model.c_str(), frames.size(),
               args.output.c_str());

@@ -30,7 +30,7 @@ void run_refine(const RefineArgs& args, bool splits_given, bool tolerance_given)
   Stopwatch clock;
   const Camera camera = camera_given ? load_camera(args.camera) : Camera{};
   const auto file = PmsFile::open(args.input);
-  const ModelView& model = file->view();
+  const ModelData& model = file->model();
   uint64_t applied = 0;
   Mesh mesh;
   if (camera_given) {

@@ -27,7 +27,7 @@ namespace pms::app {
 namespace {
 
 // A flat model (smallest box extent under a quarter of the others) is flown over; anything else orbited.
-std::vector<Camera> flight_path(const ModelView& model, uint32_t frames) {
+std::vector<Camera> flight_path(const ModelData& model, uint32_t frames) {
   float extent[3];
   for (int k = 0; k < 3; ++k) extent[k] = model.bbox_max[k] - model.bbox_min[k];
   const int up = int(std::min_element(extent, extent + 3) - extent);
@@ -165,7 +165,7 @@ void run_demo_flight(const std::string& pms_path, const std::string& model_name,
   tcp.start();
   std::printf("server:    %s on 127.0.0.1:%u (TCP, sender-driven)\n", model_name.c_str(), unsigned(tcp.port()));
 
-  const std::vector<Camera> path = flight_path(served.view(), options.frames);
+  const std::vector<Camera> path = flight_path(served.model(), options.frames);
   client::ClientOptions client_options;
   client_options.tolerance = options.tolerance;
   client::StreamingClient client("127.0.0.1", tcp.port(), client_options);

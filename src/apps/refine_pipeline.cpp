@@ -16,9 +16,9 @@ Mesh to_mesh(MeshArrays&& arrays) {
   return out;
 }
 
-Mesh refine_first_splits(const ModelView& model, uint64_t k) { return to_mesh(refine_in_stream_order(model, k)); }
+Mesh refine_first_splits(const ModelData& model, uint64_t k) { return to_mesh(refine_in_stream_order(model, k)); }
 
-Mesh refine_for_camera(const ModelView& model, const Camera& camera, float tolerance_px, uint64_t* vsplits) {
+Mesh refine_for_camera(const ModelData& model, const Camera& camera, float tolerance_px, uint64_t* vsplits) {
   ViewRefineResult result = refine_for_view(model, camera, tolerance_px);
   if (vsplits) *vsplits = result.mesh.slots.size() - model.root_count;
   return to_mesh(std::move(result.mesh));

@@ -14,10 +14,10 @@ namespace pms::app {
 Mesh to_mesh(MeshArrays&& arrays);
 
 // refine_in_stream_order() as a Mesh (with normals/colors) for the exporters.
-Mesh refine_first_splits(const ModelView& model, uint64_t k);
+Mesh refine_first_splits(const ModelData& model, uint64_t k);
 
 // refine_for_view(): from the base mesh to the converged mesh of `camera` at `tolerance_px`;
 // `vsplits` (if given) receives how many vsplits the mesh holds (its vertices minus the base's).
-Mesh refine_for_camera(const ModelView& model, const Camera& camera, float tolerance_px, uint64_t* vsplits = nullptr);
+Mesh refine_for_camera(const ModelData& model, const Camera& camera, float tolerance_px, uint64_t* vsplits = nullptr);
 
 }  // namespace pms::app

@@ -26,7 +26,7 @@ Mesh load_render_input(const std::string& path) {
   if (!is_pms(path)) return load_input(path, {});
   const auto file = PmsFile::open(path);
   try {
-    return refine_first_splits(file->view(), std::numeric_limits<uint64_t>::max());
+    return refine_first_splits(file->model(), std::numeric_limits<uint64_t>::max());
   } catch (const Error& e) {
     fail(path, e.what());  // the refinement's own errors do not know the file
   }

@@ -57,7 +57,7 @@ double LoadClient::view(const Camera& camera, float tolerance) {
 void LoadClient::drop() { server_.reset(); }
 
 void LoadClient::hold_roots() {
-  const ModelView& model = *options_.model;
+  const ModelData& model = *options_.model;
   leaf_bits_.assign((model.node_count() + 63) / 64, 0);
   for (uint32_t root = 0; root < model.root_count; ++root) leaf_bits_[root / 64] |= uint64_t(1) << (root % 64);
   held_splits_ = 0;
@@ -65,7 +65,7 @@ void LoadClient::hold_roots() {
 
 // UpdateVHierarchy (kim-lee-kobbelt §5.3) on leaves only: v_s stops being a leaf, its children become ones.
 void LoadClient::hold(const SplitRecord& split) {
-  const ModelView& model = *options_.model;
+  const ModelData& model = *options_.model;
   const uint32_t n = model.find(split.vs);
   const auto held = [&](uint32_t node) { return (leaf_bits_[node / 64] >> (node % 64)) & 1; };
   if (n == kNone || model.is_leaf(n))

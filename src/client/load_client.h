@@ -25,7 +25,7 @@ struct LoadClientOptions {
   // When set (the model the server serves), the client keeps the leaves of the partial hierarchy its
   // splits describe, a bit per node of the model, so it can resume (OPEN with those leaves, kim-lee-kobbelt
   // §5.3); and every split received must be of one of them, so none arrives twice, across a resume too.
-  const ModelView* model = nullptr;
+  const ModelData* model = nullptr;
 };
 
 class LoadClient {

@@ -55,7 +55,7 @@ void Hierarchy::compute_ids() {
 
 uint32_t Hierarchy::find(VertexId id) const { return detail::find_node(root_count, first_child, id); }
 
-uint32_t ModelView::find(VertexId id) const { return detail::find_node(root_count, first_child, id); }
+uint32_t ModelData::find(VertexId id) const { return detail::find_node(root_count, first_child, id); }
 
 // ceil(log2(n)) bits name n trees (kim-lee-kobbelt §6.2); a single tree still gets one bit so
 // that every id has a tree field (and 0 or 1 roots never yield a zero-width field).
@@ -72,8 +72,8 @@ uint32_t max_depth(const Hierarchy& h) {
   return deepest;
 }
 
-ModelView view_of(const Hierarchy& h) {
-  ModelView v;
+ModelData model_of(const Hierarchy& h) {
+  ModelData v;
   v.root_count = h.root_count;
   v.base_faces = h.base_faces;
   v.parent = h.parent;
@@ -94,11 +94,11 @@ ModelView view_of(const Hierarchy& h) {
   return v;
 }
 
-void check_node_arrays(const ModelView& view) {
-  const size_t n = view.node_count();
-  if (view.root_count > n || view.first_child.size() < n || view.position.size() < 3 * n || view.refine.size() < n ||
-      view.cut_left.size() < n || view.cut_right.size() < n || view.tree_id.size() < n || view.node_id.size() < n ||
-      (!view.normals.empty() && view.normals.size() < 3 * n) || (!view.colors.empty() && view.colors.size() < 4 * n))
+void check_node_arrays(const ModelData& model) {
+  const size_t n = model.node_count();
+  if (model.root_count > n || model.first_child.size() < n || model.position.size() < 3 * n || model.refine.size() < n ||
+      model.cut_left.size() < n || model.cut_right.size() < n || model.tree_id.size() < n || model.node_id.size() < n ||
+      (!model.normals.empty() && model.normals.size() < 3 * n) || (!model.colors.empty() && model.colors.size() < 4 * n))
     fail("model", "node arrays shorter than the node count");
 }
 

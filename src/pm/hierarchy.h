@@ -1,5 +1,5 @@
 // The view-dependent progressive-mesh model (kim-lee-kobbelt 2005 §4, §6; Hoppe 1997 §4): the packed vertex
-// hierarchy every mode shares, owned (Hierarchy) or viewed in place (ModelView, e.g. over a mapped .pms).
+// hierarchy every mode shares, owned (Hierarchy) or viewed in place (ModelData, e.g. over a mapped .pms).
 #pragma once
 #include <cstddef>
 #include <cstdint>
@@ -49,8 +49,8 @@ struct Hierarchy {
 uint32_t tree_id_bits(uint64_t root_count);
 uint32_t max_depth(const Hierarchy& h);
 
-// Read-only view of a model: either a Hierarchy in memory or a memory-mapped .pms file.
-struct ModelView {
+// A model as read-only arrays, over a Hierarchy in memory or a memory-mapped .pms file.
+struct ModelData {
   uint32_t root_count = 0;
   std::span<const uint32_t> base_faces;
   std::span<const uint32_t> parent, first_child;
@@ -73,10 +73,10 @@ struct ModelView {
   uint32_t find(VertexId id) const;
 };
 
-ModelView view_of(const Hierarchy& h);
+ModelData model_of(const Hierarchy& h);
 
-// pms::Error when a hand-made view's node arrays are shorter than its node count (a view of a validated
-// .pms file never is): what reads a view at node indices checks it first.
-void check_node_arrays(const ModelView& view);
+// pms::Error when a hand-made model's node arrays are shorter than its node count (a model of a validated
+// .pms file never is): what reads a model at node indices checks it first.
+void check_node_arrays(const ModelData& model);
 
 }  // namespace pms

@@ -1,4 +1,4 @@
-// Id derivation and lookup over plain arrays, shared by Hierarchy, ModelView and the .pms reader.
+// Id derivation and lookup over plain arrays, shared by Hierarchy, ModelData and the .pms reader.
 #pragma once
 #include <span>
 #include <string>

@@ -54,8 +54,8 @@ void check_counts(const std::string& where, const SectionMap& sections, const He
   optional(Color, kHasColors, "colors");
 }
 
-ModelView make_view(const SectionMap& sections, const HeadSection& head) {
-  ModelView v;
+ModelData make_model(const SectionMap& sections, const HeadSection& head) {
+  ModelData v;
   v.root_count = head.root_count;
   v.base_faces = typed<uint32_t>(sections[Base], 3);
   v.parent = typed<uint32_t>(sections[Parent], 1);
@@ -133,10 +133,10 @@ void PmsFile::parse(const std::string& name) {
   const SectionMap sections = locate_sections(name, data_, size_);
   const HeadSection head = read_head(name, sections);
   check_counts(name, sections, head);
-  view_ = make_view(sections, head);
-  validate_model(name, view_, tree_id_, node_id_);
-  view_.tree_id = tree_id_;
-  view_.node_id = node_id_;
+  model_ = make_model(sections, head);
+  validate_model(name, model_, tree_id_, node_id_);
+  model_.tree_id = tree_id_;
+  model_.node_id = node_id_;
   if (sections[Meta].present)
     stats_ = stats_from_json(name, {reinterpret_cast<const char*>(sections[Meta].data), size_t(sections[Meta].count)});
 }

@@ -40,7 +40,7 @@ class PmsFile {
   PmsFile(const PmsFile&) = delete;
   PmsFile& operator=(const PmsFile&) = delete;
 
-  const ModelView& view() const { return view_; }
+  const ModelData& model() const { return model_; }
   const BuildStats& stats() const { return stats_; }
   uint64_t file_size() const { return size_; }
 
@@ -53,7 +53,7 @@ class PmsFile {
   std::vector<uint8_t> owned_;  // when not memory-mapped
   std::vector<uint32_t> tree_id_;
   std::vector<uint64_t> node_id_;
-  ModelView view_;
+  ModelData model_;
   BuildStats stats_;
 };
 

@@ -98,7 +98,7 @@ inline std::string str(uint64_t value) { return std::to_string(value); }
 // order, depth <= 63, leaves, cut vertices, base faces, split order, finite values, refinement
 // info. Node arrays must already have node_count() elements (normals/colors: that or empty) and
 // base_faces a multiple of 3; tree_id/node_id are resized and filled. O(n) time, n bytes of scratch.
-void validate_model(const std::string& where, const ModelView& view, std::vector<uint32_t>& tree_id,
+void validate_model(const std::string& where, const ModelData& model, std::vector<uint32_t>& tree_id,
                     std::vector<uint64_t>& node_id);
 
 // META: BuildStats as JSON. Missing fields keep their defaults; malformed JSON or a field of the

@@ -19,7 +19,7 @@ void section_error(const std::string& where, Section section, const std::string&
 
 namespace {
 
-void check_head(const std::string& where, const ModelView& m) {
+void check_head(const std::string& where, const ModelData& m) {
   if (m.root_count == 0) section_error(where, Head, "no base vertices");
   if (m.root_count > m.node_count())
     section_error(where, Head, str(m.root_count) + " base vertices but only " + str(m.node_count()) + " nodes");
@@ -30,7 +30,7 @@ void check_head(const std::string& where, const ModelView& m) {
 }
 
 // Roots have no parent; every other node's parent precedes it (kim-lee-kobbelt §6.1 packing).
-void check_parents(const std::string& where, const ModelView& m) {
+void check_parents(const std::string& where, const ModelData& m) {
   for (uint32_t i = 0; i < m.node_count(); ++i) {
     const uint32_t p = m.parent[i];
     if (i < m.root_count) {
@@ -45,7 +45,7 @@ void check_parents(const std::string& where, const ModelView& m) {
 
 // Children are adjacent, after their parent, and agree with the parent links both ways: with
 // check_parents this makes the arrays a binary forest.
-void check_children(const std::string& where, const ModelView& m) {
+void check_children(const std::string& where, const ModelData& m) {
   const uint64_t n = m.node_count();
   for (uint32_t i = 0; i < n; ++i) {
     const uint32_t c = m.first_child[i];
@@ -80,7 +80,7 @@ void check_breadth_first(const std::string& where, const std::vector<uint64_t>& 
 }
 
 // Leaves name the input vertices, each exactly once; internal nodes name none.
-void check_leaves(const std::string& where, const ModelView& m) {
+void check_leaves(const std::string& where, const ModelData& m) {
   const size_t leaves = (m.node_count() + m.root_count) / 2;  // a binary forest, checked above
   std::vector<uint8_t> seen(leaves, 0);
   for (uint32_t i = 0; i < m.node_count(); ++i) {
@@ -99,7 +99,7 @@ void check_leaves(const std::string& where, const ModelView& m) {
 
 // Fundamental cut vertices (kim-lee-kobbelt §4): leaves outside the split node's own subtree,
 // at least one per split (a boundary split has only one).
-void check_cuts(const std::string& where, const ModelView& m, const std::vector<uint32_t>& tree_id,
+void check_cuts(const std::string& where, const ModelData& m, const std::vector<uint32_t>& tree_id,
                 const std::vector<uint64_t>& node_id) {
   const Section sides[2] = {CutLeft, CutRight};
   for (uint32_t i = 0; i < m.node_count(); ++i) {
@@ -119,7 +119,7 @@ void check_cuts(const std::string& where, const ModelView& m, const std::vector<
   }
 }
 
-void check_base(const std::string& where, const ModelView& m) {
+void check_base(const std::string& where, const ModelData& m) {
   for (size_t k = 0; k < m.base_faces.size(); ++k)
     if (m.base_faces[k] >= m.root_count)
       section_error(where, Base,
@@ -128,7 +128,7 @@ void check_base(const std::string& where, const ModelView& m) {
 }
 
 // PM order: every internal node once, each after its parent, so splits apply front to back.
-void check_split_order(const std::string& where, const ModelView& m) {
+void check_split_order(const std::string& where, const ModelData& m) {
   const size_t internal = (m.node_count() - m.root_count) / 2;
   if (m.split_order.size() != internal)
     section_error(where, SplitOrder, str(m.split_order.size()) + " entries for " + str(internal) + " internal nodes");
@@ -152,7 +152,7 @@ void check_finite(const std::string& where, Section section, std::span<const flo
 
 // Only values the quantizer produces: lengths non-negative (infinity allowed: "always refine") at the
 // stored precision, axis and angle in range. The wire carries exactly these, nothing finer.
-void check_refine(const std::string& where, const ModelView& m) {
+void check_refine(const std::string& where, const ModelData& m) {
   for (size_t i = 0; i < m.refine.size(); ++i)
     if (!is_canonical(m.refine[i]))
       section_error(where, Refine, "node " + str(i) + ": a length is negative, NaN or finer than stored, or the cone is out of range");
@@ -160,7 +160,7 @@ void check_refine(const std::string& where, const ModelView& m) {
 
 }  // namespace
 
-void validate_model(const std::string& where, const ModelView& m, std::vector<uint32_t>& tree_id,
+void validate_model(const std::string& where, const ModelData& m, std::vector<uint32_t>& tree_id,
                     std::vector<uint64_t>& node_id) {
   check_head(where, m);
   check_parents(where, m);

@@ -116,7 +116,7 @@ void write_pms(const std::string& path, const Hierarchy& h, const BuildStats& st
   check_shape(where, h);
   std::vector<uint32_t> tree_id;
   std::vector<uint64_t> node_id;
-  validate_model(where, view_of(h), tree_id, node_id);
+  validate_model(where, model_of(h), tree_id, node_id);
 
   const HeadSection head = make_head(h);
   const std::string meta = stats_to_json(stats);

@@ -22,8 +22,8 @@ struct SplitRecord {
   uint8_t color_t[4] = {0, 0, 0, 0};
 };
 
-// The vsplit packet of internal node `node` of a complete model: ids from view.id(), cut ids from the
+// The vsplit packet of internal node `node` of a complete model: ids from model.id(), cut ids from the
 // cut_left / cut_right leaf indices. Throws pms::Error for a leaf or an index out of range.
-SplitRecord split_record(const ModelView& view, uint32_t node);
+SplitRecord split_record(const ModelData& model, uint32_t node);
 
 }  // namespace pms

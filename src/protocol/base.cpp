@@ -148,7 +148,7 @@ Base decode_base(std::span<const uint8_t> payload) {
   return m;
 }
 
-Base make_base(const ModelView& model, const std::string& name, uint32_t position_bits) {
+Base make_base(const ModelData& model, const std::string& name, uint32_t position_bits) {
   Base m;
   m.model = name;
   const uint32_t roots = model.root_count;
@@ -171,7 +171,7 @@ Base make_base(const ModelView& model, const std::string& name, uint32_t positio
   return m;
 }
 
-ModelInfo model_info(const ModelView& model, const std::string& name) {
+ModelInfo model_info(const ModelData& model, const std::string& name) {
   ModelInfo info;
   info.name = name;
   info.base_vertices = model.root_count;

@@ -13,7 +13,7 @@ namespace pms::protocol {
 // ---- building messages from a model --------------------------------------------------------------------
 
 StreamContext stream_context(const Base& base);  // throws pms::Error for widths a decoder would reject
-Base make_base(const ModelView& model, const std::string& name, uint32_t position_bits = kDefaultPositionBits);
-ModelInfo model_info(const ModelView& model, const std::string& name);  // counts from the hierarchy itself
+Base make_base(const ModelData& model, const std::string& name, uint32_t position_bits = kDefaultPositionBits);
+ModelInfo model_info(const ModelData& model, const std::string& name);  // counts from the hierarchy itself
 
 }  // namespace pms::protocol

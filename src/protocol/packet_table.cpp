@@ -25,7 +25,7 @@ struct Block {
 
 }  // namespace
 
-PacketTable::PacketTable(const ModelView& model, const StreamContext& context) {
+PacketTable::PacketTable(const ModelData& model, const StreamContext& context) {
   if (const std::string why = check_context(context); !why.empty()) fail("VSPLITS", "stream context: " + why);
   const size_t n = model.node_count();
   std::vector<Block> blocks((n + kBlockNodes - 1) / kBlockNodes);

@@ -19,7 +19,7 @@ class PacketTable {
  public:
   PacketTable() = default;
   // Throws pms::Error for a model the context cannot carry (as encode(VSplits) would).
-  PacketTable(const ModelView& model, const StreamContext& context);
+  PacketTable(const ModelData& model, const StreamContext& context);
   bool empty() const { return where_.empty(); }
   size_t memory_bytes() const { return (bits_.capacity() + where_.capacity()) * sizeof(uint64_t); }
 

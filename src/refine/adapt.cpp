@@ -274,7 +274,7 @@ void SelectiveRefinement::extract(MeshArrays& out) const {
   if (morphs_.enabled()) morphs_.apply(mesh_->hierarchy(), out);
 }
 
-size_t add_model_splits(VertexHierarchy& hierarchy, const ModelView& model, std::span<const uint32_t> leaves) {
+size_t add_model_splits(VertexHierarchy& hierarchy, const ModelData& model, std::span<const uint32_t> leaves) {
   size_t added = 0;
   for (uint32_t slot : leaves) {
     if (slot >= hierarchy.size() || !hierarchy.is_leaf(slot)) continue;
@@ -286,7 +286,7 @@ size_t add_model_splits(VertexHierarchy& hierarchy, const ModelView& model, std:
   return added;
 }
 
-ViewRefineResult refine_for_view(const ModelView& model, const Camera& camera, float tolerance_px) {
+ViewRefineResult refine_for_view(const ModelData& model, const Camera& camera, float tolerance_px) {
   const ViewParams view = make_view(camera, model.bbox_min, model.bbox_max);
   VertexHierarchy hierarchy = VertexHierarchy::from_model(model);
   SelectiveMesh mesh(hierarchy, model.base_faces);

@@ -43,7 +43,7 @@ struct ConvergeStats {
 };
 
 // Owns no mesh: adapts `mesh` (and reads its hierarchy, which may grow between frames as packets arrive).
-// `model_scale` is the model's scale (ModelView::scale): refinement info is decoded with it.
+// `model_scale` is the model's scale (ModelData::scale): refinement info is decoded with it.
 class SelectiveRefinement {
  public:
   SelectiveRefinement(SelectiveMesh& mesh, float model_scale, const AdaptOptions& options = {});
@@ -115,7 +115,7 @@ class SelectiveRefinement {
 
 // Local refinement of a complete model: adds the vsplit packets of those `leaves` that are internal nodes
 // of `model` (a Fetch for SelectiveRefinement::converge). Returns how many it added.
-size_t add_model_splits(VertexHierarchy& hierarchy, const ModelView& model, std::span<const uint32_t> leaves);
+size_t add_model_splits(VertexHierarchy& hierarchy, const ModelData& model, std::span<const uint32_t> leaves);
 
 struct ViewRefineResult {
   MeshArrays mesh;
@@ -124,6 +124,6 @@ struct ViewRefineResult {
 
 // The mesh of `model` for one view: from the base mesh, splits fetched from the model as the loop asks
 // for them, run to convergence (no geomorphs).
-ViewRefineResult refine_for_view(const ModelView& model, const Camera& camera, float tolerance_px);
+ViewRefineResult refine_for_view(const ModelData& model, const Camera& camera, float tolerance_px);
 
 }  // namespace pms

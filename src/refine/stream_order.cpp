@@ -11,7 +11,7 @@
 
 namespace pms {
 
-MeshArrays refine_in_stream_order(const ModelView& model, uint64_t k) {
+MeshArrays refine_in_stream_order(const ModelData& model, uint64_t k) {
   VertexHierarchy hierarchy = VertexHierarchy::from_model(model);
   hierarchy.reserve(model.node_count());
   SelectiveMesh mesh(hierarchy, model.base_faces);

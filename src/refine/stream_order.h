@@ -9,6 +9,6 @@
 namespace pms {
 
 // Applies split_order[0, k) (k clamped to the total) and returns the resulting mesh.
-MeshArrays refine_in_stream_order(const ModelView& model, uint64_t k);
+MeshArrays refine_in_stream_order(const ModelData& model, uint64_t k);
 
 }  // namespace pms

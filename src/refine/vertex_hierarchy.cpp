@@ -113,14 +113,14 @@ uint32_t VertexHierarchy::add_split(const SplitRecord& split) {
   return t;
 }
 
-VertexHierarchy VertexHierarchy::from_model(const ModelView& view) {
-  check_node_arrays(view);
-  const bool normals = !view.normals.empty(), colors = !view.colors.empty();
+VertexHierarchy VertexHierarchy::from_model(const ModelData& model) {
+  check_node_arrays(model);
+  const bool normals = !model.normals.empty(), colors = !model.colors.empty();
   VertexHierarchy h(normals, colors);
-  h.reserve(view.root_count);
-  for (uint32_t r = 0; r < view.root_count; ++r)
-    h.add_root(view.id(r), &view.position[3 * size_t(r)], view.refine[r], normals ? &view.normals[3 * size_t(r)] : nullptr,
-               colors ? &view.colors[4 * size_t(r)] : nullptr);
+  h.reserve(model.root_count);
+  for (uint32_t r = 0; r < model.root_count; ++r)
+    h.add_root(model.id(r), &model.position[3 * size_t(r)], model.refine[r], normals ? &model.normals[3 * size_t(r)] : nullptr,
+               colors ? &model.colors[4 * size_t(r)] : nullptr);
   return h;
 }
 

@@ -20,7 +20,7 @@ class VertexHierarchy {
   explicit VertexHierarchy(bool has_normals = false, bool has_colors = false);
 
   // Loads the roots (base-mesh vertices) of a complete model; splits are added as they "arrive".
-  static VertexHierarchy from_model(const ModelView& view);
+  static VertexHierarchy from_model(const ModelData& model);
 
   // Roots must come in tree-id order (tree-id = base-vertex index, docs/internals.md, "Vertex ids"). `normal`/`color`
   // are required when the hierarchy keeps them. Returns the slot.

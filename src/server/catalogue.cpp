@@ -42,12 +42,12 @@ std::vector<std::string> model_files(const std::vector<std::string>& paths) {
 }
 
 // qrefine's inputs per node on the positions the clients will hold (snapped to the wire grid).
-std::vector<NodeCriteria> decode_criteria(const ModelView& view, const protocol::PositionGrid& grid) {
-  std::vector<NodeCriteria> criteria(view.node_count());
+std::vector<NodeCriteria> decode_criteria(const ModelData& model, const protocol::PositionGrid& grid) {
+  std::vector<NodeCriteria> criteria(model.node_count());
   for (size_t n = 0; n < criteria.size(); ++n) {
     float p[3];
-    protocol::snap_position(grid, &view.position[3 * n], p);
-    criteria[n] = node_criteria(p, dequantize_refine(view.refine[n], view.scale));
+    protocol::snap_position(grid, &model.position[3 * n], p);
+    criteria[n] = node_criteria(p, dequantize_refine(model.refine[n], model.scale));
   }
   return criteria;
 }
@@ -57,18 +57,18 @@ std::unique_ptr<ServedModel> open_model(const std::string& path, uint32_t positi
   model->path = path;
   model->name = fs::path(path).stem().string();
   model->file = PmsFile::open(path);
-  const ModelView& view = model->file->view();
-  model->info = protocol::model_info(view, model->name);
-  const protocol::Base base = protocol::make_base(view, model->name, position_bits);
+  const ModelData& data = model->file->model();
+  model->info = protocol::model_info(data, model->name);
+  const protocol::Base base = protocol::make_base(data, model->name, position_bits);
   model->context = protocol::stream_context(base);
   model->base_frame = std::make_shared<const std::vector<uint8_t>>(protocol::encode(base));
-  model->criteria = decode_criteria(view, model->context.grid);
-  model->split_rank.assign(view.node_count(), kNone);
-  for (uint32_t i = 0; i < view.split_order.size(); ++i) model->split_rank[view.split_order[i]] = i;
-  model->dependencies = DependencyFilter(view);
+  model->criteria = decode_criteria(data, model->context.grid);
+  model->split_rank.assign(data.node_count(), kNone);
+  for (uint32_t i = 0; i < data.split_order.size(); ++i) model->split_rank[data.split_order[i]] = i;
+  model->dependencies = DependencyFilter(data);
   protocol::StreamContext sender = model->context;
   sender.has_refinement = true;
-  model->packets = protocol::PacketTable(view, sender);
+  model->packets = protocol::PacketTable(data, sender);
   return model;
 }
 

@@ -31,7 +31,7 @@ struct ServedModel {
   std::vector<uint32_t> split_rank;    // per node: its index in split_order (view-independent mode); leaves kNone
   DependencyFilter dependencies;
   protocol::PacketTable packets;  // sender-driven packets (with refinement info)
-  const ModelView& view() const { return file->view(); }
+  const ModelData& model() const { return file->model(); }
 };
 
 class Catalogue {

@@ -12,14 +12,14 @@ namespace pms {
 namespace {
 
 // StreamVSplit: the client will have v's children, so the server's front moves below v.
-void stream_vsplit(const ModelView& model, ActiveTags& tags, uint32_t node, std::vector<uint32_t>& out) {
+void stream_vsplit(const ModelData& model, ActiveTags& tags, uint32_t node, std::vector<uint32_t>& out) {
   tags.split(node, model.first_child[node]);
   out.push_back(node);
 }
 
 // SelStreamVSplit(v) without recursion: v's split waits on the stack while the ancestor shared by
 // its cut vertices is split first, and so on down the chain.
-void sel_stream_vsplit(const ModelView& model, const DependencyFilter& dependencies, ActiveTags& tags, uint32_t node,
+void sel_stream_vsplit(const ModelData& model, const DependencyFilter& dependencies, ActiveTags& tags, uint32_t node,
                        std::vector<uint32_t>& out, std::vector<uint32_t>& stack) {
   stack.clear();
   stack.push_back(node);
@@ -57,7 +57,7 @@ constexpr LessImportant less_important;
 
 }  // namespace
 
-DependencyFilter::DependencyFilter(const ModelView& model) {
+DependencyFilter::DependencyFilter(const ModelData& model) {
   bits_.assign((model.node_count() + 63) / 64, 0);
   const auto depth = [&](uint32_t n) { return VertexId{0, model.node_id[n]}.depth(); };
   const auto ancestor_at = [&](uint32_t n, int d) {
@@ -83,12 +83,12 @@ DependencyFilter::DependencyFilter(const ModelView& model) {
   });
 }
 
-uint32_t active_ancestor(const ModelView& model, const ActiveTags& tags, uint32_t node) {
+uint32_t active_ancestor(const ModelData& model, const ActiveTags& tags, uint32_t node) {
   while (node != kNone && !tags.is_active(node)) node = model.parent[node];
   return node;
 }
 
-void SelectiveStreamer::start(const ModelView& model, const DependencyFilter& dependencies, ActiveTags& tags,
+void SelectiveStreamer::start(const ModelData& model, const DependencyFilter& dependencies, ActiveTags& tags,
                               Importance importance) {
   model_ = &model;
   dependencies_ = &dependencies;
@@ -109,7 +109,7 @@ bool SelectiveStreamer::continue_scan(uint64_t budget, uint64_t& work) {
   const auto more_important = [](const std::pair<float, uint32_t>& a, const std::pair<float, uint32_t>& b) {
     return less_important(b, a);
   };
-  const ModelView& model = *model_;
+  const ModelData& model = *model_;
   const uint64_t stop = work + budget;
   for (uint32_t v = scan_; v != UINT32_MAX; v = tags_->next_active(v + 1)) {
     if (work >= stop) {
@@ -147,7 +147,7 @@ void SelectiveStreamer::rank(uint32_t node, float importance) {
 
 bool SelectiveStreamer::step(size_t max_splits, uint64_t budget, std::vector<uint32_t>& out, uint64_t& work) {
   if (!model_) return true;
-  const ModelView& model = *model_;
+  const ModelData& model = *model_;
   const size_t start = out.size();
   const uint64_t stop = work + budget;
   for (;;) {
@@ -188,7 +188,7 @@ void SelectiveStreamer::stop() {
   std::vector<uint32_t>().swap(stack_);
 }
 
-bool selective_streaming(const ModelView& model, const DependencyFilter& dependencies, ActiveTags& tags,
+bool selective_streaming(const ModelData& model, const DependencyFilter& dependencies, ActiveTags& tags,
                          const Importance& importance, size_t max_splits, std::vector<uint32_t>& out) {
   SelectiveStreamer streamer;
   streamer.start(model, dependencies, tags, importance);

@@ -22,7 +22,7 @@ namespace pms {
 class DependencyFilter {
  public:
   DependencyFilter() = default;  // nothing known: every split is checked
-  explicit DependencyFilter(const ModelView& model);
+  explicit DependencyFilter(const ModelData& model);
   bool may_wait(uint32_t node) const { return bits_.empty() || ((bits_[node / 64] >> (node % 64)) & 1); }
   size_t memory_bytes() const { return bits_.capacity() * sizeof(uint64_t); }
 
@@ -43,7 +43,7 @@ class SelectiveStreamer {
  public:
   static constexpr size_t kMaxRanked = 1024;
 
-  void start(const ModelView& model, const DependencyFilter& dependencies, ActiveTags& tags, Importance importance);
+  void start(const ModelData& model, const DependencyFilter& dependencies, ActiveTags& tags, Importance importance);
   // Appends up to `max_splits` nodes to split to `out`, each after every split it depends on, and updates
   // the tags as if they were sent. Stops once `work` (nodes evaluated + split, added to) has grown by
   // `budget`, finishing the dependency chain in hand. Returns true once the view is fully served.
@@ -55,7 +55,7 @@ class SelectiveStreamer {
 
  private:
   static constexpr uint32_t kNotScanning = UINT32_MAX;
-  const ModelView* model_ = nullptr;
+  const ModelData* model_ = nullptr;
   const DependencyFilter* dependencies_ = nullptr;
   ActiveTags* tags_ = nullptr;
   Importance importance_;
@@ -73,11 +73,11 @@ class SelectiveStreamer {
 };
 
 // The whole answer at once (tests and tools): returns whether the view is served within max_splits.
-bool selective_streaming(const ModelView& model, const DependencyFilter& dependencies, ActiveTags& tags,
+bool selective_streaming(const ModelData& model, const DependencyFilter& dependencies, ActiveTags& tags,
                          const Importance& importance, size_t max_splits, std::vector<uint32_t>& out);
 
 // ActiveAncestor (kim-lee-kobbelt §4) on the server: walk up from `node` to the active node; kNone when
 // none is (the tags are then not a front of the whole forest).
-uint32_t active_ancestor(const ModelView& model, const ActiveTags& tags, uint32_t node);
+uint32_t active_ancestor(const ModelData& model, const ActiveTags& tags, uint32_t node);
 
 }  // namespace pms

@@ -35,11 +35,11 @@ struct SenderDrivenMode::Resume {
 
 SenderDrivenMode::SenderDrivenMode(const protocol::OpenHeader& open, protocol::Frame& open_frame,
                                    const ModeContext& context)
-    : context_(context), importance_(view_.importance(context.model.criteria)) {
-  const uint32_t roots = context_.model.view().root_count;
+    : context_(context), importance_(view_.importance(context.served.criteria)) {
+  const uint32_t roots = context_.served.model().root_count;
   if (!open.resume) {
     tags_ = ActiveTags(roots);
-    context_.outbox.push_back(context_.model.base_frame);
+    context_.outbox.push_back(context_.served.base_frame);
     return;
   }
   if (open.resume_trees != roots)
@@ -53,7 +53,7 @@ SenderDrivenMode::~SenderDrivenMode() = default;
 void SenderDrivenMode::receive(const protocol::ClientMessage& message) {
   const auto* view = std::get_if<protocol::View>(&message);
   if (!view) throw ProtocolError(ErrorCode::out_of_order, "a sender-driven session takes only VIEW after OPEN");
-  view_.record(*view, context_.model.view());
+  view_.record(*view, context_.served.model());
 }
 
 void SenderDrivenMode::pump(uint64_t& work) {
@@ -69,7 +69,7 @@ void SenderDrivenMode::stop() {
 
 void SenderDrivenMode::pump_resume(uint64_t& work) {
   Resume& r = *resume_;
-  const ModelView& model = context_.model.view();
+  const ModelData& model = context_.served.model();
   r.leaves.clear();
   const bool decoded = r.decoder.next(context_.limits.slice_work, r.leaves);
   work += r.leaves.size();
@@ -93,14 +93,14 @@ void SenderDrivenMode::pump_resume(uint64_t& work) {
   }
   tags_ = std::move(r.tags);
   resume_.reset();
-  context_.outbox.push_back(context_.model.base_frame);
+  context_.outbox.push_back(context_.served.base_frame);
 }
 
 // A VIEW's answer: splits accumulate across slices into batches of batch_splits. Splits of an earlier
 // VIEW still in the batch go out with the new one's frame number (the client applies every batch).
 void SenderDrivenMode::pump_answer(uint64_t& work) {
   if (std::exchange(view_.restart, false))
-    streamer_.start(context_.model.view(), context_.model.dependencies, tags_, importance_);
+    streamer_.start(context_.served.model(), context_.served.dependencies, tags_, importance_);
   const size_t limit = context_.limits.batch_splits;
   const size_t room = batch_.size() < limit ? limit - batch_.size() : 0;
   const bool served = streamer_.step(room, context_.limits.slice_work, batch_, work);
@@ -115,7 +115,7 @@ void SenderDrivenMode::pump_answer(uint64_t& work) {
 // The first `count` splits of the batch (a VSPLITS never holds more than batch_splits: a dependency chain
 // can carry the batch past it, and the rest waits for the next frame, in order).
 void SenderDrivenMode::emit_batch(size_t count, bool final) {
-  context_.queue(context_.model.packets.encode(view_.frame, final, std::span(batch_).first(count)));
+  context_.queue(context_.served.packets.encode(view_.frame, final, std::span(batch_).first(count)));
   splits_sent_ += count;
   batch_.erase(batch_.begin(), batch_.begin() + ptrdiff_t(count));
 }

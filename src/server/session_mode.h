@@ -24,7 +24,7 @@ using Buffer = std::shared_ptr<const std::vector<uint8_t>>;
 
 // What a mode works with: its session's model and limits, and the outbox its frames go to.
 struct ModeContext {
-  const ServedModel& model;
+  const ServedModel& served;
   const ServerLimits& limits;
   std::deque<Buffer>& outbox;
   void queue(std::vector<uint8_t> frame) const {
@@ -74,7 +74,7 @@ struct LatestView {
   bool pending = false;   // received and not yet answered in full
   bool restart = false;   // the answer is to start afresh
 
-  void record(const protocol::View& view, const ModelView& model);
+  void record(const protocol::View& view, const ModelData& model);
   // refinement_priority of a node under the recorded view (reads `criteria` when called, so it follows
   // every later record()).
   Importance importance(const std::vector<NodeCriteria>& per_node) const;

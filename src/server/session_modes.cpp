@@ -15,7 +15,7 @@ std::unique_ptr<SessionMode> open_session_mode(const protocol::OpenHeader& open,
   throw protocol::ProtocolError(protocol::ErrorCode::bad_message, "OPEN: a mode this server does not stream");
 }
 
-void LatestView::record(const protocol::View& view, const ModelView& model) {
+void LatestView::record(const protocol::View& view, const ModelData& model) {
   criteria = make_criteria(make_view(view.camera, model.bbox_min, model.bbox_max), view.tolerance);
   frame = view.frame;
   pending = true;

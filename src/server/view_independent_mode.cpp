@@ -32,13 +32,13 @@ struct ViewIndependentMode::Prefix {
 };
 
 ViewIndependentMode::ViewIndependentMode(const protocol::OpenHeader& open, const ModeContext& context)
-    : context_(context), wire_(context.model.context), importance_(view_.importance(context.model.criteria)) {
+    : context_(context), wire_(context.served.context), importance_(view_.importance(context.served.criteria)) {
   if (open.resume)
     throw ProtocolError(ErrorCode::bad_message,
                         "OPEN: resume: a view-independent session cannot resume (sender-driven only)");
   wire_.has_refinement = false;
-  tags_ = ActiveTags(context_.model.view().root_count);
-  context_.outbox.push_back(context_.model.base_frame);
+  tags_ = ActiveTags(context_.served.model().root_count);
+  context_.outbox.push_back(context_.served.base_frame);
 }
 
 ViewIndependentMode::~ViewIndependentMode() = default;
@@ -46,7 +46,7 @@ ViewIndependentMode::~ViewIndependentMode() = default;
 void ViewIndependentMode::receive(const protocol::ClientMessage& message) {
   const auto* view = std::get_if<protocol::View>(&message);
   if (!view) throw ProtocolError(ErrorCode::out_of_order, "a view-independent session takes only VIEW after OPEN");
-  view_.record(*view, context_.model.view());
+  view_.record(*view, context_.served.model());
 }
 
 void ViewIndependentMode::stop() {
@@ -63,7 +63,7 @@ void ViewIndependentMode::pump(uint64_t& work) {
     p.front = tags_;
     p.end = sent_;
     p.wanted_any = false;
-    p.walk.start(context_.model.view(), context_.model.dependencies, p.front, importance_);
+    p.walk.start(context_.served.model(), context_.served.dependencies, p.front, importance_);
   }
   Prefix& p = *prefix_;
   switch (p.phase) {
@@ -82,7 +82,7 @@ void ViewIndependentMode::walk(Prefix& p, uint64_t& work) {
     p.furthest = p.end;
   }
   for (uint32_t node : p.wanted)
-    p.furthest = std::max<uint64_t>(p.furthest, uint64_t(context_.model.split_rank[node]) + 1);
+    p.furthest = std::max<uint64_t>(p.furthest, uint64_t(context_.served.split_rank[node]) + 1);
   if (!served) return;
   p.walk.stop();
   p.phase = p.wanted_any ? Prefix::Phase::advancing : Prefix::Phase::streaming;
@@ -91,7 +91,7 @@ void ViewIndependentMode::walk(Prefix& p, uint64_t& work) {
 
 // The rest of the prefix, so `front` is again the front of split_order[0, furthest); then walk again.
 void ViewIndependentMode::advance(Prefix& p, uint64_t& work) {
-  const ModelView& model = context_.model.view();
+  const ModelData& model = context_.served.model();
   const uint64_t begin = p.next, stop = std::min<uint64_t>(p.furthest, p.next + context_.limits.slice_work);
   for (; p.next < stop; ++p.next) {
     const uint32_t node = model.split_order[p.next];
@@ -102,12 +102,12 @@ void ViewIndependentMode::advance(Prefix& p, uint64_t& work) {
   p.end = p.furthest;
   p.wanted_any = false;
   p.phase = Prefix::Phase::walking;
-  p.walk.start(model, context_.model.dependencies, p.front, importance_);
+  p.walk.start(model, context_.served.dependencies, p.front, importance_);
 }
 
 // split_order[sent_, end) in PM order; the last (possibly empty) batch is final.
 void ViewIndependentMode::stream(Prefix& p, uint64_t& work) {
-  const ModelView& model = context_.model.view();
+  const ModelData& model = context_.served.model();
   const uint64_t stop =
       std::min<uint64_t>({p.end, sent_ + context_.limits.batch_splits, sent_ + context_.limits.slice_work});
   protocol::VSplits message;

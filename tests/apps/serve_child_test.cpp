@@ -71,11 +71,11 @@ TEST(ServeChild, CountersAgreeWithWhatTheClientReceived) {
   EXPECT_EQ(server.stats().sessions_opened, 0u);
 
   client::LoadClientOptions options;
-  options.model = &file->view();
+  options.model = &file->model();
   client::LoadClient client("127.0.0.1", server.port(), "terrain", options);
   PathOptions path_options;
   path_options.frames = 8;
-  const std::vector<Camera> path = make_camera_path(PathKind::zoom, file->view(), path_options);
+  const std::vector<Camera> path = make_camera_path(PathKind::zoom, file->model(), path_options);
   client.open(false);
   client.view(path[4], 1);
   const uint64_t first = client.splits_received();

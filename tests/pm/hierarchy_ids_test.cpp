@@ -25,7 +25,7 @@ TEST(HierarchyIds, SmallHierarchyIdsByShifting) {
 }
 
 void expect_find_round_trip(const Hierarchy& h) {
-  const ModelView v = view_of(h);
+  const ModelData v = model_of(h);
   for (uint32_t n = 0; n < h.node_count(); ++n) {
     ASSERT_EQ(h.find(h.id(n)), n);
     ASSERT_EQ(v.find(v.id(n)), n);
@@ -41,7 +41,7 @@ TEST(HierarchyIds, FindIsTheInverseOfId) {
 
 TEST(HierarchyIds, FindRejectsAbsentIds) {
   const Hierarchy h = test::make_small_hierarchy();
-  const ModelView v = view_of(h);
+  const ModelData v = model_of(h);
   const VertexId absent[] = {
       {3, 1},                  // no such tree
       {UINT32_MAX, 1},         // nor this one
@@ -55,7 +55,7 @@ TEST(HierarchyIds, FindRejectsAbsentIds) {
     EXPECT_EQ(h.find(id), kNone) << id.tree << "/" << id.node;
     EXPECT_EQ(v.find(id), kNone) << id.tree << "/" << id.node;
   }
-  EXPECT_EQ(ModelView{}.find({0, 1}), kNone) << "an empty view has no roots";
+  EXPECT_EQ(ModelData{}.find({0, 1}), kNone) << "an empty view has no roots";
 }
 
 TEST(HierarchyIds, FindNeverReadsPastTruncatedArrays) {
@@ -107,7 +107,7 @@ TEST(HierarchyIds, TreeIdBits) {
 
 TEST(HierarchyIds, ViewOfAliasesTheVectors) {
   const Hierarchy h = test::make_small_hierarchy();
-  const ModelView v = view_of(h);
+  const ModelData v = model_of(h);
   EXPECT_EQ(v.root_count, h.root_count);
   EXPECT_EQ(v.node_count(), h.node_count());
   EXPECT_EQ(v.parent.data(), h.parent.data());

@@ -41,7 +41,7 @@ void expect_same(const A& span, const B& vec, const char* what) {
   EXPECT_TRUE(std::equal(span.begin(), span.end(), vec.begin(), vec.end())) << what;
 }
 
-void expect_model_equals(const ModelView& m, const Hierarchy& h) {
+void expect_model_equals(const ModelData& m, const Hierarchy& h) {
   EXPECT_EQ(m.root_count, h.root_count);
   expect_same(m.base_faces, h.base_faces, "base_faces");
   expect_same(m.parent, h.parent, "parent");
@@ -103,15 +103,15 @@ TEST(PmsFile, RoundTripThroughMmapAndMemory) {
     EXPECT_FALSE(fs::exists(path.string() + ".tmp"));
 
     const auto file = PmsFile::open(path.string());
-    expect_model_equals(file->view(), h);
+    expect_model_equals(file->model(), h);
     expect_stats_equal(file->stats(), stats);
     EXPECT_EQ(file->file_size(), fs::file_size(path));
 
     const std::vector<uint8_t> bytes = read_bytes(path);
     const auto copy = PmsFile::from_bytes("small.pms", bytes.data(), bytes.size());
-    expect_model_equals(copy->view(), h);
+    expect_model_equals(copy->model(), h);
     expect_stats_equal(copy->stats(), stats);
-    EXPECT_EQ(attributes, !copy->view().normals.empty());
+    EXPECT_EQ(attributes, !copy->model().normals.empty());
   }
 }
 
@@ -119,7 +119,7 @@ TEST(PmsFile, SectionsAreAlignedInTheMapping) {
   const fs::path path = test::temp_dir() / "small.pms";
   write_pms(path.string(), test::make_small_hierarchy(), sample_stats());
   const auto file = PmsFile::open(path.string());
-  const ModelView& m = file->view();
+  const ModelData& m = file->model();
   const auto base = reinterpret_cast<uintptr_t>(m.bbox_min) - 16;  // bbox_min sits 16 bytes into HEAD
   for (const void* p : {(const void*)m.parent.data(), (const void*)m.position.data(), (const void*)m.refine.data(),
                         (const void*)m.colors.data(), (const void*)m.base_faces.data()})
@@ -134,7 +134,7 @@ TEST(PmsFile, LargerForestRoundTrips) {
   const fs::path path = test::temp_dir() / "forest.pms";
   write_pms(path.string(), h, {});
   const auto file = PmsFile::open(path.string());
-  expect_model_equals(file->view(), h);
+  expect_model_equals(file->model(), h);
   EXPECT_EQ(file->stats().input_name, "");
 }
 
@@ -142,7 +142,7 @@ TEST(PmsFile, OverwritesAtomically) {
   const fs::path path = test::temp_dir() / "model.pms";
   write_pms(path.string(), test::make_small_hierarchy(false), sample_stats());
   write_pms(path.string(), test::make_small_hierarchy(true), sample_stats());
-  EXPECT_FALSE(PmsFile::open(path.string())->view().normals.empty());
+  EXPECT_FALSE(PmsFile::open(path.string())->model().normals.empty());
   // A write that fails leaves the previous file untouched and no temporary behind.
   Hierarchy bad = test::make_small_hierarchy();
   bad.position.pop_back();

@@ -45,7 +45,7 @@ std::vector<Sample> samples() {
   VSplits batch{3, true, {}};
   for (int i = 0; i < 20; ++i) batch.splits.push_back(test::random_split(rng, c));
   const test::BuiltModel& sphere = test::sphere_model();
-  const Base base = make_base(sphere.view(), "sphere");
+  const Base base = make_base(sphere.model(), "sphere");
   View view;
   view.frame = 9;
   return {
@@ -55,7 +55,7 @@ std::vector<Sample> samples() {
       {MessageType::view, encode(view), [](auto p) { decode_view(p); }},
       {MessageType::close, encode(Close{}), [](auto p) { decode_close(p); }},
       {MessageType::hello_ok, encode(HelloOk{kProtocolVersion, "srv", 1000, 2000}), [](auto p) { decode_hello_ok(p); }},
-      {MessageType::catalogue, encode(Catalogue{{model_info(sphere.view(), "sphere"), ModelInfo{}}}),
+      {MessageType::catalogue, encode(Catalogue{{model_info(sphere.model(), "sphere"), ModelInfo{}}}),
        [](auto p) { decode_catalogue(p); }},
       {MessageType::base, encode(base), [](auto p) { decode_base(p); }},
       {MessageType::vsplits, encode(batch, c), [c](auto p) { decode_vsplits(p, c); }},

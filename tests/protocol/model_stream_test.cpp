@@ -47,7 +47,7 @@ struct Received {
 
 // The server side: BASE, then the split order in VSPLITS batches; the client side: a FrameReader fed in
 // random chunks and the direction's dispatcher.
-Received stream_model(const ModelView& model, const std::string& name, uint32_t position_bits, PacketStats& stats) {
+Received stream_model(const ModelData& model, const std::string& name, uint32_t position_bits, PacketStats& stats) {
   const Base base = make_base(model, name, position_bits);
   const StreamContext server_context = stream_context(base);
   std::vector<uint8_t> wire = encode(base);
@@ -98,7 +98,7 @@ Received stream_model(const ModelView& model, const std::string& name, uint32_t 
   return got;
 }
 
-void expect_same_packets(const ModelView& model, const Received& got) {
+void expect_same_packets(const ModelData& model, const Received& got) {
   const StreamContext& c = got.context;
   ASSERT_EQ(got.splits.size(), model.split_order.size());
   for (size_t i = 0; i < got.splits.size(); ++i) {
@@ -124,7 +124,7 @@ void expect_same_packets(const ModelView& model, const Received& got) {
 
 // The client's side of kim-lee-kobbelt §5.3: UpdateVHierarchy for every packet, then SelVSplit in
 // arrival order; the result is the full input.
-void expect_client_refines_fully(const ModelView& model, const Received& got, const std::string& name) {
+void expect_client_refines_fully(const ModelData& model, const Received& got, const std::string& name) {
   const Base& base = got.base;
   VertexHierarchy hierarchy(base.has_normals, base.has_colors);
   for (uint32_t r = 0; r < base.root_count(); ++r)
@@ -162,7 +162,7 @@ void report(const char* name, const StreamContext& c, const PacketStats& s) {
 }
 
 void check_model(const test::BuiltModel& built, uint32_t position_bits = kDefaultPositionBits) {
-  const ModelView model = built.view();
+  const ModelData model = built.model();
   PacketStats stats;
   const Received got = stream_model(model, built.name, position_bits, stats);
   ASSERT_NO_FATAL_FAILURE(expect_same_packets(model, got));
@@ -193,7 +193,7 @@ TEST(ModelStream, Bunny) {
 
 // The server's encoded-once packets make the very frames the encoder makes, in any order and batch size.
 void check_packet_table(const test::BuiltModel& built, uint32_t position_bits) {
-  const ModelView model = built.view();
+  const ModelData model = built.model();
   StreamContext c = stream_context(make_base(model, built.name, position_bits));
   c.has_refinement = true;
   const PacketTable table(model, c);
@@ -226,7 +226,7 @@ TEST(ModelStream, PacketTableMakesTheEncodersFrames) {
 
 TEST(ModelStream, BunnyTopologyBitsPerPacket) {
   PMS_REQUIRE_SHARED_MODEL(path, "bunny.ply.xz");
-  const ModelView model = test::bunny_model()->view();
+  const ModelData model = test::bunny_model()->model();
   const StreamContext c = stream_context(make_base(model, "bunny"));
   uint64_t total = 0;
   uint32_t worst = 0;
@@ -245,7 +245,7 @@ TEST(ModelStream, BunnyTopologyBitsPerPacket) {
 
 TEST(ModelStream, ResumeFrontOfAFullyRefinedBunny) {
   PMS_REQUIRE_SHARED_MODEL(path, "bunny.ply.xz");
-  const ModelView model = test::bunny_model()->view();
+  const ModelData model = test::bunny_model()->model();
   Open open{"bunny", {}};
   for (uint32_t n = 0; n < model.node_count(); ++n)
     if (model.is_leaf(n)) open.resume.push_back(model.id(n));
@@ -261,7 +261,7 @@ TEST(ModelStream, ResumeFrontOfAFullyRefinedBunny) {
 }
 
 TEST(ModelStream, ModelInfoCountsTheInput) {
-  const ModelView model = test::sphere_model().view();
+  const ModelData model = test::sphere_model().model();
   const ModelInfo info = model_info(model, "sphere");
   const Mesh sphere = make_sphere(24, 32);
   EXPECT_EQ(info.input_faces, sphere.face_count());

@@ -22,7 +22,7 @@ namespace pms::test {
 struct BuiltModel {
   std::string name;
   Hierarchy hierarchy;
-  ModelView view() const { return view_of(hierarchy); }
+  ModelData model() const { return model_of(hierarchy); }
 };
 const BuiltModel& sphere_model();            // make_sphere, with per-vertex normals and colors added
 const BuiltModel& terrain_model();           // make_terrain(20000)

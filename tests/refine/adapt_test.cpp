@@ -48,7 +48,7 @@ std::vector<NamedView> views_of(const BuiltModel& model) {
 std::vector<IdFace> converge_with(const BuiltModel& model, VertexHierarchy& hierarchy, const ViewParams& view,
                                   const AdaptOptions& options, const SelectiveRefinement::Fetch& fetch,
                                   ConvergeStats* stats = nullptr) {
-  SelectiveMesh mesh(hierarchy, model.view().base_faces);
+  SelectiveMesh mesh(hierarchy, model.model().base_faces);
   SelectiveRefinement refinement(mesh, model.h.scale, options);
   refinement.set_view(view);
   const ConvergeStats s = refinement.converge(fetch);
@@ -59,7 +59,7 @@ std::vector<IdFace> converge_with(const BuiltModel& model, VertexHierarchy& hier
 
 // Packets arrive in a random order: of what the loop reports missing a random part is delivered per frame,
 // together with packets nobody asked for yet (a server sending ahead). Checks what the loop reports.
-SelectiveRefinement::Fetch random_arrivals(VertexHierarchy& hierarchy, const ModelView& model, std::mt19937& rng,
+SelectiveRefinement::Fetch random_arrivals(VertexHierarchy& hierarchy, const ModelData& model, std::mt19937& rng,
                                            const SelectiveMesh& mesh) {
   return [&hierarchy, &model, &rng, &mesh](std::span<const uint32_t> missing) -> size_t {
     std::vector<uint32_t> ask(missing.begin(), missing.end());
@@ -76,7 +76,7 @@ SelectiveRefinement::Fetch random_arrivals(VertexHierarchy& hierarchy, const Mod
 }
 
 void expect_order_and_cap_independence(const BuiltModel& model, const std::vector<uint32_t>& caps, int seeds) {
-  const ModelView m = model.view();
+  const ModelData m = model.model();
   size_t views_checked = 0;
   for (const NamedView& named : views_of(model)) {
     const ViewParams view = test::view_for(model, named.camera);
@@ -140,7 +140,7 @@ TEST(Adapt, ViewsRefineAsExpected) {
 
 // Far after close: the loop collapses back to exactly the far view's own target, and the other way round.
 void expect_history_independence(const BuiltModel& model) {
-  const ModelView m = model.view();
+  const ModelData m = model.model();
   const std::vector<NamedView> views = views_of(model);
   for (size_t a = 0; a < views.size(); ++a) {
     for (size_t b = 0; b < views.size(); ++b) {
@@ -173,7 +173,7 @@ TEST(Adapt, FarAfterCloseEqualsFarBunny) {
 // face of the refined mesh (culling is conservative, and nothing with an error is left coarse).
 void expect_visible_faces_kept(const BuiltModel& model, const Camera& camera) {
   const ViewParams view = test::view_for(model, camera);
-  const ModelView m = model.view();
+  const ModelData m = model.model();
   VertexHierarchy h = test::complete_hierarchy(m);
   SelectiveMesh mesh(h, m.base_faces);
   SelectiveRefinement refinement(mesh, m.scale, AdaptOptions{0, 0, 0});
@@ -232,7 +232,7 @@ TEST(Adapt, ZeroToleranceFromAboveGivesTheFullTerrain) {
 // split stays (no split/collapse churn from one frame to the next while waiting).
 TEST(Adapt, BlockedChainsReportTheirLeafAndHold) {
   const BuiltModel& model = test::built_terrain();
-  const ModelView m = model.view();
+  const ModelData m = model.model();
   const ViewParams view = test::view_for(model, test::framing_camera(model, {1, 0.3f, 0.1f}, 0.45f, 60));
   size_t chain_reports = 0, frames_waiting = 0;
   for (uint32_t seed = 1; seed <= 4; ++seed) {
@@ -274,7 +274,7 @@ TEST(Adapt, BlockedChainsReportTheirLeafAndHold) {
 TEST(Adapt, PathWithGeomorphsStaysManifold) {
   const BuiltModel* bunny = test::built_bunny();
   const BuiltModel& model = bunny ? *bunny : test::built_terrain();
-  const ModelView m = model.view();
+  const ModelData m = model.model();
   VertexHierarchy h = VertexHierarchy::from_model(m);
   SelectiveMesh mesh(h, m.base_faces);
   AdaptOptions options;
@@ -322,7 +322,7 @@ TEST(Adapt, PathWithGeomorphsStaysManifold) {
 // With geomorphs a collapse waits until the children have reached the parent; the end result is the same.
 TEST(Adapt, GeomorphsDelayCollapsesAndEndTheSame) {
   const BuiltModel& model = test::built_terrain();
-  const ModelView m = model.view();
+  const ModelData m = model.model();
   const Camera close = test::framing_camera(model, {-0.4f, 0.3f, 1}, 0.35f);
   const Camera far = test::framing_camera(model, {0.3f, 0.2f, 1}, 4);
   const VertexHierarchy h = test::complete_hierarchy(m);

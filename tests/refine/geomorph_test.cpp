@@ -17,7 +17,7 @@ namespace {
 constexpr uint32_t kFrames = 4;
 
 struct Fixture {
-  ModelView view = test::built_sphere().view();
+  ModelData view = test::built_sphere().model();
   VertexHierarchy h = test::complete_hierarchy(view);
   SelectiveMesh mesh{h, view.base_faces};
   Geomorphs morphs{kFrames};

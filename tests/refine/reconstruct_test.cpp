@@ -47,7 +47,7 @@ std::unique_ptr<PmsFile> build_and_open(const Mesh& mesh, const BuildOptions& op
 
 void expect_full_refinement_is_input(const Mesh& mesh, const BuildOptions& options = {}) {
   const auto file = build_and_open(mesh, options);
-  const ModelView& model = file->view();
+  const ModelData& model = file->model();
   const MeshArrays full = refine_in_stream_order(model, UINT64_MAX);
   EXPECT_EQ(full.positions.size(), mesh.positions.size());
   EXPECT_EQ(canonical_faces(full.positions, full.indices), canonical_faces(mesh.positions, mesh.indices));

@@ -374,7 +374,7 @@ ReferenceModel build_reference_model(const TestMesh& mesh, uint32_t seed, uint32
   return model;
 }
 
-ModelView ReferenceModel::view() const { return view_of(h); }
+ModelData ReferenceModel::model() const { return model_of(h); }
 
 uint32_t ReferenceModel::node_of(VertexId id) const {
   auto it = node_by_id.find({id.tree, id.node});
@@ -402,7 +402,7 @@ Faces mesh_faces(const SelectiveMesh& mesh) {
 
 Faces dual_view_faces(const SelectiveMesh& mesh, const ReferenceModel& model) {
   Faces faces;
-  const ModelView view = model.view();
+  const ModelData view = model.model();
   for (size_t i = 0; i < model.input.indices.size(); i += 3) {
     std::array<uint32_t, 3> f;
     for (int k = 0; k < 3; ++k) f[k] = mesh.active_ancestor(view.id(model.leaf_node[model.input.indices[i + k]]));

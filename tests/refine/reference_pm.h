@@ -36,7 +36,7 @@ struct ReferenceModel {
   std::vector<uint32_t> leaf_node;  // input vertex -> packed node
   std::map<std::pair<uint32_t, uint64_t>, uint32_t> node_by_id;
 
-  ModelView view() const;
+  ModelData model() const;
   uint32_t node_of(VertexId id) const;  // packed node, kNone if unknown
 };
 

@@ -44,7 +44,7 @@ const std::vector<Case>& cases() {
   return all;
 }
 
-VertexHierarchy complete_hierarchy(const ModelView& view) {
+VertexHierarchy complete_hierarchy(const ModelData& view) {
   VertexHierarchy h = VertexHierarchy::from_model(view);
   for (uint32_t node = 0; node < view.node_count(); ++node)  // breadth-first: parents first
     if (!view.is_leaf(node)) h.add_split(split_record(view, node));
@@ -88,7 +88,7 @@ TEST(SelectiveMesh, ReferenceModelsAreNontrivial) {
     EXPECT_EQ(one_sided, open) << c.name << ": boundary splits exist exactly on open meshes";
     EXPECT_LE(h.root_count, 12u) << c.name;
     int depth = 0;
-    for (size_t n = 0; n < h.node_count(); ++n) depth = std::max(depth, c.model.view().id(uint32_t(n)).depth());
+    for (size_t n = 0; n < h.node_count(); ++n) depth = std::max(depth, c.model.model().id(uint32_t(n)).depth());
     EXPECT_GE(depth, c.name == "octahedron" ? 1 : 4) << c.name;  // the octahedron only folds into a tetrahedron
     // The input itself is an oriented manifold: as a base mesh of its own vertices it passes the audit.
     VertexHierarchy flat;
@@ -101,7 +101,7 @@ TEST(SelectiveMesh, ReferenceModelsAreNontrivial) {
 TEST(SelectiveMesh, PmOrderReproducesTheInput) {
   for (const Case& c : cases()) {
     SCOPED_TRACE(c.name);
-    const ModelView view = c.model.view();
+    const ModelData view = c.model.model();
     VertexHierarchy h = VertexHierarchy::from_model(view);
     SelectiveMesh mesh(h, view.base_faces);
     ASSERT_EQ(invariants(mesh), "ok") << c.name;
@@ -125,7 +125,7 @@ TEST(SelectiveMesh, BreadthFirstOrderReproducesTheInput) {
   size_t forced = 0;
   for (const Case& c : cases()) {
     SCOPED_TRACE(c.name);
-    const ModelView view = c.model.view();
+    const ModelData view = c.model.model();
     const VertexHierarchy h = complete_hierarchy(view);
     SelectiveMesh mesh(h, view.base_faces);
     for (uint32_t node = 0; node < view.node_count(); ++node) {
@@ -150,7 +150,7 @@ TEST(SelectiveMesh, RandomArrivalOrderReproducesTheInput) {
     SCOPED_TRACE(c.name);
     for (uint32_t seed = 1; seed <= 4; ++seed) {
       std::mt19937 rng(seed);
-      const ModelView view = c.model.view();
+      const ModelData view = c.model.model();
       VertexHierarchy h = VertexHierarchy::from_model(view);
       SelectiveMesh mesh(h, view.base_faces);
       std::vector<uint32_t> available;  // internal nodes whose parent is known
@@ -194,7 +194,7 @@ TEST(SelectiveMesh, RandomInterleavingsStayManifoldAndCollapseToTheBase) {
   size_t splits = 0, collapses = 0, refused = 0;
   for (const Case& c : cases()) {
     SCOPED_TRACE(c.name);
-    const ModelView view = c.model.view();
+    const ModelData view = c.model.model();
     const VertexHierarchy h = complete_hierarchy(view);
     for (uint32_t seed = 1; seed <= 3; ++seed) {
       std::mt19937 rng(seed * 7919 + uint32_t(c.name.size()));
@@ -257,7 +257,7 @@ TEST(SelectiveMesh, RandomInterleavingsStayManifoldAndCollapseToTheBase) {
 
 TEST(SelectiveMesh, ExtractGivesTheCurrentMesh) {
   const ReferenceModel& model = cases()[1].model;
-  const ModelView view = model.view();
+  const ModelData view = model.model();
   const VertexHierarchy h = complete_hierarchy(view);
   SelectiveMesh mesh(h, view.base_faces);
   for (uint32_t node : view.split_order) ASSERT_TRUE(mesh.vsplit(h.find(view.id(node))).done);
@@ -286,7 +286,7 @@ TEST(SelectiveMesh, ExtractGivesTheCurrentMesh) {
 // sanitizer build checks) and changes nothing.
 TEST(SelectiveMesh, PrefetchAnySlotChangesNothing) {
   const ReferenceModel& model = cases()[1].model;
-  const ModelView view = model.view();
+  const ModelData view = model.model();
   const VertexHierarchy h = complete_hierarchy(view);
   SelectiveMesh mesh(h, view.base_faces);
   const size_t half = view.split_order.size() / 2;
@@ -338,7 +338,7 @@ TEST(SelectiveMesh, RejectsBadBaseMeshes) {
 // Packets that contradict the mesh are reported, and the mesh is left as it was.
 TEST(SelectiveMesh, RejectsInconsistentSplits) {
   const ReferenceModel model = test::build_reference_model(test::make_icosphere(1), 3, 20);
-  const ModelView view = model.view();
+  const ModelData view = model.model();
   VertexHierarchy h = VertexHierarchy::from_model(view);
   SelectiveMesh mesh(h, view.base_faces);
   ASSERT_GE(h.root_count(), 20u);
@@ -386,7 +386,7 @@ TEST(SelectiveMesh, RejectsInconsistentSplits) {
 
 TEST(SelectiveMesh, SplitOfAnUnknownLeafIsReported) {
   const ReferenceModel& model = cases()[1].model;
-  const ModelView view = model.view();
+  const ModelData view = model.model();
   const VertexHierarchy h = VertexHierarchy::from_model(view);
   SelectiveMesh mesh(h, view.base_faces);
   const VSplitResult r = mesh.vsplit(0);

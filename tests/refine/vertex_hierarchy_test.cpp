@@ -141,7 +141,7 @@ TEST(VertexHierarchy, FindsEveryNodeOfALargeForest) {
 
 TEST(VertexHierarchy, SplitRecordsRebuildTheModel) {
   const test::ReferenceModel model = test::build_reference_model(test::make_icosphere(2), 11);
-  const ModelView view = model.view();
+  const ModelData view = model.model();
   VertexHierarchy h = VertexHierarchy::from_model(view);
   ASSERT_EQ(h.root_count(), view.root_count);
   EXPECT_EQ(h.size(), view.root_count);

@@ -75,7 +75,7 @@ const BuiltModel* built_bunny() {
 }
 
 Camera framing_camera(const BuiltModel& model, std::array<float, 3> direction, float distance, float fovy) {
-  const ModelView v = model.view();
+  const ModelData v = model.model();
   float centre[3], radius2 = 0;
   for (int k = 0; k < 3; ++k) {
     centre[k] = 0.5f * (v.bbox_min[k] + v.bbox_max[k]);
@@ -115,7 +115,7 @@ std::vector<IdFace> id_faces(const SelectiveMesh& mesh) {
 
 std::vector<std::array<uint32_t, 3>> leaf_input_faces(const SelectiveMesh& mesh, const BuiltModel& model) {
   const VertexHierarchy& h = mesh.hierarchy();
-  const ModelView view = model.view();
+  const ModelData view = model.model();
   std::vector<std::array<uint32_t, 3>> faces;
   for (uint32_t f = 0; f < mesh.face_capacity(); ++f) {
     if (!mesh.face_alive(f)) continue;
@@ -140,7 +140,7 @@ std::vector<std::array<uint32_t, 3>> canonical_input_faces(const Mesh& mesh) {
   return faces;
 }
 
-VertexHierarchy complete_hierarchy(const ModelView& view) {
+VertexHierarchy complete_hierarchy(const ModelData& view) {
   VertexHierarchy h = VertexHierarchy::from_model(view);
   h.reserve(view.node_count());
   for (uint32_t node = 0; node < view.node_count(); ++node)
@@ -149,7 +149,7 @@ VertexHierarchy complete_hierarchy(const ModelView& view) {
 }
 
 std::vector<IdFace> naive_refinement(const BuiltModel& model, const ViewParams& view, float tolerance) {
-  const ModelView m = model.view();
+  const ModelData m = model.model();
   const VertexHierarchy h = complete_hierarchy(m);
   SelectiveMesh mesh(h, m.base_faces);
   const ViewCriteria criteria = make_criteria(view, tolerance);
@@ -169,9 +169,9 @@ std::vector<IdFace> naive_refinement(const BuiltModel& model, const ViewParams& 
 }
 
 RefinedFromAbove::RefinedFromAbove(const BuiltModel& model)
-    : hierarchy(complete_hierarchy(model.view())), mesh(hierarchy, model.view().base_faces) {
+    : hierarchy(complete_hierarchy(model.model())), mesh(hierarchy, model.model().base_faces) {
   const ViewParams view = view_for(model, framing_camera(model, {0.05f, 0.02f, 1}, 1.2f, 5));
-  SelectiveRefinement refinement(mesh, model.view().scale, AdaptOptions{0, 0, 0});
+  SelectiveRefinement refinement(mesh, model.model().scale, AdaptOptions{0, 0, 0});
   refinement.set_view(view);
   refinement.converge();
 }

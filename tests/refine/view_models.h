@@ -22,7 +22,7 @@ struct BuiltModel {
   Mesh input;        // the cleaned input the hierarchy's leaves index
   Hierarchy h;
   int up_axis = 1;   // 1 = y (scans), 2 = z (terrain)
-  ModelView view() const { return view_of(h); }
+  ModelData model() const { return model_of(h); }
 };
 
 const BuiltModel& built_sphere();   // make_sphere, ~3k faces
@@ -46,7 +46,7 @@ std::vector<std::array<uint32_t, 3>> leaf_input_faces(const SelectiveMesh& mesh,
 std::vector<std::array<uint32_t, 3>> canonical_input_faces(const Mesh& mesh);
 
 // Every internal node's vsplit packet, breadth-first.
-VertexHierarchy complete_hierarchy(const ModelView& view);
+VertexHierarchy complete_hierarchy(const ModelData& view);
 
 // A model refined through the engine at τ = 0 px, seen from high above with a narrow lens (z up): every
 // face is in view and faces the eye, so only the deviation bounds decide what stays coarse.

@@ -188,7 +188,7 @@ struct BadFront {
 };
 
 std::vector<BadFront> bad_fronts() {
-  const ModelView model = view_of(terrain().hierarchy);
+  const ModelData model = model_of(terrain().hierarchy);
   const uint32_t roots = model.root_count;
   int leaf_depth = 0;  // where tree 0's v_t line reaches a real leaf
   for (uint32_t n = model.find({0, 1}); !model.is_leaf(n); n = model.first_child[n]) ++leaf_depth;

@@ -49,7 +49,7 @@ TEST(ActiveTags, MatchesASetUnderRandomOperations) {
 }
 
 struct Client {
-  explicit Client(const ModelView& model)
+  explicit Client(const ModelData& model)
       : hierarchy(VertexHierarchy::from_model(model)), mesh(hierarchy, model.base_faces) {}
   VertexHierarchy hierarchy;
   SelectiveMesh mesh;
@@ -57,7 +57,7 @@ struct Client {
 
 // Sends `batch` to a client: each packet is attached, then split right away; the server ordered the
 // batch so every forced split is already known.
-void deliver(const ModelView& model, const std::vector<uint32_t>& batch, Client& client) {
+void deliver(const ModelData& model, const std::vector<uint32_t>& batch, Client& client) {
   for (uint32_t node : batch) {
     client.hierarchy.add_split(split_record(model, node));
     const uint32_t slot = client.hierarchy.find(model.id(node));
@@ -70,7 +70,7 @@ void deliver(const ModelView& model, const std::vector<uint32_t>& batch, Client&
 
 TEST(SelectiveStreaming, BatchesApplyInOrderAndTheFrontMatchesTheServer) {
   const BuildResult built = build_progressive_mesh(make_terrain(20000, 3), BuildOptions{});
-  const ModelView model = view_of(built.hierarchy);
+  const ModelData model = model_of(built.hierarchy);
   const DependencyFilter dependencies(model);
   for (uint32_t seed = 1; seed <= 3; ++seed) {
     SCOPED_TRACE(seed);
@@ -106,7 +106,7 @@ TEST(SelectiveStreaming, BatchesApplyInOrderAndTheFrontMatchesTheServer) {
 
 TEST(SelectiveStreaming, EverythingWantedStreamsTheWholeModelOnce) {
   const BuildResult built = build_progressive_mesh(make_sphere(24, 32), BuildOptions{});
-  const ModelView model = view_of(built.hierarchy);
+  const ModelData model = model_of(built.hierarchy);
   ActiveTags tags(model.root_count);
   Client client(model);
   std::vector<uint32_t> batch;

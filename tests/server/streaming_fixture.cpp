@@ -84,7 +84,7 @@ Faces faces_by_id(SelectiveMesh& mesh) {
 }
 
 Faces local_faces(const Hierarchy& snapped, const Camera& camera, float tolerance) {
-  const ModelView model = view_of(snapped);
+  const ModelData model = model_of(snapped);
   VertexHierarchy hierarchy = VertexHierarchy::from_model(model);
   SelectiveMesh mesh(hierarchy, model.base_faces);
   SelectiveRefinement refinement(mesh, model.scale, AdaptOptions{tolerance, 0, 0});

@@ -169,7 +169,7 @@ std::vector<std::array<float, 9>> triangles(const MeshArrays& mesh) {
 
 TEST(Streaming, ViewIndependentClientHoldsThePmOrderPrefix) {
   const Fixture& f = terrain();
-  const ModelView model = view_of(f.snapped);
+  const ModelData model = model_of(f.snapped);
   Server server(f.catalogue);
   const std::vector<Camera> path = orbit_path(f.hierarchy, 8, 0.7f);
   client::StreamingClient client("127.0.0.1", server.tcp.port(), vi_options(1.0f));
@@ -202,7 +202,7 @@ TEST(Streaming, ViewIndependentClientHoldsThePmOrderPrefix) {
 
 TEST(Streaming, ViewIndependentPacketsComeInPmOrderWithoutRefinementInfo) {
   const Fixture& f = terrain();
-  const ModelView model = view_of(f.snapped);
+  const ModelData model = model_of(f.snapped);
   Server server(f.catalogue);
   client::Link link("127.0.0.1", server.tcp.port());
   const std::chrono::seconds timeout(30);

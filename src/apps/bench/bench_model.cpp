@@ -33,7 +33,7 @@ BenchModel prepare_model(const BenchContext& context, const std::string& model, 
 std::vector<Camera> path_of(const BenchModel& m, PathKind kind, uint32_t frames) {
   PathOptions options;
   options.frames = frames;
-  return make_camera_path(kind, m.served->view(), options);
+  return make_camera_path(kind, m.served->model(), options);
 }
 
 InProcessSession in_process_session(const BenchModel& m) {

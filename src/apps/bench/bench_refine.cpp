@@ -37,7 +37,7 @@ void print(const std::string& text) {
 }
 
 // Every split known: the loop's cost alone, with nothing to fetch.
-VertexHierarchy complete_hierarchy(const ModelView& model) {
+VertexHierarchy complete_hierarchy(const ModelData& model) {
   VertexHierarchy h = VertexHierarchy::from_model(model);
   h.reserve(model.node_count());
   for (uint32_t node : model.split_order) h.add_split(split_record(model, node));
@@ -51,7 +51,7 @@ struct PathRun {
   std::vector<double> faces;
 };
 
-PathRun run_path(const ModelView& model, const std::vector<Camera>& path, float tolerance) {
+PathRun run_path(const ModelData& model, const std::vector<Camera>& path, float tolerance) {
   VertexHierarchy h = complete_hierarchy(model);
   SelectiveMesh mesh(h, model.base_faces);
   SelectiveRefinement refinement(mesh, model.scale, AdaptOptions{tolerance, 0, 0});
@@ -73,7 +73,7 @@ PathRun run_path(const ModelView& model, const std::vector<Camera>& path, float 
 }
 
 // Raw engine throughput: every split in PM order, then every collapse in reverse.
-double engine_ops_per_second(const ModelView& model, uint64_t& ops) {
+double engine_ops_per_second(const ModelData& model, uint64_t& ops) {
   VertexHierarchy h = complete_hierarchy(model);
   SelectiveMesh mesh(h, model.base_faces);
   std::vector<uint32_t> slots;
@@ -129,7 +129,7 @@ Quality quality_of(const MeshArrays& mesh, const ViewParams& view, const Image& 
 }
 
 // The view-independent mesh with (about) `faces` faces: each split adds two faces, one on the boundary.
-MeshArrays view_independent(const ModelView& model, uint64_t faces) {
+MeshArrays view_independent(const ModelData& model, uint64_t faces) {
   const uint64_t base = model.base_faces.size() / 3;
   uint64_t k = faces > base ? (faces - base) / 2 : 0;
   MeshArrays mesh = refine_in_stream_order(model, k);
@@ -156,7 +156,7 @@ std::unique_ptr<PmsFile> build_pms(const BenchContext& context, const std::strin
 }
 
 // The adaptation loop along the scan path at τ = 1 px, beside the engine's raw rate.
-std::string adaptation_section(const ModelView& model, const std::string& name, bool quick, json& out) {
+std::string adaptation_section(const ModelData& model, const std::string& name, bool quick, json& out) {
   PathOptions scan_options;
   scan_options.frames = quick ? kQuickScanFrames : kScanFrames;
   const std::vector<Camera> scan = make_camera_path(PathKind::scan, model, scan_options);
@@ -177,7 +177,7 @@ std::string adaptation_section(const ModelView& model, const std::string& name, 
          adapt.markdown() + "\nEngine ops/s: every vsplit in PM order, then every ecol in reverse, one core.\n\n";
 }
 
-std::string renderer_section(const ModelView& model, const MeshArrays& full, const Camera& camera, Renderer& renderer,
+std::string renderer_section(const ModelData& model, const MeshArrays& full, const Camera& camera, Renderer& renderer,
                              json& out) {
   Image image;
   Stopwatch render_clock;
@@ -208,7 +208,7 @@ struct ViewQuality {
   Quality bound_tau1, bound_vi;  // the model built with --deviation bound
 };
 
-ViewQuality view_quality(const ModelView& model, const ModelView& bounded, const MeshArrays& full, const Viewpoint& vp,
+ViewQuality view_quality(const ModelData& model, const ModelData& bounded, const MeshArrays& full, const Viewpoint& vp,
                          Renderer& renderer, const fs::path& out_dir) {
   const ViewParams view = make_view(vp.camera, model.bbox_min, model.bbox_max);
   Image reference;
@@ -266,12 +266,12 @@ json view_quality_json(const char* label, double full_faces, const ViewQuality& 
 // The quality table at three viewpoints, then the same views on the model built with the deviation bound
 // (build --deviation bound): more faces for τ = 1 px, and how that compares with the view-independent mesh
 // of that size.
-std::string quality_sections(const BenchContext& context, const std::string& name, const ModelView& model,
+std::string quality_sections(const BenchContext& context, const std::string& name, const ModelData& model,
                              const MeshArrays& full, const std::vector<Viewpoint>& views, Renderer& renderer, json& out) {
   Table quality = quality_table();
   json per_view = json::array();
   const auto bounded_file = build_pms(context, name, "bound");
-  const ModelView& bounded = bounded_file->view();
+  const ModelData& bounded = bounded_file->model();
   Table bound = bound_table();
   const double full_faces = double(full.indices.size() / 3);
   for (const Viewpoint& vp : views) {
@@ -302,7 +302,7 @@ void run_refine_group(BenchContext& context) {
   const bool quick = context.options.quick;
   const std::string name = context.options.models.empty() ? (quick ? "bunny" : "dragon") : context.options.models[0];
   const auto file = build_pms(context, name, "estimate");  // the default
-  const ModelView& model = file->view();
+  const ModelData& model = file->model();
   json out = {{"command", context.options.command_line}, {"machine", machine_json()}, {"model", name}};
   section += adaptation_section(model, name, quick, out);
 

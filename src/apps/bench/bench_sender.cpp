@@ -59,11 +59,11 @@ struct E2 {
 };
 
 E2 packet_bits_of(const BenchModel& m) {
-  const ModelView& view = m.served->view();
+  const ModelData& model = m.served->model();
   E2 e;
   uint64_t n = 0;
-  for (uint32_t node : view.split_order) {
-    const protocol::PacketBits b = protocol::packet_bits(split_record(view, node), m.served->context);
+  for (uint32_t node : model.split_order) {
+    const protocol::PacketBits b = protocol::packet_bits(split_record(model, node), m.served->context);
     e.topology += b.topology;
     e.position += b.position;
     e.refinement += b.refinement;
@@ -338,8 +338,8 @@ void run_e2_to_e4(const BenchModel& m, bool quick, Table& e2, Table& e34, json& 
   e34.add_row({m.name, std::to_string(2 * path.size()), thousands(laps.lap_down[0]), thousands(laps.lap_up[0]),
                thousands(laps.lap_down[1]), thousands(laps.lap_up[1]), fixed(100 * laps.mean_ratio, 1) + " %",
                fixed(100 * laps.max_ratio, 1) + " %", thousands(laps.max_tag_bytes), thousands(laps.max_front_bytes),
-               percent_of(laps.max_front_nodes, m.served->view().node_count()),
-               percent_of(laps.max_window_nodes, m.served->view().node_count())});
+               percent_of(laps.max_front_nodes, m.served->model().node_count()),
+               percent_of(laps.max_window_nodes, m.served->model().node_count())});
   record["e2"] = {{"topology_bits", bits.topology}, {"position_bits", bits.position},
                   {"refinement_bits", bits.refinement}, {"wire_bytes_per_packet", wire}};
   record["e3_e4"] = {{"lap_down", {laps.lap_down[0], laps.lap_down[1]}}, {"lap_up", {laps.lap_up[0], laps.lap_up[1]}},

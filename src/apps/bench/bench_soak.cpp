@@ -57,7 +57,7 @@ std::vector<SoakClientPlan> plan_clients(const BenchModel& m, uint16_t port, uin
     SoakClientPlan& p = plans[i];
     p.port = port;
     p.model = m.name;
-    p.view = &m.served->view();
+    p.data = &m.served->model();
     // Every client its own path: orbits and scans alternate, each from its own phase, half of each reversed.
     p.path.cameras = i % 2 == 0 ? &orbit : &scan;
     p.path.ping_pong = i % 2 == 1;

@@ -57,7 +57,7 @@ SoakClientLog run_soak_client(const SoakClientPlan& plan, uint32_t minutes) {
   };
   client::LoadClientOptions options;
   options.answer_timeout = kAnswerTimeout;
-  options.model = plan.view;
+  options.model = plan.data;
   client::LoadClient client("127.0.0.1", plan.port, plan.model, options);
   const auto period = std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(1 / kSoakFramesPerSecond));
   Clock::time_point next_frame = plan.start;

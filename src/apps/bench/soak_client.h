@@ -42,7 +42,7 @@ struct SoakClientLog {
 struct SoakClientPlan {
   uint16_t port = 0;
   std::string model;
-  const ModelView* view = nullptr;      // the model served, for the leaves a resume sends
+  const ModelData* data = nullptr;      // the model served, for the leaves a resume sends
   SoakPath path;
   uint64_t seed = 0;                    // reconnect times and resume-or-new draws
   std::chrono::steady_clock::time_point start, end;  // the client's first frame; no VIEW is sent after end
