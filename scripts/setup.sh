@@ -58,14 +58,12 @@ case "$mode" in
     bash scripts/check_layers.sh
     configure_and_build build
     (cd build && ctest --output-on-failure -j "$jobs" --timeout 900)
-    # Second configuration: the unit tests under AddressSanitizer + UndefinedBehaviorSanitizer.
-    configure_and_build build-asan -DCMAKE_BUILD_TYPE=RelWithDebInfo -DPMSTREAM_SANITIZE=ON
+    # Second configuration (clang): the unit tests under AddressSanitizer + UndefinedBehaviorSanitizer, and
+    # every decoder's libFuzzer target, from one build of the libraries.
+    CC=clang CXX=clang++ configure_and_build build-asan -DCMAKE_BUILD_TYPE=RelWithDebInfo -DPMSTREAM_SANITIZE=ON \
+      -DPMSTREAM_FUZZ=ON
     (cd build-asan && ASAN_OPTIONS=detect_leaks=1 ctest --output-on-failure -j "$jobs" --timeout 900 -LE slow)
-    # Third: every decoder's libFuzzer target (clang) builds and runs briefly.
-    CC=clang CXX=clang++ cmake -S . -B build-fuzz -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DPMSTREAM_WERROR=ON \
-      -DPMSTREAM_FUZZ=ON -DPMSTREAM_TESTS=OFF >/dev/null
-    cmake --build build-fuzz -j "$jobs" --target fuzz_targets
-    for target in build-fuzz/fuzz_*; do
+    for target in build-asan/fuzz_*; do
       [ -x "$target" ] || continue
       echo "fuzz: $(basename "$target") for ${PMSTREAM_FUZZ_SECONDS:-30} s"
       "$target" -max_total_time="${PMSTREAM_FUZZ_SECONDS:-30}" -max_len=65536 -print_final_stats=1 2>&1 | tail -3
