@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
 # One entry point for a fresh Debian 12 machine: installs what is missing, builds, then
 #   setup.sh demo   -> runs `pmstream demo`
-#   setup.sh test   -> runs the test suite (the layering check, a release build, an ASan+UBSan build of the
-#                      unit tests, then short runs of every fuzz target)
+#   setup.sh test   -> runs the test suite (the layering check, a release build and its tests, then one clang
+#                      build with ASan+UBSan: the tests again and short runs of every fuzz target)
 #   setup.sh build  -> only builds (build/pmstream)
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -44,6 +44,29 @@ configure_and_build() {  # dir, extra cmake args...
   cmake --build "$dir" -j "$jobs"
 }
 
+# Every libFuzzer target in $1 for PMSTREAM_FUZZ_SECONDS (30) each, $jobs at a time (each is single-threaded);
+# fails if one finds a crash, and prints each one's final stats.
+run_fuzzers() {
+  local seconds=${PMSTREAM_FUZZ_SECONDS:-30} logs failed=0
+  logs=$(mktemp -d)
+  for target in "$1"/fuzz_*; do
+    if [[ -f "$target" && -x "$target" && "$target" != *.* ]]; then echo "$target"; fi
+  done | xargs -P "$jobs" -I{} sh -c \
+    '"$1" -max_total_time="$2" -max_len=65536 -print_final_stats=1 >"$3/$(basename "$1").log" 2>&1' \
+    _ {} "$seconds" "$logs" || failed=1
+  for log in "$logs"/*.log; do
+    echo "fuzz: $(basename "$log" .log), $seconds s:"
+    tail -3 "$log"
+  done
+  if [ "$failed" -ne 0 ]; then
+    grep -l -E "ERROR: (libFuzzer|AddressSanitizer)|runtime error|SUMMARY" "$logs"/*.log | while read -r log; do
+      echo "fuzz: $(basename "$log" .log) found a failure:" >&2
+      grep -A30 -E "ERROR|runtime error" "$log" | head -60 >&2
+    done
+    exit 1
+  fi
+}
+
 install_packages
 case "$mode" in
   build)
@@ -63,12 +86,7 @@ case "$mode" in
     CC=clang CXX=clang++ configure_and_build build-asan -DCMAKE_BUILD_TYPE=RelWithDebInfo -DPMSTREAM_SANITIZE=ON \
       -DPMSTREAM_FUZZ=ON
     (cd build-asan && ASAN_OPTIONS=detect_leaks=1 ctest --output-on-failure -j "$jobs" --timeout 900 -LE slow)
-    for target in build-asan/fuzz_*; do
-      [ -x "$target" ] || continue
-      echo "fuzz: $(basename "$target") for ${PMSTREAM_FUZZ_SECONDS:-30} s"
-      "$target" -max_total_time="${PMSTREAM_FUZZ_SECONDS:-30}" -max_len=65536 -print_final_stats=1 2>&1 | tail -3
-      [ "${PIPESTATUS[0]}" -eq 0 ] || { echo "fuzz: $(basename "$target") found a failure" >&2; exit 1; }
-    done
+    run_fuzzers build-asan
     ;;
   *)
     echo "usage: scripts/setup.sh [build|demo|test]" >&2
