@@ -8,9 +8,11 @@
 #include <cstdio>
 #include <memory>
 #include <set>
+#include <span>
 
 #include "client/local_transport.h"
 #include "client/streaming_client.h"
+#include "common/error.h"
 #include "io/mesh.h"
 #include "io/shapes.h"
 #include "pm/hierarchy.h"
@@ -19,12 +21,15 @@
 #include "protocol/client_messages.h"
 #include "protocol/message_types.h"
 #include "protocol/packet_bits.h"
+#include "protocol/server_messages.h"
 #include "protocol/stream_context.h"
 #include "protocol/wire_internal.h"
 #include "refine/selective_mesh.h"
 #include "refine/vertex_hierarchy.h"
 #include "server/catalogue.h"
 #include "server/limits.h"
+#include "server/plain_packets.h"
+#include "server/selective_streaming.h"
 #include "server/session.h"
 #include "server/tcp_server.h"
 #include "streaming_fixture.h"
@@ -233,6 +238,33 @@ TEST(SenderPlain, ResumedSessionEndsWhereAnUnbrokenOneDoes) {
   for (const Camera& camera : path) unbroken.frame(camera);
   EXPECT_EQ(client.session().splits_received(), unbroken.session().splits_received());
   EXPECT_EQ(faces_by_id(client.session().mesh()), faces_by_id(unbroken.session().mesh()));
+}
+
+// The encoder takes one ActualCuts per node, on the sides the split has, for a context without refinement info.
+TEST(SenderPlain, PlainBatchEncoderRefusesCutsThatDoNotFitTheSplits) {
+  const Fixture& f = terrain();
+  const ModelData& model = f.catalogue->find(f.name)->model();
+  protocol::StreamContext wire = f.catalogue->find(f.name)->context;
+  wire.has_refinement = false;
+  const uint32_t node = model.split_order[0];
+  const auto side = [&](uint32_t cut) { return cut == kNone ? kNone : active_ancestor(model, ActiveTags(model.root_count), cut); };
+  const ActualCuts actual{side(model.cut_left[node]), side(model.cut_right[node])};
+  const std::vector<uint32_t> nodes{node};
+  const std::vector<uint8_t> frame = server::encode_plain_batch(model, wire, 7, true, nodes, std::vector{actual});
+  const protocol::VSplits back =
+      protocol::decode_vsplits(std::span(frame).subspan(protocol::kFrameHeaderBytes), wire);
+  ASSERT_EQ(back.splits.size(), 1u);
+  EXPECT_EQ(back.frame, 7u);
+  EXPECT_EQ(back.splits[0].vs, model.id(node));
+  EXPECT_EQ(back.splits[0].cut_l, actual.left == kNone ? kNoVertex : model.id(actual.left)) << "a root: the base mesh's";
+  EXPECT_THROW(server::encode_plain_batch(model, wire, 7, true, nodes, {}), Error) << "no cuts for the node";
+  ActualCuts other_side = actual;
+  other_side.left = actual.left == kNone ? 0 : kNone;
+  EXPECT_THROW(server::encode_plain_batch(model, wire, 7, true, nodes, std::vector{other_side}), Error)
+      << "a side the split does not have, or none where it has one";
+  protocol::StreamContext with_info = wire;
+  with_info.has_refinement = true;
+  EXPECT_THROW(server::encode_plain_batch(model, with_info, 7, true, nodes, std::vector{actual}), Error);
 }
 
 // OPEN flags (docs/protocol.md): bit 2 = plain, an option of the sender-driven mode only.
