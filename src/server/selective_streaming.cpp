@@ -38,18 +38,21 @@ void sel_stream_vsplit(const ModelData& model, const DependencyFilter& dependenc
       stack.pop_back();
       continue;
     }
-    const uint32_t cut_l = model.cut_left[v], cut_r = model.cut_right[v];
-    ActualCuts actual;
-    bool known = false;
-    if (dependencies.may_wait(v) && cut_l != kNone && cut_r != kNone) {
-      actual = {front_ancestor(model, tags, cut_l), front_ancestor(model, tags, cut_r)};
-      known = true;
-      if (actual.left == actual.right) {
-        stack.push_back(actual.left);
-        continue;
+    // The cut arrays are read only where needed: most splits of a sender-driven answer never look.
+    const bool check = dependencies.may_wait(v);
+    if (check || cuts) {
+      const uint32_t cut_l = model.cut_left[v], cut_r = model.cut_right[v];
+      if (check && cut_l != kNone && cut_r != kNone) {
+        const uint32_t left = front_ancestor(model, tags, cut_l), right = front_ancestor(model, tags, cut_r);
+        if (left == right) {
+          stack.push_back(left);
+          continue;
+        }
+        if (cuts) cuts->push_back({left, right});
+      } else if (cuts) {
+        cuts->push_back({front_ancestor(model, tags, cut_l), front_ancestor(model, tags, cut_r)});
       }
     }
-    if (cuts) cuts->push_back(known ? actual : ActualCuts{front_ancestor(model, tags, cut_l), front_ancestor(model, tags, cut_r)});
     stream_vsplit(model, tags, v, out);
     stack.pop_back();
   }
