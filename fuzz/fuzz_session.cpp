@@ -308,7 +308,7 @@ class Harness {
       case Op::read:
         return read_frames(in.byte() % 4);
       case Op::reconnect:
-        return reconnect(in.bit() ? StreamMode::view_independent : StreamMode::sender_driven);
+        return reconnect(any_mode(in));
       case Op::timeout:
         return time_out();
       case Op::count:
@@ -341,13 +341,21 @@ class Harness {
         return f_.served->name;
     }
   }
+  static StreamMode any_mode(Input& in) {
+    constexpr StreamMode kModes[] = {StreamMode::sender_driven, StreamMode::view_independent, StreamMode::sender_plain,
+                                     StreamMode::sender_driven};
+    return kModes[in.byte() % 4];
+  }
   void send_open(Input& in) {
-    const StreamMode mode = in.bit() ? StreamMode::view_independent : StreamMode::sender_driven;
+    const StreamMode mode = any_mode(in);
     send(protocol::encode(protocol::Open{model_name(in), {}, mode}));
   }
   // A cut of the real hierarchy, encoded as a client would: the server must accept it (sender-driven).
   void send_resume(Input& in) {
-    const StreamMode mode = in.byte() % 8 == 0 ? StreamMode::view_independent : StreamMode::sender_driven;
+    const uint8_t pick = in.byte() % 8;
+    const StreamMode mode = pick == 0 ? StreamMode::view_independent
+                            : pick == 1 ? StreamMode::sender_plain
+                                        : StreamMode::sender_driven;
     const std::string name = model_name(in);
     send(protocol::encode(protocol::Open{name, shape_front(in, model_, model_.root_count, false).leaves, mode}));
   }
@@ -374,11 +382,11 @@ class Harness {
         break;
     }
     const bool overreach = in.bit();
-    const bool view_independent = in.bit();
+    const uint8_t mode_bits = in.byte() % 4;  // bit 1 view-independent, bit 2 plain: both is refused
     const std::string name = model_name(in);
     protocol::Writer w(MessageType::open);
     w.string(name, protocol::kMaxNameBytes, "model");
-    w.u8(uint8_t(1 | (view_independent ? 2 : 0)));
+    w.u8(uint8_t(1 | mode_bits << 1));
     w.u32(trees);
     for (bool split : shape_front(in, model_, trees, overreach).code) w.bits(split, 1);
     Frame frame = to_frame(w.finish());
@@ -425,7 +433,7 @@ class Harness {
       check_outcome();
     }
     protocol::Open open{f_.served->name, {}, client_.has_front() ? client_.mode() : mode};
-    if (client_.has_front() && open.mode == StreamMode::sender_driven) open.resume = client_.leaves();
+    if (client_.has_front() && open.mode != StreamMode::view_independent) open.resume = client_.leaves();
     trace([&] { return "reconnect, resuming from " + std::to_string(open.resume.size()) + " leaves"; });
     c_ = std::make_unique<Connection>(f_);
     client_.reconnect();

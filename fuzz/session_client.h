@@ -189,8 +189,15 @@ class SimulatedClient {
     const uint32_t node = model_.find(split.vs);
     check(node != kNone && !model_.is_leaf(node), "a split of a node the model does not split");
     if (!held_[node]) fail("a split sent twice or out of order: " + to_string(split.vs) + " is not a held leaf");
-    check(split.cut_l == cut_id(model_.cut_left[node]) && split.cut_r == cut_id(model_.cut_right[node]),
-          "a split's cut vertices are not the model's");
+    if (s_.mode == protocol::StreamMode::sender_plain) {
+      // kim-lee-kobbelt §6.3: the cut vertices this client's mesh has, the held ancestors of the model's.
+      check(split.cut_l == cut_id(held_ancestor_or_none(model_.cut_left[node])) &&
+                split.cut_r == cut_id(held_ancestor_or_none(model_.cut_right[node])),
+            "a plain split's cut vertices are not the client's actual ones");
+    } else {
+      check(split.cut_l == cut_id(model_.cut_left[node]) && split.cut_r == cut_id(model_.cut_right[node]),
+            "a split's cut vertices are not the model's");
+    }
     // SelStreamVSplit's partial order (§5.3): when both cut vertices hang below one held leaf, that leaf's
     // split must come first, or the client cannot apply this one.
     if (is_vertex(split.cut_l) && is_vertex(split.cut_r))
@@ -213,6 +220,7 @@ class SimulatedClient {
             "a split's refinement info is not its children's");
   }
   VertexId cut_id(uint32_t node) const { return node == kNone ? kNoVertex : model_.id(node); }
+  uint32_t held_ancestor_or_none(uint32_t node) const { return node == kNone ? kNone : held_ancestor(node); }
   uint32_t held_ancestor(uint32_t node) const {
     while (node != kNone && !held_[node]) node = model_.parent[node];
     check(node != kNone, "the client's leaves are not a front");

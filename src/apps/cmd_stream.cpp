@@ -134,7 +134,8 @@ void add_stream_command(CLI::App& app) {
   cmd->add_option("--server", args->server, "HOST:PORT of the server's TCP port")->required();
   cmd->add_option("--model", args->model, "Model name in the server's catalogue")->required();
   cmd->add_option("--path", args->path, "PATH.json (pmstream path ...)")->required();
-  cmd->add_option("--mode", args->mode, "Streaming mode: sender (view-dependent) or vi (plain PM order until the view is satisfied); docs/cli.md")
+  cmd->add_option("--mode", args->mode, "Streaming mode: sender (view-dependent), sender-plain (the same splits as plain vsplits for a viewer that "
+                 "does not refine) or vi (plain PM order until the view is satisfied); docs/cli.md")
       ->capture_default_str();
   cmd->add_option("--tolerance", args->tolerance, "Screen-space error tolerance in pixels")
       ->check(CLI::NonNegativeNumber)

@@ -2,6 +2,7 @@
 #include "client/client_mode.h"
 
 #include "client/sender_driven_client.h"
+#include "client/sender_plain_client.h"
 #include "client/view_independent_client.h"
 #include "common/error.h"
 
@@ -11,6 +12,7 @@ std::unique_ptr<ClientMode> make_client_mode(protocol::StreamMode mode) {
   switch (mode) {
     case protocol::StreamMode::sender_driven: return std::make_unique<SenderDrivenClient>();
     case protocol::StreamMode::view_independent: return std::make_unique<ViewIndependentClient>();
+    case protocol::StreamMode::sender_plain: return std::make_unique<SenderPlainClient>();
   }
   fail("client", "a streaming mode this client does not know");
 }

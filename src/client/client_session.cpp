@@ -40,6 +40,12 @@ void ClientSession::on_vsplits(const protocol::VSplits& batch) {
   splits_received_ += batch.splits.size();
 }
 
+void ClientSession::apply_as_they_come(const protocol::VSplits& batch, const char* promise) {
+  for (const SplitRecord& split : batch.splits)
+    if (!mesh_->vsplit(hierarchy_->find(split.vs)).done)
+      fail("VSPLITS", "split of " + to_string(split.vs) + " cannot be made on this mesh yet (" + promise + ")");
+}
+
 ViewParams ClientSession::view_params(const Camera& camera) const {
   return make_view(camera, base_.bbox_min, base_.bbox_max);
 }

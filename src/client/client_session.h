@@ -25,6 +25,9 @@ class ClientSession {
   // Attaches a batch's packets as leaves of the partial hierarchy (UpdateVHierarchy). Applying them to
   // the mesh is the mode's business (client_mode.h).
   void on_vsplits(const protocol::VSplits& batch);
+  // Makes every split of an attached batch on the mesh, in order: for the modes whose client applies
+  // splits as they arrive. pms::Error naming `promise` (the order the server owes) when one cannot be made.
+  void apply_as_they_come(const protocol::VSplits& batch, const char* promise);
 
   bool has_model() const { return refinement_ != nullptr; }
   const protocol::StreamContext& context() const { return context_; }

@@ -17,6 +17,8 @@ namespace {
 constexpr int kMaxDepth = 63;  // node-ids are 64 bits with the leading 1
 constexpr uint8_t kFlagResume = 1;
 constexpr uint8_t kFlagViewIndependent = 2;  // StreamMode::view_independent
+// StreamMode::sender_plain: an option of the sender-driven mode (actual cut vertices, no refinement info).
+constexpr uint8_t kFlagPlain = 4;
 
 // Preorder: in the same tree, left-aligned path bits compare like the bit strings they are (for ids
 // where neither is an ancestor of the other, which is the case inside a front).
@@ -49,9 +51,9 @@ struct FrontWriter {
 std::vector<uint8_t> encode(const Open& m) {
   Writer w(MessageType::open);
   w.string(m.model, kMaxNameBytes, "model");
-  const bool vi = m.mode == StreamMode::view_independent;
-  if (!vi && m.mode != StreamMode::sender_driven) fail("OPEN", "mode: not a mode this protocol knows");
-  w.u8(uint8_t((m.resume.empty() ? 0 : kFlagResume) | (vi ? kFlagViewIndependent : 0)));
+  const bool vi = m.mode == StreamMode::view_independent, plain = m.mode == StreamMode::sender_plain;
+  if (!vi && !plain && m.mode != StreamMode::sender_driven) fail("OPEN", "mode: not a mode this protocol knows");
+  w.u8(uint8_t((m.resume.empty() ? 0 : kFlagResume) | (vi ? kFlagViewIndependent : 0) | (plain ? kFlagPlain : 0)));
   if (!m.resume.empty()) {
     std::vector<VertexId> leaves = m.resume;
     for (VertexId v : leaves)
@@ -72,8 +74,11 @@ OpenHeader decode_open_header(std::span<const uint8_t> payload) {
   OpenHeader m;
   m.model = r.string(kMaxNameBytes, "model");
   const uint8_t flags = r.u8("flags");
-  if (flags & ~(kFlagResume | kFlagViewIndependent)) r.fail(ErrorCode::bad_message, "flags", "unknown bits set");
+  if (flags & ~(kFlagResume | kFlagViewIndependent | kFlagPlain)) r.fail(ErrorCode::bad_message, "flags", "unknown bits set");
+  if ((flags & kFlagViewIndependent) && (flags & kFlagPlain))
+    r.fail(ErrorCode::bad_message, "flags", "plain is an option of the sender-driven mode, not of view-independent");
   if (flags & kFlagViewIndependent) m.mode = StreamMode::view_independent;
+  if (flags & kFlagPlain) m.mode = StreamMode::sender_plain;
   if (flags & kFlagResume) {
     m.resume = true;
     m.resume_trees = r.u32("resume tree count");

@@ -10,6 +10,7 @@ struct NamedMode {
 constexpr NamedMode kModes[] = {
     {StreamMode::sender_driven, "sender"},
     {StreamMode::view_independent, "vi"},
+    {StreamMode::sender_plain, "sender-plain"},
 };
 
 }  // namespace

@@ -11,9 +11,14 @@ namespace pms::protocol {
 // client's front needs, with refinement info, and the client refines on its own in between.
 // view_independent: the baseline of kim-lee-kobbelt §8 (Fig. 9): the plain PM order, coarse to fine,
 // without refinement info, until the prefix sent satisfies the client's view.
-enum class StreamMode : uint8_t { sender_driven, view_independent };
+// sender_plain: kim-lee-kobbelt §6.3's variation of sender_driven (Fig. 10, middle column), for viewers that
+// will not refine on their own: the same splits in the same order, but each packet names the cut vertices
+// it has on the client's mesh (the active ancestors of the fundamental ones) and carries no refinement
+// info; the client applies every split as it arrives and never coarsens. On the wire an option of the
+// sender-driven mode (OPEN flag bit 2).
+enum class StreamMode : uint8_t { sender_driven, view_independent, sender_plain };
 
-// The CLI's name of a mode ("sender", "vi"), and back; every name, comma-separated, for help texts.
+// The CLI's name of a mode ("sender", "vi", "sender-plain"), and back; every name, comma-separated, for help texts.
 const char* mode_name(StreamMode mode);
 std::optional<StreamMode> mode_named(std::string_view name);
 std::string mode_names();

@@ -11,6 +11,14 @@
 namespace pms {
 namespace {
 
+// A front of the whole forest always holds an ancestor of every node: none means the tags are broken.
+uint32_t front_ancestor(const ModelData& model, const ActiveTags& tags, uint32_t node) {
+  if (node == kNone) return kNone;
+  const uint32_t a = active_ancestor(model, tags, node);
+  if (a == kNone) throw std::logic_error("SelStreamVSplit: a cut vertex has no active ancestor");
+  return a;
+}
+
 // StreamVSplit: the client will have v's children, so the server's front moves below v.
 void stream_vsplit(const ModelData& model, ActiveTags& tags, uint32_t node, std::vector<uint32_t>& out) {
   tags.split(node, model.first_child[node]);
@@ -18,9 +26,10 @@ void stream_vsplit(const ModelData& model, ActiveTags& tags, uint32_t node, std:
 }
 
 // SelStreamVSplit(v) without recursion: v's split waits on the stack while the ancestor shared by
-// its cut vertices is split first, and so on down the chain.
+// its cut vertices is split first, and so on down the chain. With `cuts`, every split's active ancestors
+// are recorded (the dependency check's, where it ran).
 void sel_stream_vsplit(const ModelData& model, const DependencyFilter& dependencies, ActiveTags& tags, uint32_t node,
-                       std::vector<uint32_t>& out, std::vector<uint32_t>& stack) {
+                       std::vector<uint32_t>& out, std::vector<uint32_t>& stack, std::vector<ActualCuts>* cuts) {
   stack.clear();
   stack.push_back(node);
   while (!stack.empty()) {
@@ -29,16 +38,19 @@ void sel_stream_vsplit(const ModelData& model, const DependencyFilter& dependenc
       stack.pop_back();
       continue;
     }
-    if (dependencies.may_wait(v)) {
+    // The cut arrays are read only where needed: most splits of a sender-driven answer never look.
+    const bool check = dependencies.may_wait(v);
+    if (check || cuts) {
       const uint32_t cut_l = model.cut_left[v], cut_r = model.cut_right[v];
-      if (cut_l != kNone && cut_r != kNone) {
-        const uint32_t left = active_ancestor(model, tags, cut_l);
-        // A front of the whole forest always holds an ancestor of every node; waiting on none would loop.
-        if (left == kNone) throw std::logic_error("SelStreamVSplit: a cut vertex has no active ancestor");
-        if (left == active_ancestor(model, tags, cut_r)) {
+      if (check && cut_l != kNone && cut_r != kNone) {
+        const uint32_t left = front_ancestor(model, tags, cut_l), right = front_ancestor(model, tags, cut_r);
+        if (left == right) {
           stack.push_back(left);
           continue;
         }
+        if (cuts) cuts->push_back({left, right});
+      } else if (cuts) {
+        cuts->push_back({front_ancestor(model, tags, cut_l), front_ancestor(model, tags, cut_r)});
       }
     }
     stream_vsplit(model, tags, v, out);
@@ -145,7 +157,8 @@ void SelectiveStreamer::rank(uint32_t node, float importance) {
   std::push_heap(heap_.begin(), heap_.end(), less_important);
 }
 
-bool SelectiveStreamer::step(size_t max_splits, uint64_t budget, std::vector<uint32_t>& out, uint64_t& work) {
+bool SelectiveStreamer::step(size_t max_splits, uint64_t budget, std::vector<uint32_t>& out, uint64_t& work,
+                             std::vector<ActualCuts>* cuts) {
   if (!model_) return true;
   const ModelData& model = *model_;
   const size_t start = out.size();
@@ -163,7 +176,7 @@ bool SelectiveStreamer::step(size_t max_splits, uint64_t budget, std::vector<uin
     heap_.pop_back();
     if (!tags_->is_active(v)) continue;  // split earlier as a dependency
     const size_t before = out.size();
-    sel_stream_vsplit(model, *dependencies_, *tags_, v, out, stack_);
+    sel_stream_vsplit(model, *dependencies_, *tags_, v, out, stack_, cuts);
     work += out.size() - before;
     // Children of every split just made may want refining too; forced splits' children included.
     for (size_t i = before; i < out.size(); ++i) {

@@ -33,6 +33,12 @@ class DependencyFilter {
 // importance(node) > 0 when qrefine(node) holds for the view; larger = more visible error.
 using Importance = std::function<float(uint32_t node)>;
 
+// The cut vertices a split has on the client's mesh when it is made (kim-lee-kobbelt §6.3): the active
+// ancestors of its fundamental v̂_l, v̂_r, as node indices; kNone for a missing side.
+struct ActualCuts {
+  uint32_t left = kNone, right = kNone;
+};
+
 // One VIEW's answer, produced in slices so a session holds encoded bytes for one batch at a time and never
 // keeps an I/O thread long: start() only records the view; each step() continues ranking the front (a
 // scan that may take many steps on a large front) or hands out the next most important splits, within a
@@ -47,7 +53,10 @@ class SelectiveStreamer {
   // Appends up to `max_splits` nodes to split to `out`, each after every split it depends on, and updates
   // the tags as if they were sent. Stops once `work` (nodes evaluated + split, added to) has grown by
   // `budget`, finishing the dependency chain in hand. Returns true once the view is fully served.
-  bool step(size_t max_splits, uint64_t budget, std::vector<uint32_t>& out, uint64_t& work);
+  // With `cuts`, each split's ActualCuts go there too, one per node appended to `out`, read off the tags
+  // just before that split (the client's front when it applies the packets in order).
+  bool step(size_t max_splits, uint64_t budget, std::vector<uint32_t>& out, uint64_t& work,
+            std::vector<ActualCuts>* cuts = nullptr);
   bool active() const { return model_ != nullptr; }
   // Frees the ranking (a served view keeps no memory in the session).
   void stop();

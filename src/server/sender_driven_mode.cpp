@@ -11,6 +11,7 @@
 #include "pm/hierarchy.h"
 #include "pm/vertex_id.h"
 #include "protocol/message_types.h"
+#include "server/plain_packets.h"
 
 namespace pms::server {
 
@@ -35,7 +36,9 @@ struct SenderDrivenMode::Resume {
 
 SenderDrivenMode::SenderDrivenMode(const protocol::OpenHeader& open, protocol::Frame& open_frame,
                                    const ModeContext& context)
-    : context_(context), importance_(view_.importance(context.served.criteria)) {
+    : context_(context), importance_(view_.importance(context.served.criteria)),
+      plain_(open.mode == protocol::StreamMode::sender_plain), plain_wire_(context.served.context) {
+  plain_wire_.has_refinement = false;
   const uint32_t roots = context_.served.model().root_count;
   if (!open.resume) {
     tags_ = ActiveTags(roots);
@@ -103,7 +106,7 @@ void SenderDrivenMode::pump_answer(uint64_t& work) {
     streamer_.start(context_.served.model(), context_.served.dependencies, tags_, importance_);
   const size_t limit = context_.limits.batch_splits;
   const size_t room = batch_.size() < limit ? limit - batch_.size() : 0;
-  const bool served = streamer_.step(room, context_.limits.slice_work, batch_, work);
+  const bool served = streamer_.step(room, context_.limits.slice_work, batch_, work, plain_ ? &batch_cuts_ : nullptr);
   while (batch_.size() > limit || (batch_.size() == limit && !served)) emit_batch(limit, false);
   if (served) {
     streamer_.stop();
@@ -115,13 +118,21 @@ void SenderDrivenMode::pump_answer(uint64_t& work) {
 // The first `count` splits of the batch (a VSPLITS never holds more than batch_splits: a dependency chain
 // can carry the batch past it, and the rest waits for the next frame, in order).
 void SenderDrivenMode::emit_batch(size_t count, bool final) {
-  context_.queue(context_.served.packets.encode(view_.frame, final, std::span(batch_).first(count)));
+  const std::span<const uint32_t> nodes = std::span(batch_).first(count);
+  if (plain_) {
+    context_.queue(encode_plain_batch(context_.served.model(), plain_wire_, view_.frame, final, nodes,
+                                      std::span(batch_cuts_).first(count)));
+    batch_cuts_.erase(batch_cuts_.begin(), batch_cuts_.begin() + ptrdiff_t(count));
+  } else {
+    context_.queue(context_.served.packets.encode(view_.frame, final, nodes));
+  }
   splits_sent_ += count;
   batch_.erase(batch_.begin(), batch_.begin() + ptrdiff_t(count));
 }
 
 size_t SenderDrivenMode::state_bytes() const {
-  size_t bytes = sizeof(*this) + tags_.memory_bytes() + streamer_.memory_bytes() + batch_.capacity() * sizeof(uint32_t);
+  size_t bytes = sizeof(*this) + tags_.memory_bytes() + streamer_.memory_bytes() + batch_.capacity() * sizeof(uint32_t) +
+                 batch_cuts_.capacity() * sizeof(ActualCuts);
   if (resume_)
     bytes += sizeof(Resume) + resume_->payload.capacity() + resume_->tags.memory_bytes() +
              resume_->leaves.capacity() * sizeof(VertexId);

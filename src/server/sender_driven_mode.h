@@ -2,6 +2,8 @@
 // windowed active tags and answers each VIEW with SelectiveStreaming over it, in batches of vsplit packets
 // with refinement info, so the client can refine on its own until its front needs more. A session can be
 // resumed: OPEN then carries the leaves the client holds, and the tags are rebuilt from them.
+// Its plain option (StreamMode::sender_plain, kim-lee-kobbelt §6.3) streams the same splits in the same
+// order, but as plain_packets.h codes them: the client's actual cut vertices, no refinement info.
 #pragma once
 #include <cstddef>
 #include <cstdint>
@@ -10,6 +12,7 @@
 
 #include "protocol/client_messages.h"
 #include "protocol/framing.h"
+#include "protocol/stream_context.h"
 #include "server/active_tags.h"
 #include "server/selective_streaming.h"
 #include "server/session_mode.h"
@@ -45,6 +48,10 @@ class SenderDrivenMode : public SessionMode {
   Importance importance_;
   SelectiveStreamer streamer_;
   std::vector<uint32_t> batch_;  // splits chosen and not yet sent
+  // The plain option: the context without refinement info, and batch_'s cut vertices on the client's mesh.
+  bool plain_ = false;
+  protocol::StreamContext plain_wire_;
+  std::vector<ActualCuts> batch_cuts_;
   uint64_t splits_sent_ = 0;
 };
 

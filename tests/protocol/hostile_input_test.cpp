@@ -154,7 +154,15 @@ TEST(HostileInput, OpenResume) {
     for (int b : bits) w.bits(uint64_t(b), 1);
     return payload_of(w.finish(), MessageType::open);
   };
-  expect_rejected([&] { decode_open(open_payload(4, {}, {})); }, ErrorCode::bad_message, "OPEN: flags: unknown bits");
+  expect_rejected([&] { decode_open(open_payload(8, {}, {})); }, ErrorCode::bad_message, "OPEN: flags: unknown bits");
+  expect_rejected([&] { decode_open(open_payload(0x80, {}, {})); }, ErrorCode::bad_message, "OPEN: flags: unknown bits");
+  // Plain (bit 2) is an option of the sender-driven mode: never with view-independent (bit 1), resume or not.
+  expect_rejected([&] { decode_open(open_payload(6, {}, {})); }, ErrorCode::bad_message, "OPEN: flags: plain");
+  expect_rejected([&] { decode_open(open_payload(7, {1}, {0})); }, ErrorCode::bad_message, "OPEN: flags: plain");
+  EXPECT_EQ(decode_open(open_payload(4, {}, {})).mode, StreamMode::sender_plain);
+  const Open plain_resume = decode_open(open_payload(5, {1}, {1, 0, 0}));
+  EXPECT_EQ(plain_resume.mode, StreamMode::sender_plain);
+  EXPECT_EQ(plain_resume.resume.size(), 2u) << "a plain session resumes as a sender-driven one does";
   expect_rejected([&] { decode_open(open_payload(1, {0}, {})); }, ErrorCode::bad_message, "resume tree count: is 0");
   expect_rejected([&] { decode_open(open_payload(1, {0xFFFFFFFF}, {0, 0})); }, ErrorCode::bad_message,
                   "resume tree count: count 4294967295 does not fit");

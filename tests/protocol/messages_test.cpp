@@ -76,7 +76,11 @@ TEST(Messages, OpenRoundTrip) {
     const Open vi = round_trip(m, MessageType::open, [](auto p) { return decode_open(p); });
     EXPECT_EQ(vi.mode, StreamMode::view_independent);
     EXPECT_EQ(encode(m)[kFrameHeaderBytes + 2 + m.model.size()], 2) << "flags: bit 1 = view-independent";
-    m.mode = seed % 2 ? StreamMode::view_independent : StreamMode::sender_driven;
+    m.mode = StreamMode::sender_plain;
+    const Open plain = round_trip(m, MessageType::open, [](auto p) { return decode_open(p); });
+    EXPECT_EQ(plain.mode, StreamMode::sender_plain);
+    EXPECT_EQ(encode(m)[kFrameHeaderBytes + 2 + m.model.size()], 4) << "flags: bit 2 = plain (sender-driven option)";
+    m.mode = seed % 3 == 0 ? StreamMode::view_independent : seed % 3 == 1 ? StreamMode::sender_plain : StreamMode::sender_driven;
 
     m.resume = test::random_front(rng, uint32_t(1 + rng() % 100), 63);
     const Open back = round_trip(m, MessageType::open, [](auto p) { return decode_open(p); });

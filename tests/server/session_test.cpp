@@ -252,5 +252,38 @@ TEST(Session, ViewIndependentAnswersAreSlicedToo) {
   EXPECT_TRUE(reader.batches.back().final);
 }
 
+// The plain option (kim-lee-kobbelt §6.3) names each split's actual cut vertices while it walks the front:
+// the same bounded slices, and every split's cut vertices are leaves the client holds when it arrives.
+TEST(Session, PlainAnswersAreSlicedAndNameHeldCutVertices) {
+  const Hierarchy& h = terrain().hierarchy;
+  server::ServerLimits limits;
+  limits.slice_work = 256;
+  server::Session session(terrain().catalogue, limits);
+  greet(session);
+  session.receive(frame_of(protocol::encode(protocol::Open{"terrain", {}, protocol::StreamMode::sender_plain})));
+  session.receive(frame_of(protocol::encode(protocol::View{close_camera(h), 0.0f, 1})));
+  Reader reader;
+  reader.view_independent = true;  // no refinement info in these packets either
+  run(session, reader, limits);
+  std::set<std::pair<uint32_t, uint64_t>> held;
+  for (uint32_t t = 0; t < h.root_count; ++t) held.insert({t, 1});
+  size_t splits = 0;
+  for (const auto& b : reader.batches)
+    for (const auto& s : b.splits) {
+      ASSERT_TRUE(held.erase({s.vs.tree, s.vs.node})) << to_string(s.vs) << " is not a held leaf";
+      for (VertexId cut : {s.cut_l, s.cut_r})
+        if (is_vertex(cut)) {
+          EXPECT_TRUE(held.count({cut.tree, cut.node})) << to_string(cut) << " is not a held leaf";
+        }
+      EXPECT_NE(s.cut_l, s.cut_r);
+      held.insert({s.vs.tree, s.vs.child(0).node});
+      held.insert({s.vs.tree, s.vs.child(1).node});
+      ++splits;
+    }
+  EXPECT_GT(splits, 1000u);
+  EXPECT_EQ(session.tags().active_count(), held.size());
+  EXPECT_TRUE(reader.batches.back().final);
+}
+
 }  // namespace
 }  // namespace pms

@@ -135,6 +135,7 @@ Laps run_laps(const BenchModel& m, const std::vector<Camera>& path) {
 struct E5 {
   uint64_t vd_bytes = 0, vd_faces = 0;
   uint64_t vi_bytes = 0, vi_splits = 0, vi_faces = 0;
+  uint64_t plain_bytes = 0;  // the same splits as VD, as plain vsplits (kim-lee-kobbelt §6.3, stream --mode sender-plain)
 };
 
 // A close view: the first orbit camera moved halfway to its target (the model overflows the screen).
@@ -144,23 +145,33 @@ Camera close_view(const BenchModel& m) {
   return c;
 }
 
-E5 run_e5(const BenchModel& m, const Camera& camera) {
-  E5 e;
-  client::StreamingClient client(in_process_session(m).transport, client::ClientOptions{kTolerance});
+struct OneView {
+  uint64_t bytes_down = 0, splits = 0, faces = 0;
+};
+
+// A fresh in-process session in `mode` flies to `camera`: bytes down until that VIEW's final batch.
+OneView one_view(const BenchModel& m, const Camera& camera, protocol::StreamMode mode) {
+  client::ClientOptions options{kTolerance};
+  options.mode = mode;
+  client::StreamingClient client(in_process_session(m).transport, options);
   client.open(m.name);
   client.frame(camera);
-  e.vd_bytes = client.counters().bytes_down;
-  e.vd_faces = client.session().mesh().face_count();
+  return {client.counters().bytes_down, client.session().splits_received(), client.session().mesh().face_count()};
+}
+
+E5 run_e5(const BenchModel& m, const Camera& camera) {
+  E5 e;
+  const OneView vd = one_view(m, camera, protocol::StreamMode::sender_driven);
+  e.vd_bytes = vd.bytes_down;
+  e.vd_faces = vd.faces;
   // The view-independent baseline streams the plain PM order (packets without refinement info) until the
-  // prefix satisfies the same view: a real vi session, bytes down until that VIEW's final batch.
-  client::ClientOptions vi_options{kTolerance};
-  vi_options.mode = protocol::StreamMode::view_independent;
-  client::StreamingClient vi(in_process_session(m).transport, vi_options);
-  vi.open(m.name);
-  vi.frame(camera);
-  e.vi_bytes = vi.counters().bytes_down;
-  e.vi_splits = vi.session().splits_received();
-  e.vi_faces = vi.session().mesh().face_count();
+  // prefix satisfies the same view.
+  const OneView vi = one_view(m, camera, protocol::StreamMode::view_independent);
+  e.vi_bytes = vi.bytes_down;
+  e.vi_splits = vi.splits;
+  e.vi_faces = vi.faces;
+  // §6.3's variation: the view-dependent splits with the client's actual cut vertices, no refinement info.
+  e.plain_bytes = one_view(m, camera, protocol::StreamMode::sender_plain).bytes_down;
   return e;
 }
 
@@ -325,7 +336,7 @@ Table e34_table() {
 
 Table e5_table() {
   return Table({{"model", false}, {"VD bytes", true}, {"VD faces", true}, {"VI bytes", true}, {"VI splits", true},
-                {"VD / VI", true}, {"paper VD / VI", true}});
+                {"VD / VI", true}, {"paper VD / VI", true}, {"VD plain bytes", true}, {"plain / VD", true}});
 }
 
 // E2 and E3/E4 on one model: a row in each table and their entries in the model's record.
@@ -357,9 +368,11 @@ void run_e5_pair(const BenchContext& context, const BenchModel& m, Table& e5, js
   const E5 vb = run_e5(bounded, close_view(bounded));
   for (const auto& [label, e] : {std::pair{m.name, vd}, std::pair{m.name + ", bound", vb}})
     e5.add_row({label, thousands(e.vd_bytes), thousands(e.vd_faces), thousands(e.vi_bytes), thousands(e.vi_splits),
-                fixed(double(e.vd_bytes) / double(std::max<uint64_t>(1, e.vi_bytes)), 2), paper});
+                fixed(double(e.vd_bytes) / double(std::max<uint64_t>(1, e.vi_bytes)), 2), paper,
+                thousands(e.plain_bytes), fixed(double(e.plain_bytes) / double(std::max<uint64_t>(1, e.vd_bytes)), 2)});
   for (const auto& [key, e] : {std::pair{"e5", vd}, std::pair{"e5_bound", vb}})
-    record[key] = {{"vd_bytes", e.vd_bytes}, {"vd_faces", e.vd_faces}, {"vi_bytes", e.vi_bytes}, {"vi_splits", e.vi_splits}};
+    record[key] = {{"vd_bytes", e.vd_bytes}, {"vd_faces", e.vd_faces}, {"vi_bytes", e.vi_bytes}, {"vi_splits", e.vi_splits},
+                   {"vd_plain_bytes", e.plain_bytes}};
 }
 
 // Prints the three tables and returns their part of the report.
@@ -380,7 +393,8 @@ std::string e2_to_e5_sections(const Table& e2, const Table& e34, const Table& e5
   section += "### E5: bytes to satisfy τ = 1 px from a close view\n\n" + e5.markdown() +
              "\nVI = a view-independent session (`stream --mode vi`) to the same view: the base mesh plus the plain "
              "PM-order prefix (packets without refinement info) up to the last split the view needs, bytes down until "
-             "that VIEW's final batch. \"bound\" rows: the model built with `--deviation bound` (a bound on the input "
+             "that VIEW's final batch. \"VD plain\" = the same view in `stream --mode sender-plain` (kim-lee-kobbelt §6.3, "
+             "Fig. 10 middle column): the VD splits with the client's actual cut vertices and no refinement info. \"bound\" rows: the model built with `--deviation bound` (a bound on the input "
              "surface below each node, whose chain over-refines a close view) instead of the default, Hoppe 1997's "
              "sampled estimate (the criteria the paper uses).\n\n";
   return section;
