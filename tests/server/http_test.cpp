@@ -97,6 +97,22 @@ TEST(Http, CatalogueAndBaseAreCacheableAndTheSameForEveryClient) {
   EXPECT_TRUE(head.body.empty());
 }
 
+// Stateless: another server process over the same file answers every URL with the same headers and bytes.
+TEST(Http, TwoServersOfOneFileAnswerAlike) {
+  Server first;
+  HttpServer second(server::Catalogue::open({terrain().path}), HttpLimits{}, "127.0.0.1", 0);
+  second.start();
+  HttpTestClient a(first.port()), b(second.port());
+  for (const std::string& url : {std::string("/models"), std::string("/models/terrain/base"), splits_url(some_roots(7, 2)),
+                                 std::string("/models/terrain/blocks/") + std::to_string(some_roots(1).ids[0].tree) + "/1/3"}) {
+    const HttpReply x = a.get(url), y = b.get(url);
+    ASSERT_EQ(x.status, 200) << url << ": " << x.text();
+    EXPECT_EQ(x.headers, y.headers) << url;
+    EXPECT_EQ(x.body, y.body) << url;
+  }
+  EXPECT_NE(a.get("/models/terrain/base").header("etag"), a.get(splits_url(some_roots(7, 2))).header("etag"));
+}
+
 TEST(Http, IfNoneMatchGetsA304WithoutABody) {
   Server server;
   HttpTestClient client(server.port());
