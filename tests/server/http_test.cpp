@@ -238,6 +238,30 @@ TEST(Http, SilentAndSlowPeersAreClosedByTheDeadlines) {
   EXPECT_TRUE(reaches(server.http.stats().connections_timed_out, 3));
 }
 
+// A peer that sends requests and never reads the answers: once the kernel's buffers are full, nothing is
+// taken within the write deadline and the connection is closed, while the idle deadline is far off.
+TEST(Http, APeerThatDoesNotReadIsClosedByTheWriteDeadline) {
+  HttpLimits limits;
+  limits.write_timeout_ms = 300;
+  limits.idle_timeout_ms = 60000;
+  Server server(limits);
+  const std::string url = splits_url(some_roots(64, 8));
+  HttpTestClient reader(server.port());
+  const size_t answer = reader.get(url).body.size();
+  ASSERT_GT(answer, 50000u);
+  HttpTestClient deaf(server.port(), 20000);
+  std::string requests;
+  for (size_t sent = 0; sent < (64u << 20); sent += answer) requests += "GET " + url + " HTTP/1.1\r\nHost: x\r\n\r\n";
+  try {
+    deaf.send(requests);  // may block until the server gives up on this peer, and then fail
+  } catch (const std::exception&) {
+  }
+  for (int i = 0; i < 400 && server.http.stats().connections_timed_out.load() == 0; ++i)
+    std::this_thread::sleep_for(std::chrono::milliseconds(25));
+  EXPECT_EQ(server.http.stats().connections_timed_out.load(), 1u);
+  EXPECT_EQ(reader.get("/models").status, 200);  // the others are served meanwhile
+}
+
 TEST(Http, ConnectionsOverTheLimitGet503) {
   HttpLimits limits;
   limits.max_connections = 3;
