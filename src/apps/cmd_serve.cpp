@@ -1,5 +1,6 @@
-// pmstream serve FILES_OR_DIRS... [--port 7300] [--host 0.0.0.0] [--max-sessions N] [--json] ...
-// Runs the sender-driven TCP server until SIGINT or SIGTERM; SIGUSR1 prints the totals so far.
+// pmstream serve FILES_OR_DIRS... [--port 7300] [--http-port P] [--host 0.0.0.0] [--max-sessions N] [--json] ...
+// Runs the sender-driven TCP server, and with --http-port the receiver-driven HTTP server beside it, until
+// SIGINT or SIGTERM; SIGUSR1 prints the totals so far.
 #include <algorithm>
 #include <csignal>
 #include <cstdio>
@@ -11,6 +12,7 @@
 #include "apps/resource_usage.h"
 #include "common/error.h"
 #include "server/catalogue.h"
+#include "server/http_server.h"
 #include "server/limits.h"
 #include "server/stats.h"
 #include "server/tcp_server.h"
@@ -23,8 +25,10 @@ struct ServeArgs {
   std::string host = "0.0.0.0";
   uint16_t port = 7300;
   uint16_t http_port = 0;
+  bool http_port_given = false;
   bool json = false;
   server::ServerLimits limits;
+  server::HttpLimits http;
 };
 
 uint64_t rss_bytes() {
@@ -74,6 +78,19 @@ nlohmann::json stats_json(const char* event, const server::ServerStats& s, const
           {"cpu_s", cpu_seconds()}};
 }
 
+void add_http_stats(nlohmann::json& line, const server::HttpStats& s) {
+  line["http"] = {{"connections_opened", s.connections_opened.load()},
+                  {"connections_active", s.connections_active.load()},
+                  {"connections_refused", s.connections_refused.load()},
+                  {"connections_timed_out", s.connections_timed_out.load()},
+                  {"requests", s.requests.load()},
+                  {"not_modified", s.not_modified.load()},
+                  {"client_errors", s.client_errors.load()},
+                  {"bytes_in", s.bytes_in.load()},
+                  {"bytes_out", s.bytes_out.load()},
+                  {"splits_served", s.splits_served.load()}};
+}
+
 void print_line(const std::string& line) {
   std::printf("%s\n", line.c_str());
   std::fflush(stdout);
@@ -92,9 +109,29 @@ void print_totals(const server::ServerStats& s) {
   std::fflush(stdout);
 }
 
-void run_serve(const ServeArgs& args) {
-  if (args.http_port != 0)
-    fail("serve", "--http-port: the HTTP/WebSocket transport (receiver-driven mode, browser) is not in this build yet");
+void print_stats(const char* event, const ServeArgs& args, const server::TcpServer& tcp,
+                 const server::HttpServer* http, const Stopwatch& uptime) {
+  if (args.json) {
+    nlohmann::json line = stats_json(event, tcp.stats(), uptime);
+    if (http) add_http_stats(line, http->stats());
+    print_line(line.dump());
+  } else {
+    print_totals(tcp.stats());
+    if (http) {
+      const server::HttpStats& s = http->stats();
+      std::printf("http: %llu connections (%llu refused, %llu timed out), %llu requests (%llu not modified, "
+                  "%llu client errors), %llu bytes in, %llu bytes out, %llu splits served\n",
+                  (unsigned long long)s.connections_opened.load(), (unsigned long long)s.connections_refused.load(),
+                  (unsigned long long)s.connections_timed_out.load(), (unsigned long long)s.requests.load(),
+                  (unsigned long long)s.not_modified.load(), (unsigned long long)s.client_errors.load(),
+                  (unsigned long long)s.bytes_in.load(), (unsigned long long)s.bytes_out.load(),
+                  (unsigned long long)s.splits_served.load());
+      std::fflush(stdout);
+    }
+  }
+}
+
+void run_serve(ServeArgs args) {
   // Signals go to the thread that waits for them, not to an I/O thread.
   sigset_t signals;
   sigemptyset(&signals);
@@ -106,14 +143,21 @@ void run_serve(const ServeArgs& args) {
   const Stopwatch uptime;
   const auto catalogue = server::Catalogue::open(args.paths, args.limits.position_bits);
   server::TcpServer tcp(catalogue, args.limits, args.host, args.port);
+  std::unique_ptr<server::HttpServer> http;
+  if (args.http_port_given) {
+    args.http.threads = args.limits.threads;
+    http = std::make_unique<server::HttpServer>(catalogue, args.http, args.host, args.http_port);
+  }
   tcp.start();
+  if (http) http->start();
   if (args.json) {
     nlohmann::json models = nlohmann::json::array();
     for (const auto& model : catalogue->models())
       models.push_back({{"name", model->name}, {"path", model->path}, {"faces", model->info.input_faces},
                         {"base_vertices", model->info.base_vertices}, {"vsplits", model->info.vsplits}});
-    print_line(nlohmann::json{{"event", "listening"}, {"host", args.host}, {"port", tcp.port()}, {"models", models}}
-                   .dump());
+    nlohmann::json line{{"event", "listening"}, {"host", args.host}, {"port", tcp.port()}, {"models", models}};
+    if (http) line["http_port"] = http->port();
+    print_line(line.dump());
   } else {
     for (const auto& model : catalogue->models())
       std::printf("serving %s: %llu faces, %u base vertices, %llu vsplits (%s)\n", model->name.c_str(),
@@ -121,23 +165,17 @@ void run_serve(const ServeArgs& args) {
                   (unsigned long long)model->info.vsplits, model->path.c_str());
     print_line("listening on " + args.host + ":" + std::to_string(tcp.port()) +
                " (TCP, sender-driven); Ctrl-C stops, SIGUSR1 prints the totals so far");
+    if (http) print_line("listening on " + args.host + ":" + std::to_string(http->port()) + " (HTTP, receiver-driven)");
   }
   for (;;) {
     int received = 0;
     sigwait(&signals, &received);
     if (received != SIGUSR1) break;
-    if (args.json) {
-      print_line(stats_json("stats", tcp.stats(), uptime).dump());
-    } else {
-      print_totals(tcp.stats());
-    }
+    print_stats("stats", args, tcp, http.get(), uptime);
   }
+  if (http) http->stop();
   tcp.stop();
-  if (args.json) {
-    print_line(stats_json("stopped", tcp.stats(), uptime).dump());
-  } else {
-    print_totals(tcp.stats());
-  }
+  print_stats("stopped", args, tcp, http.get(), uptime);
 }
 
 void add_limit(CLI::App* cmd, const char* name, uint32_t& value, const char* help) {
@@ -149,11 +187,23 @@ void add_limit(CLI::App* cmd, const char* name, uint32_t& value, const char* hel
 void add_serve_command(CLI::App& app) {
   auto args = std::make_shared<ServeArgs>();
   server::ServerLimits& limits = args->limits;
-  CLI::App* cmd = app.add_subcommand("serve", "Serve .pms models to streaming clients (sender-driven, TCP)");
+  CLI::App* cmd = app.add_subcommand("serve", "Serve .pms models to streaming clients (sender-driven over TCP; receiver-driven over HTTP with --http-port)");
   cmd->add_option("paths", args->paths, ".pms files or directories holding them")->required();
   cmd->add_option("--host", args->host, "Address to listen on")->capture_default_str();
   cmd->add_option("--port", args->port, "TCP port (0: any free port, printed at start)")->capture_default_str();
-  cmd->add_option("--http-port", args->http_port, "HTTP + WebSocket port (receiver-driven mode; later)");
+  cmd->add_option("--http-port", args->http_port,
+                  "Also serve the receiver-driven mode over HTTP on this port (0: any free port, printed at start)");
+  server::HttpLimits& http = args->http;
+  add_limit(cmd, "--http-max-connections", http.max_connections, "Concurrent HTTP connections; more get 503");
+  add_limit(cmd, "--http-idle-timeout-ms", http.idle_timeout_ms,
+            "Close a keep-alive HTTP connection that begins no request for this long");
+  add_limit(cmd, "--http-request-timeout-ms", http.request_timeout_ms,
+            "An HTTP request, once begun, must arrive whole within this");
+  add_limit(cmd, "--http-write-timeout-ms", http.write_timeout_ms,
+            "Close an HTTP peer that takes no answer byte for this long");
+  add_limit(cmd, "--http-max-request-ids", http.max_request_ids, "Ids one request code may name (413 over it)");
+  add_limit(cmd, "--http-max-response-splits", http.max_response_splits,
+            "Split records one answer may carry, descendants included (413 over it)");
   cmd->add_flag("--json", args->json, "Print one JSON object per line: listening, stats (SIGUSR1), stopped");
   add_limit(cmd, "--max-sessions", limits.max_sessions, "Concurrent sessions; more are refused (server_full)");
   add_limit(cmd, "--threads", limits.threads, "I/O threads (0 = one per core)");
@@ -179,7 +229,10 @@ void add_serve_command(CLI::App& app) {
       ->check(CLI::Range(1u, 1u << 16))
       ->capture_default_str();
   add_limit(cmd, "--position-bits", limits.position_bits, "Bits per coordinate on the wire (1-24, or 32)");
-  cmd->callback([args] { run_serve(*args); });
+  cmd->callback([args, cmd] {
+    args->http_port_given = cmd->count("--http-port") > 0;
+    run_serve(*args);
+  });
 }
 
 }  // namespace pms::app

@@ -6,6 +6,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 #include <cerrno>
+#include <cstddef>
 #include <cstring>
 
 #include "common/error.h"
@@ -130,7 +131,8 @@ PmsFile::~PmsFile() {
 }
 
 void PmsFile::parse(const std::string& name) {
-  const SectionMap sections = locate_sections(name, data_, size_);
+  const SectionMap sections = locate_sections(name, data_, size_);  // checked the header and its checksum
+  std::memcpy(&content_checksum_, data_ + offsetof(FileHeader, header_checksum), sizeof content_checksum_);
   const HeadSection head = read_head(name, sections);
   check_counts(name, sections, head);
   model_ = make_model(sections, head);

@@ -43,12 +43,16 @@ class PmsFile {
   const ModelData& model() const { return model_; }
   const BuildStats& stats() const { return stats_; }
   uint64_t file_size() const { return size_; }
+  // The header checksum, which covers every section's checksum: files with equal content have equal
+  // values (HTTP ETags name a model's bytes by it).
+  uint64_t content_checksum() const { return content_checksum_; }
 
  private:
   PmsFile() = default;
   void parse(const std::string& name);
   const uint8_t* data_ = nullptr;
   uint64_t size_ = 0;
+  uint64_t content_checksum_ = 0;
   bool mapped_ = false;
   std::vector<uint8_t> owned_;  // when not memory-mapped
   std::vector<uint32_t> tree_id_;

@@ -28,4 +28,19 @@ struct ServerLimits {
   uint32_t threads = 0;                    // I/O threads; 0 = one per core
 };
 
+// Every bound the HTTP transport (receiver-driven mode) puts on a peer (docs/operating.md, "HTTP").
+struct HttpLimits {
+  uint32_t max_connections = 1000;         // more are answered 503 and closed
+  uint32_t max_target_bytes = 4096;        // the request line's URL: 414 over it (larger codes are POSTed)
+  uint32_t max_header_bytes = 8192;        // request line and headers: 431 over it
+  uint32_t max_body_bytes = 16384;         // a POSTed request code: 413 over it
+  uint32_t max_request_ids = 4096;         // ids in one request code: 413 over it
+  uint32_t max_request_depth = 8;          // a request's descendant depth: 400 over it
+  uint32_t max_response_splits = 65536;    // split records in one answer (ids and their descendants): 413
+  uint32_t idle_timeout_ms = 30000;        // keep-alive: no request begun for this long: closed
+  uint32_t request_timeout_ms = 10000;     // a request, once begun, must arrive whole within this
+  uint32_t write_timeout_ms = 10000;       // answer bytes waiting and none taken for this long: closed
+  uint32_t threads = 0;                    // I/O threads; 0 = one per core
+};
+
 }  // namespace pms::server

@@ -2,6 +2,8 @@
 // LoadClient received, a resume re-sends nothing, and a server that does not report is an error that
 // says why (E11 and the soak read the server only through ServeChild).
 #include <gtest/gtest.h>
+#include <utility>  // before asio with C++20
+#include <boost/asio.hpp>
 #include <nlohmann/json.hpp>
 #include <functional>
 #include <string>
@@ -99,6 +101,37 @@ TEST(ServeChild, CountersAgreeWithWhatTheClientReceived) {
   EXPECT_GE(stopped.peak_rss_bytes, during.rss_bytes);
   EXPECT_GT(stopped.bytes_out, stopped.bytes_in);
   EXPECT_EQ(stopped.sessions_failed + stopped.protocol_errors, 0u);
+}
+
+// One HTTP/1.1 request that asks the server to close after it; the whole answer as text.
+std::string http_exchange(uint16_t port, const std::string& target) {
+  namespace asio = boost::asio;
+  asio::io_context io;
+  asio::ip::tcp::socket socket(io);
+  socket.connect({asio::ip::make_address("127.0.0.1"), port});
+  asio::write(socket, asio::buffer("GET " + target + " HTTP/1.1\r\nHost: t\r\nConnection: close\r\n\r\n"));
+  std::string answer;
+  boost::system::error_code ec;
+  asio::read(socket, asio::dynamic_buffer(answer), ec);  // to the end of the stream
+  return answer;
+}
+
+TEST(ServeChild, ServesHttpBesideTcpAndCountsIt) {
+  const auto pms = small_model(test::temp_dir());
+  ServeChild server(PMSTREAM_BINARY, {pms.string(), "--http-port", "0"});
+  const uint16_t http_port = server.listening()["http_port"];
+  EXPECT_GT(http_port, 0);
+  EXPECT_NE(http_port, server.port());
+  const std::string models = http_exchange(http_port, "/models");
+  EXPECT_EQ(models.rfind("HTTP/1.1 200 OK\r\n", 0), 0u) << models;
+  EXPECT_NE(models.find("\"name\":\"terrain\""), std::string::npos) << models;
+  const std::string base = http_exchange(http_port, "/models/terrain/base");
+  EXPECT_NE(base.find("Cache-Control: public, max-age=31536000, immutable"), std::string::npos) << base;
+  EXPECT_EQ(http_exchange(http_port, "/models/other/base").rfind("HTTP/1.1 404", 0), 0u);
+  const ServeStats stopped = server.stop();
+  EXPECT_EQ(stopped.line["http"]["requests"], 3);
+  EXPECT_EQ(stopped.line["http"]["client_errors"], 1);
+  EXPECT_EQ(stopped.sessions_opened, 0u);  // HTTP has no sessions
 }
 
 TEST(ServeChild, AServerThatDoesNotStartSaysWhy) {

@@ -1,0 +1,104 @@
+// libFuzzer target for the HTTP request path (docs/architecture.md, "Correctness properties", 5): bytes go
+// through Beast's request parser under the server's limits, then the routes over a real catalogue, then
+// the response serializer, as many pipelined requests as the bytes hold. Input byte 0 picks the form: raw
+// HTTP bytes, or the rest as a request code sent as GET /models/terrain/splits/BASE64 and as POST (so the
+// fuzzer reaches the code paths without having to invent base64). Every answer must be a 2xx, 304 or 4xx
+// whose body stays within the limits' bound; nothing may crash, hang or throw.
+#include <unistd.h>
+#include <cstddef>
+#include <cstdint>
+#include <filesystem>
+#include <sstream>
+#include <string>
+
+#include "builder/build.h"
+#include "io/shapes.h"
+#include "pm/pms_file.h"
+#include "protocol/base64url.h"
+#include "server/catalogue.h"
+#include "server/http_message.h"
+#include "server/limits.h"
+
+namespace {
+
+using namespace pms;
+using namespace pms::server;
+
+void check(bool condition) {
+  if (!condition) __builtin_trap();
+}
+
+struct Fixture {
+  std::shared_ptr<const Catalogue> catalogue;
+  HttpLimits limits;
+  size_t body_bound = 0;
+};
+
+const Fixture& fixture() {
+  static const Fixture f = [] {
+    Fixture f;
+    f.limits.max_request_ids = 64;
+    f.limits.max_response_splits = 256;
+    const BuildResult built = build_progressive_mesh(make_terrain(2000), BuildOptions{});
+    const auto dir = std::filesystem::temp_directory_path() / ("pmstream-fuzz-http-" + std::to_string(getpid()));
+    std::filesystem::create_directories(dir);
+    write_pms((dir / "terrain.pms").string(), built.hierarchy, built.stats);
+    f.catalogue = Catalogue::open({(dir / "terrain.pms").string()});
+    std::filesystem::remove_all(dir);
+    // A vsplit packet is under 1024 bits; BASE and the catalogue are what they are.
+    f.body_bound = std::max<size_t>(f.catalogue->find("terrain")->base_frame->size(),
+                                    size_t(f.limits.max_response_splits) * 128 + 16) + 4096;
+    return f;
+  }();
+  return f;
+}
+
+void check_answer(const HttpAnswer& answer, bool parsed) {
+  const int s = answer.status;
+  check(s == 200 || s == 304 || (s >= 400 && s < 500));
+  check(parsed || s >= 400);
+  check(answer.body().size() <= fixture().body_bound);
+  std::ostringstream out;
+  out << make_response(answer, false, true, 11);  // the serializer takes every answer
+  check(out.str().size() > answer.body().size());
+}
+
+// Each request in `bytes` in turn, until the parser wants more than there is or refuses them.
+void serve_bytes(std::string_view bytes) {
+  const Fixture& f = fixture();
+  for (int requests = 0; requests < 16 && !bytes.empty(); ++requests) {
+    HttpParser parser;
+    bound_parser(parser, f.limits);
+    parser.eager(true);
+    boost::beast::error_code ec;
+    size_t used = 0;
+    while (!parser.is_done() && used < bytes.size()) {
+      const size_t n = parser.put(boost::asio::buffer(bytes.data() + used, bytes.size() - used), ec);
+      used += n;
+      if (ec == http::error::need_more) {
+        if (n == 0) return;  // the rest would come in a later read
+        ec = {};
+        continue;
+      }
+      if (ec) return check_answer(parse_error_answer(ec, bytes.substr(0, used)), false);
+    }
+    if (!parser.is_done()) return;
+    check_answer(answer_request(*f.catalogue, f.limits, parser.get()), true);
+    bytes.remove_prefix(used);
+  }
+}
+
+}  // namespace
+
+extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
+  if (size < 1) return 0;
+  const std::string_view rest(reinterpret_cast<const char*>(data + 1), size - 1);
+  if (data[0] % 2 == 0) {
+    serve_bytes(rest);
+  } else {
+    const std::string code = protocol::base64url_encode({data + 1, size - 1});
+    serve_bytes("GET /models/terrain/splits/" + code + " HTTP/1.1\r\nHost: f\r\n\r\nPOST /models/terrain/splits "
+                "HTTP/1.1\r\nHost: f\r\nContent-Length: " + std::to_string(size - 1) + "\r\n\r\n" + std::string(rest));
+  }
+  return 0;
+}

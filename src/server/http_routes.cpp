@@ -1,0 +1,226 @@
+// The routes of the receiver-driven mode: GET /models, GET /models/M/base, POST /models/M/splits and its
+// GET form /models/M/splits/CODE, and GET /models/M/blocks/TREE/NODE/DEPTH (docs/protocol.md,
+// "Receiver-driven over HTTP"). Each URL has one answer for a given model file: strong ETags, immutable.
+#define XXH_INLINE_ALL
+#include <xxhash.h>
+#include <charconv>
+#include <cstdio>
+#include <nlohmann/json.hpp>
+
+#include "pm/vertex_id.h"
+#include "protocol/base64url.h"
+#include "protocol/message_types.h"
+#include "protocol/split_request.h"
+#include "server/http_routes.h"
+#include "server/split_lookup.h"
+#include "server/split_records_body.h"
+
+namespace pms::server {
+namespace {
+
+using protocol::ErrorCode;
+using protocol::ProtocolError;
+
+std::vector<std::string_view> segments_of(std::string_view path) {
+  std::vector<std::string_view> segments;
+  while (!path.empty() && segments.size() <= 8) {
+    path.remove_prefix(1);  // the '/'
+    const size_t end = std::min(path.find('/'), path.size());
+    segments.push_back(path.substr(0, end));
+    path.remove_prefix(end);
+  }
+  return segments;
+}
+
+// Decimal without sign or leading zeros: one spelling per number, so one URL per resource.
+bool parse_decimal(std::string_view text, uint64_t& value) {
+  if (text.empty() || (text.size() > 1 && text[0] == '0')) return false;
+  const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), value);
+  return ec == std::errc() && end == text.data() + text.size();
+}
+
+std::string hex64(uint64_t v) {
+  char text[17];
+  std::snprintf(text, sizeof text, "%016llx", (unsigned long long)v);
+  return text;
+}
+
+// A strong ETag from what the bytes depend on: the model file's content, the wire's quantization, the
+// record format and the canonical URL of the resource.
+std::string etag_of(const ServedModel& model, const std::string& resource) {
+  XXH64_state_t state;
+  XXH64_reset(&state, 0);
+  const uint64_t content = model.file->content_checksum();
+  const uint32_t format[2] = {model.context.grid.bits, kSplitRecordsFormat};
+  XXH64_update(&state, &content, sizeof content);
+  XXH64_update(&state, format, sizeof format);
+  XXH64_update(&state, resource.data(), resource.size());
+  return '"' + hex64(XXH64_digest(&state)) + '"';
+}
+
+// If-None-Match uses the weak comparison (RFC 9110 §13.1.2): W/ prefixes are ignored.
+bool matches(std::string_view if_none_match, const std::string& etag) {
+  while (!if_none_match.empty()) {
+    const size_t comma = std::min(if_none_match.find(','), if_none_match.size());
+    std::string_view tag = if_none_match.substr(0, comma);
+    while (!tag.empty() && (tag.front() == ' ' || tag.front() == '\t')) tag.remove_prefix(1);
+    while (!tag.empty() && (tag.back() == ' ' || tag.back() == '\t')) tag.remove_suffix(1);
+    if (tag.starts_with("W/")) tag.remove_prefix(2);
+    if (tag == "*" || tag == etag) return true;
+    if_none_match.remove_prefix(std::min(comma + 1, if_none_match.size()));
+  }
+  return false;
+}
+
+int status_of(ErrorCode code) {
+  switch (code) {
+    case ErrorCode::bad_id: return 404;
+    case ErrorCode::too_large: return 413;
+    default: return 400;
+  }
+}
+
+// A 200 for `etag`, or a 304 when the client holds it already.
+HttpAnswer fresh(const HttpRequest& request, const std::string& etag, const char* content_type) {
+  HttpAnswer answer;
+  answer.status = matches(request.if_none_match, etag) ? 304 : 200;
+  answer.content_type = content_type;
+  answer.etag = etag;
+  answer.cacheable = true;
+  return answer;
+}
+
+HttpAnswer catalogue_answer(const Catalogue& catalogue, const HttpRequest& request) {
+  nlohmann::json models = nlohmann::json::array();
+  for (const auto& model : catalogue.models()) {
+    const protocol::ModelInfo& info = model->info;
+    models.push_back({{"name", info.name},
+                      {"faces", info.input_faces},
+                      {"base_vertices", info.base_vertices},
+                      {"vsplits", info.vsplits},
+                      {"tree_id_bits", info.tree_id_bits},
+                      {"node_id_bits", info.node_id_bits},
+                      {"position_bits", model->context.grid.bits},
+                      {"records_format", kSplitRecordsFormat},
+                      {"block_depth", kSuggestedBlockDepth},
+                      {"etag_seed", hex64(model->file->content_checksum())}});
+  }
+  const std::string text = nlohmann::json{{"models", models}}.dump() + "\n";
+  HttpAnswer answer = fresh(request, '"' + hex64(XXH64(text.data(), text.size(), 0)) + '"', "application/json");
+  if (answer.status == 200) answer.owned.assign(text.begin(), text.end());
+  return answer;
+}
+
+HttpAnswer base_answer(const ServedModel& model, const HttpRequest& request) {
+  HttpAnswer answer = fresh(request, etag_of(model, "/models/" + model.name + "/base"), "application/octet-stream");
+  if (answer.status == 200) {
+    answer.shared = model.base_frame;
+    answer.shared_offset = protocol::kFrameHeaderBytes;
+  }
+  return answer;
+}
+
+// The records of a decoded request; `resource` is its canonical URL (the GET form, also for a POST).
+HttpAnswer splits_answer(const ServedModel& model, const HttpLimits& limits, const HttpRequest& request,
+                         const protocol::SplitRequest& split_request, const std::string& resource) {
+  const std::vector<uint32_t> nodes = requested_nodes(model.model(), split_request, limits.max_response_splits);
+  HttpAnswer answer = fresh(request, etag_of(model, resource), "application/octet-stream");
+  if (answer.status == 200) {
+    answer.owned = split_records_body(model, nodes);
+    answer.splits = nodes.size();
+  }
+  return answer;
+}
+
+protocol::SplitRequest decode_code(const ServedModel& model, const HttpLimits& limits, std::span<const uint8_t> code) {
+  protocol::SplitRequestLimits bounds;
+  bounds.root_count = model.model().root_count;
+  bounds.max_node_depth = int(model.context.node_id_bits) - 1;  // the deepest level holds leaves only
+  bounds.max_ids = limits.max_request_ids;
+  bounds.max_depth = limits.max_request_depth;
+  bounds.max_bytes = limits.max_body_bytes;
+  return protocol::decode_split_request(code, bounds);
+}
+
+std::string splits_resource(const ServedModel& model, std::span<const uint8_t> code) {
+  return "/models/" + model.name + "/splits/" + protocol::base64url_encode(code);
+}
+
+HttpAnswer block_answer(const ServedModel& model, const HttpLimits& limits, const HttpRequest& request,
+                        std::span<const std::string_view> at) {
+  uint64_t tree = 0, node = 0, depth = 0;
+  if (!parse_decimal(at[0], tree) || !parse_decimal(at[1], node) || !parse_decimal(at[2], depth) || node == 0)
+    return error_answer(400, "a block is /models/M/blocks/TREE/NODE/DEPTH in plain decimal, NODE >= 1");
+  if (depth > limits.max_request_depth)
+    return error_answer(400, "block depth " + std::to_string(depth) + " is over the limit of " +
+                                 std::to_string(limits.max_request_depth));
+  const VertexId id{uint32_t(tree), node};
+  if (tree >= model.model().root_count || uint64_t(id.depth()) >= model.context.node_id_bits)
+    return error_answer(404, to_string(id) + " is not a split of model '" + model.name + "'");
+  // One URL per set of records: blocks tile each tree in bands of depth + 1 levels.
+  if (id.depth() % (depth + 1) != 0)
+    return error_answer(400, "a block of depth " + std::to_string(depth) + " starts at a node whose depth is a "
+                             "multiple of " + std::to_string(depth + 1) + "; " + to_string(id) + " is at depth " +
+                             std::to_string(id.depth()));
+  const std::string resource = "/models/" + model.name + "/blocks/" + std::string(at[0]) + "/" +
+                               std::string(at[1]) + "/" + std::string(at[2]);
+  return splits_answer(model, limits, request, {uint32_t(depth), {id}}, resource);
+}
+
+HttpAnswer method_not_allowed(const char* allow) {
+  HttpAnswer answer = error_answer(405, std::string("this resource takes ") + allow);
+  answer.allow = allow;
+  return answer;
+}
+
+HttpAnswer model_route(const Catalogue& catalogue, const HttpLimits& limits, const HttpRequest& request,
+                       std::span<const std::string_view> s) {
+  const bool get = request.method == "GET" || request.method == "HEAD";
+  const bool post_route = s.size() == 3 && s[2] == "splits";
+  const bool get_route = (s.size() == 3 && s[2] == "base") || (s.size() == 4 && s[2] == "splits") ||
+                         (s.size() == 6 && s[2] == "blocks");
+  if (!post_route && !get_route) return error_answer(404, "no such resource (docs/protocol.md lists them)");
+  if (post_route && request.method != "POST") return method_not_allowed("POST");
+  if (get_route && !get) return method_not_allowed("GET, HEAD");
+  const ServedModel* model = catalogue.find(std::string(s[1]));
+  if (!model) return error_answer(404, "no model named '" + std::string(s[1]) + "'");
+  if (s[2] == "base") return base_answer(*model, request);
+  if (s[2] == "blocks") return block_answer(*model, limits, request, s.subspan(3));
+  if (post_route) return splits_answer(*model, limits, request, decode_code(*model, limits, request.body),
+                                       splits_resource(*model, request.body));
+  if (s[3].size() > (uint64_t(limits.max_body_bytes) * 4 + 2) / 3)
+    return error_answer(414, "a request code of over " + std::to_string(limits.max_body_bytes) + " bytes");
+  const auto code = protocol::base64url_decode(s[3]);
+  if (!code) return error_answer(400, "the request code is not canonical base64url (RFC 4648 §5, no padding)");
+  return splits_answer(*model, limits, request, decode_code(*model, limits, *code), splits_resource(*model, *code));
+}
+
+}  // namespace
+
+HttpAnswer error_answer(int status, const std::string& text) {
+  HttpAnswer answer;
+  answer.status = status;
+  answer.owned.assign(text.begin(), text.end());
+  answer.owned.push_back('\n');
+  return answer;
+}
+
+HttpAnswer route(const Catalogue& catalogue, const HttpLimits& limits, const HttpRequest& request) {
+  if (request.target.size() > limits.max_target_bytes)
+    return error_answer(414, "the URL is over " + std::to_string(limits.max_target_bytes) + " bytes; POST large requests");
+  if (request.target.empty() || request.target[0] != '/' || request.target.find('?') != std::string_view::npos)
+    return error_answer(400, "the URL must be a path without a query string");
+  const std::vector<std::string_view> s = segments_of(request.target);
+  try {
+    if (s.size() == 1 && s[0] == "models") {
+      if (request.method != "GET" && request.method != "HEAD") return method_not_allowed("GET, HEAD");
+      return catalogue_answer(catalogue, request);
+    }
+    if (s.size() >= 3 && s[0] == "models") return model_route(catalogue, limits, request, s);
+  } catch (const ProtocolError& e) {
+    return error_answer(status_of(e.code), e.what());
+  }
+  return error_answer(404, "no such resource (docs/protocol.md lists them)");
+}
+
+}  // namespace pms::server

@@ -1,0 +1,50 @@
+// The receiver-driven mode's resources (cheng-ooi 2008): the routes of the HTTP transport as a pure
+// function of the catalogue and one request, with no I/O, no Beast and no per-client state, so any number
+// of server processes answer a URL with the same bytes. docs/protocol.md, "Receiver-driven over HTTP".
+#pragma once
+#include <cstdint>
+#include <memory>
+#include <span>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "server/catalogue.h"
+#include "server/limits.h"
+
+namespace pms::server {
+
+struct HttpRequest {
+  std::string_view method;  // "GET", "HEAD", "POST", ...
+  std::string_view target;  // the request line's URL (origin form: starts with '/')
+  std::span<const uint8_t> body;
+  std::string_view if_none_match;  // the header's value; empty when absent
+};
+
+struct HttpAnswer {
+  int status = 200;
+  std::string content_type = "text/plain; charset=utf-8";
+  std::string etag;        // strong, quoted; empty for errors
+  bool cacheable = false;  // immutable for a year; errors are not stored
+  std::string allow;       // the methods a 405's resource takes
+  uint64_t splits = 0;     // split records in the body
+  // The body: bytes shared with the catalogue (BASE), from an offset, or its own.
+  std::shared_ptr<const std::vector<uint8_t>> shared;
+  size_t shared_offset = 0;
+  std::vector<uint8_t> owned;
+
+  std::span<const uint8_t> body() const {
+    return shared ? std::span<const uint8_t>(*shared).subspan(shared_offset) : std::span<const uint8_t>(owned);
+  }
+};
+
+// The answer to one request: 200, 304 (If-None-Match matched), or a 4xx with a short text body.
+HttpAnswer route(const Catalogue& catalogue, const HttpLimits& limits, const HttpRequest& request);
+
+// A 4xx or 5xx with `text` (and a newline) as its body.
+HttpAnswer error_answer(int status, const std::string& text);
+
+// Blocks a client should ask for (GET /models lists it): subtrees of this many levels below the node.
+constexpr uint32_t kSuggestedBlockDepth = 3;
+
+}  // namespace pms::server

@@ -1,0 +1,287 @@
+// The receiver-driven HTTP transport over real loopback connections: every route, the cache headers, 304s,
+// keep-alive, hostile requests answered with 4xx while a good client goes on, deadlines, the connection cap.
+#include <gtest/gtest.h>
+#include <atomic>
+#include <chrono>
+#include <memory>
+#include <thread>
+#include <nlohmann/json.hpp>
+
+#include "http_test_client.h"
+#include "io/shapes.h"
+#include "pm/hierarchy.h"
+#include "protocol/base64url.h"
+#include "protocol/message_types.h"
+#include "protocol/server_messages.h"
+#include "protocol/split_request.h"
+#include "server/http_server.h"
+#include "server/limits.h"
+#include "streaming_fixture.h"
+
+namespace pms::test {
+namespace {
+
+using protocol::SplitRequest;
+using server::HttpLimits;
+using server::HttpServer;
+
+const Fixture& terrain() {
+  static const Fixture f = make_fixture(make_terrain(20000, 3), "terrain");
+  return f;
+}
+
+struct Server {
+  explicit Server(const HttpLimits& limits = {}) : http(terrain().catalogue, limits, "127.0.0.1", 0) { http.start(); }
+  uint16_t port() const { return http.port(); }
+  HttpServer http;
+};
+
+const server::ServedModel& served() { return *terrain().catalogue->find("terrain"); }
+
+// The first `n` roots that have a split, as one request.
+SplitRequest some_roots(size_t n, uint32_t depth = 0) {
+  const ModelData& model = served().model();
+  SplitRequest request{depth, {}};
+  for (uint32_t r = 0; r < model.root_count && request.ids.size() < n; ++r)
+    if (!model.is_leaf(r)) request.ids.push_back(model.id(r));
+  return request;
+}
+
+std::string splits_url(const SplitRequest& request) {
+  return "/models/terrain/splits/" + protocol::base64url_encode(protocol::encode_split_request(request));
+}
+
+std::vector<VertexId> split_ids(const std::vector<uint8_t>& body) {
+  protocol::StreamContext context = served().context;
+  context.has_refinement = true;
+  std::vector<VertexId> ids;
+  for (const SplitRecord& s : protocol::decode_vsplits(body, context).splits) ids.push_back(s.vs);
+  return ids;
+}
+
+// A deadline closes the socket before the handler that counts it runs: counters lag what a peer sees.
+bool reaches(const std::atomic<uint64_t>& counter, uint64_t value) {
+  for (int i = 0; i < 200 && counter.load() < value; ++i) std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  return counter.load() == value;
+}
+
+void expect_cacheable(const HttpReply& reply) {
+  EXPECT_EQ(reply.header("cache-control"), "public, max-age=31536000, immutable");
+  EXPECT_EQ(reply.header("etag").front(), '"');  // strong
+  EXPECT_TRUE(reply.header("date").empty());
+  EXPECT_TRUE(reply.header("set-cookie").empty());
+}
+
+TEST(Http, CatalogueAndBaseAreCacheableAndTheSameForEveryClient) {
+  Server server;
+  HttpTestClient a(server.port()), b(server.port());
+  const HttpReply models = a.get("/models");
+  ASSERT_EQ(models.status, 200);
+  EXPECT_EQ(models.header("content-type"), "application/json");
+  const auto json = nlohmann::json::parse(models.text());
+  EXPECT_EQ(json["models"][0]["name"], "terrain");
+  EXPECT_EQ(json["models"][0]["vsplits"], served().info.vsplits);
+  const HttpReply base = a.get("/models/terrain/base");
+  ASSERT_EQ(base.status, 200);
+  expect_cacheable(base);
+  const std::vector<uint8_t>& frame = *served().base_frame;
+  EXPECT_EQ(base.body, std::vector<uint8_t>(frame.begin() + protocol::kFrameHeaderBytes, frame.end()));
+  EXPECT_EQ(protocol::decode_base(base.body).positions.size(), 3 * size_t(served().model().root_count));
+  const HttpReply again = b.get("/models/terrain/base");  // another client, another connection
+  EXPECT_EQ(again.header("etag"), base.header("etag"));
+  EXPECT_EQ(again.headers, base.headers);
+  EXPECT_EQ(again.body, base.body);
+  const HttpReply head = b.head("/models/terrain/base");
+  EXPECT_EQ(head.status, 200);
+  EXPECT_EQ(head.header("content-length"), std::to_string(base.body.size()));
+  EXPECT_TRUE(head.body.empty());
+}
+
+// Stateless: another server process over the same file answers every URL with the same headers and bytes.
+TEST(Http, TwoServersOfOneFileAnswerAlike) {
+  Server first;
+  HttpServer second(server::Catalogue::open({terrain().path}), HttpLimits{}, "127.0.0.1", 0);
+  second.start();
+  HttpTestClient a(first.port()), b(second.port());
+  for (const std::string& url : {std::string("/models"), std::string("/models/terrain/base"), splits_url(some_roots(7, 2)),
+                                 std::string("/models/terrain/blocks/") + std::to_string(some_roots(1).ids[0].tree) + "/1/3"}) {
+    const HttpReply x = a.get(url), y = b.get(url);
+    ASSERT_EQ(x.status, 200) << url << ": " << x.text();
+    EXPECT_EQ(x.headers, y.headers) << url;
+    EXPECT_EQ(x.body, y.body) << url;
+  }
+  EXPECT_NE(a.get("/models/terrain/base").header("etag"), a.get(splits_url(some_roots(7, 2))).header("etag"));
+}
+
+TEST(Http, IfNoneMatchGetsA304WithoutABody) {
+  Server server;
+  HttpTestClient client(server.port());
+  const std::string url = splits_url(some_roots(5));
+  const HttpReply first = client.get(url);
+  ASSERT_EQ(first.status, 200);
+  const HttpReply cached = client.get(url, {{"If-None-Match", "\"0000\", " + first.header("etag")}});
+  EXPECT_EQ(cached.status, 304);
+  EXPECT_TRUE(cached.body.empty());
+  EXPECT_EQ(cached.header("etag"), first.header("etag"));
+  expect_cacheable(cached);
+  EXPECT_EQ(client.get(url, {{"If-None-Match", "\"other\""}}).status, 200);
+  EXPECT_EQ(server.http.stats().not_modified.load(), 1u);
+}
+
+TEST(Http, GetAndPostOfARequestCarryItsSplitsInCodeOrder) {
+  Server server;
+  HttpTestClient client(server.port());
+  const SplitRequest request = some_roots(20);
+  const HttpReply get = client.get(splits_url(request));
+  ASSERT_EQ(get.status, 200) << get.text();
+  expect_cacheable(get);
+  EXPECT_EQ(split_ids(get.body), request.ids);  // the roots come in tree order
+  const HttpReply post = client.post("/models/terrain/splits", protocol::encode_split_request(request));
+  ASSERT_EQ(post.status, 200);
+  EXPECT_EQ(post.body, get.body);
+  EXPECT_EQ(post.header("etag"), get.header("etag"));  // one resource, whichever form named it
+}
+
+TEST(Http, ADepthBringsDescendantsBreadthFirstAndBlocksTileTheTrees) {
+  Server server;
+  HttpTestClient client(server.port());
+  const ModelData& model = served().model();
+  const SplitRequest request = some_roots(1, 1);
+  const uint32_t root = request.ids[0].tree;
+  std::vector<VertexId> expected{model.id(root)};
+  for (uint32_t c = 0; c < 2; ++c)
+    if (!model.is_leaf(model.first_child[root] + c)) expected.push_back(model.id(model.first_child[root] + c));
+  const HttpReply deep = client.get(splits_url(request));
+  ASSERT_EQ(deep.status, 200);
+  EXPECT_EQ(split_ids(deep.body), expected);
+  const std::string block = "/models/terrain/blocks/" + std::to_string(root) + "/1/1";
+  const HttpReply tile = client.get(block);
+  ASSERT_EQ(tile.status, 200) << tile.text();
+  expect_cacheable(tile);
+  EXPECT_EQ(tile.body, deep.body);
+  // Blocks of depth 1 start at even depths only; node 2 is at depth 1.
+  EXPECT_EQ(client.get("/models/terrain/blocks/" + std::to_string(root) + "/2/1").status, 400);
+  EXPECT_EQ(client.get("/models/terrain/blocks/" + std::to_string(root) + "/01/1").status, 400);
+}
+
+TEST(Http, KeepAliveServesManyRequestsOnOneConnection) {
+  Server server;
+  HttpTestClient client(server.port());
+  for (int i = 0; i < 10; ++i) ASSERT_EQ(client.get(i % 2 ? "/models" : splits_url(some_roots(size_t(i + 1)))).status, 200);
+  // Pipelined: two requests in one write, two answers in order.
+  client.send("GET /models HTTP/1.1\r\nHost: x\r\n\r\nGET /models/terrain/base HTTP/1.1\r\nHost: x\r\n\r\n");
+  EXPECT_EQ(client.read().status, 200);
+  EXPECT_EQ(client.read().body.size(), served().base_frame->size() - protocol::kFrameHeaderBytes);
+  EXPECT_EQ(server.http.stats().connections_opened.load(), 1u);
+}
+
+TEST(Http, HostileRequestsGet4xxWhileAGoodClientIsServed) {
+  HttpLimits limits;
+  limits.max_request_ids = 4;
+  Server server(limits);
+  HttpTestClient good(server.port());
+  ASSERT_EQ(good.get("/models").status, 200);
+  HttpTestClient bad(server.port());  // these keep the connection: each request parsed fine
+  EXPECT_EQ(bad.post("/models/terrain/splits", std::vector<uint8_t>(10, 0)).status, 400);  // not a code
+  std::vector<uint8_t> code = protocol::encode_split_request(some_roots(3));
+  code.pop_back();
+  EXPECT_EQ(bad.post("/models/terrain/splits", code).status, 400);  // truncated
+  EXPECT_EQ(bad.get("/models/terrain/splits/AA+A").status, 400);   // not base64url
+  const SplitRequest too_many = some_roots(5);
+  ASSERT_EQ(too_many.ids.size(), 5u);
+  EXPECT_EQ(bad.post("/models/terrain/splits", protocol::encode_split_request(too_many)).status, 413);
+  const ModelData& model = served().model();
+  uint32_t leaf = 0;
+  while (!model.is_leaf(leaf)) ++leaf;
+  const HttpReply unknown_id = bad.get(splits_url({0, {model.id(leaf)}}));
+  EXPECT_EQ(unknown_id.status, 404);
+  EXPECT_NE(unknown_id.text().find("no split"), std::string::npos) << unknown_id.text();
+  EXPECT_EQ(bad.get(splits_url({0, {{model.root_count, 1}}})).status, 404);  // no such tree
+  EXPECT_EQ(bad.get("/models/nothere/base").status, 404);
+  EXPECT_EQ(bad.get("/elsewhere").status, 404);
+  EXPECT_EQ(bad.get("/models?x=1").status, 400);
+  const HttpReply wrong_method = bad.post("/models/terrain/base", {});
+  EXPECT_EQ(wrong_method.status, 405);
+  EXPECT_EQ(wrong_method.header("allow"), "GET, HEAD");
+  EXPECT_EQ(wrong_method.header("cache-control"), "no-store");
+  EXPECT_EQ(bad.get("/models/terrain/splits").status, 405);
+  EXPECT_EQ(bad.get("/models/terrain/base").status, 200);  // still served on the same connection
+  // These end their connection: the parser is out of step with the stream.
+  EXPECT_EQ(HttpTestClient(server.port()).post("/models/terrain/splits", std::vector<uint8_t>(20000, 1)).status, 413);
+  EXPECT_EQ(HttpTestClient(server.port()).get("/models/" + std::string(5000, 'a')).status, 414);
+  EXPECT_EQ(HttpTestClient(server.port()).get("/models/" + std::string(20000, 'a')).status, 414);
+  EXPECT_EQ(HttpTestClient(server.port()).get("/models", {{"X-Big", std::string(9000, 'b')}}).status, 431);
+  HttpTestClient garbage(server.port());
+  EXPECT_EQ(garbage.raw("HELLO\r\n\r\n").status, 400);
+  EXPECT_TRUE(garbage.closed_by_server());
+  EXPECT_EQ(good.get(splits_url(some_roots(4))).status, 200);
+  EXPECT_GE(server.http.stats().client_errors.load(), 16u);
+}
+
+TEST(Http, SilentAndSlowPeersAreClosedByTheDeadlines) {
+  HttpLimits limits;
+  limits.idle_timeout_ms = 300;
+  limits.request_timeout_ms = 300;
+  Server server(limits);
+  const auto start = std::chrono::steady_clock::now();
+  HttpTestClient silent(server.port(), 3000);
+  EXPECT_TRUE(silent.closed_by_server());
+  EXPECT_GE(std::chrono::steady_clock::now() - start, std::chrono::milliseconds(250));
+  EXPECT_TRUE(reaches(server.http.stats().connections_timed_out, 1));
+  HttpTestClient slow(server.port(), 3000);
+  slow.send("GET /models HT");  // begun, never finished
+  EXPECT_TRUE(slow.closed_by_server());
+  EXPECT_TRUE(reaches(server.http.stats().connections_timed_out, 2));
+  HttpTestClient kept(server.port(), 3000);  // keep-alive after an answer: the idle deadline again
+  EXPECT_EQ(kept.get("/models").status, 200);
+  EXPECT_TRUE(kept.closed_by_server());
+  EXPECT_TRUE(reaches(server.http.stats().connections_timed_out, 3));
+}
+
+// A peer that sends requests and never reads the answers: once the kernel's buffers are full, nothing is
+// taken within the write deadline and the connection is closed, while the idle deadline is far off.
+TEST(Http, APeerThatDoesNotReadIsClosedByTheWriteDeadline) {
+  HttpLimits limits;
+  limits.write_timeout_ms = 300;
+  limits.idle_timeout_ms = 60000;
+  Server server(limits);
+  const std::string url = splits_url(some_roots(64, 8));
+  HttpTestClient reader(server.port());
+  const size_t answer = reader.get(url).body.size();
+  ASSERT_GT(answer, 50000u);
+  HttpTestClient deaf(server.port(), 20000);
+  std::string requests;
+  for (size_t sent = 0; sent < (64u << 20); sent += answer) requests += "GET " + url + " HTTP/1.1\r\nHost: x\r\n\r\n";
+  try {
+    deaf.send(requests);  // may block until the server gives up on this peer, and then fail
+  } catch (const std::exception&) {
+  }
+  for (int i = 0; i < 400 && server.http.stats().connections_timed_out.load() == 0; ++i)
+    std::this_thread::sleep_for(std::chrono::milliseconds(25));
+  EXPECT_EQ(server.http.stats().connections_timed_out.load(), 1u);
+  EXPECT_EQ(reader.get("/models").status, 200);  // the others are served meanwhile
+}
+
+TEST(Http, ConnectionsOverTheLimitGet503) {
+  HttpLimits limits;
+  limits.max_connections = 3;
+  Server server(limits);
+  std::vector<std::unique_ptr<HttpTestClient>> clients;
+  for (int i = 0; i < 3; ++i) {
+    clients.push_back(std::make_unique<HttpTestClient>(server.port()));
+    ASSERT_EQ(clients.back()->get("/models").status, 200);
+  }
+  HttpTestClient refused(server.port());
+  const HttpReply full = refused.read();
+  EXPECT_EQ(full.status, 503);
+  EXPECT_EQ(server.http.stats().connections_refused.load(), 1u);
+  clients.pop_back();
+  for (int i = 0; i < 200 && server.http.stats().connections_active.load() >= 3; ++i)
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  ASSERT_EQ(server.http.stats().connections_active.load(), 2u);
+  HttpTestClient later(server.port());
+  EXPECT_EQ(later.get("/models").status, 200);
+}
+
+}  // namespace
+}  // namespace pms::test

@@ -1,0 +1,100 @@
+// The Beast test client (http_test_client.h).
+#include "http_test_client.h"
+
+#include <utility>
+#include <boost/asio.hpp>
+#include <boost/beast/core.hpp>
+#include <boost/beast/http.hpp>
+#include <sys/socket.h>
+#include <sys/time.h>
+#include <cctype>
+#include <stdexcept>
+
+namespace pms::test {
+
+namespace asio = boost::asio;
+namespace beast = boost::beast;
+namespace http = beast::http;
+using asio::ip::tcp;
+
+struct HttpTestClient::Impl {
+  asio::io_context io;
+  tcp::socket socket{io};
+  beast::flat_buffer buffer;
+};
+
+HttpTestClient::HttpTestClient(uint16_t port, int timeout_ms) : impl_(std::make_unique<Impl>()) {
+  impl_->socket.connect(tcp::endpoint(asio::ip::make_address("127.0.0.1"), port));
+  timeval tv{timeout_ms / 1000, (timeout_ms % 1000) * 1000};
+  ::setsockopt(impl_->socket.native_handle(), SOL_SOCKET, SO_RCVTIMEO, &tv, sizeof tv);
+}
+
+HttpTestClient::~HttpTestClient() = default;
+
+namespace {
+
+HttpReply send_request(tcp::socket& socket, beast::flat_buffer& buffer, http::request<http::vector_body<uint8_t>>& request) {
+  request.set(http::field::host, "127.0.0.1");
+  request.prepare_payload();
+  http::write(socket, request);
+  http::response_parser<http::vector_body<uint8_t>> parser;
+  parser.body_limit(64u << 20);
+  parser.skip(request.method() == http::verb::head);
+  http::read(socket, buffer, parser);
+  HttpReply reply;
+  reply.status = int(parser.get().result_int());
+  for (const auto& field : parser.get()) {
+    std::string name(field.name_string());
+    for (char& c : name) c = char(std::tolower(static_cast<unsigned char>(c)));
+    reply.headers[name] = std::string(field.value());
+  }
+  reply.body = std::move(parser.get().body());
+  return reply;
+}
+
+}  // namespace
+
+HttpReply HttpTestClient::get(const std::string& target, const std::map<std::string, std::string>& headers) {
+  http::request<http::vector_body<uint8_t>> request{http::verb::get, target, 11};
+  for (const auto& [name, value] : headers) request.set(name, value);
+  return send_request(impl_->socket, impl_->buffer, request);
+}
+
+HttpReply HttpTestClient::head(const std::string& target) {
+  http::request<http::vector_body<uint8_t>> request{http::verb::head, target, 11};
+  return send_request(impl_->socket, impl_->buffer, request);
+}
+
+HttpReply HttpTestClient::post(const std::string& target, const std::vector<uint8_t>& body) {
+  http::request<http::vector_body<uint8_t>> request{http::verb::post, target, 11};
+  request.body() = body;
+  return send_request(impl_->socket, impl_->buffer, request);
+}
+
+void HttpTestClient::send(const std::string& bytes) { asio::write(impl_->socket, asio::buffer(bytes)); }
+
+HttpReply HttpTestClient::read() {
+  http::response_parser<http::vector_body<uint8_t>> parser;
+  http::read(impl_->socket, impl_->buffer, parser);
+  HttpReply reply;
+  reply.status = int(parser.get().result_int());
+  reply.body = std::move(parser.get().body());
+  return reply;
+}
+
+HttpReply HttpTestClient::raw(const std::string& bytes) {
+  send(bytes);
+  return read();
+}
+
+bool HttpTestClient::closed_by_server() {
+  char byte;
+  boost::system::error_code ec;
+  for (;;) {
+    impl_->socket.read_some(asio::buffer(&byte, 1), ec);
+    if (ec == asio::error::eof || ec == asio::error::connection_reset) return true;
+    if (ec) return false;  // the receive timeout: still open
+  }
+}
+
+}  // namespace pms::test
