@@ -106,6 +106,7 @@ DistanceRun run_distance(const ModelData& model, const VertexHierarchy& h, float
   const ViewParams view = make_view(camera_at(model, distance, 0), model.bbox_min, model.bbox_max);
   SelectiveMesh mesh(h, model.base_faces);
   SelectiveRefinement refinement(mesh, model.scale, tolerance(kTolerance));
+  refinement.set_view(view);
   refine_fully(mesh, model, h);
   for (uint32_t i = 0; i < repeats; ++i) {
     coarsen(refinement, model);
@@ -144,7 +145,7 @@ double median(const std::vector<double>& v) { return percentile(v, 0.5); }
 
 std::string ms_text(double ms) {
   char text[32];
-  std::snprintf(text, sizeof text, ms >= 1 ? "%.2f" : "%.2g", ms);
+  std::snprintf(text, sizeof text, ms >= 1 ? "%.2f" : "%.3g", ms);
   return text;
 }
 
