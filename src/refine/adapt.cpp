@@ -116,7 +116,11 @@ uint32_t SelectiveRefinement::dependency(uint32_t slot) {
 
 // A split node the target keeps: evaluate its children, and keep its parent and its dependency too.
 void SelectiveRefinement::justify(uint32_t v) {
-  if (mesh_->is_active(v) || state(v).kept == frame_) return;
+  if (!mesh_->is_active(v) && state(v).kept != frame_) keep(v);
+}
+
+// justify() of a split node whose slot is decoded and not kept yet this frame.
+void SelectiveRefinement::keep(uint32_t v) {
   const uint32_t t = slots_[v].first_child;
   if (t + 1 >= slots_.size()) grow(t + 2);  // before taking references: it may move the slots
   Slot& slot = slots_[v];
@@ -165,7 +169,7 @@ void SelectiveRefinement::visit_active(uint32_t v, FrameStats& stats) {
     morphs_.cancel_collapse(h, v);  // its parent is kept: a collapse under way is called off
   }
   ++stats.evaluated;
-  const Slot& slot = state(v);
+  const Slot& slot = slots_[v];  // decoded by the walk
   if (!criteria_detail::qrefine_inline(view_, slot.criteria)) return;
   if (slot.first_child == kNone) {  // a leaf of what is known
     report_missing(v);
@@ -180,7 +184,7 @@ void SelectiveRefinement::visit_active(uint32_t v, FrameStats& stats) {
   const VSplitResult r = mesh_->vsplit(v);
   stats.vsplits += uint32_t(mesh_->vertex_count() - before);
   if (r.done) {
-    justify(v);
+    keep(v);
   } else {
     report_missing(r.needs);
     pin_chain(v);
@@ -189,7 +193,7 @@ void SelectiveRefinement::visit_active(uint32_t v, FrameStats& stats) {
 
 void SelectiveRefinement::visit_split(uint32_t v, FrameStats& stats) {
   ++stats.evaluated;
-  if (criteria_detail::qrefine_inline(view_, state(v).criteria)) justify(v);
+  if (criteria_detail::qrefine_inline(view_, slots_[v].criteria)) keep(v);  // decoded, not kept: see adapt()
   else tops_.push_back(v);  // may still be forced later this frame
 }
 

@@ -1,9 +1,9 @@
 // How the engine's per-slot arrays (SelectiveMesh records, the adaptation loop's slots) grow: with the
 // highest slot in use, not with the model, so a fresh mesh pays for what it refines. Touching a new page
-// is what costs (docs/internals.md, "Fresh meshes"): small arrays double on the ordinary heap (below
-// malloc's mmap threshold, blocks a later mesh reuses); past that the whole known range is reserved at
-// once (address space only, on huge pages when it is big enough), so growing copies nothing more and
-// memory is touched only where slots are written.
+// is what costs (docs/internals.md, "Against SrMesh; fresh meshes"): small arrays double on the ordinary
+// heap (below malloc's mmap threshold: blocks a later mesh reuses); past that the whole known range is
+// reserved at once (address space only, on huge pages when it is big enough), so growing copies nothing
+// more and memory is touched only where slots are written.
 #pragma once
 #include <algorithm>
 #include <cstddef>
