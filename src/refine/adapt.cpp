@@ -21,7 +21,9 @@
 #include "pm/refine_info.h"
 #include "pm/split_record.h"
 #include "pm/vertex_id.h"
+#include "refine/criteria_inline.h"
 #include "refine/selective_mesh.h"
+#include "refine/slot_growth.h"
 #include "refine/vertex_hierarchy.h"
 
 namespace pms {
@@ -33,7 +35,8 @@ constexpr uint32_t kUnknown = kNone - 1;  // Slot::dependency not computed yet (
 }  // namespace
 
 SelectiveRefinement::SelectiveRefinement(SelectiveMesh& mesh, float model_scale, const AdaptOptions& options)
-    : mesh_(&mesh), scale_(model_scale) {
+    : mesh_(&mesh), scale_(model_scale), synced_(mesh.hierarchy().size()) {
+  static_assert(sizeof(Slot) == 64);
   set_options(options);
 }
 
@@ -50,28 +53,46 @@ void SelectiveRefinement::set_view(const ViewParams& view) {
   has_view_ = true;
 }
 
-// Per-slot state follows the hierarchy as packets arrive.
+// A split arriving for a slot already decoded: children come as a pair after their parent, and the
+// first of the pair tells the parent.
 void SelectiveRefinement::sync() {
   const VertexHierarchy& h = mesh_->hierarchy();
-  const size_t old = slots_.size(), n = h.size();
   if (morphs_.enabled()) morphs_.sync(*mesh_);
-  if (old >= n) return;
-  slots_.resize(n);
-  reported_.resize(n, 0);
-  for (uint32_t v = uint32_t(old); v < n; ++v) {
-    Slot& slot = slots_[v];
-    slot.criteria = node_criteria(h.position(v), dequantize_refine(h.refine(v), scale_));
-    slot.parent = h.parent(v);
-    // Children arrive as a pair after their parent: the first of the pair tells the parent.
-    if (slot.parent != kNone && h.first_child(slot.parent) == v) slots_[slot.parent].first_child = v;
+  for (uint32_t v = synced_; v < h.size(); ++v) {
+    const uint32_t p = h.parent(v);
+    if (p != kNone && p < slots_.size() && slots_[p].loaded && h.first_child(p) == v) slots_[p].first_child = v;
   }
+  synced_ = h.size();
+}
+
+void SelectiveRefinement::grow(uint32_t end) {
+  const size_t known = mesh_->hierarchy().size();
+  if (end > known) fail(kWhere, "unknown slot");
+  if (end <= slots_.size()) return;
+  slots_.reserve(slot_capacity(end, slots_.capacity(), known, sizeof(slots_[0])));
+  slots_.resize(std::min(known, std::max<size_t>(end, 2 * slots_.size())));
+}
+
+void SelectiveRefinement::load(uint32_t v) {
+  const VertexHierarchy& h = mesh_->hierarchy();
+  Slot& slot = slots_[v];
+  slot.criteria = node_criteria(h.position(v), dequantize_refine(h.refine(v), scale_));
+  slot.parent = h.parent(v);
+  slot.first_child = h.first_child(v);
+  slot.loaded = 1;
+}
+
+SelectiveRefinement::Slot& SelectiveRefinement::first_use(uint32_t v) {
+  if (v >= slots_.size()) grow(v + 1);
+  if (!slots_[v].loaded) load(v);
+  return slots_[v];
 }
 
 bool SelectiveRefinement::qrefine(uint32_t slot) {
   if (!has_view_) fail(kWhere, "no view set");
   sync();
-  if (slot >= slots_.size()) fail(kWhere, "qrefine of an unknown slot");
-  return pms::qrefine(view_, slots_[slot].criteria);
+  if (slot >= mesh_->hierarchy().size()) fail(kWhere, "qrefine of an unknown slot");
+  return criteria_detail::qrefine_inline(view_, state(slot).criteria);
 }
 
 // The node a split of `slot` needs split first (kim-lee-kobbelt §5.3): the deepest common ancestor of
@@ -79,7 +100,7 @@ bool SelectiveRefinement::qrefine(uint32_t slot) {
 // Asked only of split nodes, whose dependency is split too (SelectiveMesh keeps the partial order), so
 // it is known; computed once per slot.
 uint32_t SelectiveRefinement::dependency(uint32_t slot) {
-  if (slots_[slot].dependency != kUnknown) return slots_[slot].dependency;
+  if (state(slot).dependency != kUnknown) return slots_[slot].dependency;
   const VertexHierarchy& h = mesh_->hierarchy();
   const VertexId a = h.cut_left(slot), b = h.cut_right(slot);
   uint32_t dep = kNone;
@@ -95,20 +116,26 @@ uint32_t SelectiveRefinement::dependency(uint32_t slot) {
 
 // A split node the target keeps: evaluate its children, and keep its parent and its dependency too.
 void SelectiveRefinement::justify(uint32_t v) {
+  if (!mesh_->is_active(v) && state(v).kept != frame_) keep(v);
+}
+
+// justify() of a split node whose slot is decoded and not kept yet this frame.
+void SelectiveRefinement::keep(uint32_t v) {
+  const uint32_t t = slots_[v].first_child;
+  if (t + 1 >= slots_.size()) grow(t + 2);  // before taking references: it may move the slots
   Slot& slot = slots_[v];
-  if (slot.kept == frame_ || mesh_->is_active(v)) return;
   slot.kept = frame_;
-  const uint32_t t = slot.first_child;
   __builtin_prefetch(&slots_[t]);
   __builtin_prefetch(&slots_[t + 1]);
   push_eval(t);
   push_eval(t + 1);
-  if (slot.parent != kNone && slots_[slot.parent].kept != frame_) push_forced(slot.parent);
-  const uint32_t dep = dependency(v);
-  if (dep != kNone && slots_[dep].kept != frame_) push_forced(dep);
+  if (slot.parent != kNone && state(slot.parent).kept != frame_) push_forced(slot.parent);
+  const uint32_t dep = slot.dependency != kUnknown ? slot.dependency : dependency(v);  // computed once per slot
+  if (dep != kNone && state(dep).kept != frame_) push_forced(dep);
 }
 
 void SelectiveRefinement::report_missing(uint32_t v) {
+  if (v >= reported_.size()) reported_.resize(std::max<size_t>(v + 1, 2 * reported_.size()), 0);
   if (reported_[v] == frame_) return;
   reported_[v] = frame_;
   missing_.push_back(v);
@@ -142,8 +169,9 @@ void SelectiveRefinement::visit_active(uint32_t v, FrameStats& stats) {
     morphs_.cancel_collapse(h, v);  // its parent is kept: a collapse under way is called off
   }
   ++stats.evaluated;
-  if (!pms::qrefine(view_, slots_[v].criteria)) return;
-  if (slots_[v].first_child == kNone) {  // a leaf of what is known
+  const Slot& slot = slots_[v];  // decoded by the walk
+  if (!criteria_detail::qrefine_inline(view_, slot.criteria)) return;
+  if (slot.first_child == kNone) {  // a leaf of what is known
     report_missing(v);
     return;
   }
@@ -156,7 +184,7 @@ void SelectiveRefinement::visit_active(uint32_t v, FrameStats& stats) {
   const VSplitResult r = mesh_->vsplit(v);
   stats.vsplits += uint32_t(mesh_->vertex_count() - before);
   if (r.done) {
-    justify(v);
+    keep(v);
   } else {
     report_missing(r.needs);
     pin_chain(v);
@@ -165,7 +193,7 @@ void SelectiveRefinement::visit_active(uint32_t v, FrameStats& stats) {
 
 void SelectiveRefinement::visit_split(uint32_t v, FrameStats& stats) {
   ++stats.evaluated;
-  if (pms::qrefine(view_, slots_[v].criteria)) justify(v);
+  if (criteria_detail::qrefine_inline(view_, slots_[v].criteria)) keep(v);  // decoded, not kept: see adapt()
   else tops_.push_back(v);  // may still be forced later this frame
 }
 
@@ -176,7 +204,7 @@ void SelectiveRefinement::collapse_unwanted(FrameStats& stats) {
   const VertexHierarchy& h = mesh_->hierarchy();
   collapse_.clear();
   for (uint32_t top : tops_) {
-    if (slots_[top].kept == frame_) continue;
+    if (state(top).kept == frame_) continue;
     const size_t first = collapse_.size();
     stack_.clear();
     stack_.push_back(top);
@@ -185,8 +213,8 @@ void SelectiveRefinement::collapse_unwanted(FrameStats& stats) {
       stack_.pop_back();
       if (mesh_->is_active(v)) continue;
       collapse_.push_back(v);
-      stack_.push_back(slots_[v].first_child);
-      stack_.push_back(slots_[v].first_child + 1);
+      stack_.push_back(h.first_child(v));
+      stack_.push_back(h.first_child(v) + 1);
     }
     std::reverse(collapse_.begin() + ptrdiff_t(first), collapse_.end());
   }
@@ -243,7 +271,7 @@ FrameStats SelectiveRefinement::adapt() {
     const uint32_t v = uint32_t(entry >> 1);
     if (entry & 1) {
       justify(v);
-    } else if (slots_[v].kept != frame_) {
+    } else if (state(v).kept != frame_) {
       if (mesh_->is_active(v)) visit_active(v, stats);
       else visit_split(v, stats);
     }

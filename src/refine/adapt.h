@@ -9,6 +9,7 @@
 #include <span>
 #include <vector>
 
+#include "common/huge_pages.h"
 #include "pm/hierarchy.h"
 #include "pm/vertex_id.h"
 #include "refine/camera.h"
@@ -78,10 +79,20 @@ class SelectiveRefinement {
 
  private:
   void sync();
+  struct Slot;
+  // v's slot, grown and decoded on first use (out of line: the walk's fast path stays small).
+  Slot& state(uint32_t v) {
+    if (v < slots_.size() && slots_[v].loaded) [[likely]] return slots_[v];
+    return first_use(v);
+  }
+  Slot& first_use(uint32_t v);
+  void grow(uint32_t end);
+  void load(uint32_t v);
   uint32_t dependency(uint32_t slot);
   void push_eval(uint32_t v) { stack_.push_back(uint64_t(v) << 1); }
   void push_forced(uint32_t v) { stack_.push_back(uint64_t(v) << 1 | 1); }
   void justify(uint32_t v);
+  void keep(uint32_t v);
   void visit_active(uint32_t v, FrameStats& stats);
   void visit_split(uint32_t v, FrameStats& stats);
   void pin_chain(uint32_t v);
@@ -96,16 +107,20 @@ class SelectiveRefinement {
   ViewCriteria view_;
   bool has_view_ = false;
   uint32_t frame_ = 0;
-  // Everything the walk reads of a slot, in one cache line: the walk is bound by memory latency.
+  // Everything the walk reads of a slot, in one cache line: the walk is bound by memory latency. Slots
+  // exist up to the highest one reached (grown geometrically) and are decoded when first reached, so a
+  // fresh refinement pays for the nodes it evaluates, not for the model.
   struct alignas(64) Slot {
     NodeCriteria criteria;  // decoded once
     uint32_t kept = 0;      // frame in which the node was found wanted or forced
     uint32_t first_child = kNone;
     uint32_t parent = kNone;
     uint32_t dependency = kNone - 1;  // the node its split needs split (partial order); kNone - 1: not computed
+    uint32_t loaded = 0;              // criteria, first_child and parent are set
   };
-  std::vector<Slot> slots_;
-  std::vector<uint32_t> reported_;  // per slot: frame in which it went to missing_
+  BigVector<Slot> slots_;  // on huge pages (common/huge_pages.h): the walk reads them at random
+  uint32_t synced_ = 0;             // hierarchy size whose new children pairs the loaded slots know of
+  std::vector<uint32_t> reported_;  // per slot: frame in which it went to missing_ (grown on use)
   std::vector<uint64_t> stack_;       // slot << 1 | forced
   std::vector<uint32_t> tops_;        // split nodes not wanted, whose subtrees may have to collapse
   std::vector<uint32_t> collapse_, retry_;

@@ -2,6 +2,7 @@
 // orientation, normal cones), §4.3 (screen-space geometric error, deviation space D(mu, delta)).
 // kim-lee-kobbelt 2005 §5.3: qrefine() is false for a real leaf, whatever the view.
 #include "refine/criteria.h"
+#include "refine/criteria_inline.h"
 
 #include <algorithm>
 #include <cmath>
@@ -11,15 +12,7 @@
 #include "pm/refine_info.h"
 
 namespace pms {
-namespace {
-
-// Float slack, relative to the eye distance, for the two culling tests: rounding in the planes, the
-// decoded cone axis and cos/sin of its angle is ~1e-7 of the distance; culling a little less is safe.
-constexpr float kCullSlack = 1e-5f;
-
-float dot3(const float a[3], const float b[3]) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
-
-}  // namespace
+using namespace criteria_detail;
 
 ViewCriteria make_criteria(const ViewParams& view, float tolerance_px) {
   if (!(tolerance_px >= 0) || !std::isfinite(tolerance_px)) fail("view", "tolerance must be a finite number >= 0");
@@ -47,56 +40,6 @@ NodeCriteria node_criteria(const float position[3], const RefineBounds& bounds) 
     n.sin_a = std::sin(bounds.cone_angle);
   }
   return n;
-}
-
-[[gnu::always_inline]] inline bool outside_frustum_inline(const ViewCriteria& view, const NodeCriteria& node) {
-  float d[3];
-  for (int k = 0; k < 3; ++k) d[k] = node.p[k] - view.eye[k];
-  const float slack = node.radius + kCullSlack * std::sqrt(dot3(d, d));
-  for (const float* plane : view.planes)
-    if (dot3(plane, node.p) + plane[3] < -slack) return true;
-  return false;
-}
-
-// With d = p − e, θ = angle(a, d) and α the cone half-angle, min over the cone of n·d is
-// ‖d‖ cos(θ + α) = (a·d) cos α − ‖a × d‖ sin α, and min over the sphere of n·(q − e) is n·d − r.
-// Hoppe's test (a·d > 0 ∧ (a·d)² > ‖d‖² sin²α) is this with r = 0.
-[[gnu::always_inline]] inline bool back_facing_inline(const ViewCriteria& view, const NodeCriteria& node) {
-  if (node.cos_a <= 0) return false;
-  float d[3];
-  for (int k = 0; k < 3; ++k) d[k] = node.p[k] - view.eye[k];
-  const float along = dot3(node.axis, d);
-  if (along <= node.radius) return false;  // cos α <= 1: the bound below cannot exceed r
-  const float* a = node.axis;
-  const float c[3] = {a[1] * d[2] - a[2] * d[1], a[2] * d[0] - a[0] * d[2], a[0] * d[1] - a[1] * d[0]};
-  const float across = std::sqrt(dot3(c, c));  // ‖a × d‖: accurate where sqrt(‖d‖² − (a·d)²) cancels
-  const float distance = std::sqrt(dot3(d, d));
-  return along * node.cos_a - across * node.sin_a > node.radius + kCullSlack * distance;
-}
-
-[[gnu::always_inline]] inline bool screen_error_exceeds_inline(const ViewCriteria& view, const NodeCriteria& node) {
-  float d[3];
-  for (int k = 0; k < 3; ++k) d[k] = node.p[k] - view.eye[k];
-  const float d2 = dot3(d, d);
-  const float bound = view.kappa2 * d2;  // kappa² ‖d‖²
-  if (node.mu2 > bound) return true;
-  const float along = dot3(d, node.axis);
-  return node.delta2 * (d2 - along * along) > bound * d2;
-}
-
-[[gnu::always_inline]] inline bool qrefine_inline(const ViewCriteria& view, const NodeCriteria& node) {
-  return screen_error_exceeds_inline(view, node) && !outside_frustum_inline(view, node) &&
-         !back_facing_inline(view, node);
-}
-
-[[gnu::always_inline]] inline float priority_inline(const ViewCriteria& view, const NodeCriteria& node) {
-  if (!qrefine_inline(view, node)) return 0;
-  float d[3];
-  for (int k = 0; k < 3; ++k) d[k] = node.p[k] - view.eye[k];
-  const float d2 = std::max(dot3(d, d), 1e-30f);
-  const float along = dot3(d, node.axis);
-  const float error = std::max(node.mu2 * d2, node.delta2 * (d2 - along * along)) / (d2 * d2);
-  return std::max(error, 1e-30f);  // qrefine held: stay > 0 even when it underflows
 }
 
 bool outside_frustum(const ViewCriteria& view, const NodeCriteria& node) { return outside_frustum_inline(view, node); }

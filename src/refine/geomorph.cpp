@@ -18,26 +18,41 @@ void Geomorphs::set_frames(uint32_t frames) {
   state_.clear();
   record_.clear();
   records_.clear();
+  synced_ = 0;
 }
 
-void Geomorphs::sync(const SelectiveMesh& mesh) {
-  const VertexHierarchy& h = mesh.hierarchy();
-  const size_t old = state_.size(), n = h.size();
-  if (old >= n) return;
+void Geomorphs::cover(const VertexHierarchy& h, uint32_t end) {
+  if (end <= state_.size()) return;
+  const size_t n = std::min<size_t>(h.size(), std::max<size_t>(end, 2 * state_.size()));
   shown_.resize(3 * n);
   state_.resize(n, 0);
   record_.resize(n, kNone);
-  for (uint32_t v = uint32_t(old); v < n; ++v) {
-    // Shown: active, or above the front (a mesh handed over already refined); a node below the front
-    // gets its place when it appears.
-    if (!mesh.is_active(v) && mesh.active_ancestor(h.id(v)) != kNone) continue;
-    state_[v] = 1;
-    std::copy_n(h.position(v), 3, &shown_[3 * size_t(v)]);
+}
+
+// A parent's slot is below its children's (they arrive after it), so covering v covers its ancestors.
+void Geomorphs::show_with_ancestors(const VertexHierarchy& h, uint32_t v) {
+  cover(h, v + 1);
+  for (uint32_t a = v; a != kNone && !state_[a]; a = h.parent(a)) {
+    state_[a] = 1;
+    std::copy_n(h.position(a), 3, &shown_[3 * size_t(a)]);
   }
 }
 
+// Shown: active, or above the front (a mesh handed over already refined); a node below the front gets
+// its place when it appears. Split nodes are exactly the ancestors of active ones.
+void Geomorphs::sync(const SelectiveMesh& mesh) {
+  const VertexHierarchy& h = mesh.hierarchy();
+  if (synced_ == 0) {
+    for (uint32_t v : mesh.active_vertices()) show_with_ancestors(h, v);
+  } else {
+    for (uint32_t v = synced_; v < h.size(); ++v)
+      if (mesh.is_active(v)) show_with_ancestors(h, v);
+  }
+  synced_ = h.size();
+}
+
 void Geomorphs::start(uint32_t v, uint32_t target, const float* from) {
-  if (record_[v] == kNone) {
+  if (record_[v] == kNone) {  // covered by the caller
     record_[v] = uint32_t(records_.size());
     records_.push_back({});
   }
@@ -49,6 +64,7 @@ void Geomorphs::start(uint32_t v, uint32_t target, const float* from) {
 }
 
 void Geomorphs::drop(uint32_t v) {
+  if (v >= record_.size()) return;
   const uint32_t i = record_[v];
   if (i == kNone) return;
   records_[i] = records_.back();
@@ -58,6 +74,7 @@ void Geomorphs::drop(uint32_t v) {
 }
 
 void Geomorphs::appear(const VertexHierarchy& h, uint32_t v) {
+  cover(h, v + 1);
   if (state_[v]) return;
   // The nearest ancestor shown on screen: the parent, unless the parent itself was split before it was
   // ever shown (a forced chain); roots are always shown.
@@ -73,6 +90,7 @@ void Geomorphs::appear(const VertexHierarchy& h, uint32_t v) {
 
 void Geomorphs::begin_collapse(const VertexHierarchy& h, uint32_t p) {
   const uint32_t t = h.first_child(p);
+  cover(h, t + 2);
   for (uint32_t c : {t, t + 1}) {
     if (record_[c] != kNone && records_[record_[c]].target == p) continue;  // already under way
     start(c, p, &shown_[3 * size_t(c)]);
@@ -82,13 +100,15 @@ void Geomorphs::begin_collapse(const VertexHierarchy& h, uint32_t p) {
 bool Geomorphs::collapse_ready(const VertexHierarchy& h, uint32_t p) const {
   const uint32_t t = h.first_child(p);
   for (uint32_t c : {t, t + 1}) {
-    const uint32_t i = record_[c];
+    const uint32_t i = c < record_.size() ? record_[c] : kNone;
     if (i == kNone || records_[i].target != p || records_[i].step < frames_) return false;
   }
   return true;
 }
 
-bool Geomorphs::collapsing(uint32_t v) const { return record_[v] != kNone && records_[record_[v]].target != kNone; }
+bool Geomorphs::collapsing(uint32_t v) const {
+  return v < record_.size() && record_[v] != kNone && records_[record_[v]].target != kNone;
+}
 
 void Geomorphs::cancel_collapse(const VertexHierarchy& h, uint32_t v) {
   if (!collapsing(v)) return;
@@ -99,6 +119,7 @@ void Geomorphs::cancel_collapse(const VertexHierarchy& h, uint32_t v) {
 
 void Geomorphs::collapsed(const VertexHierarchy& h, uint32_t p) {
   const uint32_t t = h.first_child(p);
+  cover(h, t + 2);
   for (uint32_t c : {t, t + 1}) {
     drop(c);
     state_[c] = 0;

@@ -24,7 +24,9 @@ class Geomorphs {
   uint32_t frames() const { return frames_; }
   bool enabled() const { return frames_ > 0; }
 
-  // Grows the per-slot state to the hierarchy; vertices active in `mesh` show at their positions.
+  // Vertices active in `mesh` (and the split nodes above them) show at their positions: on the first
+  // call the whole front, later the slots that arrived since, if active. Cost: the front once, then the
+  // arrivals.
   void sync(const SelectiveMesh& mesh);
 
   // `v` is active and appeared by a split since it was last seen: it starts where its nearest shown
@@ -64,12 +66,17 @@ class Geomorphs {
     return h.position(r.target == kNone ? r.slot : r.target);
   }
   void start(uint32_t v, uint32_t target, const float* from);
+  void cover(const VertexHierarchy& h, uint32_t end);  // per-slot state for slots [0, end) at least
+  void show_with_ancestors(const VertexHierarchy& h, uint32_t v);
   void drop(uint32_t v);
 
   uint32_t frames_;
+  // Per slot, up to the highest slot morphed or shown so far (grown geometrically; beyond it a slot has
+  // state 0 and no record).
   std::vector<float> shown_;       // 3 per slot: valid when state_ is set
   std::vector<uint8_t> state_;     // per slot: 1 = shown_ is where it is (or was, when last active) shown
   std::vector<uint32_t> record_;   // per slot: index in records_, kNone when not morphing
+  uint32_t synced_ = 0;            // hierarchy size sync() has seen; 0: not yet (or morphing was off)
   std::vector<Record> records_;
 };
 

@@ -17,6 +17,7 @@
 #include "common/error.h"
 #include "pm/vertex_id.h"
 #include "refine/selective_mesh.h"
+#include "refine/slot_growth.h"
 #include "refine/vertex_hierarchy.h"
 
 namespace pms {
@@ -54,8 +55,11 @@ SelectiveMesh::SelectiveMesh(const VertexHierarchy& hierarchy, std::span<const u
   std::sort(edges.begin(), edges.end());
   if (std::adjacent_find(edges.begin(), edges.end()) != edges.end())
     fail("base mesh", "edge used twice in the same direction (non-manifold or inconsistent orientation)");
-  sync_slots();
-  std::vector<uint32_t> count(hierarchy.size(), 0);
+  reserve_faces();
+  uint32_t root_end = 0;
+  for (uint32_t r = 0; r < hierarchy.root_count(); ++r) root_end = std::max(root_end, hierarchy.root_slot(r) + 1);
+  grow_records(root_end);
+  std::vector<uint32_t> count(root_end, 0);
   for (uint32_t c = 0; c < corners; ++c) ++count[corner_[c]];
   for (uint32_t r = 0; r < hierarchy.root_count(); ++r) {
     const uint32_t slot = hierarchy.root_slot(r);
@@ -68,7 +72,7 @@ SelectiveMesh::SelectiveMesh(const VertexHierarchy& hierarchy, std::span<const u
   }
   for (uint32_t r = 0; r < hierarchy.root_count(); ++r) {
     const uint32_t slot = hierarchy.root_slot(r);
-    activate(slot);
+    activate(slot, hierarchy.id(slot));
     load_corners(slot, fan_);
     order_fan(fan_, ordered_, successor_);
     if (ordered_.size() != fan_.size())
@@ -112,17 +116,18 @@ SelectiveMesh::SelectiveMesh(const VertexHierarchy& hierarchy, std::span<const u
 }
 
 void SelectiveMesh::prefetch_vsplit(uint32_t s, int stage) const {
-  if (s >= vertex_.size()) return;
+  const VertexHierarchy& h = *hierarchy_;
+  if (s >= vertex_.size() || s >= h.size()) return;
   switch (stage) {
     case 0:
-      __builtin_prefetch(&first_child_[s]);
+      __builtin_prefetch(h.first_child_address(s));
       prefetch_record(s);
       break;
     case 1:
-      if (const uint32_t t = first_child_[s]; t != kNone) {
+      if (const uint32_t t = h.first_child(s); t != kNone) {
         prefetch_record(t);  // written by the split
         prefetch_record(t + 1);
-        __builtin_prefetch(&cut_[t]);
+        __builtin_prefetch(h.cut_address(t));
       }
       prefetch_fan(s, FanStage::corners);
       break;
@@ -135,18 +140,19 @@ void SelectiveMesh::prefetch_vsplit(uint32_t s, int stage) const {
 }
 
 void SelectiveMesh::prefetch_ecol(uint32_t p, int stage) const {
-  if (p >= first_child_.size()) return;
+  const VertexHierarchy& h = *hierarchy_;
+  if (p >= h.size()) return;
   if (stage == 0) {
-    __builtin_prefetch(&first_child_[p]);
+    __builtin_prefetch(h.first_child_address(p));
     return;
   }
-  const uint32_t t = first_child_[p];
+  const uint32_t t = h.first_child(p);
   if (t == kNone || t + 1 >= vertex_.size()) return;
   switch (stage) {
     case 1:
       prefetch_record(t);
       prefetch_record(t + 1);
-      __builtin_prefetch(&cut_[t]);
+      __builtin_prefetch(h.cut_address(t));
       break;
     case 2:
       prefetch_fan(t, FanStage::corners);
@@ -160,33 +166,27 @@ void SelectiveMesh::prefetch_ecol(uint32_t p, int stage) const {
   }
 }
 
-void SelectiveMesh::sync_slots() {
-  // The hierarchy grows as packets arrive; per-slot records follow lazily. A new pair of children also
-  // sets its parent's first_child_.
-  const uint32_t old_size = uint32_t(vertex_.size());
-  if (old_size >= hierarchy_->size()) return;
+// Each known split adds at most two faces: room for all of them, so no split reallocates the face
+// arrays (growing geometrically, as the hierarchy grows a packet at a time). Only reserved: memory is
+// touched as faces are made.
+void SelectiveMesh::reserve_faces() {
   const VertexHierarchy& h = *hierarchy_;
-  vertex_.resize(h.size());
-  first_child_.resize(h.size(), kNone);
-  cut_.resize(h.size(), kNoVertex);
-  // Each known split adds at most two faces: room for all of them now, so no split reallocates the
-  // face arrays (growing geometrically, as the hierarchy grows a packet at a time).
+  if (reserved_for_ == h.size()) return;
+  reserved_for_ = h.size();
   const size_t face_bound = base_face_count_ + (h.size() - h.root_count());
   if (3 * face_bound > corner_.capacity()) {
     const size_t faces = std::max(face_bound, corner_.capacity() / 3 * 2);
     corner_.reserve(3 * faces);
     partner_.reserve(faces);
   }
-  for (uint32_t v = old_size; v < vertex_.size(); ++v) {
-    const VertexId id = h.id(v);
-    vertex_[v].tree = id.tree;
-    vertex_[v].node = id.node;
-    if (const uint32_t p = h.parent(v); p != kNone) {
-      const bool left = h.first_child(p) == v;  // children come as a pair: v_t, then v_u
-      if (left) first_child_[p] = v;
-      cut_[v] = left ? h.cut_left(p) : h.cut_right(p);
-    }
-  }
+}
+
+void SelectiveMesh::grow_records(uint32_t end) {
+  if (end <= vertex_.size()) return;
+  const size_t known = hierarchy_->size();
+  vertex_.reserve(slot_capacity(end, vertex_.capacity(), known, sizeof(vertex_[0])));
+  vertex_.resize(std::min(known, std::max<size_t>(end, 2 * vertex_.size())));
+  active_bits_.resize((vertex_.size() + 63) / 64, 0);
 }
 
 // Lists longer than kInlineFaces live in pool blocks of power-of-two sizes, recycled per size: a list
@@ -244,9 +244,13 @@ void SelectiveMesh::remove_face(uint32_t v, uint32_t f) {
   list[i] = list[--record.size];
 }
 
-void SelectiveMesh::activate(uint32_t v) {
-  vertex_[v].active_pos = uint32_t(active_.size());
+void SelectiveMesh::activate(uint32_t v, VertexId id) {
+  VertexRecord& record = vertex_[v];
+  record.tree = id.tree;
+  record.node = id.node;
+  record.active_pos = uint32_t(active_.size());
   active_.push_back(v);
+  active_bits_[v >> 6] |= uint64_t(1) << (v & 63);
 }
 
 void SelectiveMesh::deactivate(uint32_t v) {
@@ -257,6 +261,7 @@ void SelectiveMesh::deactivate(uint32_t v) {
   if (record.capacity > kInlineFaces) free_block(record.inline_faces[0], record.capacity);
   record.size = record.capacity = 0;
   record.active_pos = kNone;
+  active_bits_[v >> 6] &= ~(uint64_t(1) << (v & 63));
 }
 
 uint32_t SelectiveMesh::new_face(uint32_t a, uint32_t b, uint32_t c) {
@@ -392,7 +397,7 @@ uint32_t SelectiveMesh::cut_ancestor(VertexId cut, uint32_t slot) const {
 // only side is a border) v_t keeps only the new faces. Everything is checked before the first write,
 // so inconsistent packets leave the mesh as it was.
 void SelectiveMesh::split_fan(uint32_t s, uint32_t l, uint32_t r) {  // fan_: s's corners
-  const uint32_t t = first_child_[s], u = t + 1;
+  const uint32_t t = hierarchy_->first_child(s), u = t + 1;
   const auto reject = [&](const std::string& why) { fail(kWhere, "vsplit " + to_string(hierarchy_->id(s)) + ": " + why); };
   const bool closed = order_fan(fan_, ordered_, successor_);
   if (ordered_.size() != fan_.size()) reject("corrupted fan");
@@ -423,6 +428,7 @@ void SelectiveMesh::split_fan(uint32_t s, uint32_t l, uint32_t r) {  // fan_: s'
     partner_[fr] = fl;
   }
   const uint32_t added = (fl != kNone) + (fr != kNone);
+  const VertexId id = id_of(s);
   deactivate(s);
   for (uint32_t child : {t, u}) {
     uint32_t* list = assign_faces(child, (child == t ? t_count : n - t_count) + added);
@@ -436,12 +442,12 @@ void SelectiveMesh::split_fan(uint32_t s, uint32_t l, uint32_t r) {  // fan_: s'
   }
   if (fl != kNone) append_face(l, fl);
   if (fr != kNone) append_face(r, fr);
-  activate(t);
-  activate(u);
+  activate(t, id.child(0));
+  activate(u, id.child(1));
 }
 
 VSplitResult SelectiveMesh::vsplit(uint32_t slot) {
-  sync_slots();
+  reserve_faces();
   if (!is_active(slot))
     fail(kWhere, "vsplit of inactive vertex " + (slot < hierarchy_->size() ? to_string(hierarchy_->id(slot)) : "?"));
   // SelStreamVSplit (kim-lee-kobbelt §5.3) without recursion: v_l == v_r must be split first, and that
@@ -452,11 +458,12 @@ VSplitResult SelectiveMesh::vsplit(uint32_t slot) {
   while (!chain_.empty()) {
     const uint32_t s = chain_.back();
     if (!is_active(s)) fail(kWhere, "cyclic split order at " + to_string(hierarchy_->id(s)));
-    const uint32_t t = first_child_[s];
+    const uint32_t t = hierarchy_->first_child(s);
     if (t == kNone) return {false, s};
+    grow_records(t + 2);
     load_corners(s, fan_);
-    const uint32_t l = cut_ancestor(cut_[t], s);
-    const uint32_t r = cut_ancestor(cut_[t + 1], s);
+    const uint32_t l = cut_ancestor(hierarchy_->cut_of_child(t), s);
+    const uint32_t r = cut_ancestor(hierarchy_->cut_of_child(t + 1), s);
     if (l != kNone && l == r) {
       if (chain_.size() > active_.size()) fail(kWhere, "cyclic split order at " + to_string(hierarchy_->id(s)));
       chain_.push_back(l);
@@ -497,9 +504,9 @@ bool SelectiveMesh::breaks_split_order(uint32_t u) const {
 }
 
 bool SelectiveMesh::ecol(uint32_t p) {
-  sync_slots();
-  if (p >= first_child_.size() || first_child_[p] == kNone) fail(kWhere, "ecol of a node with no known children");
-  const uint32_t t = first_child_[p], u = t + 1;
+  const VertexHierarchy& h = *hierarchy_;
+  if (p >= h.size() || h.first_child(p) == kNone) fail(kWhere, "ecol of a node with no known children");
+  const uint32_t t = h.first_child(p), u = t + 1;
   if (!is_active(t) || !is_active(u)) return false;
   load_corners(t, fan_);
   uint32_t fl = kNone, fr = kNone, l = kNone, r = kNone;  // f_l = (t, u, l), f_r = (u, t, r)
@@ -509,7 +516,7 @@ bool SelectiveMesh::ecol(uint32_t p) {
   }
   // The faces on t-u must be those vsplit(p) would create here: same sides, apexes ActiveAncestor(v̂)
   // (an active vertex is the active ancestor of v̂ exactly when its id is a prefix of v̂'s).
-  const VertexId cut_l = cut_[t], cut_r = cut_[u];
+  const VertexId cut_l = h.cut_of_child(t), cut_r = h.cut_of_child(u);
   if ((fl != kNone) != is_vertex(cut_l) || (fr != kNone) != is_vertex(cut_r)) return false;
   if (l != kNone && !is_ancestor_or_self(id_of(l), cut_l)) return false;
   if (r != kNone && !is_ancestor_or_self(id_of(r), cut_r)) return false;
@@ -523,6 +530,7 @@ bool SelectiveMesh::ecol(uint32_t p) {
   if (!link_condition(t, l, r, t_end, u_end)) return false;
   // No vertex may be left without faces: an apex whose only face is the one removed, or p itself.
   const uint32_t removed = (fl != kNone) + (fr != kNone);
+  const VertexId id = id_of(t).parent();
   const uint32_t count = uint32_t(fan_.size() + fan_u_.size()) - 2 * removed;
   if (count == 0) return false;
   if ((fl != kNone && vertex_[l].size == 1) || (fr != kNone && vertex_[r].size == 1)) return false;
@@ -541,7 +549,7 @@ bool SelectiveMesh::ecol(uint32_t p) {
   }
   if (fl != kNone) free_face(fl);
   if (fr != kNone) free_face(fr);
-  activate(p);
+  activate(p, id);
   return true;
 }
 

@@ -68,7 +68,9 @@ class SelectiveMesh {
   void prefetch_vsplit(uint32_t slot, int stage) const;
   void prefetch_ecol(uint32_t parent_slot, int stage) const;
 
-  bool is_active(uint32_t slot) const { return slot < vertex_.size() && vertex_[slot].capacity != 0; }
+  bool is_active(uint32_t slot) const {
+    return slot < vertex_.size() && (active_bits_[slot >> 6] >> (slot & 63) & 1) != 0;
+  }
   std::span<const uint32_t> active_vertices() const { return active_; }
   size_t vertex_count() const { return active_.size(); }
   size_t face_count() const { return face_count_; }
@@ -102,7 +104,8 @@ class SelectiveMesh {
   };
   static_assert(sizeof(VertexRecord) == 64);
 
-  void sync_slots();
+  void reserve_faces();
+  void grow_records(uint32_t end);  // records for slots [0, end) at least
   void prefetch_record(uint32_t v) const;
   enum class FanStage { corners, split_neighbours, collapse_reads };
   void prefetch_fan(uint32_t v, FanStage stage) const;
@@ -128,7 +131,7 @@ class SelectiveMesh {
   uint32_t* assign_faces(uint32_t v, uint32_t count);  // a fresh list of `count` entries for v
   void append_face(uint32_t v, uint32_t f);
   void remove_face(uint32_t v, uint32_t f);
-  void activate(uint32_t v);
+  void activate(uint32_t v, VertexId id);
   void deactivate(uint32_t v);
   bool pool_blocks_disjoint(std::vector<std::pair<uint32_t, uint32_t>>& blocks) const;  // audit
 
@@ -139,11 +142,11 @@ class SelectiveMesh {
   uint32_t free_face_ = kNone;
   size_t face_count_ = 0;
   size_t base_face_count_ = 0;
-  BigVector<VertexRecord> vertex_;  // per slot
-  // Per slot, the hierarchy's first child and cut vertex (v_t: v̂_l, v_u: v̂_r), copied: every operation
-  // starts from them, and here they lie on huge pages (the hierarchy's arrays need not).
-  BigVector<uint32_t> first_child_;
-  BigVector<VertexId> cut_;
+  // Per slot up to the highest slot activated so far (grown geometrically, never past the hierarchy):
+  // a fresh mesh pays for what it refines, not for the model. A record's id is set when it activates.
+  BigVector<VertexRecord> vertex_;
+  std::vector<uint64_t> active_bits_;  // per slot, 1 = active: the adaptation walk asks for every node
+  uint32_t reserved_for_ = 0;          // hierarchy size the face arrays were reserved for
   BigVector<uint32_t> pool_;    // incident-face blocks; a free block holds the next free one
   uint32_t free_block_[32];      // per log2(capacity): first free block
   BigVector<uint32_t> active_;  // active slots

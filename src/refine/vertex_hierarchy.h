@@ -46,6 +46,11 @@ class VertexHierarchy {
   // v̂_l / v̂_r of a split node (kNoVertex for a missing side); only valid when !is_leaf(slot).
   VertexId cut_left(uint32_t slot) const { return cut_[first_child_[slot]]; }
   VertexId cut_right(uint32_t slot) const { return cut_[first_child_[slot] + 1]; }
+  // The same, stored with the children: v̂_l for a first child v_t, v̂_r for v_u.
+  VertexId cut_of_child(uint32_t child) const { return cut_[child]; }
+  // For prefetching only: where first_child(slot) and cut_of_child(child) live until the hierarchy grows.
+  const uint32_t* first_child_address(uint32_t slot) const { return &first_child_[slot]; }
+  const VertexId* cut_address(uint32_t child) const { return &cut_[child]; }
   bool has_normals() const { return has_normals_; }
   bool has_colors() const { return has_colors_; }
   const float* normal(uint32_t slot) const { return &normal_[3 * size_t(slot)]; }

@@ -169,6 +169,46 @@ TEST(Adapt, FarAfterCloseEqualsFarBunny) {
   expect_history_independence(*test::built_bunny());
 }
 
+// A fresh mesh and refinement reach a view's target in one frame from the base, and so does a mesh whose
+// state was used before (fully refined, then coarsened back): per-slot state made on first use
+// (SelectiveMesh records, the loop's decoded slots) must not differ from state left behind.
+void expect_fresh_equals_reused(const BuiltModel& model) {
+  const ModelData m = model.model();
+  const VertexHierarchy h = test::complete_hierarchy(m);
+  SelectiveMesh reused(h, m.base_faces);
+  for (uint32_t node : m.split_order) reused.vsplit(h.find(m.id(node)));
+  SelectiveRefinement reused_loop(reused, m.scale);
+  for (const NamedView& named : views_of(model)) {
+    SCOPED_TRACE(model.name + " " + named.name);
+    const ViewParams view = test::view_for(model, named.camera);
+    const std::vector<IdFace> target = test::naive_refinement(model, view, 1);
+    reused_loop.set_view(view);
+    reused_loop.set_options(AdaptOptions{1e9f, 0, 0});  // nothing is visible at that tolerance: back to the base
+    reused_loop.converge();
+    ASSERT_EQ(reused.face_count(), m.base_faces.size() / 3);
+    reused_loop.set_options(AdaptOptions{1, 0, 0});
+    reused_loop.adapt();
+    EXPECT_EQ(reused_loop.adapt().ops(), 0u) << "from the base in one frame";
+    ASSERT_EQ(invariants(reused), "ok");
+    EXPECT_EQ(test::id_faces(reused), target);
+
+    SelectiveMesh fresh(h, m.base_faces);
+    SelectiveRefinement fresh_loop(fresh, m.scale);
+    fresh_loop.set_view(view);
+    fresh_loop.adapt();
+    EXPECT_EQ(fresh_loop.adapt().ops(), 0u) << "from the base in one frame";
+    ASSERT_EQ(invariants(fresh), "ok");
+    EXPECT_EQ(test::id_faces(fresh), target);
+  }
+}
+
+TEST(Adapt, FreshAndReusedMeshesAgreeSphere) { expect_fresh_equals_reused(test::built_sphere()); }
+TEST(Adapt, FreshAndReusedMeshesAgreeTerrain) { expect_fresh_equals_reused(test::built_terrain()); }
+TEST(Adapt, FreshAndReusedMeshesAgreeBunny) {
+  PMS_REQUIRE_SHARED_MODEL(path, "bunny.ply.xz");
+  expect_fresh_equals_reused(*test::built_bunny());
+}
+
 // τ = 0 with the whole model in view: every input face that is inside the frustum and front-facing is a
 // face of the refined mesh (culling is conservative, and nothing with an error is left coarse).
 void expect_visible_faces_kept(const BuiltModel& model, const Camera& camera) {

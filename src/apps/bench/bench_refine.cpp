@@ -8,6 +8,7 @@
 #include <cstdio>
 
 #include "apps/bench/bench.h"
+#include "apps/bench/bench_refine.h"
 #include "apps/bench/child_process.h"
 #include "apps/bench/report.h"
 #include "apps/camera_path.h"
@@ -26,23 +27,23 @@
 namespace pms::app {
 namespace fs = std::filesystem;
 using nlohmann::json;
-namespace {
 
-constexpr uint32_t kScanFrames = 180, kQuickScanFrames = 40;
-constexpr uint32_t kRenderRepeats = 5;
-
-void print(const std::string& text) {
+void print_now(const std::string& text) {
   std::fputs(text.c_str(), stdout);
   std::fflush(stdout);
 }
 
-// Every split known: the loop's cost alone, with nothing to fetch.
 VertexHierarchy complete_hierarchy(const ModelData& model) {
   VertexHierarchy h = VertexHierarchy::from_model(model);
   h.reserve(model.node_count());
   for (uint32_t node : model.split_order) h.add_split(split_record(model, node));
   return h;
 }
+
+namespace {
+
+constexpr uint32_t kScanFrames = 180, kQuickScanFrames = 40;
+constexpr uint32_t kRenderRepeats = 5;
 
 struct PathRun {
   std::vector<double> frame_ms;
@@ -172,7 +173,7 @@ std::string adaptation_section(const ModelData& model, const std::string& name, 
                  thousands(uint64_t(percentile(run.faces, 0.5)))});
   out["adapt"] = {{"frames", scan.size()}, {"frame_ms", run.frame_ms}, {"ops", run.ops}, {"adapt_seconds", run.adapt_seconds},
                   {"engine_ops", engine_ops}, {"engine_ops_per_second", engine_rate}, {"faces", run.faces}};
-  print("\nAdaptation along a scan path at τ = 1 px (targets: median ≤ 4 ms, ≥ 3 M ops/s)\n" + adapt.markdown());
+  print_now("\nAdaptation along a scan path at τ = 1 px (targets: median ≤ 4 ms, ≥ 3 M ops/s)\n" + adapt.markdown());
   return "### Adaptation along a " + std::to_string(scan.size()) + "-frame scan path, τ = 1 px (" + name + ")\n\n" +
          adapt.markdown() + "\nEngine ops/s: every vsplit in PM order, then every ecol in reverse, one core.\n\n";
 }
@@ -185,7 +186,7 @@ std::string renderer_section(const ModelData& model, const MeshArrays& full, con
     renderer.render(as_render(full), make_view(camera, model.bbox_min, model.bbox_max), image);
   const double triangles_per_second = double(kRenderRepeats) * double(full.indices.size() / 3) / render_clock.seconds();
   out["render_triangles_per_second"] = triangles_per_second;
-  print("\nRenderer: " + thousands(uint64_t(triangles_per_second)) + " triangles/s (" + thousands(full.indices.size() / 3) +
+  print_now("\nRenderer: " + thousands(uint64_t(triangles_per_second)) + " triangles/s (" + thousands(full.indices.size() / 3) +
         " faces, " + std::to_string(camera.width) + "x" + std::to_string(camera.height) + ")\n");
   return "Renderer: " + thousands(uint64_t(triangles_per_second)) + " triangles/s on the full mesh.\n\n";
 }
@@ -281,10 +282,10 @@ std::string quality_sections(const BenchContext& context, const std::string& nam
     per_view.push_back(view_quality_json(vp.label, full_faces, q));
   }
   out["quality"] = per_view;
-  print("\nImage quality against the full mesh (targets: τ=0 err ≤ 0.2 %, PSNR ≥ 35 dB, ≤ 60 % faces close; τ=1 ≤ 30 % faces "
+  print_now("\nImage quality against the full mesh (targets: τ=0 err ≤ 0.2 %, PSNR ≥ 35 dB, ≤ 60 % faces close; τ=1 ≤ 30 % faces "
         "close, better than VI at mid and close)\n" +
         quality.markdown());
-  print("\nThe same views, model built with --deviation bound (a bound on the surface below each node instead of Hoppe's "
+  print_now("\nThe same views, model built with --deviation bound (a bound on the surface below each node instead of Hoppe's "
         "estimate)\n" + bound.markdown());
   return "### Image quality against the full mesh\n\n" + quality.markdown() +
          "\nVI = the first K splits in stream order with at least the τ = 1 px mesh's face count. "
@@ -305,6 +306,7 @@ void run_refine_group(BenchContext& context) {
   const ModelData& model = file->model();
   json out = {{"command", context.options.command_line}, {"machine", machine_json()}, {"model", name}};
   section += adaptation_section(model, name, quick, out);
+  section += srmesh_comparison_section(context, out);
 
   const MeshArrays full = refine_in_stream_order(model, model.split_order.size());
   Renderer renderer;
