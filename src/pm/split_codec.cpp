@@ -1,0 +1,400 @@
+// Split records coded against the client's own hierarchy (issue 19; cheng-ooi 2008 §4.3 codes dx, dy, dz
+// against v_s with Huffman codes and the cut neighbours after Kim et al. 2006; docs/pms-format.md has the
+// record format field by field and the measured bits).
+//
+// - Cut vertices: a fundamental cut vertex is a leaf next to v_s's leaves, so its id shares a long prefix
+//   with an id the client already holds (the id-prefix property behind ActiveAncestor, kim-lee-kobbelt §4):
+//   v_s itself (the sibling's subtree and nearby), the cut vertices of v_s's nearest ancestors, and for
+//   v̂_r the v̂_l just decoded. A record names the reference, how far above it the two ids part, and the
+//   rest of the path below the parting bit (which is implied: the other child). Ids far from every
+//   reference escape to tree-id, depth and path.
+// - Position: v_t − v_s per axis on the grid, as a magnitude class (prefix coded, with a table per class
+//   of v_s's radius: the radius bounds |p_t − p_s|) and the class's low bits raw.
+// - Refinement info: each child's as the difference of its 11-bit length codes, cone angle and axis from
+//   v_s's (a child's bounds nest in its parent's, so the differences are small and mostly of one sign).
+#include "pm/split_codec.h"
+
+#include <algorithm>
+#include <bit>
+#include <string>
+
+#include "common/error.h"
+
+namespace pms {
+namespace {
+
+// Signed integers as a magnitude class k = bit_width(|v|) with the sign in the symbol: 0, then +k, -k for
+// k = 1 .. kMaxClass; the k - 1 bits below the leading one follow raw.
+constexpr uint32_t kMaxClass = 40;
+constexpr uint32_t kIntSymbols = 1 + 2 * kMaxClass;
+constexpr uint32_t kNoConeSymbol = kIntSymbols;  // after the integers, in the angle codes
+
+constexpr uint32_t kMaxDepthSymbols = 64;
+constexpr uint32_t kEqualSymbol = kMaxDepthSymbols;  // "the reference itself", in the parting codes
+constexpr uint32_t kReferences = 2 + 2 * kCutAncestors;  // v_s, ancestor cuts, v̂_l (for v̂_r)
+constexpr uint32_t kEscapeSymbol = 0;                  // reference symbols are 1 + reference index
+constexpr uint32_t kRadiusClasses = 32;                // half-float exponent of v_s's radius
+
+// Code slots, in serialization order.
+constexpr uint32_t kSlotCutSides = 0;
+constexpr uint32_t kSlotCutRef = kSlotCutSides + 1;            // [side]
+constexpr uint32_t kSlotCutUp = kSlotCutRef + 2;               // [side][reference is v_s: 0, a leaf: 1]
+constexpr uint32_t kSlotCutRest = kSlotCutUp + 4;              // [side][same]
+constexpr uint32_t kSlotCutDepth = kSlotCutRest + 4;           // escaped ids
+constexpr uint32_t kSlotPosition = kSlotCutDepth + 1;          // [axis][radius class]
+constexpr uint32_t kSlotInfoFlags = kSlotPosition + 3 * kRadiusClasses;
+constexpr uint32_t kSlotLength = kSlotInfoFlags + 1;           // [radius, mu, delta][child]
+constexpr uint32_t kSlotAngle = kSlotLength + 6;               // [child][parent has a cone]
+constexpr uint32_t kSlotAxis = kSlotAngle + 4;                 // [child]
+constexpr uint32_t kSlotCount = kSlotAxis + 2;
+
+uint32_t alphabet(uint32_t slot) {
+  if (slot == kSlotCutSides || slot == kSlotInfoFlags) return 4;
+  if (slot < kSlotCutUp) return 1 + kReferences;
+  if (slot < kSlotCutRest) return kMaxDepthSymbols + 1;
+  if (slot < kSlotPosition) return kMaxDepthSymbols;
+  if (slot >= kSlotAngle && slot < kSlotAxis) return kIntSymbols + 1;
+  return kIntSymbols;
+}
+
+enum Part { topology, geometry, refinement };
+
+uint32_t tree_bits(uint32_t root_count) { return root_count <= 1 ? 1 : uint32_t(std::bit_width(root_count - 1)); }
+
+uint32_t int_symbol(int64_t v) {
+  if (v == 0) return 0;
+  const uint64_t magnitude = v < 0 ? uint64_t(-v) : uint64_t(v);
+  const auto k = uint32_t(std::bit_width(magnitude));
+  if (k > kMaxClass) fail("split record", "value " + std::to_string(v) + " too large to code");
+  return 2 * k - 1 + (v < 0);
+}
+
+// v's length codes: the half float without its sign and dropped bits, monotone in the value.
+int64_t length_code(uint16_t half) { return half >> kLengthDroppedBits; }
+
+struct Reference {
+  VertexId id = kNoVertex;
+  bool leaf = false;  // a cut vertex (can equal the target); else v_s (cannot)
+};
+
+// How `target` is coded against `ref`: equal, or parting `up` levels above ref and `rest` levels below
+// the implied parting bit. False when ref cannot express it (another tree, or one id above the other).
+struct Parting {
+  bool equal = false;
+  uint32_t up = 0, rest = 0;
+};
+bool parting(VertexId ref, VertexId target, Parting& p) {
+  if (!is_vertex(ref) || ref.tree != target.tree) return false;
+  if (ref == target) {
+    p = {true, 0, 0};
+    return true;
+  }
+  const int dr = ref.depth(), dt = target.depth();
+  int c = std::min(dr, dt);
+  uint64_t a = ref.node >> (dr - c), b = target.node >> (dt - c);
+  while (a != b) a >>= 1, b >>= 1, --c;
+  if (c == dr || c == dt) return false;  // one is the other's ancestor: no parting bit
+  p = {false, uint32_t(dr - 1 - c), uint32_t(dt - c - 1)};
+  return true;
+}
+
+}  // namespace
+
+// Symbol counts per slot, for fitting the tables; costs from a previous fit choose the references.
+struct SplitCodec::Counts {
+  std::vector<std::vector<uint64_t>> counts;
+  Counts() : counts(kSlotCount) {
+    for (uint32_t s = 0; s < kSlotCount; ++s) counts[s].assign(alphabet(s), 0);
+  }
+  void symbol(uint32_t slot, uint32_t sym, Part) { ++counts[slot][sym]; }
+  void raw(uint64_t, unsigned, Part) {}
+};
+
+namespace {
+
+struct Writing {
+  const std::vector<PrefixCode>& codes;
+  BitWriter& w;
+  RecordBits bits;
+  void symbol(uint32_t slot, uint32_t sym, Part part) {
+    const uint64_t before = w.size();
+    codes[slot].write(w, sym);
+    add(part, w.size() - before);
+  }
+  void raw(uint64_t value, unsigned n, Part part) {
+    w.bits(value, n);
+    add(part, n);
+  }
+  void add(Part part, uint64_t n) {
+    (part == topology ? bits.topology : part == geometry ? bits.geometry : bits.refinement) += n;
+  }
+};
+
+template <class Out> void put_int(Out& out, uint32_t slot, int64_t v, Part part) {
+  const uint32_t sym = int_symbol(v);
+  out.symbol(slot, sym, part);
+  if (sym == 0) return;
+  const uint32_t k = (sym + 1) / 2;
+  const uint64_t magnitude = v < 0 ? uint64_t(-v) : uint64_t(v);
+  out.raw(magnitude, k - 1, part);  // the bits below the leading one
+}
+
+int64_t get_int(uint32_t sym, BitReader& r, const char* field) {
+  if (sym == 0) return 0;
+  if (sym >= kIntSymbols) r.fail_field(field, "not an integer symbol");
+  const uint32_t k = (sym + 1) / 2;
+  const uint64_t magnitude = (uint64_t(1) << (k - 1)) | r.bits(k - 1, field);
+  return sym % 2 == 0 ? -int64_t(magnitude) : int64_t(magnitude);
+}
+
+// The references a cut vertex of `side` may be coded against, in symbol order.
+void references(const SplitContext& c, int side, VertexId cut_l, Reference out[kReferences]) {
+  out[0] = {c.vs, false};
+  for (int i = 0; i < 2 * kCutAncestors; ++i) out[1 + i] = {c.ancestor_cuts[i], true};
+  out[kReferences - 1] = {side == 1 ? cut_l : kNoVertex, true};
+}
+
+uint32_t position_class(const SplitContext& c) { return (c.info_s.radius >> 10) & (kRadiusClasses - 1); }
+
+}  // namespace
+
+template <class Out> void SplitCodec::emit(const SplitContext& c, const SplitPayload& p, Out& out) const {
+  // Cut vertices.
+  const unsigned sides = (is_vertex(p.cut_l) ? 1u : 0u) | (is_vertex(p.cut_r) ? 2u : 0u);
+  if (sides == 0) fail("split record", "split of " + to_string(c.vs) + " has no cut vertex");
+  out.symbol(kSlotCutSides, sides, topology);
+  for (int side = 0; side < 2; ++side) {
+    const VertexId cut = side == 0 ? p.cut_l : p.cut_r;
+    if (!is_vertex(cut)) continue;
+    if (cut.tree >= root_count_ || uint32_t(cut.depth()) > max_depth_ || is_ancestor_or_self(c.vs, cut))
+      fail("split record", "split of " + to_string(c.vs) + ": cut vertex " + to_string(cut) + " cannot be coded");
+    Reference refs[kReferences];
+    references(c, side, p.cut_l, refs);
+    // The cheapest reference under the current tables (or, before any, the shortest rest), first on ties.
+    uint32_t best = kReferences;
+    Parting best_parting;
+    uint64_t best_cost = UINT64_MAX;
+    for (uint32_t i = 0; i < kReferences; ++i) {
+      Parting pt;
+      if (!parting(refs[i].id, cut, pt) || (pt.equal && !refs[i].leaf)) continue;
+      uint64_t cost = pt.rest;
+      if (!codes_.empty()) {
+        const uint32_t kind = refs[i].leaf ? 1 : 0;
+        const auto price = [](const PrefixCode& code, uint32_t sym) -> uint64_t { return code.has(sym) ? code.cost(sym) : 24; };
+        cost += price(codes_[kSlotCutRef + uint32_t(side)], 1 + i);
+        cost += price(codes_[kSlotCutUp + 2 * uint32_t(side) + kind], pt.equal ? kEqualSymbol : pt.up);
+        if (!pt.equal) cost += price(codes_[kSlotCutRest + 2 * uint32_t(side) + kind], pt.rest);
+      }
+      if (cost < best_cost) best = i, best_parting = pt, best_cost = cost;
+    }
+    if (best == kReferences) {
+      out.symbol(kSlotCutRef + uint32_t(side), kEscapeSymbol, topology);
+      out.raw(cut.tree, tree_bits(root_count_), topology);
+      out.symbol(kSlotCutDepth, uint32_t(cut.depth()), topology);
+      out.raw(cut.node, unsigned(cut.depth()), topology);
+      continue;
+    }
+    const uint32_t kind = refs[best].leaf ? 1 : 0;
+    out.symbol(kSlotCutRef + uint32_t(side), 1 + best, topology);
+    out.symbol(kSlotCutUp + 2 * uint32_t(side) + kind, best_parting.equal ? kEqualSymbol : best_parting.up, topology);
+    if (best_parting.equal) continue;
+    out.symbol(kSlotCutRest + 2 * uint32_t(side) + kind, best_parting.rest, topology);
+    out.raw(cut.node, best_parting.rest, topology);
+  }
+  // Position of v_t against v_s's.
+  const uint32_t pclass = position_class(c);
+  for (uint32_t axis = 0; axis < 3; ++axis) {
+    if (position_bits_ < 32 && p.position_t[axis] >> position_bits_)
+      fail("split record", "split of " + to_string(c.vs) + ": position outside the grid");
+    put_int(out, kSlotPosition + axis * kRadiusClasses + pclass, int64_t(p.position_t[axis]) - int64_t(c.position_s[axis]), geometry);
+  }
+  // Refinement info of v_t and v_u against v_s's.
+  const RefineInfo* child[2] = {&p.info_t, &p.info_u};
+  for (const RefineInfo* info : child)
+    if (!is_canonical(*info) || !(*info == as_sent(*info)))
+      fail("split record", "split of " + to_string(c.vs) + ": refinement info is not as sent");
+  out.symbol(kSlotInfoFlags, (never_refines(p.info_t) ? 1u : 0u) | (never_refines(p.info_u) ? 2u : 0u), refinement);
+  const RefineInfo& s = c.info_s;
+  for (uint32_t k = 0; k < 2; ++k) {
+    const RefineInfo& v = *child[k];
+    if (never_refines(v)) continue;
+    const uint16_t RefineInfo::*lengths[3] = {&RefineInfo::radius, &RefineInfo::mu, &RefineInfo::delta};
+    for (uint32_t f = 0; f < 3; ++f)
+      put_int(out, kSlotLength + 2 * f + k, length_code(s.*lengths[f]) - length_code(v.*lengths[f]), refinement);
+    const bool parent_cone = s.cone_angle != kNoCone;
+    const uint32_t angle_slot = kSlotAngle + 2 * k + (parent_cone ? 1 : 0);
+    if (v.cone_angle == kNoCone) {
+      out.symbol(angle_slot, kNoConeSymbol, refinement);
+      continue;
+    }
+    put_int(out, angle_slot, parent_cone ? int64_t(s.cone_angle) - v.cone_angle : int64_t(v.cone_angle), refinement);
+    put_int(out, kSlotAxis + k, int64_t(int16_t(v.cone_x)) - int16_t(s.cone_x), refinement);
+    put_int(out, kSlotAxis + k, int64_t(int16_t(v.cone_y)) - int16_t(s.cone_y), refinement);
+  }
+}
+
+void SplitCodec::encode(const SplitContext& context, const SplitPayload& payload, BitWriter& w, RecordBits* bits) const {
+  if (codes_.size() != kSlotCount) fail("split record", "the codec has no tables");
+  Writing out{codes_, w, {}};
+  emit(context, payload, out);
+  if (bits) *bits = out.bits;
+}
+
+SplitPayload SplitCodec::decode(const SplitContext& c, BitReader& r) const {
+  if (codes_.size() != kSlotCount) fail("split record", "the codec has no tables");
+  SplitPayload p;
+  const uint32_t sides = codes_[kSlotCutSides].read(r, "cut sides");
+  if (sides == 0) r.fail_field("cut sides", "neither v̂_l nor v̂_r is present");
+  for (int side = 0; side < 2; ++side) {
+    if (!(sides & (1u << side))) continue;
+    const char* field = side == 0 ? "v̂_l" : "v̂_r";
+    const uint32_t sym = codes_[kSlotCutRef + uint32_t(side)].read(r, field);
+    VertexId cut;
+    if (sym == kEscapeSymbol) {
+      cut.tree = uint32_t(r.bits(tree_bits(root_count_), field));
+      const uint32_t depth = codes_[kSlotCutDepth].read(r, field);
+      if (depth > max_depth_) r.fail_field(field, "deeper than the model");
+      cut.node = (uint64_t(1) << depth) | r.bits(depth, field);
+    } else {
+      Reference refs[kReferences];
+      references(c, side, p.cut_l, refs);
+      const Reference& ref = refs[sym - 1];
+      if (!is_vertex(ref.id)) r.fail_field(field, "names a reference the client does not hold");
+      const uint32_t kind = ref.leaf ? 1 : 0;
+      const uint32_t up = codes_[kSlotCutUp + 2 * uint32_t(side) + kind].read(r, field);
+      if (up == kEqualSymbol) {
+        if (!ref.leaf) r.fail_field(field, "equal to v_s");
+        cut = ref.id;
+      } else {
+        const int dr = ref.id.depth();
+        if (int(up) >= dr) r.fail_field(field, "parts above the root");
+        const int common = dr - 1 - int(up);
+        const uint64_t prefix = ref.id.node >> (dr - common);
+        const uint64_t other = ((ref.id.node >> (dr - common - 1)) & 1) ^ 1;
+        const uint32_t rest = codes_[kSlotCutRest + 2 * uint32_t(side) + kind].read(r, field);
+        if (uint32_t(common) + 1 + rest > max_depth_) r.fail_field(field, "deeper than the model");
+        cut = {ref.id.tree, (((prefix << 1) | other) << rest) | r.bits(rest, field)};
+      }
+    }
+    if (cut.tree >= root_count_) r.fail_field(field, "tree-id outside the model");
+    if (is_ancestor_or_self(c.vs, cut)) r.fail_field(field, "inside v_s's subtree");
+    (side == 0 ? p.cut_l : p.cut_r) = cut;
+  }
+  const uint32_t pclass = position_class(c);
+  for (uint32_t axis = 0; axis < 3; ++axis) {
+    const PrefixCode& code = codes_[kSlotPosition + axis * kRadiusClasses + pclass];
+    const int64_t v = int64_t(c.position_s[axis]) + get_int(code.read(r, "position"), r, "position");
+    const int64_t top = position_bits_ >= 32 ? int64_t(UINT32_MAX) : (int64_t(1) << position_bits_) - 1;
+    if (v < 0 || v > top) r.fail_field("position", "outside the grid");
+    p.position_t[axis] = uint32_t(v);
+  }
+  const uint32_t flags = codes_[kSlotInfoFlags].read(r, "info flags");
+  const RefineInfo& s = c.info_s;
+  RefineInfo* child[2] = {&p.info_t, &p.info_u};
+  for (uint32_t k = 0; k < 2; ++k) {
+    const char* field = k == 0 ? "info_t" : "info_u";
+    RefineInfo& v = *child[k];
+    if (flags & (1u << k)) {
+      v = as_sent(RefineInfo{});
+      continue;
+    }
+    uint16_t RefineInfo::*lengths[3] = {&RefineInfo::radius, &RefineInfo::mu, &RefineInfo::delta};
+    for (uint32_t f = 0; f < 3; ++f) {
+      const PrefixCode& code = codes_[kSlotLength + 2 * f + k];
+      const int64_t value = length_code(s.*lengths[f]) - get_int(code.read(r, field), r, field);
+      if (value < 0 || value > (0x7C00 >> kLengthDroppedBits)) r.fail_field(field, "length outside the half-float range");
+      v.*lengths[f] = uint16_t(value << kLengthDroppedBits);
+    }
+    const bool parent_cone = s.cone_angle != kNoCone;
+    const PrefixCode& angle_code = codes_[kSlotAngle + 2 * k + (parent_cone ? 1 : 0)];
+    const uint32_t sym = angle_code.read(r, field);
+    if (sym == kNoConeSymbol) {
+      v.cone_angle = kNoCone;
+      v.cone_x = v.cone_y = 0;
+    } else {
+      const int64_t delta = get_int(sym, r, field);
+      const int64_t angle = parent_cone ? int64_t(s.cone_angle) - delta : delta;
+      if (angle < 0 || angle > kConeSteps) r.fail_field(field, "cone angle out of range");
+      v.cone_angle = uint16_t(angle);
+      const PrefixCode& axis_code = codes_[kSlotAxis + k];
+      for (uint16_t RefineInfo::*q : {&RefineInfo::cone_x, &RefineInfo::cone_y}) {
+        const int64_t value = int64_t(int16_t(s.*q)) + get_int(axis_code.read(r, field), r, field);
+        if (value < -kAxisSteps || value > kAxisSteps) r.fail_field(field, "cone axis out of range");
+        v.*q = uint16_t(int16_t(value));
+      }
+    }
+    if (!is_canonical(v) || never_refines(v)) r.fail_field(field, "not a value the quantizer produces");
+  }
+  return p;
+}
+
+SplitCodec SplitCodec::build(const ModelData& model, std::span<const uint32_t> positions, uint32_t position_bits) {
+  check_node_arrays(model);
+  if (positions.size() != 3 * model.node_count()) fail("split record", "positions are not 3 per node");
+  if (!(position_bits >= 1 && position_bits <= 32)) fail("split record", "position bits outside 1..32");
+  SplitCodec codec;
+  codec.root_count_ = model.root_count;
+  codec.position_bits_ = position_bits;
+  for (size_t n = 0; n < model.node_count(); ++n) codec.max_depth_ = std::max<uint32_t>(codec.max_depth_, uint32_t(model.id(uint32_t(n)).depth()));
+  // Two fits: the first chooses references by their rest alone, the second by the first fit's costs.
+  for (int pass = 0; pass < 2; ++pass) {
+    Counts counts;
+    for (uint32_t node = 0; node < model.node_count(); ++node)
+      if (!model.is_leaf(node)) codec.emit(split_context(model, positions, node), split_payload(model, positions, node), counts);
+    std::vector<PrefixCode> codes;
+    for (uint32_t s = 0; s < kSlotCount; ++s) codes.push_back(PrefixCode::from_counts(counts.counts[s]));
+    codec.codes_ = std::move(codes);
+  }
+  return codec;
+}
+
+void SplitCodec::serialize(BitWriter& w) const {
+  if (codes_.size() != kSlotCount) fail("split record", "the codec has no tables");
+  w.bits(root_count_, 32);
+  w.bits(max_depth_, 8);
+  w.bits(position_bits_, 8);
+  for (const PrefixCode& code : codes_) code.serialize(w);
+}
+
+SplitCodec SplitCodec::deserialize(BitReader& r) {
+  SplitCodec codec;
+  codec.root_count_ = uint32_t(r.bits(32, "root count"));
+  codec.max_depth_ = uint32_t(r.bits(8, "max depth"));
+  codec.position_bits_ = uint32_t(r.bits(8, "position bits"));
+  if (codec.root_count_ == 0) r.fail_field("root count", "0");
+  if (codec.max_depth_ > 63) r.fail_field("max depth", "above 63");
+  if (codec.position_bits_ < 1 || codec.position_bits_ > 32) r.fail_field("position bits", "outside 1..32");
+  for (uint32_t s = 0; s < kSlotCount; ++s) codec.codes_.push_back(PrefixCode::deserialize(r, alphabet(s), "code table"));
+  return codec;
+}
+
+SplitContext split_context(const ModelData& model, std::span<const uint32_t> positions, uint32_t node) {
+  SplitContext c;
+  c.vs = model.id(node);
+  std::copy_n(&positions[3 * size_t(node)], 3, c.position_s);
+  c.info_s = as_sent(model.refine[node]);
+  uint32_t n = node;
+  for (int i = 0; i < kCutAncestors; ++i) {
+    n = model.parent[n];
+    if (n == kNone) break;
+    for (int side = 0; side < 2; ++side) {
+      const uint32_t cut = side == 0 ? model.cut_left[n] : model.cut_right[n];
+      c.ancestor_cuts[2 * i + side] = cut == kNone ? kNoVertex : model.id(cut);
+    }
+  }
+  return c;
+}
+
+SplitPayload split_payload(const ModelData& model, std::span<const uint32_t> positions, uint32_t node) {
+  if (model.is_leaf(node)) fail("split record", "node " + std::to_string(node) + " is a leaf");
+  SplitPayload p;
+  const uint32_t t = model.first_child[node];
+  if (model.cut_left[node] != kNone) p.cut_l = model.id(model.cut_left[node]);
+  if (model.cut_right[node] != kNone) p.cut_r = model.id(model.cut_right[node]);
+  std::copy_n(&positions[3 * size_t(t)], 3, p.position_t);
+  p.info_t = as_sent(model.refine[t]);
+  p.info_u = as_sent(model.refine[t + 1]);
+  return p;
+}
+
+}  // namespace pms
