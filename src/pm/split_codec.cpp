@@ -32,27 +32,35 @@ constexpr uint32_t kNoConeSymbol = kIntSymbols;  // after the integers, in the a
 constexpr uint32_t kMaxDepthSymbols = 64;
 constexpr uint32_t kEqualSymbol = kMaxDepthSymbols;  // "the reference itself", in the parting codes
 constexpr uint32_t kReferences = 2 + 2 * kCutAncestors;  // v_s, ancestor cuts, v̂_l (for v̂_r)
-constexpr uint32_t kEscapeSymbol = 0;                  // reference symbols are 1 + reference index
-constexpr uint32_t kRadiusClasses = 32;                // half-float exponent of v_s's radius
+// Reference symbols: escape, 1 + reference index, or "no cut vertex on this side".
+constexpr uint32_t kEscapeSymbol = 0;
+constexpr uint32_t kAbsentSymbol = kReferences + 1;
+constexpr uint32_t kRefSymbols = kReferences + 2;
+constexpr uint32_t kRadiusClasses = 32;   // half-float exponent of v_s's radius
+constexpr uint32_t kPositionContexts = kRadiusClasses + 2 * 26;  // x: radius class; y, z: classes of x, max(x, y)
+constexpr uint32_t kFlagContexts = 10;    // v_s never refines, or the class of its radius over its mu
+constexpr uint32_t kChainContexts = 12;   // the previous field's symbol, clamped
+constexpr uint32_t kAxisContexts = 13;    // no parent cone, or the class of the angle the child leaves inside it
 
-// Code slots, in serialization order.
-constexpr uint32_t kSlotCutSides = 0;
-constexpr uint32_t kSlotCutRef = kSlotCutSides + 1;            // [side]
-constexpr uint32_t kSlotCutUp = kSlotCutRef + 2;               // [side][reference is v_s: 0, a leaf: 1]
-constexpr uint32_t kSlotCutRest = kSlotCutUp + 4;              // [side][same]
-constexpr uint32_t kSlotCutDepth = kSlotCutRest + 4;           // escaped ids
-constexpr uint32_t kSlotPosition = kSlotCutDepth + 1;          // [axis][radius class]
-constexpr uint32_t kSlotInfoFlags = kSlotPosition + 3 * kRadiusClasses;
-constexpr uint32_t kSlotLength = kSlotInfoFlags + 1;           // [radius, mu, delta][child]
-constexpr uint32_t kSlotAngle = kSlotLength + 6;               // [child][parent has a cone]
-constexpr uint32_t kSlotAxis = kSlotAngle + 4;                 // [child]
-constexpr uint32_t kSlotCount = kSlotAxis + 2;
+// Code slots, in serialization order; [..] are the contexts.
+constexpr uint32_t kSlotCutRef = 0;                                 // [v̂_l; v̂_r after each v̂_l symbol]
+constexpr uint32_t kSlotCutUp = kSlotCutRef + 1 + kRefSymbols;      // [side][reference is v_s: 0, a leaf: 1]
+constexpr uint32_t kSlotCutRest = kSlotCutUp + 4;                   // [side][same]
+constexpr uint32_t kSlotCutDepth = kSlotCutRest + 4;                // escaped ids
+constexpr uint32_t kSlotPosition = kSlotCutDepth + 1;               // [axis][radius class]
+constexpr uint32_t kSlotInfoFlags = kSlotPosition + kPositionContexts;  // [flag context]
+constexpr uint32_t kSlotRadius = kSlotInfoFlags + kFlagContexts;    // [child][height context]
+constexpr uint32_t kSlotMu = kSlotRadius + 2 * kFlagContexts;                       // [child][radius symbol]
+constexpr uint32_t kSlotDelta = kSlotMu + 2 * kChainContexts;       // [child][mu symbol]
+constexpr uint32_t kSlotAngle = kSlotDelta + 2 * kChainContexts;    // [child][parent has a cone]
+constexpr uint32_t kSlotAxis = kSlotAngle + 4;                      // [child][axis context]
+constexpr uint32_t kSlotCount = kSlotAxis + 2 * kAxisContexts;
 
 uint32_t alphabet(uint32_t slot) {
-  if (slot == kSlotCutSides || slot == kSlotInfoFlags) return 4;
-  if (slot < kSlotCutUp) return 1 + kReferences;
+  if (slot < kSlotCutUp) return kRefSymbols;
   if (slot < kSlotCutRest) return kMaxDepthSymbols + 1;
-  if (slot < kSlotPosition) return kMaxDepthSymbols;
+  if (slot == kSlotCutDepth) return kMaxDepthSymbols;
+  if (slot >= kSlotInfoFlags && slot < kSlotRadius) return 4;
   if (slot >= kSlotAngle && slot < kSlotAxis) return kIntSymbols + 1;
   return kIntSymbols;
 }
@@ -82,6 +90,7 @@ struct Reference {
 struct Parting {
   bool equal = false;
   uint32_t up = 0, rest = 0;
+  int64_t depth_step = 0;  // depth(target) - depth(ref) = rest - up, what is coded
 };
 bool parting(VertexId ref, VertexId target, Parting& p) {
   if (!is_vertex(ref) || ref.tree != target.tree) return false;
@@ -94,7 +103,7 @@ bool parting(VertexId ref, VertexId target, Parting& p) {
   uint64_t a = ref.node >> (dr - c), b = target.node >> (dt - c);
   while (a != b) a >>= 1, b >>= 1, --c;
   if (c == dr || c == dt) return false;  // one is the other's ancestor: no parting bit
-  p = {false, uint32_t(dr - 1 - c), uint32_t(dt - c - 1)};
+  p = {false, uint32_t(dr - 1 - c), uint32_t(dt - c - 1), int64_t(dt) - dr};
   return true;
 }
 
@@ -130,13 +139,14 @@ struct Writing {
   }
 };
 
-template <class Out> void put_int(Out& out, uint32_t slot, int64_t v, Part part) {
+template <class Out> uint32_t put_int(Out& out, uint32_t slot, int64_t v, Part part) {
   const uint32_t sym = int_symbol(v);
   out.symbol(slot, sym, part);
-  if (sym == 0) return;
+  if (sym == 0) return sym;
   const uint32_t k = (sym + 1) / 2;
   const uint64_t magnitude = v < 0 ? uint64_t(-v) : uint64_t(v);
   out.raw(magnitude, k - 1, part);  // the bits below the leading one
+  return sym;
 }
 
 int64_t get_int(uint32_t sym, BitReader& r, const char* field) {
@@ -156,16 +166,34 @@ void references(const SplitContext& c, int side, VertexId cut_l, Reference out[k
 
 uint32_t position_class(const SplitContext& c) { return (c.info_s.radius >> 10) & (kRadiusClasses - 1); }
 
+// Whether v_s's children never refine, and how far below v_s their bounds are, depend on how far v_s is
+// from the deepest level.
+uint32_t height_context(const SplitContext& c, uint32_t max_depth) {
+  return std::min<uint32_t>(uint32_t(std::max(0, int(max_depth) - c.vs.depth())), kFlagContexts - 1);
+}
+uint32_t chain_context(uint32_t previous_symbol) { return std::min(previous_symbol, kChainContexts - 1); }
+// A child's cone lies inside its parent's, so its axis moves at most about the angle left between them.
+uint32_t axis_context(const RefineInfo& s, const RefineInfo& v) {
+  if (s.cone_angle == kNoCone) return 0;
+  const int64_t room = std::max<int64_t>(0, int64_t(s.cone_angle) - v.cone_angle);
+  return 1 + std::min<uint32_t>(uint32_t(std::bit_width(uint64_t(room))), kAxisContexts - 2);
+}
+
+constexpr uint16_t RefineInfo::*kLengths[3] = {&RefineInfo::radius, &RefineInfo::mu, &RefineInfo::delta};
+
 }  // namespace
 
 template <class Out> void SplitCodec::emit(const SplitContext& c, const SplitPayload& p, Out& out) const {
   // Cut vertices.
-  const unsigned sides = (is_vertex(p.cut_l) ? 1u : 0u) | (is_vertex(p.cut_r) ? 2u : 0u);
-  if (sides == 0) fail("split record", "split of " + to_string(c.vs) + " has no cut vertex");
-  out.symbol(kSlotCutSides, sides, topology);
+  if (!is_vertex(p.cut_l) && !is_vertex(p.cut_r)) fail("split record", "split of " + to_string(c.vs) + " has no cut vertex");
+  uint32_t ref_slot = kSlotCutRef;
   for (int side = 0; side < 2; ++side) {
     const VertexId cut = side == 0 ? p.cut_l : p.cut_r;
-    if (!is_vertex(cut)) continue;
+    if (!is_vertex(cut)) {
+      out.symbol(ref_slot, kAbsentSymbol, topology);
+      ref_slot = kSlotCutRef + 1 + kAbsentSymbol;
+      continue;
+    }
     if (cut.tree >= root_count_ || uint32_t(cut.depth()) > max_depth_ || is_ancestor_or_self(c.vs, cut))
       fail("split record", "split of " + to_string(c.vs) + ": cut vertex " + to_string(cut) + " cannot be coded");
     Reference refs[kReferences];
@@ -181,46 +209,54 @@ template <class Out> void SplitCodec::emit(const SplitContext& c, const SplitPay
       if (!codes_.empty()) {
         const uint32_t kind = refs[i].leaf ? 1 : 0;
         const auto price = [](const PrefixCode& code, uint32_t sym) -> uint64_t { return code.has(sym) ? code.cost(sym) : 24; };
-        cost += price(codes_[kSlotCutRef + uint32_t(side)], 1 + i);
+        cost += price(codes_[ref_slot], 1 + i);
         cost += price(codes_[kSlotCutUp + 2 * uint32_t(side) + kind], pt.equal ? kEqualSymbol : pt.up);
-        if (!pt.equal) cost += price(codes_[kSlotCutRest + 2 * uint32_t(side) + kind], pt.rest);
+        if (!pt.equal) {
+          const uint32_t sym = int_symbol(pt.depth_step);
+          cost += price(codes_[kSlotCutRest + 2 * uint32_t(side) + kind], sym) + (sym + 1) / 2 - (sym != 0);
+        }
       }
       if (cost < best_cost) best = i, best_parting = pt, best_cost = cost;
     }
+    const uint32_t ref_symbol = best == kReferences ? kEscapeSymbol : 1 + best;
+    out.symbol(ref_slot, ref_symbol, topology);
+    ref_slot = kSlotCutRef + 1 + ref_symbol;
     if (best == kReferences) {
-      out.symbol(kSlotCutRef + uint32_t(side), kEscapeSymbol, topology);
       out.raw(cut.tree, tree_bits(root_count_), topology);
       out.symbol(kSlotCutDepth, uint32_t(cut.depth()), topology);
       out.raw(cut.node, unsigned(cut.depth()), topology);
       continue;
     }
     const uint32_t kind = refs[best].leaf ? 1 : 0;
-    out.symbol(kSlotCutRef + uint32_t(side), 1 + best, topology);
     out.symbol(kSlotCutUp + 2 * uint32_t(side) + kind, best_parting.equal ? kEqualSymbol : best_parting.up, topology);
     if (best_parting.equal) continue;
-    out.symbol(kSlotCutRest + 2 * uint32_t(side) + kind, best_parting.rest, topology);
+    put_int(out, kSlotCutRest + 2 * uint32_t(side) + kind, best_parting.depth_step, topology);
     out.raw(cut.node, best_parting.rest, topology);
   }
   // Position of v_t against v_s's.
-  const uint32_t pclass = position_class(c);
+  uint32_t pslot = kSlotPosition + position_class(c), largest = 0;
   for (uint32_t axis = 0; axis < 3; ++axis) {
     if (position_bits_ < 32 && p.position_t[axis] >> position_bits_)
       fail("split record", "split of " + to_string(c.vs) + ": position outside the grid");
-    put_int(out, kSlotPosition + axis * kRadiusClasses + pclass, int64_t(p.position_t[axis]) - int64_t(c.position_s[axis]), geometry);
+    const uint32_t sym = put_int(out, pslot, int64_t(p.position_t[axis]) - int64_t(c.position_s[axis]), geometry);
+    largest = std::max(largest, (sym + 1) / 2);
+    pslot = kSlotPosition + kRadiusClasses + (axis == 0 ? 0 : 26) + std::min(largest, 25u);
   }
   // Refinement info of v_t and v_u against v_s's.
   const RefineInfo* child[2] = {&p.info_t, &p.info_u};
   for (const RefineInfo* info : child)
     if (!is_canonical(*info) || !(*info == as_sent(*info)))
       fail("split record", "split of " + to_string(c.vs) + ": refinement info is not as sent");
-  out.symbol(kSlotInfoFlags, (never_refines(p.info_t) ? 1u : 0u) | (never_refines(p.info_u) ? 2u : 0u), refinement);
   const RefineInfo& s = c.info_s;
+  out.symbol(kSlotInfoFlags + height_context(c, max_depth_), (never_refines(p.info_t) ? 1u : 0u) | (never_refines(p.info_u) ? 2u : 0u), refinement);
   for (uint32_t k = 0; k < 2; ++k) {
     const RefineInfo& v = *child[k];
     if (never_refines(v)) continue;
-    const uint16_t RefineInfo::*lengths[3] = {&RefineInfo::radius, &RefineInfo::mu, &RefineInfo::delta};
-    for (uint32_t f = 0; f < 3; ++f)
-      put_int(out, kSlotLength + 2 * f + k, length_code(s.*lengths[f]) - length_code(v.*lengths[f]), refinement);
+    uint32_t slot = kSlotRadius + k * kFlagContexts + height_context(c, max_depth_);
+    for (uint32_t f = 0; f < 3; ++f) {
+      const uint32_t sym = put_int(out, slot, length_code(s.*kLengths[f]) - length_code(v.*kLengths[f]), refinement);
+      slot = (f == 0 ? kSlotMu : kSlotDelta) + k * kChainContexts + chain_context(sym);
+    }
     const bool parent_cone = s.cone_angle != kNoCone;
     const uint32_t angle_slot = kSlotAngle + 2 * k + (parent_cone ? 1 : 0);
     if (v.cone_angle == kNoCone) {
@@ -228,8 +264,9 @@ template <class Out> void SplitCodec::emit(const SplitContext& c, const SplitPay
       continue;
     }
     put_int(out, angle_slot, parent_cone ? int64_t(s.cone_angle) - v.cone_angle : int64_t(v.cone_angle), refinement);
-    put_int(out, kSlotAxis + k, int64_t(int16_t(v.cone_x)) - int16_t(s.cone_x), refinement);
-    put_int(out, kSlotAxis + k, int64_t(int16_t(v.cone_y)) - int16_t(s.cone_y), refinement);
+    const uint32_t axis_slot = kSlotAxis + k * kAxisContexts + axis_context(s, v);
+    put_int(out, axis_slot, int64_t(int16_t(v.cone_x)) - int16_t(s.cone_x), refinement);
+    put_int(out, axis_slot, int64_t(int16_t(v.cone_y)) - int16_t(s.cone_y), refinement);
   }
 }
 
@@ -243,12 +280,12 @@ void SplitCodec::encode(const SplitContext& context, const SplitPayload& payload
 SplitPayload SplitCodec::decode(const SplitContext& c, BitReader& r) const {
   if (codes_.size() != kSlotCount) fail("split record", "the codec has no tables");
   SplitPayload p;
-  const uint32_t sides = codes_[kSlotCutSides].read(r, "cut sides");
-  if (sides == 0) r.fail_field("cut sides", "neither v̂_l nor v̂_r is present");
+  uint32_t ref_slot = kSlotCutRef;
   for (int side = 0; side < 2; ++side) {
-    if (!(sides & (1u << side))) continue;
     const char* field = side == 0 ? "v̂_l" : "v̂_r";
-    const uint32_t sym = codes_[kSlotCutRef + uint32_t(side)].read(r, field);
+    const uint32_t sym = codes_[ref_slot].read(r, field);
+    ref_slot = kSlotCutRef + 1 + sym;
+    if (sym == kAbsentSymbol) continue;
     VertexId cut;
     if (sym == kEscapeSymbol) {
       cut.tree = uint32_t(r.bits(tree_bits(root_count_), field));
@@ -271,25 +308,28 @@ SplitPayload SplitCodec::decode(const SplitContext& c, BitReader& r) const {
         const int common = dr - 1 - int(up);
         const uint64_t prefix = ref.id.node >> (dr - common);
         const uint64_t other = ((ref.id.node >> (dr - common - 1)) & 1) ^ 1;
-        const uint32_t rest = codes_[kSlotCutRest + 2 * uint32_t(side) + kind].read(r, field);
-        if (uint32_t(common) + 1 + rest > max_depth_) r.fail_field(field, "deeper than the model");
-        cut = {ref.id.tree, (((prefix << 1) | other) << rest) | r.bits(rest, field)};
+        const int64_t rest = get_int(codes_[kSlotCutRest + 2 * uint32_t(side) + kind].read(r, field), r, field) + int64_t(up);
+        if (rest < 0 || common + 1 + rest > int64_t(max_depth_)) r.fail_field(field, "depth outside the model");
+        cut = {ref.id.tree, (((prefix << 1) | other) << rest) | r.bits(unsigned(rest), field)};
       }
     }
     if (cut.tree >= root_count_) r.fail_field(field, "tree-id outside the model");
     if (is_ancestor_or_self(c.vs, cut)) r.fail_field(field, "inside v_s's subtree");
     (side == 0 ? p.cut_l : p.cut_r) = cut;
   }
-  const uint32_t pclass = position_class(c);
+  if (!is_vertex(p.cut_l) && !is_vertex(p.cut_r)) r.fail_field("v̂_r", "neither v̂_l nor v̂_r is present");
+  uint32_t pslot = kSlotPosition + position_class(c), largest = 0;
   for (uint32_t axis = 0; axis < 3; ++axis) {
-    const PrefixCode& code = codes_[kSlotPosition + axis * kRadiusClasses + pclass];
-    const int64_t v = int64_t(c.position_s[axis]) + get_int(code.read(r, "position"), r, "position");
+    const uint32_t sym = codes_[pslot].read(r, "position");
+    const int64_t v = int64_t(c.position_s[axis]) + get_int(sym, r, "position");
+    largest = std::max(largest, (sym + 1) / 2);
+    pslot = kSlotPosition + kRadiusClasses + (axis == 0 ? 0 : 26) + std::min(largest, 25u);
     const int64_t top = position_bits_ >= 32 ? int64_t(UINT32_MAX) : (int64_t(1) << position_bits_) - 1;
     if (v < 0 || v > top) r.fail_field("position", "outside the grid");
     p.position_t[axis] = uint32_t(v);
   }
-  const uint32_t flags = codes_[kSlotInfoFlags].read(r, "info flags");
   const RefineInfo& s = c.info_s;
+  const uint32_t flags = codes_[kSlotInfoFlags + height_context(c, max_depth_)].read(r, "info flags");
   RefineInfo* child[2] = {&p.info_t, &p.info_u};
   for (uint32_t k = 0; k < 2; ++k) {
     const char* field = k == 0 ? "info_t" : "info_u";
@@ -298,16 +338,16 @@ SplitPayload SplitCodec::decode(const SplitContext& c, BitReader& r) const {
       v = as_sent(RefineInfo{});
       continue;
     }
-    uint16_t RefineInfo::*lengths[3] = {&RefineInfo::radius, &RefineInfo::mu, &RefineInfo::delta};
+    uint32_t slot = kSlotRadius + k * kFlagContexts + height_context(c, max_depth_);
     for (uint32_t f = 0; f < 3; ++f) {
-      const PrefixCode& code = codes_[kSlotLength + 2 * f + k];
-      const int64_t value = length_code(s.*lengths[f]) - get_int(code.read(r, field), r, field);
+      const uint32_t sym = codes_[slot].read(r, field);
+      const int64_t value = length_code(s.*kLengths[f]) - get_int(sym, r, field);
       if (value < 0 || value > (0x7C00 >> kLengthDroppedBits)) r.fail_field(field, "length outside the half-float range");
-      v.*lengths[f] = uint16_t(value << kLengthDroppedBits);
+      v.*kLengths[f] = uint16_t(value << kLengthDroppedBits);
+      slot = (f == 0 ? kSlotMu : kSlotDelta) + k * kChainContexts + chain_context(sym);
     }
     const bool parent_cone = s.cone_angle != kNoCone;
-    const PrefixCode& angle_code = codes_[kSlotAngle + 2 * k + (parent_cone ? 1 : 0)];
-    const uint32_t sym = angle_code.read(r, field);
+    const uint32_t sym = codes_[kSlotAngle + 2 * k + (parent_cone ? 1 : 0)].read(r, field);
     if (sym == kNoConeSymbol) {
       v.cone_angle = kNoCone;
       v.cone_x = v.cone_y = 0;
@@ -316,7 +356,7 @@ SplitPayload SplitCodec::decode(const SplitContext& c, BitReader& r) const {
       const int64_t angle = parent_cone ? int64_t(s.cone_angle) - delta : delta;
       if (angle < 0 || angle > kConeSteps) r.fail_field(field, "cone angle out of range");
       v.cone_angle = uint16_t(angle);
-      const PrefixCode& axis_code = codes_[kSlotAxis + k];
+      const PrefixCode& axis_code = codes_[kSlotAxis + k * kAxisContexts + axis_context(s, v)];
       for (uint16_t RefineInfo::*q : {&RefineInfo::cone_x, &RefineInfo::cone_y}) {
         const int64_t value = int64_t(int16_t(s.*q)) + get_int(axis_code.read(r, field), r, field);
         if (value < -kAxisSteps || value > kAxisSteps) r.fail_field(field, "cone axis out of range");

@@ -16,6 +16,7 @@
 #include "client/load_client.h"
 #include "apps/bench/report.h"
 #include "apps/bench/serve_child.h"
+#include "apps/bench/split_record_bits.h"
 #include "apps/camera_path.h"
 #include "apps/percentile.h"
 #include "apps/resource_usage.h"
@@ -137,12 +138,7 @@ struct E5 {
   uint64_t vi_bytes = 0, vi_splits = 0, vi_faces = 0;
 };
 
-// A close view: the first orbit camera moved halfway to its target (the model overflows the screen).
-Camera close_view(const BenchModel& m) {
-  Camera c = path_of(m, PathKind::orbit, 1)[0];
-  for (int k = 0; k < 3; ++k) c.eye[k] = 0.5f * (c.eye[k] + c.target[k]);
-  return c;
-}
+Camera close_view(const BenchModel& m) { return app::close_view(m.served->model()); }
 
 E5 run_e5(const BenchModel& m, const Camera& camera) {
   E5 e;
