@@ -36,7 +36,7 @@ constexpr uint32_t kReferences = 2 + 2 * kCutAncestors;  // v_s, ancestor cuts, 
 constexpr uint32_t kEscapeSymbol = 0;
 constexpr uint32_t kAbsentSymbol = kReferences + 1;
 constexpr uint32_t kRefSymbols = kReferences + 2;
-constexpr uint32_t kRadiusClasses = 32;   // half-float exponent of v_s's radius
+constexpr uint32_t kRadiusClasses = 64;   // v_s's radius by half octaves (half-float exponent and top mantissa bit)
 constexpr uint32_t kPositionContexts = kRadiusClasses + 2 * 26;  // x: radius class; y, z: classes of x, max(x, y)
 constexpr uint32_t kFlagContexts = 10;    // v_s never refines, or the class of its radius over its mu
 constexpr uint32_t kChainContexts = 12;   // the previous field's symbol, clamped
@@ -55,6 +55,7 @@ constexpr uint32_t kSlotDelta = kSlotMu + 2 * kChainContexts;       // [child][m
 constexpr uint32_t kSlotAngle = kSlotDelta + 2 * kChainContexts;    // [child][parent has a cone]
 constexpr uint32_t kSlotAxis = kSlotAngle + 4;                      // [child][axis context]
 constexpr uint32_t kSlotCount = kSlotAxis + 2 * kAxisContexts;
+static_assert(kSlotCount == 244, "docs/protocol.md, \"Split records\", gives the count");
 
 uint32_t alphabet(uint32_t slot) {
   if (slot < kSlotCutUp) return kRefSymbols;
@@ -164,7 +165,7 @@ void references(const SplitContext& c, int side, VertexId cut_l, Reference out[k
   out[kReferences - 1] = {side == 1 ? cut_l : kNoVertex, true};
 }
 
-uint32_t position_class(const SplitContext& c) { return (c.info_s.radius >> 10) & (kRadiusClasses - 1); }
+uint32_t position_class(const SplitContext& c) { return (c.info_s.radius >> 9) & (kRadiusClasses - 1); }
 
 // Whether v_s's children never refine, and how far below v_s their bounds are, depend on how far v_s is
 // from the deepest level.
