@@ -38,6 +38,18 @@ Hierarchy test_forest() {
   return h;
 }
 
+// The forest, its grid positions and its codec, made once.
+struct Forest {
+  Hierarchy h = test_forest();
+  ModelData model = model_of(h);
+  std::vector<uint32_t> q = grid_positions(h);
+  SplitCodec codec = SplitCodec::build(model, q, 16);
+};
+const Forest& forest() {
+  static const Forest f;
+  return f;
+}
+
 struct Encoded {
   BitWriter bits;
   std::vector<uint64_t> start;  // per internal node in split order
@@ -58,10 +70,7 @@ Encoded encode_all(const SplitCodec& codec, const ModelData& model, const std::v
 }
 
 TEST(SplitCodec, EveryRecordRoundTripsOnItsOwn) {
-  const Hierarchy h = test_forest();
-  const ModelData model = model_of(h);
-  const std::vector<uint32_t> q = grid_positions(h);
-  const SplitCodec codec = SplitCodec::build(model, q, 16);
+  const auto& [h, model, q, codec] = forest();
   const Encoded e = encode_all(codec, model, q);
   ASSERT_GT(model.split_order.size(), 20u);
   for (size_t i = 0; i < model.split_order.size(); ++i) {
@@ -73,10 +82,7 @@ TEST(SplitCodec, EveryRecordRoundTripsOnItsOwn) {
 }
 
 TEST(SplitCodec, TablesRoundTripThroughTheirSerialization) {
-  const Hierarchy h = test_forest();
-  const ModelData model = model_of(h);
-  const std::vector<uint32_t> q = grid_positions(h);
-  const SplitCodec codec = SplitCodec::build(model, q, 16);
+  const auto& [h, model, q, codec] = forest();
   BitWriter w;
   codec.serialize(w);
   BitReader r(w.bytes(), 0, w.size(), "tables");
@@ -93,10 +99,7 @@ TEST(SplitCodec, TablesRoundTripThroughTheirSerialization) {
 }
 
 TEST(SplitCodec, TruncatedAndRandomRecordsFailCleanly) {
-  const Hierarchy h = test_forest();
-  const ModelData model = model_of(h);
-  const std::vector<uint32_t> q = grid_positions(h);
-  const SplitCodec codec = SplitCodec::build(model, q, 16);
+  const auto& [h, model, q, codec] = forest();
   const Encoded e = encode_all(codec, model, q);
   for (size_t i = 0; i < model.split_order.size(); ++i) {
     const SplitContext context = split_context(model, q, model.split_order[i]);
@@ -144,10 +147,7 @@ TEST(SplitCodec, RandomTablesFailCleanly) {
 }
 
 TEST(SplitCodec, RefusesWhatItCannotCarry) {
-  const Hierarchy h = test_forest();
-  const ModelData model = model_of(h);
-  const std::vector<uint32_t> q = grid_positions(h);
-  const SplitCodec codec = SplitCodec::build(model, q, 16);
+  const auto& [h, model, q, codec] = forest();
   const uint32_t node = model.split_order[0];
   const SplitContext context = split_context(model, q, node);
   SplitPayload p = split_payload(model, q, node);
