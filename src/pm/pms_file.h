@@ -3,10 +3,12 @@
 #pragma once
 #include <cstdint>
 #include <memory>
+#include <span>
 #include <string>
 #include <vector>
 
 #include "pm/hierarchy.h"
+#include "pm/split_codec.h"
 
 namespace pms {
 
@@ -43,6 +45,11 @@ class PmsFile {
   const ModelData& model() const { return model_; }
   const BuildStats& stats() const { return stats_; }
   uint64_t file_size() const { return size_; }
+  // The compressed split records (pm/split_codec.h; pms-format.md SRTB, SROF, SREC), checked at open:
+  // internal node i's record is bits [split_offsets()[i], split_offsets()[i + 1]) of split_records().
+  const SplitCodec& split_codec() const { return split_codec_; }
+  std::span<const uint64_t> split_offsets() const { return split_offsets_; }
+  std::span<const uint8_t> split_records() const { return split_records_; }
 
  private:
   PmsFile() = default;
@@ -55,6 +62,9 @@ class PmsFile {
   std::vector<uint64_t> node_id_;
   ModelData model_;
   BuildStats stats_;
+  SplitCodec split_codec_;
+  std::span<const uint8_t> split_tables_, split_records_;
+  std::span<const uint64_t> split_offsets_;
 };
 
 }  // namespace pms

@@ -19,6 +19,7 @@
 #include <string>
 
 #include "common/error.h"
+#include "pm/position_grid.h"
 
 namespace pms {
 namespace {
@@ -436,6 +437,62 @@ SplitPayload split_payload(const ModelData& model, std::span<const uint32_t> pos
   p.info_t = as_sent(model.refine[t]);
   p.info_u = as_sent(model.refine[t + 1]);
   return p;
+}
+
+std::vector<uint32_t> grid_positions(const ModelData& model, uint32_t position_bits) {
+  PositionGrid grid;
+  std::copy_n(model.bbox_min, 3, grid.min);
+  std::copy_n(model.bbox_max, 3, grid.max);
+  grid.bits = position_bits;
+  std::vector<uint32_t> q(3 * model.node_count());
+  for (size_t n = 0; n < model.node_count(); ++n) quantize_position(grid, &model.position[3 * n], &q[3 * n]);
+  return q;
+}
+
+EncodedRecords encode_records(const ModelData& model, uint32_t position_bits) {
+  const std::vector<uint32_t> q = grid_positions(model, position_bits);
+  const SplitCodec codec = SplitCodec::build(model, q, position_bits);
+  EncodedRecords out;
+  BitWriter tables;
+  codec.serialize(tables);
+  out.tables = tables.bytes();
+  BitWriter records;
+  out.offsets.reserve(model.node_count() + 1);
+  for (uint32_t node = 0; node < model.node_count(); ++node) {
+    out.offsets.push_back(records.size());
+    if (!model.is_leaf(node)) codec.encode(split_context(model, q, node), split_payload(model, q, node), records);
+  }
+  out.offsets.push_back(records.size());
+  out.records = records.bytes();
+  return out;
+}
+
+SplitCodec check_records(const std::string& where, const ModelData& model, std::span<const uint8_t> tables,
+                         std::span<const uint64_t> offsets, std::span<const uint8_t> records) {
+  BitReader table_reader(tables, where + ": split tables");
+  SplitCodec codec = SplitCodec::deserialize(table_reader);
+  if (table_reader.bits_left() >= 8) fail(where, "split tables: bytes after the tables");
+  uint32_t depth = 0;
+  for (uint64_t id : model.node_id) depth = std::max(depth, uint32_t(63 - std::countl_zero(id)));
+  if (codec.root_count() != model.root_count || codec.max_depth() != depth || !valid_position_bits(codec.position_bits()))
+    fail(where, "split tables: root count, depth or position bits do not match the model");
+  const size_t n = model.node_count();
+  if (offsets.size() != n + 1) fail(where, "split record offsets: not one per node plus one");
+  const uint64_t bits = 8 * uint64_t(records.size());
+  if (offsets[0] != 0 || offsets[n] > bits || bits - offsets[n] >= 8)
+    fail(where, "split record offsets: do not span the records");
+  const std::vector<uint32_t> q = grid_positions(model, codec.position_bits());
+  for (uint32_t node = 0; node < n; ++node) {
+    if (offsets[node + 1] < offsets[node]) fail(where, "split record offsets: not in order at node " + std::to_string(node));
+    if (model.is_leaf(node)) {
+      if (offsets[node + 1] != offsets[node]) fail(where, "split records: leaf " + std::to_string(node) + " has a record");
+      continue;
+    }
+    BitReader r(records, offsets[node], offsets[node + 1], where + ": split record of node " + std::to_string(node));
+    if (!(codec.decode(split_context(model, q, node), r) == split_payload(model, q, node)) || r.bits_left() != 0)
+      fail(where, "split records: node " + std::to_string(node) + "'s record is not its split");
+  }
+  return codec;
 }
 
 }  // namespace pms

@@ -7,6 +7,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <span>
+#include <string>
 #include <vector>
 
 #include "common/bit_stream.h"
@@ -84,6 +85,25 @@ class SplitCodec {
   uint32_t root_count_ = 0, max_depth_ = 0, position_bits_ = 0;
   std::vector<PrefixCode> codes_;  // one per slot (split_codec.cpp)
 };
+
+// 3 quantized coordinates per node on a grid of `position_bits` over the model's box: what records carry.
+std::vector<uint32_t> grid_positions(const ModelData& model, uint32_t position_bits);
+
+// Every internal node's record, in node order, as the .pms file stores them (pms-format.md, SRTB, SROF,
+// SREC): the serialized tables, n + 1 bit offsets (node i's record is bits [offsets[i], offsets[i + 1]);
+// empty for a leaf) and the records' bit stream, padded to a byte.
+struct EncodedRecords {
+  std::vector<uint8_t> tables;
+  std::vector<uint64_t> offsets;
+  std::vector<uint8_t> records;
+};
+EncodedRecords encode_records(const ModelData& model, uint32_t position_bits);
+
+// The codec of stored records, after checking them against the model: the tables parse and fit its ids,
+// the offsets are ordered and end with the stream, leaves have none and every internal node's record
+// decodes on its own to that node's split. Throws pms::Error naming `where` and the node.
+SplitCodec check_records(const std::string& where, const ModelData& model, std::span<const uint8_t> tables,
+                         std::span<const uint64_t> offsets, std::span<const uint8_t> records);
 
 // The context and payload of internal node `node` of a complete model (the builder's and the tests'
 // view; a client builds the context from its own hierarchy).

@@ -17,16 +17,6 @@
 namespace pms {
 namespace {
 
-// Positions on a 16-bit grid over the model's box.
-std::vector<uint32_t> grid_positions(const Hierarchy& h) {
-  std::vector<uint32_t> q(h.position.size());
-  for (size_t i = 0; i < q.size(); ++i) {
-    const float lo = h.bbox_min[i % 3], hi = h.bbox_max[i % 3];
-    q[i] = hi > lo ? uint32_t(std::lround((h.position[i] - lo) / (hi - lo) * 65535.0)) : 0;
-  }
-  return q;
-}
-
 Hierarchy test_forest() {
   Hierarchy h = test::make_forest(5, [](uint32_t tree, int depth, bool leftmost) {
     return depth < 3 || (depth < 6 && (leftmost || (tree + uint32_t(depth)) % 2 == 0));
@@ -42,7 +32,7 @@ Hierarchy test_forest() {
 struct Forest {
   Hierarchy h = test_forest();
   ModelData model = model_of(h);
-  std::vector<uint32_t> q = grid_positions(h);
+  std::vector<uint32_t> q = grid_positions(model, 16);
   SplitCodec codec = SplitCodec::build(model, q, 16);
 };
 const Forest& forest() {

@@ -30,12 +30,6 @@ PositionGrid model_grid(const ModelData& model, uint32_t bits) {
   return grid;
 }
 
-std::vector<uint32_t> quantized_positions(const ModelData& model, const PositionGrid& grid) {
-  std::vector<uint32_t> q(3 * model.node_count());
-  for (size_t n = 0; n < model.node_count(); ++n) quantize_position(grid, &model.position[3 * n], &q[3 * n]);
-  return q;
-}
-
 // What a client knows of v_s, from its own hierarchy: the ids, the snapped position re-quantized (the grid
 // is coarse enough for that to give the sent integers back), the info as sent, the ancestors' cuts.
 SplitContext client_context(const VertexHierarchy& h, uint32_t slot, const PositionGrid& grid) {
@@ -64,7 +58,7 @@ struct RecordStats {
 // receives them in split order, and sums the bits.
 RecordStats check_records(const ModelData& model, uint32_t position_bits) {
   const PositionGrid grid = model_grid(model, position_bits);
-  const std::vector<uint32_t> q = quantized_positions(model, grid);
+  const std::vector<uint32_t> q = grid_positions(model, position_bits);
   const SplitCodec codec = SplitCodec::build(model, q, position_bits);
   RecordStats stats;
   BitWriter tables;

@@ -5,22 +5,11 @@
 #include "pm/split_record.h"
 #include "protocol/model_messages.h"
 #include "protocol/packet_bits.h"
-#include "protocol/position_grid.h"
 #include "refine/adapt.h"
 #include "refine/selective_mesh.h"
 #include "refine/vertex_hierarchy.h"
 
 namespace pms::app {
-
-std::vector<uint32_t> grid_positions(const ModelData& model, uint32_t position_bits) {
-  protocol::PositionGrid grid;
-  std::copy_n(model.bbox_min, 3, grid.min);
-  std::copy_n(model.bbox_max, 3, grid.max);
-  grid.bits = position_bits;
-  std::vector<uint32_t> q(3 * model.node_count());
-  for (size_t n = 0; n < model.node_count(); ++n) protocol::quantize_position(grid, &model.position[3 * n], &q[3 * n]);
-  return q;
-}
 
 RecordBitsReport record_bits(const ModelData& model, const SplitCodec& codec, std::span<const uint32_t> positions,
                              std::span<const uint32_t> nodes) {

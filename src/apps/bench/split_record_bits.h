@@ -19,9 +19,6 @@ struct RecordBitsReport {
   double per_split(uint64_t total) const { return splits ? double(total) / double(splits) : 0; }
 };
 
-// 3 quantized coordinates per node on the wire's grid over the model's box (docs/protocol.md, Quantization).
-std::vector<uint32_t> grid_positions(const ModelData& model, uint32_t position_bits);
-
 // Encodes the records of `nodes` (internal nodes) with `codec` and sums their bits.
 RecordBitsReport record_bits(const ModelData& model, const SplitCodec& codec, std::span<const uint32_t> positions,
                              std::span<const uint32_t> nodes);
