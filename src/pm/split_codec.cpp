@@ -201,6 +201,7 @@ template <class Out> void SplitCodec::emit(const SplitContext& c, const SplitPay
     Reference refs[kReferences];
     references(c, side, p.cut_l, refs);
     // The cheapest reference under the current tables (or, before any, the shortest rest), first on ties.
+    // With tables, only references whose symbols all have code words; the escape always has one (build).
     uint32_t best = kReferences;
     Parting best_parting;
     uint64_t best_cost = UINT64_MAX;
@@ -210,13 +211,13 @@ template <class Out> void SplitCodec::emit(const SplitContext& c, const SplitPay
       uint64_t cost = pt.rest;
       if (!codes_.empty()) {
         const uint32_t kind = refs[i].leaf ? 1 : 0;
-        const auto price = [](const PrefixCode& code, uint32_t sym) -> uint64_t { return code.has(sym) ? code.cost(sym) : 24; };
-        cost += price(codes_[ref_slot], 1 + i);
-        cost += price(codes_[kSlotCutUp + 2 * uint32_t(side) + kind], pt.equal ? kEqualSymbol : pt.up);
-        if (!pt.equal) {
-          const uint32_t sym = int_symbol(pt.depth_step);
-          cost += price(codes_[kSlotCutRest + 2 * uint32_t(side) + kind], sym) + (sym + 1) / 2 - (sym != 0);
-        }
+        const PrefixCode& ref_code = codes_[ref_slot];
+        const PrefixCode& up_code = codes_[kSlotCutUp + 2 * uint32_t(side) + kind];
+        const PrefixCode& step_code = codes_[kSlotCutRest + 2 * uint32_t(side) + kind];
+        const uint32_t up = pt.equal ? kEqualSymbol : pt.up, step = int_symbol(pt.depth_step);
+        if (!ref_code.has(1 + i) || !up_code.has(up) || (!pt.equal && !step_code.has(step))) continue;
+        cost += ref_code.cost(1 + i) + up_code.cost(up);
+        if (!pt.equal) cost += step_code.cost(step) + (step + 1) / 2 - (step != 0);
       }
       if (cost < best_cost) best = i, best_parting = pt, best_cost = cost;
     }
@@ -383,6 +384,10 @@ SplitCodec SplitCodec::build(const ModelData& model, std::span<const uint32_t> p
     Counts counts;
     for (uint32_t node = 0; node < model.node_count(); ++node)
       if (!model.is_leaf(node)) codec.emit(split_context(model, positions, node), split_payload(model, positions, node), counts);
+    // The escape, the missing side and every escaped depth keep a code word in every table they may be
+    // needed in: a reference the final tables price differently can move v̂_r to another table.
+    for (uint32_t slot = kSlotCutRef; slot < kSlotCutUp; ++slot) ++counts.counts[slot][kEscapeSymbol], ++counts.counts[slot][kAbsentSymbol];
+    for (uint32_t depth = 0; depth <= codec.max_depth_; ++depth) ++counts.counts[kSlotCutDepth][depth];
     std::vector<PrefixCode> codes;
     for (uint32_t s = 0; s < kSlotCount; ++s) codes.push_back(PrefixCode::from_counts(counts.counts[s]));
     codec.codes_ = std::move(codes);
