@@ -444,11 +444,16 @@ SplitPayload split_payload(const ModelData& model, std::span<const uint32_t> pos
   return p;
 }
 
-std::vector<uint32_t> grid_positions(const ModelData& model, uint32_t position_bits) {
+PositionGrid model_grid(const ModelData& model, uint32_t position_bits) {
   PositionGrid grid;
   std::copy_n(model.bbox_min, 3, grid.min);
   std::copy_n(model.bbox_max, 3, grid.max);
   grid.bits = position_bits;
+  return grid;
+}
+
+std::vector<uint32_t> grid_positions(const ModelData& model, uint32_t position_bits) {
+  const PositionGrid grid = model_grid(model, position_bits);
   std::vector<uint32_t> q(3 * model.node_count());
   for (size_t n = 0; n < model.node_count(); ++n) quantize_position(grid, &model.position[3 * n], &q[3 * n]);
   return q;

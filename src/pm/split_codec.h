@@ -12,6 +12,7 @@
 
 #include "common/bit_stream.h"
 #include "pm/hierarchy.h"
+#include "pm/position_grid.h"
 #include "pm/prefix_code.h"
 #include "pm/refine_info.h"
 #include "pm/vertex_id.h"
@@ -86,7 +87,9 @@ class SplitCodec {
   std::vector<PrefixCode> codes_;  // one per slot (split_codec.cpp)
 };
 
-// 3 quantized coordinates per node on a grid of `position_bits` over the model's box: what records carry.
+// The grid of `position_bits` per axis over the model's box, and the 3 quantized coordinates per node on
+// it that records carry.
+PositionGrid model_grid(const ModelData& model, uint32_t position_bits);
 std::vector<uint32_t> grid_positions(const ModelData& model, uint32_t position_bits);
 
 // Every internal node's record, in node order, as the .pms file stores them (pms-format.md, SRTB, SROF,

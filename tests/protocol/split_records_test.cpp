@@ -22,14 +22,6 @@
 namespace pms::protocol {
 namespace {
 
-PositionGrid model_grid(const ModelData& model, uint32_t bits) {
-  PositionGrid grid;
-  std::copy_n(model.bbox_min, 3, grid.min);
-  std::copy_n(model.bbox_max, 3, grid.max);
-  grid.bits = bits;
-  return grid;
-}
-
 // What a client knows of v_s, from its own hierarchy: the ids, the snapped position re-quantized (the grid
 // is coarse enough for that to give the sent integers back), the info as sent, the ancestors' cuts.
 SplitContext client_context(const VertexHierarchy& h, uint32_t slot, const PositionGrid& grid) {
@@ -54,17 +46,15 @@ struct RecordStats {
   uint64_t table_bits = 0;
 };
 
-// Encodes every split of the model, checks each record against the model and through a client that
-// receives them in split order, and sums the bits.
+// Encodes every split of the model as the .pms file stores them, decodes each stored record through a
+// client that receives them in split order, checks it against the model, and sums the bits.
 RecordStats check_records(const ModelData& model, uint32_t position_bits) {
   const PositionGrid grid = model_grid(model, position_bits);
   const std::vector<uint32_t> q = grid_positions(model, position_bits);
-  const SplitCodec codec = SplitCodec::build(model, q, position_bits);
+  const EncodedRecords stored = encode_records(model, position_bits);  // what the .pms file holds
   RecordStats stats;
-  BitWriter tables;
-  codec.serialize(tables);
-  stats.table_bits = tables.size();
-  BitReader table_reader(tables.bytes(), 0, tables.size(), "tables");
+  stats.table_bits = 8 * stored.tables.size();
+  BitReader table_reader(stored.tables, "tables");
   const SplitCodec client_codec = SplitCodec::deserialize(table_reader);
 
   const StreamContext context = stream_context(make_base(model, "model", position_bits));
@@ -78,7 +68,8 @@ RecordStats check_records(const ModelData& model, uint32_t position_bits) {
     BitWriter w;
     RecordBits parts;
     const SplitPayload sent = split_payload(model, q, node);
-    codec.encode(split_context(model, q, node), sent, w, &parts);
+    client_codec.encode(split_context(model, q, node), sent, w, &parts);
+    EXPECT_EQ(w.size(), stored.offsets[node + 1] - stored.offsets[node]);  // the same tables code it the same way
     stats.bits += parts;
     ++stats.splits;
     const PacketBits today = packet_bits(split_record(model, node), context);
@@ -87,7 +78,7 @@ RecordStats check_records(const ModelData& model, uint32_t position_bits) {
     const uint32_t slot = client.find(model.id(node));
     EXPECT_NE(slot, kNone);
     if (slot == kNone) break;
-    BitReader r(w.bytes(), 0, w.size(), "record");
+    BitReader r(stored.records, stored.offsets[node], stored.offsets[node + 1], "record");
     const SplitPayload got = client_codec.decode(client_context(client, slot, grid), r);
     EXPECT_EQ(r.bits_left(), 0u);
     EXPECT_EQ(got, sent) << "split of " << to_string(model.id(node));
