@@ -14,6 +14,7 @@
 #include "pm/pms_file.h"
 #include "pm/pms_format_internal.h"
 #include "pm/refine_info.h"
+#include "pm/split_codec.h"
 
 namespace pms {
 namespace {
@@ -139,6 +140,12 @@ void PmsFile::parse(const std::string& name) {
   validate_model(name, model_, tree_id_, node_id_);
   model_.tree_id = tree_id_;
   model_.node_id = node_id_;
+  if (sections[SplitOffsets].count != uint64_t(head.node_count) + 1)
+    section_error(name, SplitOffsets, str(sections[SplitOffsets].count) + " elements for " + str(head.node_count) + " nodes");
+  split_tables_ = {sections[SplitTables].data, size_t(sections[SplitTables].count)};
+  split_offsets_ = typed<uint64_t>(sections[SplitOffsets], 1);
+  split_records_ = {sections[SplitRecords].data, size_t(sections[SplitRecords].count)};
+  split_codec_ = check_records(name, model_, split_tables_, split_offsets_, split_records_);
   if (sections[Meta].present)
     stats_ = stats_from_json(name, {reinterpret_cast<const char*>(sections[Meta].data), size_t(sections[Meta].count)});
 }

@@ -3,10 +3,12 @@
 #pragma once
 #include <cstdint>
 #include <memory>
+#include <span>
 #include <string>
 #include <vector>
 
 #include "pm/hierarchy.h"
+#include "pm/split_codec.h"
 
 namespace pms {
 
@@ -46,6 +48,11 @@ class PmsFile {
   // The header checksum, which covers every section's checksum: files with equal content have equal
   // values (HTTP ETags name a model's bytes by it).
   uint64_t content_checksum() const { return content_checksum_; }
+  // The compressed split records (pm/split_codec.h; pms-format.md SRTB, SROF, SREC), checked at open:
+  // internal node i's record is bits [split_offsets()[i], split_offsets()[i + 1]) of split_records().
+  const SplitCodec& split_codec() const { return split_codec_; }
+  std::span<const uint64_t> split_offsets() const { return split_offsets_; }
+  std::span<const uint8_t> split_records() const { return split_records_; }
 
  private:
   PmsFile() = default;
@@ -59,6 +66,9 @@ class PmsFile {
   std::vector<uint64_t> node_id_;
   ModelData model_;
   BuildStats stats_;
+  SplitCodec split_codec_;
+  std::span<const uint8_t> split_tables_, split_records_;
+  std::span<const uint64_t> split_offsets_;
 };
 
 }  // namespace pms

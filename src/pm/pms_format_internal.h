@@ -1,4 +1,4 @@
-// On-disk layout of .pms version 2, shared by the writer and the reader (docs/pms-format.md).
+// On-disk layout of .pms version 3, shared by the writer and the reader (docs/pms-format.md).
 // Sections are used in place (spans into the mapping), so the layout is the host's: little-endian.
 #pragma once
 #include <array>
@@ -18,8 +18,9 @@ namespace pms::format {
 static_assert(std::endian::native == std::endian::little, ".pms sections are little-endian and mapped in place");
 
 constexpr char kMagic[8] = {'P', 'M', 'S', 'T', 'R', 'E', 'A', 'M'};
-// Version 2 stores refinement info at the precision the wire carries (version 1 had finer RINF).
-constexpr uint32_t kVersion = 2;
+// Version 3 adds the compressed split records (SRTB, SROF, SREC); version 2 stored refinement info at the
+// precision the wire carries (version 1 had finer RINF).
+constexpr uint32_t kVersion = 3;
 constexpr uint64_t kAlignment = 64;  // every section starts here, so spans into a mapping are aligned
 
 struct FileHeader {
@@ -59,7 +60,7 @@ static_assert(sizeof(HeadSection) == 48);
 
 // Sections in file order; Section values index kSections.
 enum Section : int { Head, Meta, Base, Parent, Children, Position, CutLeft, CutRight, Refine, Leaf, SplitOrder,
-                     Normal, Color, kSectionCount };
+                     Normal, Color, SplitTables, SplitOffsets, SplitRecords, kSectionCount };
 
 struct SectionKind {
   char tag[5];
@@ -71,7 +72,7 @@ inline constexpr SectionKind kSections[kSectionCount] = {
     {"HEAD", sizeof(HeadSection), true}, {"META", 1, false},  {"BASE", 12, true}, {"PRNT", 4, true},
     {"CHLD", 4, true},                   {"POSI", 12, true},  {"CUTL", 4, true},  {"CUTR", 4, true},
     {"RINF", sizeof(RefineInfo), true},  {"LEAF", 4, true},   {"SORD", 4, true},  {"NRML", 12, false},
-    {"COLR", 4, false}};
+    {"COLR", 4, false},                  {"SRTB", 1, true},   {"SROF", 8, true},  {"SREC", 1, true}};
 
 // xxh64 of the header and section table with the header_checksum field counted as zero.
 uint64_t header_checksum(const uint8_t* header_and_table, uint64_t bytes);

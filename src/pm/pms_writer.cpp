@@ -12,6 +12,8 @@
 #include "pm/hierarchy.h"
 #include "pm/pms_file.h"
 #include "pm/pms_format_internal.h"
+#include "pm/position_grid.h"
+#include "pm/split_codec.h"
 #include "pm/vertex_id.h"
 
 namespace pms {
@@ -118,6 +120,11 @@ void write_pms(const std::string& path, const Hierarchy& h, const BuildStats& st
   std::vector<uint64_t> node_id;
   validate_model(where, model_of(h), tree_id, node_id);
 
+  ModelData model = model_of(h);
+  model.tree_id = tree_id;
+  model.node_id = node_id;
+  const EncodedRecords records = encode_records(model, kDefaultPositionBits);
+
   const HeadSection head = make_head(h);
   const std::string meta = stats_to_json(stats);
   const uint64_t n = h.node_count();
@@ -134,6 +141,9 @@ void write_pms(const std::string& path, const Hierarchy& h, const BuildStats& st
                                {SplitOrder, h.split_order.data(), h.split_order.size()}};
   if (!h.normals.empty()) chunks.push_back({Normal, h.normals.data(), n});
   if (!h.colors.empty()) chunks.push_back({Color, h.colors.data(), n});
+  chunks.push_back({SplitTables, records.tables.data(), records.tables.size()});
+  chunks.push_back({SplitOffsets, records.offsets.data(), records.offsets.size()});
+  chunks.push_back({SplitRecords, records.records.data(), records.records.size()});
 
   FileHeader header{};
   std::memcpy(header.magic, kMagic, sizeof kMagic);

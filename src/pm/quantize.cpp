@@ -185,6 +185,13 @@ bool is_canonical(const RefineInfo& info) {
   return info.cone_angle <= kConeSteps && axis_ok(info.cone_x) && axis_ok(info.cone_y);
 }
 
+RefineInfo as_sent(const RefineInfo& info) {
+  if (!never_refines(info)) return info;
+  RefineInfo zero{};
+  zero.cone_angle = kNoCone;
+  return zero;
+}
+
 RefineBounds dequantize_refine(const RefineInfo& info, float scale) {
   RefineBounds b;
   b.radius = decode_length(info.radius, scale);

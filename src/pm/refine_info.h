@@ -31,6 +31,13 @@ constexpr uint16_t kConeSteps = (1 << kConeAngleBits) - 2;  // largest cone_angl
 // or angle out of range, a no-cone axis other than +z): the file reader and wire decoder reject them.
 bool is_canonical(const RefineInfo& info);
 
+// mu = delta = 0: qrefine's screen-space test is strict, so such a node never asks to be refined whatever
+// its radius and cone. Every real leaf is one.
+inline bool never_refines(const RefineInfo& info) { return info.mu == 0 && info.delta == 0; }
+// The info as every mode delivers it (docs/protocol.md, RefineInfo): a node that never refines travels
+// as one flag and decodes with radius 0 and no cone; any other info exactly as stored.
+RefineInfo as_sent(const RefineInfo& info);
+
 // Decoded, in model units.
 struct RefineBounds {
   float radius = 0;     // sphere around the node's position bounding its descendants' input faces

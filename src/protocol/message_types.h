@@ -7,6 +7,7 @@
 #include <string>
 
 #include "common/error.h"
+#include "pm/position_grid.h"
 
 namespace pms::protocol {
 
@@ -18,7 +19,7 @@ constexpr size_t kFrameHeaderBytes = 5;                 // u32 payload length + 
 constexpr uint32_t kDefaultMaxMessage = 16u << 20;      // payload bytes a reader accepts by default
 constexpr size_t kMaxNameBytes = 1024;                  // model, client and server names
 constexpr uint64_t kDefaultMaxResumeLeaves = 1u << 22;  // OPEN: leaves a resume front may list
-constexpr uint32_t kDefaultPositionBits = 16;
+using pms::kDefaultPositionBits;
 
 // Client -> server types have the high bit clear, server -> client set.
 enum class MessageType : uint8_t {

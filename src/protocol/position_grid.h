@@ -1,26 +1,15 @@
-// Quantized positions: the numbers both ends of a session evaluate the refinement criteria on.
+// Quantized positions on the wire: the grid lives in pm/position_grid.h (the builder codes split records on
+// it offline); the protocol layer names it as its own.
 #pragma once
-#include <cstdint>
-
-#include "protocol/message_types.h"
+#include "pm/position_grid.h"
 
 namespace pms::protocol {
 
-// Positions on the wire: `bits` per axis on a uniform grid over the model's bounding box (1..24 bits),
-// or the raw float32 bits (32). Client and server must evaluate refinement criteria on the same numbers,
-// so the server quantizes the model's exact positions when it encodes and evaluates qrefine on
-// dequantize(quantize(p)) (snap_position); the client only ever sees the dequantized values.
-struct PositionGrid {
-  float min[3] = {0, 0, 0};
-  float max[3] = {0, 0, 0};
-  uint32_t bits = kDefaultPositionBits;
-};
-bool valid_position_bits(uint32_t bits);  // 1..24 or 32
-// Clamps to the box; non-finite coordinates become the box minimum (grid) or stay as they are (32 bits).
-void quantize_position(const PositionGrid& grid, const float p[3], uint32_t q[3]);
-void dequantize_position(const PositionGrid& grid, const uint32_t q[3], float p[3]);
-void snap_position(const PositionGrid& grid, const float p[3], float out[3]);  // dequantize(quantize(p))
-// Largest |dequantize(quantize(p)) - p| per axis for p inside the box (half a grid step, plus float rounding).
-float position_error_bound(const PositionGrid& grid, int axis);
+using pms::dequantize_position;
+using pms::PositionGrid;
+using pms::position_error_bound;
+using pms::quantize_position;
+using pms::snap_position;
+using pms::valid_position_bits;
 
 }  // namespace pms::protocol

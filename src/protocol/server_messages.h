@@ -84,10 +84,7 @@ Base decode_base(std::span<const uint8_t> payload);
 VSplits decode_vsplits(std::span<const uint8_t> payload, const StreamContext& context);
 ErrorMessage decode_error(std::span<const uint8_t> payload);  // codes this build does not know pass through
 
-// What a receiver decodes for `info`. A node with mu = delta = 0 (every real leaf, about half of any
-// hierarchy, and flat interior nodes) never asks to be refined whatever its radius and cone (criteria.h
-// screen_error_exceeds), so its info travels as one flag bit and decodes with radius 0 and no cone; any
-// other info arrives exactly as stored.
-RefineInfo as_sent(const RefineInfo& info);
+// What a receiver decodes for `info` (pm/refine_info.h): every mode, split records included, delivers it.
+using pms::as_sent;
 
 }  // namespace pms::protocol

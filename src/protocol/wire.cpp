@@ -129,7 +129,6 @@ void Reader::fail(ErrorCode code, const char* field, const std::string& what) co
 // exists when there is a cone (the angle field's top value means "no cone").
 constexpr uint32_t kNoConeOnWire = (1u << kConeAngleBits) - 1;
 
-static bool never_refines(const RefineInfo& info) { return info.mu == 0 && info.delta == 0; }
 
 void write_refine(Writer& w, const RefineInfo& info, const char* field) {
   if (!is_canonical(info)) fail(field, "refinement info is not at the stored precision (pms-format.md RINF)");
@@ -168,13 +167,6 @@ RefineInfo read_refine(Reader& r, const char* field) {
   // qrefine's comparisons or mean nothing.
   if (!is_canonical(info)) r.fail(ErrorCode::bad_message, field, "a length is NaN, or the cone axis or angle is out of range");
   return info;
-}
-
-RefineInfo as_sent(const RefineInfo& info) {
-  if (!never_refines(info)) return info;
-  RefineInfo zero{};
-  zero.cone_angle = kNoCone;
-  return zero;
 }
 
 std::string check_context(const StreamContext& c) {

@@ -8,9 +8,11 @@
 #include <filesystem>
 #include <fstream>
 
+#include "common/bit_stream.h"
 #include "common/error.h"
 #include "pm/hierarchy.h"
 #include "pm/pms_file.h"
+#include "pm/split_codec.h"
 #include "pm/vertex_id.h"
 #include "pm_fixtures.h"
 #include "test_support.h"
@@ -177,13 +179,13 @@ TEST(PmsCorrupt, WrongMagicAndNewerVersion) {
   f.bytes[0] = 'X';
   expect_error(f, "header: ", "not a .pms file");
   f = small();
-  store<uint32_t>(f.bytes, kVersionAt, 3);
+  store<uint32_t>(f.bytes, kVersionAt, 4);
   f.fix_checksums();
-  EXPECT_EQ(f.error(), "header: unsupported version 3 (this build reads 2)");
+  EXPECT_EQ(f.error(), "header: unsupported version 4 (this build reads 3)");
   f = small();
-  store<uint32_t>(f.bytes, kVersionAt, 1);
+  store<uint32_t>(f.bytes, kVersionAt, 2);
   f.fix_checksums();
-  EXPECT_EQ(f.error(), "header: unsupported version 1 (this build reads 2; rebuild the file with this pmstream)");
+  EXPECT_EQ(f.error(), "header: unsupported version 2 (this build reads 3; rebuild the file with this pmstream)");
 }
 
 TEST(PmsCorrupt, AbsurdNodeCountInHead) {
@@ -373,6 +375,50 @@ TEST(PmsCorrupt, Meta) {
   f = clean;
   replace(json, "\"" + std::string(json.size() - 2, 'x') + "\"");
   EXPECT_EQ(f.error(), "section META: not a JSON object");
+}
+
+// The split records must be the hierarchy's: a flipped bit in a record, an offset moved, a record given to
+// a leaf or tables that name another model are refused even with every checksum recomputed.
+TEST(PmsCorrupt, SplitRecordsMustBeTheModels) {
+  PmsBytes f = small();
+  EXPECT_EQ(f.error(), "(opened fine)");
+  const Entry records = f.entry("SREC");
+  ASSERT_GT(records.count, 0u);
+  for (size_t byte = 0; byte < records.count; ++byte) {
+    PmsBytes g = f;
+    g.bytes[records.offset + byte] ^= 0x10;
+    g.fix_checksums();
+    const std::string e = g.error();
+    if (byte == records.count - 1 && e == "(opened fine)") continue;  // a padding bit
+    EXPECT_NE(e.find("split record"), std::string::npos) << e;
+  }
+  PmsBytes moved = f;
+  moved.set<uint64_t>("SROF", 1, moved.get<uint64_t>("SROF", 1) + 1);
+  moved.fix_checksums();
+  EXPECT_NE(moved.error().find("split record"), std::string::npos) << moved.error();
+  PmsBytes leaf = f;  // node 2 is a leaf: give it the start of node 3's record
+  leaf.set<uint64_t>("SROF", 3, leaf.get<uint64_t>("SROF", 3) + 1);
+  leaf.fix_checksums();
+  EXPECT_NE(leaf.error().find("split record"), std::string::npos) << leaf.error();
+  PmsBytes tables = f;
+  tables.set<uint32_t>("SRTB", 0, 7);  // the root count the tables were fitted to
+  tables.fix_checksums();
+  EXPECT_NE(tables.error().find("split tables"), std::string::npos) << tables.error();
+}
+
+TEST(PmsFile, StoredSplitRecordsDecodeToTheModel) {
+  PmsBytes f = small();
+  const auto file = PmsFile::from_bytes("model.pms", f.bytes.data(), f.bytes.size());
+  const ModelData& model = file->model();
+  const std::vector<uint32_t> q = grid_positions(model, file->split_codec().position_bits());
+  size_t decoded = 0;
+  for (uint32_t node = 0; node < model.node_count(); ++node) {
+    if (model.is_leaf(node)) continue;
+    BitReader r(file->split_records(), file->split_offsets()[node], file->split_offsets()[node + 1], "record");
+    EXPECT_EQ(file->split_codec().decode(split_context(model, q, node), r), split_payload(model, q, node));
+    ++decoded;
+  }
+  EXPECT_EQ(decoded, model.split_order.size());
 }
 
 }  // namespace

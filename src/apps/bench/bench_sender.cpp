@@ -16,6 +16,7 @@
 #include "client/load_client.h"
 #include "apps/bench/report.h"
 #include "apps/bench/serve_child.h"
+#include "apps/bench/split_record_bits.h"
 #include "apps/camera_path.h"
 #include "apps/percentile.h"
 #include "apps/resource_usage.h"
@@ -138,12 +139,7 @@ struct E5 {
   uint64_t plain_bytes = 0;  // the same splits as VD, as plain vsplits (kim-lee-kobbelt §6.3, stream --mode sender-plain)
 };
 
-// A close view: the first orbit camera moved halfway to its target (the model overflows the screen).
-Camera close_view(const BenchModel& m) {
-  Camera c = path_of(m, PathKind::orbit, 1)[0];
-  for (int k = 0; k < 3; ++k) c.eye[k] = 0.5f * (c.eye[k] + c.target[k]);
-  return c;
-}
+Camera close_view(const BenchModel& m) { return app::close_view(m.served->model()); }
 
 struct OneView {
   uint64_t bytes_down = 0, splits = 0, faces = 0;

@@ -1,0 +1,70 @@
+// LSB-first bit streams (docs/protocol.md, "Bit stream"): bit k of the stream is bit k mod 8 of byte
+// k div 8, an n-bit field goes least significant bit first. Shared by codecs below the protocol layer
+// (pm/split_codec.h); every read is bounds-checked and fails with pms::Error, never reads past the data.
+#pragma once
+#include <cstdint>
+#include <span>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "common/error.h"
+
+namespace pms {
+
+class BitWriter {
+ public:
+  void bits(uint64_t value, unsigned n) {  // n <= 64; bits of value above n are ignored
+    for (unsigned i = 0; i < n; ++i) bit(unsigned(value >> i) & 1);
+  }
+  void bit(unsigned b) {
+    if ((size_ & 7) == 0) bytes_.push_back(0);
+    bytes_.back() |= uint8_t((b & 1) << (size_ & 7));
+    ++size_;
+  }
+  void append(const BitWriter& other) {
+    for (uint64_t i = 0; i < other.size_; ++i) bit(unsigned(other.bytes_[i >> 3] >> (i & 7)) & 1);
+  }
+  uint64_t size() const { return size_; }  // in bits
+  // The bytes written; the last one is padded with zero bits.
+  const std::vector<uint8_t>& bytes() const { return bytes_; }
+
+ private:
+  std::vector<uint8_t> bytes_;
+  uint64_t size_ = 0;
+};
+
+class BitReader {
+ public:
+  // Reads bits [start, end) of `data`; `what` names the data in error messages.
+  BitReader(std::span<const uint8_t> data, uint64_t start, uint64_t end, std::string what)
+      : data_(data), pos_(start), end_(end), what_(std::move(what)) {
+    if (end > 8 * uint64_t(data.size()) || start > end) fail(what_, "bit range outside the data");
+  }
+  BitReader(std::span<const uint8_t> data, std::string what) : BitReader(data, 0, 8 * uint64_t(data.size()), std::move(what)) {}
+
+  unsigned bit(const char* field) {
+    if (pos_ >= end_) fail(what_, std::string(field) + ": truncated");
+    const unsigned b = unsigned(data_[pos_ >> 3] >> (pos_ & 7)) & 1;
+    ++pos_;
+    return b;
+  }
+  uint64_t bits(unsigned n, const char* field) {  // n <= 64
+    if (n > end_ - pos_) fail(what_, std::string(field) + ": truncated");
+    uint64_t value = 0;
+    for (unsigned i = 0; i < n; ++i) value |= uint64_t(bit(field)) << i;
+    return value;
+  }
+  uint64_t position() const { return pos_; }
+  uint64_t bits_left() const { return end_ - pos_; }
+  [[noreturn]] void fail_field(const char* field, const std::string& problem) const {
+    fail(what_, std::string(field) + ": " + problem);
+  }
+
+ private:
+  std::span<const uint8_t> data_;
+  uint64_t pos_, end_;
+  std::string what_;
+};
+
+}  // namespace pms

@@ -1,0 +1,140 @@
+// Canonical Huffman codes: lengths from counts (a Huffman tree, rebuilt on halved counts until no length
+// exceeds kMaxCodeLength, as zlib's and JPEG's writers settle for), code words assigned in canonical order,
+// and decoding one bit at a time by code-word ranges per length (Mark Adler's puff.c does the same).
+#include "pm/prefix_code.h"
+
+#include <algorithm>
+#include <queue>
+#include <string>
+
+#include "common/error.h"
+
+namespace pms {
+namespace {
+
+// Huffman code lengths of the symbols with count > 0 (others 0); the tree's depth may exceed the limit.
+std::vector<uint8_t> huffman_lengths(std::span<const uint64_t> counts) {
+  struct Node {
+    uint64_t weight;
+    uint32_t index;  // < counts.size(): a symbol; else internal node index + counts.size()
+  };
+  auto heavier = [](const Node& a, const Node& b) { return a.weight != b.weight ? a.weight > b.weight : a.index > b.index; };
+  std::priority_queue<Node, std::vector<Node>, decltype(heavier)> queue(heavier);
+  const auto n = uint32_t(counts.size());
+  for (uint32_t s = 0; s < n; ++s)
+    if (counts[s] > 0) queue.push({counts[s], s});
+  std::vector<uint8_t> lengths(n, 0);
+  if (queue.size() == 1) {
+    lengths[queue.top().index] = 1;
+    return lengths;
+  }
+  std::vector<uint32_t> parent;  // of internal nodes, by internal index; and of symbols below
+  std::vector<uint32_t> symbol_parent(n, UINT32_MAX);
+  while (queue.size() > 1) {
+    const Node a = queue.top();
+    queue.pop();
+    const Node b = queue.top();
+    queue.pop();
+    const auto internal = uint32_t(parent.size());
+    parent.push_back(UINT32_MAX);
+    for (const Node& child : {a, b}) {
+      if (child.index < n) symbol_parent[child.index] = internal;
+      else parent[child.index - n] = internal;
+    }
+    queue.push({a.weight + b.weight, internal + n});
+  }
+  for (uint32_t s = 0; s < n; ++s) {
+    if (symbol_parent[s] == UINT32_MAX) continue;
+    unsigned depth = 0;
+    for (uint32_t p = symbol_parent[s]; p != UINT32_MAX; p = parent[p]) ++depth;
+    lengths[s] = uint8_t(std::min(depth, 255u));
+  }
+  return lengths;
+}
+
+}  // namespace
+
+PrefixCode::PrefixCode(std::vector<uint8_t> lengths) : lengths_(std::move(lengths)), count_(kMaxCodeLength + 1, 0) {
+  uint32_t present = 0;
+  for (uint8_t l : lengths_) {
+    if (l > kMaxCodeLength) fail("prefix code", "code length " + std::to_string(l) + " above " + std::to_string(kMaxCodeLength));
+    if (l) ++count_[l], ++present;
+  }
+  // Kraft: sum of 2^-l <= 1, in units of 2^-kMaxCodeLength.
+  uint64_t kraft = 0;
+  for (unsigned l = 1; l <= kMaxCodeLength; ++l) kraft += uint64_t(count_[l]) << (kMaxCodeLength - l);
+  if (kraft > (uint64_t(1) << kMaxCodeLength)) fail("prefix code", "lengths oversubscribe the code space");
+  single_ = present == 1;
+  // Canonical code words: by length, then by symbol.
+  codes_.assign(lengths_.size(), 0);
+  uint32_t next[kMaxCodeLength + 2] = {};
+  uint32_t code = 0;
+  for (unsigned l = 1; l <= kMaxCodeLength; ++l) {
+    code = (code + count_[l - 1]) << 1;
+    next[l] = code;
+  }
+  for (unsigned l = 1; l <= kMaxCodeLength; ++l)
+    for (uint32_t s = 0; s < lengths_.size(); ++s)
+      if (lengths_[s] == l) {
+        codes_[s] = uint16_t(next[l]++);
+        sorted_.push_back(s);
+      }
+  count_[0] = 0;
+}
+
+PrefixCode PrefixCode::from_counts(std::span<const uint64_t> counts) {
+  std::vector<uint64_t> scaled(counts.begin(), counts.end());
+  for (;;) {
+    std::vector<uint8_t> lengths = huffman_lengths(scaled);
+    uint8_t longest = 0;
+    for (uint8_t l : lengths) longest = std::max(longest, l);
+    if (longest <= kMaxCodeLength) return PrefixCode(std::move(lengths));
+    for (uint64_t& c : scaled)
+      if (c > 0) c = std::max<uint64_t>(1, c >> 1);
+  }
+}
+
+void PrefixCode::write(BitWriter& w, uint32_t symbol) const {
+  if (!has(symbol)) fail("prefix code", "symbol " + std::to_string(symbol) + " has no code word");
+  if (single_) return;
+  const unsigned length = lengths_[symbol];
+  for (unsigned i = length; i-- > 0;) w.bit((codes_[symbol] >> i) & 1);
+}
+
+uint32_t PrefixCode::read(BitReader& r, const char* field) const {
+  if (sorted_.empty()) r.fail_field(field, "the code has no symbols");
+  if (single_) return sorted_[0];
+  uint32_t code = 0, first = 0, index = 0;  // first code word of this length, its index in sorted_
+  for (unsigned l = 1; l <= kMaxCodeLength; ++l) {
+    code |= r.bit(field);
+    const uint32_t count = count_[l];
+    if (code - first < count) return sorted_[index + (code - first)];
+    index += count;
+    first = (first + count) << 1;
+    code <<= 1;
+  }
+  r.fail_field(field, "not a code word of the model's code");
+}
+
+void PrefixCode::serialize(BitWriter& w) const {
+  size_t m = lengths_.size();
+  while (m > 0 && lengths_[m - 1] == 0) --m;
+  if (m > UINT16_MAX) fail("prefix code", "alphabet too large to serialize");
+  w.bits(m, 16);
+  for (size_t s = 0; s < m; ++s) w.bits(lengths_[s], 4);
+}
+
+PrefixCode PrefixCode::deserialize(BitReader& r, size_t alphabet, const char* field) {
+  const auto m = size_t(r.bits(16, field));
+  if (m > alphabet) r.fail_field(field, std::to_string(m) + " symbols, the alphabet has " + std::to_string(alphabet));
+  if (4 * uint64_t(m) > r.bits_left()) r.fail_field(field, "truncated");
+  std::vector<uint8_t> lengths(alphabet, 0);
+  for (size_t s = 0; s < m; ++s) lengths[s] = uint8_t(r.bits(4, field));
+  try {
+    return PrefixCode(std::move(lengths));
+  } catch (const Error& e) {
+    r.fail_field(field, e.what());
+  }
+}
+
+}  // namespace pms

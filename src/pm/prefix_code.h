@@ -1,0 +1,48 @@
+// Static canonical prefix codes (Huffman 1952; canonical form as in DEFLATE, RFC 1951 §3.2.2): the entropy
+// coder of the split records (pm/split_codec.h). A static code costs no termination bits per record, which
+// an arithmetic or rANS coder would pay on every ~30-bit record that must decode on its own.
+#pragma once
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "common/bit_stream.h"
+
+namespace pms {
+
+constexpr unsigned kMaxCodeLength = 15;
+
+class PrefixCode {
+ public:
+  PrefixCode() = default;
+  // Lengths per symbol (0 = the symbol never occurs). Throws pms::Error for a length above
+  // kMaxCodeLength or lengths that oversubscribe the code space (Kraft sum > 1); an incomplete code is
+  // allowed, and its unused code words are rejected when read. A code with a single symbol costs 0 bits.
+  explicit PrefixCode(std::vector<uint8_t> lengths);
+  // Huffman lengths for `counts`, limited to kMaxCodeLength. Symbols counted 0 get no code word.
+  static PrefixCode from_counts(std::span<const uint64_t> counts);
+
+  size_t alphabet() const { return lengths_.size(); }
+  bool has(uint32_t symbol) const { return symbol < lengths_.size() && lengths_[symbol] != 0; }
+  // Bits the symbol costs (0 for the only symbol of a one-symbol code); the symbol must be present.
+  unsigned cost(uint32_t symbol) const { return single_ ? 0 : lengths_[symbol]; }
+  const std::vector<uint8_t>& lengths() const { return lengths_; }
+
+  // Throws pms::Error when the symbol has no code word.
+  void write(BitWriter& w, uint32_t symbol) const;
+  uint32_t read(BitReader& r, const char* field) const;
+
+  // Serialized form: u16 symbols-with-lengths count m (the alphabet's trailing absent symbols dropped),
+  // then m lengths of 4 bits. `deserialize` accepts m <= alphabet and fills the rest with 0.
+  void serialize(BitWriter& w) const;
+  static PrefixCode deserialize(BitReader& r, size_t alphabet, const char* field);
+
+ private:
+  std::vector<uint8_t> lengths_;
+  std::vector<uint16_t> codes_;     // per symbol, canonical, read most significant bit first
+  std::vector<uint16_t> count_;     // code words per length, 0..kMaxCodeLength
+  std::vector<uint32_t> sorted_;    // symbols in canonical order (by length, then symbol)
+  bool single_ = false;
+};
+
+}  // namespace pms

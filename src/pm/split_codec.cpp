@@ -1,0 +1,508 @@
+// Split records coded against the client's own hierarchy (issue 19; cheng-ooi 2008 §4.3 codes dx, dy, dz
+// against v_s with Huffman codes and the cut neighbours after Kim et al. 2006; docs/pms-format.md has the
+// record format field by field and the measured bits).
+//
+// - Cut vertices: a fundamental cut vertex is a leaf next to v_s's leaves, so its id shares a long prefix
+//   with an id the client already holds (the id-prefix property behind ActiveAncestor, kim-lee-kobbelt §4):
+//   v_s itself (the sibling's subtree and nearby), the cut vertices of v_s's nearest ancestors, and for
+//   v̂_r the v̂_l just decoded. A record names the reference, how far above it the two ids part, and the
+//   rest of the path below the parting bit (which is implied: the other child). Ids far from every
+//   reference escape to tree-id, depth and path.
+// - Position: v_t − v_s per axis on the grid, as a magnitude class (prefix coded, with a table per class
+//   of v_s's radius: the radius bounds |p_t − p_s|) and the class's low bits raw.
+// - Refinement info: each child's as the difference of its 11-bit length codes, cone angle and axis from
+//   v_s's (a child's bounds nest in its parent's, so the differences are small and mostly of one sign).
+#include "pm/split_codec.h"
+
+#include <algorithm>
+#include <bit>
+#include <string>
+
+#include "common/error.h"
+#include "pm/position_grid.h"
+
+namespace pms {
+namespace {
+
+// Signed integers as a magnitude class k = bit_width(|v|) with the sign in the symbol: 0, then +k, -k for
+// k = 1 .. kMaxClass; the k - 1 bits below the leading one follow raw.
+constexpr uint32_t kMaxClass = 40;
+constexpr uint32_t kIntSymbols = 1 + 2 * kMaxClass;
+constexpr uint32_t kNoConeSymbol = kIntSymbols;  // after the integers, in the angle codes
+
+constexpr uint32_t kMaxDepthSymbols = 64;
+constexpr uint32_t kEqualSymbol = kMaxDepthSymbols;  // "the reference itself", in the parting codes
+constexpr uint32_t kReferences = 2 + 2 * kCutAncestors;  // v_s, ancestor cuts, v̂_l (for v̂_r)
+// Reference symbols: escape, 1 + reference index, or "no cut vertex on this side".
+constexpr uint32_t kEscapeSymbol = 0;
+constexpr uint32_t kAbsentSymbol = kReferences + 1;
+constexpr uint32_t kRefSymbols = kReferences + 2;
+constexpr uint32_t kRadiusClasses = 64;   // v_s's radius by half octaves (half-float exponent and top mantissa bit)
+constexpr uint32_t kPositionContexts = kRadiusClasses + 2 * 26;  // x: radius class; y, z: classes of x, max(x, y)
+constexpr uint32_t kFlagContexts = 10;    // v_s never refines, or the class of its radius over its mu
+constexpr uint32_t kChainContexts = 12;   // the previous field's symbol, clamped
+constexpr uint32_t kAxisContexts = 13;    // no parent cone, or the class of the angle the child leaves inside it
+
+// Code slots, in serialization order; [..] are the contexts.
+constexpr uint32_t kSlotCutRef = 0;                                 // [v̂_l; v̂_r after each v̂_l symbol]
+constexpr uint32_t kSlotCutUp = kSlotCutRef + 1 + kRefSymbols;      // [side][reference is v_s: 0, a leaf: 1]
+constexpr uint32_t kSlotCutRest = kSlotCutUp + 4;                   // [side][same]
+constexpr uint32_t kSlotCutDepth = kSlotCutRest + 4;                // escaped ids
+constexpr uint32_t kSlotPosition = kSlotCutDepth + 1;               // [axis][radius class]
+constexpr uint32_t kSlotInfoFlags = kSlotPosition + kPositionContexts;  // [flag context]
+constexpr uint32_t kSlotRadius = kSlotInfoFlags + kFlagContexts;    // [child][height context]
+constexpr uint32_t kSlotMu = kSlotRadius + 2 * kFlagContexts;                       // [child][radius symbol]
+constexpr uint32_t kSlotDelta = kSlotMu + 2 * kChainContexts;       // [child][mu symbol]
+constexpr uint32_t kSlotAngle = kSlotDelta + 2 * kChainContexts;    // [child][parent has a cone]
+constexpr uint32_t kSlotAxis = kSlotAngle + 4;                      // [child][axis context]
+constexpr uint32_t kSlotCount = kSlotAxis + 2 * kAxisContexts;
+static_assert(kSlotCount == 244, "docs/protocol.md, \"Split records\", gives the count");
+
+uint32_t alphabet(uint32_t slot) {
+  if (slot < kSlotCutUp) return kRefSymbols;
+  if (slot < kSlotCutRest) return kMaxDepthSymbols + 1;
+  if (slot == kSlotCutDepth) return kMaxDepthSymbols;
+  if (slot >= kSlotInfoFlags && slot < kSlotRadius) return 4;
+  if (slot >= kSlotAngle && slot < kSlotAxis) return kIntSymbols + 1;
+  return kIntSymbols;
+}
+
+enum Part { topology, geometry, refinement };
+
+uint32_t tree_bits(uint32_t root_count) { return root_count <= 1 ? 1 : uint32_t(std::bit_width(root_count - 1)); }
+
+uint32_t int_symbol(int64_t v) {
+  if (v == 0) return 0;
+  const uint64_t magnitude = v < 0 ? uint64_t(-v) : uint64_t(v);
+  const auto k = uint32_t(std::bit_width(magnitude));
+  if (k > kMaxClass) fail("split record", "value " + std::to_string(v) + " too large to code");
+  return 2 * k - 1 + (v < 0);
+}
+
+// v's length codes: the half float without its sign and dropped bits, monotone in the value.
+int64_t length_code(uint16_t half) { return half >> kLengthDroppedBits; }
+
+struct Reference {
+  VertexId id = kNoVertex;
+  bool leaf = false;  // a cut vertex (can equal the target); else v_s (cannot)
+};
+
+// How `target` is coded against `ref`: equal, or parting `up` levels above ref and `rest` levels below
+// the implied parting bit. False when ref cannot express it (another tree, or one id above the other).
+struct Parting {
+  bool equal = false;
+  uint32_t up = 0, rest = 0;
+  int64_t depth_step = 0;  // depth(target) - depth(ref) = rest - up, what is coded
+};
+bool parting(VertexId ref, VertexId target, Parting& p) {
+  if (!is_vertex(ref) || ref.tree != target.tree) return false;
+  if (ref == target) {
+    p = {true, 0, 0};
+    return true;
+  }
+  const int dr = ref.depth(), dt = target.depth();
+  int c = std::min(dr, dt);
+  uint64_t a = ref.node >> (dr - c), b = target.node >> (dt - c);
+  while (a != b) a >>= 1, b >>= 1, --c;
+  if (c == dr || c == dt) return false;  // one is the other's ancestor: no parting bit
+  p = {false, uint32_t(dr - 1 - c), uint32_t(dt - c - 1), int64_t(dt) - dr};
+  return true;
+}
+
+}  // namespace
+
+// Symbol counts per slot, for fitting the tables; costs from a previous fit choose the references.
+struct SplitCodec::Counts {
+  std::vector<std::vector<uint64_t>> counts;
+  Counts() : counts(kSlotCount) {
+    for (uint32_t s = 0; s < kSlotCount; ++s) counts[s].assign(alphabet(s), 0);
+  }
+  void symbol(uint32_t slot, uint32_t sym, Part) { ++counts[slot][sym]; }
+  void raw(uint64_t, unsigned, Part) {}
+};
+
+namespace {
+
+struct Writing {
+  const std::vector<PrefixCode>& codes;
+  BitWriter& w;
+  RecordBits bits;
+  void symbol(uint32_t slot, uint32_t sym, Part part) {
+    const uint64_t before = w.size();
+    codes[slot].write(w, sym);
+    add(part, w.size() - before);
+  }
+  void raw(uint64_t value, unsigned n, Part part) {
+    w.bits(value, n);
+    add(part, n);
+  }
+  void add(Part part, uint64_t n) {
+    (part == topology ? bits.topology : part == geometry ? bits.geometry : bits.refinement) += n;
+  }
+};
+
+template <class Out> uint32_t put_int(Out& out, uint32_t slot, int64_t v, Part part) {
+  const uint32_t sym = int_symbol(v);
+  out.symbol(slot, sym, part);
+  if (sym == 0) return sym;
+  const uint32_t k = (sym + 1) / 2;
+  const uint64_t magnitude = v < 0 ? uint64_t(-v) : uint64_t(v);
+  out.raw(magnitude, k - 1, part);  // the bits below the leading one
+  return sym;
+}
+
+int64_t get_int(uint32_t sym, BitReader& r, const char* field) {
+  if (sym == 0) return 0;
+  if (sym >= kIntSymbols) r.fail_field(field, "not an integer symbol");
+  const uint32_t k = (sym + 1) / 2;
+  const uint64_t magnitude = (uint64_t(1) << (k - 1)) | r.bits(k - 1, field);
+  return sym % 2 == 0 ? -int64_t(magnitude) : int64_t(magnitude);
+}
+
+// The references a cut vertex of `side` may be coded against, in symbol order.
+void references(const SplitContext& c, int side, VertexId cut_l, Reference out[kReferences]) {
+  out[0] = {c.vs, false};
+  for (int i = 0; i < 2 * kCutAncestors; ++i) out[1 + i] = {c.ancestor_cuts[i], true};
+  out[kReferences - 1] = {side == 1 ? cut_l : kNoVertex, true};
+}
+
+uint32_t position_class(const SplitContext& c) { return (c.info_s.radius >> 9) & (kRadiusClasses - 1); }
+
+// Whether v_s's children never refine, and how far below v_s their bounds are, depend on how far v_s is
+// from the deepest level.
+uint32_t height_context(const SplitContext& c, uint32_t max_depth) {
+  return std::min<uint32_t>(uint32_t(std::max(0, int(max_depth) - c.vs.depth())), kFlagContexts - 1);
+}
+uint32_t chain_context(uint32_t previous_symbol) { return std::min(previous_symbol, kChainContexts - 1); }
+// A child's cone lies inside its parent's, so its axis moves at most about the angle left between them.
+uint32_t axis_context(const RefineInfo& s, const RefineInfo& v) {
+  if (s.cone_angle == kNoCone) return 0;
+  const int64_t room = std::max<int64_t>(0, int64_t(s.cone_angle) - v.cone_angle);
+  return 1 + std::min<uint32_t>(uint32_t(std::bit_width(uint64_t(room))), kAxisContexts - 2);
+}
+
+constexpr uint16_t RefineInfo::*kLengths[3] = {&RefineInfo::radius, &RefineInfo::mu, &RefineInfo::delta};
+
+}  // namespace
+
+template <class Out> void SplitCodec::emit(const SplitContext& c, const SplitPayload& p, Out& out) const {
+  // Cut vertices.
+  if (!is_vertex(p.cut_l) && !is_vertex(p.cut_r)) fail("split record", "split of " + to_string(c.vs) + " has no cut vertex");
+  uint32_t ref_slot = kSlotCutRef;
+  for (int side = 0; side < 2; ++side) {
+    const VertexId cut = side == 0 ? p.cut_l : p.cut_r;
+    if (!is_vertex(cut)) {
+      out.symbol(ref_slot, kAbsentSymbol, topology);
+      ref_slot = kSlotCutRef + 1 + kAbsentSymbol;
+      continue;
+    }
+    if (cut.tree >= root_count_ || uint32_t(cut.depth()) > max_depth_ || is_ancestor_or_self(c.vs, cut))
+      fail("split record", "split of " + to_string(c.vs) + ": cut vertex " + to_string(cut) + " cannot be coded");
+    Reference refs[kReferences];
+    references(c, side, p.cut_l, refs);
+    // The cheapest reference under the current tables (or, before any, the shortest rest), first on ties.
+    // With tables, only references whose symbols all have code words; the escape always has one (build).
+    uint32_t best = kReferences;
+    Parting best_parting;
+    uint64_t best_cost = UINT64_MAX;
+    for (uint32_t i = 0; i < kReferences; ++i) {
+      Parting pt;
+      if (!parting(refs[i].id, cut, pt) || (pt.equal && !refs[i].leaf)) continue;
+      uint64_t cost = pt.rest;
+      if (!codes_.empty()) {
+        const uint32_t kind = refs[i].leaf ? 1 : 0;
+        const PrefixCode& ref_code = codes_[ref_slot];
+        const PrefixCode& up_code = codes_[kSlotCutUp + 2 * uint32_t(side) + kind];
+        const PrefixCode& step_code = codes_[kSlotCutRest + 2 * uint32_t(side) + kind];
+        const uint32_t up = pt.equal ? kEqualSymbol : pt.up, step = int_symbol(pt.depth_step);
+        if (!ref_code.has(1 + i) || !up_code.has(up) || (!pt.equal && !step_code.has(step))) continue;
+        cost += ref_code.cost(1 + i) + up_code.cost(up);
+        if (!pt.equal) cost += step_code.cost(step) + (step + 1) / 2 - (step != 0);
+      }
+      if (cost < best_cost) best = i, best_parting = pt, best_cost = cost;
+    }
+    const uint32_t ref_symbol = best == kReferences ? kEscapeSymbol : 1 + best;
+    out.symbol(ref_slot, ref_symbol, topology);
+    ref_slot = kSlotCutRef + 1 + ref_symbol;
+    if (best == kReferences) {
+      out.raw(cut.tree, tree_bits(root_count_), topology);
+      out.symbol(kSlotCutDepth, uint32_t(cut.depth()), topology);
+      out.raw(cut.node, unsigned(cut.depth()), topology);
+      continue;
+    }
+    const uint32_t kind = refs[best].leaf ? 1 : 0;
+    out.symbol(kSlotCutUp + 2 * uint32_t(side) + kind, best_parting.equal ? kEqualSymbol : best_parting.up, topology);
+    if (best_parting.equal) continue;
+    put_int(out, kSlotCutRest + 2 * uint32_t(side) + kind, best_parting.depth_step, topology);
+    out.raw(cut.node, best_parting.rest, topology);
+  }
+  // Position of v_t against v_s's.
+  uint32_t pslot = kSlotPosition + position_class(c), largest = 0;
+  for (uint32_t axis = 0; axis < 3; ++axis) {
+    if (position_bits_ < 32 && p.position_t[axis] >> position_bits_)
+      fail("split record", "split of " + to_string(c.vs) + ": position outside the grid");
+    const uint32_t sym = put_int(out, pslot, int64_t(p.position_t[axis]) - int64_t(c.position_s[axis]), geometry);
+    largest = std::max(largest, (sym + 1) / 2);
+    pslot = kSlotPosition + kRadiusClasses + (axis == 0 ? 0 : 26) + std::min(largest, 25u);
+  }
+  // Refinement info of v_t and v_u against v_s's.
+  const RefineInfo* child[2] = {&p.info_t, &p.info_u};
+  for (const RefineInfo* info : child)
+    if (!is_canonical(*info) || !(*info == as_sent(*info)))
+      fail("split record", "split of " + to_string(c.vs) + ": refinement info is not as sent");
+  const RefineInfo& s = c.info_s;
+  out.symbol(kSlotInfoFlags + height_context(c, max_depth_), (never_refines(p.info_t) ? 1u : 0u) | (never_refines(p.info_u) ? 2u : 0u), refinement);
+  for (uint32_t k = 0; k < 2; ++k) {
+    const RefineInfo& v = *child[k];
+    if (never_refines(v)) continue;
+    uint32_t slot = kSlotRadius + k * kFlagContexts + height_context(c, max_depth_);
+    for (uint32_t f = 0; f < 3; ++f) {
+      const uint32_t sym = put_int(out, slot, length_code(s.*kLengths[f]) - length_code(v.*kLengths[f]), refinement);
+      slot = (f == 0 ? kSlotMu : kSlotDelta) + k * kChainContexts + chain_context(sym);
+    }
+    const bool parent_cone = s.cone_angle != kNoCone;
+    const uint32_t angle_slot = kSlotAngle + 2 * k + (parent_cone ? 1 : 0);
+    if (v.cone_angle == kNoCone) {
+      out.symbol(angle_slot, kNoConeSymbol, refinement);
+      continue;
+    }
+    put_int(out, angle_slot, parent_cone ? int64_t(s.cone_angle) - v.cone_angle : int64_t(v.cone_angle), refinement);
+    const uint32_t axis_slot = kSlotAxis + k * kAxisContexts + axis_context(s, v);
+    put_int(out, axis_slot, int64_t(int16_t(v.cone_x)) - int16_t(s.cone_x), refinement);
+    put_int(out, axis_slot, int64_t(int16_t(v.cone_y)) - int16_t(s.cone_y), refinement);
+  }
+}
+
+void SplitCodec::encode(const SplitContext& context, const SplitPayload& payload, BitWriter& w, RecordBits* bits) const {
+  if (codes_.size() != kSlotCount) fail("split record", "the codec has no tables");
+  Writing out{codes_, w, {}};
+  emit(context, payload, out);
+  if (bits) *bits = out.bits;
+}
+
+SplitPayload SplitCodec::decode(const SplitContext& c, BitReader& r) const {
+  if (codes_.size() != kSlotCount) fail("split record", "the codec has no tables");
+  SplitPayload p;
+  uint32_t ref_slot = kSlotCutRef;
+  for (int side = 0; side < 2; ++side) {
+    const char* field = side == 0 ? "v̂_l" : "v̂_r";
+    const uint32_t sym = codes_[ref_slot].read(r, field);
+    ref_slot = kSlotCutRef + 1 + sym;
+    if (sym == kAbsentSymbol) continue;
+    VertexId cut;
+    if (sym == kEscapeSymbol) {
+      cut.tree = uint32_t(r.bits(tree_bits(root_count_), field));
+      const uint32_t depth = codes_[kSlotCutDepth].read(r, field);
+      if (depth > max_depth_) r.fail_field(field, "deeper than the model");
+      cut.node = (uint64_t(1) << depth) | r.bits(depth, field);
+    } else {
+      Reference refs[kReferences];
+      references(c, side, p.cut_l, refs);
+      const Reference& ref = refs[sym - 1];
+      if (!is_vertex(ref.id)) r.fail_field(field, "names a reference the client does not hold");
+      const uint32_t kind = ref.leaf ? 1 : 0;
+      const uint32_t up = codes_[kSlotCutUp + 2 * uint32_t(side) + kind].read(r, field);
+      if (up == kEqualSymbol) {
+        if (!ref.leaf) r.fail_field(field, "equal to v_s");
+        cut = ref.id;
+      } else {
+        const int dr = ref.id.depth();
+        if (int(up) >= dr) r.fail_field(field, "parts above the root");
+        const int common = dr - 1 - int(up);
+        const uint64_t prefix = ref.id.node >> (dr - common);
+        const uint64_t other = ((ref.id.node >> (dr - common - 1)) & 1) ^ 1;
+        const int64_t rest = get_int(codes_[kSlotCutRest + 2 * uint32_t(side) + kind].read(r, field), r, field) + int64_t(up);
+        if (rest < 0 || common + 1 + rest > int64_t(max_depth_)) r.fail_field(field, "depth outside the model");
+        cut = {ref.id.tree, (((prefix << 1) | other) << rest) | r.bits(unsigned(rest), field)};
+      }
+    }
+    if (cut.tree >= root_count_) r.fail_field(field, "tree-id outside the model");
+    if (is_ancestor_or_self(c.vs, cut)) r.fail_field(field, "inside v_s's subtree");
+    (side == 0 ? p.cut_l : p.cut_r) = cut;
+  }
+  if (!is_vertex(p.cut_l) && !is_vertex(p.cut_r)) r.fail_field("v̂_r", "neither v̂_l nor v̂_r is present");
+  uint32_t pslot = kSlotPosition + position_class(c), largest = 0;
+  for (uint32_t axis = 0; axis < 3; ++axis) {
+    const uint32_t sym = codes_[pslot].read(r, "position");
+    const int64_t v = int64_t(c.position_s[axis]) + get_int(sym, r, "position");
+    largest = std::max(largest, (sym + 1) / 2);
+    pslot = kSlotPosition + kRadiusClasses + (axis == 0 ? 0 : 26) + std::min(largest, 25u);
+    const int64_t top = position_bits_ >= 32 ? int64_t(UINT32_MAX) : (int64_t(1) << position_bits_) - 1;
+    if (v < 0 || v > top) r.fail_field("position", "outside the grid");
+    p.position_t[axis] = uint32_t(v);
+  }
+  const RefineInfo& s = c.info_s;
+  const uint32_t flags = codes_[kSlotInfoFlags + height_context(c, max_depth_)].read(r, "info flags");
+  RefineInfo* child[2] = {&p.info_t, &p.info_u};
+  for (uint32_t k = 0; k < 2; ++k) {
+    const char* field = k == 0 ? "info_t" : "info_u";
+    RefineInfo& v = *child[k];
+    if (flags & (1u << k)) {
+      v = as_sent(RefineInfo{});
+      continue;
+    }
+    uint32_t slot = kSlotRadius + k * kFlagContexts + height_context(c, max_depth_);
+    for (uint32_t f = 0; f < 3; ++f) {
+      const uint32_t sym = codes_[slot].read(r, field);
+      const int64_t value = length_code(s.*kLengths[f]) - get_int(sym, r, field);
+      if (value < 0 || value > (0x7C00 >> kLengthDroppedBits)) r.fail_field(field, "length outside the half-float range");
+      v.*kLengths[f] = uint16_t(value << kLengthDroppedBits);
+      slot = (f == 0 ? kSlotMu : kSlotDelta) + k * kChainContexts + chain_context(sym);
+    }
+    const bool parent_cone = s.cone_angle != kNoCone;
+    const uint32_t sym = codes_[kSlotAngle + 2 * k + (parent_cone ? 1 : 0)].read(r, field);
+    if (sym == kNoConeSymbol) {
+      v.cone_angle = kNoCone;
+      v.cone_x = v.cone_y = 0;
+    } else {
+      const int64_t delta = get_int(sym, r, field);
+      const int64_t angle = parent_cone ? int64_t(s.cone_angle) - delta : delta;
+      if (angle < 0 || angle > kConeSteps) r.fail_field(field, "cone angle out of range");
+      v.cone_angle = uint16_t(angle);
+      const PrefixCode& axis_code = codes_[kSlotAxis + k * kAxisContexts + axis_context(s, v)];
+      for (uint16_t RefineInfo::*q : {&RefineInfo::cone_x, &RefineInfo::cone_y}) {
+        const int64_t value = int64_t(int16_t(s.*q)) + get_int(axis_code.read(r, field), r, field);
+        if (value < -kAxisSteps || value > kAxisSteps) r.fail_field(field, "cone axis out of range");
+        v.*q = uint16_t(int16_t(value));
+      }
+    }
+    if (!is_canonical(v) || never_refines(v)) r.fail_field(field, "not a value the quantizer produces");
+  }
+  return p;
+}
+
+SplitCodec SplitCodec::build(const ModelData& model, std::span<const uint32_t> positions, uint32_t position_bits) {
+  check_node_arrays(model);
+  if (positions.size() != 3 * model.node_count()) fail("split record", "positions are not 3 per node");
+  if (!(position_bits >= 1 && position_bits <= 32)) fail("split record", "position bits outside 1..32");
+  SplitCodec codec;
+  codec.root_count_ = model.root_count;
+  codec.position_bits_ = position_bits;
+  for (size_t n = 0; n < model.node_count(); ++n) codec.max_depth_ = std::max<uint32_t>(codec.max_depth_, uint32_t(model.id(uint32_t(n)).depth()));
+  // Two fits: the first chooses references by their rest alone, the second by the first fit's costs.
+  for (int pass = 0; pass < 2; ++pass) {
+    Counts counts;
+    for (uint32_t node = 0; node < model.node_count(); ++node)
+      if (!model.is_leaf(node)) codec.emit(split_context(model, positions, node), split_payload(model, positions, node), counts);
+    // The escape, the missing side and every escaped depth keep a code word in every table they may be
+    // needed in: a reference the final tables price differently can move v̂_r to another table.
+    for (uint32_t slot = kSlotCutRef; slot < kSlotCutUp; ++slot) ++counts.counts[slot][kEscapeSymbol], ++counts.counts[slot][kAbsentSymbol];
+    for (uint32_t depth = 0; depth <= codec.max_depth_; ++depth) ++counts.counts[kSlotCutDepth][depth];
+    std::vector<PrefixCode> codes;
+    for (uint32_t s = 0; s < kSlotCount; ++s) codes.push_back(PrefixCode::from_counts(counts.counts[s]));
+    codec.codes_ = std::move(codes);
+  }
+  return codec;
+}
+
+void SplitCodec::serialize(BitWriter& w) const {
+  if (codes_.size() != kSlotCount) fail("split record", "the codec has no tables");
+  w.bits(root_count_, 32);
+  w.bits(max_depth_, 8);
+  w.bits(position_bits_, 8);
+  for (const PrefixCode& code : codes_) code.serialize(w);
+}
+
+SplitCodec SplitCodec::deserialize(BitReader& r) {
+  SplitCodec codec;
+  codec.root_count_ = uint32_t(r.bits(32, "root count"));
+  codec.max_depth_ = uint32_t(r.bits(8, "max depth"));
+  codec.position_bits_ = uint32_t(r.bits(8, "position bits"));
+  if (codec.root_count_ == 0) r.fail_field("root count", "0");
+  if (codec.max_depth_ > 63) r.fail_field("max depth", "above 63");
+  if (codec.position_bits_ < 1 || codec.position_bits_ > 32) r.fail_field("position bits", "outside 1..32");
+  for (uint32_t s = 0; s < kSlotCount; ++s) codec.codes_.push_back(PrefixCode::deserialize(r, alphabet(s), "code table"));
+  return codec;
+}
+
+SplitContext split_context(const ModelData& model, std::span<const uint32_t> positions, uint32_t node) {
+  SplitContext c;
+  c.vs = model.id(node);
+  std::copy_n(&positions[3 * size_t(node)], 3, c.position_s);
+  c.info_s = as_sent(model.refine[node]);
+  uint32_t n = node;
+  for (int i = 0; i < kCutAncestors; ++i) {
+    n = model.parent[n];
+    if (n == kNone) break;
+    for (int side = 0; side < 2; ++side) {
+      const uint32_t cut = side == 0 ? model.cut_left[n] : model.cut_right[n];
+      c.ancestor_cuts[2 * i + side] = cut == kNone ? kNoVertex : model.id(cut);
+    }
+  }
+  return c;
+}
+
+SplitPayload split_payload(const ModelData& model, std::span<const uint32_t> positions, uint32_t node) {
+  if (model.is_leaf(node)) fail("split record", "node " + std::to_string(node) + " is a leaf");
+  SplitPayload p;
+  const uint32_t t = model.first_child[node];
+  if (model.cut_left[node] != kNone) p.cut_l = model.id(model.cut_left[node]);
+  if (model.cut_right[node] != kNone) p.cut_r = model.id(model.cut_right[node]);
+  std::copy_n(&positions[3 * size_t(t)], 3, p.position_t);
+  p.info_t = as_sent(model.refine[t]);
+  p.info_u = as_sent(model.refine[t + 1]);
+  return p;
+}
+
+PositionGrid model_grid(const ModelData& model, uint32_t position_bits) {
+  PositionGrid grid;
+  std::copy_n(model.bbox_min, 3, grid.min);
+  std::copy_n(model.bbox_max, 3, grid.max);
+  grid.bits = position_bits;
+  return grid;
+}
+
+std::vector<uint32_t> grid_positions(const ModelData& model, uint32_t position_bits) {
+  const PositionGrid grid = model_grid(model, position_bits);
+  std::vector<uint32_t> q(3 * model.node_count());
+  for (size_t n = 0; n < model.node_count(); ++n) quantize_position(grid, &model.position[3 * n], &q[3 * n]);
+  return q;
+}
+
+EncodedRecords encode_records(const ModelData& model, uint32_t position_bits) {
+  const std::vector<uint32_t> q = grid_positions(model, position_bits);
+  const SplitCodec codec = SplitCodec::build(model, q, position_bits);
+  EncodedRecords out;
+  BitWriter tables;
+  codec.serialize(tables);
+  out.tables = tables.bytes();
+  BitWriter records;
+  out.offsets.reserve(model.node_count() + 1);
+  for (uint32_t node = 0; node < model.node_count(); ++node) {
+    out.offsets.push_back(records.size());
+    if (!model.is_leaf(node)) codec.encode(split_context(model, q, node), split_payload(model, q, node), records);
+  }
+  out.offsets.push_back(records.size());
+  out.records = records.bytes();
+  return out;
+}
+
+SplitCodec check_records(const std::string& where, const ModelData& model, std::span<const uint8_t> tables,
+                         std::span<const uint64_t> offsets, std::span<const uint8_t> records) {
+  BitReader table_reader(tables, where + ": split tables");
+  SplitCodec codec = SplitCodec::deserialize(table_reader);
+  if (table_reader.bits_left() >= 8) fail(where, "split tables: bytes after the tables");
+  uint32_t depth = 0;
+  for (uint64_t id : model.node_id) depth = std::max(depth, uint32_t(63 - std::countl_zero(id)));
+  if (codec.root_count() != model.root_count || codec.max_depth() != depth || !valid_position_bits(codec.position_bits()))
+    fail(where, "split tables: root count, depth or position bits do not match the model");
+  const size_t n = model.node_count();
+  if (offsets.size() != n + 1) fail(where, "split record offsets: not one per node plus one");
+  const uint64_t bits = 8 * uint64_t(records.size());
+  if (offsets[0] != 0 || offsets[n] > bits || bits - offsets[n] >= 8)
+    fail(where, "split record offsets: do not span the records");
+  const std::vector<uint32_t> q = grid_positions(model, codec.position_bits());
+  for (uint32_t node = 0; node < n; ++node) {
+    if (offsets[node + 1] < offsets[node]) fail(where, "split record offsets: not in order at node " + std::to_string(node));
+    if (model.is_leaf(node)) {
+      if (offsets[node + 1] != offsets[node]) fail(where, "split records: leaf " + std::to_string(node) + " has a record");
+      continue;
+    }
+    BitReader r(records, offsets[node], offsets[node + 1], where + ": split record of node " + std::to_string(node));
+    if (!(codec.decode(split_context(model, q, node), r) == split_payload(model, q, node)) || r.bits_left() != 0)
+      fail(where, "split records: node " + std::to_string(node) + "'s record is not its split");
+  }
+  return codec;
+}
+
+}  // namespace pms

@@ -1,0 +1,130 @@
+// Canonical prefix codes: round trips, optimal-length sanity, the length limit, serialization, and
+// hostile tables and streams rejected with pms::Error.
+#include <gtest/gtest.h>
+
+#include <cstdint>
+#include <random>
+#include <vector>
+
+#include "common/bit_stream.h"
+#include "common/error.h"
+#include "pm/prefix_code.h"
+
+namespace pms {
+namespace {
+
+TEST(BitStream, FieldsAreLsbFirstAndReadsAreBounded) {
+  BitWriter w;
+  w.bits(0x5, 3);
+  w.bits(0xABCD, 16);
+  w.bit(1);
+  ASSERT_EQ(w.size(), 20u);
+  ASSERT_EQ(w.bytes().size(), 3u);
+  EXPECT_EQ(w.bytes()[0], uint8_t(0x5 | (0xABCD << 3)));
+  BitReader r(w.bytes(), 0, w.size(), "test");
+  EXPECT_EQ(r.bits(3, "a"), 0x5u);
+  EXPECT_EQ(r.bits(16, "b"), 0xABCDu);
+  EXPECT_EQ(r.bit("c"), 1u);
+  EXPECT_THROW(r.bit("d"), Error);  // the range ends at bit 20, inside the last byte
+  EXPECT_THROW(BitReader(w.bytes(), 0, 25, "test"), Error);
+}
+
+TEST(PrefixCode, RoundTripsAndCostsNearTheEntropy) {
+  std::mt19937_64 rng(7);
+  std::geometric_distribution<uint32_t> geometric(0.3);
+  std::vector<uint32_t> symbols(20000);
+  std::vector<uint64_t> counts(40, 0);
+  for (uint32_t& s : symbols) {
+    s = std::min<uint32_t>(geometric(rng), 39);
+    ++counts[s];
+  }
+  const PrefixCode code = PrefixCode::from_counts(counts);
+  BitWriter w;
+  double entropy = 0;
+  for (uint64_t c : counts)
+    if (c) entropy -= double(c) * std::log2(double(c) / double(symbols.size()));
+  for (uint32_t s : symbols) code.write(w, s);
+  EXPECT_LE(double(w.size()), entropy + double(symbols.size()));  // Huffman: within 1 bit a symbol
+  EXPECT_GE(double(w.size()), entropy);
+  BitReader r(w.bytes(), 0, w.size(), "test");
+  for (uint32_t s : symbols) ASSERT_EQ(code.read(r, "symbol"), s);
+  EXPECT_EQ(r.bits_left(), 0u);
+}
+
+TEST(PrefixCode, LengthsStayWithinTheLimit) {
+  std::vector<uint64_t> fibonacci = {1, 1};
+  while (fibonacci.size() < 40) fibonacci.push_back(fibonacci[fibonacci.size() - 1] + fibonacci[fibonacci.size() - 2]);
+  const PrefixCode code = PrefixCode::from_counts(fibonacci);  // unlimited Huffman would need 39 bits
+  for (uint8_t l : code.lengths()) {
+    EXPECT_GE(l, 1u);
+    EXPECT_LE(l, kMaxCodeLength);
+  }
+  BitWriter w;
+  for (uint32_t s = 0; s < 40; ++s) code.write(w, s);
+  BitReader r(w.bytes(), 0, w.size(), "test");
+  for (uint32_t s = 0; s < 40; ++s) EXPECT_EQ(code.read(r, "symbol"), s);
+}
+
+TEST(PrefixCode, OneSymbolCostsNothingAndAbsentSymbolsAreRefused) {
+  const std::vector<uint64_t> counts = {0, 0, 9, 0};
+  const PrefixCode code = PrefixCode::from_counts(counts);
+  BitWriter w;
+  code.write(w, 2);
+  EXPECT_EQ(w.size(), 0u);
+  EXPECT_EQ(code.cost(2), 0u);
+  BitReader r(w.bytes(), "test");
+  EXPECT_EQ(code.read(r, "symbol"), 2u);
+  EXPECT_THROW(code.write(w, 1), Error);
+  EXPECT_THROW(code.write(w, 9), Error);
+  const PrefixCode empty = PrefixCode::from_counts(std::vector<uint64_t>(3, 0));
+  BitReader r2(w.bytes(), "test");
+  EXPECT_THROW(empty.read(r2, "symbol"), Error);
+}
+
+TEST(PrefixCode, SerializesAndRejectsHostileTables) {
+  const std::vector<uint64_t> counts = {5, 0, 3, 8, 1, 0, 0};
+  const PrefixCode code = PrefixCode::from_counts(counts);
+  BitWriter w;
+  code.serialize(w);
+  EXPECT_EQ(w.size(), 16u + 4 * 5);  // the two trailing absent symbols are dropped
+  BitReader r(w.bytes(), 0, w.size(), "test");
+  const PrefixCode back = PrefixCode::deserialize(r, counts.size(), "table");
+  EXPECT_EQ(back.lengths(), code.lengths());
+  BitReader small(w.bytes(), 0, w.size(), "test");
+  EXPECT_THROW(PrefixCode::deserialize(small, 4, "table"), Error);  // 5 lengths for an alphabet of 4
+  // Three code words of length 1 oversubscribe the code space.
+  BitWriter bad;
+  bad.bits(3, 16);
+  for (int i = 0; i < 3; ++i) bad.bits(1, 4);
+  BitReader rb(bad.bytes(), 0, bad.size(), "test");
+  EXPECT_THROW(PrefixCode::deserialize(rb, 8, "table"), Error);
+  BitReader truncated(w.bytes(), 0, 20, "test");
+  EXPECT_THROW(PrefixCode::deserialize(truncated, counts.size(), "table"), Error);
+  EXPECT_THROW(PrefixCode(std::vector<uint8_t>{16, 1}), Error);
+}
+
+TEST(PrefixCode, UnusedCodeWordsOfAnIncompleteCodeAreRejected) {
+  const PrefixCode code(std::vector<uint8_t>{1, 2});  // 0, 10; 11 is unused
+  BitWriter w;
+  w.bits(0b11, 2);
+  for (int i = 0; i < 16; ++i) w.bit(1);
+  BitReader r(w.bytes(), 0, w.size(), "test");
+  EXPECT_THROW(code.read(r, "symbol"), Error);
+}
+
+TEST(PrefixCode, RandomStreamsDecodeOrFailCleanly) {
+  std::mt19937_64 rng(11);
+  const PrefixCode code = PrefixCode::from_counts(std::vector<uint64_t>{1, 2, 3, 5, 8, 13, 0, 21});
+  for (int trial = 0; trial < 200; ++trial) {
+    std::vector<uint8_t> bytes(rng() % 8);
+    for (uint8_t& b : bytes) b = uint8_t(rng());
+    BitReader r(bytes, "random");
+    try {
+      while (true) EXPECT_TRUE(code.has(code.read(r, "symbol")));
+    } catch (const Error&) {
+    }
+  }
+}
+
+}  // namespace
+}  // namespace pms

@@ -1,0 +1,162 @@
+// Split records on hand-made forests: every record round-trips through its own bits, the tables
+// round-trip through their serialization, and hostile tables and records fail with pms::Error.
+// The real models' round trips and bits per part are in tests/protocol/split_records_test.cpp.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdint>
+#include <random>
+#include <vector>
+
+#include "common/bit_stream.h"
+#include "common/error.h"
+#include "pm/hierarchy.h"
+#include "pm/split_codec.h"
+#include "pm_fixtures.h"
+
+namespace pms {
+namespace {
+
+Hierarchy test_forest() {
+  Hierarchy h = test::make_forest(5, [](uint32_t tree, int depth, bool leftmost) {
+    return depth < 3 || (depth < 6 && (leftmost || (tree + uint32_t(depth)) % 2 == 0));
+  });
+  h.compute_ids();
+  // Leaves never refine, as a builder's do.
+  for (uint32_t n = 0; n < h.node_count(); ++n)
+    if (h.is_leaf(n)) h.refine[n].mu = h.refine[n].delta = 0;
+  return h;
+}
+
+// The forest, its grid positions and its codec, made once.
+struct Forest {
+  Hierarchy h = test_forest();
+  ModelData model = model_of(h);
+  std::vector<uint32_t> q = grid_positions(model, 16);
+  SplitCodec codec = SplitCodec::build(model, q, 16);
+};
+const Forest& forest() {
+  static const Forest f;
+  return f;
+}
+
+struct Encoded {
+  BitWriter bits;
+  std::vector<uint64_t> start;  // per internal node in split order
+};
+
+Encoded encode_all(const SplitCodec& codec, const ModelData& model, const std::vector<uint32_t>& q) {
+  Encoded e;
+  for (uint32_t node : model.split_order) {
+    e.start.push_back(e.bits.size());
+    BitWriter w;
+    RecordBits parts;
+    codec.encode(split_context(model, q, node), split_payload(model, q, node), w, &parts);
+    EXPECT_EQ(parts.total(), w.size());
+    e.bits.append(w);
+  }
+  e.start.push_back(e.bits.size());
+  return e;
+}
+
+TEST(SplitCodec, EveryRecordRoundTripsOnItsOwn) {
+  const auto& [h, model, q, codec] = forest();
+  const Encoded e = encode_all(codec, model, q);
+  ASSERT_GT(model.split_order.size(), 20u);
+  for (size_t i = 0; i < model.split_order.size(); ++i) {
+    const uint32_t node = model.split_order[i];
+    BitReader r(e.bits.bytes(), e.start[i], e.start[i + 1], "record");
+    EXPECT_EQ(codec.decode(split_context(model, q, node), r), split_payload(model, q, node)) << "node " << node;
+    EXPECT_EQ(r.bits_left(), 0u);
+  }
+}
+
+TEST(SplitCodec, TablesRoundTripThroughTheirSerialization) {
+  const auto& [h, model, q, codec] = forest();
+  BitWriter w;
+  codec.serialize(w);
+  BitReader r(w.bytes(), 0, w.size(), "tables");
+  const SplitCodec back = SplitCodec::deserialize(r);
+  EXPECT_EQ(back.root_count(), codec.root_count());
+  EXPECT_EQ(back.max_depth(), codec.max_depth());
+  EXPECT_EQ(back.position_bits(), 16u);
+  EXPECT_EQ(encode_all(back, model, q).bits.bytes(), encode_all(codec, model, q).bits.bytes());
+  // Every prefix of the tables is refused.
+  for (uint64_t end = 0; end < w.size(); end += 7) {
+    BitReader cut(w.bytes(), 0, end, "tables");
+    EXPECT_THROW(SplitCodec::deserialize(cut), Error) << end;
+  }
+}
+
+TEST(SplitCodec, TruncatedAndRandomRecordsFailCleanly) {
+  const auto& [h, model, q, codec] = forest();
+  const Encoded e = encode_all(codec, model, q);
+  for (size_t i = 0; i < model.split_order.size(); ++i) {
+    const SplitContext context = split_context(model, q, model.split_order[i]);
+    for (uint64_t end = e.start[i]; end < e.start[i + 1]; ++end) {
+      BitReader r(e.bits.bytes(), e.start[i], end, "record");
+      EXPECT_THROW(codec.decode(context, r), Error);
+    }
+  }
+  std::mt19937_64 rng(3);
+  size_t decoded = 0;
+  for (int trial = 0; trial < 2000; ++trial) {
+    std::vector<uint8_t> bytes(1 + rng() % 16);
+    for (uint8_t& b : bytes) b = uint8_t(rng());
+    const uint32_t node = model.split_order[rng() % model.split_order.size()];
+    const SplitContext context = split_context(model, q, node);
+    BitReader r(bytes, "random");
+    try {
+      const SplitPayload p = codec.decode(context, r);
+      ++decoded;
+      EXPECT_TRUE(is_vertex(p.cut_l) || is_vertex(p.cut_r));
+      for (VertexId cut : {p.cut_l, p.cut_r})
+        if (is_vertex(cut)) {
+          EXPECT_LT(cut.tree, model.root_count);
+          EXPECT_FALSE(is_ancestor_or_self(context.vs, cut));
+        }
+      EXPECT_TRUE(is_canonical(p.info_t) && is_canonical(p.info_u));
+    } catch (const Error&) {
+    }
+  }
+  EXPECT_GT(decoded, 0u);  // random bits do form records: the check above ran
+}
+
+TEST(SplitCodec, RandomTablesFailCleanly) {
+  std::mt19937_64 rng(5);
+  for (int trial = 0; trial < 500; ++trial) {
+    std::vector<uint8_t> bytes(rng() % 64);
+    for (uint8_t& b : bytes) b = uint8_t(rng());
+    if (bytes.size() > 6) bytes[5] = 16;  // a valid position width, to get past the header more often
+    BitReader r(bytes, "random tables");
+    try {
+      SplitCodec::deserialize(r);
+    } catch (const Error&) {
+    }
+  }
+}
+
+TEST(SplitCodec, RefusesWhatItCannotCarry) {
+  const auto& [h, model, q, codec] = forest();
+  const uint32_t node = model.split_order[0];
+  const SplitContext context = split_context(model, q, node);
+  SplitPayload p = split_payload(model, q, node);
+  BitWriter w;
+  SplitPayload inside = p;
+  inside.cut_l = context.vs.child(0);  // inside v_s's own subtree
+  EXPECT_THROW(codec.encode(context, inside, w), Error);
+  SplitPayload off_grid = p;
+  off_grid.position_t[0] = 1u << 16;
+  EXPECT_THROW(codec.encode(context, off_grid, w), Error);
+  SplitPayload no_cut = p;
+  no_cut.cut_l = no_cut.cut_r = kNoVertex;
+  EXPECT_THROW(codec.encode(context, no_cut, w), Error);
+  SplitPayload not_sent = p;
+  not_sent.info_t.mu = not_sent.info_t.delta = 0;
+  not_sent.info_t.radius = 0x3C00;  // never refines, but with a radius: not what as_sent delivers
+  EXPECT_THROW(codec.encode(context, not_sent, w), Error);
+  EXPECT_THROW(SplitCodec().encode(context, p, w), Error);
+}
+
+}  // namespace
+}  // namespace pms
