@@ -18,6 +18,7 @@
 #include "common/error.h"
 #include "server/http_message.h"
 #include "server/http_routes.h"
+#include "server/io_threads.h"
 
 namespace pms::server {
 namespace {
@@ -202,15 +203,7 @@ struct HttpServer::Impl {
 HttpServer::HttpServer(std::shared_ptr<const Catalogue> catalogue, const HttpLimits& limits, const std::string& host,
                        uint16_t port)
     : impl_(std::make_unique<Impl>(std::move(catalogue), limits)) {
-  boost::system::error_code ec;
-  const auto address = asio::ip::make_address(host, ec);
-  if (ec) fail(host, "not an IP address: " + ec.message());
-  const tcp::endpoint endpoint(address, port);
-  impl_->acceptor.open(endpoint.protocol(), ec);
-  if (!ec) impl_->acceptor.set_option(tcp::acceptor::reuse_address(true), ec);
-  if (!ec) impl_->acceptor.bind(endpoint, ec);
-  if (!ec) impl_->acceptor.listen(asio::socket_base::max_listen_connections, ec);
-  if (ec) fail(host + ":" + std::to_string(port), "HTTP: cannot listen: " + ec.message());
+  listen_on(impl_->acceptor, host, port, "HTTP");
 }
 
 HttpServer::~HttpServer() { stop(); }
@@ -219,18 +212,7 @@ uint16_t HttpServer::port() const { return impl_->acceptor.local_endpoint().port
 
 void HttpServer::start() {
   impl_->accept();
-  const unsigned n = impl_->limits.threads ? impl_->limits.threads : std::max(1u, std::thread::hardware_concurrency());
-  for (unsigned i = 0; i < n; ++i)
-    impl_->threads.emplace_back([this] {
-      for (;;) {  // a handler that throws loses its connection; the thread goes on
-        try {
-          impl_->io.run();
-          return;
-        } catch (const std::exception& e) {
-          log_line(std::string("I/O thread: ") + e.what());
-        }
-      }
-    });
+  start_io_threads(impl_->io, impl_->limits.threads, impl_->threads, log_line);
 }
 
 // Connections hold no state worth a goodbye: the loop stops, and destroying it closes their sockets.

@@ -19,6 +19,7 @@
 #include "protocol/message_types.h"
 #include "protocol/server_messages.h"
 #include "server/catalogue.h"
+#include "server/io_threads.h"
 #include "server/limits.h"
 #include "server/session.h"
 #include "server/stats.h"
@@ -636,15 +637,7 @@ TcpServer::TcpServer(std::shared_ptr<const Catalogue> catalogue, const ServerLim
                      uint16_t port)
     : impl_(std::make_unique<Impl>(std::move(catalogue), limits)) {
   impl_->catalogue->check_limits(limits);
-  boost::system::error_code ec;
-  const auto address = asio::ip::make_address(host, ec);
-  if (ec) fail(host, "not an IP address: " + ec.message());
-  const tcp::endpoint endpoint(address, port);
-  impl_->acceptor.open(endpoint.protocol(), ec);
-  if (!ec) impl_->acceptor.set_option(tcp::acceptor::reuse_address(true), ec);
-  if (!ec) impl_->acceptor.bind(endpoint, ec);
-  if (!ec) impl_->acceptor.listen(asio::socket_base::max_listen_connections, ec);
-  if (ec) fail(host + ":" + std::to_string(port), "cannot listen: " + ec.message());
+  listen_on(impl_->acceptor, host, port, "");
 }
 
 TcpServer::~TcpServer() { stop(); }
@@ -653,19 +646,8 @@ uint16_t TcpServer::port() const { return impl_->acceptor.local_endpoint().port(
 
 void TcpServer::start() {
   impl_->accept();
-  unsigned n = impl_->limits.threads ? impl_->limits.threads : std::max(1u, std::thread::hardware_concurrency());
-  for (unsigned i = 0; i < n; ++i)
-    impl_->threads.emplace_back([this] {
-      // A handler that throws ends its own session (Connection catches); this only keeps the thread alive.
-      for (;;) {
-        try {
-          impl_->io.run();
-          return;
-        } catch (const std::exception& e) {
-          log_line(std::string("I/O thread: ") + e.what());
-        }
-      }
-    });
+  // A handler that throws ends its own session (Connection catches); the pool only keeps the thread alive.
+  start_io_threads(impl_->io, impl_->limits.threads, impl_->threads, log_line);
 }
 
 void TcpServer::stop() {

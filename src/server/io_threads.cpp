@@ -1,0 +1,40 @@
+#include "server/io_threads.h"
+
+#include <algorithm>
+#include <exception>
+
+#include "common/error.h"
+
+namespace pms::server {
+
+void listen_on(boost::asio::ip::tcp::acceptor& acceptor, const std::string& host, uint16_t port,
+               const std::string& what) {
+  namespace asio = boost::asio;
+  boost::system::error_code ec;
+  const auto address = asio::ip::make_address(host, ec);
+  if (ec) fail(host, "not an IP address: " + ec.message());
+  const asio::ip::tcp::endpoint endpoint(address, port);
+  acceptor.open(endpoint.protocol(), ec);
+  if (!ec) acceptor.set_option(asio::ip::tcp::acceptor::reuse_address(true), ec);
+  if (!ec) acceptor.bind(endpoint, ec);
+  if (!ec) acceptor.listen(asio::socket_base::max_listen_connections, ec);
+  if (ec) fail(host + ":" + std::to_string(port), (what.empty() ? "" : what + ": ") + "cannot listen: " + ec.message());
+}
+
+void start_io_threads(boost::asio::io_context& io, unsigned count, std::vector<std::thread>& threads,
+                      const std::function<void(const std::string&)>& log) {
+  const unsigned n = count ? count : std::max(1u, std::thread::hardware_concurrency());
+  for (unsigned i = 0; i < n; ++i)
+    threads.emplace_back([&io, log] {
+      for (;;) {
+        try {
+          io.run();
+          return;
+        } catch (const std::exception& e) {
+          log(std::string("I/O thread: ") + e.what());
+        }
+      }
+    });
+}
+
+}  // namespace pms::server
