@@ -15,6 +15,7 @@
 #include <algorithm>
 #include <bit>
 #include <cmath>
+#include <cstring>
 
 #include "common/error.h"
 #include "pm/hierarchy.h"
@@ -42,15 +43,23 @@ SelectiveRefinement::SelectiveRefinement(SelectiveMesh& mesh, float model_scale,
 
 void SelectiveRefinement::set_options(const AdaptOptions& options) {
   if (!(options.tolerance >= 0) || !std::isfinite(options.tolerance)) fail(kWhere, "tolerance must be a finite number >= 0");
+  if (options.morph_frames != options_.morph_frames || options.max_ops != options_.max_ops) settled_ = false;
   options_ = options;
   morphs_.set_frames(options.morph_frames);
-  if (has_view_) view_ = make_criteria(view_params_, options_.tolerance);
+  if (has_view_) use_criteria(make_criteria(view_params_, options_.tolerance));
 }
 
 void SelectiveRefinement::set_view(const ViewParams& view) {
   view_params_ = view;
-  view_ = make_criteria(view, options_.tolerance);
+  use_criteria(make_criteria(view, options_.tolerance));
   has_view_ = true;
+}
+
+// Only what qrefine reads decides the walk: the same bytes give the same frame.
+void SelectiveRefinement::use_criteria(const ViewCriteria& criteria) {
+  static_assert(sizeof(ViewCriteria) == 28 * sizeof(float), "compared as bytes: no padding");
+  if (std::memcmp(&criteria, &view_, sizeof view_) != 0) settled_ = false;
+  view_ = criteria;
 }
 
 // A split arriving for a slot already decoded: children come as a pair after their parent, and the
@@ -249,8 +258,17 @@ void SelectiveRefinement::collapse_unwanted(FrameStats& stats) {
   }
 }
 
+bool SelectiveRefinement::unchanged_since_settled() const {
+  return settled_ && settled_changes_ == mesh_->changes() && settled_size_ == mesh_->hierarchy().size();
+}
+
 FrameStats SelectiveRefinement::adapt() {
   if (!has_view_) fail(kWhere, "no view set");
+  if (unchanged_since_settled()) {
+    FrameStats stats;
+    stats.missing = uint32_t(missing_.size());
+    return stats;
+  }
   sync();
   if (++frame_ == 0) {  // stamps wrapped: clear them so old frames cannot match
     for (Slot& slot : slots_) slot.kept = 0;
@@ -279,6 +297,9 @@ FrameStats SelectiveRefinement::adapt() {
   collapse_unwanted(stats);
   if (morphs_.enabled()) stats.morphing = uint32_t(morphs_.advance(*mesh_));
   stats.missing = uint32_t(missing_.size());
+  settled_ = stats.ops() == 0 && !stats.capped && stats.morphing == 0;
+  settled_changes_ = mesh_->changes();
+  settled_size_ = uint32_t(h.size());
   return stats;
 }
 
