@@ -125,11 +125,12 @@ uint32_t SelectiveRefinement::dependency(uint32_t slot) {
 
 // A split node the target keeps: evaluate its children, and keep its parent and its dependency too.
 void SelectiveRefinement::justify(uint32_t v) {
-  if (!mesh_->is_active(v) && state(v).kept != frame_) keep(v);
+  if (!mesh_->is_active(v) && state(v).kept != frame_) keep(v, false);
 }
 
-// justify() of a split node whose slot is decoded and not kept yet this frame.
-void SelectiveRefinement::keep(uint32_t v) {
+// justify() of a split node whose slot is decoded and not kept yet this frame. `parent_kept`: v was
+// reached as the child of a kept node (or is a root), so its parent needs no look.
+void SelectiveRefinement::keep(uint32_t v, bool parent_kept) {
   const uint32_t t = slots_[v].first_child;
   if (t + 1 >= slots_.size()) grow(t + 2);  // before taking references: it may move the slots
   Slot& slot = slots_[v];
@@ -138,7 +139,7 @@ void SelectiveRefinement::keep(uint32_t v) {
   __builtin_prefetch(&slots_[t + 1]);
   push_eval(t);
   push_eval(t + 1);
-  if (slot.parent != kNone && state(slot.parent).kept != frame_) push_forced(slot.parent);
+  if (!parent_kept && slot.parent != kNone && state(slot.parent).kept != frame_) push_forced(slot.parent);
   const uint32_t dep = slot.dependency != kUnknown ? slot.dependency : dependency(v);  // computed once per slot
   if (dep != kNone && state(dep).kept != frame_) push_forced(dep);
 }
@@ -193,7 +194,7 @@ void SelectiveRefinement::visit_active(uint32_t v, FrameStats& stats) {
   const VSplitResult r = mesh_->vsplit(v);
   stats.vsplits += uint32_t(mesh_->vertex_count() - before);
   if (r.done) {
-    keep(v);
+    keep(v, true);
   } else {
     report_missing(r.needs);
     pin_chain(v);
@@ -202,7 +203,7 @@ void SelectiveRefinement::visit_active(uint32_t v, FrameStats& stats) {
 
 void SelectiveRefinement::visit_split(uint32_t v, FrameStats& stats) {
   ++stats.evaluated;
-  if (criteria_detail::qrefine_inline(view_, slots_[v].criteria)) keep(v);  // decoded, not kept: see adapt()
+  if (criteria_detail::qrefine_inline(view_, slots_[v].criteria)) keep(v, true);  // decoded, not kept: see adapt()
   else tops_.push_back(v);  // may still be forced later this frame
 }
 

@@ -99,7 +99,7 @@ class SelectiveRefinement {
   void push_eval(uint32_t v) { stack_.push_back(uint64_t(v) << 1); }
   void push_forced(uint32_t v) { stack_.push_back(uint64_t(v) << 1 | 1); }
   void justify(uint32_t v);
-  void keep(uint32_t v);
+  void keep(uint32_t v, bool parent_kept);
   void visit_active(uint32_t v, FrameStats& stats);
   void visit_split(uint32_t v, FrameStats& stats);
   void pin_chain(uint32_t v);
