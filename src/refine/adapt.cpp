@@ -15,6 +15,7 @@
 #include <algorithm>
 #include <bit>
 #include <cmath>
+#include <cstring>
 
 #include "common/error.h"
 #include "pm/hierarchy.h"
@@ -42,15 +43,23 @@ SelectiveRefinement::SelectiveRefinement(SelectiveMesh& mesh, float model_scale,
 
 void SelectiveRefinement::set_options(const AdaptOptions& options) {
   if (!(options.tolerance >= 0) || !std::isfinite(options.tolerance)) fail(kWhere, "tolerance must be a finite number >= 0");
+  if (options.morph_frames != options_.morph_frames || options.max_ops != options_.max_ops) settled_ = false;
   options_ = options;
   morphs_.set_frames(options.morph_frames);
-  if (has_view_) view_ = make_criteria(view_params_, options_.tolerance);
+  if (has_view_) use_criteria(make_criteria(view_params_, options_.tolerance));
 }
 
 void SelectiveRefinement::set_view(const ViewParams& view) {
   view_params_ = view;
-  view_ = make_criteria(view, options_.tolerance);
+  use_criteria(make_criteria(view, options_.tolerance));
   has_view_ = true;
+}
+
+// Only what qrefine reads decides the walk: the same bytes give the same frame.
+void SelectiveRefinement::use_criteria(const ViewCriteria& criteria) {
+  static_assert(sizeof(ViewCriteria) == 28 * sizeof(float), "compared as bytes: no padding");
+  if (std::memcmp(&criteria, &view_, sizeof view_) != 0) settled_ = false;
+  view_ = criteria;
 }
 
 // A split arriving for a slot already decoded: children come as a pair after their parent, and the
@@ -116,11 +125,12 @@ uint32_t SelectiveRefinement::dependency(uint32_t slot) {
 
 // A split node the target keeps: evaluate its children, and keep its parent and its dependency too.
 void SelectiveRefinement::justify(uint32_t v) {
-  if (!mesh_->is_active(v) && state(v).kept != frame_) keep(v);
+  if (!mesh_->is_active(v) && state(v).kept != frame_) keep(v, false);
 }
 
-// justify() of a split node whose slot is decoded and not kept yet this frame.
-void SelectiveRefinement::keep(uint32_t v) {
+// justify() of a split node whose slot is decoded and not kept yet this frame. `parent_kept`: v was
+// reached as the child of a kept node (or is a root), so its parent needs no look.
+void SelectiveRefinement::keep(uint32_t v, bool parent_kept) {
   const uint32_t t = slots_[v].first_child;
   if (t + 1 >= slots_.size()) grow(t + 2);  // before taking references: it may move the slots
   Slot& slot = slots_[v];
@@ -129,7 +139,7 @@ void SelectiveRefinement::keep(uint32_t v) {
   __builtin_prefetch(&slots_[t + 1]);
   push_eval(t);
   push_eval(t + 1);
-  if (slot.parent != kNone && state(slot.parent).kept != frame_) push_forced(slot.parent);
+  if (!parent_kept && slot.parent != kNone && state(slot.parent).kept != frame_) push_forced(slot.parent);
   const uint32_t dep = slot.dependency != kUnknown ? slot.dependency : dependency(v);  // computed once per slot
   if (dep != kNone && state(dep).kept != frame_) push_forced(dep);
 }
@@ -184,7 +194,7 @@ void SelectiveRefinement::visit_active(uint32_t v, FrameStats& stats) {
   const VSplitResult r = mesh_->vsplit(v);
   stats.vsplits += uint32_t(mesh_->vertex_count() - before);
   if (r.done) {
-    keep(v);
+    keep(v, true);
   } else {
     report_missing(r.needs);
     pin_chain(v);
@@ -193,7 +203,7 @@ void SelectiveRefinement::visit_active(uint32_t v, FrameStats& stats) {
 
 void SelectiveRefinement::visit_split(uint32_t v, FrameStats& stats) {
   ++stats.evaluated;
-  if (criteria_detail::qrefine_inline(view_, slots_[v].criteria)) keep(v);  // decoded, not kept: see adapt()
+  if (criteria_detail::qrefine_inline(view_, slots_[v].criteria)) keep(v, true);  // decoded, not kept: see adapt()
   else tops_.push_back(v);  // may still be forced later this frame
 }
 
@@ -249,8 +259,17 @@ void SelectiveRefinement::collapse_unwanted(FrameStats& stats) {
   }
 }
 
+bool SelectiveRefinement::unchanged_since_settled() const {
+  return settled_ && settled_changes_ == mesh_->changes() && settled_size_ == mesh_->hierarchy().size();
+}
+
 FrameStats SelectiveRefinement::adapt() {
   if (!has_view_) fail(kWhere, "no view set");
+  if (unchanged_since_settled()) {
+    FrameStats stats;
+    stats.missing = uint32_t(missing_.size());
+    return stats;
+  }
   sync();
   if (++frame_ == 0) {  // stamps wrapped: clear them so old frames cannot match
     for (Slot& slot : slots_) slot.kept = 0;
@@ -279,6 +298,9 @@ FrameStats SelectiveRefinement::adapt() {
   collapse_unwanted(stats);
   if (morphs_.enabled()) stats.morphing = uint32_t(morphs_.advance(*mesh_));
   stats.missing = uint32_t(missing_.size());
+  settled_ = stats.ops() == 0 && !stats.capped && stats.morphing == 0;
+  settled_changes_ = mesh_->changes();
+  settled_size_ = uint32_t(h.size());
   return stats;
 }
 

@@ -54,11 +54,16 @@ class SelectiveRefinement {
   // The view for the next frames, with options().tolerance; pms::Error for a negative tolerance.
   void set_view(const ViewParams& view);
 
-  // One frame. Walks the split forest from the roots and evaluates qrefine once per node it reaches:
+  // One frame. After a frame that changed nothing (no operation, cap or movement), with the same criteria
+  // (view and τ), options, hierarchy and mesh, the walk would reach the same result: it returns at once
+  // (evaluated 0, the same missing()). Otherwise it walks the split forest from the roots and evaluates
+  // qrefine once per node it reaches:
   // splits active vertices that want it (the partial order's forced chain included), keeps a split node
   // while it is wanted, forced by a kept split, or an ancestor of one, and collapses the rest (after a
   // geomorph when morph_frames > 0). Known leaves that want a split whose packet is unknown go to missing().
   FrameStats adapt();
+  // The next adapt() walks even when nothing changed (benchmarks time the walk with it).
+  void rewalk() { settled_ = false; }
 
   // Active known leaves (slots) that qrefine wants split but whose vsplit packet is not known, including
   // the leaf a forced chain stopped at. Valid until the next adapt(): the streaming client asks for them.
@@ -79,6 +84,8 @@ class SelectiveRefinement {
 
  private:
   void sync();
+  bool unchanged_since_settled() const;
+  void use_criteria(const ViewCriteria& criteria);
   struct Slot;
   // v's slot, grown and decoded on first use (out of line: the walk's fast path stays small).
   Slot& state(uint32_t v) {
@@ -92,7 +99,7 @@ class SelectiveRefinement {
   void push_eval(uint32_t v) { stack_.push_back(uint64_t(v) << 1); }
   void push_forced(uint32_t v) { stack_.push_back(uint64_t(v) << 1 | 1); }
   void justify(uint32_t v);
-  void keep(uint32_t v);
+  void keep(uint32_t v, bool parent_kept);
   void visit_active(uint32_t v, FrameStats& stats);
   void visit_split(uint32_t v, FrameStats& stats);
   void pin_chain(uint32_t v);
@@ -107,6 +114,11 @@ class SelectiveRefinement {
   ViewCriteria view_;
   bool has_view_ = false;
   uint32_t frame_ = 0;
+  // The last frame changed nothing (no operation, cap or movement); valid while view, options,
+  // hierarchy size and mesh changes() stay as they were then.
+  bool settled_ = false;
+  uint64_t settled_changes_ = 0;
+  uint32_t settled_size_ = 0;
   // Everything the walk reads of a slot, in one cache line: the walk is bound by memory latency. Slots
   // exist up to the highest one reached (grown geometrically) and are decoded when first reached, so a
   // fresh refinement pays for the nodes it evaluates, not for the model.

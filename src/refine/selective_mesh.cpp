@@ -251,6 +251,7 @@ void SelectiveMesh::activate(uint32_t v, VertexId id) {
   record.active_pos = uint32_t(active_.size());
   active_.push_back(v);
   active_bits_[v >> 6] |= uint64_t(1) << (v & 63);
+  ++changes_;
 }
 
 void SelectiveMesh::deactivate(uint32_t v) {
@@ -262,6 +263,7 @@ void SelectiveMesh::deactivate(uint32_t v) {
   record.size = record.capacity = 0;
   record.active_pos = kNone;
   active_bits_[v >> 6] &= ~(uint64_t(1) << (v & 63));
+  ++changes_;
 }
 
 uint32_t SelectiveMesh::new_face(uint32_t a, uint32_t b, uint32_t c) {

@@ -79,6 +79,9 @@ class SelectiveMesh {
   bool face_alive(uint32_t f) const { return corner_[3 * size_t(f)] != kNone; }
   const uint32_t* face(uint32_t f) const { return &corner_[3 * size_t(f)]; }  // 3 slots, CCW
   const VertexHierarchy& hierarchy() const { return *hierarchy_; }
+  // Counts activations and deactivations: equal values mean the same active front (the adaptation
+  // loop's steady-frame test).
+  uint64_t changes() const { return changes_; }
 
   // Vertices in active_vertices() order.
   void extract(MeshArrays& out) const;
@@ -140,6 +143,7 @@ class SelectiveMesh {
   BigVector<uint32_t> corner_;   // 3 slots per face; a dead face holds kNone, next free face
   BigVector<uint32_t> partner_;  // per face: the other face of the split that made it (f_l <-> f_r)
   uint32_t free_face_ = kNone;
+  uint64_t changes_ = 0;
   size_t face_count_ = 0;
   size_t base_face_count_ = 0;
   // Per slot up to the highest slot activated so far (grown geometrically, never past the hierarchy):

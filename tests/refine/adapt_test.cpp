@@ -209,6 +209,51 @@ TEST(Adapt, FreshAndReusedMeshesAgreeBunny) {
   expect_fresh_equals_reused(*test::built_bunny());
 }
 
+// A frame after a converged one with nothing changed returns without walking; a split made behind the
+// loop's back, a new view or new options make the next frame walk again and reach the target.
+TEST(Adapt, SteadyFramesSkipOnlyWhileNothingChanged) {
+  const BuiltModel& model = test::built_terrain();
+  const ModelData m = model.model();
+  const VertexHierarchy h = test::complete_hierarchy(m);
+  const ViewParams view = test::view_for(model, test::framing_camera(model, {0.3f, 0.2f, 1}, 2));
+  const std::vector<IdFace> target = test::naive_refinement(model, view, 1);
+  SelectiveMesh mesh(h, m.base_faces);
+  SelectiveRefinement refinement(mesh, m.scale);
+  refinement.set_view(view);
+  refinement.converge();
+  const FrameStats steady = refinement.adapt();
+  EXPECT_EQ(steady.evaluated, 0u);
+  EXPECT_EQ(steady.ops(), 0u);
+  ASSERT_EQ(test::id_faces(mesh), target);
+
+  uint32_t extra = kNone;  // an active vertex the target does not split
+  for (uint32_t v : mesh.active_vertices()) {
+    if (!h.is_leaf(v)) extra = v;
+  }
+  ASSERT_NE(extra, kNone);
+  ASSERT_TRUE(mesh.vsplit(extra).done);
+  const FrameStats after_split = refinement.adapt();
+  EXPECT_GT(after_split.evaluated, 0u);
+  EXPECT_GT(after_split.ecols, 0u);
+  EXPECT_EQ(test::id_faces(mesh), target);
+
+  EXPECT_EQ(refinement.adapt().ops(), 0u) << "the target was reached";
+  refinement.set_view(view);
+  EXPECT_EQ(refinement.adapt().evaluated, 0u) << "the same view again changes nothing";
+  refinement.rewalk();
+  const FrameStats walked = refinement.adapt();
+  EXPECT_GT(walked.evaluated, 0u);
+  EXPECT_EQ(walked.ops(), 0u);
+  refinement.rewalk();
+  EXPECT_EQ(refinement.adapt().evaluated, walked.evaluated) << "a walk over the same mesh evaluates the same nodes";
+  refinement.set_options(AdaptOptions{1e9f, 0, 0});
+  EXPECT_GT(refinement.adapt().ecols, 0u) << "new options walk again";
+  refinement.set_options(AdaptOptions{1, 0, 0});
+  refinement.converge();
+  refinement.set_view(test::view_for(model, test::framing_camera(model, {0.3f, 0.2f, 1}, 8)));
+  EXPECT_GT(refinement.adapt().evaluated, 0u) << "a new view walks again";
+}
+
 // τ = 0 with the whole model in view: every input face that is inside the frustum and front-facing is a
 // face of the refined mesh (culling is conservative, and nothing with an error is left coarse).
 void expect_visible_faces_kept(const BuiltModel& model, const Camera& camera) {
