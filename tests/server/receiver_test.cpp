@@ -4,6 +4,7 @@
 #include <utility>  // before asio with C++20 (docs/architecture.md, "Stack")
 #include <boost/asio.hpp>
 #include <gtest/gtest.h>
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <string>
@@ -11,11 +12,14 @@
 
 #include "client/http_connection.h"
 #include "client/receiver_client.h"
+#include "client/streaming_client.h"
 #include "client/transport.h"
 #include "common/error.h"
 #include "io/shapes.h"
+#include "protocol/split_request.h"
 #include "server/http_server.h"
 #include "server/limits.h"
+#include "server/tcp_server.h"
 #include "streaming_fixture.h"
 
 namespace pms {
@@ -71,6 +75,31 @@ TEST(Receiver, MeshEqualsLocalRefinementAndASecondLapAsksForNothing) {
     EXPECT_EQ(r.report.down_bytes, 0u);
   }
   EXPECT_EQ(server.http.stats().requests.load(), requests_after_lap1) << "a second lap sends no request";
+}
+
+// The leaves held, in code order (the slots are in arrival order, which differs between modes).
+std::vector<VertexId> sorted_leaves(const client::ClientSession& session) {
+  std::vector<VertexId> leaves = session.known_leaves();
+  std::sort(leaves.begin(), leaves.end(), protocol::code_order);
+  return leaves;
+}
+
+// The client chooses exactly what the sender-driven server would send it: the same splits on the same path.
+TEST(Receiver, ReceivesTheSplitsTheSenderDrivenModeSendsOnTheSamePath) {
+  const Fixture& f = terrain();
+  Server http(f.catalogue);
+  server::TcpServer tcp(f.catalogue, server::ServerLimits{}, "127.0.0.1", 0);
+  tcp.start();
+  client::ReceiverClient receiver(http.url());
+  receiver.open("terrain");
+  client::StreamingClient sender("127.0.0.1", tcp.port(), client::ClientOptions{1.0f});
+  sender.open("terrain");
+  for (const Camera& camera : orbit_path(f.hierarchy, 8, 0.7f)) {
+    receiver.frame(camera);
+    sender.frame(camera);
+    EXPECT_EQ(receiver.session().splits_received(), sender.session().splits_received());
+    EXPECT_EQ(sorted_leaves(receiver.session()), sorted_leaves(sender.session()));
+  }
 }
 
 TEST(Receiver, SurvivesTheServerClosingIdleKeptAliveConnections) {
