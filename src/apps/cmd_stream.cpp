@@ -1,4 +1,5 @@
 // pmstream stream --server HOST:PORT --model NAME --path PATH.json --mode MODE --tolerance PX
+//                 (--mode receiver: --server http://HOST:PORT[/prefix] [--in-flight N] [--ids-per-request N])
 //                 [--laps K] [--reconnect N] [--timeout-ms N] [--connect-timeout-ms N] [--save-mesh OUT.ply]
 //                 [--snapshots DIR] [--json]
 // The headless viewer: follows a camera path, streaming what each frame needs, and reports per frame.
@@ -11,6 +12,8 @@
 #include "apps/commands.h"
 #include "apps/refine_pipeline.h"
 #include "apps/resource_usage.h"
+#include "client/http_connection.h"
+#include "client/receiver_client.h"
 #include "client/streaming_client.h"
 #include "client/transport.h"
 #include "common/error.h"
@@ -28,6 +31,7 @@ struct StreamArgs {
   float tolerance = 1;
   uint32_t laps = 1, morph_frames = 0, max_ops = 0, reconnect = 0;
   uint32_t timeout_ms = 30000, connect_timeout_ms = 5000;
+  uint32_t in_flight = 4, ids_per_request = 64;  // receiver mode
   bool json = false;
 };
 
@@ -44,13 +48,15 @@ void split_host_port(const std::string& text, std::string& host, uint16_t& port)
   }
 }
 
-Mesh current_mesh(client::StreamingClient& client) {
+template <class Client>
+Mesh current_mesh(Client& client) {
   MeshArrays arrays;
   client.session().refinement().extract(arrays);
   return to_mesh(std::move(arrays));
 }
 
-void snapshot(client::StreamingClient& client, const Camera& camera, const std::string& dir, size_t index,
+template <class Client>
+void snapshot(Client& client, const Camera& camera, const std::string& dir, size_t index,
               Renderer& renderer, Image& image) {
   const Mesh mesh = current_mesh(client);
   renderer.render({mesh.positions, mesh.indices, mesh.colors}, client.session().view_params(camera), image);
@@ -59,7 +65,81 @@ void snapshot(client::StreamingClient& client, const Camera& camera, const std::
   save_png((std::filesystem::path(dir) / name).string(), image);
 }
 
+nlohmann::json frame_json(const client::FrameReport& r, size_t index, uint32_t lap) {
+  return {{"frame", index},         {"lap", lap},           {"up_bytes", r.up_bytes}, {"down_bytes", r.down_bytes},
+          {"faces", r.faces},       {"vsplits", r.vsplits}, {"latency_ms", r.latency_ms}};
+}
+
+void progress(const StreamArgs& args, size_t index, size_t frames, const client::FrameReport& r) {
+  if (!args.json)
+    std::fprintf(stderr, "\rframe %zu/%zu  faces %llu  down %llu B", index + 1, frames, (unsigned long long)r.faces,
+                 (unsigned long long)r.down_bytes);
+}
+
+void print_report(const StreamArgs& args, nlohmann::json& out, size_t frames, uint64_t splits, uint64_t up,
+                  uint64_t down, uint64_t faces, double seconds) {
+  if (args.json) {
+    std::printf("%s\n", out.dump().c_str());
+  } else {
+    std::printf("%s: %zu frames, %llu vsplits received, %llu B up, %llu B down, %llu faces at the end (%.2f s)\n",
+                args.model.c_str(), frames, (unsigned long long)splits, (unsigned long long)up,
+                (unsigned long long)down, (unsigned long long)faces, seconds);
+  }
+}
+
+// --mode receiver: no session, GETs over HTTP (client/receiver_client.h); byte counts are HTTP's, headers
+// included, with the payload apart.
+void run_receiver(const StreamArgs& args) {
+  const client::HttpUrl url = client::parse_http_url(args.server);
+  const std::vector<Camera> path = load_path(args.path);
+  if (!args.snapshots.empty()) std::filesystem::create_directories(args.snapshots);
+  Stopwatch clock;
+  client::ReceiverOptions options;
+  options.tolerance = args.tolerance;
+  options.morph_frames = args.morph_frames;
+  options.max_ops = args.max_ops;
+  options.ids_per_request = args.ids_per_request;
+  options.http.in_flight = args.in_flight;
+  options.http.io_timeout = std::chrono::milliseconds(args.timeout_ms);
+  options.http.connect_timeout = std::chrono::milliseconds(args.connect_timeout_ms);
+  client::ReceiverClient client(url, options);
+  client.open(args.model);
+  nlohmann::json frames = nlohmann::json::array();
+  Renderer renderer;
+  Image image;
+  size_t index = 0;
+  for (uint32_t lap = 0; lap < args.laps; ++lap) {
+    for (const Camera& camera : path) {
+      const client::ReceiverFrame r = client.frame(camera);
+      nlohmann::json f = frame_json(r.report, index, lap);
+      f["down_payload_bytes"] = r.payload_down;
+      f["split_requests"] = r.split_requests;
+      f["rounds"] = r.rounds;
+      frames.push_back(std::move(f));
+      if (!args.snapshots.empty()) snapshot(client, camera, args.snapshots, index, renderer, image);
+      progress(args, index, size_t(args.laps) * path.size(), r.report);
+      ++index;
+    }
+  }
+  if (!args.json) std::fprintf(stderr, "\n");
+  client.settle(path.back());
+  if (!args.save_mesh.empty()) save_ply(current_mesh(client), args.save_mesh);
+  const client::HttpCounters& c = client.counters();
+  nlohmann::json out = {{"frames", frames},
+                        {"total_up_bytes", c.bytes_up},
+                        {"total_down_bytes", c.bytes_down},
+                        {"total_down_payload_bytes", c.payload_down},
+                        {"http_requests", c.requests},
+                        {"split_requests", client.split_requests()},
+                        {"http_connections", c.connections},
+                        {"vsplits_received", client.session().splits_received()},
+                        {"seconds", clock.seconds()}};
+  print_report(args, out, index, client.session().splits_received(), c.bytes_up, c.bytes_down,
+               client.session().mesh().face_count(), clock.seconds());
+}
+
 void run_stream(const StreamArgs& args) {
+  if (args.mode == "receiver") return run_receiver(args);
   const std::optional<protocol::StreamMode> mode = protocol::mode_named(args.mode);
   if (!mode) fail("--mode", "'" + args.mode + "': this build streams in the modes " + protocol::mode_names());
   std::string host;
@@ -90,17 +170,9 @@ void run_stream(const StreamArgs& args) {
   for (uint32_t lap = 0; lap < args.laps; ++lap) {
     for (const Camera& camera : path) {
       const client::FrameReport r = client.frame(camera);
-      frames.push_back({{"frame", index},
-                        {"lap", lap},
-                        {"up_bytes", r.up_bytes},
-                        {"down_bytes", r.down_bytes},
-                        {"faces", r.faces},
-                        {"vsplits", r.vsplits},
-                        {"latency_ms", r.latency_ms}});
+      frames.push_back(frame_json(r, index, lap));
       if (!args.snapshots.empty()) snapshot(client, camera, args.snapshots, index, renderer, image);
-      if (!args.json)
-        std::fprintf(stderr, "\rframe %zu/%zu  faces %llu  down %llu B", index + 1, size_t(args.laps) * path.size(),
-                     (unsigned long long)r.faces, (unsigned long long)r.down_bytes);
+      progress(args, index, size_t(args.laps) * path.size(), r);
       ++index;
     }
   }
@@ -116,14 +188,8 @@ void run_stream(const StreamArgs& args) {
                         {"total_down_payload_bytes", c.payload_down()},
                         {"vsplits_received", client.session().splits_received()},
                         {"seconds", clock.seconds()}};
-  if (args.json) {
-    std::printf("%s\n", out.dump().c_str());
-  } else {
-    std::printf("%s: %zu frames, %llu vsplits received, %llu B up, %llu B down, %llu faces at the end (%.2f s)\n",
-                args.model.c_str(), index, (unsigned long long)client.session().splits_received(),
-                (unsigned long long)c.bytes_up, (unsigned long long)c.bytes_down,
-                (unsigned long long)client.session().mesh().face_count(), clock.seconds());
-  }
+  print_report(args, out, index, client.session().splits_received(), c.bytes_up, c.bytes_down,
+               client.session().mesh().face_count(), clock.seconds());
 }
 
 }  // namespace
@@ -131,11 +197,11 @@ void run_stream(const StreamArgs& args) {
 void add_stream_command(CLI::App& app) {
   auto args = std::make_shared<StreamArgs>();
   CLI::App* cmd = app.add_subcommand("stream", "Headless viewer: stream a model from a server along a camera path");
-  cmd->add_option("--server", args->server, "HOST:PORT of the server's TCP port")->required();
+  cmd->add_option("--server", args->server, "HOST:PORT of the server's TCP port; for --mode receiver http://HOST:PORT[/prefix] of its HTTP port")->required();
   cmd->add_option("--model", args->model, "Model name in the server's catalogue")->required();
   cmd->add_option("--path", args->path, "PATH.json (pmstream path ...)")->required();
   cmd->add_option("--mode", args->mode, "Streaming mode: sender (view-dependent), sender-plain (the same splits as plain vsplits for a viewer that "
-                 "does not refine) or vi (plain PM order until the view is satisfied); docs/cli.md")
+                 "does not refine), vi (plain PM order until the view is satisfied) or receiver (the client asks for splits by id over HTTP); docs/cli.md")
       ->capture_default_str();
   cmd->add_option("--tolerance", args->tolerance, "Screen-space error tolerance in pixels")
       ->check(CLI::NonNegativeNumber)
@@ -151,6 +217,12 @@ void add_stream_command(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--connect-timeout-ms", args->connect_timeout_ms, "Give up a connection attempt after this long")
       ->check(CLI::Range(1u, 3600000u))
+      ->capture_default_str();
+  cmd->add_option("--in-flight", args->in_flight, "receiver: HTTP requests sent ahead of the answer being read")
+      ->check(CLI::Range(1u, 64u))
+      ->capture_default_str();
+  cmd->add_option("--ids-per-request", args->ids_per_request, "receiver: split ids in one GET")
+      ->check(CLI::Range(1u, 1024u))
       ->capture_default_str();
   cmd->add_option("--geomorph-frames", args->morph_frames, "Blend splits and collapses over N frames (0 = off)")
       ->capture_default_str();

@@ -1,0 +1,152 @@
+// The receiver-driven client (receiver_client.h): the sender-driven client's frame loop, with the client
+// choosing the splits itself — the leaves qrefine wants split, most screen area first — and fetching them
+// by id with the cacheable GET form.
+#include "client/receiver_client.h"
+
+#include <algorithm>
+#include <nlohmann/json.hpp>
+
+#include "common/error.h"
+#include "protocol/base64url.h"
+#include "protocol/server_messages.h"
+#include "protocol/split_request.h"
+#include "refine/adapt.h"
+
+namespace pms::client {
+namespace {
+
+std::string answer_text(const HttpAnswer& answer) {
+  std::string text(answer.body.begin(), answer.body.begin() + std::min<size_t>(answer.body.size(), 200));
+  while (!text.empty() && (text.back() == '\n' || text.back() == '\r')) text.pop_back();
+  return text;
+}
+
+[[noreturn]] void refused(const std::string& target, const HttpAnswer& answer) {
+  fail("GET " + target, "HTTP " + std::to_string(answer.status) + ": " + answer_text(answer));
+}
+
+// Frames without a cap reach the view's mesh for what is known in one adapt(); the extra passes only
+// finish collapses that waited for a geomorph (as the sender-driven client does).
+void adapt_for_view(SelectiveRefinement& refinement) {
+  FrameStats stats = refinement.adapt();
+  for (int pass = 0; pass < 64 && !stats.capped && stats.ops() > 0 && refinement.missing().empty(); ++pass)
+    stats = refinement.adapt();
+}
+
+}  // namespace
+
+ReceiverClient::ReceiverClient(const HttpUrl& server, const ReceiverOptions& options)
+    : options_(options), http_(server, options.http), importance_(RenderOptions{1}) {
+  if (options.ids_per_request == 0) fail("receiver", "ids_per_request must be at least 1");
+  session_.adapt_options.tolerance = options.tolerance;
+  session_.adapt_options.morph_frames = options.morph_frames;
+  session_.adapt_options.max_ops = options.max_ops;
+  session_.refinement_info = true;  // the records carry the children's refinement info: the client refines
+}
+
+std::vector<std::string> ReceiverClient::list() {
+  const std::string target = "/models";
+  const HttpAnswer answer = http_.get(target);
+  if (answer.status != 200) refused(target, answer);
+  const nlohmann::json json = nlohmann::json::parse(answer.body.begin(), answer.body.end(), nullptr, false);
+  if (json.is_discarded() || !json.contains("models") || !json["models"].is_array())
+    fail("GET " + target, "not the catalogue's JSON");
+  std::vector<std::string> names;
+  for (const nlohmann::json& model : json["models"])
+    if (model.contains("name") && model["name"].is_string()) names.push_back(model["name"].get<std::string>());
+  return names;
+}
+
+void ReceiverClient::open(const std::string& model) {
+  if (session_.has_model()) fail("open", "this client already holds '" + model_ + "'");
+  const std::string target = "/models/" + model + "/base";
+  const HttpAnswer answer = http_.get(target);
+  if (answer.status != 200) refused(target, answer);
+  session_.on_base(protocol::decode_base(answer.body));
+  model_ = model;
+}
+
+// The leaves the last adapt() could not split, the visible ones by the pixels of their faces, then the
+// rest (forced chains' leaves can be out of sight) in the order adapt() found them.
+std::vector<VertexId> ReceiverClient::ranked_missing(const Camera& camera) {
+  SelectiveRefinement& refinement = session_.refinement();
+  const std::span<const uint32_t> missing = refinement.missing();
+  std::vector<uint32_t> sorted(missing.begin(), missing.end());
+  std::sort(sorted.begin(), sorted.end());
+  sorted.erase(std::unique(sorted.begin(), sorted.end()), sorted.end());
+  const auto wanted = [&sorted](uint32_t slot) { return std::binary_search(sorted.begin(), sorted.end(), slot); };
+  const std::vector<VertexArea>& ranked = importance_.rank(session_.mesh(), session_.view_params(camera), wanted);
+  VertexHierarchy& hierarchy = session_.hierarchy();
+  std::vector<uint8_t> taken(sorted.size(), 0);
+  std::vector<VertexId> ids;
+  ids.reserve(sorted.size());
+  for (const VertexArea& area : ranked) {
+    taken[size_t(std::lower_bound(sorted.begin(), sorted.end(), area.slot) - sorted.begin())] = 1;
+    ids.push_back(hierarchy.id(area.slot));
+  }
+  for (const uint32_t slot : missing) {
+    const size_t at = size_t(std::lower_bound(sorted.begin(), sorted.end(), slot) - sorted.begin());
+    if (taken[at]) continue;
+    taken[at] = 1;
+    ids.push_back(hierarchy.id(slot));
+  }
+  return ids;
+}
+
+// GETs the splits of `ids` in their order, ids_per_request to a request (each request is one cacheable
+// URL: the code of its id set), and attaches every answer as it arrives. Returns the splits attached.
+size_t ReceiverClient::fetch(const std::vector<VertexId>& ids) {
+  std::vector<std::string> targets;
+  for (size_t begin = 0; begin < ids.size(); begin += options_.ids_per_request) {
+    const size_t end = std::min(ids.size(), begin + options_.ids_per_request);
+    protocol::SplitRequest request{0, std::vector<VertexId>(ids.begin() + begin, ids.begin() + end)};
+    targets.push_back("/models/" + model_ + "/splits/" +
+                      protocol::base64url_encode(protocol::encode_split_request(request)));
+  }
+  size_t attached = 0;
+  http_.get_all(targets, [&](size_t index, HttpAnswer&& answer) {
+    if (answer.status != 200) refused(targets[index], answer);
+    const protocol::VSplits batch = protocol::decode_vsplits(answer.body, session_.context());
+    session_.on_vsplits(batch);
+    attached += batch.splits.size();
+  });
+  split_requests_ += targets.size();
+  return attached;
+}
+
+ReceiverFrame ReceiverClient::frame(const Camera& camera) {
+  if (!session_.has_model()) fail("stream", "no model open");
+  ReceiverFrame out;
+  out.report.frame = ++frame_;
+  const HttpCounters before = http_.counters();
+  const uint64_t requests_before = split_requests_;
+  const auto start = std::chrono::steady_clock::now();
+  SelectiveRefinement& refinement = session_.refinement();
+  refinement.set_view(session_.view_params(camera));
+  // Each round's answers let adapt() go one level deeper into the front; a model's depth bounds the rounds.
+  for (uint32_t round = 0; round < 4096; ++round) {
+    adapt_for_view(refinement);
+    if (refinement.missing().empty()) break;
+    ++out.rounds;
+    out.report.requested = true;
+    const size_t received = fetch(ranked_missing(camera));
+    out.report.vsplits += received;
+    if (received == 0) break;
+  }
+  if (out.report.requested)
+    out.report.latency_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  const HttpCounters& after = http_.counters();
+  out.report.up_bytes = after.bytes_up - before.bytes_up;
+  out.report.down_bytes = after.bytes_down - before.bytes_down;
+  out.payload_down = after.payload_down - before.payload_down;
+  out.split_requests = uint32_t(split_requests_ - requests_before);
+  out.report.faces = session_.mesh().face_count();
+  return out;
+}
+
+void ReceiverClient::settle(const Camera& camera) {
+  frame(camera);
+  session_.refinement().converge();
+}
+
+}  // namespace pms::client

@@ -1,0 +1,205 @@
+// The receiver-driven client against the HTTP server over real loopback: its mesh is local refinement's
+// for the same view and τ, a second lap asks for nothing, the ids asked for match the splits received, and a
+// server that stalls or closes mid-answer is a clear error within the deadline.
+#include <utility>  // before asio with C++20 (docs/architecture.md, "Stack")
+#include <boost/asio.hpp>
+#include <gtest/gtest.h>
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <string>
+#include <thread>
+
+#include "client/http_connection.h"
+#include "client/receiver_client.h"
+#include "client/streaming_client.h"
+#include "client/transport.h"
+#include "common/error.h"
+#include "io/shapes.h"
+#include "protocol/split_request.h"
+#include "server/http_server.h"
+#include "server/limits.h"
+#include "server/tcp_server.h"
+#include "streaming_fixture.h"
+
+namespace pms {
+namespace {
+
+using test::Fixture;
+using test::faces_by_id;
+using test::local_faces;
+using test::make_fixture;
+using test::orbit_path;
+
+const Fixture& terrain() {
+  static const Fixture f = make_fixture(make_terrain(30000, 5), "terrain");
+  return f;
+}
+
+struct Server {
+  explicit Server(std::shared_ptr<const server::Catalogue> catalogue, const server::HttpLimits& limits = {})
+      : http(std::move(catalogue), limits, "127.0.0.1", 0) {
+    http.start();
+  }
+  client::HttpUrl url() const { return client::HttpUrl{"127.0.0.1", http.port(), ""}; }
+  server::HttpServer http;
+};
+
+TEST(Receiver, MeshEqualsLocalRefinementAndASecondLapAsksForNothing) {
+  const Fixture& f = terrain();
+  Server server(f.catalogue);
+  client::ReceiverOptions options;
+  options.ids_per_request = 16;  // several requests per round, so pipelining is exercised
+  client::ReceiverClient client(server.url(), options);
+  ASSERT_EQ(client.list(), std::vector<std::string>{"terrain"});
+  client.open("terrain");
+  const std::vector<Camera> path = orbit_path(f.hierarchy, 10, 0.3f);
+  uint64_t lap1_requests = 0;
+  for (const Camera& camera : path) {
+    const client::ReceiverFrame r = client.frame(camera);
+    lap1_requests += r.split_requests;
+    EXPECT_EQ(r.report.up_bytes > 0, r.split_requests > 0);
+    EXPECT_GE(r.report.down_bytes, r.payload_down);
+    EXPECT_EQ(faces_by_id(client.session().mesh()), local_faces(f.snapped, camera, 1.0f))
+        << "frame " << r.report.frame << " differs from local refinement";
+  }
+  EXPECT_GT(lap1_requests, 1u);
+  EXPECT_GT(client.session().splits_received(), 0u);
+  EXPECT_EQ(server.http.stats().splits_served.load(), client.session().splits_received())
+      << "every split asked for once, and only what was attached";
+  const uint64_t requests_after_lap1 = server.http.stats().requests.load();
+  for (const Camera& camera : path) {
+    const client::ReceiverFrame r = client.frame(camera);
+    EXPECT_EQ(r.split_requests, 0u);
+    EXPECT_EQ(r.report.up_bytes, 0u);
+    EXPECT_EQ(r.report.down_bytes, 0u);
+  }
+  EXPECT_EQ(server.http.stats().requests.load(), requests_after_lap1) << "a second lap sends no request";
+}
+
+// The leaves held, in code order (the slots are in arrival order, which differs between modes).
+std::vector<VertexId> sorted_leaves(const client::ClientSession& session) {
+  std::vector<VertexId> leaves = session.known_leaves();
+  std::sort(leaves.begin(), leaves.end(), protocol::code_order);
+  return leaves;
+}
+
+// The client chooses exactly what the sender-driven server would send it: the same splits on the same path.
+TEST(Receiver, ReceivesTheSplitsTheSenderDrivenModeSendsOnTheSamePath) {
+  const Fixture& f = terrain();
+  Server http(f.catalogue);
+  server::TcpServer tcp(f.catalogue, server::ServerLimits{}, "127.0.0.1", 0);
+  tcp.start();
+  client::ReceiverClient receiver(http.url());
+  receiver.open("terrain");
+  client::StreamingClient sender("127.0.0.1", tcp.port(), client::ClientOptions{1.0f});
+  sender.open("terrain");
+  for (const Camera& camera : orbit_path(f.hierarchy, 8, 0.7f)) {
+    receiver.frame(camera);
+    sender.frame(camera);
+    EXPECT_EQ(receiver.session().splits_received(), sender.session().splits_received());
+    EXPECT_EQ(sorted_leaves(receiver.session()), sorted_leaves(sender.session()));
+  }
+}
+
+TEST(Receiver, SurvivesTheServerClosingIdleKeptAliveConnections) {
+  const Fixture& f = terrain();
+  server::HttpLimits limits;
+  limits.idle_timeout_ms = 100;
+  Server server(f.catalogue, limits);
+  client::ReceiverClient client(server.url());
+  client.open("terrain");
+  const std::vector<Camera> path = orbit_path(f.hierarchy, 4, 0.1f);
+  for (const Camera& camera : path) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(250));  // the server has closed the connection
+    client.frame(camera);
+    EXPECT_EQ(faces_by_id(client.session().mesh()), local_faces(f.snapped, camera, 1.0f));
+  }
+  EXPECT_GT(client.counters().connections, 1u);
+}
+
+// A hostile origin on loopback: reads a request, sends the start of an answer, then stalls or closes.
+struct BrokenServer {
+  explicit BrokenServer(bool close_mid_answer) : acceptor(io, {boost::asio::ip::make_address("127.0.0.1"), 0}) {
+    thread = std::thread([this, close_mid_answer] {
+      boost::asio::ip::tcp::socket socket(io);
+      acceptor.accept(socket);
+      char request[4096];
+      boost::system::error_code ec;
+      socket.read_some(boost::asio::buffer(request), ec);
+      const std::string start = "HTTP/1.1 200 OK\r\nContent-Length: 100000\r\n\r\nabc";
+      boost::asio::write(socket, boost::asio::buffer(start), ec);
+      if (!close_mid_answer)
+        while (!done) std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    });
+  }
+  ~BrokenServer() {
+    done = true;
+    thread.join();
+  }
+  client::HttpUrl url() const { return client::HttpUrl{"127.0.0.1", acceptor.local_endpoint().port(), ""}; }
+
+  boost::asio::io_context io;
+  boost::asio::ip::tcp::acceptor acceptor;
+  std::atomic<bool> done{false};
+  std::thread thread;
+};
+
+std::string error_of(const client::HttpUrl& url, std::chrono::milliseconds deadline, double& seconds) {
+  client::HttpOptions options;
+  options.io_timeout = deadline;
+  client::HttpConnection connection(url, options);
+  const auto start = std::chrono::steady_clock::now();
+  std::string what;
+  try {
+    connection.get("/models/x/base");
+  } catch (const client::ConnectionError& e) {
+    what = e.what();
+  }
+  seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return what;
+}
+
+TEST(Receiver, AServerThatStallsMidAnswerIsAnErrorWithinTheDeadline) {
+  BrokenServer stalling(false);
+  double seconds = 0;
+  const std::string what = error_of(stalling.url(), std::chrono::milliseconds(300), seconds);
+  EXPECT_NE(what.find("no progress within 300 ms"), std::string::npos) << what;
+  EXPECT_NE(what.find("/models/x/base"), std::string::npos) << what;
+  EXPECT_GE(seconds, 0.25);
+  EXPECT_LT(seconds, 3.0);
+}
+
+TEST(Receiver, AServerThatClosesMidAnswerIsAClearError) {
+  BrokenServer closing(true);
+  double seconds = 0;
+  const std::string what = error_of(closing.url(), std::chrono::milliseconds(5000), seconds);
+  EXPECT_NE(what.find("closed the connection mid-answer"), std::string::npos) << what;
+  EXPECT_LT(seconds, 3.0);
+}
+
+TEST(Receiver, AnUnknownModelIsACleanError) {
+  Server server(terrain().catalogue);
+  client::ReceiverClient client(server.url());
+  try {
+    client.open("nope");
+    FAIL() << "opened an unknown model";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("HTTP 404"), std::string::npos) << e.what();
+  }
+}
+
+TEST(Receiver, ServerUrlsParse) {
+  const client::HttpUrl url = client::parse_http_url("http://example.org:8080/cdn/pm/");
+  EXPECT_EQ(url.host, "example.org");
+  EXPECT_EQ(url.port, 8080);
+  EXPECT_EQ(url.prefix, "/cdn/pm");
+  EXPECT_EQ(client::parse_http_url("http://h").port, 80);
+  EXPECT_THROW(client::parse_http_url("https://h"), Error);
+  EXPECT_THROW(client::parse_http_url("http://h:0"), Error);
+  EXPECT_THROW(client::parse_http_url("http://h:12x"), Error);
+  EXPECT_THROW(client::parse_http_url("http://h/p?q=1"), Error);
+}
+
+}  // namespace
+}  // namespace pms
