@@ -138,8 +138,9 @@ class HttpConnection : public std::enable_shared_from_this<HttpConnection> {
 // The answer to a connection over the limit, written once without waiting: it fits any socket buffer.
 void refuse(tcp::socket& socket) {
   static const std::string text = [] {
-    HttpResponse response = make_response(error_answer(503, "the server is at its connection limit; try again later"),
-                                          false, false, 11);
+    // The response's body is a span into the answer, which must outlive the serialization.
+    const HttpAnswer answer = error_answer(503, "the server is at its connection limit; try again later");
+    HttpResponse response = make_response(answer, false, false, 11);
     std::ostringstream out;
     out << response;
     return out.str();
