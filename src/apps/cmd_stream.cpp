@@ -87,6 +87,31 @@ void print_report(const StreamArgs& args, nlohmann::json& out, size_t frames, ui
   }
 }
 
+// Flies the path lap after lap: `frame(camera, index, lap)` runs one frame and returns its JSON and
+// report; snapshots, the progress line and the settling after the last camera are the same for every
+// client. Returns the frames' JSON and how many frames were flown.
+template <class Client, class Frame>
+std::pair<nlohmann::json, size_t> fly(const StreamArgs& args, const std::vector<Camera>& path, Client& client,
+                                      Frame&& frame) {
+  nlohmann::json frames = nlohmann::json::array();
+  Renderer renderer;
+  Image image;
+  size_t index = 0;
+  for (uint32_t lap = 0; lap < args.laps; ++lap) {
+    for (const Camera& camera : path) {
+      auto [json, report] = frame(camera, index, lap);
+      frames.push_back(std::move(json));
+      if (!args.snapshots.empty()) snapshot(client, camera, args.snapshots, index, renderer, image);
+      progress(args, index, size_t(args.laps) * path.size(), report);
+      ++index;
+    }
+  }
+  if (!args.json) std::fprintf(stderr, "\n");
+  client.settle(path.back());
+  if (!args.save_mesh.empty()) save_ply(current_mesh(client), args.save_mesh);
+  return {std::move(frames), index};
+}
+
 // --mode receiver: no session, GETs over HTTP (client/receiver_client.h); byte counts are HTTP's, headers
 // included, with the payload apart.
 void run_receiver(const StreamArgs& args) {
@@ -104,26 +129,14 @@ void run_receiver(const StreamArgs& args) {
   options.http.connect_timeout = std::chrono::milliseconds(args.connect_timeout_ms);
   client::ReceiverClient client(url, options);
   client.open(args.model);
-  nlohmann::json frames = nlohmann::json::array();
-  Renderer renderer;
-  Image image;
-  size_t index = 0;
-  for (uint32_t lap = 0; lap < args.laps; ++lap) {
-    for (const Camera& camera : path) {
-      const client::ReceiverFrame r = client.frame(camera);
-      nlohmann::json f = frame_json(r.report, index, lap);
-      f["down_payload_bytes"] = r.payload_down;
-      f["split_requests"] = r.split_requests;
-      f["rounds"] = r.rounds;
-      frames.push_back(std::move(f));
-      if (!args.snapshots.empty()) snapshot(client, camera, args.snapshots, index, renderer, image);
-      progress(args, index, size_t(args.laps) * path.size(), r.report);
-      ++index;
-    }
-  }
-  if (!args.json) std::fprintf(stderr, "\n");
-  client.settle(path.back());
-  if (!args.save_mesh.empty()) save_ply(current_mesh(client), args.save_mesh);
+  const auto [frames, index] = fly(args, path, client, [&](const Camera& camera, size_t frame, uint32_t lap) {
+    const client::ReceiverFrame r = client.frame(camera);
+    nlohmann::json f = frame_json(r.report, frame, lap);
+    f["down_payload_bytes"] = r.payload_down;
+    f["split_requests"] = r.split_requests;
+    f["rounds"] = r.rounds;
+    return std::pair{std::move(f), r.report};
+  });
   const client::HttpCounters& c = client.counters();
   nlohmann::json out = {{"frames", frames},
                         {"total_up_bytes", c.bytes_up},
@@ -163,22 +176,10 @@ void run_stream(const StreamArgs& args) {
   client::StreamingClient client(host, port, options);
   client.open(args.model);
 
-  nlohmann::json frames = nlohmann::json::array();
-  Renderer renderer;
-  Image image;
-  size_t index = 0;
-  for (uint32_t lap = 0; lap < args.laps; ++lap) {
-    for (const Camera& camera : path) {
-      const client::FrameReport r = client.frame(camera);
-      frames.push_back(frame_json(r, index, lap));
-      if (!args.snapshots.empty()) snapshot(client, camera, args.snapshots, index, renderer, image);
-      progress(args, index, size_t(args.laps) * path.size(), r);
-      ++index;
-    }
-  }
-  if (!args.json) std::fprintf(stderr, "\n");
-  client.settle(path.back());
-  if (!args.save_mesh.empty()) save_ply(current_mesh(client), args.save_mesh);
+  const auto [frames, index] = fly(args, path, client, [&](const Camera& camera, size_t frame, uint32_t lap) {
+    const client::FrameReport r = client.frame(camera);
+    return std::pair{frame_json(r, frame, lap), r};
+  });
 
   const client::LinkCounters c = client.counters();
   nlohmann::json out = {{"frames", frames},
