@@ -4,6 +4,7 @@
 // a ClientMode (docs/architecture.md, "Streaming modes"); it shares ClientSession and FrameReport with them.
 #pragma once
 #include <chrono>
+#include <nlohmann/json.hpp>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -12,6 +13,7 @@
 #include "client/client_session.h"
 #include "client/http_connection.h"
 #include "client/screen_importance.h"
+#include "pm/split_codec.h"
 #include "pm/vertex_id.h"
 #include "refine/camera.h"
 
@@ -49,6 +51,7 @@ class ReceiverClient {
   uint64_t split_requests() const { return split_requests_; }
 
  private:
+  nlohmann::json catalogue();
   std::vector<VertexId> ranked_missing(const Camera& camera);
   size_t fetch(const std::vector<VertexId>& ids);
 
@@ -57,6 +60,8 @@ class ReceiverClient {
   ClientSession session_;
   ScreenImportance importance_;
   std::string model_;
+  uint32_t records_format_ = 1;  // the catalogue's word for the model: 2 = compact records, coded by codec_
+  SplitCodec codec_;
   uint32_t frame_ = 0;
   uint64_t split_requests_ = 0;
 };
