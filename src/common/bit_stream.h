@@ -2,6 +2,7 @@
 // k div 8, an n-bit field goes least significant bit first. Shared by codecs below the protocol layer
 // (pm/split_codec.h); every read is bounds-checked and fails with pms::Error, never reads past the data.
 #pragma once
+#include <algorithm>
 #include <cstdint>
 #include <span>
 #include <string>
@@ -15,7 +16,15 @@ namespace pms {
 class BitWriter {
  public:
   void bits(uint64_t value, unsigned n) {  // n <= 64; bits of value above n are ignored
-    for (unsigned i = 0; i < n; ++i) bit(unsigned(value >> i) & 1);
+    // A byte (or what is left of the last one) at a time: servers copy records with it.
+    while (n) {
+      const unsigned used = unsigned(size_ & 7), take = std::min(n, 8 - used);
+      if (used == 0) bytes_.push_back(0);
+      bytes_.back() |= uint8_t((value & ((1u << take) - 1)) << used);
+      value >>= take;
+      n -= take;
+      size_ += take;
+    }
   }
   void bit(unsigned b) {
     if ((size_ & 7) == 0) bytes_.push_back(0);
@@ -23,7 +32,9 @@ class BitWriter {
     ++size_;
   }
   void append(const BitWriter& other) {
-    for (uint64_t i = 0; i < other.size_; ++i) bit(unsigned(other.bytes_[i >> 3] >> (i & 7)) & 1);
+    uint64_t i = 0;
+    for (; i + 8 <= other.size_; i += 8) bits(other.bytes_[i >> 3], 8);
+    if (i < other.size_) bits(other.bytes_[i >> 3], unsigned(other.size_ - i));
   }
   uint64_t size() const { return size_; }  // in bits
   // The bytes written; the last one is padded with zero bits.
@@ -52,7 +63,12 @@ class BitReader {
   uint64_t bits(unsigned n, const char* field) {  // n <= 64
     if (n > end_ - pos_) fail(what_, std::string(field) + ": truncated");
     uint64_t value = 0;
-    for (unsigned i = 0; i < n; ++i) value |= uint64_t(bit(field)) << i;
+    for (unsigned got = 0; got < n;) {
+      const unsigned offset = unsigned(pos_ & 7), take = std::min(n - got, 8 - offset);
+      value |= uint64_t((unsigned(data_[pos_ >> 3]) >> offset) & ((1u << take) - 1)) << got;
+      got += take;
+      pos_ += take;
+    }
     return value;
   }
   uint64_t position() const { return pos_; }
