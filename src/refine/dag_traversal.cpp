@@ -1,0 +1,203 @@
+// MANAGE-TRAVERSAL and the three traversals of Zheng & Chan 2006 (§4 Fig. 2, §5 Figs. 3–5) over a DagCut.
+//
+// ERROR-EVALUATE is the refinement engine's qrefine (Hoppe 1997 §4) and its priority, on the DAG's decoded
+// NodeCriteria. NEED-APPLY of a split candidate is qrefine; a candidate still waiting for a dependency
+// is split together with what it needs (each of those split when it reaches Fs), as the adaptation loop's
+// forced chain does. NEED-APPLY of an Fc node is "not qrefine" for the linear and constant-time traversals.
+// The priority traversal first justifies the split nodes top down as the adaptation loop does (a split node
+// is kept when its parent is kept and it qrefines, or when a kept node or a wanted candidate needs it), so
+// that it collapses exactly what the view's target mesh does not hold: the criteria are not monotone, and
+// with the local rule a node whose parent does not qrefine could keep that parent split forever.
+#include "refine/dag_traversal.h"
+
+#include <algorithm>
+
+#include "refine/criteria_inline.h"
+
+namespace pms {
+
+bool DagTraverser::qrefine(uint32_t n, DagFrameStats& stats) {
+  ++stats.evaluated;
+  return criteria_detail::qrefine_inline(view_, cut_->dag().criteria(n));
+}
+
+float DagTraverser::priority(uint32_t n, DagFrameStats& stats) {
+  ++stats.evaluated;
+  return criteria_detail::priority_inline(view_, cut_->dag().criteria(n));
+}
+
+// Top down from the roots (the adaptation loop's walk over the cut): marks the split nodes the view keeps
+// and the collapsed ones a wanted candidate needs. Each node is evaluated at most once.
+void DagTraverser::justify(DagFrameStats& stats) {
+  DagCut& cut = *cut_;
+  const Dag& dag = cut.dag();
+  cut.clear_marks();
+  stack_.clear();
+  for (uint32_t r : dag.roots()) stack_.push_back(uint64_t(r) << 1);
+  while (!stack_.empty()) {
+    const uint64_t entry = stack_.back();
+    stack_.pop_back();
+    const uint32_t v = uint32_t(entry >> 1);
+    if (cut.marked(v)) continue;
+    const bool forced = entry & 1;
+    if (!forced && !qrefine(v, stats)) continue;  // a split node may still be forced later
+    if (cut.is_split(v)) {
+      cut.mark(v);
+      for (int k = 0; k < 2; ++k)
+        if (const uint32_t c = dag.hierarchy_child(v, k); c != kNone) stack_.push_back(uint64_t(c) << 1);
+    } else if (forced) {
+      cut.mark(v);  // a collapsed node a wanted candidate needs: what it needs is kept too
+    }
+    for (uint32_t p : dag.parents(v)) stack_.push_back(uint64_t(p) << 1 | 1);
+  }
+}
+
+void DagTraverser::push_split_candidate(uint32_t n, DagFrameStats& stats) {
+  float key = priority(n, stats);
+  const uint32_t p = cut_->dag().hierarchy_parent(n);
+  if (justified_ && p != kNone && !cut_->marked(p)) key = 0;  // its parent leaves the target mesh
+  if (key <= 0) return;
+  heap_.push_back({key, n});
+  std::push_heap(heap_.begin(), heap_.end(), [](const Ranked& a, const Ranked& b) { return a.key < b.key; });
+}
+
+// Splits n after the collapsed nodes it needs, each one as it reaches Fs. False when a limit stopped it
+// (the splits done so far stay: each was legal).
+bool DagTraverser::split_with_needs(uint32_t n, Limits& limits, DagFrameStats& stats, std::vector<DagOp>& ops) {
+  DagCut& cut = *cut_;
+  const Dag& dag = cut.dag();
+  while (!cut.is_split(n)) {
+    uint32_t y = n;
+    while (!cut.in_fs(y)) {  // a collapsed node with a collapsed DAG parent: climb to one
+      for (uint32_t p : dag.parents(y))
+        if (!cut.is_split(p)) {
+          y = p;
+          break;
+        }
+    }
+    if (limits.max_ops && stats.splits >= limits.max_ops) return false;
+    if (dag.faces(y) > limits.room) {
+      stats.stopped_by_budget = true;
+      return false;
+    }
+    if (limits.room != UINT64_MAX) limits.room -= dag.faces(y);
+    cut.split(y);
+    ops.push_back({y, true});
+    ++stats.splits;
+    stats.forced += y != n;
+    if (justified_) {
+      cut.mark(y);
+      for (int k = 0; k < 2; ++k)
+        if (const uint32_t c = dag.hierarchy_child(y, k); c != kNone) push_split_candidate(c, stats);
+    }
+  }
+  return true;
+}
+
+void DagTraverser::collapse(uint32_t n, DagFrameStats& stats, std::vector<DagOp>& ops) {
+  cut_->collapse(n);
+  ops.push_back({n, false});
+  ++stats.collapses;
+}
+
+// Fig. 3 over Fc: the least visible errors first, until one is kept.
+void DagTraverser::priority_collapse(const Limits& limits, DagFrameStats& stats, std::vector<DagOp>& ops) {
+  DagCut& cut = *cut_;
+  const auto later = [](const Ranked& a, const Ranked& b) { return a.key > b.key; };
+  const auto push = [&](uint32_t n) {
+    const float key = priority(n, stats);
+    if (justified_ ? cut.marked(n) : key > 0) return;  // NEED-APPLY fails
+    heap_.push_back({key, n});
+    std::push_heap(heap_.begin(), heap_.end(), later);
+  };
+  heap_.clear();
+  for (uint32_t n : cut.collapse_front()) push(n);
+  while (!heap_.empty() && !(limits.max_ops && stats.collapses >= limits.max_ops)) {
+    std::pop_heap(heap_.begin(), heap_.end(), later);
+    const uint32_t n = heap_.back().node;
+    heap_.pop_back();
+    if (!cut.in_fc(n)) continue;
+    collapse(n, stats, ops);
+    for (uint32_t p : cut.dag().parents(n))
+      if (cut.in_fc(p)) push(p);
+  }
+}
+
+// Fig. 3 over the split candidates: the most visible errors first.
+void DagTraverser::priority_split(Limits& limits, DagFrameStats& stats, std::vector<DagOp>& ops) {
+  DagCut& cut = *cut_;
+  const auto less = [](const Ranked& a, const Ranked& b) { return a.key < b.key; };
+  heap_.clear();
+  for (uint32_t n : cut.split_front()) push_split_candidate(n, stats);
+  while (!heap_.empty()) {
+    std::pop_heap(heap_.begin(), heap_.end(), less);
+    const uint32_t n = heap_.back().node;
+    heap_.pop_back();
+    if (!cut.is_candidate(n)) continue;  // split meanwhile, for a node that needed it
+    if (!split_with_needs(n, limits, stats, ops)) return;
+  }
+}
+
+// Figs. 4 and 5 over the Fc queue: stops at the operation or evaluation limit, or after a whole pass
+// of the queue without a collapse (nothing left to do for this view).
+void DagTraverser::fifo_collapse(const Limits& limits, DagFrameStats& stats, std::vector<DagOp>& ops) {
+  DagCut& cut = *cut_;
+  const uint32_t evaluated_before = stats.evaluated;
+  size_t idle = 0;
+  while (!(limits.max_ops && stats.collapses >= limits.max_ops) &&
+         !(limits.max_evaluated && stats.evaluated - evaluated_before >= limits.max_evaluated)) {
+    const uint32_t n = cut.pop_collapse();
+    if (n == kNone) return;
+    if (!qrefine(n, stats)) {
+      collapse(n, stats, ops);
+      idle = 0;
+    } else {
+      cut.requeue_collapse(n);
+      if (++idle >= cut.collapse_queue_size()) return;
+    }
+  }
+}
+
+void DagTraverser::fifo_split(Limits& limits, DagFrameStats& stats, std::vector<DagOp>& ops) {
+  DagCut& cut = *cut_;
+  const uint32_t evaluated_before = stats.evaluated;
+  size_t idle = 0;
+  while (!(limits.max_ops && stats.splits >= limits.max_ops) &&
+         !(limits.max_evaluated && stats.evaluated - evaluated_before >= limits.max_evaluated)) {
+    const uint32_t n = cut.pop_split();
+    if (n == kNone) return;
+    if (qrefine(n, stats)) {
+      idle = 0;
+      if (!split_with_needs(n, limits, stats, ops)) {
+        if (cut.is_candidate(n)) cut.requeue_split(n);
+        return;
+      }
+    } else {
+      cut.requeue_split(n);
+      if (++idle >= cut.split_queue_size()) return;
+    }
+  }
+}
+
+// Fig. 2. In BUDGET mode the splits' triangles are limited to what keeps the cut within the budget.
+DagFrameStats DagTraverser::manage(const DagManageOptions& options, std::vector<DagOp>& ops) {
+  DagFrameStats stats;
+  Limits limits;
+  if (options.traversal == DagTraversal::constant_time) limits.max_evaluated = options.max_ops;
+  else limits.max_ops = options.max_ops;
+  justified_ = options.traversal == DagTraversal::priority;
+  if (justified_) justify(stats);
+  if (justified_) priority_collapse(limits, stats, ops);
+  else fifo_collapse(limits, stats, ops);
+  if (options.mode == DagMode::budget) {
+    const uint64_t t = cut_->triangles();
+    limits.room = options.budget > t ? options.budget - t : 0;
+  }
+  if (justified_) priority_split(limits, stats, ops);
+  else fifo_split(limits, stats, ops);
+  if (justified_) cut_->clear_marks();
+  justified_ = false;
+  return stats;
+}
+
+}  // namespace pms
