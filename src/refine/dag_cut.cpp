@@ -114,6 +114,11 @@ std::span<const uint32_t> DagCut::split_front() {
   return compact(split_queue_, kQueuedS, [this](uint32_t n) { return is_candidate(n); });
 }
 
+void DagCut::trim_split_queue() {
+  if (split_queue_size() <= 2 * split_queue_trimmed_ + 1024) return;
+  split_queue_trimmed_ = split_front().size();
+}
+
 void DagCut::mark(uint32_t n) {
   if (state_[n] & kMark) return;
   state_[n] |= kMark;

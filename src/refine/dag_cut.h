@@ -54,6 +54,9 @@ class DagCut {
   // The queued nodes still in their fronts, in queue order (drops the others).
   std::span<const uint32_t> collapse_front();
   std::span<const uint32_t> split_front();
+  // Compacts the split queue once it holds twice the entries it held after the last compaction (a
+  // traversal that does not pop it calls this; amortized O(1) per operation).
+  void trim_split_queue();
 
   // One bit per node for a traversal's marks (the priority traversal's justification); clear_marks
   // clears the marked ones.
@@ -85,6 +88,7 @@ class DagCut {
   const Dag* dag_;
   std::vector<uint16_t> state_;  // kSplit, queue and mark bits, counter
   Queue collapse_queue_, split_queue_;
+  size_t split_queue_trimmed_ = 0;  // entries after the last compaction
   std::vector<uint32_t> marked_;
   uint64_t triangles_ = 0;
   uint32_t split_count_ = 0, fc_size_ = 0, fs_size_ = 0;

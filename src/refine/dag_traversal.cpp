@@ -27,11 +27,14 @@ float DagTraverser::priority(uint32_t n, DagFrameStats& stats) {
 }
 
 // Top down from the roots (the adaptation loop's walk over the cut): marks the split nodes the view keeps
-// and the collapsed ones a wanted candidate needs. Each node is evaluated at most once.
+// and the collapsed ones a wanted candidate needs. Each node is evaluated at most once; the wanted
+// candidates go straight to the split heap (a candidate below an unkept parent is never wanted, and the
+// collapse phase only makes such candidates).
 void DagTraverser::justify(DagFrameStats& stats) {
   DagCut& cut = *cut_;
   const Dag& dag = cut.dag();
   cut.clear_marks();
+  split_heap_.clear();
   stack_.clear();
   for (uint32_t r : dag.roots()) stack_.push_back(uint64_t(r) << 1);
   while (!stack_.empty()) {
@@ -39,26 +42,32 @@ void DagTraverser::justify(DagFrameStats& stats) {
     stack_.pop_back();
     const uint32_t v = uint32_t(entry >> 1);
     if (cut.marked(v)) continue;
-    const bool forced = entry & 1;
-    if (!forced && !qrefine(v, stats)) continue;  // a split node may still be forced later
-    if (cut.is_split(v)) {
+    if (entry & 1) {
+      cut.mark(v);  // needed by a kept node or a wanted candidate
+    } else if (cut.is_split(v)) {
+      if (!qrefine(v, stats)) continue;  // it may still be forced later
       cut.mark(v);
+    } else {
+      const float key = priority(v, stats);
+      if (key <= 0) continue;
+      push_split(key, v);
+    }
+    if (cut.is_split(v))
       for (int k = 0; k < 2; ++k)
         if (const uint32_t c = dag.hierarchy_child(v, k); c != kNone) stack_.push_back(uint64_t(c) << 1);
-    } else if (forced) {
-      cut.mark(v);  // a collapsed node a wanted candidate needs: what it needs is kept too
-    }
     for (uint32_t p : dag.parents(v)) stack_.push_back(uint64_t(p) << 1 | 1);
   }
 }
 
+void DagTraverser::push_split(float key, uint32_t n) {
+  split_heap_.push_back({key, n});
+  std::push_heap(split_heap_.begin(), split_heap_.end(), [](const Ranked& a, const Ranked& b) { return a.key < b.key; });
+}
+
 void DagTraverser::push_split_candidate(uint32_t n, DagFrameStats& stats) {
-  float key = priority(n, stats);
   const uint32_t p = cut_->dag().hierarchy_parent(n);
-  if (justified_ && p != kNone && !cut_->marked(p)) key = 0;  // its parent leaves the target mesh
-  if (key <= 0) return;
-  heap_.push_back({key, n});
-  std::push_heap(heap_.begin(), heap_.end(), [](const Ranked& a, const Ranked& b) { return a.key < b.key; });
+  if (p != kNone && !cut_->marked(p)) return;  // its parent leaves the target mesh: not wanted
+  if (const float key = priority(n, stats); key > 0) push_split(key, n);
 }
 
 // Splits n after the collapsed nodes it needs, each one as it reaches Fs. False when a limit stopped it
@@ -100,22 +109,22 @@ void DagTraverser::collapse(uint32_t n, DagFrameStats& stats, std::vector<DagOp>
   ++stats.collapses;
 }
 
-// Fig. 3 over Fc: the least visible errors first, until one is kept.
+// Fig. 3 over Fc: the least visible errors first. Only the unkept nodes need applying, so only they are
+// evaluated for their priority.
 void DagTraverser::priority_collapse(const Limits& limits, DagFrameStats& stats, std::vector<DagOp>& ops) {
   DagCut& cut = *cut_;
   const auto later = [](const Ranked& a, const Ranked& b) { return a.key > b.key; };
   const auto push = [&](uint32_t n) {
-    const float key = priority(n, stats);
-    if (justified_ ? cut.marked(n) : key > 0) return;  // NEED-APPLY fails
-    heap_.push_back({key, n});
-    std::push_heap(heap_.begin(), heap_.end(), later);
+    if (cut.marked(n)) return;  // kept: NEED-APPLY fails
+    collapse_heap_.push_back({priority(n, stats), n});
+    std::push_heap(collapse_heap_.begin(), collapse_heap_.end(), later);
   };
-  heap_.clear();
+  collapse_heap_.clear();
   for (uint32_t n : cut.collapse_front()) push(n);
-  while (!heap_.empty() && !(limits.max_ops && stats.collapses >= limits.max_ops)) {
-    std::pop_heap(heap_.begin(), heap_.end(), later);
-    const uint32_t n = heap_.back().node;
-    heap_.pop_back();
+  while (!collapse_heap_.empty() && !(limits.max_ops && stats.collapses >= limits.max_ops)) {
+    std::pop_heap(collapse_heap_.begin(), collapse_heap_.end(), later);
+    const uint32_t n = collapse_heap_.back().node;
+    collapse_heap_.pop_back();
     if (!cut.in_fc(n)) continue;
     collapse(n, stats, ops);
     for (uint32_t p : cut.dag().parents(n))
@@ -123,16 +132,16 @@ void DagTraverser::priority_collapse(const Limits& limits, DagFrameStats& stats,
   }
 }
 
-// Fig. 3 over the split candidates: the most visible errors first.
+// Fig. 3 over the split candidates, the most visible errors first: the heap justify() filled, and the
+// children of what it splits.
 void DagTraverser::priority_split(Limits& limits, DagFrameStats& stats, std::vector<DagOp>& ops) {
   DagCut& cut = *cut_;
   const auto less = [](const Ranked& a, const Ranked& b) { return a.key < b.key; };
-  heap_.clear();
-  for (uint32_t n : cut.split_front()) push_split_candidate(n, stats);
-  while (!heap_.empty()) {
-    std::pop_heap(heap_.begin(), heap_.end(), less);
-    const uint32_t n = heap_.back().node;
-    heap_.pop_back();
+  cut.trim_split_queue();  // nothing pops it here: keep it from filling with nodes that left
+  while (!split_heap_.empty()) {
+    std::pop_heap(split_heap_.begin(), split_heap_.end(), less);
+    const uint32_t n = split_heap_.back().node;
+    split_heap_.pop_back();
     if (!cut.is_candidate(n)) continue;  // split meanwhile, for a node that needed it
     if (!split_with_needs(n, limits, stats, ops)) return;
   }

@@ -61,13 +61,13 @@ class DagTraverser {
   };
   bool qrefine(uint32_t n, DagFrameStats& stats);
   float priority(uint32_t n, DagFrameStats& stats);
-  bool wanted_split(uint32_t n, DagFrameStats& stats);
   void justify(DagFrameStats& stats);
   void force_closure(uint32_t n);
   bool split_with_needs(uint32_t n, Limits& limits, DagFrameStats& stats, std::vector<DagOp>& ops);
   void collapse(uint32_t n, DagFrameStats& stats, std::vector<DagOp>& ops);
   void priority_collapse(const Limits& limits, DagFrameStats& stats, std::vector<DagOp>& ops);
   void priority_split(Limits& limits, DagFrameStats& stats, std::vector<DagOp>& ops);
+  void push_split(float key, uint32_t n);
   void push_split_candidate(uint32_t n, DagFrameStats& stats);
   void fifo_collapse(const Limits& limits, DagFrameStats& stats, std::vector<DagOp>& ops);
   void fifo_split(Limits& limits, DagFrameStats& stats, std::vector<DagOp>& ops);
@@ -75,7 +75,7 @@ class DagTraverser {
   DagCut* cut_;
   ViewCriteria view_;
   bool justified_ = false;  // priority: marks say which split nodes the view's target mesh keeps
-  std::vector<Ranked> heap_;
+  std::vector<Ranked> collapse_heap_, split_heap_;
   std::vector<uint64_t> stack_;  // node << 1 | forced
 };
 

@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "common/error.h"
 #include "pm/hierarchy.h"
 #include "refine/adapt.h"
 #include "refine/criteria.h"
@@ -377,6 +378,39 @@ TEST(DagTraversal, ConstantTimeEvaluatesAtMostN) {
   }
   EXPECT_GT(frames_with_work, 30u);
   EXPECT_GT(cut.split_count(), 500u);
+  EXPECT_EQ(audit(cut), "ok");
+}
+
+// A hand-made model's bad links are refused, and a cut refuses operations its fronts do not allow.
+TEST(Dag, RefusesBadModelsAndIllegalOperations) {
+  const BuiltModel& model = test::built_sphere();
+  uint32_t internal = kNone;
+  for (uint32_t n = 0; n < model.h.node_count() && internal == kNone; ++n)
+    if (!model.h.is_leaf(n) && model.h.cut_left[n] != kNone) internal = n;
+  ASSERT_NE(internal, kNone);
+  {
+    Hierarchy h = model.h;
+    h.cut_left[internal] = uint32_t(h.node_count() + 7);
+    EXPECT_THROW(Dag{model_of(h)}, Error);
+  }
+  {
+    Hierarchy h = model.h;
+    h.cut_left[internal] = h.cut_right[internal] = kNone;
+    EXPECT_THROW(Dag{model_of(h)}, Error);
+  }
+  {
+    Hierarchy h = model.h;
+    h.parent[internal] = uint32_t(h.node_count());
+    EXPECT_THROW(Dag{model_of(h)}, Error);
+  }
+  const Dag dag(model.model());
+  DagCut cut(dag);
+  const uint32_t root = dag.roots()[0];
+  EXPECT_THROW(cut.collapse(root), Error);  // not split
+  uint32_t below = kNone;
+  for (uint32_t n = 0; n < dag.size() && below == kNone; ++n)
+    if (dag.hierarchy_parent(n) != kNone) below = n;
+  EXPECT_THROW(cut.split(below), Error);  // its parent is collapsed
   EXPECT_EQ(audit(cut), "ok");
 }
 
