@@ -12,12 +12,43 @@ constexpr const char* kWhere = "dag cut";
 
 }  // namespace
 
-DagCut::DagCut(const Dag& dag) : dag_(&dag), state_(dag.size(), 0), triangles_(dag.base_faces()) {
+DagCut::DagCut(const Dag& dag) : dag_(&dag), state_(dag.size(), 0) { recount(); }
+
+DagCut::DagCut(const Dag& dag, std::span<const uint32_t> split) : dag_(&dag), state_(dag.size(), 0) {
+  for (uint32_t n : split) {
+    if (n >= dag.size()) fail(kWhere, "a split node out of range");
+    state_[n] = kSplit;
+  }
+  for (uint32_t n : split) {
+    const uint32_t hp = dag.hierarchy_parent(n);
+    if (hp != kNone && !is_split(hp)) fail(kWhere, "a split node below a collapsed one: not a cut");
+    for (uint32_t p : dag.parents(n))
+      if (!is_split(p)) fail(kWhere, "a split node whose dependency is collapsed: not a cut");
+  }
+  recount();
+}
+
+// Counters, front sizes, triangles and queues from the split bits alone.
+void DagCut::recount() {
+  const Dag& dag = *dag_;
+  triangles_ = dag.base_faces();
+  split_count_ = fc_size_ = fs_size_ = 0;
   for (uint32_t n = 0; n < dag.size(); ++n) {
-    state_[n] = uint16_t(dag.parents(n).size());
+    uint32_t count = 0;
+    if (is_split(n)) {
+      for (uint32_t c : dag.children(n)) count += is_split(c);
+      triangles_ += dag.faces(n);
+      ++split_count_;
+    } else {
+      for (uint32_t p : dag.parents(n)) count += !is_split(p);
+    }
+    state_[n] = uint16_t((state_[n] & kSplit) | count);
     enter_fronts(n);
   }
-  for (uint32_t r : dag.roots()) enqueue(split_queue_, r, kQueuedS);
+  for (uint32_t n = 0; n < dag.size(); ++n) {
+    if (in_fc(n)) enqueue(collapse_queue_, n, kQueuedC);
+    if (is_candidate(n)) enqueue(split_queue_, n, kQueuedS);
+  }
 }
 
 void DagCut::enqueue(Queue& q, uint32_t n, uint16_t bit) {

@@ -19,6 +19,10 @@ class DagCut {
  public:
   // The base mesh: nothing split. `dag` must outlive the cut.
   explicit DagCut(const Dag& dag);
+  // The cut whose split nodes are `split` (any order, duplicates allowed), e.g. rebuilt from what a
+  // resuming client holds: pms::Error for a node out of range or a set that is not a cut (a split node
+  // whose DAG parent or hierarchy parent is collapsed). O(nodes + edges).
+  DagCut(const Dag& dag, std::span<const uint32_t> split);
 
   const Dag& dag() const { return *dag_; }
   bool is_split(uint32_t n) const { return (state_[n] & kSplit) != 0; }
@@ -82,6 +86,7 @@ class DagCut {
   uint32_t pop(Queue& q, uint16_t bit, InFront in_front);
   template <class InFront>
   std::span<const uint32_t> compact(Queue& q, uint16_t bit, InFront in_front);
+  void recount();
   void leave_fronts(uint32_t n) { fc_size_ -= in_fc(n); fs_size_ -= in_fs(n); }
   void enter_fronts(uint32_t n) { fc_size_ += in_fc(n); fs_size_ += in_fs(n); }
 

@@ -414,5 +414,43 @@ TEST(Dag, RefusesBadModelsAndIllegalOperations) {
   EXPECT_EQ(audit(cut), "ok");
 }
 
+// A cut rebuilt from its split nodes alone (what a resuming client's mesh tells) is the same cut; a set
+// that is not a cut is refused.
+TEST(Dag, CutRebuildsFromItsSplitNodes) {
+  const BuiltModel& model = test::built_terrain();
+  const Dag dag(model.model());
+  DagCut cut(dag);
+  DagTraverser traverser(cut);
+  traverser.set_view(make_criteria(test::view_for(model, test::framing_camera(model, {1, 0.3f, 0.08f}, 0.45f, 60)), 1));
+  DagManageOptions options;
+  options.traversal = DagTraversal::linear;
+  for (int frame = 0; frame < 20; ++frame) {
+    std::vector<DagOp> ops;
+    traverser.manage(options, ops);
+  }
+  std::vector<uint32_t> split;
+  for (uint32_t n = 0; n < dag.size(); ++n)
+    if (cut.is_split(n)) split.push_back(n);
+  ASSERT_GT(split.size(), 100u);
+  std::reverse(split.begin(), split.end());
+  const DagCut rebuilt(dag, split);
+  EXPECT_EQ(audit(rebuilt), "ok");
+  EXPECT_EQ(rebuilt.triangles(), cut.triangles());
+  EXPECT_EQ(rebuilt.fc_size(), cut.fc_size());
+  EXPECT_EQ(rebuilt.fs_size(), cut.fs_size());
+  for (uint32_t n = 0; n < dag.size(); ++n) ASSERT_EQ(rebuilt.counter(n), cut.counter(n)) << n;
+  // Without a node some split node needs, it is no cut.
+  uint32_t needed = kNone;
+  for (uint32_t n : split)
+    if (!cut.in_fc(n)) needed = n;
+  ASSERT_NE(needed, kNone);
+  std::vector<uint32_t> holed;
+  for (uint32_t n : split)
+    if (n != needed) holed.push_back(n);
+  EXPECT_THROW(DagCut(dag, holed), Error);
+  holed.push_back(dag.size());
+  EXPECT_THROW(DagCut(dag, holed), Error);
+}
+
 }  // namespace
 }  // namespace pms
