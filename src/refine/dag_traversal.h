@@ -49,6 +49,10 @@ class DagTraverser {
   DagFrameStats manage(const DagManageOptions& options, std::vector<DagOp>& ops);
 
   DagCut& cut() { return *cut_; }
+  // Scratch the traversals keep between frames (heaps, the justification stack), beyond the cut.
+  size_t memory_bytes() const {
+    return (collapse_heap_.capacity() + split_heap_.capacity()) * sizeof(Ranked) + stack_.capacity() * sizeof(uint64_t);
+  }
 
  private:
   struct Limits {
