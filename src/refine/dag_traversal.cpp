@@ -147,45 +147,51 @@ void DagTraverser::priority_split(Limits& limits, DagFrameStats& stats, std::vec
   }
 }
 
-// Figs. 4 and 5 over the Fc queue: stops at the operation or evaluation limit, or after a whole pass
-// of the queue without a collapse (nothing left to do for this view).
+// Figs. 4 and 5 over the cut's FIFO queues. A node that does not need applying goes to the back. A phase
+// stops at the operation or evaluation limit, at an empty queue, or at the first node it already
+// evaluated (a whole pass without anything left to apply, Fig. 4 line 11: NEED-APPLY depends only on the
+// view, so a second look would say the same). Each node is evaluated at most once a phase.
 void DagTraverser::fifo_collapse(const Limits& limits, DagFrameStats& stats, std::vector<DagOp>& ops) {
   DagCut& cut = *cut_;
   const uint32_t evaluated_before = stats.evaluated;
-  size_t idle = 0;
   while (!(limits.max_ops && stats.collapses >= limits.max_ops) &&
          !(limits.max_evaluated && stats.evaluated - evaluated_before >= limits.max_evaluated)) {
     const uint32_t n = cut.pop_collapse();
-    if (n == kNone) return;
+    if (n == kNone) break;
+    if (cut.marked(n)) {
+      cut.requeue_collapse(n);
+      break;
+    }
     if (!qrefine(n, stats)) {
       collapse(n, stats, ops);
-      idle = 0;
     } else {
+      cut.mark(n);
       cut.requeue_collapse(n);
-      if (++idle >= cut.collapse_queue_size()) return;
     }
   }
+  cut.clear_marks();
 }
 
 void DagTraverser::fifo_split(Limits& limits, DagFrameStats& stats, std::vector<DagOp>& ops) {
   DagCut& cut = *cut_;
   const uint32_t evaluated_before = stats.evaluated;
-  size_t idle = 0;
   while (!(limits.max_ops && stats.splits >= limits.max_ops) &&
          !(limits.max_evaluated && stats.evaluated - evaluated_before >= limits.max_evaluated)) {
     const uint32_t n = cut.pop_split();
-    if (n == kNone) return;
-    if (qrefine(n, stats)) {
-      idle = 0;
-      if (!split_with_needs(n, limits, stats, ops)) {
-        if (cut.is_candidate(n)) cut.requeue_split(n);
-        return;
-      }
-    } else {
+    if (n == kNone) break;
+    if (cut.marked(n)) {
       cut.requeue_split(n);
-      if (++idle >= cut.split_queue_size()) return;
+      break;
+    }
+    if (!qrefine(n, stats)) {
+      cut.mark(n);
+      cut.requeue_split(n);
+    } else if (!split_with_needs(n, limits, stats, ops)) {
+      if (cut.is_candidate(n)) cut.requeue_split(n);
+      break;
     }
   }
+  cut.clear_marks();
 }
 
 // Fig. 2. In BUDGET mode the splits' triangles are limited to what keeps the cut within the budget.

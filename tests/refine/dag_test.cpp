@@ -275,10 +275,14 @@ void expect_route(const BuiltModel& model, DagTraversal traversal, DagMode mode,
     traverser.set_view(make_criteria(test::view_for(model, camera), tolerance));
     for (int frame = 0; frame < 4; ++frame) {
       std::vector<DagOp> ops;
+      const size_t queued = cut.collapse_queue_size() + cut.split_queue_size();
       const DagFrameStats stats = traverser.manage(options, ops);
       mirror.apply(ops);
       ASSERT_FALSE(::testing::Test::HasFatalFailure());
       ops_total += ops.size();
+      if (traversal != DagTraversal::priority) {  // each queued or new front node evaluated once at most
+        ASSERT_LE(stats.evaluated, queued + ops.size() * (3 + dag.stats().max_children));
+      }
       budget_stopped |= stats.stopped_by_budget;
       ASSERT_EQ(stats.splits + stats.collapses, ops.size());
       if (traversal != DagTraversal::constant_time && n_ops) {
