@@ -96,7 +96,8 @@ Dag::Dag(const ModelData& model, std::span<const float> positions) {
     raw.parent[n] = hierarchy_parent_[n];
     for (int k = 0; k < 2; ++k) hierarchy_child_[2 * size_t(n) + uint32_t(k)] = node_of_[model.first_child[m] + uint32_t(k)];
     const uint32_t cl = model.cut_left[m], cr = model.cut_right[m];
-    if ((cl != kNone && cl >= count) || (cr != kNone && cr >= count)) fail(kWhere, "bad cut vertex");
+    if ((cl != kNone && (cl >= count || !model.is_leaf(cl))) || (cr != kNone && (cr >= count || !model.is_leaf(cr))))
+      fail(kWhere, "a cut vertex that is not a leaf");
     if (cl == kNone && cr == kNone) fail(kWhere, "a split without cut vertices");
     faces_[n] = uint8_t((cl != kNone) + (cr != kNone));
     criteria_[n] = node_criteria(&position[3 * size_t(m)], dequantize_refine(model.refine[m], model.scale));
