@@ -151,47 +151,50 @@ void DagTraverser::priority_split(Limits& limits, DagFrameStats& stats, std::vec
 // stops at the operation or evaluation limit, at an empty queue, or at the first node it already
 // evaluated (a whole pass without anything left to apply, Fig. 4 line 11: NEED-APPLY depends only on the
 // view, so a second look would say the same). Each node is evaluated at most once a phase.
-void DagTraverser::fifo_collapse(const Limits& limits, DagFrameStats& stats, std::vector<DagOp>& ops) {
+template <class Pop, class Requeue, class TryApply>
+void DagTraverser::fifo_phase(const uint32_t& applied, const Limits& limits, DagFrameStats& stats, Pop pop,
+                              Requeue requeue, TryApply try_apply) {
   DagCut& cut = *cut_;
   const uint32_t evaluated_before = stats.evaluated;
-  while (!(limits.max_ops && stats.collapses >= limits.max_ops) &&
+  while (!(limits.max_ops && applied >= limits.max_ops) &&
          !(limits.max_evaluated && stats.evaluated - evaluated_before >= limits.max_evaluated)) {
-    const uint32_t n = cut.pop_collapse();
+    const uint32_t n = pop();
     if (n == kNone) break;
     if (cut.marked(n)) {
-      cut.requeue_collapse(n);
+      requeue(n);
       break;
     }
-    if (!qrefine(n, stats)) {
-      collapse(n, stats, ops);
-    } else {
+    const Outcome outcome = try_apply(n);
+    if (outcome == Outcome::stopped) break;
+    if (outcome == Outcome::not_needed) {
       cut.mark(n);
-      cut.requeue_collapse(n);
+      requeue(n);
     }
   }
   cut.clear_marks();
 }
 
+void DagTraverser::fifo_collapse(const Limits& limits, DagFrameStats& stats, std::vector<DagOp>& ops) {
+  DagCut& cut = *cut_;
+  fifo_phase(
+      stats.collapses, limits, stats, [&] { return cut.pop_collapse(); }, [&](uint32_t n) { cut.requeue_collapse(n); },
+      [&](uint32_t n) {
+        if (qrefine(n, stats)) return Outcome::not_needed;
+        collapse(n, stats, ops);
+        return Outcome::applied;
+      });
+}
+
 void DagTraverser::fifo_split(Limits& limits, DagFrameStats& stats, std::vector<DagOp>& ops) {
   DagCut& cut = *cut_;
-  const uint32_t evaluated_before = stats.evaluated;
-  while (!(limits.max_ops && stats.splits >= limits.max_ops) &&
-         !(limits.max_evaluated && stats.evaluated - evaluated_before >= limits.max_evaluated)) {
-    const uint32_t n = cut.pop_split();
-    if (n == kNone) break;
-    if (cut.marked(n)) {
-      cut.requeue_split(n);
-      break;
-    }
-    if (!qrefine(n, stats)) {
-      cut.mark(n);
-      cut.requeue_split(n);
-    } else if (!split_with_needs(n, limits, stats, ops)) {
-      if (cut.is_candidate(n)) cut.requeue_split(n);
-      break;
-    }
-  }
-  cut.clear_marks();
+  fifo_phase(
+      stats.splits, limits, stats, [&] { return cut.pop_split(); }, [&](uint32_t n) { cut.requeue_split(n); },
+      [&](uint32_t n) {
+        if (!qrefine(n, stats)) return Outcome::not_needed;
+        if (split_with_needs(n, limits, stats, ops)) return Outcome::applied;
+        if (cut.is_candidate(n)) cut.requeue_split(n);  // a limit stopped it, maybe halfway
+        return Outcome::stopped;
+      });
 }
 
 // Fig. 2. In BUDGET mode the splits' triangles are limited to what keeps the cut within the budget.

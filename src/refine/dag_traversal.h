@@ -73,6 +73,10 @@ class DagTraverser {
   void priority_split(Limits& limits, DagFrameStats& stats, std::vector<DagOp>& ops);
   void push_split(float key, uint32_t n);
   void push_split_candidate(uint32_t n, DagFrameStats& stats);
+  enum class Outcome { not_needed, applied, stopped };
+  template <class Pop, class Requeue, class TryApply>
+  void fifo_phase(const uint32_t& applied, const Limits& limits, DagFrameStats& stats, Pop pop, Requeue requeue,
+                  TryApply try_apply);
   void fifo_collapse(const Limits& limits, DagFrameStats& stats, std::vector<DagOp>& ops);
   void fifo_split(Limits& limits, DagFrameStats& stats, std::vector<DagOp>& ops);
 
