@@ -12,6 +12,7 @@
 
 #include <algorithm>
 
+#include "common/error.h"
 #include "refine/criteria_inline.h"
 
 namespace pms {
@@ -199,6 +200,7 @@ void DagTraverser::fifo_split(Limits& limits, DagFrameStats& stats, std::vector<
 
 // Fig. 2. In BUDGET mode the splits' triangles are limited to what keeps the cut within the budget.
 DagFrameStats DagTraverser::manage(const DagManageOptions& options, std::vector<DagOp>& ops) {
+  if (!has_view_) fail("dag traversal", "no view set");
   DagFrameStats stats;
   Limits limits;
   if (options.traversal == DagTraversal::constant_time) limits.max_evaluated = options.max_ops;

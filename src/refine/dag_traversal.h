@@ -44,8 +44,12 @@ class DagTraverser {
  public:
   explicit DagTraverser(DagCut& cut) : cut_(&cut) {}
 
-  void set_view(const ViewCriteria& view) { view_ = view; }
+  void set_view(const ViewCriteria& view) {
+    view_ = view;
+    has_view_ = true;
+  }
   // MANAGE-TRAVERSAL (Fig. 2): applies the operations to the cut and appends them to `ops` in that order.
+  // pms::Error before set_view().
   DagFrameStats manage(const DagManageOptions& options, std::vector<DagOp>& ops);
 
   DagCut& cut() { return *cut_; }
@@ -82,6 +86,7 @@ class DagTraverser {
 
   DagCut* cut_;
   ViewCriteria view_;
+  bool has_view_ = false;
   bool justified_ = false;  // priority: marks say which split nodes the view's target mesh keeps
   std::vector<Ranked> collapse_heap_, split_heap_;
   std::vector<uint64_t> stack_;  // node << 1 | forced

@@ -415,6 +415,9 @@ TEST(Dag, RefusesBadModelsAndIllegalOperations) {
   for (uint32_t n = 0; n < dag.size() && below == kNone; ++n)
     if (dag.hierarchy_parent(n) != kNone) below = n;
   EXPECT_THROW(cut.split(below), Error);  // its parent is collapsed
+  DagTraverser traverser(cut);
+  std::vector<DagOp> ops;
+  EXPECT_THROW(traverser.manage({}, ops), Error);  // no view
   EXPECT_EQ(audit(cut), "ok");
 }
 
