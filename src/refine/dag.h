@@ -29,8 +29,8 @@ struct DagStats {
 
 class Dag {
  public:
-  // Counters of a cut must hold any node's out-degree (DagCut packs them in 11 bits).
-  static constexpr uint32_t kMaxChildren = 2047;
+  // Counters of a cut must hold any node's out-degree (DagCut's side table has 16 bits).
+  static constexpr uint32_t kMaxChildren = 65535;
 
   // `positions`: 3 floats per model node that ERROR-EVALUATE reads (e.g. the wire grid's snapped ones);
   // empty = the model's own. pms::Error for a model with inconsistent links or a node with more than

@@ -3,6 +3,8 @@
 // and brings into Fs the DAG children whose last collapsed parent it was; collapsing is the mirror image.
 #include "refine/dag_cut.h"
 
+#include <algorithm>
+
 #include "common/error.h"
 
 namespace pms {
@@ -12,12 +14,17 @@ constexpr const char* kWhere = "dag cut";
 
 }  // namespace
 
-DagCut::DagCut(const Dag& dag) : dag_(&dag), state_(dag.size(), 0) { recount(); }
+DagCut::DagCut(const Dag& dag, uint32_t inline_limit) : dag_(&dag), state_(dag.size(), 0) {
+  init_wide(inline_limit);
+  recount();
+}
 
-DagCut::DagCut(const Dag& dag, std::span<const uint32_t> split) : dag_(&dag), state_(dag.size(), 0) {
+DagCut::DagCut(const Dag& dag, std::span<const uint32_t> split, uint32_t inline_limit)
+    : dag_(&dag), state_(dag.size(), 0) {
+  init_wide(inline_limit);
   for (uint32_t n : split) {
     if (n >= dag.size()) fail(kWhere, "a split node out of range");
-    state_[n] = kSplit;
+    state_[n] |= kSplit;
   }
   for (uint32_t n : split) {
     const uint32_t hp = dag.hierarchy_parent(n);
@@ -26,6 +33,34 @@ DagCut::DagCut(const Dag& dag, std::span<const uint32_t> split) : dag_(&dag), st
       if (!is_split(p)) fail(kWhere, "a split node whose dependency is collapsed: not a cut");
   }
   recount();
+}
+
+void DagCut::init_wide(uint32_t inline_limit) {
+  if (inline_limit > kInlineLimit) fail(kWhere, "counters wider than the state byte");
+  for (uint32_t n = 0; n < dag_->size(); ++n)
+    if (dag_->children(n).size() > inline_limit || dag_->parents(n).size() > inline_limit) {
+      wide_nodes_.push_back(n);
+      state_[n] = kWide;
+    }
+  wide_counters_.assign(wide_nodes_.size(), 0);
+}
+
+uint32_t DagCut::wide_counter(uint32_t n) const {
+  return wide_counters_[size_t(std::lower_bound(wide_nodes_.begin(), wide_nodes_.end(), n) - wide_nodes_.begin())];
+}
+
+uint16_t& DagCut::wide_slot(uint32_t n) {
+  return wide_counters_[size_t(std::lower_bound(wide_nodes_.begin(), wide_nodes_.end(), n) - wide_nodes_.begin())];
+}
+
+void DagCut::set_counter(uint32_t n, uint32_t value) {
+  if ((state_[n] & kCounter) == kWide) wide_slot(n) = uint16_t(value);
+  else state_[n] = uint8_t((state_[n] & ~kCounter) | value);
+}
+
+void DagCut::add_counter(uint32_t n, int delta) {
+  if ((state_[n] & kCounter) == kWide) wide_slot(n) = uint16_t(wide_slot(n) + delta);
+  else state_[n] = uint8_t(state_[n] + delta);  // stays within the low bits: 0 <= counter <= degree
 }
 
 // Counters, front sizes, triangles and queues from the split bits alone.
@@ -42,7 +77,7 @@ void DagCut::recount() {
     } else {
       for (uint32_t p : dag.parents(n)) count += !is_split(p);
     }
-    state_[n] = uint16_t((state_[n] & kSplit) | count);
+    set_counter(n, count);
     enter_fronts(n);
   }
   for (uint32_t n = 0; n < dag.size(); ++n) {
@@ -51,7 +86,7 @@ void DagCut::recount() {
   }
 }
 
-void DagCut::enqueue(Queue& q, uint32_t n, uint16_t bit) {
+void DagCut::enqueue(Queue& q, uint32_t n, uint8_t bit) {
   if (state_[n] & bit) return;
   state_[n] |= bit;
   q.items.push_back(n);
@@ -61,16 +96,16 @@ void DagCut::split(uint32_t n) {
   if (!in_fs(n)) fail(kWhere, "split of a node not in Fs");
   const Dag& dag = *dag_;
   leave_fronts(n);
-  state_[n] |= kSplit;  // counter 0: its children are collapsed, since they need it
+  state_[n] |= kSplit;  // counter stays 0: its children are collapsed, since they need it
   enter_fronts(n);
   for (uint32_t p : dag.parents(n)) {
     leave_fronts(p);
-    ++state_[p];
+    add_counter(p, 1);
     enter_fronts(p);
   }
   for (uint32_t c : dag.children(n)) {
     leave_fronts(c);
-    --state_[c];
+    add_counter(c, -1);
     enter_fronts(c);
     if (in_fs(c) && is_candidate(c)) enqueue(split_queue_, c, kQueuedS);
   }
@@ -87,17 +122,17 @@ void DagCut::collapse(uint32_t n) {
   if (!in_fc(n)) fail(kWhere, "collapse of a node not in Fc");
   const Dag& dag = *dag_;
   leave_fronts(n);
-  state_[n] &= uint16_t(~kSplit);  // counter 0 either way: no split child before, no collapsed parent now
+  state_[n] &= uint8_t(~kSplit);  // counter 0 either way: no split child before, no collapsed parent now
   enter_fronts(n);
   for (uint32_t p : dag.parents(n)) {
     leave_fronts(p);
-    --state_[p];
+    add_counter(p, -1);
     enter_fronts(p);
     if (in_fc(p)) enqueue(collapse_queue_, p, kQueuedC);
   }
   for (uint32_t c : dag.children(n)) {
     leave_fronts(c);
-    ++state_[c];
+    add_counter(c, 1);
     enter_fronts(c);
   }
   enqueue(split_queue_, n, kQueuedS);
@@ -106,10 +141,10 @@ void DagCut::collapse(uint32_t n) {
 }
 
 template <class InFront>
-uint32_t DagCut::pop(Queue& q, uint16_t bit, InFront in_front) {
+uint32_t DagCut::pop(Queue& q, uint8_t bit, InFront in_front) {
   while (q.head < q.items.size()) {
     const uint32_t n = q.items[q.head++];
-    state_[n] &= uint16_t(~bit);
+    state_[n] &= uint8_t(~bit);
     if (q.head > 4096 && 2 * q.head > q.items.size()) {  // amortized: drop the consumed half
       q.items.erase(q.items.begin(), q.items.begin() + ptrdiff_t(q.head));
       q.head = 0;
@@ -120,12 +155,12 @@ uint32_t DagCut::pop(Queue& q, uint16_t bit, InFront in_front) {
 }
 
 template <class InFront>
-std::span<const uint32_t> DagCut::compact(Queue& q, uint16_t bit, InFront in_front) {
+std::span<const uint32_t> DagCut::compact(Queue& q, uint8_t bit, InFront in_front) {
   size_t kept = 0;
   for (size_t i = q.head; i < q.items.size(); ++i) {
     const uint32_t n = q.items[i];
     if (in_front(n)) q.items[kept++] = n;
-    else state_[n] &= uint16_t(~bit);
+    else state_[n] &= uint8_t(~bit);
   }
   q.items.resize(kept);
   q.head = 0;
@@ -157,7 +192,7 @@ void DagCut::mark(uint32_t n) {
 }
 
 void DagCut::clear_marks() {
-  for (uint32_t n : marked_) state_[n] &= uint16_t(~kMark);
+  for (uint32_t n : marked_) state_[n] &= uint8_t(~kMark);
   marked_.clear();
 }
 
@@ -200,7 +235,7 @@ bool DagCut::check(std::string* why) const {
 }
 
 size_t DagCut::memory_bytes() const {
-  return state_.capacity() * sizeof(state_[0]) +
+  return state_.capacity() + wide_nodes_.capacity() * 4 + wide_counters_.capacity() * 2 +
          4 * (collapse_queue_.items.capacity() + split_queue_.items.capacity() + marked_.capacity());
 }
 

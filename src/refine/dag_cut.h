@@ -17,18 +17,26 @@ namespace pms {
 
 class DagCut {
  public:
+  // A node's counter lives in its state byte when the node has at most `inline_limit` (<= 14) DAG
+  // children, else in a side table (no node of the models measured has more than 4; tests lower the
+  // limit to exercise the table).
+  static constexpr uint32_t kInlineLimit = 14;
+
   // The base mesh: nothing split. `dag` must outlive the cut.
-  explicit DagCut(const Dag& dag);
+  explicit DagCut(const Dag& dag, uint32_t inline_limit = kInlineLimit);
   // The cut whose split nodes are `split` (any order, duplicates allowed), e.g. rebuilt from what a
   // resuming client holds: pms::Error for a node out of range or a set that is not a cut (a split node
   // whose DAG parent or hierarchy parent is collapsed). O(nodes + edges).
-  DagCut(const Dag& dag, std::span<const uint32_t> split);
+  DagCut(const Dag& dag, std::span<const uint32_t> split, uint32_t inline_limit = kInlineLimit);
 
   const Dag& dag() const { return *dag_; }
   bool is_split(uint32_t n) const { return (state_[n] & kSplit) != 0; }
-  uint32_t counter(uint32_t n) const { return state_[n] & kCounter; }
-  bool in_fc(uint32_t n) const { return (state_[n] & (kSplit | kCounter)) == kSplit; }
-  bool in_fs(uint32_t n) const { return (state_[n] & (kSplit | kCounter)) == 0; }
+  uint32_t counter(uint32_t n) const {
+    const uint32_t c = state_[n] & kCounter;
+    return c == kWide ? wide_counter(n) : c;
+  }
+  bool in_fc(uint32_t n) const { return is_split(n) && counter(n) == 0; }
+  bool in_fs(uint32_t n) const { return !is_split(n) && counter(n) == 0; }
   // Collapsed with its hierarchy parent split (or a root): an active vertex of the mesh that has a split.
   // Every Fs node is one; the others wait for a dependency and split only with it (forced).
   bool is_candidate(uint32_t n) const {
@@ -74,24 +82,33 @@ class DagCut {
   size_t memory_bytes() const;
 
  private:
-  static constexpr uint16_t kSplit = 1u << 15, kQueuedC = 1u << 14, kQueuedS = 1u << 13, kMark = 1u << 12;
-  static constexpr uint16_t kCounter = 0x0FFF;
-  static_assert(Dag::kMaxChildren <= kCounter);
+  // The state byte: split, queued in Fc's queue, queued in the split queue, marked, 4-bit counter
+  // (kWide: the counter is in the side table).
+  static constexpr uint8_t kSplit = 0x80, kQueuedC = 0x40, kQueuedS = 0x20, kMark = 0x10, kCounter = 0x0F;
+  static constexpr uint8_t kWide = 0x0F;
+  static_assert(kInlineLimit < kWide && Dag::kMaxChildren <= UINT16_MAX);
   struct Queue {
     std::vector<uint32_t> items;
     size_t head = 0;
   };
-  void enqueue(Queue& q, uint32_t n, uint16_t bit);
+  void enqueue(Queue& q, uint32_t n, uint8_t bit);
   template <class InFront>
-  uint32_t pop(Queue& q, uint16_t bit, InFront in_front);
+  uint32_t pop(Queue& q, uint8_t bit, InFront in_front);
   template <class InFront>
-  std::span<const uint32_t> compact(Queue& q, uint16_t bit, InFront in_front);
+  std::span<const uint32_t> compact(Queue& q, uint8_t bit, InFront in_front);
+  void init_wide(uint32_t inline_limit);
+  uint32_t wide_counter(uint32_t n) const;
+  uint16_t& wide_slot(uint32_t n);
+  void set_counter(uint32_t n, uint32_t value);
+  void add_counter(uint32_t n, int delta);
   void recount();
   void leave_fronts(uint32_t n) { fc_size_ -= in_fc(n); fs_size_ -= in_fs(n); }
   void enter_fronts(uint32_t n) { fc_size_ += in_fc(n); fs_size_ += in_fs(n); }
 
   const Dag* dag_;
-  std::vector<uint16_t> state_;  // kSplit, queue and mark bits, counter
+  std::vector<uint8_t> state_;
+  std::vector<uint32_t> wide_nodes_;     // ascending: the nodes whose counters are in the side table
+  std::vector<uint16_t> wide_counters_;  // theirs
   Queue collapse_queue_, split_queue_;
   size_t split_queue_trimmed_ = 0;  // entries after the last compaction
   std::vector<uint32_t> marked_;

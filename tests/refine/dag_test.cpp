@@ -213,9 +213,10 @@ TEST(Dag, NoRedundantEdgeSphere) {
 
 // Random legal operations from the fronts: the mesh accepts each one alone and stays valid, and the cut's
 // counters, fronts and triangle count equal a recount.
-void expect_random_operations_legal(const BuiltModel& model, int steps, uint32_t seed) {
+void expect_random_operations_legal(const BuiltModel& model, int steps, uint32_t seed,
+                                    uint32_t inline_limit = DagCut::kInlineLimit) {
   const Dag dag(model.model());
-  DagCut cut(dag);
+  DagCut cut(dag, inline_limit);
   Mirror mirror(model, dag);
   std::mt19937 rng(seed);
   for (int step = 0; step < steps; ++step) {
@@ -247,6 +248,13 @@ void expect_random_operations_legal(const BuiltModel& model, int steps, uint32_t
 TEST(Dag, RandomOperationsAreLegalSphere) { expect_random_operations_legal(test::built_sphere(), 6000, 1); }
 TEST(Dag, RandomOperationsAreLegalTerrain) { expect_random_operations_legal(test::built_terrain(), 20000, 2); }
 TEST(Dag, RandomOperationsAreLegalStuddedPlane) { expect_random_operations_legal(test::built_studded_plane(), 6000, 3); }
+// Counters in the side table (every node with a DAG child or parent there) behave the same.
+TEST(Dag, RandomOperationsAreLegalWithSideTableCountersTerrain) {
+  expect_random_operations_legal(test::built_terrain(), 20000, 5, 0);
+}
+TEST(Dag, RandomOperationsAreLegalWithSomeSideTableCountersSphere) {
+  expect_random_operations_legal(test::built_sphere(), 6000, 6, 1);
+}
 TEST(Dag, RandomOperationsAreLegalBunny) {
   PMS_REQUIRE_SHARED_MODEL(path, "bunny.ply.xz");
   expect_random_operations_legal(*test::built_bunny(), 40000, 4);
@@ -255,9 +263,10 @@ TEST(Dag, RandomOperationsAreLegalBunny) {
 // A route flown with each traversal and mode: every frame's operations are legal, the cut stays
 // consistent, BUDGET never exceeds the budget; then, converged at the last view with the same
 // traversal, the mesh is the adaptation loop's (priority always; linear and constant-time from the base).
-void expect_route(const BuiltModel& model, DagTraversal traversal, DagMode mode, uint32_t n_ops, float tolerance) {
+void expect_route(const BuiltModel& model, DagTraversal traversal, DagMode mode, uint32_t n_ops, float tolerance,
+                  uint32_t inline_limit = DagCut::kInlineLimit) {
   const Dag dag(model.model());
-  DagCut cut(dag);
+  DagCut cut(dag, inline_limit);
   Mirror mirror(model, dag);
   DagTraverser traverser(cut);
   DagManageOptions options;
@@ -331,6 +340,11 @@ void expect_every_route(const BuiltModel& model, float tolerance) {
 
 TEST(DagTraversal, RoutesSphere) { expect_every_route(test::built_sphere(), 0.5f); }
 TEST(DagTraversal, RoutesTerrain) { expect_every_route(test::built_terrain(), 1); }
+TEST(DagTraversal, RoutesWithSideTableCountersTerrain) {
+  expect_route(test::built_terrain(), DagTraversal::priority, DagMode::budget, 300, 1, 1);
+  expect_route(test::built_terrain(), DagTraversal::priority, DagMode::free, 300, 1, 0);
+  expect_route(test::built_terrain(), DagTraversal::linear, DagMode::free, 300, 1, 1);
+}
 TEST(DagTraversal, RoutesBunny) {
   PMS_REQUIRE_SHARED_MODEL(path, "bunny.ply.xz");
   expect_every_route(*test::built_bunny(), 1);
