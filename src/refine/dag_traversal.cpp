@@ -1,0 +1,223 @@
+// MANAGE-TRAVERSAL and the three traversals of Zheng & Chan 2006 (§4 Fig. 2, §5 Figs. 3–5) over a DagCut.
+//
+// ERROR-EVALUATE is the refinement engine's qrefine (Hoppe 1997 §4) and its priority, on the DAG's decoded
+// NodeCriteria. NEED-APPLY of a split candidate is qrefine; a candidate still waiting for a dependency
+// is split together with what it needs (each of those split when it reaches Fs), as the adaptation loop's
+// forced chain does. NEED-APPLY of an Fc node is "not qrefine" for the linear and constant-time traversals.
+// The priority traversal first justifies the split nodes top down as the adaptation loop does (a split node
+// is kept when its parent is kept and it qrefines, or when a kept node or a wanted candidate needs it), so
+// that it collapses exactly what the view's target mesh does not hold: the criteria are not monotone, and
+// with the local rule a node whose parent does not qrefine could keep that parent split forever.
+#include "refine/dag_traversal.h"
+
+#include <algorithm>
+
+#include "common/error.h"
+#include "refine/criteria_inline.h"
+
+namespace pms {
+
+bool DagTraverser::qrefine(uint32_t n, DagFrameStats& stats) {
+  ++stats.evaluated;
+  return criteria_detail::qrefine_inline(view_, cut_->dag().criteria(n));
+}
+
+float DagTraverser::priority(uint32_t n, DagFrameStats& stats) {
+  ++stats.evaluated;
+  return criteria_detail::priority_inline(view_, cut_->dag().criteria(n));
+}
+
+// Top down from the roots (the adaptation loop's walk over the cut): marks the split nodes the view keeps
+// and the collapsed ones a wanted candidate needs. Each node is evaluated at most once; the wanted
+// candidates go straight to the split heap (a candidate below an unkept parent is never wanted, and the
+// collapse phase only makes such candidates).
+void DagTraverser::justify(DagFrameStats& stats) {
+  DagCut& cut = *cut_;
+  const Dag& dag = cut.dag();
+  cut.clear_marks();
+  split_heap_.clear();
+  stack_.clear();
+  for (uint32_t r : dag.roots()) stack_.push_back(uint64_t(r) << 1);
+  while (!stack_.empty()) {
+    const uint64_t entry = stack_.back();
+    stack_.pop_back();
+    const uint32_t v = uint32_t(entry >> 1);
+    if (cut.marked(v)) continue;
+    if (entry & 1) {
+      cut.mark(v);  // needed by a kept node or a wanted candidate
+    } else if (cut.is_split(v)) {
+      if (!qrefine(v, stats)) continue;  // it may still be forced later
+      cut.mark(v);
+    } else {
+      const float key = priority(v, stats);
+      if (key <= 0) continue;
+      push_split(key, v);
+    }
+    if (cut.is_split(v))
+      for (int k = 0; k < 2; ++k)
+        if (const uint32_t c = dag.hierarchy_child(v, k); c != kNone) stack_.push_back(uint64_t(c) << 1);
+    for (uint32_t p : dag.parents(v)) stack_.push_back(uint64_t(p) << 1 | 1);
+  }
+}
+
+void DagTraverser::push_split(float key, uint32_t n) {
+  split_heap_.push_back({key, n});
+  std::push_heap(split_heap_.begin(), split_heap_.end(), [](const Ranked& a, const Ranked& b) { return a.key < b.key; });
+}
+
+void DagTraverser::push_split_candidate(uint32_t n, DagFrameStats& stats) {
+  const uint32_t p = cut_->dag().hierarchy_parent(n);
+  if (p != kNone && !cut_->marked(p)) return;  // its parent leaves the target mesh: not wanted
+  if (const float key = priority(n, stats); key > 0) push_split(key, n);
+}
+
+// Splits n after the collapsed nodes it needs, each one as it reaches Fs. False when a limit stopped it
+// (the splits done so far stay: each was legal).
+bool DagTraverser::split_with_needs(uint32_t n, Limits& limits, DagFrameStats& stats, std::vector<DagOp>& ops) {
+  DagCut& cut = *cut_;
+  const Dag& dag = cut.dag();
+  while (!cut.is_split(n)) {
+    uint32_t y = n;
+    while (!cut.in_fs(y)) {  // a collapsed node with a collapsed DAG parent: climb to one
+      for (uint32_t p : dag.parents(y))
+        if (!cut.is_split(p)) {
+          y = p;
+          break;
+        }
+    }
+    if (limits.max_ops && stats.splits >= limits.max_ops) return false;
+    if (dag.faces(y) > limits.room) {
+      stats.stopped_by_budget = true;
+      return false;
+    }
+    if (limits.room != UINT64_MAX) limits.room -= dag.faces(y);
+    cut.split(y);
+    ops.push_back({y, true});
+    ++stats.splits;
+    stats.forced += y != n;
+    if (justified_) {
+      cut.mark(y);
+      for (int k = 0; k < 2; ++k)
+        if (const uint32_t c = dag.hierarchy_child(y, k); c != kNone) push_split_candidate(c, stats);
+    }
+  }
+  return true;
+}
+
+void DagTraverser::collapse(uint32_t n, DagFrameStats& stats, std::vector<DagOp>& ops) {
+  cut_->collapse(n);
+  ops.push_back({n, false});
+  ++stats.collapses;
+}
+
+// Fig. 3 over Fc: the least visible errors first. Only the unkept nodes need applying, so only they are
+// evaluated for their priority.
+void DagTraverser::priority_collapse(const Limits& limits, DagFrameStats& stats, std::vector<DagOp>& ops) {
+  DagCut& cut = *cut_;
+  const auto later = [](const Ranked& a, const Ranked& b) { return a.key > b.key; };
+  const auto push = [&](uint32_t n) {
+    if (cut.marked(n)) return;  // kept: NEED-APPLY fails
+    collapse_heap_.push_back({priority(n, stats), n});
+    std::push_heap(collapse_heap_.begin(), collapse_heap_.end(), later);
+  };
+  collapse_heap_.clear();
+  for (uint32_t n : cut.collapse_front()) push(n);
+  while (!collapse_heap_.empty() && !(limits.max_ops && stats.collapses >= limits.max_ops)) {
+    std::pop_heap(collapse_heap_.begin(), collapse_heap_.end(), later);
+    const uint32_t n = collapse_heap_.back().node;
+    collapse_heap_.pop_back();
+    if (!cut.in_fc(n)) continue;
+    collapse(n, stats, ops);
+    for (uint32_t p : cut.dag().parents(n))
+      if (cut.in_fc(p)) push(p);
+  }
+}
+
+// Fig. 3 over the split candidates, the most visible errors first: the heap justify() filled, and the
+// children of what it splits.
+void DagTraverser::priority_split(Limits& limits, DagFrameStats& stats, std::vector<DagOp>& ops) {
+  DagCut& cut = *cut_;
+  const auto less = [](const Ranked& a, const Ranked& b) { return a.key < b.key; };
+  cut.trim_split_queue();  // nothing pops it here: keep it from filling with nodes that left
+  while (!split_heap_.empty()) {
+    std::pop_heap(split_heap_.begin(), split_heap_.end(), less);
+    const uint32_t n = split_heap_.back().node;
+    split_heap_.pop_back();
+    if (!cut.is_candidate(n)) continue;  // split meanwhile, for a node that needed it
+    if (!split_with_needs(n, limits, stats, ops)) return;
+  }
+}
+
+// Figs. 4 and 5 over the cut's FIFO queues. A node that does not need applying goes to the back. A phase
+// stops at the operation or evaluation limit, at an empty queue, or at the first node it already
+// evaluated (a whole pass without anything left to apply, Fig. 4 line 11: NEED-APPLY depends only on the
+// view, so a second look would say the same). Each node is evaluated at most once a phase.
+template <class Pop, class Requeue, class TryApply>
+void DagTraverser::fifo_phase(const uint32_t& applied, const Limits& limits, DagFrameStats& stats, Pop pop,
+                              Requeue requeue, TryApply try_apply) {
+  DagCut& cut = *cut_;
+  const uint32_t evaluated_before = stats.evaluated;
+  while (!(limits.max_ops && applied >= limits.max_ops) &&
+         !(limits.max_evaluated && stats.evaluated - evaluated_before >= limits.max_evaluated)) {
+    const uint32_t n = pop();
+    if (n == kNone) break;
+    if (cut.marked(n)) {
+      requeue(n);
+      break;
+    }
+    const Outcome outcome = try_apply(n);
+    if (outcome == Outcome::stopped) break;
+    if (outcome == Outcome::not_needed) {
+      cut.mark(n);
+      requeue(n);
+    }
+  }
+  cut.clear_marks();
+}
+
+void DagTraverser::fifo_collapse(const Limits& limits, DagFrameStats& stats, std::vector<DagOp>& ops) {
+  DagCut& cut = *cut_;
+  fifo_phase(
+      stats.collapses, limits, stats, [&] { return cut.pop_collapse(); }, [&](uint32_t n) { cut.requeue_collapse(n); },
+      [&](uint32_t n) {
+        if (qrefine(n, stats)) return Outcome::not_needed;
+        collapse(n, stats, ops);
+        return Outcome::applied;
+      });
+}
+
+void DagTraverser::fifo_split(Limits& limits, DagFrameStats& stats, std::vector<DagOp>& ops) {
+  DagCut& cut = *cut_;
+  fifo_phase(
+      stats.splits, limits, stats, [&] { return cut.pop_split(); }, [&](uint32_t n) { cut.requeue_split(n); },
+      [&](uint32_t n) {
+        if (!qrefine(n, stats)) return Outcome::not_needed;
+        if (split_with_needs(n, limits, stats, ops)) return Outcome::applied;
+        if (cut.is_candidate(n)) cut.requeue_split(n);  // a limit stopped it, maybe halfway
+        return Outcome::stopped;
+      });
+}
+
+// Fig. 2. In BUDGET mode the splits' triangles are limited to what keeps the cut within the budget.
+DagFrameStats DagTraverser::manage(const DagManageOptions& options, std::vector<DagOp>& ops) {
+  if (!has_view_) fail("dag traversal", "no view set");
+  DagFrameStats stats;
+  Limits limits;
+  if (options.traversal == DagTraversal::constant_time) limits.max_evaluated = options.max_ops;
+  else limits.max_ops = options.max_ops;
+  justified_ = options.traversal == DagTraversal::priority;
+  if (justified_) justify(stats);
+  if (justified_) priority_collapse(limits, stats, ops);
+  else fifo_collapse(limits, stats, ops);
+  if (options.mode == DagMode::budget) {
+    const uint64_t t = cut_->triangles();
+    limits.room = options.budget > t ? options.budget - t : 0;
+  }
+  if (justified_) priority_split(limits, stats, ops);
+  else fifo_split(limits, stats, ops);
+  if (justified_) cut_->clear_marks();
+  justified_ = false;
+  return stats;
+}
+
+}  // namespace pms

@@ -1,0 +1,95 @@
+// Traversals of a DAG cut (Zheng & Chan 2006 §4–5): MANAGE-TRAVERSAL(vp, mode, N) collapses first, then
+// splits, under the fidelity constraint (the view and τ, evaluated by the refinement engine's own qrefine on
+// the same decoded numbers), the mesh-change constraint N and, in BUDGET mode, the client's triangle budget.
+// Three algorithms: priority-oriented (every front node evaluated, two priority queues), linear (the cut's
+// FIFO queues, continued from frame to frame, at most N operations) and constant-time (at most N nodes
+// evaluated). docs/internals.md ("The DAG of operations") has the rules and why priority converges to the
+// adaptation loop's mesh.
+// Shared with the browser build: single-threaded, no std::ranges algorithms, std::format or coroutines.
+#pragma once
+#include <cstdint>
+#include <vector>
+
+#include "refine/criteria.h"
+#include "refine/dag_cut.h"
+
+namespace pms {
+
+enum class DagTraversal : uint8_t { priority, linear, constant_time };
+enum class DagMode : uint8_t { free, budget };
+
+struct DagManageOptions {
+  DagTraversal traversal = DagTraversal::priority;
+  DagMode mode = DagMode::free;
+  // N: operations per phase (priority, linear) or nodes evaluated per phase (constant-time); 0 = no limit.
+  uint32_t max_ops = 300;
+  // BUDGET mode: the splits add at most as many triangles as keep the cut at or below this (so, from a cut
+  // within the budget, at least as many as the collapses removed: the paper's rule counted in triangles).
+  uint64_t budget = 0;
+};
+
+struct DagOp {
+  uint32_t node;  // DAG node
+  bool split;     // false: collapse
+};
+
+struct DagFrameStats {
+  uint32_t splits = 0, collapses = 0;
+  uint32_t forced = 0;     // of the splits, those a wanted node needed first
+  uint32_t evaluated = 0;  // ERROR-EVALUATE calls
+  bool stopped_by_budget = false;
+};
+
+class DagTraverser {
+ public:
+  explicit DagTraverser(DagCut& cut) : cut_(&cut) {}
+
+  void set_view(const ViewCriteria& view) {
+    view_ = view;
+    has_view_ = true;
+  }
+  // MANAGE-TRAVERSAL (Fig. 2): applies the operations to the cut and appends them to `ops` in that order.
+  // pms::Error before set_view().
+  DagFrameStats manage(const DagManageOptions& options, std::vector<DagOp>& ops);
+
+  DagCut& cut() { return *cut_; }
+  // Scratch the traversals keep between frames (heaps, the justification stack), beyond the cut.
+  size_t memory_bytes() const {
+    return (collapse_heap_.capacity() + split_heap_.capacity()) * sizeof(Ranked) + stack_.capacity() * sizeof(uint64_t);
+  }
+
+ private:
+  struct Limits {
+    uint32_t max_ops = 0, max_evaluated = 0;  // 0 = none
+    uint64_t room = UINT64_MAX;               // triangles the splits may add
+  };
+  struct Ranked {
+    float key;
+    uint32_t node;
+  };
+  bool qrefine(uint32_t n, DagFrameStats& stats);
+  float priority(uint32_t n, DagFrameStats& stats);
+  void justify(DagFrameStats& stats);
+  void force_closure(uint32_t n);
+  bool split_with_needs(uint32_t n, Limits& limits, DagFrameStats& stats, std::vector<DagOp>& ops);
+  void collapse(uint32_t n, DagFrameStats& stats, std::vector<DagOp>& ops);
+  void priority_collapse(const Limits& limits, DagFrameStats& stats, std::vector<DagOp>& ops);
+  void priority_split(Limits& limits, DagFrameStats& stats, std::vector<DagOp>& ops);
+  void push_split(float key, uint32_t n);
+  void push_split_candidate(uint32_t n, DagFrameStats& stats);
+  enum class Outcome { not_needed, applied, stopped };
+  template <class Pop, class Requeue, class TryApply>
+  void fifo_phase(const uint32_t& applied, const Limits& limits, DagFrameStats& stats, Pop pop, Requeue requeue,
+                  TryApply try_apply);
+  void fifo_collapse(const Limits& limits, DagFrameStats& stats, std::vector<DagOp>& ops);
+  void fifo_split(Limits& limits, DagFrameStats& stats, std::vector<DagOp>& ops);
+
+  DagCut* cut_;
+  ViewCriteria view_;
+  bool has_view_ = false;
+  bool justified_ = false;  // priority: marks say which split nodes the view's target mesh keeps
+  std::vector<Ranked> collapse_heap_, split_heap_;
+  std::vector<uint64_t> stack_;  // node << 1 | forced
+};
+
+}  // namespace pms

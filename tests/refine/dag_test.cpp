@@ -1,0 +1,477 @@
+// The DAG of vsplit / ecol operations (Zheng & Chan 2006 §3) and its traversals (§4–5) on built models:
+// every operation a cut allows is legal on the selectively refined mesh (SelectiveMesh applies it alone,
+// without a forced chain, and keeps its invariants), every dependency edge is needed, counters and fronts
+// equal a recount after random and view-driven sequences, BUDGET mode never exceeds the budget, and at
+// convergence the traversals give the adaptation loop's mesh of the view.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "common/error.h"
+#include "pm/hierarchy.h"
+#include "refine/adapt.h"
+#include "refine/criteria.h"
+#include "refine/dag.h"
+#include "refine/dag_cut.h"
+#include "refine/dag_traversal.h"
+#include "refine/selective_mesh.h"
+#include "refine/vertex_hierarchy.h"
+#include "test_support.h"
+#include "view_models.h"
+
+namespace pms {
+namespace {
+
+using test::BuiltModel;
+using test::IdFace;
+
+std::string audit(const DagCut& cut) {
+  std::string why;
+  return cut.check(&why) ? "ok" : why;
+}
+
+std::string invariants(const SelectiveMesh& mesh) {
+  std::string why;
+  return mesh.check_invariants(&why) ? "ok" : why;
+}
+
+// The client's mesh: a SelectiveMesh over the complete hierarchy that applies a cut's operations.
+struct Mirror {
+  const Dag& dag;
+  VertexHierarchy hierarchy;
+  SelectiveMesh mesh;
+  std::vector<uint32_t> slot;  // per DAG node
+
+  Mirror(const BuiltModel& model, const Dag& d)
+      : dag(d), hierarchy(test::complete_hierarchy(model.model())), mesh(hierarchy, model.model().base_faces) {
+    const ModelData m = model.model();
+    for (uint32_t n = 0; n < dag.size(); ++n) slot.push_back(hierarchy.find(m.id(dag.model_node(n))));
+  }
+
+  // A split must need no forced chain: exactly one vertex more.
+  void apply(const DagOp& op) {
+    const size_t before = mesh.vertex_count();
+    if (op.split) {
+      const VSplitResult r = mesh.vsplit(slot[op.node]);
+      ASSERT_TRUE(r.done) << "split of DAG node " << op.node;
+      ASSERT_EQ(mesh.vertex_count(), before + 1) << "the split of DAG node " << op.node << " needed a forced chain";
+    } else {
+      ASSERT_TRUE(mesh.ecol(slot[op.node])) << "SelectiveMesh refused the collapse of DAG node " << op.node;
+    }
+  }
+  void apply(const std::vector<DagOp>& ops) {
+    for (const DagOp& op : ops) {
+      apply(op);
+      if (::testing::Test::HasFatalFailure()) return;
+    }
+  }
+};
+
+// Splits n and everything it needs, each as it reaches Fs (the order of the traversals' forced splits).
+void split_closure(DagCut& cut, uint32_t n, std::vector<DagOp>& ops) {
+  while (!cut.is_split(n)) {
+    uint32_t y = n;
+    while (!cut.in_fs(y)) {
+      const auto parents = cut.dag().parents(y);
+      y = *std::find_if(parents.begin(), parents.end(), [&](uint32_t p) { return !cut.is_split(p); });
+    }
+    cut.split(y);
+    ops.push_back({y, true});
+  }
+}
+
+std::vector<Camera> route_of(const BuiltModel& model) {
+  std::vector<Camera> route;
+  route.push_back(test::framing_camera(model, {0.3f, 0.2f, 1}, 4));
+  route.push_back(test::framing_camera(model, {1, 0.5f, 0.4f}, 1));
+  for (int i = 0; i <= 6; ++i) {  // moving close, sweeping around
+    const float a = 0.35f * float(i);
+    route.push_back(test::framing_camera(model, {std::sin(a), 0.3f - 0.1f * float(i), std::cos(a)}, 1.0f - 0.1f * float(i)));
+  }
+  route.push_back(test::framing_camera(model, {1, 0.05f, -0.2f}, 0.6f, 30));
+  route.push_back(test::framing_camera(model, {-0.4f, 0.3f, 1}, 0.35f));
+  route.push_back(test::framing_camera(model, {0.3f, 0.2f, 1}, 3));
+  return route;
+}
+
+std::vector<IdFace> adapt_mesh(const BuiltModel& model, const ViewParams& view, float tolerance) {
+  const ModelData m = model.model();
+  VertexHierarchy h = test::complete_hierarchy(m);
+  SelectiveMesh mesh(h, m.base_faces);
+  AdaptOptions options;
+  options.tolerance = tolerance;
+  SelectiveRefinement refinement(mesh, m.scale, options);
+  refinement.set_view(view);
+  refinement.converge();
+  return test::id_faces(mesh);
+}
+
+// MANAGE-TRAVERSAL with no limits until a frame changes nothing.
+void converge(DagTraverser& traverser, DagTraversal traversal, Mirror& mirror) {
+  DagManageOptions options;
+  options.traversal = traversal;
+  options.max_ops = 0;
+  for (int frame = 0; frame < 200; ++frame) {
+    std::vector<DagOp> ops;
+    traverser.manage(options, ops);
+    mirror.apply(ops);
+    if (::testing::Test::HasFatalFailure() || ops.empty()) return;
+  }
+  ADD_FAILURE() << "no convergence in 200 frames";
+}
+
+void expect_sound_edges(const BuiltModel& model) {
+  const ModelData m = model.model();
+  const Dag dag(m);
+  const DagStats& s = dag.stats();
+  std::printf("[ dag ] %s: %u nodes, %.4f edges per node (%llu parent, %llu dependency; redundant: %llu ancestor, "
+              "%llu dependency, %llu parent), max out-degree %u, %.1f ms, %.1f B per node shared\n",
+              model.name.c_str(), s.nodes, s.edges_per_node(), (unsigned long long)s.parent_edges,
+              (unsigned long long)s.dependency_edges, (unsigned long long)s.redundant_ancestor,
+              (unsigned long long)s.redundant_dependency, (unsigned long long)s.redundant_parent, s.max_children,
+              1e3 * s.seconds, double(dag.memory_bytes()) / s.nodes);
+  ASSERT_GT(s.nodes, 0u);
+  uint64_t edges = 0;
+  for (uint32_t n = 0; n < dag.size(); ++n) {
+    const auto parents = dag.parents(n);
+    ASSERT_LE(parents.size(), 2u);
+    edges += parents.size();
+    for (uint32_t p : parents) {
+      const auto kids = dag.children(p);
+      EXPECT_NE(std::find(kids.begin(), kids.end(), n), kids.end()) << "out-edges are not the in-edges reversed";
+      if (p != dag.hierarchy_parent(n)) {  // a dependency: never an ancestor (those are split anyway)
+        EXPECT_FALSE(is_ancestor_or_self(m.id(dag.model_node(p)), m.id(dag.model_node(n))));
+      }
+    }
+    if (dag.hierarchy_parent(n) == kNone) {
+      EXPECT_NE(std::find(dag.roots().begin(), dag.roots().end(), n), dag.roots().end());
+    }
+  }
+  EXPECT_EQ(edges, s.parent_edges + s.dependency_edges);
+  // Every dependency edge w -> n is needed: with everything else n needs split and w collapsed, n's cut
+  // vertices share their active ancestor, so n alone cannot split.
+  int checked = 0;
+  for (uint32_t n = 0; n < dag.size() && checked < 30; ++n) {
+    const uint32_t p = dag.hierarchy_parent(n);
+    const auto parents = dag.parents(n);
+    if (p == kNone || parents.size() != 2) continue;
+    const uint32_t w = parents[0] == p ? parents[1] : parents[0];
+    DagCut cut(dag);
+    Mirror mirror(model, dag);
+    std::vector<DagOp> ops;
+    split_closure(cut, p, ops);
+    mirror.apply(ops);
+    ASSERT_FALSE(::testing::Test::HasFatalFailure());
+    ASSERT_FALSE(cut.is_split(w)) << "the parent's requirements hold the dependency: a redundant edge";
+    ASSERT_TRUE(cut.is_candidate(n) && !cut.in_fs(n));
+    const uint32_t mn = dag.model_node(n);
+    EXPECT_EQ(mirror.mesh.active_ancestor(m.id(m.cut_left[mn])), mirror.mesh.active_ancestor(m.id(m.cut_right[mn])))
+        << "node " << n << " could split without its dependency " << w;
+    ++checked;
+  }
+  if (s.dependency_edges > 0) {
+    EXPECT_GT(checked, 0);
+  }
+}
+
+TEST(Dag, EdgesAreSoundAndNeededSphere) { expect_sound_edges(test::built_sphere()); }
+TEST(Dag, EdgesAreSoundAndNeededTerrain) { expect_sound_edges(test::built_terrain()); }
+TEST(Dag, EdgesAreSoundAndNeededBunny) {
+  PMS_REQUIRE_SHARED_MODEL(path, "bunny.ply.xz");
+  expect_sound_edges(*test::built_bunny());
+}
+
+// No edge is implied by another path: on a small model, the closure over the other in-edge never holds
+// an edge's source (brute force over the reduced graph, which has the same closures).
+TEST(Dag, NoRedundantEdgeSphere) {
+  const Dag dag(test::built_sphere().model());
+  std::vector<uint32_t> seen(dag.size(), kNone), stack;
+  for (uint32_t n = 0; n < dag.size(); ++n) {
+    const auto parents = dag.parents(n);
+    for (uint32_t a : parents)
+      for (uint32_t b : parents) {
+        if (a == b) continue;
+        stack.assign(1, b);  // is a required by b?
+        bool found = false;
+        while (!stack.empty() && !found) {
+          const uint32_t y = stack.back();
+          stack.pop_back();
+          if (seen[y] == n * 2 + (a < b)) continue;
+          seen[y] = n * 2 + (a < b);
+          found = y == a;
+          for (uint32_t q : dag.parents(y)) stack.push_back(q);
+        }
+        EXPECT_FALSE(found) << "edge " << a << " -> " << n << " is implied through " << b;
+      }
+  }
+}
+
+// Random legal operations from the fronts: the mesh accepts each one alone and stays valid, and the cut's
+// counters, fronts and triangle count equal a recount.
+void expect_random_operations_legal(const BuiltModel& model, int steps, uint32_t seed,
+                                    uint32_t inline_limit = DagCut::kInlineLimit) {
+  const Dag dag(model.model());
+  DagCut cut(dag, inline_limit);
+  Mirror mirror(model, dag);
+  std::mt19937 rng(seed);
+  for (int step = 0; step < steps; ++step) {
+    const bool split = std::uniform_int_distribution<int>(0, 99)(rng) < (step < steps / 2 ? 75 : 35);
+    std::vector<uint32_t> front;
+    if (split) {
+      for (uint32_t n : cut.split_front())
+        if (cut.in_fs(n)) front.push_back(n);
+    } else {
+      for (uint32_t n : cut.collapse_front()) front.push_back(n);
+    }
+    if (front.empty()) continue;
+    const uint32_t n = front[std::uniform_int_distribution<size_t>(0, front.size() - 1)(rng)];
+    if (split) cut.split(n);
+    else cut.collapse(n);
+    mirror.apply({n, split});
+    ASSERT_FALSE(::testing::Test::HasFatalFailure());
+    ASSERT_EQ(mirror.mesh.face_count(), cut.triangles());
+    if (step % 97 == 0) {
+      ASSERT_EQ(audit(cut), "ok") << "step " << step;
+      ASSERT_EQ(invariants(mirror.mesh), "ok") << "step " << step;
+    }
+  }
+  EXPECT_EQ(audit(cut), "ok");
+  EXPECT_EQ(invariants(mirror.mesh), "ok");
+  EXPECT_GT(cut.split_count(), 0u);
+}
+
+TEST(Dag, RandomOperationsAreLegalSphere) { expect_random_operations_legal(test::built_sphere(), 6000, 1); }
+TEST(Dag, RandomOperationsAreLegalTerrain) { expect_random_operations_legal(test::built_terrain(), 20000, 2); }
+TEST(Dag, RandomOperationsAreLegalStuddedPlane) { expect_random_operations_legal(test::built_studded_plane(), 6000, 3); }
+// Counters in the side table (every node with a DAG child or parent there) behave the same.
+TEST(Dag, RandomOperationsAreLegalWithSideTableCountersTerrain) {
+  expect_random_operations_legal(test::built_terrain(), 20000, 5, 0);
+}
+TEST(Dag, RandomOperationsAreLegalWithSomeSideTableCountersSphere) {
+  expect_random_operations_legal(test::built_sphere(), 6000, 6, 1);
+}
+TEST(Dag, RandomOperationsAreLegalBunny) {
+  PMS_REQUIRE_SHARED_MODEL(path, "bunny.ply.xz");
+  expect_random_operations_legal(*test::built_bunny(), 40000, 4);
+}
+
+// A route flown with each traversal and mode: every frame's operations are legal, the cut stays
+// consistent, BUDGET never exceeds the budget; then, converged at the last view with the same
+// traversal, the mesh is the adaptation loop's (priority always; linear and constant-time from the base).
+void expect_route(const BuiltModel& model, DagTraversal traversal, DagMode mode, uint32_t n_ops, float tolerance,
+                  uint32_t inline_limit = DagCut::kInlineLimit) {
+  const Dag dag(model.model());
+  DagCut cut(dag, inline_limit);
+  Mirror mirror(model, dag);
+  DagTraverser traverser(cut);
+  DagManageOptions options;
+  options.traversal = traversal;
+  options.mode = mode;
+  options.max_ops = n_ops;
+  const std::vector<Camera> route = route_of(model);
+  // A budget the close views want more than (their converged mesh size, halved) and the route reaches
+  // with N operations per frame.
+  options.budget = std::min<uint64_t>(adapt_mesh(model, test::view_for(model, route[route.size() - 2]), tolerance).size() / 2,
+                                      dag.base_faces() + 2 * 20 * uint64_t(n_ops));
+  uint64_t ops_total = 0;
+  bool budget_stopped = false;
+  for (const Camera& camera : route) {
+    traverser.set_view(make_criteria(test::view_for(model, camera), tolerance));
+    for (int frame = 0; frame < 4; ++frame) {
+      std::vector<DagOp> ops;
+      const size_t queued = cut.collapse_queue_size() + cut.split_queue_size();
+      const DagFrameStats stats = traverser.manage(options, ops);
+      mirror.apply(ops);
+      ASSERT_FALSE(::testing::Test::HasFatalFailure());
+      ops_total += ops.size();
+      if (traversal != DagTraversal::priority) {  // each queued or new front node evaluated once at most
+        ASSERT_LE(stats.evaluated, queued + ops.size() * (3 + dag.stats().max_children));
+      }
+      budget_stopped |= stats.stopped_by_budget;
+      ASSERT_EQ(stats.splits + stats.collapses, ops.size());
+      if (traversal != DagTraversal::constant_time && n_ops) {
+        ASSERT_LE(stats.splits, n_ops);
+        ASSERT_LE(stats.collapses, n_ops);
+      }
+      if (traversal == DagTraversal::constant_time && n_ops) {
+        ASSERT_LE(stats.evaluated, 2 * n_ops);
+      }
+      ASSERT_EQ(mirror.mesh.face_count(), cut.triangles());
+      if (mode == DagMode::budget) {
+        ASSERT_LE(cut.triangles(), options.budget);
+      }
+      ASSERT_EQ(audit(cut), "ok");
+    }
+    ASSERT_EQ(invariants(mirror.mesh), "ok");
+  }
+  EXPECT_GT(ops_total, 0u);
+  if (mode == DagMode::budget) {
+    EXPECT_TRUE(budget_stopped) << "the budget never bound: the test checks nothing";
+  }
+  if (mode == DagMode::free && traversal == DagTraversal::priority) {
+    const ViewParams last = test::view_for(model, route.back());
+    converge(traverser, traversal, mirror);
+    EXPECT_EQ(audit(cut), "ok");
+    EXPECT_TRUE(test::id_faces(mirror.mesh) == adapt_mesh(model, last, tolerance))
+        << "priority at convergence is not the adaptation loop's mesh";
+    // And then the close view, from where the route left the cut.
+    const ViewParams close = test::view_for(model, route[route.size() - 2]);
+    traverser.set_view(make_criteria(close, tolerance));
+    converge(traverser, traversal, mirror);
+    EXPECT_TRUE(test::id_faces(mirror.mesh) == adapt_mesh(model, close, tolerance));
+  }
+}
+
+void expect_every_route(const BuiltModel& model, float tolerance) {
+  for (DagTraversal traversal : {DagTraversal::priority, DagTraversal::linear, DagTraversal::constant_time})
+    for (DagMode mode : {DagMode::free, DagMode::budget})
+      for (uint32_t n : {300u, 17u}) {
+        SCOPED_TRACE("traversal " + std::to_string(int(traversal)) + " mode " + std::to_string(int(mode)) + " N " +
+                     std::to_string(n));
+        expect_route(model, traversal, mode, n, tolerance);
+        if (::testing::Test::HasFatalFailure()) return;
+      }
+}
+
+TEST(DagTraversal, RoutesSphere) { expect_every_route(test::built_sphere(), 0.5f); }
+TEST(DagTraversal, RoutesTerrain) { expect_every_route(test::built_terrain(), 1); }
+TEST(DagTraversal, RoutesWithSideTableCountersTerrain) {
+  expect_route(test::built_terrain(), DagTraversal::priority, DagMode::budget, 300, 1, 1);
+  expect_route(test::built_terrain(), DagTraversal::priority, DagMode::free, 300, 1, 0);
+  expect_route(test::built_terrain(), DagTraversal::linear, DagMode::free, 300, 1, 1);
+}
+TEST(DagTraversal, RoutesBunny) {
+  PMS_REQUIRE_SHARED_MODEL(path, "bunny.ply.xz");
+  expect_every_route(*test::built_bunny(), 1);
+}
+
+// From the base mesh every traversal converges to the adaptation loop's mesh: the local rule's fixed
+// point reached by splits only is the target itself.
+void expect_from_base(const BuiltModel& model, float tolerance) {
+  const Dag dag(model.model());
+  for (const Camera& camera : route_of(model)) {
+    const ViewParams view = test::view_for(model, camera);
+    const std::vector<IdFace> target = adapt_mesh(model, view, tolerance);
+    for (DagTraversal traversal : {DagTraversal::priority, DagTraversal::linear, DagTraversal::constant_time}) {
+      DagCut cut(dag);
+      Mirror mirror(model, dag);
+      DagTraverser traverser(cut);
+      traverser.set_view(make_criteria(view, tolerance));
+      converge(traverser, traversal, mirror);
+      ASSERT_FALSE(::testing::Test::HasFatalFailure());
+      EXPECT_TRUE(test::id_faces(mirror.mesh) == target) << "traversal " << int(traversal);
+      EXPECT_EQ(audit(cut), "ok");
+    }
+  }
+}
+
+TEST(DagTraversal, FromBaseEqualsAdaptSphere) { expect_from_base(test::built_sphere(), 0.5f); }
+TEST(DagTraversal, FromBaseEqualsAdaptTerrain) { expect_from_base(test::built_terrain(), 1); }
+TEST(DagTraversal, FromBaseEqualsAdaptBunny) {
+  PMS_REQUIRE_SHARED_MODEL(path, "bunny.ply.xz");
+  expect_from_base(*test::built_bunny(), 1);
+}
+
+// Constant-time evaluates at most N nodes per phase, however large the front.
+TEST(DagTraversal, ConstantTimeEvaluatesAtMostN) {
+  const BuiltModel& model = test::built_terrain();
+  const Dag dag(model.model());
+  DagCut cut(dag);
+  DagTraverser traverser(cut);
+  traverser.set_view(make_criteria(test::view_for(model, test::framing_camera(model, {0.1f, 0.2f, 1}, 0.8f)), 0.5f));
+  DagManageOptions options;
+  options.traversal = DagTraversal::constant_time;
+  options.max_ops = 40;
+  uint32_t frames_with_work = 0;
+  for (int frame = 0; frame < 60; ++frame) {
+    std::vector<DagOp> ops;
+    const DagFrameStats stats = traverser.manage(options, ops);
+    ASSERT_LE(stats.evaluated, 2 * options.max_ops);  // two phases
+    frames_with_work += !ops.empty();
+  }
+  EXPECT_GT(frames_with_work, 30u);
+  EXPECT_GT(cut.split_count(), 500u);
+  EXPECT_EQ(audit(cut), "ok");
+}
+
+// A hand-made model's bad links are refused, and a cut refuses operations its fronts do not allow.
+TEST(Dag, RefusesBadModelsAndIllegalOperations) {
+  const BuiltModel& model = test::built_sphere();
+  uint32_t internal = kNone;
+  for (uint32_t n = 0; n < model.h.node_count() && internal == kNone; ++n)
+    if (!model.h.is_leaf(n) && model.h.cut_left[n] != kNone) internal = n;
+  ASSERT_NE(internal, kNone);
+  {
+    Hierarchy h = model.h;
+    h.cut_left[internal] = uint32_t(h.node_count() + 7);
+    EXPECT_THROW(Dag{model_of(h)}, Error);
+  }
+  {
+    Hierarchy h = model.h;
+    h.cut_left[internal] = h.cut_right[internal] = kNone;
+    EXPECT_THROW(Dag{model_of(h)}, Error);
+  }
+  {
+    Hierarchy h = model.h;
+    h.parent[internal] = uint32_t(h.node_count());
+    EXPECT_THROW(Dag{model_of(h)}, Error);
+  }
+  const Dag dag(model.model());
+  DagCut cut(dag);
+  const uint32_t root = dag.roots()[0];
+  EXPECT_THROW(cut.collapse(root), Error);  // not split
+  uint32_t below = kNone;
+  for (uint32_t n = 0; n < dag.size() && below == kNone; ++n)
+    if (dag.hierarchy_parent(n) != kNone) below = n;
+  EXPECT_THROW(cut.split(below), Error);  // its parent is collapsed
+  DagTraverser traverser(cut);
+  std::vector<DagOp> ops;
+  EXPECT_THROW(traverser.manage({}, ops), Error);  // no view
+  EXPECT_EQ(audit(cut), "ok");
+}
+
+// A cut rebuilt from its split nodes alone (what a resuming client's mesh tells) is the same cut; a set
+// that is not a cut is refused.
+TEST(Dag, CutRebuildsFromItsSplitNodes) {
+  const BuiltModel& model = test::built_terrain();
+  const Dag dag(model.model());
+  DagCut cut(dag);
+  DagTraverser traverser(cut);
+  traverser.set_view(make_criteria(test::view_for(model, test::framing_camera(model, {1, 0.3f, 0.08f}, 0.45f, 60)), 1));
+  DagManageOptions options;
+  options.traversal = DagTraversal::linear;
+  for (int frame = 0; frame < 20; ++frame) {
+    std::vector<DagOp> ops;
+    traverser.manage(options, ops);
+  }
+  std::vector<uint32_t> split;
+  for (uint32_t n = 0; n < dag.size(); ++n)
+    if (cut.is_split(n)) split.push_back(n);
+  ASSERT_GT(split.size(), 100u);
+  std::reverse(split.begin(), split.end());
+  const DagCut rebuilt(dag, split);
+  EXPECT_EQ(audit(rebuilt), "ok");
+  EXPECT_EQ(rebuilt.triangles(), cut.triangles());
+  EXPECT_EQ(rebuilt.fc_size(), cut.fc_size());
+  EXPECT_EQ(rebuilt.fs_size(), cut.fs_size());
+  for (uint32_t n = 0; n < dag.size(); ++n) ASSERT_EQ(rebuilt.counter(n), cut.counter(n)) << n;
+  // Without a node some split node needs, it is no cut.
+  uint32_t needed = kNone;
+  for (uint32_t n : split)
+    if (!cut.in_fc(n)) needed = n;
+  ASSERT_NE(needed, kNone);
+  std::vector<uint32_t> holed;
+  for (uint32_t n : split)
+    if (n != needed) holed.push_back(n);
+  EXPECT_THROW(DagCut(dag, holed), Error);
+  holed.push_back(dag.size());
+  EXPECT_THROW(DagCut(dag, holed), Error);
+}
+
+}  // namespace
+}  // namespace pms
