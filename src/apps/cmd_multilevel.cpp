@@ -1,10 +1,11 @@
-// pmstream multilevel build IN -o OUT [--levels L] [--ascii] [--base-vertices N] [--json]
+// pmstream multilevel build IN -o OUT [--levels L] [--cluster grid:N,...] [--ascii] [--base-vertices N] [--json]
 // pmstream multilevel info FILE [--json]
 // pmstream multilevel level FILE --level X -o OUT.ply
 // Progressive multilevel meshes (gueziec et al. 1999; docs/multilevel-format.md, docs/cli.md).
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 
 #include "apps/build_pipeline.h"
@@ -15,6 +16,7 @@
 #include "common/error.h"
 #include "io/mesh.h"
 #include "refine/multilevel_build.h"
+#include "refine/multilevel_cluster.h"
 #include "refine/multilevel_file.h"
 #include "refine/multilevel_mesh.h"
 
@@ -25,8 +27,66 @@ struct MultilevelBuildArgs {
   std::string input, output;
   uint32_t levels = 0;
   uint64_t base_vertices = BuildOptions{}.base_vertices;
+  std::string cluster;  // "grid:N,..." or empty: the builder's collapses
   bool ascii = false, json = false;
 };
+
+// "grid:64,16,4" -> {64, 16, 4}.
+std::vector<uint32_t> grid_resolutions(const std::string& spec) {
+  const std::string prefix = "grid:";
+  if (spec.rfind(prefix, 0) != 0) fail("--cluster", "'" + spec + "' is not grid:N,... (e.g. grid:64,16,4)");
+  std::vector<uint32_t> cells;
+  size_t at = prefix.size();
+  while (at <= spec.size()) {
+    const size_t comma = std::min(spec.find(',', at), spec.size());
+    const std::string item = spec.substr(at, comma - at);
+    char* end = nullptr;
+    const unsigned long n = std::strtoul(item.c_str(), &end, 10);
+    if (item.empty() || *end != '\0' || n == 0 || n > (1u << 20))
+      fail("--cluster", "'" + item + "' is not a grid size from 1 to 2^20");
+    if (!cells.empty() && n >= cells.back()) fail("--cluster", "grid sizes must decrease (finest first)");
+    cells.push_back(uint32_t(n));
+    at = comma + 1;
+  }
+  return cells;
+}
+
+// Where the levels come from: the builder's collapses of the cleaned mesh, or grid clusterings of the mesh
+// as loaded (non-manifold allowed, so it is not cleaned).
+struct LevelSource {
+  MultilevelMesh ml;
+  std::string clean_report = "not cleaned (clustering input may be non-manifold)";
+  uint64_t operations = 0;  // collapses or clusterings
+  double source_seconds = 0, multilevel_seconds = 0;
+};
+
+LevelSource multilevel_of(Mesh mesh, const MultilevelBuildArgs& args, const ProgressFn& progress) {
+  LevelSource out;
+  if (!args.cluster.empty()) {
+    const std::vector<uint32_t> cells = grid_resolutions(args.cluster);
+    Stopwatch cluster_time;
+    const std::vector<VertexClustering> clusterings = grid_clusterings(mesh, cells);
+    out.source_seconds = cluster_time.seconds();
+    Stopwatch ml_time;
+    out.ml = build_multilevel_from_clusterings(mesh, clusterings, args.levels);
+    out.multilevel_seconds = ml_time.seconds();
+    out.operations = clusterings.size();
+    return out;
+  }
+  out.clean_report = describe(clean_mesh(mesh));
+  BuildOptions options;
+  options.base_vertices = args.base_vertices;
+  options.progress = progress;
+  Stopwatch pm_time;
+  const BuildResult built = build_progressive_mesh(mesh, options);
+  out.source_seconds = pm_time.seconds();
+  Stopwatch ml_time;
+  const std::vector<EdgeCollapse> collapses = collapses_of(built.hierarchy);
+  out.ml = build_multilevel(mesh, collapses, args.levels);
+  out.multilevel_seconds = ml_time.seconds();
+  out.operations = collapses.size();
+  return out;
+}
 
 void run_multilevel_build(const MultilevelBuildArgs& args) {
   Stopwatch total;
@@ -34,18 +94,11 @@ void run_multilevel_build(const MultilevelBuildArgs& args) {
   Stopwatch load_time;
   Mesh mesh = load_input(args.input, bar.callback());
   const double load_seconds = load_time.seconds();
-  const CleanReport clean = clean_mesh(mesh);
-  BuildOptions options;
-  options.base_vertices = args.base_vertices;
-  options.progress = bar.callback();
-  Stopwatch pm_time;
-  const BuildResult built = build_progressive_mesh(mesh, options);
-  const double pm_seconds = pm_time.seconds();
+  const LevelSource source = multilevel_of(std::move(mesh), args, bar.callback());
   bar.finish();
-  Stopwatch ml_time;
-  const std::vector<EdgeCollapse> collapses = collapses_of(built.hierarchy);
-  const MultilevelMesh ml = build_multilevel(mesh, collapses, args.levels);
-  const double ml_seconds = ml_time.seconds();
+  const MultilevelMesh& ml = source.ml;
+  const double pm_seconds = source.source_seconds, ml_seconds = source.multilevel_seconds;
+  const char* operations = args.cluster.empty() ? "collapses" : "clusterings";
   Stopwatch write_time;
   write_multilevel(args.output, ml, args.ascii);
   const double write_seconds = write_time.seconds();
@@ -55,23 +108,24 @@ void run_multilevel_build(const MultilevelBuildArgs& args) {
     nlohmann::json j = {{"input", args.input},         {"output", args.output},
                         {"format", args.ascii ? "ascii" : "binary"},
                         {"vertices", ml.vertices()},   {"triangles", ml.faces()},
-                        {"levels", ml.level_count()},  {"collapses", collapses.size()},
+                        {"levels", ml.level_count()},  {operations, source.operations},
                         {"representatives", ml.stored_representatives()},
                         {"output_bytes", bytes},       {"attributes_dropped", dropped},
-                        {"load_seconds", load_seconds}, {"collapse_seconds", pm_seconds},
+                        {"load_seconds", load_seconds}, {args.cluster.empty() ? "collapse_seconds" : "cluster_seconds", pm_seconds},
                         {"multilevel_seconds", ml_seconds}, {"write_seconds", write_seconds},
                         {"seconds", total.seconds()},  {"peak_rss_mb", peak_rss_mb()}};
     std::printf("%s\n", j.dump().c_str());
     return;
   }
   std::printf("%s -> %s (%s)\n", args.input.c_str(), args.output.c_str(), args.ascii ? "ASCII" : "binary");
-  std::printf("  cleaning:        %s\n", describe(clean).c_str());
-  std::printf("  mesh:            %u vertices, %u triangles; %zu collapses\n", ml.vertices(), ml.faces(), collapses.size());
+  std::printf("  cleaning:        %s\n", source.clean_report.c_str());
+  std::printf("  mesh:            %u vertices, %u triangles; %llu %s\n", ml.vertices(), ml.faces(),
+              (unsigned long long)source.operations, operations);
   std::printf("  levels:          %u (coarsest: %u vertices, %u triangles)\n", ml.level_count(), ml.vertex_count.back(),
               ml.triangle_count.back());
   std::printf("  representatives: %llu stored\n", (unsigned long long)ml.stored_representatives());
-  std::printf("  time:            %.2f s (load %.2f, collapses %.2f, multilevel %.3f, write %.3f)\n", total.seconds(),
-              load_seconds, pm_seconds, ml_seconds, write_seconds);
+  std::printf("  time:            %.2f s (load %.2f, %s %.2f, multilevel %.3f, write %.3f)\n", total.seconds(),
+              load_seconds, operations, pm_seconds, ml_seconds, write_seconds);
   std::printf("  output:          %llu bytes\n", (unsigned long long)bytes);
   if (dropped) std::printf("  note:            the ASCII form has no normals or colours; they were left out\n");
 }
@@ -190,6 +244,9 @@ void add_multilevel_command(CLI::App& app) {
       ->capture_default_str();
   build->add_option("--base-vertices", b->base_vertices, "Collapse until this many vertices are left (0: as far as possible)")
       ->capture_default_str();
+  build->add_option("--cluster", b->cluster,
+                    "Levels from vertex clusterings instead of collapses: grid:N,... (N^3 cells each, finest first; "
+                    "the mesh is not cleaned, non-manifold results allowed)");
   build->add_flag("--ascii", b->ascii, "Write the paper's ASCII form (Fig. 6) instead of the binary one");
   build->add_flag("--json", b->json, "Print one JSON object with the statistics");
   build->callback([b] { run_multilevel_build(*b); });

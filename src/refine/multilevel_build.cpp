@@ -187,14 +187,17 @@ std::vector<uint32_t> merge_level_map(uint32_t from, uint32_t to) {
   return map;
 }
 
+void merge_levels(CollapseLevels& levels, uint32_t level_count) {
+  if (level_count == 0 || level_count >= levels.level_count) return;
+  const std::vector<uint32_t> map = merge_level_map(levels.level_count, level_count);
+  for (uint32_t& l : levels.vertex_level) l = map[l];
+  for (uint32_t& l : levels.triangle_level) l = map[l];
+  levels.level_count = level_count;
+}
+
 MultilevelMesh build_multilevel(const Mesh& mesh, std::span<const EdgeCollapse> collapses, uint32_t level_count) {
   CollapseLevels levels = assign_levels(mesh, collapses);
-  if (level_count > 0 && level_count < levels.level_count) {
-    const std::vector<uint32_t> map = merge_level_map(levels.level_count, level_count);
-    for (uint32_t& l : levels.vertex_level) l = map[l];
-    for (uint32_t& l : levels.triangle_level) l = map[l];
-    levels.level_count = level_count;
-  }
+  merge_levels(levels, level_count);
   return assemble_multilevel(mesh, levels);
 }
 

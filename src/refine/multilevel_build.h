@@ -39,6 +39,9 @@ CollapseLevels assign_levels(const Mesh& mesh, std::span<const EdgeCollapse> col
 // the same level as its child (after merging) is skipped, so every representative is of a higher level.
 MultilevelMesh assemble_multilevel(const Mesh& mesh, const CollapseLevels& levels);
 
+// Merges consecutive levels down to `level_count` (merge_level_map); 0 or more than there are: unchanged.
+void merge_levels(CollapseLevels& levels, uint32_t level_count);
+
 // The whole path: levels from the collapses, then assembled; `level_count` > 0 merges consecutive levels
 // down to that many (merge_level_map).
 MultilevelMesh build_multilevel(const Mesh& mesh, std::span<const EdgeCollapse> collapses, uint32_t level_count = 0);

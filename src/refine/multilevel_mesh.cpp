@@ -96,6 +96,18 @@ void representatives_stated_by(const MultilevelMesh& m, uint32_t t, uint32_t n_l
   }
 }
 
+std::vector<uint32_t> representatives_per_level(const MultilevelMesh& m) {
+  std::vector<uint32_t> count(m.level_count(), 0);
+  std::vector<uint8_t> stated(m.vertices(), 0);
+  std::vector<uint32_t> reps;
+  for_each_triangle_by_level(m, [&](uint32_t t, uint32_t l) {
+    reps.clear();
+    representatives_stated_by(m, t, m.vertex_count[l], stated, reps);
+    count[l] += uint32_t(reps.size() / 2);
+  });
+  return count;
+}
+
 MultilevelLod::MultilevelLod(const MultilevelMesh& mesh) : mesh_(mesh) {}
 
 void MultilevelLod::connect(uint32_t level) {

@@ -46,6 +46,9 @@ void validate_multilevel(const std::string& where, const MultilevelMesh& mesh);
 void representatives_stated_by(const MultilevelMesh& mesh, uint32_t t, uint32_t n_l, std::vector<uint8_t>& stated,
                                std::vector<uint32_t>& out);
 
+// Per level, how many representatives its triangles state (what its file batch carries).
+std::vector<uint32_t> representatives_per_level(const MultilevelMesh& mesh);
+
 // One LOD of a multilevel mesh at a time (the paper's setLevel). The mesh must outlive it.
 class MultilevelLod {
  public:

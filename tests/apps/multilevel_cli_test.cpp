@@ -60,6 +60,24 @@ TEST(MultilevelCli, BuildInfoLevelInBothForms) {
   EXPECT_NE(beyond.err.find("level 6 is outside 0..5"), std::string::npos) << beyond.err;
 }
 
+TEST(MultilevelCli, GridClusteringInput) {
+  const auto dir = test::temp_dir();
+  const std::string ply = (dir / "torus.ply").string(), out = (dir / "c.txt").string();
+  save_ply(make_torus(40, 20, 2.0f, 0.5f), ply);
+  const test::CliRun build = test::run_pmstream("multilevel build " + ply + " -o " + out + " --cluster grid:12,4 --ascii --json");
+  ASSERT_EQ(build.exit_code, 0) << build.err;
+  const auto b = nlohmann::json::parse(build.out);
+  EXPECT_EQ(b["levels"], 3);
+  EXPECT_EQ(b["clusterings"], 2);
+  const test::CliRun info = test::run_pmstream("multilevel info " + out + " --json");
+  ASSERT_EQ(info.exit_code, 0) << info.err;
+  const auto j = nlohmann::json::parse(info.out);
+  EXPECT_LT(j["per_level"][0]["triangles"].get<uint64_t>(), j["per_level"][1]["triangles"].get<uint64_t>());
+  const test::CliRun bad = test::run_pmstream("multilevel build " + ply + " -o " + out + " --cluster grid:4,12");
+  EXPECT_NE(bad.exit_code, 0);
+  EXPECT_NE(bad.err.find("grid sizes must decrease"), std::string::npos) << bad.err;
+}
+
 TEST(MultilevelCli, TerrainInputAndMalformedFiles) {
   const auto dir = test::temp_dir();
   const std::string out = (dir / "t.pml").string();
