@@ -3,7 +3,6 @@
 // throw pms::Error; crashes, hangs, sanitizer reports and huge allocations are findings. The binary form
 // is tried with its checksums recomputed, so mutated contents reach the structural checks.
 // Seed corpus: files written by `pmstream multilevel build` (with and without --ascii).
-#include <xxhash.h>
 #include <cstddef>
 #include <cstdint>
 #include <cstring>
@@ -15,27 +14,6 @@
 #include "refine/multilevel_mesh.h"
 
 namespace {
-
-void fix_checksums(std::vector<uint8_t>& bytes) {
-  if (bytes.size() < 40) return;
-  uint32_t sections = 0;
-  std::memcpy(&sections, bytes.data() + 16, 4);
-  if (sections > (bytes.size() - 40) / 32) return;
-  for (uint32_t i = 0; i < sections; ++i) {
-    uint8_t* e = bytes.data() + 40 + 32 * size_t(i);
-    uint32_t element = 0;
-    uint64_t offset = 0, count = 0;
-    std::memcpy(&element, e + 4, 4);
-    std::memcpy(&offset, e + 8, 8);
-    std::memcpy(&count, e + 16, 8);
-    if (element == 0 || offset > bytes.size() || count > (bytes.size() - offset) / element) continue;
-    const uint64_t sum = XXH64(bytes.data() + offset, element * count, 0);
-    std::memcpy(e + 24, &sum, 8);
-  }
-  std::memset(bytes.data() + 32, 0, 8);
-  const uint64_t sum = XXH64(bytes.data(), 40 + 32 * size_t(sections), 0);
-  std::memcpy(bytes.data() + 32, &sum, 8);
-}
 
 void touch(const pms::MultilevelMesh& m) {
   pms::MultilevelLod lod(m);
@@ -58,7 +36,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   }
   std::vector<uint8_t> bytes(data, data + size);
   if (size >= 8) std::memcpy(bytes.data(), "PMSMULTI", 8);
-  fix_checksums(bytes);
+  pms::reseal_multilevel_binary(bytes);
   try {
     touch(pms::parse_multilevel_binary("fuzz.pml", bytes, kLimits));
   } catch (const pms::Error&) {

@@ -170,6 +170,23 @@ void read_level(const SectionReader& in, const SectionEntry& e, const uint8_t* b
 
 }  // namespace
 
+void reseal_multilevel_binary(std::span<uint8_t> bytes) {
+  if (bytes.size() < sizeof(FileHeader)) return;
+  FileHeader h;
+  std::memcpy(&h, bytes.data(), sizeof h);
+  if (h.section_count > (bytes.size() - sizeof h) / sizeof(SectionEntry)) return;
+  for (uint32_t i = 0; i < h.section_count; ++i) {
+    uint8_t* at = bytes.data() + sizeof h + uint64_t(i) * sizeof(SectionEntry);
+    SectionEntry e;
+    std::memcpy(&e, at, sizeof e);
+    if (e.element_size == 0 || e.offset > bytes.size() || e.count > (bytes.size() - e.offset) / e.element_size) continue;
+    e.checksum = XXH64(bytes.data() + e.offset, e.count * e.element_size, 0);
+    std::memcpy(at, &e, sizeof e);
+  }
+  h.header_checksum = checksum_of(bytes.data(), sizeof h + uint64_t(h.section_count) * sizeof(SectionEntry));
+  std::memcpy(bytes.data(), &h, sizeof h);
+}
+
 bool is_multilevel_binary(std::span<const uint8_t> bytes) {
   return bytes.size() >= 8 && std::memcmp(bytes.data(), kMagic, 8) == 0;
 }

@@ -28,6 +28,10 @@ MultilevelMesh parse_multilevel_binary(const std::string& where, std::span<const
                                        const MultilevelLimits& limits = {});
 std::vector<uint8_t> format_multilevel_binary(const MultilevelMesh& mesh);
 
+// Recomputes every section checksum and the header checksum of a binary file changed on purpose, where its
+// table allows: tests and the fuzzer use it so that their changes reach the checks behind the checksums.
+void reseal_multilevel_binary(std::span<uint8_t> bytes);
+
 // Either form, told apart by the binary magic. Writing goes through PATH.tmp and a rename.
 MultilevelMesh read_multilevel(const std::string& path, const MultilevelLimits& limits = {});
 void write_multilevel(const std::string& path, const MultilevelMesh& mesh, bool ascii);

@@ -5,7 +5,6 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
-#include <xxhash.h>
 
 #include "common/error.h"
 #include "refine/multilevel_build.h"
@@ -200,25 +199,6 @@ TEST(MultilevelFile, MalformedAsciiNamesTheLine) {
   for (const auto& [text, expected] : cases) EXPECT_EQ(ascii_error(text), expected) << "input: " << text;
 }
 
-// The header and table checksums recomputed after a deliberate change, so the structural checks are reached.
-void fix_checksums(std::vector<uint8_t>& bytes) {
-  uint32_t sections = 0;
-  std::memcpy(&sections, bytes.data() + 16, 4);
-  for (uint32_t i = 0; i < sections; ++i) {
-    uint8_t* e = bytes.data() + 40 + 32 * size_t(i);
-    uint32_t element = 0;
-    uint64_t offset = 0, count = 0;
-    std::memcpy(&element, e + 4, 4);
-    std::memcpy(&offset, e + 8, 8);
-    std::memcpy(&count, e + 16, 8);
-    const uint64_t sum = XXH64(bytes.data() + offset, element * count, 0);
-    std::memcpy(e + 24, &sum, 8);
-  }
-  std::memset(bytes.data() + 32, 0, 8);
-  const uint64_t sum = XXH64(bytes.data(), 40 + 32 * size_t(sections), 0);
-  std::memcpy(bytes.data() + 32, &sum, 8);
-}
-
 std::string binary_error(const std::vector<uint8_t>& bytes) {
   return error_of([&] { parse_multilevel_binary("m.pml", bytes); });
 }
@@ -251,12 +231,12 @@ TEST(MultilevelFile, MalformedBinaryNamesTheOffset) {
   bad = good;
   const uint32_t self = 4;  // triangle (0, 4, 5) states 4 -> 1: make it 4 -> 4
   std::memcpy(bad.data() + first_level + 4 * (4 + 12 + 12 + 1), &self, 4);
-  fix_checksums(bad);
+  reseal_multilevel_binary(bad);
   EXPECT_EQ(binary_error(bad), "m.pml: vertex 4 has representative 4, which is not below it");
   bad = good;
   const uint32_t many = 1000;
   std::memcpy(bad.data() + last_offset + 4, &many, 4);
-  fix_checksums(bad);
+  reseal_multilevel_binary(bad);
   EXPECT_NE(binary_error(bad).find("section LEVL of level 0: 58 words but its counts need"), std::string::npos)
       << binary_error(bad);
 }
