@@ -5,7 +5,6 @@
 
 #include <charconv>
 #include <cmath>
-#include <unordered_map>
 
 #include "common/error.h"
 #include "refine/multilevel_file.h"
@@ -89,6 +88,7 @@ class Lexer {
 
 struct Shape {
   uint32_t dimension = 3, level_count = 0;
+  uint64_t vertex_count = 0;  // in the whole file, so indices are checked as they are read
 };
 
 // Pass 1: batches well formed, in vertex/triangle pairs; how many numbers each vertex batch holds.
@@ -111,7 +111,9 @@ Shape shape_of(const std::string& where, std::string_view text, const Multilevel
   for (uint32_t d : {3u, 2u}) {
     bool whole = true;
     for (const auto& batch : vertex_batches) whole = whole && batch.first % d == 0;
-    if (whole) return {d, uint32_t(batches / 2)};
+    uint64_t numbers = 0;
+    for (const auto& batch : vertex_batches) numbers += batch.first;
+    if (whole) return {d, uint32_t(batches / 2), numbers / d};
   }
   for (const auto& [numbers, line] : vertex_batches)
     if (numbers % 3 && numbers % 2)
@@ -119,35 +121,34 @@ Shape shape_of(const std::string& where, std::string_view text, const Multilevel
   fail(where, "vertex batches mix 2D and 3D coordinates");
 }
 
-struct StatedRep {
-  uint32_t representative;
-  uint64_t line;
-};
-
 // Pass 2, one triangle batch of level l with n vertices known: corners, then the representatives they state.
-void read_triangles(Lexer& lex, uint32_t level, uint32_t n, MultilevelMesh& m,
-                    std::unordered_map<uint32_t, StatedRep>& stated, uint64_t& highest, uint64_t& highest_line) {
+// `stated` holds the representatives stated so far (kNoRep where none), one entry per vertex of the file.
+void read_triangles(Lexer& lex, uint32_t level, uint32_t n, MultilevelMesh& m, std::vector<uint32_t>& stated) {
+  const uint64_t total = stated.size();
+  auto vertex = [&](const char* what) {
+    const uint32_t v = lex.index();
+    if (v >= total) lex.error(std::string(what) + " " + str(v) + " is beyond the file's " + str(total) + " vertices");
+    return v;
+  };
   Token t = lex.next();
   while (t == Token::number) {
     uint32_t corner[3];
     for (int k = 0; k < 3; ++k) {
       if (t != Token::number) lex.error("a triangle of level " + str(level) + " has " + str(k) + " corners, not 3");
-      corner[k] = lex.index();
+      corner[k] = vertex("vertex");
       t = lex.next();
     }
     for (uint32_t v : corner) {
       m.triangles.push_back(v);
-      while (v >= n && !stated.contains(v)) {
+      while (v >= n && stated[v] == kNoRep) {
         if (t != Token::number)
           lex.error("vertex " + str(v) + " is not in level " + str(level) + " or above: its representative must follow the triangle");
-        const uint32_t r = lex.index();
+        const uint32_t r = vertex("representative");
         if (r >= v) lex.error("representative " + str(r) + " of vertex " + str(v) + " is not below it");
-        stated.emplace(v, StatedRep{r, lex.line()});
-        if (v > highest) highest = v, highest_line = lex.line();
+        stated[v] = r;
         v = r;
         t = lex.next();
       }
-      if (v > highest) highest = v, highest_line = lex.line();
     }
   }
   if (t != Token::close) lex.error("expected '}' to close the triangles of level " + str(level));
@@ -173,24 +174,19 @@ MultilevelMesh parse_multilevel_ascii(const std::string& where, std::string_view
   m.dimension = shape.dimension;
   m.vertex_count.resize(shape.level_count);
   m.triangle_count.resize(shape.level_count);
+  if (shape.vertex_count > kMaxIndex) fail(where, "more than " + str(kMaxIndex) + " vertices");
   Lexer lex(where, text);
-  std::unordered_map<uint32_t, StatedRep> stated;
-  uint64_t highest = 0, highest_line = 0;
+  std::vector<uint32_t> stated(shape.vertex_count, kNoRep);
   for (uint32_t level = shape.level_count; level-- > 0;) {
     lex.next();  // '{'
     read_vertices(lex, m);
-    if (m.positions.size() / m.dimension > kMaxIndex) lex.error("more than " + str(kMaxIndex) + " vertices");
     m.vertex_count[level] = uint32_t(m.positions.size() / m.dimension);
     lex.next();  // '{'
-    read_triangles(lex, level, m.vertex_count[level], m, stated, highest, highest_line);
+    read_triangles(lex, level, m.vertex_count[level], m, stated);
     if (m.triangles.size() / 3 > kMaxIndex) lex.error("more than " + str(kMaxIndex) + " triangles");
     m.triangle_count[level] = uint32_t(m.triangles.size() / 3);
   }
-  const uint32_t n = m.vertices();
-  if (m.faces() > 0 && highest >= n)
-    fail(where, "line " + str(highest_line) + ": vertex " + str(highest) + " is named but the file has " + str(n) + " vertices");
-  m.representative.assign(n, kNoRep);
-  for (const auto& [v, rep] : stated) m.representative[v] = rep.representative;
+  m.representative = std::move(stated);
   validate_multilevel(where, m);
   return m;
 }

@@ -188,12 +188,13 @@ TEST(MultilevelFile, MalformedAsciiNamesTheLine) {
       {"{0,0,0}", "m.txt: the last level has vertices but no triangle batch (an empty one is {})"},
       {"{0,0,0,1,1,1,1}{}", "m.txt: line 1: a vertex batch of 7 numbers is not whole 2D or 3D vertices"},
       {"{0,0,0, 1,0,0, 0,1,0}\n{0, 1}", "m.txt: line 2: a triangle of level 0 has 2 corners, not 3"},
-      {"{0,0,0, 1,0,0, 0,1,0}\n{0, 1, 5}", "m.txt: line 2: vertex 5 is not in level 0 or above: its representative must follow the triangle"},
-      {"{0,0,0, 1,0,0, 0,1,0}\n{0, 1, 5, 7}", "m.txt: line 2: representative 7 of vertex 5 is not below it"},
+      {"{0,0,0, 1,0,0}\n{0, 1, 2}{0,1,0}{}", "m.txt: line 2: vertex 2 is not in level 1 or above: its representative must follow the triangle"},
+      {"{0,0,0, 1,0,0}\n{0, 1, 2, 2}{0,1,0}{}", "m.txt: line 2: representative 2 of vertex 2 is not below it"},
+      {"{0,0,0, 1,0,0, 0,1,0}\n{0, 1, 5}", "m.txt: line 2: vertex 5 is beyond the file's 3 vertices"},
       {"{0,0,0, 1,0,0, 0,1,0}\n{0, 1, x}", "m.txt: line 2: 'x' is not a vertex index"},
       {"{0,0,0, 1,0,0, 0,1,0}\n{0, 1, -2}", "m.txt: line 2: '-2' is not a vertex index"},
       {"{0,0,0, 1,0,0, 0,1,nan}\n{}", "m.txt: line 1: 'nan' is not a finite number"},
-      {"{0,0,0, 1,0,0, 0,1,0}\n{0, 1,\n 9, 2}{}{}", "m.txt: line 3: vertex 9 is named but the file has 3 vertices"},
+      {"{0,0,0, 1,0,0}\n{0, 1,\n 2, 7}{0,1,0}{}", "m.txt: line 3: representative 7 is beyond the file's 3 vertices"},
       {"{0,0,0, 1,0,0, 0,1,0}{0,1,99999999999}", "m.txt: line 1: '99999999999' is not a vertex index"},
   };
   for (const auto& [text, expected] : cases) EXPECT_EQ(ascii_error(text), expected) << "input: " << text;
