@@ -112,10 +112,8 @@ CollapseLevels assign_levels(const Mesh& mesh, std::span<const EdgeCollapse> col
     out.vertex_level[a] = level - 1;
     out.parent[a] = b;
     p.removed_vertex[a] = 1;
-    std::vector<uint32_t> around_b;
-    around_b.reserve(p.faces[a].size() + p.faces[b].size());
-    for (uint32_t t : p.faces[b])
-      if (!p.removed_face[t]) around_b.push_back(t);
+    std::vector<uint32_t>& around_b = p.faces[b];
+    std::erase_if(around_b, [&](uint32_t t) { return p.removed_face[t] != 0; });
     for (uint32_t t : p.faces[a]) {
       if (p.removed_face[t]) continue;
       uint32_t* c = &p.corners[3 * size_t(t)];
@@ -128,8 +126,7 @@ CollapseLevels assign_levels(const Mesh& mesh, std::span<const EdgeCollapse> col
         around_b.push_back(t);
       }
     }
-    std::erase_if(around_b, [&](uint32_t t) { return p.removed_face[t] != 0; });
-    p.faces[b] = std::move(around_b);
+    // Faces of b that were a's too (the ones just removed) are dropped on b's next collapse or scan.
     std::vector<uint32_t>().swap(p.faces[a]);
   }
   // Red vertices and triangles take one level above every collapse (top + 1, 1-based).

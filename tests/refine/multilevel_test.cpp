@@ -132,9 +132,20 @@ TEST(Multilevel, GeomorphEndsAreTheLevels) {
     for (const Face& f : lod_faces(lod, 3))
       if (f[0] != f[1] && f[1] != f[2] && f[2] != f[0]) visible.push_back(f);
     EXPECT_EQ(visible, lod_faces(exact, 3)) << "t = 0, level " << lo;
-    // Halfway: LOD lo's triangles over all of its vertices.
+    // Halfway: LOD lo's triangles, every vertex halfway between where t = 0 and t = 1 put it.
+    lod.geomorph(lo, 0);
+    const std::vector<float> start(lod.positions().begin(), lod.positions().end());
+    lod.geomorph(lo, 1);
+    const std::vector<float> end(lod.positions().begin(), lod.positions().end());
     lod.set_level(float(lo) + 0.5f);
     EXPECT_FLOAT_EQ(lod.level(), float(lo) + 0.5f);
+    ASSERT_EQ(lod.positions().size(), start.size());
+    size_t moving = 0;
+    for (size_t i = 0; i < start.size(); ++i) {
+      EXPECT_NEAR(lod.positions()[i], 0.5f * (start[i] + end[i]), 1e-5f) << "coordinate " << i;
+      moving += start[i] != end[i];
+    }
+    EXPECT_GT(moving, 0u) << "level " << lo << " has vertices that move";
     EXPECT_EQ(lod.indices().size(), 3 * size_t(ml.triangle_count[lo]));
     EXPECT_EQ(lod.colors().size(), 4 * size_t(ml.vertex_count[lo]));
   }
