@@ -110,8 +110,9 @@ TEST(MultilevelFile, Figure6ParsesWithItsLevelsAndThreeRepresentatives) {
   // (6, 2, 8): 6 is in level 1, 8 is not; (4, 6, 7): 7 is missing from level 1, its representative is 1.
   EXPECT_EQ(std::vector<uint32_t>(lod.indices().begin(), lod.indices().begin() + 9),
             (std::vector<uint32_t>{6, 2, 1, 3, 1, 2, 4, 6, 1}));
-  // Written back, it reads the same.
+  // Written back, it reads the same, in both forms.
   expect_same(parse_multilevel_ascii("again", format_multilevel_ascii(m)), m);
+  expect_same(parse_multilevel_binary("again", format_multilevel_binary(m)), m);
 }
 
 TEST(MultilevelFile, Figure6AsPrintedIsRefusedAtItsTypo) {
