@@ -193,6 +193,10 @@ MultilevelMesh parse_multilevel_ascii(const std::string& where, std::string_view
 
 std::string format_multilevel_ascii(const MultilevelMesh& m) {
   validate_multilevel("", m);
+  bool reads_as_3d = m.dimension == 2;
+  for (uint32_t l = 0; l < m.level_count(); ++l) reads_as_3d = reads_as_3d && m.level_vertices(l) % 3 == 0;
+  if (reads_as_3d)
+    fail("", "a 2D mesh whose every level has a multiple of 3 vertices would read back as 3D from the ASCII form");
   std::string out(1, '#');
   out += str(m.level_count());
   out += "-level progressive mesh\n";

@@ -115,6 +115,19 @@ TEST(MultilevelFile, Figure6ParsesWithItsLevelsAndThreeRepresentatives) {
   expect_same(parse_multilevel_binary("again", format_multilevel_binary(m)), m);
 }
 
+TEST(MultilevelFile, An2DMeshThatWouldReadAs3DIsNotWritten) {
+  MultilevelMesh m;
+  m.dimension = 2;
+  m.positions = {0, 0, 1, 0, 0, 1};
+  m.triangles = {0, 1, 2};
+  m.representative.assign(3, MultilevelMesh::kNoRepresentative);
+  m.vertex_count = {3};
+  m.triangle_count = {1};
+  EXPECT_EQ(error_of([&] { format_multilevel_ascii(m); }),
+            "a 2D mesh whose every level has a multiple of 3 vertices would read back as 3D from the ASCII form");
+  expect_same(parse_multilevel_binary("2d", format_multilevel_binary(m)), m);  // the binary form says its dimension
+}
+
 TEST(MultilevelFile, Figure6AsPrintedIsRefusedAtItsTypo) {
   std::string printed = kFigure6;
   printed.replace(printed.find("3.0, -3.0}"), 4, "3.0.");
