@@ -1,6 +1,8 @@
 // Multilevel files on disk: either form read whole (bounded by the limits), written through PATH.tmp and a
 // rename so that a failed write leaves an existing file untouched.
+#include <cerrno>
 #include <cstdio>
+#include <cstring>
 #include <fstream>
 
 #include "common/error.h"
@@ -10,8 +12,10 @@ namespace pms {
 
 MultilevelMesh read_multilevel(const std::string& path, const MultilevelLimits& limits) {
   std::ifstream file(path, std::ios::binary | std::ios::ate);
-  if (!file) fail(path, "cannot open");
-  const auto size = uint64_t(file.tellg());
+  if (!file) fail(path, std::string("cannot open: ") + std::strerror(errno));
+  const std::streamoff end = file.tellg();
+  if (end < 0) fail(path, "cannot read (not a regular file?)");
+  const auto size = uint64_t(end);
   if (size > limits.max_file_bytes) fail(path, "larger than " + std::to_string(limits.max_file_bytes) + " bytes");
   std::vector<uint8_t> bytes(size);
   file.seekg(0);
