@@ -3,6 +3,7 @@
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 
 #include "common/error.h"
@@ -11,6 +12,8 @@
 namespace pms {
 
 MultilevelMesh read_multilevel(const std::string& path, const MultilevelLimits& limits) {
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec)) fail(path, "is a directory");
   std::ifstream file(path, std::ios::binary | std::ios::ate);
   if (!file) fail(path, std::string("cannot open: ") + std::strerror(errno));
   const std::streamoff end = file.tellg();
