@@ -211,9 +211,9 @@ std::string format_multilevel_ascii(const MultilevelMesh& m) {
     for (uint32_t v = v_begin; v < v_end; ++v) {
       for (uint32_t k = 0; k < d; ++k) {
         out += format_float(m.positions[size_t(v) * d + k]);
-        if (k + 1 < d || v + 1 < v_end) out += ", ";
+        if (k + 1 < d) out += ", ";
       }
-      if (v + 1 < v_end) out += '\n';
+      if (v + 1 < v_end) out += ",\n";
     }
     out += "}\n{#level " + str(level) + " triangles (" + str(t_end - t_begin) + "), each followed by the representatives it states\n";
     for (uint32_t t = t_begin; t < t_end; ++t) {
