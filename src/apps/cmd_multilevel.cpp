@@ -1,4 +1,4 @@
-// pmstream multilevel build IN -o OUT [--levels L] [--cluster grid:N,...] [--ascii] [--base-vertices N] [--json]
+// pmstream multilevel build IN -o OUT [--levels L] [--cluster grid:N,...|FILE.json] [--ascii] [--base-vertices N] [--json]
 // pmstream multilevel info FILE [--json]
 // pmstream multilevel level FILE --level X -o OUT.ply
 // Progressive multilevel meshes (gueziec et al. 1999; docs/multilevel-format.md, docs/cli.md).
@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
 
 #include "apps/build_pipeline.h"
 #include "apps/commands.h"
@@ -34,7 +35,6 @@ struct MultilevelBuildArgs {
 // "grid:64,16,4" -> {64, 16, 4}.
 std::vector<uint32_t> grid_resolutions(const std::string& spec) {
   const std::string prefix = "grid:";
-  if (spec.rfind(prefix, 0) != 0) fail("--cluster", "'" + spec + "' is not grid:N,... (e.g. grid:64,16,4)");
   std::vector<uint32_t> cells;
   size_t at = prefix.size();
   while (at <= spec.size()) {
@@ -51,6 +51,32 @@ std::vector<uint32_t> grid_resolutions(const std::string& spec) {
   return cells;
 }
 
+// A clustering file: {"clusterings": [{"cluster": [one cluster per input vertex], "positions": [x, y, z per
+// cluster]}, ...]}, finest first (docs/cli.md, "multilevel").
+std::vector<VertexClustering> clusterings_from_file(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) fail(path, "cannot open the clustering file");
+  try {
+    const nlohmann::json j = nlohmann::json::parse(in);
+    std::vector<VertexClustering> out;
+    for (const auto& c : j.at("clusterings")) {
+      VertexClustering clustering;
+      clustering.cluster = c.at("cluster").get<std::vector<uint32_t>>();
+      clustering.positions = c.at("positions").get<std::vector<float>>();
+      if (clustering.positions.size() % 3) fail(path, "clustering " + std::to_string(out.size()) + ": positions are not x, y, z triples");
+      out.push_back(std::move(clustering));
+    }
+    return out;
+  } catch (const nlohmann::json::exception& e) {
+    fail(path, std::string("not a clustering file: ") + e.what());
+  }
+}
+
+std::vector<VertexClustering> clusterings_of(const Mesh& mesh, const std::string& spec) {
+  if (spec.rfind("grid:", 0) == 0) return grid_clusterings(mesh, grid_resolutions(spec));
+  return clusterings_from_file(spec);
+}
+
 // Where the levels come from: the builder's collapses of the cleaned mesh, or grid clusterings of the mesh
 // as loaded (non-manifold allowed, so it is not cleaned).
 struct LevelSource {
@@ -63,9 +89,8 @@ struct LevelSource {
 LevelSource multilevel_of(Mesh mesh, const MultilevelBuildArgs& args, const ProgressFn& progress) {
   LevelSource out;
   if (!args.cluster.empty()) {
-    const std::vector<uint32_t> cells = grid_resolutions(args.cluster);
     Stopwatch cluster_time;
-    const std::vector<VertexClustering> clusterings = grid_clusterings(mesh, cells);
+    const std::vector<VertexClustering> clusterings = clusterings_of(mesh, args.cluster);
     out.source_seconds = cluster_time.seconds();
     Stopwatch ml_time;
     out.ml = build_multilevel_from_clusterings(mesh, clusterings, args.levels);
@@ -245,8 +270,8 @@ void add_multilevel_command(CLI::App& app) {
   build->add_option("--base-vertices", b->base_vertices, "Collapse until this many vertices are left (0: as far as possible)")
       ->capture_default_str();
   build->add_option("--cluster", b->cluster,
-                    "Levels from vertex clusterings instead of collapses: grid:N,... (N^3 cells each, finest first; "
-                    "the mesh is not cleaned, non-manifold results allowed)");
+                    "Levels from vertex clusterings instead of collapses: grid:N,... (N^3 cells each, finest first) or a "
+                    "JSON clustering file; the mesh is not cleaned, non-manifold results allowed");
   build->add_flag("--ascii", b->ascii, "Write the paper's ASCII form (Fig. 6) instead of the binary one");
   build->add_flag("--json", b->json, "Print one JSON object with the statistics");
   build->callback([b] { run_multilevel_build(*b); });

@@ -4,6 +4,7 @@
 #include <nlohmann/json.hpp>
 
 #include <filesystem>
+#include <fstream>
 #include <string>
 
 #include "io/mesh.h"
@@ -76,6 +77,44 @@ TEST(MultilevelCli, GridClusteringInput) {
   const test::CliRun bad = test::run_pmstream("multilevel build " + ply + " -o " + out + " --cluster grid:4,12");
   EXPECT_NE(bad.exit_code, 0);
   EXPECT_NE(bad.err.find("grid sizes must decrease"), std::string::npos) << bad.err;
+}
+
+// The paper's Fig. 12: two clusterings from a file give Fig. 6's three representatives.
+TEST(MultilevelCli, ClusteringFileInput) {
+  const auto dir = test::temp_dir();
+  Mesh mesh;
+  const float xy[10][2] = {{-3, 3}, {3, 3}, {-3, -3}, {3, -3}, {-2.3f, 3}, {-3, 2.3f}, {-2.3f, 2.3f},
+                           {2.3f, 3}, {2.3f, 2.3f}, {3, 2.3f}};
+  for (const auto& p : xy) mesh.positions.insert(mesh.positions.end(), {p[0], p[1], 0});
+  mesh.indices = {6, 2, 8, 3, 8, 2, 4, 6, 7, 5, 2, 6, 6, 4, 5, 4, 0, 5, 8, 3, 9, 9, 1, 8, 7, 8, 1, 8, 7, 6};
+  const std::string ply = (dir / "fig12.ply").string(), json = (dir / "fig12.json").string();
+  save_ply(mesh, ply);
+  nlohmann::json clusterings = nlohmann::json::array();
+  for (const std::vector<uint32_t>& group : {std::vector<uint32_t>{1, 7, 8, 9}, std::vector<uint32_t>{0, 4, 5, 6}}) {
+    std::vector<uint32_t> cluster(10);
+    std::vector<float> positions(mesh.positions);
+    for (uint32_t v = 0; v < 10; ++v) cluster[v] = v;
+    for (uint32_t v : group) cluster[v] = 10;
+    positions.insert(positions.end(), {group[0] == 1 ? 3.0f : -3.0f, 3.0f, 0.0f});
+    clusterings.push_back({{"cluster", cluster}, {"positions", positions}});
+  }
+  {
+    std::ofstream out(json);
+    out << nlohmann::json{{"clusterings", clusterings}}.dump();
+  }
+  const std::string out = (dir / "fig12.txt").string();
+  const test::CliRun build = test::run_pmstream("multilevel build " + ply + " -o " + out + " --cluster " + json + " --ascii --json");
+  ASSERT_EQ(build.exit_code, 0) << build.err;
+  const auto b = nlohmann::json::parse(build.out);
+  EXPECT_EQ(b["levels"], 3);
+  EXPECT_EQ(b["representatives"], 3) << "Fig. 12-13: three suffice";
+  {
+    std::ofstream bad(json);
+    bad << R"({"clusterings": [{"cluster": [0, "x"], "positions": []}]})";
+  }
+  const test::CliRun refused = test::run_pmstream("multilevel build " + ply + " -o " + out + " --cluster " + json);
+  EXPECT_NE(refused.exit_code, 0);
+  EXPECT_NE(refused.err.find(json + ": not a clustering file"), std::string::npos) << refused.err;
 }
 
 TEST(MultilevelCli, TerrainInputAndMalformedFiles) {
