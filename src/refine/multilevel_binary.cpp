@@ -61,6 +61,7 @@ uint64_t checksum_of(const uint8_t* header_and_table, uint64_t bytes) {
 template <typename T>
 void append(std::vector<uint32_t>& words, const T* data, size_t count) {
   static_assert(sizeof(T) == 4);
+  if (count == 0) return;  // data() may be null
   const size_t at = words.size();
   words.resize(at + count);
   std::memcpy(words.data() + at, data, count * 4);
@@ -155,6 +156,7 @@ void read_level(const SectionReader& in, const SectionEntry& e, const uint8_t* b
     in.error(e.offset, name + ": " + str(e.count) + " words but its counts need " + str(words));
   const uint8_t* p = base + e.offset + sizeof h;
   auto take = [&](auto& out, uint64_t count, size_t elem) {
+    if (count == 0) return;  // data() may be null
     const size_t at = out.size();
     out.resize(at + count);
     std::memcpy(out.data() + at, p, count * elem);
