@@ -14,5 +14,6 @@ void add_render_command(CLI::App& app);
 void add_compare_command(CLI::App& app);
 void add_serve_command(CLI::App& app);
 void add_stream_command(CLI::App& app);
+void add_multilevel_command(CLI::App& app);
 
 }  // namespace pms::app

@@ -19,6 +19,7 @@ int main(int argc, char** argv) {
   pms::app::add_compare_command(app);
   pms::app::add_serve_command(app);
   pms::app::add_stream_command(app);
+  pms::app::add_multilevel_command(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -1,0 +1,45 @@
+// libFuzzer target for both multilevel readers (docs/architecture.md, "Correctness properties", 5): any
+// bytes either parse into a structure that validates and whose every LOD and geomorph can be taken, or
+// throw pms::Error; crashes, hangs, sanitizer reports and huge allocations are findings. The binary form
+// is tried with its checksums recomputed, so mutated contents reach the structural checks.
+// Seed corpus: files written by `pmstream multilevel build` (with and without --ascii).
+#include <cstddef>
+#include <cstdint>
+#include <cstring>
+#include <string_view>
+#include <vector>
+
+#include "common/error.h"
+#include "refine/multilevel_file.h"
+#include "refine/multilevel_mesh.h"
+
+namespace {
+
+void touch(const pms::MultilevelMesh& m) {
+  pms::MultilevelLod lod(m);
+  for (uint32_t l = m.level_count(); l-- > 0;) {
+    lod.set_level(l);
+    for (uint32_t i : lod.indices())
+      if (i >= lod.vertex_count()) __builtin_trap();
+    lod.set_level(float(l) + 0.5f);
+  }
+}
+
+const pms::MultilevelLimits kLimits{uint64_t(1) << 24, 1024};
+
+}  // namespace
+
+extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
+  try {
+    touch(pms::parse_multilevel_ascii("fuzz.txt", std::string_view(reinterpret_cast<const char*>(data), size), kLimits));
+  } catch (const pms::Error&) {
+  }
+  std::vector<uint8_t> bytes(data, data + size);
+  if (size >= 8) std::memcpy(bytes.data(), "PMSMULTI", 8);
+  pms::reseal_multilevel_binary(bytes);
+  try {
+    touch(pms::parse_multilevel_binary("fuzz.pml", bytes, kLimits));
+  } catch (const pms::Error&) {
+  }
+  return 0;
+}

@@ -1,0 +1,296 @@
+// pmstream multilevel build IN -o OUT [--levels L] [--cluster grid:N,...|FILE.json] [--ascii] [--base-vertices N] [--json]
+// pmstream multilevel info FILE [--json]
+// pmstream multilevel level FILE --level X -o OUT.ply
+// Progressive multilevel meshes (gueziec et al. 1999; docs/multilevel-format.md, docs/cli.md).
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+
+#include "apps/build_pipeline.h"
+#include "apps/commands.h"
+#include "apps/progress_bar.h"
+#include "apps/resource_usage.h"
+#include "builder/build.h"
+#include "common/error.h"
+#include "io/mesh.h"
+#include "refine/multilevel_build.h"
+#include "refine/multilevel_cluster.h"
+#include "refine/multilevel_file.h"
+#include "refine/multilevel_mesh.h"
+
+namespace pms::app {
+namespace {
+
+struct MultilevelBuildArgs {
+  std::string input, output;
+  uint32_t levels = 0;
+  uint64_t base_vertices = BuildOptions{}.base_vertices;
+  std::string cluster;  // "grid:N,..." or empty: the builder's collapses
+  bool ascii = false, json = false;
+};
+
+// "grid:64,16,4" -> {64, 16, 4}.
+std::vector<uint32_t> grid_resolutions(const std::string& spec) {
+  const std::string prefix = "grid:";
+  std::vector<uint32_t> cells;
+  size_t at = prefix.size();
+  while (at <= spec.size()) {
+    const size_t comma = std::min(spec.find(',', at), spec.size());
+    const std::string item = spec.substr(at, comma - at);
+    char* end = nullptr;
+    const unsigned long n = std::strtoul(item.c_str(), &end, 10);
+    if (item.empty() || *end != '\0' || n == 0 || n > (1u << 20))
+      fail("--cluster", "'" + item + "' is not a grid size from 1 to 2^20");
+    if (!cells.empty() && n >= cells.back()) fail("--cluster", "grid sizes must decrease (finest first)");
+    cells.push_back(uint32_t(n));
+    at = comma + 1;
+  }
+  return cells;
+}
+
+// A clustering file: {"clusterings": [{"cluster": [one cluster per input vertex], "positions": [x, y, z per
+// cluster]}, ...]}, finest first (docs/cli.md, "multilevel").
+std::vector<VertexClustering> clusterings_from_file(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) fail(path, "cannot open the clustering file");
+  try {
+    const nlohmann::json j = nlohmann::json::parse(in);
+    std::vector<VertexClustering> out;
+    for (const auto& c : j.at("clusterings")) {
+      VertexClustering clustering;
+      clustering.cluster = c.at("cluster").get<std::vector<uint32_t>>();
+      clustering.positions = c.at("positions").get<std::vector<float>>();
+      if (clustering.positions.size() % 3) fail(path, "clustering " + std::to_string(out.size()) + ": positions are not x, y, z triples");
+      out.push_back(std::move(clustering));
+    }
+    return out;
+  } catch (const nlohmann::json::exception& e) {
+    fail(path, std::string("not a clustering file: ") + e.what());
+  }
+}
+
+std::vector<VertexClustering> clusterings_of(const Mesh& mesh, const std::string& spec) {
+  if (spec.rfind("grid:", 0) == 0) return grid_clusterings(mesh, grid_resolutions(spec));
+  return clusterings_from_file(spec);
+}
+
+// Where the levels come from: the builder's collapses of the cleaned mesh, or grid clusterings of the mesh
+// as loaded (non-manifold allowed, so it is not cleaned).
+struct LevelSource {
+  MultilevelMesh ml;
+  std::string clean_report = "not cleaned (clustering input may be non-manifold)";
+  uint64_t operations = 0;  // collapses or clusterings
+  double source_seconds = 0, multilevel_seconds = 0;
+};
+
+LevelSource multilevel_of(Mesh mesh, const MultilevelBuildArgs& args, const ProgressFn& progress) {
+  LevelSource out;
+  if (!args.cluster.empty()) {
+    Stopwatch cluster_time;
+    const std::vector<VertexClustering> clusterings = clusterings_of(mesh, args.cluster);
+    out.source_seconds = cluster_time.seconds();
+    Stopwatch ml_time;
+    out.ml = build_multilevel_from_clusterings(mesh, clusterings, args.levels);
+    out.multilevel_seconds = ml_time.seconds();
+    out.operations = clusterings.size();
+    return out;
+  }
+  out.clean_report = describe(clean_mesh(mesh));
+  BuildOptions options;
+  options.base_vertices = args.base_vertices;
+  options.progress = progress;
+  Stopwatch pm_time;
+  const BuildResult built = build_progressive_mesh(mesh, options);
+  out.source_seconds = pm_time.seconds();
+  Stopwatch ml_time;
+  const std::vector<EdgeCollapse> collapses = collapses_of(built.hierarchy);
+  out.ml = build_multilevel(mesh, collapses, args.levels);
+  out.multilevel_seconds = ml_time.seconds();
+  out.operations = collapses.size();
+  return out;
+}
+
+void run_multilevel_build(const MultilevelBuildArgs& args) {
+  Stopwatch total;
+  ProgressBar bar(!args.json);
+  Stopwatch load_time;
+  Mesh mesh = load_input(args.input, bar.callback());
+  const double load_seconds = load_time.seconds();
+  const LevelSource source = multilevel_of(std::move(mesh), args, bar.callback());
+  bar.finish();
+  const MultilevelMesh& ml = source.ml;
+  const double pm_seconds = source.source_seconds, ml_seconds = source.multilevel_seconds;
+  const char* operations = args.cluster.empty() ? "collapses" : "clusterings";
+  Stopwatch write_time;
+  write_multilevel(args.output, ml, args.ascii);
+  const double write_seconds = write_time.seconds();
+  const uint64_t bytes = std::filesystem::file_size(args.output);
+  const bool dropped = args.ascii && (!ml.normals.empty() || !ml.colors.empty());
+  if (args.json) {
+    nlohmann::json j = {{"input", args.input},         {"output", args.output},
+                        {"format", args.ascii ? "ascii" : "binary"},
+                        {"vertices", ml.vertices()},   {"triangles", ml.faces()},
+                        {"levels", ml.level_count()},  {operations, source.operations},
+                        {"representatives", ml.stored_representatives()},
+                        {"output_bytes", bytes},       {"attributes_dropped", dropped},
+                        {"load_seconds", load_seconds}, {args.cluster.empty() ? "collapse_seconds" : "cluster_seconds", pm_seconds},
+                        {"multilevel_seconds", ml_seconds}, {"write_seconds", write_seconds},
+                        {"seconds", total.seconds()},  {"peak_rss_mb", peak_rss_mb()}};
+    std::printf("%s\n", j.dump().c_str());
+    return;
+  }
+  std::printf("%s -> %s (%s)\n", args.input.c_str(), args.output.c_str(), args.ascii ? "ASCII" : "binary");
+  std::printf("  cleaning:        %s\n", source.clean_report.c_str());
+  std::printf("  mesh:            %u vertices, %u triangles; %llu %s\n", ml.vertices(), ml.faces(),
+              (unsigned long long)source.operations, operations);
+  std::printf("  levels:          %u (coarsest: %u vertices, %u triangles)\n", ml.level_count(), ml.vertex_count.back(),
+              ml.triangle_count.back());
+  std::printf("  representatives: %llu stored\n", (unsigned long long)ml.stored_representatives());
+  std::printf("  time:            %.2f s (load %.2f, %s %.2f, multilevel %.3f, write %.3f)\n", total.seconds(),
+              load_seconds, operations, pm_seconds, ml_seconds, write_seconds);
+  std::printf("  output:          %llu bytes\n", (unsigned long long)bytes);
+  if (dropped) std::printf("  note:            the ASCII form has no normals or colours; they were left out\n");
+}
+
+// Milliseconds of a set_level jump to `level` from the opposite end, and of a geomorph frame there: the
+// fastest of a few tries, so that a busy machine's preemptions do not count.
+struct SwitchTimes {
+  double jump_ms = 1e300, morph_ms = 0;
+};
+
+SwitchTimes time_switches(const MultilevelMesh& m, uint32_t level) {
+  MultilevelLod lod(m);
+  SwitchTimes t;
+  const uint32_t other_end = level < m.level_count() / 2 ? m.level_count() - 1 : 0u;
+  for (int i = 0; i < 5; ++i) {
+    lod.set_level(other_end);
+    Stopwatch jump;
+    lod.set_level(level);
+    t.jump_ms = std::min(t.jump_ms, jump.seconds() * 1e3);
+  }
+  if (level + 1 < m.level_count()) {
+    t.morph_ms = 1e300;
+    lod.set_level(float(level) + 0.25f);  // connectivity and morph sources for this pair of levels
+    for (int i = 0; i < 5; ++i) {
+      Stopwatch morph;
+      lod.set_level(float(level) + 0.1f * float(i + 3));
+      t.morph_ms = std::min(t.morph_ms, morph.seconds() * 1e3);
+    }
+  }
+  return t;
+}
+
+void run_multilevel_info(const std::string& path, bool json) {
+  const MultilevelMesh m = read_multilevel(path);
+  const uint64_t bytes = std::filesystem::file_size(path);
+  const std::vector<uint32_t> reps = representatives_per_level(m);
+  nlohmann::json levels = nlohmann::json::array();
+  for (uint32_t l = m.level_count(); l-- > 0;) {
+    const SwitchTimes t = time_switches(m, l);
+    levels.push_back({{"level", l},
+                      {"vertices", m.vertex_count[l]},
+                      {"triangles", m.triangle_count[l]},
+                      {"level_vertices", m.level_vertices(l)},
+                      {"level_triangles", m.level_triangles(l)},
+                      {"representatives", reps[l]},
+                      {"set_level_ms", t.jump_ms},
+                      {"geomorph_ms", t.morph_ms}});
+  }
+  if (json) {
+    const nlohmann::json j = {{"file", path},
+                              {"bytes", bytes},
+                              {"dimension", m.dimension},
+                              {"normals", !m.normals.empty()},
+                              {"colors", !m.colors.empty()},
+                              {"levels", m.level_count()},
+                              {"vertices", m.vertices()},
+                              {"triangles", m.faces()},
+                              {"representatives", m.stored_representatives()},
+                              {"per_level", levels}};
+    std::printf("%s\n", j.dump().c_str());
+    return;
+  }
+  std::printf("%s (%llu bytes): %u levels, %u vertices, %u triangles, %uD%s%s\n", path.c_str(),
+              (unsigned long long)bytes, m.level_count(), m.vertices(), m.faces(), m.dimension,
+              m.normals.empty() ? "" : ", normals", m.colors.empty() ? "" : ", colors");
+  std::printf("  representatives: %llu stored\n", (unsigned long long)m.stored_representatives());
+  std::printf("  %5s %10s %10s %10s %10s %8s %10s %10s\n", "level", "LOD verts", "LOD tris", "+verts", "+tris", "reps",
+              "setLevel", "geomorph");
+  for (const auto& row : levels)
+    std::printf("  %5u %10u %10u %10u %10u %8u %8.3f ms %8.3f ms\n", row["level"].get<uint32_t>(),
+                row["vertices"].get<uint32_t>(), row["triangles"].get<uint32_t>(), row["level_vertices"].get<uint32_t>(),
+                row["level_triangles"].get<uint32_t>(), row["representatives"].get<uint32_t>(),
+                row["set_level_ms"].get<double>(), row["geomorph_ms"].get<double>());
+}
+
+Mesh lod_mesh(const MultilevelMesh& m, const MultilevelLod& lod) {
+  Mesh out;
+  const uint32_t n = lod.vertex_count(), d = m.dimension;
+  const auto positions = lod.positions();
+  out.positions.resize(size_t(n) * 3, 0.0f);  // a 2D file lies in z = 0
+  for (uint32_t v = 0; v < n; ++v)
+    for (uint32_t k = 0; k < d; ++k) out.positions[3 * size_t(v) + k] = positions[size_t(v) * d + k];
+  out.normals.assign(lod.normals().begin(), lod.normals().end());
+  out.colors.assign(lod.colors().begin(), lod.colors().end());
+  out.indices.assign(lod.indices().begin(), lod.indices().end());
+  return out;
+}
+
+void run_multilevel_level(const std::string& path, double level, const std::string& output) {
+  const MultilevelMesh m = read_multilevel(path);
+  const double top = m.level_count() - 1;
+  if (!(level >= 0 && level <= top)) {
+    char text[96];
+    std::snprintf(text, sizeof text, "level %g is outside 0..%u", level, m.level_count() - 1);
+    fail(path, text);
+  }
+  MultilevelLod lod(m);
+  if (level == std::floor(level)) lod.set_level(uint32_t(level));
+  else lod.set_level(float(level));
+  save_ply(lod_mesh(m, lod), output);
+  std::printf("%s level %g -> %s: %u vertices, %zu triangles\n", path.c_str(), level, output.c_str(), lod.vertex_count(),
+              lod.indices().size() / 3);
+}
+
+}  // namespace
+
+void add_multilevel_command(CLI::App& app) {
+  CLI::App* cmd = app.add_subcommand("multilevel", "Progressive multilevel meshes (gueziec et al. 1999)");
+  cmd->require_subcommand(1);
+
+  auto b = std::make_shared<MultilevelBuildArgs>();
+  CLI::App* build = cmd->add_subcommand("build", "Build a multilevel mesh from the builder's edge collapses");
+  build->add_option("input", b->input, "Input mesh (PLY, OBJ, OFF, STL, glTF/GLB; .gz/.xz), or terrain:FACES")->required();
+  build->add_option("-o,--output", b->output, "Output file (binary unless --ascii)")->required();
+  build->add_option("--levels", b->levels, "Merge consecutive levels down to this many (0: every level)")
+      ->capture_default_str();
+  build->add_option("--base-vertices", b->base_vertices, "Collapse until this many vertices are left (0: as far as possible)")
+      ->capture_default_str();
+  build->add_option("--cluster", b->cluster,
+                    "Levels from vertex clusterings instead of collapses: grid:N,... (N^3 cells each, finest first) or a "
+                    "JSON clustering file; the mesh is not cleaned, non-manifold results allowed");
+  build->add_flag("--ascii", b->ascii, "Write the paper's ASCII form (Fig. 6) instead of the binary one");
+  build->add_flag("--json", b->json, "Print one JSON object with the statistics");
+  build->callback([b] { run_multilevel_build(*b); });
+
+  auto info_path = std::make_shared<std::string>();
+  auto info_json = std::make_shared<bool>(false);
+  CLI::App* info = cmd->add_subcommand("info", "Per level: the LOD's vertices and triangles, representatives, switch times");
+  info->add_option("file", *info_path, "Multilevel file (ASCII or binary)")->required();
+  info->add_flag("--json", *info_json, "Print one JSON object");
+  info->callback([info_path, info_json] { run_multilevel_info(*info_path, *info_json); });
+
+  auto level_path = std::make_shared<std::string>();
+  auto level_out = std::make_shared<std::string>();
+  auto level_x = std::make_shared<double>(0);
+  CLI::App* level = cmd->add_subcommand("level", "Write the LOD at a level (fractional: a geomorph) as PLY");
+  level->add_option("file", *level_path, "Multilevel file (ASCII or binary)")->required();
+  level->add_option("--level", *level_x, "Level, 0 = finest; e.g. 2.5 is halfway from level 3 to level 2")->required();
+  level->add_option("-o,--output", *level_out, "Output .ply")->required();
+  level->callback([level_path, level_x, level_out] { run_multilevel_level(*level_path, *level_x, *level_out); });
+}
+
+}  // namespace pms::app

@@ -1,0 +1,201 @@
+// Gueziec, Taubin, Horn, Lazarus 1999, "From edge collapses to a progressive multilevel representation":
+// levels from a collapse sequence (Fig. 4), then vertices and triangles sorted by decreasing level with the
+// representatives that triangles need (Fig. 5), and consecutive levels merged to a requested count.
+#include "refine/multilevel_build.h"
+
+#include <algorithm>
+#include <numeric>
+
+#include "common/error.h"
+
+namespace pms {
+namespace {
+
+constexpr uint32_t kNoRep = MultilevelMesh::kNoRepresentative;
+
+std::string str(uint64_t v) { return std::to_string(v); }
+
+bool degenerate(const uint32_t* c) { return c[0] == c[1] || c[1] == c[2] || c[2] == c[0]; }
+
+// The collapse sequence played on the mesh: current corners and the live triangles around each vertex.
+struct CollapsePlayback {
+  std::vector<uint32_t> corners;             // current vertex of each corner
+  std::vector<std::vector<uint32_t>> faces;  // per live vertex: triangles that were live when added
+  std::vector<uint8_t> removed_vertex, removed_face;
+  std::vector<uint32_t> running_level;       // 1-based, as in the paper
+
+  explicit CollapsePlayback(const Mesh& mesh)
+      : corners(mesh.indices), faces(mesh.vertex_count()), removed_vertex(mesh.vertex_count()),
+        removed_face(mesh.face_count()), running_level(mesh.vertex_count()) {
+    for (uint32_t t = 0; t < mesh.face_count(); ++t) {
+      if (degenerate(&corners[3 * size_t(t)])) {
+        removed_face[t] = 1;  // never part of a surface: level 0
+        continue;
+      }
+      for (int k = 0; k < 3; ++k) faces[corners[3 * size_t(t) + k]].push_back(t);
+    }
+  }
+
+  // The highest running level over the star of edge (a, b): its endpoints and their neighbours.
+  uint32_t star_level(uint32_t a, uint32_t b) const {
+    uint32_t level = std::max(running_level[a], running_level[b]);
+    for (uint32_t v : {a, b})
+      for (uint32_t t : faces[v]) {
+        if (removed_face[t]) continue;
+        for (int k = 0; k < 3; ++k) level = std::max(level, running_level[corners[3 * size_t(t) + k]]);
+      }
+    return level;
+  }
+};
+
+void check_collapse(const CollapsePlayback& p, const EdgeCollapse& c, size_t i) {
+  const size_t n = p.removed_vertex.size();
+  if (c.removed >= n || c.survivor >= n)
+    fail("", "collapse " + str(i) + " names a vertex beyond the mesh's " + str(n));
+  if (c.removed == c.survivor) fail("", "collapse " + str(i) + " collapses vertex " + str(c.removed) + " onto itself");
+  if (p.removed_vertex[c.removed] || p.removed_vertex[c.survivor])
+    fail("", "collapse " + str(i) + " names a vertex an earlier collapse removed");
+}
+
+// What `x` is represented by once levels may have merged: the first parent of a higher level.
+uint32_t effective_parent(const CollapseLevels& levels, uint32_t x) {
+  uint32_t p = levels.parent[x];
+  while (p != kNoRep && levels.vertex_level[p] <= levels.vertex_level[x]) p = levels.parent[p];
+  return p;
+}
+
+// Indices sorted by decreasing level, ties in input order.
+std::vector<uint32_t> by_decreasing_level(const std::vector<uint32_t>& level) {
+  std::vector<uint32_t> order(level.size());
+  std::iota(order.begin(), order.end(), 0u);
+  std::stable_sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) { return level[a] > level[b]; });
+  return order;
+}
+
+std::vector<uint32_t> counts_per_level(const std::vector<uint32_t>& level, uint32_t level_count) {
+  std::vector<uint32_t> count(level_count + 1, 0);
+  for (uint32_t l : level) ++count[l];
+  for (uint32_t l = level_count; l-- > 0;) count[l] += count[l + 1];  // levels >= l
+  count.pop_back();
+  return count;
+}
+
+}  // namespace
+
+std::vector<EdgeCollapse> collapses_of(const Hierarchy& h) {
+  const size_t n = h.node_count();
+  std::vector<uint32_t> leaf(n, kNone);
+  for (size_t i = n; i-- > 0;)  // children come after their parent
+    leaf[i] = h.is_leaf(uint32_t(i)) ? h.leaf_vertex[i] : leaf[h.first_child[i] + 1];
+  std::vector<EdgeCollapse> collapses;
+  collapses.reserve(h.split_order.size());
+  for (size_t i = h.split_order.size(); i-- > 0;) {
+    const uint32_t c = h.first_child[h.split_order[i]];
+    collapses.push_back({leaf[c], leaf[c + 1]});
+  }
+  return collapses;
+}
+
+CollapseLevels assign_levels(const Mesh& mesh, std::span<const EdgeCollapse> collapses) {
+  CollapsePlayback p(mesh);
+  CollapseLevels out;
+  out.vertex_level.assign(mesh.vertex_count(), 0);
+  out.triangle_level.assign(mesh.face_count(), 0);
+  out.parent.assign(mesh.vertex_count(), kNoRep);
+  uint32_t top = 0;
+  for (size_t i = 0; i < collapses.size(); ++i) {
+    const auto [a, b] = collapses[i];
+    check_collapse(p, collapses[i], i);
+    const uint32_t level = p.star_level(a, b) + 1;
+    top = std::max(top, level);
+    p.running_level[a] = p.running_level[b] = level;
+    out.vertex_level[a] = level - 1;
+    out.parent[a] = b;
+    p.removed_vertex[a] = 1;
+    std::vector<uint32_t>& around_b = p.faces[b];
+    std::erase_if(around_b, [&](uint32_t t) { return p.removed_face[t] != 0; });
+    for (uint32_t t : p.faces[a]) {
+      if (p.removed_face[t]) continue;
+      uint32_t* c = &p.corners[3 * size_t(t)];
+      for (int k = 0; k < 3; ++k)
+        if (c[k] == a) c[k] = b;
+      if (degenerate(c)) {
+        p.removed_face[t] = 1;
+        out.triangle_level[t] = level - 1;
+      } else {
+        around_b.push_back(t);
+      }
+    }
+    // Faces of b that were a's too (the ones just removed) are dropped on b's next collapse or scan.
+    std::vector<uint32_t>().swap(p.faces[a]);
+  }
+  // Red vertices and triangles take one level above every collapse (top + 1, 1-based).
+  for (uint32_t v = 0; v < mesh.vertex_count(); ++v)
+    if (!p.removed_vertex[v]) out.vertex_level[v] = top;
+  for (uint32_t t = 0; t < mesh.face_count(); ++t)
+    if (!p.removed_face[t]) out.triangle_level[t] = top;
+  out.level_count = top + 1;
+  return out;
+}
+
+MultilevelMesh assemble_multilevel(const Mesh& mesh, const CollapseLevels& levels) {
+  const uint32_t n = uint32_t(mesh.vertex_count()), f = uint32_t(mesh.face_count());
+  const std::vector<uint32_t> vertex_order = by_decreasing_level(levels.vertex_level);
+  const std::vector<uint32_t> face_order = by_decreasing_level(levels.triangle_level);
+  std::vector<uint32_t> new_index(n);
+  for (uint32_t i = 0; i < n; ++i) new_index[vertex_order[i]] = i;
+
+  MultilevelMesh m;
+  m.dimension = 3;
+  m.vertex_count = counts_per_level(levels.vertex_level, levels.level_count);
+  m.triangle_count = counts_per_level(levels.triangle_level, levels.level_count);
+  m.positions.resize(size_t(n) * 3);
+  if (mesh.has_normals()) m.normals.resize(size_t(n) * 3);
+  if (mesh.has_colors()) m.colors.resize(size_t(n) * 4);
+  for (uint32_t i = 0; i < n; ++i) {
+    const uint32_t v = vertex_order[i];
+    std::copy_n(&mesh.positions[3 * size_t(v)], 3, &m.positions[3 * size_t(i)]);
+    if (mesh.has_normals()) std::copy_n(&mesh.normals[3 * size_t(v)], 3, &m.normals[3 * size_t(i)]);
+    if (mesh.has_colors()) std::copy_n(&mesh.colors[4 * size_t(v)], 4, &m.colors[4 * size_t(i)]);
+  }
+  m.triangles.resize(size_t(f) * 3);
+  for (uint32_t i = 0; i < f; ++i)
+    for (int k = 0; k < 3; ++k) m.triangles[3 * size_t(i) + k] = new_index[mesh.indices[3 * size_t(face_order[i]) + k]];
+
+  // needed[x] = 1 + the highest triangle level whose LODs miss x: a chain already marked that high
+  // stops the walk, so every vertex is visited O(1) times per level.
+  std::vector<uint32_t> needed(n, 0);
+  for (uint32_t t = 0; t < f; ++t) {
+    const uint32_t k = levels.triangle_level[t];
+    for (int c = 0; c < 3; ++c)
+      for (uint32_t x = mesh.indices[3 * size_t(t) + c]; x != kNoRep && levels.vertex_level[x] < k && needed[x] <= k;
+           x = effective_parent(levels, x))
+        needed[x] = k + 1;
+  }
+  m.representative.assign(n, kNoRep);
+  for (uint32_t x = 0; x < n; ++x)
+    if (needed[x]) m.representative[new_index[x]] = new_index[effective_parent(levels, x)];
+  return m;
+}
+
+std::vector<uint32_t> merge_level_map(uint32_t from, uint32_t to) {
+  std::vector<uint32_t> map(from);
+  for (uint32_t k = 0; k < from; ++k) map[k] = to == 0 || to >= from ? k : uint32_t(uint64_t(k) * to / from);
+  return map;
+}
+
+void merge_levels(CollapseLevels& levels, uint32_t level_count) {
+  if (level_count == 0 || level_count >= levels.level_count) return;
+  const std::vector<uint32_t> map = merge_level_map(levels.level_count, level_count);
+  for (uint32_t& l : levels.vertex_level) l = map[l];
+  for (uint32_t& l : levels.triangle_level) l = map[l];
+  levels.level_count = level_count;
+}
+
+MultilevelMesh build_multilevel(const Mesh& mesh, std::span<const EdgeCollapse> collapses, uint32_t level_count) {
+  CollapseLevels levels = assign_levels(mesh, collapses);
+  merge_levels(levels, level_count);
+  return assemble_multilevel(mesh, levels);
+}
+
+}  // namespace pms

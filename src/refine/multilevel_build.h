@@ -1,0 +1,53 @@
+// Building a progressive multilevel mesh from edge collapses (gueziec et al. 1999, "From edge collapses to a
+// progressive multilevel representation", Fig. 3-5), and merging its levels.
+#pragma once
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "io/mesh.h"
+#include "pm/hierarchy.h"
+#include "refine/multilevel_mesh.h"
+
+namespace pms {
+
+// A directed (half-edge) collapse: `removed` (the paper's blue vertex) goes, `survivor` (red) stays where it
+// is and becomes its representative. Vertex numbers are the input mesh's.
+struct EdgeCollapse {
+  uint32_t removed = 0;
+  uint32_t survivor = 0;
+};
+
+// The builder's collapses in the order it made them (the reverse of split_order), in the numbering of
+// the mesh it was given (Hierarchy::leaf_vertex): a node stands for the leaf its v_u children lead to.
+std::vector<EdgeCollapse> collapses_of(const Hierarchy& hierarchy);
+
+// Per input vertex and triangle, the level the paper assigns (0 = finest): a collapse gets 1 + the highest
+// level in its edge's star, which its two endpoints take; its blue vertex and the triangles it removes keep
+// it; what is left at the end takes one more than the highest. Levels here are that minus one.
+struct CollapseLevels {
+  uint32_t level_count = 0;
+  std::vector<uint32_t> vertex_level, triangle_level;
+  std::vector<uint32_t> parent;  // per vertex: what it collapsed onto (kNoRepresentative if it survived)
+};
+
+// pms::Error when a collapse names a vertex out of range, already removed, or collapses onto itself.
+CollapseLevels assign_levels(const Mesh& mesh, std::span<const EdgeCollapse> collapses);
+
+// Sorts the mesh by decreasing level and keeps only the representatives a triangle needs: vertex v of a
+// triangle of level k with level(v) < k needs its chain of parents until one of level >= k. A parent of
+// the same level as its child (after merging) is skipped, so every representative is of a higher level.
+MultilevelMesh assemble_multilevel(const Mesh& mesh, const CollapseLevels& levels);
+
+// Merges consecutive levels down to `level_count` (merge_level_map); 0 or more than there are: unchanged.
+void merge_levels(CollapseLevels& levels, uint32_t level_count);
+
+// The whole path: levels from the collapses, then assembled; `level_count` > 0 merges consecutive levels
+// down to that many (merge_level_map).
+MultilevelMesh build_multilevel(const Mesh& mesh, std::span<const EdgeCollapse> collapses, uint32_t level_count = 0);
+
+// Level k of `from` levels goes to floor(k * to / from): consecutive levels merge, level 0 and the top stay
+// the extremes, and LOD m of the result is LOD min{k : map[k] = m} of the original. to >= from: identity.
+std::vector<uint32_t> merge_level_map(uint32_t from, uint32_t to);
+
+}  // namespace pms
