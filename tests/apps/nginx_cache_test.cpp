@@ -120,11 +120,11 @@ struct Flight {
   uint64_t rounds = 0;    // adapt -> request -> attach cycles, over all frames
 };
 
-Flight fly(const std::string& server, const fs::path& path, const std::string& fetch, const fs::path& dir,
+Flight fly(const std::string& server, const fs::path& path, const std::string& fetch_flags, const fs::path& dir,
            const std::string& name) {
   const fs::path mesh = dir / (name + ".ply");
   const test::CliRun run = test::run_pmstream("stream --mode receiver --server " + server + " --model bunny --path " +
-                                              path.string() + " --fetch " + fetch + " --save-mesh " + mesh.string() +
+                                              path.string() + " " + fetch_flags + " --save-mesh " + mesh.string() +
                                               " --json");
   if (run.exit_code != 0) fail("pmstream stream", run.err);
   Flight flight{nlohmann::json::parse(run.out), slurp(mesh)};
@@ -170,13 +170,13 @@ TEST_F(NginxCache, ASecondClientOnTheSamePathIsServedFromTheCacheAlone) {
   for (const std::string fetch : {"lists", "blocks"}) {
     SCOPED_TRACE("--fetch " + fetch);
     Nginx nginx(nginx_, origin_port_);  // an empty cache
-    const Flight first = fly(nginx.url(), path, fetch, dir_, fetch + "_first");
+    const Flight first = fly(nginx.url(), path, "--fetch " + fetch, dir_, fetch + "_first");
     const uint64_t split_requests = first.report["split_requests"];
     ASSERT_GT(split_requests, 0u);
     EXPECT_EQ(first.report["cache_hits"], 0u) << "a lone client never asks for a URL twice";
     const uint64_t origin_splits = origin_split_requests(*origin_), origin_all = origin_requests(*origin_);
 
-    const Flight second = fly(nginx.url(), path, fetch, dir_, fetch + "_second");
+    const Flight second = fly(nginx.url(), path, "--fetch " + fetch, dir_, fetch + "_second");
     EXPECT_EQ(second.report["split_requests"], split_requests) << "the same path asks for the same URLs";
     EXPECT_EQ(second.report["cache_hits"], split_requests) << "every split answer says X-Cache-Status: HIT";
     EXPECT_EQ(origin_split_requests(*origin_), origin_splits) << "the origin saw no split request from it";
@@ -199,13 +199,13 @@ TEST_F(NginxCache, TenClientsOnDifferentPathsShareTheCache) {
     paths.push_back(dir_ / ("stretch" + std::to_string(i) + ".json"));
     app::save_path(paths.back().string(), stretch);
   }
-  for (const std::string fetch : {"lists", "blocks"}) {
-    SCOPED_TRACE("--fetch " + fetch);
+  for (const std::string fetch : {"--fetch lists", "--fetch blocks --block-depth 2", "--fetch blocks --block-depth 3"}) {
+    SCOPED_TRACE(fetch);
     Nginx nginx(nginx_, origin_port_);
-    const uint64_t origin_before = origin_split_requests(*origin_);
+    const nlohmann::json origin_before = origin_->stats().line["http"];
     uint64_t requests = 0, hits = 0, down = 0, payload = 0, up = 0, rounds = 0, splits = 0;
     for (size_t i = 0; i < paths.size(); ++i) {
-      const Flight flight = fly(nginx.url(), paths[i], fetch, dir_, fetch + std::to_string(i));
+      const Flight flight = fly(nginx.url(), paths[i], fetch, dir_, "ten" + std::to_string(i));
       requests += flight.report["split_requests"].get<uint64_t>();
       hits += flight.report["cache_hits"].get<uint64_t>();
       down += flight.report["total_down_bytes"].get<uint64_t>();
@@ -214,13 +214,18 @@ TEST_F(NginxCache, TenClientsOnDifferentPathsShareTheCache) {
       splits += flight.report["vsplits_received"].get<uint64_t>();
       rounds += flight.rounds;
     }
-    const uint64_t origin_seen = origin_split_requests(*origin_) - origin_before;
-    EXPECT_EQ(origin_seen, requests - hits) << "each answer not from the cache is one origin request";
-    std::printf("nginx, 10 clients, bunny orbit stretches, --fetch %s: %llu split GETs, %llu HIT (hit rate %.1f %%), "
-                "origin %llu; per client: %.0f splits, %.0f B down (%.0f payload), %.0f B up, %.1f GETs, "
-                "%.1f rounds\n",
+    const nlohmann::json origin_after = origin_->stats().line["http"];
+    const auto origin = [&](const char* counter) {
+      return origin_after[counter].get<uint64_t>() - origin_before[counter].get<uint64_t>();
+    };
+    EXPECT_EQ(origin("split_requests"), requests - hits) << "each answer not from the cache is one origin request";
+    std::printf("nginx, 10 clients, bunny orbit stretches, %s: %llu split GETs, %llu HIT (hit rate %.1f %%); "
+                "origin: %llu split requests, %llu splits, %llu B out; per client: %.0f splits, %.0f B down "
+                "(%.0f payload), %.0f B up, %.1f GETs, %.1f rounds\n",
                 fetch.c_str(), (unsigned long long)requests, (unsigned long long)hits,
-                100.0 * double(hits) / double(std::max<uint64_t>(requests, 1)), (unsigned long long)origin_seen,
+                100.0 * double(hits) / double(std::max<uint64_t>(requests, 1)),
+                (unsigned long long)origin("split_requests"), (unsigned long long)origin("splits_served"),
+                (unsigned long long)origin("bytes_out"),
                 double(splits) / 10, double(down) / 10, double(payload) / 10, double(up) / 10,
                 double(requests) / 10, double(rounds) / 10);
     std::fflush(stdout);
