@@ -32,7 +32,7 @@ struct StreamArgs {
   float tolerance = 1;
   uint32_t laps = 1, morph_frames = 0, max_ops = 0, reconnect = 0;
   uint32_t timeout_ms = 30000, connect_timeout_ms = 5000;
-  uint32_t in_flight = 4, ids_per_request = 64, block_depth = 3;  // receiver mode
+  uint32_t in_flight = 4, ids_per_request = 64, block_depth = client::ReceiverOptions{}.block_depth;  // receiver
   std::string fetch = client::fetch_policy_name(client::ReceiverOptions{}.fetch);
   bool json = false;
 };

@@ -32,7 +32,7 @@ struct ReceiverOptions {
   uint32_t max_ops = 0;            // per frame, 0 = no cap
   FetchPolicy fetch = FetchPolicy::lists;
   uint32_t ids_per_request = 64;   // lists: split ids in one GET /splits/{code}
-  uint32_t block_depth = 3;        // blocks: levels below a block's root (bands of block_depth + 1 levels)
+  uint32_t block_depth = 2;        // blocks: levels below a block's root; GET /models suggests the same
   HttpOptions http;                // deadlines, requests in flight, answer limits
 };
 

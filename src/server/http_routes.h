@@ -46,6 +46,7 @@ HttpAnswer route(const Catalogue& catalogue, const HttpLimits& limits, const Htt
 HttpAnswer error_answer(int status, const std::string& text);
 
 // Blocks a client should ask for (GET /models lists it): subtrees of this many levels below the node.
-constexpr uint32_t kSuggestedBlockDepth = 3;
+// Clients behind one cache share blocks only when they use the same depth; docs/protocol.md says why 2.
+constexpr uint32_t kSuggestedBlockDepth = 2;
 
 }  // namespace pms::server

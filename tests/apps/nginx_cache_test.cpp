@@ -199,7 +199,7 @@ TEST_F(NginxCache, TenClientsOnDifferentPathsShareTheCache) {
     paths.push_back(dir_ / ("stretch" + std::to_string(i) + ".json"));
     app::save_path(paths.back().string(), stretch);
   }
-  for (const std::string fetch : {"--fetch lists", "--fetch blocks --block-depth 2", "--fetch blocks --block-depth 3"}) {
+  for (const std::string fetch : {"--fetch lists", "--fetch blocks", "--fetch blocks --block-depth 3"}) {
     SCOPED_TRACE(fetch);
     Nginx nginx(nginx_, origin_port_);
     const nlohmann::json origin_before = origin_->stats().line["http"];
