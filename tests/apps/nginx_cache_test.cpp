@@ -6,7 +6,9 @@
 #include <utility>  // before asio with C++20 (docs/architecture.md, "Stack")
 #include <boost/asio.hpp>
 #include <gtest/gtest.h>
+#include <pwd.h>
 #include <signal.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <atomic>
@@ -77,7 +79,8 @@ class Nginx {
     const auto fill = [&conf](const std::string& name, const std::string& value) {
       for (size_t at; (at = conf.find(name)) != std::string::npos;) conf.replace(at, name.size(), value);
     };
-    fill("@USER@", std::getenv("USER") ? std::getenv("USER") : "root");
+    const passwd* user = ::getpwuid(::geteuid());  // nginx ignores `user` unless it runs as root
+    fill("@USER@", user ? user->pw_name : "root");
     fill("@DIR@", dir_.string());
     fill("@LISTEN@", "127.0.0.1:" + std::to_string(port_));
     fill("@ORIGIN@", "127.0.0.1:" + std::to_string(origin_port));
