@@ -14,6 +14,7 @@ jobs=$(nproc 2>/dev/null || echo 2)
 packages=(build-essential cmake ninja-build pkg-config git xz-utils
           libcli11-dev nlohmann-json3-dev libfmt-dev libassimp-dev zlib1g-dev liblzma-dev libxxhash-dev
           libfast-float-dev libzstd-dev libboost-dev libstb-dev libpng-dev
+          libmeshoptimizer-dev libdraco-dev
           libgtest-dev libgmock-dev libbenchmark-dev clang libclang-rt-14-dev
           libopenmesh-apps gnuplot-nox graphviz
           nginx-light)  # the caching proxy of deploy/nginx, which the NginxCache tests run on loopback

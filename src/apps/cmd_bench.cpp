@@ -23,6 +23,8 @@ constexpr BenchGroup kGroups[] = {
     {"refine", "adaptation time and ops/s on a scan path, renderer speed, image quality at far/mid/close", run_refine_group},
     {"sender", "E2 packet bits, E3 server memory, E4 two laps, E5 bytes to satisfy tolerance, E11 many clients",
      run_sender_group},
+    {"receiver", "whole-model bits per vertex against meshoptimizer, gzip, zstd and Draco; E7 server CPU and bytes per split",
+     run_receiver_group},
     {"soak", "many clients resuming and reconnecting for minutes: server RSS over time, failures, latency per minute",
      run_soak_group},
 };

@@ -3,12 +3,16 @@
 
 #include "client/client_session.h"
 
+#include <algorithm>
+#include <cstdint>
+
 #include "common/error.h"
 #include "pm/split_record.h"
 #include "pm/vertex_id.h"
 #include "protocol/client_messages.h"
 #include "protocol/model_messages.h"
 #include "protocol/server_messages.h"
+#include "protocol/split_bands.h"
 #include "refine/selective_mesh.h"
 #include "refine/vertex_hierarchy.h"
 
@@ -38,6 +42,17 @@ void ClientSession::on_vsplits(const protocol::VSplits& batch) {
   if (!has_model()) fail("VSPLITS", "received before BASE");
   for (const SplitRecord& split : batch.splits) hierarchy_->add_split(split);
   splits_received_ += batch.splits.size();
+}
+
+uint32_t ClientSession::on_split_bands(std::span<const uint8_t> body, const protocol::SplitRequest& request,
+                                       const SplitCodec& codec) {
+  if (!has_model()) fail("split records", "received before BASE");
+  // A band holds at most every node of its depth + 1 levels.
+  const uint64_t most = uint64_t(request.ids.size()) * ((uint64_t(2) << std::min<uint32_t>(request.depth, 30)) - 1);
+  const uint32_t added = protocol::read_split_bands(body, request, codec, context_.grid, *hierarchy_,
+                                                    uint32_t(std::min<uint64_t>(most, UINT32_MAX)));
+  splits_received_ += added;
+  return added;
 }
 
 void ClientSession::apply_as_they_come(const protocol::VSplits& batch, const char* promise) {

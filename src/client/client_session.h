@@ -4,11 +4,14 @@
 #pragma once
 #include <cstdint>
 #include <memory>
+#include <span>
 #include <vector>
 
+#include "pm/split_codec.h"
 #include "pm/vertex_id.h"
 #include "protocol/client_messages.h"
 #include "protocol/server_messages.h"
+#include "protocol/split_request.h"
 #include "protocol/stream_context.h"
 #include "refine/adapt.h"
 #include "refine/camera.h"
@@ -25,6 +28,9 @@ class ClientSession {
   // Attaches a batch's packets as leaves of the partial hierarchy (UpdateVHierarchy). Applying them to
   // the mesh is the mode's business (client_mode.h).
   void on_vsplits(const protocol::VSplits& batch);
+  // The same for a receiver-driven answer in records format 2 (protocol/split_bands.h): the bands of
+  // `request`'s ids, coded with `codec`. Returns the splits attached.
+  uint32_t on_split_bands(std::span<const uint8_t> body, const protocol::SplitRequest& request, const SplitCodec& codec);
   // Makes every split of an attached batch on the mesh, in order: for the modes whose client applies
   // splits as they arrive. pms::Error naming `promise` (the order the server owes) when one cannot be made.
   void apply_as_they_come(const protocol::VSplits& batch, const char* promise);

@@ -8,6 +8,7 @@
 #include <utility>
 #include <nlohmann/json.hpp>
 
+#include "common/bit_stream.h"
 #include "common/error.h"
 #include "protocol/base64url.h"
 #include "protocol/server_messages.h"
@@ -68,16 +69,22 @@ ReceiverClient::ReceiverClient(const HttpUrl& server, const ReceiverOptions& opt
   session_.refinement_info = true;  // the records carry the children's refinement info: the client refines
 }
 
-std::vector<std::string> ReceiverClient::list() {
+// GET /models: the array of models, checked to be one.
+nlohmann::json ReceiverClient::catalogue() {
   const std::string target = "/models";
   const HttpAnswer answer = http_.get(target);
   if (answer.status != 200) refused(target, answer);
-  const nlohmann::json json = nlohmann::json::parse(answer.body.begin(), answer.body.end(), nullptr, false);
-  if (json.is_discarded() || !json.contains("models") || !json["models"].is_array())
+  nlohmann::json json = nlohmann::json::parse(answer.body.begin(), answer.body.end(), nullptr, false);
+  if (json.is_discarded() || !json.is_object() || !json.contains("models") || !json["models"].is_array())
     fail("GET " + target, "not the catalogue's JSON");
+  return std::move(json["models"]);
+}
+
+std::vector<std::string> ReceiverClient::list() {
   std::vector<std::string> names;
-  for (const nlohmann::json& model : json["models"])
-    if (model.contains("name") && model["name"].is_string()) names.push_back(model["name"].get<std::string>());
+  for (const nlohmann::json& model : catalogue())
+    if (model.is_object() && model.contains("name") && model["name"].is_string())
+      names.push_back(model["name"].get<std::string>());
   return names;
 }
 
@@ -88,6 +95,19 @@ void ReceiverClient::open(const std::string& model) {
   if (answer.status != 200) refused(target, answer);
   session_.on_base(protocol::decode_base(answer.body));
   model_ = model;
+  for (const nlohmann::json& entry : catalogue())
+    if (entry.is_object() && entry.value("name", "") == model) records_format_ = entry.value("records_format", 1u);
+  if (records_format_ == 2) {
+    const std::string tables = "/models/" + model + "/codec";
+    const HttpAnswer codec = http_.get(tables);
+    if (codec.status != 200) refused(tables, codec);
+    BitReader r(codec.body, "GET " + tables);
+    codec_ = SplitCodec::deserialize(r);
+    if (codec_.root_count() != session_.base().root_count() || codec_.position_bits() != session_.context().grid.bits)
+      fail("GET " + tables, "code tables of another model or grid than its BASE");
+  } else if (records_format_ != 1) {
+    fail("GET /models", "records format " + std::to_string(records_format_) + " is not one this client reads");
+  }
 }
 
 // The leaves the last adapt() could not split, the visible ones by the pixels of their faces, then the
@@ -120,11 +140,14 @@ std::vector<VertexId> ReceiverClient::ranked_missing(const Camera& camera) {
 // ids_per_request ids to a URL, in rank order: each URL is the code of its id set.
 std::vector<std::string> ReceiverClient::list_targets(const std::vector<VertexId>& ids) const {
   std::vector<std::string> targets;
+  std::vector<protocol::SplitRequest> requests;
   for (size_t begin = 0; begin < ids.size(); begin += options_.ids_per_request) {
     const size_t end = std::min(ids.size(), begin + options_.ids_per_request);
-    protocol::SplitRequest request{0, std::vector<VertexId>(ids.begin() + begin, ids.begin() + end)};
-    targets.push_back("/models/" + model_ + "/splits/" +
-                      protocol::base64url_encode(protocol::encode_split_request(request)));
+    requests.push_back({0, std::vector<VertexId>(ids.begin() + begin, ids.begin() + end)});
+    // The answer comes in code order, which format 2's bands are read in.
+    std::sort(requests.back().ids.begin(), requests.back().ids.end(), protocol::code_order);
+    const std::vector<uint8_t> code = protocol::encode_split_request(requests.back());
+    targets.push_back("/models/" + model_ + "/splits/" + protocol::base64url_encode(code));
   }
   return targets;
 }
@@ -153,6 +176,10 @@ size_t ReceiverClient::fetch(const std::vector<VertexId>& ids) {
   size_t attached = 0;
   http_.get_all(targets, [&](size_t index, HttpAnswer&& answer) {
     if (answer.status != 200) refused(targets[index], answer);
+    if (records_format_ == 2) {
+      attached += session_.on_split_bands(answer.body, requests[index], codec_);
+      return;
+    }
     const protocol::VSplits batch = protocol::decode_vsplits(answer.body, session_.context());
     session_.on_vsplits(batch);
     attached += batch.splits.size();

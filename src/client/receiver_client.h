@@ -4,6 +4,7 @@
 // a ClientMode (docs/architecture.md, "Streaming modes"); it shares ClientSession and FrameReport with them.
 #pragma once
 #include <chrono>
+#include <nlohmann/json.hpp>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -12,6 +13,7 @@
 #include "client/client_session.h"
 #include "client/http_connection.h"
 #include "client/screen_importance.h"
+#include "pm/split_codec.h"
 #include "pm/vertex_id.h"
 #include "refine/camera.h"
 
@@ -62,6 +64,7 @@ class ReceiverClient {
   uint64_t cache_hits() const { return cache_hits_; }
 
  private:
+  nlohmann::json catalogue();
   std::vector<VertexId> ranked_missing(const Camera& camera);
   std::vector<std::string> list_targets(const std::vector<VertexId>& ids) const;
   std::vector<std::string> block_targets(const std::vector<VertexId>& ids) const;
@@ -72,6 +75,8 @@ class ReceiverClient {
   ClientSession session_;
   ScreenImportance importance_;
   std::string model_;
+  uint32_t records_format_ = 1;  // the catalogue's word for the model: 2 = compact records, coded by codec_
+  SplitCodec codec_;
   uint32_t frame_ = 0;
   uint64_t split_requests_ = 0;
   uint64_t cache_hits_ = 0;

@@ -2,10 +2,12 @@
 #include <algorithm>
 #include <filesystem>
 
+#include "common/bit_stream.h"
 #include "common/error.h"
 #include "pm/hierarchy.h"
 #include "pm/pms_file.h"
 #include "pm/refine_info.h"
+#include "pm/split_codec.h"
 #include "pm/vertex_id.h"
 #include "protocol/message_types.h"
 #include "protocol/model_messages.h"
@@ -52,6 +54,29 @@ std::vector<NodeCriteria> decode_criteria(const ModelData& model, const protocol
   return criteria;
 }
 
+// Format 2 for a model without normals and colors. The .pms holds records at the grid it was built for;
+// a server started with other position bits codes its own once.
+void attach_records(ServedModel& model, const protocol::Base& base) {
+  if (base.has_normals || base.has_colors) return;
+  const PmsFile& file = *model.file;
+  const uint32_t bits = model.context.grid.bits;
+  const SplitCodec* codec = &file.split_codec();
+  if (!file.split_offsets().empty() && codec->position_bits() == bits) {
+    model.records = {file.split_records(), file.split_offsets()};
+  } else {
+    model.own_records = encode_records(file.model(), bits);
+    model.records = {model.own_records.records, model.own_records.offsets};
+  }
+  if (!model.own_records.tables.empty()) {
+    model.codec_tables = std::make_shared<const std::vector<uint8_t>>(model.own_records.tables);
+  } else {
+    BitWriter w;
+    codec->serialize(w);
+    model.codec_tables = std::make_shared<const std::vector<uint8_t>>(w.bytes());
+  }
+  model.records_format = 2;
+}
+
 std::unique_ptr<ServedModel> open_model(const std::string& path, uint32_t position_bits) {
   auto model = std::make_unique<ServedModel>();
   model->path = path;
@@ -69,6 +94,7 @@ std::unique_ptr<ServedModel> open_model(const std::string& path, uint32_t positi
   protocol::StreamContext sender = model->context;
   sender.has_refinement = true;
   model->packets = protocol::PacketTable(data, sender);
+  attach_records(*model, base);
   return model;
 }
 

@@ -10,6 +10,7 @@
 #include "protocol/message_types.h"
 #include "protocol/packet_table.h"
 #include "protocol/server_messages.h"
+#include "protocol/split_bands.h"
 #include "protocol/stream_context.h"
 #include "refine/criteria.h"
 #include "server/limits.h"
@@ -31,6 +32,12 @@ struct ServedModel {
   std::vector<uint32_t> split_rank;    // per node: its index in split_order (view-independent mode); leaves kNone
   DependencyFilter dependencies;
   protocol::PacketTable packets;  // sender-driven packets (with refinement info)
+  // The receiver-driven answers' body format (server/split_records_body.h): 2, the compact records, which
+  // carry no normals or colors; 1, VSPLITS packets, for a model that has either.
+  uint32_t records_format = 1;
+  protocol::StoredRecords records;     // format 2: the file's own at the served grid, or `own_records`
+  EncodedRecords own_records;          // coded at load when the file's records are at another grid
+  std::shared_ptr<const std::vector<uint8_t>> codec_tables;  // format 2: serialized (GET /models/{m}/codec)
   const ModelData& model() const { return file->model(); }
 };
 

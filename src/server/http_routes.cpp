@@ -51,7 +51,7 @@ std::string etag_of(const ServedModel& model, const std::string& resource) {
   XXH64_state_t state;
   XXH64_reset(&state, 0);
   const uint64_t content = model.file->content_checksum();
-  const uint32_t format[2] = {model.context.grid.bits, kSplitRecordsFormat};
+  const uint32_t format[2] = {model.context.grid.bits, model.records_format};
   XXH64_update(&state, &content, sizeof content);
   XXH64_update(&state, format, sizeof format);
   XXH64_update(&state, resource.data(), resource.size());
@@ -101,7 +101,7 @@ HttpAnswer catalogue_answer(const Catalogue& catalogue, const HttpRequest& reque
                       {"tree_id_bits", info.tree_id_bits},
                       {"node_id_bits", info.node_id_bits},
                       {"position_bits", model->context.grid.bits},
-                      {"records_format", kSplitRecordsFormat},
+                      {"records_format", model->records_format},
                       {"block_depth", kSuggestedBlockDepth},
                       {"etag_seed", hex64(model->file->content_checksum())}});
   }
@@ -127,9 +127,18 @@ HttpAnswer splits_answer(const ServedModel& model, const HttpLimits& limits, con
   HttpAnswer answer = fresh(request, etag_of(model, resource), "application/octet-stream");
   answer.split_resource = true;
   if (answer.status == 200) {
-    answer.owned = split_records_body(model, nodes);
+    answer.owned = split_records_body(model, split_request, nodes);
     answer.splits = nodes.size();
   }
+  return answer;
+}
+
+// Format 2's code tables, which every record of the model is coded with.
+HttpAnswer codec_answer(const ServedModel& model, const HttpRequest& request) {
+  if (model.records_format != 2)
+    return error_answer(404, "model '" + model.name + "' is served in records format 1, which has no code tables");
+  HttpAnswer answer = fresh(request, etag_of(model, "/models/" + model.name + "/codec"), "application/octet-stream");
+  if (answer.status == 200) answer.shared = model.codec_tables;
   return answer;
 }
 
@@ -178,7 +187,7 @@ HttpAnswer model_route(const Catalogue& catalogue, const HttpLimits& limits, con
                        std::span<const std::string_view> s) {
   const bool get = request.method == "GET" || request.method == "HEAD";
   const bool post_route = s.size() == 3 && s[2] == "splits";
-  const bool get_route = (s.size() == 3 && s[2] == "base") || (s.size() == 4 && s[2] == "splits") ||
+  const bool get_route = (s.size() == 3 && (s[2] == "base" || s[2] == "codec")) || (s.size() == 4 && s[2] == "splits") ||
                          (s.size() == 6 && s[2] == "blocks");
   if (!post_route && !get_route) return error_answer(404, "no such resource (docs/protocol.md lists them)");
   if (post_route && request.method != "POST") return method_not_allowed("POST");
@@ -186,6 +195,7 @@ HttpAnswer model_route(const Catalogue& catalogue, const HttpLimits& limits, con
   const ServedModel* model = catalogue.find(std::string(s[1]));
   if (!model) return error_answer(404, "no model named '" + std::string(s[1]) + "'");
   if (s[2] == "base") return base_answer(*model, request);
+  if (s[2] == "codec") return codec_answer(*model, request);
   if (s[2] == "blocks") return block_answer(*model, limits, request, s.subspan(3));
   if (post_route) return splits_answer(*model, limits, request, decode_code(*model, limits, request.body),
                                        splits_resource(*model, request.body));

@@ -15,29 +15,13 @@
 #include "protocol/packet_bits.h"
 #include "protocol/position_grid.h"
 #include "protocol/server_messages.h"
+#include "protocol/split_bands.h"
 #include "protocol/stream_context.h"
 #include "protocol_fixtures.h"
 #include "refine/vertex_hierarchy.h"
 
 namespace pms::protocol {
 namespace {
-
-// What a client knows of v_s, from its own hierarchy: the ids, the snapped position re-quantized (the grid
-// is coarse enough for that to give the sent integers back), the info as sent, the ancestors' cuts.
-SplitContext client_context(const VertexHierarchy& h, uint32_t slot, const PositionGrid& grid) {
-  SplitContext c;
-  c.vs = h.id(slot);
-  quantize_position(grid, h.position(slot), c.position_s);
-  c.info_s = h.refine(slot);
-  uint32_t s = slot;
-  for (int i = 0; i < kCutAncestors; ++i) {
-    s = h.parent(s);
-    if (s == kNone) break;
-    c.ancestor_cuts[2 * size_t(i)] = h.cut_left(s);
-    c.ancestor_cuts[2 * size_t(i) + 1] = h.cut_right(s);
-  }
-  return c;
-}
 
 struct RecordStats {
   size_t splits = 0;
@@ -79,18 +63,11 @@ RecordStats check_records(const ModelData& model, uint32_t position_bits) {
     EXPECT_NE(slot, kNone);
     if (slot == kNone) break;
     BitReader r(stored.records, stored.offsets[node], stored.offsets[node + 1], "record");
-    const SplitPayload got = client_codec.decode(client_context(client, slot, grid), r);
+    const SplitPayload got = client_codec.decode(held_split_context(client, slot, grid), r);
     EXPECT_EQ(r.bits_left(), 0u);
     EXPECT_EQ(got, sent) << "split of " << to_string(model.id(node));
     if (!(got == sent)) break;
-    SplitRecord record;
-    record.vs = model.id(node);
-    record.cut_l = got.cut_l;
-    record.cut_r = got.cut_r;
-    dequantize_position(grid, got.position_t, record.position_t);
-    record.info_t = got.info_t;
-    record.info_u = got.info_u;
-    client.add_split(record);
+    client.add_split(split_record_of(model.id(node), got, grid));
   }
   // The client now holds every node with the values every mode evaluates: snapped positions, info as sent.
   for (uint32_t n = 0; n < model.node_count(); ++n) {

@@ -13,7 +13,9 @@
 #include "protocol/base64url.h"
 #include "protocol/message_types.h"
 #include "protocol/server_messages.h"
+#include "protocol/split_bands.h"
 #include "protocol/split_request.h"
+#include "refine/vertex_hierarchy.h"
 #include "server/http_server.h"
 #include "server/limits.h"
 #include "streaming_fixture.h"
@@ -51,11 +53,18 @@ std::string splits_url(const SplitRequest& request) {
   return "/models/terrain/splits/" + protocol::base64url_encode(protocol::encode_split_request(request));
 }
 
-std::vector<VertexId> split_ids(const std::vector<uint8_t>& body) {
-  protocol::StreamContext context = served().context;
-  context.has_refinement = true;
+// The splits an answer to `request` carries, in its order, read as a client that holds the base mesh
+// reads them (records format 2: the bands need the client's hierarchy to decode).
+std::vector<VertexId> split_ids(const std::vector<uint8_t>& body, const SplitRequest& request) {
+  EXPECT_EQ(served().records_format, 2u);
+  const std::vector<uint8_t>& frame = *served().base_frame;
+  const protocol::Base base = protocol::decode_base(std::span(frame).subspan(protocol::kFrameHeaderBytes));
+  VertexHierarchy h;
+  for (uint32_t r = 0; r < base.root_count(); ++r) h.add_root(VertexId{r, 1}, &base.positions[3 * size_t(r)], base.refine[r]);
+  const uint32_t before = h.size();
+  protocol::read_split_bands(body, request, served().file->split_codec(), served().context.grid, h, 1u << 20);
   std::vector<VertexId> ids;
-  for (const SplitRecord& s : protocol::decode_vsplits(body, context).splits) ids.push_back(s.vs);
+  for (uint32_t slot = before; slot < h.size(); slot += 2) ids.push_back(h.id(h.parent(slot)));  // two children per split
   return ids;
 }
 
@@ -135,7 +144,7 @@ TEST(Http, GetAndPostOfARequestCarryItsSplitsInCodeOrder) {
   const HttpReply get = client.get(splits_url(request));
   ASSERT_EQ(get.status, 200) << get.text();
   expect_cacheable(get);
-  EXPECT_EQ(split_ids(get.body), request.ids);  // the roots come in tree order
+  EXPECT_EQ(split_ids(get.body, request), request.ids);  // the roots come in tree order
   const HttpReply post = client.post("/models/terrain/splits", protocol::encode_split_request(request));
   ASSERT_EQ(post.status, 200);
   EXPECT_EQ(post.body, get.body);
@@ -153,7 +162,7 @@ TEST(Http, ADepthBringsDescendantsBreadthFirstAndBlocksTileTheTrees) {
     if (!model.is_leaf(model.first_child[root] + c)) expected.push_back(model.id(model.first_child[root] + c));
   const HttpReply deep = client.get(splits_url(request));
   ASSERT_EQ(deep.status, 200);
-  EXPECT_EQ(split_ids(deep.body), expected);
+  EXPECT_EQ(split_ids(deep.body, request), expected);
   const std::string block = "/models/terrain/blocks/" + std::to_string(root) + "/1/1";
   const HttpReply tile = client.get(block);
   ASSERT_EQ(tile.status, 200) << tile.text();

@@ -125,6 +125,24 @@ TEST(Receiver, ReceivesTheSplitsTheSenderDrivenModeSendsOnTheSamePath) {
   }
 }
 
+// The compact records carry no colors or normals: such a model travels as records format 1 (VSPLITS
+// packets) and the client still ends on local refinement's mesh.
+TEST(Receiver, AModelWithColorsTravelsInRecordsFormatOne) {
+  Mesh mesh = make_terrain(8000, 9);
+  mesh.colors.resize(4 * mesh.vertex_count());
+  for (size_t i = 0; i < mesh.colors.size(); ++i) mesh.colors[i] = uint8_t(i * 37);
+  const Fixture f = make_fixture(mesh, "colored");
+  ASSERT_EQ(f.catalogue->find("colored")->records_format, 1u);
+  Server server(f.catalogue);
+  client::ReceiverClient client(server.url());
+  client.open("colored");
+  for (const Camera& camera : orbit_path(f.hierarchy, 6, 0.2f)) {
+    client.frame(camera);
+    EXPECT_EQ(faces_by_id(client.session().mesh()), local_faces(f.snapped, camera, 1.0f));
+  }
+  EXPECT_GT(client.session().splits_received(), 0u);
+}
+
 TEST(Receiver, SurvivesTheServerClosingIdleKeptAliveConnections) {
   const Fixture& f = terrain();
   server::HttpLimits limits;

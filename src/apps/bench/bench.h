@@ -47,6 +47,8 @@ void run_build_group(BenchContext& context);
 void run_refine_group(BenchContext& context);
 // E2, E3, E4, E5 and E11 of the sender-driven mode (bench_sender.cpp).
 void run_sender_group(BenchContext& context);
+// Receiver-driven against sender-driven and single-rate codecs: whole-model bits, E7 (bench_receiver.cpp).
+void run_receiver_group(BenchContext& context);
 // Requirement 8's soak: many resuming clients against one server for minutes (bench_soak.cpp).
 void run_soak_group(BenchContext& context);
 

@@ -1,0 +1,69 @@
+// libFuzzer target for records format 2's reader (protocol/split_bands.h), the receiver-driven client's
+// decoder of every split answer: the input is u8 depth | u8 id count | a body. A real model's code tables
+// and a client holding its base mesh read the hostile body as the answer to the first ids' bands; it
+// either attaches valid splits (the hierarchy stays one the mesh can use) or throws pms::Error.
+#include <cstddef>
+#include <cstdint>
+#include <span>
+
+#include "builder/build.h"
+#include "common/bit_stream.h"
+#include "common/error.h"
+#include "io/shapes.h"
+#include "pm/refine_info.h"
+#include "pm/split_codec.h"
+#include "protocol/split_bands.h"
+#include "refine/selective_mesh.h"
+#include "refine/vertex_hierarchy.h"
+
+namespace {
+
+constexpr uint32_t kPositionBits = 16;
+constexpr uint32_t kMaxRecords = 4096;
+
+struct Model {
+  pms::Hierarchy hierarchy;
+  pms::ModelData model;
+  pms::PositionGrid grid;
+  pms::SplitCodec codec;
+};
+
+const Model& model() {
+  static const Model m = [] {
+    Model built;
+    built.hierarchy = pms::build_progressive_mesh(pms::make_terrain(3000, 2), pms::BuildOptions{}).hierarchy;
+    built.model = pms::model_of(built.hierarchy);
+    built.grid = pms::model_grid(built.model, kPositionBits);
+    const pms::EncodedRecords records = pms::encode_records(built.model, kPositionBits);
+    pms::BitReader r(records.tables, "tables");
+    built.codec = pms::SplitCodec::deserialize(r);
+    return built;
+  }();
+  return m;
+}
+
+}  // namespace
+
+extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
+  if (size < 2) return 0;
+  const Model& m = model();
+  pms::protocol::SplitRequest request{uint32_t(data[0] % 9), {}};
+  for (uint32_t r = 0; r < m.model.root_count && request.ids.size() < size_t(data[1] % 32 + 1); ++r)
+    if (!m.model.is_leaf(r)) request.ids.push_back(m.model.id(r));
+  pms::VertexHierarchy h;
+  for (uint32_t r = 0; r < m.model.root_count; ++r) {
+    float p[3];
+    pms::snap_position(m.grid, &m.model.position[3 * size_t(r)], p);
+    h.add_root(m.model.id(r), p, pms::as_sent(m.model.refine[r]));
+  }
+  try {
+    pms::protocol::read_split_bands(std::span(data + 2, size - 2), request, m.codec, m.grid, h, kMaxRecords);
+  } catch (const pms::Error&) {
+  }
+  // Whatever was attached before an error, the base mesh refined by it must stay a valid mesh.
+  pms::SelectiveMesh mesh(h, m.model.base_faces);
+  for (uint32_t slot = 0; slot < h.size(); ++slot)
+    if (!h.is_leaf(slot)) mesh.vsplit(slot);
+  if (!mesh.check_invariants(nullptr)) __builtin_trap();
+  return 0;
+}

@@ -1,0 +1,102 @@
+#include "protocol/split_bands.h"
+
+#include <string>
+
+#include "common/error.h"
+#include "pm/refine_info.h"
+#include "pm/split_record.h"
+
+namespace pms::protocol {
+namespace {
+
+struct BandEntry {
+  uint32_t node;   // a model node (writer) or a hierarchy slot (reader)
+  uint32_t level;  // below the band's root
+};
+
+void copy_bits(BitReader& from, uint64_t count, BitWriter& to) {
+  for (; count >= 64; count -= 64) to.bits(from.bits(64, "record"), 64);
+  if (count) to.bits(from.bits(unsigned(count), "record"), unsigned(count));
+}
+
+// A child whose info can refine has a split of its own (every leaf's info never refines); for one whose
+// info never refines, the stream says.
+bool child_has_split(const RefineInfo& info, BitReader& r) { return !never_refines(info) || r.bit("child's split"); }
+
+}  // namespace
+
+uint32_t write_split_band(const ModelData& model, const StoredRecords& records, uint32_t root, uint32_t depth,
+                          BitWriter& w) {
+  if (model.is_leaf(root)) fail("split band", "node " + std::to_string(root) + " is a leaf");
+  std::vector<BandEntry> queue{{root, 0}};
+  for (size_t next = 0; next < queue.size(); ++next) {
+    const auto [node, level] = queue[next];
+    BitReader record(records.bits, records.offsets[node], records.offsets[node + 1], "stored record");
+    copy_bits(record, record.bits_left(), w);
+    if (level == depth) continue;
+    for (uint32_t child = model.first_child[node]; child < model.first_child[node] + 2; ++child) {
+      const bool split = !model.is_leaf(child);
+      if (never_refines(as_sent(model.refine[child]))) w.bit(split ? 1 : 0);
+      else if (!split) fail("split band", "leaf " + std::to_string(child) + " has an info that refines");
+      if (split) queue.push_back({child, level + 1});
+    }
+  }
+  return uint32_t(queue.size());
+}
+
+SplitRecord split_record_of(VertexId vs, const SplitPayload& payload, const PositionGrid& grid) {
+  SplitRecord split;
+  split.vs = vs;
+  split.cut_l = payload.cut_l;
+  split.cut_r = payload.cut_r;
+  dequantize_position(grid, payload.position_t, split.position_t);
+  split.info_t = payload.info_t;
+  split.info_u = payload.info_u;
+  return split;
+}
+
+SplitContext held_split_context(const VertexHierarchy& h, uint32_t slot, const PositionGrid& grid) {
+  SplitContext c;
+  c.vs = h.id(slot);
+  quantize_position(grid, h.position(slot), c.position_s);
+  c.info_s = h.refine(slot);
+  uint32_t s = slot;
+  for (int i = 0; i < kCutAncestors; ++i) {
+    s = h.parent(s);
+    if (s == kNone) break;
+    c.ancestor_cuts[2 * size_t(i)] = h.cut_left(s);
+    c.ancestor_cuts[2 * size_t(i) + 1] = h.cut_right(s);
+  }
+  return c;
+}
+
+uint32_t read_split_bands(std::span<const uint8_t> body, const SplitRequest& request, const SplitCodec& codec,
+                          const PositionGrid& grid, VertexHierarchy& h, uint32_t max_splits) {
+  BitReader r(body, "split records");
+  uint32_t records = 0, added = 0;
+  std::vector<BandEntry> queue;
+  for (VertexId id : request.ids) {
+    const uint32_t root = h.find(id);
+    if (root == kNone) fail("split records", "an answer for " + to_string(id) + ", which this client does not hold");
+    queue.assign(1, {root, 0});
+    for (size_t next = 0; next < queue.size(); ++next) {
+      const auto [slot, level] = queue[next];
+      if (++records > max_splits) fail("split records", "more than " + std::to_string(max_splits) + " records");
+      const SplitPayload p = codec.decode(held_split_context(h, slot, grid), r);
+      if (h.is_leaf(slot)) {
+        h.add_split(split_record_of(h.id(slot), p, grid));
+        ++added;
+      }
+      if (level == request.depth) continue;
+      const RefineInfo* infos[2] = {&p.info_t, &p.info_u};
+      for (uint32_t k = 0; k < 2; ++k)
+        if (child_has_split(*infos[k], r)) queue.push_back({h.first_child(slot) + k, level + 1});
+    }
+  }
+  // The writer pads the stream to a byte with zeros.
+  if (r.bits_left() >= 8 || (r.bits_left() && r.bits(unsigned(r.bits_left()), "padding") != 0))
+    fail("split records", "bits after the last record");
+  return added;
+}
+
+}  // namespace pms::protocol
