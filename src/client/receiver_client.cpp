@@ -138,54 +138,54 @@ std::vector<VertexId> ReceiverClient::ranked_missing(const Camera& camera) {
 }
 
 // ids_per_request ids to a URL, in rank order: each URL is the code of its id set.
-std::vector<std::string> ReceiverClient::list_targets(const std::vector<VertexId>& ids) const {
-  std::vector<std::string> targets;
-  std::vector<protocol::SplitRequest> requests;
+ReceiverClient::Requests ReceiverClient::list_requests(const std::vector<VertexId>& ids) const {
+  Requests out;
   for (size_t begin = 0; begin < ids.size(); begin += options_.ids_per_request) {
     const size_t end = std::min(ids.size(), begin + options_.ids_per_request);
-    requests.push_back({0, std::vector<VertexId>(ids.begin() + begin, ids.begin() + end)});
+    out.requests.push_back({0, std::vector<VertexId>(ids.begin() + begin, ids.begin() + end)});
     // The answer comes in code order, which format 2's bands are read in.
-    std::sort(requests.back().ids.begin(), requests.back().ids.end(), protocol::code_order);
-    const std::vector<uint8_t> code = protocol::encode_split_request(requests.back());
-    targets.push_back("/models/" + model_ + "/splits/" + protocol::base64url_encode(code));
+    std::sort(out.requests.back().ids.begin(), out.requests.back().ids.end(), protocol::code_order);
+    const std::vector<uint8_t> code = protocol::encode_split_request(out.requests.back());
+    out.targets.push_back("/models/" + model_ + "/splits/" + protocol::base64url_encode(code));
   }
-  return targets;
+  return out;
 }
 
 // The block of each id (its ancestor at the top of its band of block_depth + 1 levels), in the rank order
 // of the first id that needs it. An id the client lacks is a leaf of what it holds, so it holds the whole
 // path down to it: every block root is a vertex it has, and no block can have been fetched before (it
-// would have brought the id), so no record arrives twice.
-std::vector<std::string> ReceiverClient::block_targets(const std::vector<VertexId>& ids) const {
+// would have brought the id), so no record arrives twice. A block's answer is that of the request
+// "its root, block_depth levels down", which is how format 2's bands are read.
+ReceiverClient::Requests ReceiverClient::block_requests(const std::vector<VertexId>& ids) const {
   const int band = int(options_.block_depth) + 1;
   std::set<std::pair<uint32_t, uint64_t>> asked;
-  std::vector<std::string> targets;
+  Requests out;
   for (const VertexId id : ids) {
     const VertexId root = ancestor_at_depth(id, id.depth() / band * band);
-    if (asked.emplace(root.tree, root.node).second)
-      targets.push_back(block_target(model_, root, options_.block_depth));
+    if (!asked.emplace(root.tree, root.node).second) continue;
+    out.targets.push_back(block_target(model_, root, options_.block_depth));
+    out.requests.push_back({options_.block_depth, {root}});
   }
-  return targets;
+  return out;
 }
 
 // GETs the splits of `ids` in their order (as the policy shapes the URLs) and attaches every answer as it
 // arrives. Returns the splits attached.
 size_t ReceiverClient::fetch(const std::vector<VertexId>& ids) {
-  const std::vector<std::string> targets =
-      options_.fetch == FetchPolicy::blocks ? block_targets(ids) : list_targets(ids);
+  const Requests asked = options_.fetch == FetchPolicy::blocks ? block_requests(ids) : list_requests(ids);
   size_t attached = 0;
-  http_.get_all(targets, [&](size_t index, HttpAnswer&& answer) {
-    if (answer.status != 200) refused(targets[index], answer);
+  http_.get_all(asked.targets, [&](size_t index, HttpAnswer&& answer) {
+    if (answer.status != 200) refused(asked.targets[index], answer);
+    cache_hits_ += answer.cache_status == "HIT";
     if (records_format_ == 2) {
-      attached += session_.on_split_bands(answer.body, requests[index], codec_);
+      attached += session_.on_split_bands(answer.body, asked.requests[index], codec_);
       return;
     }
     const protocol::VSplits batch = protocol::decode_vsplits(answer.body, session_.context());
     session_.on_vsplits(batch);
     attached += batch.splits.size();
-    cache_hits_ += answer.cache_status == "HIT";
   });
-  split_requests_ += targets.size();
+  split_requests_ += asked.targets.size();
   return attached;
 }
 

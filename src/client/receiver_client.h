@@ -15,6 +15,7 @@
 #include "client/screen_importance.h"
 #include "pm/split_codec.h"
 #include "pm/vertex_id.h"
+#include "protocol/split_request.h"
 #include "refine/camera.h"
 
 namespace pms::client {
@@ -66,8 +67,12 @@ class ReceiverClient {
  private:
   nlohmann::json catalogue();
   std::vector<VertexId> ranked_missing(const Camera& camera);
-  std::vector<std::string> list_targets(const std::vector<VertexId>& ids) const;
-  std::vector<std::string> block_targets(const std::vector<VertexId>& ids) const;
+  struct Requests {
+    std::vector<std::string> targets;               // the URLs, in the order they are sent
+    std::vector<protocol::SplitRequest> requests;   // what each names: format 2's answers are read by it
+  };
+  Requests list_requests(const std::vector<VertexId>& ids) const;
+  Requests block_requests(const std::vector<VertexId>& ids) const;
   size_t fetch(const std::vector<VertexId>& ids);
 
   ReceiverOptions options_;
