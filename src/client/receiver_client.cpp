@@ -152,9 +152,9 @@ ReceiverClient::Requests ReceiverClient::list_requests(const std::vector<VertexI
 }
 
 // The block of each id (its ancestor at the top of its band of block_depth + 1 levels), in the rank order
-// of the first id that needs it. An id the client lacks is a leaf of what it holds, so it holds the whole
-// path down to it: every block root is a vertex it has, and no block can have been fetched before (it
-// would have brought the id), so no record arrives twice. A block's answer is that of the request
+// of the first id that needs it. An id the client lacks is a leaf of what it holds; the splits of its band
+// above it would have come with its own block, so the id is that block's root, a vertex the client has,
+// and no block is fetched twice (it would have brought the id): no record arrives twice. A block's answer is that of the request
 // "its root, block_depth levels down", which is how format 2's bands are read.
 ReceiverClient::Requests ReceiverClient::block_requests(const std::vector<VertexId>& ids) const {
   const int band = int(options_.block_depth) + 1;
