@@ -16,7 +16,8 @@ packages=(build-essential cmake ninja-build pkg-config git xz-utils
           libfast-float-dev libzstd-dev libboost-dev libstb-dev libpng-dev
           libmeshoptimizer-dev libdraco-dev
           libgtest-dev libgmock-dev libbenchmark-dev clang libclang-rt-14-dev
-          libopenmesh-apps gnuplot-nox graphviz)
+          libopenmesh-apps gnuplot-nox graphviz
+          nginx-light)  # the caching proxy of deploy/nginx, which the NginxCache tests run on loopback
 
 install_packages() {
   local missing=()

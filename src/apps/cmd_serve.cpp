@@ -88,7 +88,8 @@ void add_http_stats(nlohmann::json& line, const server::HttpStats& s) {
                   {"client_errors", s.client_errors.load()},
                   {"bytes_in", s.bytes_in.load()},
                   {"bytes_out", s.bytes_out.load()},
-                  {"splits_served", s.splits_served.load()}};
+                  {"splits_served", s.splits_served.load()},
+                  {"split_requests", s.split_requests.load()}};
 }
 
 void print_line(const std::string& line) {
@@ -120,12 +121,12 @@ void print_stats(const char* event, const ServeArgs& args, const server::TcpServ
     if (http) {
       const server::HttpStats& s = http->stats();
       std::printf("http: %llu connections (%llu refused, %llu timed out), %llu requests (%llu not modified, "
-                  "%llu client errors), %llu bytes in, %llu bytes out, %llu splits served\n",
+                  "%llu client errors), %llu bytes in, %llu bytes out, %llu splits served in %llu split requests\n",
                   (unsigned long long)s.connections_opened.load(), (unsigned long long)s.connections_refused.load(),
                   (unsigned long long)s.connections_timed_out.load(), (unsigned long long)s.requests.load(),
                   (unsigned long long)s.not_modified.load(), (unsigned long long)s.client_errors.load(),
                   (unsigned long long)s.bytes_in.load(), (unsigned long long)s.bytes_out.load(),
-                  (unsigned long long)s.splits_served.load());
+                  (unsigned long long)s.splits_served.load(), (unsigned long long)s.split_requests.load());
       std::fflush(stdout);
     }
   }

@@ -1,5 +1,6 @@
 // pmstream stream --server HOST:PORT --model NAME --path PATH.json --mode MODE --tolerance PX
-//                 (--mode receiver: --server http://HOST:PORT[/prefix] [--in-flight N] [--ids-per-request N])
+//                 (--mode receiver: --server http://HOST:PORT[/prefix] [--in-flight N] [--fetch lists|blocks]
+//                  [--ids-per-request N] [--block-depth K])
 //                 [--laps K] [--reconnect N] [--timeout-ms N] [--connect-timeout-ms N] [--save-mesh OUT.ply]
 //                 [--snapshots DIR] [--json]
 // The headless viewer: follows a camera path, streaming what each frame needs, and reports per frame.
@@ -31,7 +32,8 @@ struct StreamArgs {
   float tolerance = 1;
   uint32_t laps = 1, morph_frames = 0, max_ops = 0, reconnect = 0;
   uint32_t timeout_ms = 30000, connect_timeout_ms = 5000;
-  uint32_t in_flight = 4, ids_per_request = 64;  // receiver mode
+  uint32_t in_flight = 4, ids_per_request = 64, block_depth = client::ReceiverOptions{}.block_depth;  // receiver
+  std::string fetch = client::fetch_policy_name(client::ReceiverOptions{}.fetch);
   bool json = false;
 };
 
@@ -123,7 +125,9 @@ void run_receiver(const StreamArgs& args) {
   options.tolerance = args.tolerance;
   options.morph_frames = args.morph_frames;
   options.max_ops = args.max_ops;
+  options.fetch = client::fetch_policy_named(args.fetch);
   options.ids_per_request = args.ids_per_request;
+  options.block_depth = args.block_depth;
   options.http.in_flight = args.in_flight;
   options.http.io_timeout = std::chrono::milliseconds(args.timeout_ms);
   options.http.connect_timeout = std::chrono::milliseconds(args.connect_timeout_ms);
@@ -134,6 +138,7 @@ void run_receiver(const StreamArgs& args) {
     nlohmann::json f = frame_json(r.report, frame, lap);
     f["down_payload_bytes"] = r.payload_down;
     f["split_requests"] = r.split_requests;
+    f["cache_hits"] = r.cache_hits;
     f["rounds"] = r.rounds;
     return std::pair{std::move(f), r.report};
   });
@@ -144,6 +149,8 @@ void run_receiver(const StreamArgs& args) {
                         {"total_down_payload_bytes", c.payload_down},
                         {"http_requests", c.requests},
                         {"split_requests", client.split_requests()},
+                        {"cache_hits", client.cache_hits()},
+                        {"fetch", args.fetch},
                         {"http_connections", c.connections},
                         {"vsplits_received", client.session().splits_received()},
                         {"seconds", clock.seconds()}};
@@ -222,8 +229,16 @@ void add_stream_command(CLI::App& app) {
   cmd->add_option("--in-flight", args->in_flight, "receiver: HTTP requests sent ahead of the answer being read")
       ->check(CLI::Range(1u, 64u))
       ->capture_default_str();
-  cmd->add_option("--ids-per-request", args->ids_per_request, "receiver: split ids in one GET")
+  cmd->add_option("--fetch", args->fetch,
+                  "receiver: lists (GET the ids it lacks) or blocks (GET the fixed subtree bands holding them, "
+                  "shared by clients behind a cache); docs/protocol.md")
+      ->check(CLI::IsMember({"lists", "blocks"}))
+      ->capture_default_str();
+  cmd->add_option("--ids-per-request", args->ids_per_request, "receiver, lists: split ids in one GET")
       ->check(CLI::Range(1u, 1024u))
+      ->capture_default_str();
+  cmd->add_option("--block-depth", args->block_depth, "receiver, blocks: levels below a block's root")
+      ->check(CLI::Range(0u, 8u))
       ->capture_default_str();
   cmd->add_option("--geomorph-frames", args->morph_frames, "Blend splits and collapses over N frames (0 = off)")
       ->capture_default_str();

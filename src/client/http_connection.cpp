@@ -131,6 +131,8 @@ struct HttpConnection::Impl {
     HttpAnswer answer;
     answer.status = int(parser.get().result_int());
     answer.body = std::move(parser.get().body());
+    if (const auto status = parser.get().find("X-Cache-Status"); status != parser.get().end())
+      answer.cache_status = std::string(status->value().substr(0, 32));
     counters.payload_down += answer.body.size();
     keep_alive = parser.get().keep_alive();
     return answer;

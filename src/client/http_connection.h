@@ -30,6 +30,7 @@ struct HttpCounters {
 struct HttpAnswer {
   int status = 0;
   std::vector<uint8_t> body;
+  std::string cache_status;  // X-Cache-Status of a caching proxy in between (nginx: HIT, MISS, ...); else empty
 };
 
 // "http://HOST[:PORT][/prefix]": where a receiver-driven client finds the server's routes.

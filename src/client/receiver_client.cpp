@@ -4,6 +4,8 @@
 #include "client/receiver_client.h"
 
 #include <algorithm>
+#include <set>
+#include <utility>
 #include <nlohmann/json.hpp>
 
 #include "common/bit_stream.h"
@@ -34,11 +36,33 @@ void adapt_for_view(SelectiveRefinement& refinement) {
     stats = refinement.adapt();
 }
 
+// Appended piece by piece: GCC 12 warns wrongly (-Wrestrict) on a chain of `+` with to_string().
+std::string block_target(const std::string& model, VertexId root, uint32_t depth) {
+  std::string target = "/models/";
+  target += model;
+  target += "/blocks/";
+  target += std::to_string(root.tree);
+  target += '/';
+  target += std::to_string(root.node);
+  target += '/';
+  target += std::to_string(depth);
+  return target;
+}
+
 }  // namespace
+
+const char* fetch_policy_name(FetchPolicy policy) { return policy == FetchPolicy::blocks ? "blocks" : "lists"; }
+
+FetchPolicy fetch_policy_named(const std::string& name, const std::string& where) {
+  if (name == "lists") return FetchPolicy::lists;
+  if (name == "blocks") return FetchPolicy::blocks;
+  fail(where, "'" + name + "' is not a fetch policy (lists or blocks)");
+}
 
 ReceiverClient::ReceiverClient(const HttpUrl& server, const ReceiverOptions& options)
     : options_(options), http_(server, options.http), importance_(RenderOptions{1}) {
   if (options.ids_per_request == 0) fail("receiver", "ids_per_request must be at least 1");
+  if (options.block_depth > 8) fail("receiver", "block_depth must be at most 8 (the server's request depth limit)");
   session_.adapt_options.tolerance = options.tolerance;
   session_.adapt_options.morph_frames = options.morph_frames;
   session_.adapt_options.max_ops = options.max_ops;
@@ -113,31 +137,55 @@ std::vector<VertexId> ReceiverClient::ranked_missing(const Camera& camera) {
   return ids;
 }
 
-// GETs the splits of `ids` in their order, ids_per_request to a request (each request is one cacheable
-// URL: the code of its id set), and attaches every answer as it arrives. Returns the splits attached.
-size_t ReceiverClient::fetch(const std::vector<VertexId>& ids) {
-  std::vector<std::string> targets;
-  std::vector<protocol::SplitRequest> requests;
+// ids_per_request ids to a URL, in rank order: each URL is the code of its id set.
+ReceiverClient::Requests ReceiverClient::list_requests(const std::vector<VertexId>& ids) const {
+  Requests out;
   for (size_t begin = 0; begin < ids.size(); begin += options_.ids_per_request) {
     const size_t end = std::min(ids.size(), begin + options_.ids_per_request);
-    requests.push_back({0, std::vector<VertexId>(ids.begin() + begin, ids.begin() + end)});
+    out.requests.push_back({0, std::vector<VertexId>(ids.begin() + begin, ids.begin() + end)});
     // The answer comes in code order, which format 2's bands are read in.
-    std::sort(requests.back().ids.begin(), requests.back().ids.end(), protocol::code_order);
-    const std::vector<uint8_t> code = protocol::encode_split_request(requests.back());
-    targets.push_back("/models/" + model_ + "/splits/" + protocol::base64url_encode(code));
+    std::sort(out.requests.back().ids.begin(), out.requests.back().ids.end(), protocol::code_order);
+    const std::vector<uint8_t> code = protocol::encode_split_request(out.requests.back());
+    out.targets.push_back("/models/" + model_ + "/splits/" + protocol::base64url_encode(code));
   }
+  return out;
+}
+
+// The block of each id (its ancestor at the top of its band of block_depth + 1 levels), in the rank order
+// of the first id that needs it. An id the client lacks is a leaf of what it holds; the splits of its band
+// above it would have come with its own block, so the id is that block's root, a vertex the client has,
+// and no block is fetched twice (it would have brought the id): no record arrives twice. A block's answer is that of the request
+// "its root, block_depth levels down", which is how format 2's bands are read.
+ReceiverClient::Requests ReceiverClient::block_requests(const std::vector<VertexId>& ids) const {
+  const int band = int(options_.block_depth) + 1;
+  std::set<std::pair<uint32_t, uint64_t>> asked;
+  Requests out;
+  for (const VertexId id : ids) {
+    const VertexId root = ancestor_at_depth(id, id.depth() / band * band);
+    if (!asked.emplace(root.tree, root.node).second) continue;
+    out.targets.push_back(block_target(model_, root, options_.block_depth));
+    out.requests.push_back({options_.block_depth, {root}});
+  }
+  return out;
+}
+
+// GETs the splits of `ids` in their order (as the policy shapes the URLs) and attaches every answer as it
+// arrives. Returns the splits attached.
+size_t ReceiverClient::fetch(const std::vector<VertexId>& ids) {
+  const Requests asked = options_.fetch == FetchPolicy::blocks ? block_requests(ids) : list_requests(ids);
   size_t attached = 0;
-  http_.get_all(targets, [&](size_t index, HttpAnswer&& answer) {
-    if (answer.status != 200) refused(targets[index], answer);
+  http_.get_all(asked.targets, [&](size_t index, HttpAnswer&& answer) {
+    if (answer.status != 200) refused(asked.targets[index], answer);
+    cache_hits_ += answer.cache_status == "HIT";
     if (records_format_ == 2) {
-      attached += session_.on_split_bands(answer.body, requests[index], codec_);
+      attached += session_.on_split_bands(answer.body, asked.requests[index], codec_);
       return;
     }
     const protocol::VSplits batch = protocol::decode_vsplits(answer.body, session_.context());
     session_.on_vsplits(batch);
     attached += batch.splits.size();
   });
-  split_requests_ += targets.size();
+  split_requests_ += asked.targets.size();
   return attached;
 }
 
@@ -146,7 +194,7 @@ ReceiverFrame ReceiverClient::frame(const Camera& camera) {
   ReceiverFrame out;
   out.report.frame = ++frame_;
   const HttpCounters before = http_.counters();
-  const uint64_t requests_before = split_requests_;
+  const uint64_t requests_before = split_requests_, hits_before = cache_hits_;
   const auto start = std::chrono::steady_clock::now();
   SelectiveRefinement& refinement = session_.refinement();
   refinement.set_view(session_.view_params(camera));
@@ -167,6 +215,7 @@ ReceiverFrame ReceiverClient::frame(const Camera& camera) {
   out.report.down_bytes = after.bytes_down - before.bytes_down;
   out.payload_down = after.payload_down - before.payload_down;
   out.split_requests = uint32_t(split_requests_ - requests_before);
+  out.cache_hits = uint32_t(cache_hits_ - hits_before);
   out.report.faces = session_.mesh().face_count();
   return out;
 }

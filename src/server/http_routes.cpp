@@ -125,6 +125,7 @@ HttpAnswer splits_answer(const ServedModel& model, const HttpLimits& limits, con
                          const protocol::SplitRequest& split_request, const std::string& resource) {
   const std::vector<uint32_t> nodes = requested_nodes(model.model(), split_request, limits.max_response_splits);
   HttpAnswer answer = fresh(request, etag_of(model, resource), "application/octet-stream");
+  answer.split_resource = true;
   if (answer.status == 200) {
     answer.owned = split_records_body(model, split_request, nodes);
     answer.splits = nodes.size();

@@ -28,6 +28,7 @@ struct HttpAnswer {
   bool cacheable = false;  // immutable for a year; errors are not stored
   std::string allow;       // the methods a 405's resource takes
   uint64_t splits = 0;     // split records in the body
+  bool split_resource = false;  // an answer of /splits or /blocks (200 or 304): what a cache saves the origin
   // The body: bytes shared with the catalogue (BASE), from an offset, or its own.
   std::shared_ptr<const std::vector<uint8_t>> shared;
   size_t shared_offset = 0;
@@ -45,6 +46,7 @@ HttpAnswer route(const Catalogue& catalogue, const HttpLimits& limits, const Htt
 HttpAnswer error_answer(int status, const std::string& text);
 
 // Blocks a client should ask for (GET /models lists it): subtrees of this many levels below the node.
-constexpr uint32_t kSuggestedBlockDepth = 3;
+// Clients behind one cache share blocks only when they use the same depth; docs/protocol.md says why 2.
+constexpr uint32_t kSuggestedBlockDepth = 2;
 
 }  // namespace pms::server

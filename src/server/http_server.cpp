@@ -90,6 +90,7 @@ class HttpConnection : public std::enable_shared_from_this<HttpConnection> {
     if (answer.status == 304) stats_.not_modified++;
     if (answer.status >= 400 && answer.status < 500) stats_.client_errors++;
     stats_.splits_served += answer.splits;
+    stats_.split_requests += answer.split_resource;
     answer_ = std::move(answer);
     response_.emplace(make_response(answer_, head, keep_alive, version));
     serializer_.emplace(*response_);

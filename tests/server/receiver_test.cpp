@@ -77,6 +77,29 @@ TEST(Receiver, MeshEqualsLocalRefinementAndASecondLapAsksForNothing) {
   EXPECT_EQ(server.http.stats().requests.load(), requests_after_lap1) << "a second lap sends no request";
 }
 
+// Fetching by blocks brings whole subtree bands, more than the view needs, yet the mesh is still local
+// refinement's: what the client holds beyond the view's needs changes nothing adapt() decides.
+TEST(Receiver, BlocksGiveTheMeshOfLocalRefinement) {
+  const Fixture& f = terrain();
+  for (const uint32_t block_depth : {0u, 2u, 3u}) {
+    Server server(f.catalogue);
+    client::ReceiverOptions options;
+    options.fetch = client::FetchPolicy::blocks;
+    options.block_depth = block_depth;
+    client::ReceiverClient client(server.url(), options);
+    client.open("terrain");
+    for (const Camera& camera : orbit_path(f.hierarchy, 8, 0.3f)) {
+      client.frame(camera);
+      EXPECT_EQ(faces_by_id(client.session().mesh()), local_faces(f.snapped, camera, 1.0f))
+          << "block depth " << block_depth << " differs from local refinement";
+    }
+    EXPECT_GT(client.split_requests(), 0u);
+    EXPECT_EQ(server.http.stats().split_requests.load(), client.split_requests());
+    EXPECT_EQ(server.http.stats().splits_served.load(), client.session().splits_received())
+        << "no block asked for twice, every record attached";
+  }
+}
+
 // The leaves held, in code order (the slots are in arrival order, which differs between modes).
 std::vector<VertexId> sorted_leaves(const client::ClientSession& session) {
   std::vector<VertexId> leaves = session.known_leaves();
