@@ -16,6 +16,7 @@
 
 #include <algorithm>
 #include <bit>
+#include <cmath>
 #include <string>
 
 #include "common/error.h"
@@ -38,7 +39,11 @@ constexpr uint32_t kEscapeSymbol = 0;
 constexpr uint32_t kAbsentSymbol = kReferences + 1;
 constexpr uint32_t kRefSymbols = kReferences + 2;
 constexpr uint32_t kRadiusClasses = 64;   // v_s's radius by half octaves (half-float exponent and top mantissa bit)
-constexpr uint32_t kPositionContexts = kRadiusClasses + 2 * 26;  // x: radius class; y, z: classes of x, max(x, y)
+constexpr uint32_t kGridBits = 24;          // finer than this, positions are float bits (position_grid.h)
+constexpr uint32_t kSizeClasses = 26;      // magnitude classes of a coordinate difference, clamped
+// First axis: radius class; second: class of the first; third: the larger class of the other two, or,
+// predicted in v_s's tangent plane, the class of the offset the plane allows (plane_context).
+constexpr uint32_t kPositionContexts = kRadiusClasses + 3 * kSizeClasses;
 constexpr uint32_t kFlagContexts = 10;    // v_s never refines, or the class of its radius over its mu
 constexpr uint32_t kChainContexts = 12;   // the previous field's symbol, clamped
 constexpr uint32_t kAxisContexts = 13;    // no parent cone, or the class of the angle the child leaves inside it
@@ -56,7 +61,7 @@ constexpr uint32_t kSlotDelta = kSlotMu + 2 * kChainContexts;       // [child][m
 constexpr uint32_t kSlotAngle = kSlotDelta + 2 * kChainContexts;    // [child][parent has a cone]
 constexpr uint32_t kSlotAxis = kSlotAngle + 4;                      // [child][axis context]
 constexpr uint32_t kSlotCount = kSlotAxis + 2 * kAxisContexts;
-static_assert(kSlotCount == 244, "docs/protocol.md, \"Split records\", gives the count");
+static_assert(kSlotCount == 270, "docs/protocol.md, \"Split records\", gives the count");
 
 uint32_t alphabet(uint32_t slot) {
   if (slot < kSlotCutUp) return kRefSymbols;
@@ -168,6 +173,58 @@ void references(const SplitContext& c, int side, VertexId cut_l, Reference out[k
 
 uint32_t position_class(const SplitContext& c) { return (c.info_s.radius >> 9) & (kRadiusClasses - 1); }
 
+// v_t - v_s is an edge of the surface under v_s, so it lies near the plane normal to v_s's cone axis:
+// the axis where that normal is largest is predicted from the other two, the others coded first. The
+// normal is the octahedral axis decoded in integers (L1 norm kAxisSteps), scaled by each axis's grid step.
+struct PositionFrame {
+  uint32_t order[3] = {0, 1, 2};
+  bool plane = false;
+  int64_t normal[3] = {0, 0, 0};
+  int64_t angle = 0;
+};
+PositionFrame position_frame(const RefineInfo& s, const std::array<uint16_t, 3>& steps, uint32_t position_bits) {
+  PositionFrame f;
+  if (s.cone_angle == kNoCone || position_bits > kGridBits) return f;
+  int64_t x = int16_t(s.cone_x), y = int16_t(s.cone_y);
+  const int64_t z = kAxisSteps - std::abs(x) - std::abs(y);
+  if (z < 0) {  // the lower hemisphere, folded over the diagonals
+    const int64_t fx = (x >= 0 ? 1 : -1) * (kAxisSteps - std::abs(y)), fy = (y >= 0 ? 1 : -1) * (kAxisSteps - std::abs(x));
+    x = fx, y = fy;
+  }
+  const int64_t n[3] = {x * steps[0], y * steps[1], z * steps[2]};
+  uint32_t major = 0;
+  for (uint32_t a = 1; a < 3; ++a)
+    if (std::abs(n[a]) > std::abs(n[major])) major = a;
+  if (n[major] == 0) return f;
+  f.plane = true;
+  f.order[0] = major == 0 ? 1 : 0;
+  f.order[1] = major == 2 ? 1 : 2;
+  f.order[2] = major;
+  std::copy_n(n, 3, f.normal);
+  f.angle = s.cone_angle;
+  return f;
+}
+// The major axis's difference on the plane through v_s, rounded to the grid.
+int64_t plane_prediction(const PositionFrame& f, const int64_t d[3]) {
+  const int64_t num = -(f.normal[f.order[0]] * d[f.order[0]] + f.normal[f.order[1]] * d[f.order[1]]);
+  const int64_t den = f.normal[f.order[2]];
+  const int64_t q = (2 * std::abs(num) + std::abs(den)) / (2 * std::abs(den));  // |num / den| rounded
+  return (num < 0) != (den < 0) ? -q : q;
+}
+// How far off the plane v_t may lie grows with the in-plane offset and the cone's width.
+uint32_t plane_context(const PositionFrame& f, const int64_t d[3]) {
+  const uint64_t offset = uint64_t(std::max(std::abs(d[f.order[0]]), std::abs(d[f.order[1]])));
+  return std::min<uint32_t>(uint32_t(std::bit_width((offset * uint64_t(f.angle + 1)) >> 8)), kSizeClasses - 1);
+}
+// The slot of the position code for the axis at `index` in the frame's order, given the symbols before it.
+uint32_t position_slot(const SplitContext& c, const PositionFrame& f, uint32_t index, const uint32_t classes[3],
+                       const int64_t d[3]) {
+  if (index == 0) return kSlotPosition + position_class(c);
+  if (index == 1) return kSlotPosition + kRadiusClasses + std::min(classes[0], kSizeClasses - 1);
+  if (f.plane) return kSlotPosition + kRadiusClasses + 2 * kSizeClasses + plane_context(f, d);
+  return kSlotPosition + kRadiusClasses + kSizeClasses + std::min(std::max(classes[0], classes[1]), kSizeClasses - 1);
+}
+
 // Whether v_s's children never refine, and how far below v_s their bounds are, depend on how far v_s is
 // from the deepest level.
 uint32_t height_context(const SplitContext& c, uint32_t max_depth) {
@@ -237,13 +294,17 @@ template <class Out> void SplitCodec::emit(const SplitContext& c, const SplitPay
     out.raw(cut.node, best_parting.rest, topology);
   }
   // Position of v_t against v_s's.
-  uint32_t pslot = kSlotPosition + position_class(c), largest = 0;
-  for (uint32_t axis = 0; axis < 3; ++axis) {
+  const PositionFrame frame = position_frame(c.info_s, steps_, position_bits_);
+  int64_t d[3] = {0, 0, 0};
+  uint32_t classes[3] = {0, 0, 0};
+  for (uint32_t index = 0; index < 3; ++index) {
+    const uint32_t axis = frame.order[index];
     if (position_bits_ < 32 && p.position_t[axis] >> position_bits_)
       fail("split record", "split of " + to_string(c.vs) + ": position outside the grid");
-    const uint32_t sym = put_int(out, pslot, int64_t(p.position_t[axis]) - int64_t(c.position_s[axis]), geometry);
-    largest = std::max(largest, (sym + 1) / 2);
-    pslot = kSlotPosition + kRadiusClasses + (axis == 0 ? 0 : 26) + std::min(largest, 25u);
+    d[axis] = int64_t(p.position_t[axis]) - int64_t(c.position_s[axis]);
+    const int64_t predicted = index == 2 && frame.plane ? plane_prediction(frame, d) : 0;
+    const uint32_t sym = put_int(out, position_slot(c, frame, index, classes, d), d[axis] - predicted, geometry);
+    classes[index] = (sym + 1) / 2;
   }
   // Refinement info of v_t and v_u against v_s's.
   const RefineInfo* child[2] = {&p.info_t, &p.info_u};
@@ -321,13 +382,17 @@ SplitPayload SplitCodec::decode(const SplitContext& c, BitReader& r) const {
     (side == 0 ? p.cut_l : p.cut_r) = cut;
   }
   if (!is_vertex(p.cut_l) && !is_vertex(p.cut_r)) r.fail_field("v̂_r", "neither v̂_l nor v̂_r is present");
-  uint32_t pslot = kSlotPosition + position_class(c), largest = 0;
-  for (uint32_t axis = 0; axis < 3; ++axis) {
-    const uint32_t sym = codes_[pslot].read(r, "position");
-    const int64_t v = int64_t(c.position_s[axis]) + get_int(sym, r, "position");
-    largest = std::max(largest, (sym + 1) / 2);
-    pslot = kSlotPosition + kRadiusClasses + (axis == 0 ? 0 : 26) + std::min(largest, 25u);
-    const int64_t top = position_bits_ >= 32 ? int64_t(UINT32_MAX) : (int64_t(1) << position_bits_) - 1;
+  const PositionFrame frame = position_frame(c.info_s, steps_, position_bits_);
+  int64_t d[3] = {0, 0, 0};
+  uint32_t classes[3] = {0, 0, 0};
+  const int64_t top = position_bits_ >= 32 ? int64_t(UINT32_MAX) : (int64_t(1) << position_bits_) - 1;
+  for (uint32_t index = 0; index < 3; ++index) {
+    const uint32_t axis = frame.order[index];
+    const uint32_t sym = codes_[position_slot(c, frame, index, classes, d)].read(r, "position");
+    const int64_t predicted = index == 2 && frame.plane ? plane_prediction(frame, d) : 0;
+    d[axis] = predicted + get_int(sym, r, "position");
+    classes[index] = (sym + 1) / 2;
+    const int64_t v = int64_t(c.position_s[axis]) + d[axis];
     if (v < 0 || v > top) r.fail_field("position", "outside the grid");
     p.position_t[axis] = uint32_t(v);
   }
@@ -378,6 +443,7 @@ SplitCodec SplitCodec::build(const ModelData& model, std::span<const uint32_t> p
   SplitCodec codec;
   codec.root_count_ = model.root_count;
   codec.position_bits_ = position_bits;
+  codec.steps_ = grid_step_ratios(model);
   for (size_t n = 0; n < model.node_count(); ++n) codec.max_depth_ = std::max<uint32_t>(codec.max_depth_, uint32_t(model.id(uint32_t(n)).depth()));
   // Two fits: the first chooses references by their rest alone, the second by the first fit's costs.
   for (int pass = 0; pass < 2; ++pass) {
@@ -400,6 +466,7 @@ void SplitCodec::serialize(BitWriter& w) const {
   w.bits(root_count_, 32);
   w.bits(max_depth_, 8);
   w.bits(position_bits_, 8);
+  for (uint16_t step : steps_) w.bits(step, 16);
   for (const PrefixCode& code : codes_) code.serialize(w);
 }
 
@@ -408,6 +475,7 @@ SplitCodec SplitCodec::deserialize(BitReader& r) {
   codec.root_count_ = uint32_t(r.bits(32, "root count"));
   codec.max_depth_ = uint32_t(r.bits(8, "max depth"));
   codec.position_bits_ = uint32_t(r.bits(8, "position bits"));
+  for (uint16_t& step : codec.steps_) step = uint16_t(r.bits(16, "grid steps"));
   if (codec.root_count_ == 0) r.fail_field("root count", "0");
   if (codec.max_depth_ > 63) r.fail_field("max depth", "above 63");
   if (codec.position_bits_ < 1 || codec.position_bits_ > 32) r.fail_field("position bits", "outside 1..32");
@@ -442,6 +510,14 @@ SplitPayload split_payload(const ModelData& model, std::span<const uint32_t> pos
   p.info_t = as_sent(model.refine[t]);
   p.info_u = as_sent(model.refine[t + 1]);
   return p;
+}
+
+std::array<uint16_t, 3> grid_step_ratios(const ModelData& model) {
+  double extent[3], largest = 0;
+  for (int i = 0; i < 3; ++i) largest = std::max(largest, extent[i] = double(model.bbox_max[i]) - double(model.bbox_min[i]));
+  std::array<uint16_t, 3> steps{};
+  for (int i = 0; i < 3; ++i) steps[i] = largest > 0 ? uint16_t(std::lround(65535 * extent[i] / largest)) : 0;
+  return steps;
 }
 
 PositionGrid model_grid(const ModelData& model, uint32_t position_bits) {
