@@ -43,16 +43,17 @@ constexpr uint32_t kGridBits = 24;          // finer than this, positions are fl
 constexpr uint32_t kSizeClasses = 26;      // magnitude classes of a coordinate difference, clamped
 // First axis: radius class; second: class of the first; third: the larger class of the other two, or,
 // predicted in v_s's tangent plane, the class of the offset the plane allows (plane_context).
-constexpr uint32_t kPositionContexts = kRadiusClasses + 3 * kSizeClasses;
+constexpr uint32_t kPositionContexts = 2 * kRadiusClasses + 3 * kSizeClasses;
 constexpr uint32_t kFlagContexts = 10;    // v_s never refines, or the class of its radius over its mu
 constexpr uint32_t kChainContexts = 12;   // the previous field's symbol, clamped
 constexpr uint32_t kAxisContexts = 13;    // no parent cone, or the class of the angle the child leaves inside it
 
 // Code slots, in serialization order; [..] are the contexts.
+constexpr uint32_t kCutHeights = 8;  // v_s's height above the deepest level, clamped
 constexpr uint32_t kSlotCutRef = 0;                                 // [v̂_l; v̂_r after each v̂_l symbol]
-constexpr uint32_t kSlotCutUp = kSlotCutRef + 1 + kRefSymbols;      // [side][reference is v_s: 0, a leaf: 1]
-constexpr uint32_t kSlotCutRest = kSlotCutUp + 4;                   // [side][same]
-constexpr uint32_t kSlotCutDepth = kSlotCutRest + 4;                // escaped ids
+constexpr uint32_t kSlotCutUp = kSlotCutRef + 1 + kRefSymbols;      // [side][reference is v_s: 0, a leaf: 1][height]
+constexpr uint32_t kSlotCutRest = kSlotCutUp + 4 * kCutHeights;     // [side][same][height]
+constexpr uint32_t kSlotCutDepth = kSlotCutRest + 4 * kCutHeights;  // escaped ids
 constexpr uint32_t kSlotPosition = kSlotCutDepth + 1;               // [axis][radius class]
 constexpr uint32_t kSlotInfoFlags = kSlotPosition + kPositionContexts;  // [flag context]
 constexpr uint32_t kSlotRadius = kSlotInfoFlags + kFlagContexts;    // [child][height context]
@@ -61,7 +62,7 @@ constexpr uint32_t kSlotDelta = kSlotMu + 2 * kChainContexts;       // [child][m
 constexpr uint32_t kSlotAngle = kSlotDelta + 2 * kChainContexts;    // [child][parent has a cone]
 constexpr uint32_t kSlotAxis = kSlotAngle + 4;                      // [child][axis context]
 constexpr uint32_t kSlotCount = kSlotAxis + 2 * kAxisContexts;
-static_assert(kSlotCount == 270, "docs/protocol.md, \"Split records\", gives the count");
+static_assert(kSlotCount == 390, "docs/protocol.md, \"Split records\", gives the count");
 
 uint32_t alphabet(uint32_t slot) {
   if (slot < kSlotCutUp) return kRefSymbols;
@@ -171,7 +172,15 @@ void references(const SplitContext& c, int side, VertexId cut_l, Reference out[k
   out[kReferences - 1] = {side == 1 ? cut_l : kNoVertex, true};
 }
 
-uint32_t position_class(const SplitContext& c) { return (c.info_s.radius >> 9) & (kRadiusClasses - 1); }
+// A half float's exponent and top mantissa bit.
+uint32_t half_octave(uint16_t half) { return (half >> 9) & (kRadiusClasses - 1); }
+// v_s's radius bounds |p_t - p_s| + r(v_t) (refinement_info.cpp), so r(v_s) - r(v_t) bounds the offset,
+// and is close to it when v_t's sphere sets v_s's; a child that never refines is sent without a radius.
+uint32_t position_class(const SplitContext& c, const RefineInfo& t) {
+  if (never_refines(t)) return half_octave(c.info_s.radius);
+  const float room = float_from_half(c.info_s.radius) - float_from_half(t.radius);
+  return kRadiusClasses + half_octave(half_from_float_up(room));
+}
 
 // v_t - v_s is an edge of the surface under v_s, so it lies near the plane normal to v_s's cone axis:
 // the axis where that normal is largest is predicted from the other two, the others coded first. The
@@ -217,18 +226,27 @@ uint32_t plane_context(const PositionFrame& f, const int64_t d[3]) {
   return std::min<uint32_t>(uint32_t(std::bit_width((offset * uint64_t(f.angle + 1)) >> 8)), kSizeClasses - 1);
 }
 // The slot of the position code for the axis at `index` in the frame's order, given the symbols before it.
-uint32_t position_slot(const SplitContext& c, const PositionFrame& f, uint32_t index, const uint32_t classes[3],
-                       const int64_t d[3]) {
-  if (index == 0) return kSlotPosition + position_class(c);
-  if (index == 1) return kSlotPosition + kRadiusClasses + std::min(classes[0], kSizeClasses - 1);
-  if (f.plane) return kSlotPosition + kRadiusClasses + 2 * kSizeClasses + plane_context(f, d);
-  return kSlotPosition + kRadiusClasses + kSizeClasses + std::min(std::max(classes[0], classes[1]), kSizeClasses - 1);
+uint32_t position_slot(const SplitContext& c, const RefineInfo& t, const PositionFrame& f, uint32_t index,
+                       const uint32_t classes[3], const int64_t d[3]) {
+  constexpr uint32_t sized = kSlotPosition + 2 * kRadiusClasses;
+  if (index == 0) return kSlotPosition + position_class(c, t);
+  if (index == 1) return sized + std::min(classes[0], kSizeClasses - 1);
+  if (f.plane) return sized + 2 * kSizeClasses + plane_context(f, d);
+  return sized + kSizeClasses + std::min(std::max(classes[0], classes[1]), kSizeClasses - 1);
 }
 
 // Whether v_s's children never refine, and how far below v_s their bounds are, depend on how far v_s is
 // from the deepest level.
 uint32_t height_context(const SplitContext& c, uint32_t max_depth) {
   return std::min<uint32_t>(uint32_t(std::max(0, int(max_depth) - c.vs.depth())), kFlagContexts - 1);
+}
+// How far a cut vertex parts from its reference, and how deep it goes, depends on how far v_s is from the
+// deepest level (the cut vertices are leaves).
+uint32_t cut_height(const SplitContext& c, uint32_t max_depth) {
+  return std::min<uint32_t>(uint32_t(std::max(0, int(max_depth) - c.vs.depth())), kCutHeights - 1);
+}
+uint32_t cut_slot(uint32_t base, const SplitContext& c, uint32_t max_depth, int side, bool leaf_reference) {
+  return base + (2 * uint32_t(side) + (leaf_reference ? 1 : 0)) * kCutHeights + cut_height(c, max_depth);
 }
 uint32_t chain_context(uint32_t previous_symbol) { return std::min(previous_symbol, kChainContexts - 1); }
 // A child's cone lies inside its parent's, so its axis moves at most about the angle left between them.
@@ -267,10 +285,9 @@ template <class Out> void SplitCodec::emit(const SplitContext& c, const SplitPay
       if (!parting(refs[i].id, cut, pt) || (pt.equal && !refs[i].leaf)) continue;
       uint64_t cost = pt.rest;
       if (!codes_.empty()) {
-        const uint32_t kind = refs[i].leaf ? 1 : 0;
         const PrefixCode& ref_code = codes_[ref_slot];
-        const PrefixCode& up_code = codes_[kSlotCutUp + 2 * uint32_t(side) + kind];
-        const PrefixCode& step_code = codes_[kSlotCutRest + 2 * uint32_t(side) + kind];
+        const PrefixCode& up_code = codes_[cut_slot(kSlotCutUp, c, max_depth_, side, refs[i].leaf)];
+        const PrefixCode& step_code = codes_[cut_slot(kSlotCutRest, c, max_depth_, side, refs[i].leaf)];
         const uint32_t up = pt.equal ? kEqualSymbol : pt.up, step = int_symbol(pt.depth_step);
         if (!ref_code.has(1 + i) || !up_code.has(up) || (!pt.equal && !step_code.has(step))) continue;
         cost += ref_code.cost(1 + i) + up_code.cost(up);
@@ -287,24 +304,10 @@ template <class Out> void SplitCodec::emit(const SplitContext& c, const SplitPay
       out.raw(cut.node, unsigned(cut.depth()), topology);
       continue;
     }
-    const uint32_t kind = refs[best].leaf ? 1 : 0;
-    out.symbol(kSlotCutUp + 2 * uint32_t(side) + kind, best_parting.equal ? kEqualSymbol : best_parting.up, topology);
+    out.symbol(cut_slot(kSlotCutUp, c, max_depth_, side, refs[best].leaf), best_parting.equal ? kEqualSymbol : best_parting.up, topology);
     if (best_parting.equal) continue;
-    put_int(out, kSlotCutRest + 2 * uint32_t(side) + kind, best_parting.depth_step, topology);
+    put_int(out, cut_slot(kSlotCutRest, c, max_depth_, side, refs[best].leaf), best_parting.depth_step, topology);
     out.raw(cut.node, best_parting.rest, topology);
-  }
-  // Position of v_t against v_s's.
-  const PositionFrame frame = position_frame(c.info_s, steps_, position_bits_);
-  int64_t d[3] = {0, 0, 0};
-  uint32_t classes[3] = {0, 0, 0};
-  for (uint32_t index = 0; index < 3; ++index) {
-    const uint32_t axis = frame.order[index];
-    if (position_bits_ < 32 && p.position_t[axis] >> position_bits_)
-      fail("split record", "split of " + to_string(c.vs) + ": position outside the grid");
-    d[axis] = int64_t(p.position_t[axis]) - int64_t(c.position_s[axis]);
-    const int64_t predicted = index == 2 && frame.plane ? plane_prediction(frame, d) : 0;
-    const uint32_t sym = put_int(out, position_slot(c, frame, index, classes, d), d[axis] - predicted, geometry);
-    classes[index] = (sym + 1) / 2;
   }
   // Refinement info of v_t and v_u against v_s's.
   const RefineInfo* child[2] = {&p.info_t, &p.info_u};
@@ -331,6 +334,19 @@ template <class Out> void SplitCodec::emit(const SplitContext& c, const SplitPay
     const uint32_t axis_slot = kSlotAxis + k * kAxisContexts + axis_context(s, v);
     put_int(out, axis_slot, int64_t(int16_t(v.cone_x)) - int16_t(s.cone_x), refinement);
     put_int(out, axis_slot, int64_t(int16_t(v.cone_y)) - int16_t(s.cone_y), refinement);
+  }
+  // Position of v_t against v_s's.
+  const PositionFrame frame = position_frame(c.info_s, steps_, position_bits_);
+  int64_t d[3] = {0, 0, 0};
+  uint32_t classes[3] = {0, 0, 0};
+  for (uint32_t index = 0; index < 3; ++index) {
+    const uint32_t axis = frame.order[index];
+    if (position_bits_ < 32 && p.position_t[axis] >> position_bits_)
+      fail("split record", "split of " + to_string(c.vs) + ": position outside the grid");
+    d[axis] = int64_t(p.position_t[axis]) - int64_t(c.position_s[axis]);
+    const int64_t predicted = index == 2 && frame.plane ? plane_prediction(frame, d) : 0;
+    const uint32_t sym = put_int(out, position_slot(c, p.info_t, frame, index, classes, d), d[axis] - predicted, geometry);
+    classes[index] = (sym + 1) / 2;
   }
 }
 
@@ -361,8 +377,7 @@ SplitPayload SplitCodec::decode(const SplitContext& c, BitReader& r) const {
       references(c, side, p.cut_l, refs);
       const Reference& ref = refs[sym - 1];
       if (!is_vertex(ref.id)) r.fail_field(field, "names a reference the client does not hold");
-      const uint32_t kind = ref.leaf ? 1 : 0;
-      const uint32_t up = codes_[kSlotCutUp + 2 * uint32_t(side) + kind].read(r, field);
+      const uint32_t up = codes_[cut_slot(kSlotCutUp, c, max_depth_, side, ref.leaf)].read(r, field);
       if (up == kEqualSymbol) {
         if (!ref.leaf) r.fail_field(field, "equal to v_s");
         cut = ref.id;
@@ -372,7 +387,7 @@ SplitPayload SplitCodec::decode(const SplitContext& c, BitReader& r) const {
         const int common = dr - 1 - int(up);
         const uint64_t prefix = ref.id.node >> (dr - common);
         const uint64_t other = ((ref.id.node >> (dr - common - 1)) & 1) ^ 1;
-        const int64_t rest = get_int(codes_[kSlotCutRest + 2 * uint32_t(side) + kind].read(r, field), r, field) + int64_t(up);
+        const int64_t rest = get_int(codes_[cut_slot(kSlotCutRest, c, max_depth_, side, ref.leaf)].read(r, field), r, field) + int64_t(up);
         if (rest < 0 || common + 1 + rest > int64_t(max_depth_)) r.fail_field(field, "depth outside the model");
         cut = {ref.id.tree, (((prefix << 1) | other) << rest) | r.bits(unsigned(rest), field)};
       }
@@ -382,20 +397,6 @@ SplitPayload SplitCodec::decode(const SplitContext& c, BitReader& r) const {
     (side == 0 ? p.cut_l : p.cut_r) = cut;
   }
   if (!is_vertex(p.cut_l) && !is_vertex(p.cut_r)) r.fail_field("v̂_r", "neither v̂_l nor v̂_r is present");
-  const PositionFrame frame = position_frame(c.info_s, steps_, position_bits_);
-  int64_t d[3] = {0, 0, 0};
-  uint32_t classes[3] = {0, 0, 0};
-  const int64_t top = position_bits_ >= 32 ? int64_t(UINT32_MAX) : (int64_t(1) << position_bits_) - 1;
-  for (uint32_t index = 0; index < 3; ++index) {
-    const uint32_t axis = frame.order[index];
-    const uint32_t sym = codes_[position_slot(c, frame, index, classes, d)].read(r, "position");
-    const int64_t predicted = index == 2 && frame.plane ? plane_prediction(frame, d) : 0;
-    d[axis] = predicted + get_int(sym, r, "position");
-    classes[index] = (sym + 1) / 2;
-    const int64_t v = int64_t(c.position_s[axis]) + d[axis];
-    if (v < 0 || v > top) r.fail_field("position", "outside the grid");
-    p.position_t[axis] = uint32_t(v);
-  }
   const RefineInfo& s = c.info_s;
   const uint32_t flags = codes_[kSlotInfoFlags + height_context(c, max_depth_)].read(r, "info flags");
   RefineInfo* child[2] = {&p.info_t, &p.info_u};
@@ -432,6 +433,20 @@ SplitPayload SplitCodec::decode(const SplitContext& c, BitReader& r) const {
       }
     }
     if (!is_canonical(v) || never_refines(v)) r.fail_field(field, "not a value the quantizer produces");
+  }
+  const PositionFrame frame = position_frame(c.info_s, steps_, position_bits_);
+  int64_t d[3] = {0, 0, 0};
+  uint32_t classes[3] = {0, 0, 0};
+  const int64_t top = position_bits_ >= 32 ? int64_t(UINT32_MAX) : (int64_t(1) << position_bits_) - 1;
+  for (uint32_t index = 0; index < 3; ++index) {
+    const uint32_t axis = frame.order[index];
+    const uint32_t sym = codes_[position_slot(c, p.info_t, frame, index, classes, d)].read(r, "position");
+    const int64_t predicted = index == 2 && frame.plane ? plane_prediction(frame, d) : 0;
+    d[axis] = predicted + get_int(sym, r, "position");
+    classes[index] = (sym + 1) / 2;
+    const int64_t v = int64_t(c.position_s[axis]) + d[axis];
+    if (v < 0 || v > top) r.fail_field("position", "outside the grid");
+    p.position_t[axis] = uint32_t(v);
   }
   return p;
 }
