@@ -62,7 +62,7 @@ constexpr uint32_t kSlotDelta = kSlotMu + 2 * kChainContexts;       // [child][m
 constexpr uint32_t kSlotAngle = kSlotDelta + 2 * kChainContexts;    // [child][parent has a cone]
 constexpr uint32_t kSlotAxis = kSlotAngle + 4;                      // [child][axis context]
 constexpr uint32_t kSlotCount = kSlotAxis + 2 * kAxisContexts;
-static_assert(kSlotCount == 390, "docs/protocol.md, \"Split records\", gives the count");
+static_assert(kSlotCount == 394, "docs/protocol.md, \"Split records\", gives the count");
 
 uint32_t alphabet(uint32_t slot) {
   if (slot < kSlotCutUp) return kRefSymbols;

@@ -20,7 +20,7 @@
 namespace pms {
 
 // How many of v_s's nearest ancestors lend their cut vertices as references for v_s's own.
-constexpr int kCutAncestors = 3;
+constexpr int kCutAncestors = 5;
 
 template <size_t N> constexpr std::array<VertexId, N> no_vertices() {
   std::array<VertexId, N> ids;
