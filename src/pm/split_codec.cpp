@@ -49,7 +49,7 @@ constexpr uint32_t kChainContexts = 12;   // the previous field's symbol, clampe
 constexpr uint32_t kAxisContexts = 13;    // no parent cone, or the class of the angle the child leaves inside it
 
 // Code slots, in serialization order; [..] are the contexts.
-constexpr uint32_t kCutHeights = 8;  // v_s's height above the deepest level, clamped
+constexpr uint32_t kCutHeights = 12;  // v_s's height above the deepest level, clamped
 constexpr uint32_t kSlotCutRef = 0;                                 // [v̂_l; v̂_r after each v̂_l symbol]
 constexpr uint32_t kSlotCutUp = kSlotCutRef + 1 + kRefSymbols;      // [side][reference is v_s: 0, a leaf: 1][height]
 constexpr uint32_t kSlotCutRest = kSlotCutUp + 4 * kCutHeights;     // [side][same][height]
@@ -62,7 +62,7 @@ constexpr uint32_t kSlotDelta = kSlotMu + 2 * kChainContexts;       // [child][m
 constexpr uint32_t kSlotAngle = kSlotDelta + 2 * kChainContexts;    // [child][parent has a cone]
 constexpr uint32_t kSlotAxis = kSlotAngle + 4;                      // [child][axis context]
 constexpr uint32_t kSlotCount = kSlotAxis + 2 * kAxisContexts;
-static_assert(kSlotCount == 394, "docs/protocol.md, \"Split records\", gives the count");
+static_assert(kSlotCount == 426, "docs/protocol.md, \"Split records\", gives the count");
 
 uint32_t alphabet(uint32_t slot) {
   if (slot < kSlotCutUp) return kRefSymbols;
