@@ -43,7 +43,7 @@ constexpr uint32_t kGridBits = 24;          // finer than this, positions are fl
 constexpr uint32_t kSizeClasses = 26;      // magnitude classes of a coordinate difference, clamped
 // First axis: radius class; second: class of the first; third: the larger class of the other two, or,
 // predicted in v_s's tangent plane, the class of the offset the plane allows (plane_context).
-constexpr uint32_t kPositionContexts = 2 * kRadiusClasses + 3 * kSizeClasses;
+constexpr uint32_t kPositionContexts = kRadiusClasses + 3 * kSizeClasses;
 constexpr uint32_t kFlagContexts = 10;    // v_s never refines, or the class of its radius over its mu
 constexpr uint32_t kChainContexts = 12;   // the previous field's symbol, clamped
 constexpr uint32_t kAxisContexts = 13;    // no parent cone, or the class of the angle the child leaves inside it
@@ -56,13 +56,13 @@ constexpr uint32_t kSlotCutRest = kSlotCutUp + 4 * kCutHeights;     // [side][sa
 constexpr uint32_t kSlotCutDepth = kSlotCutRest + 4 * kCutHeights;  // escaped ids
 constexpr uint32_t kSlotPosition = kSlotCutDepth + 1;               // [axis][radius class]
 constexpr uint32_t kSlotInfoFlags = kSlotPosition + kPositionContexts;  // [flag context]
-constexpr uint32_t kSlotRadius = kSlotInfoFlags + kFlagContexts;    // [child][height context]
-constexpr uint32_t kSlotMu = kSlotRadius + 2 * kFlagContexts;                       // [child][radius symbol]
+constexpr uint32_t kSlotRadius = kSlotInfoFlags + kFlagContexts;    // [t, or u without t: height; u: t's radius symbol]
+constexpr uint32_t kSlotMu = kSlotRadius + 2 * kFlagContexts + kChainContexts;                      // [child][radius symbol]
 constexpr uint32_t kSlotDelta = kSlotMu + 2 * kChainContexts;       // [child][mu symbol]
 constexpr uint32_t kSlotAngle = kSlotDelta + 2 * kChainContexts;    // [child][parent has a cone]
 constexpr uint32_t kSlotAxis = kSlotAngle + 4;                      // [child][axis context]
 constexpr uint32_t kSlotCount = kSlotAxis + 2 * kAxisContexts;
-static_assert(kSlotCount == 426, "docs/protocol.md, \"Split records\", gives the count");
+static_assert(kSlotCount == 374, "docs/protocol.md, \"Split records\", gives the count");
 
 uint32_t alphabet(uint32_t slot) {
   if (slot < kSlotCutUp) return kRefSymbols;
@@ -174,12 +174,21 @@ void references(const SplitContext& c, int side, VertexId cut_l, Reference out[k
 
 // A half float's exponent and top mantissa bit.
 uint32_t half_octave(uint16_t half) { return (half >> 9) & (kRadiusClasses - 1); }
-// v_s's radius bounds |p_t - p_s| + r(v_t) (refinement_info.cpp), so r(v_s) - r(v_t) bounds the offset,
-// and is close to it when v_t's sphere sets v_s's; a child that never refines is sent without a radius.
-uint32_t position_class(const SplitContext& c, const RefineInfo& t) {
-  if (never_refines(t)) return half_octave(c.info_s.radius);
-  const float room = float_from_half(c.info_s.radius) - float_from_half(t.radius);
-  return kRadiusClasses + half_octave(half_from_float_up(room));
+uint32_t position_class(const SplitContext& c) { return half_octave(c.info_s.radius); }
+
+// v_s's sphere holds v_t's moved by the offset (refinement_info.cpp), and is that sphere whenever v_t's
+// reaches further than v_u's: r(v_s) - |p_t - p_s| bounds r(v_t) and is close to it. `grid_step` is the
+// largest axis's grid step over the model's scale (0: no grid, no prediction).
+int64_t radius_reference(const RefineInfo& s, uint32_t child, const int64_t d[3], const std::array<uint16_t, 3>& steps,
+                         float grid_step) {
+  if (child != 0 || !(grid_step > 0)) return length_code(s.radius);
+  double offset = 0;
+  for (int i = 0; i < 3; ++i) {
+    const double x = double(d[i]) * (double(steps[i]) / 65535) * double(grid_step);
+    offset += x * x;
+  }
+  const double room = double(float_from_half(s.radius)) - std::sqrt(offset);
+  return length_code(half_from_float_up(float(std::max(room, 0.0))));
 }
 
 // v_t - v_s is an edge of the surface under v_s, so it lies near the plane normal to v_s's cone axis:
@@ -226,10 +235,10 @@ uint32_t plane_context(const PositionFrame& f, const int64_t d[3]) {
   return std::min<uint32_t>(uint32_t(std::bit_width((offset * uint64_t(f.angle + 1)) >> 8)), kSizeClasses - 1);
 }
 // The slot of the position code for the axis at `index` in the frame's order, given the symbols before it.
-uint32_t position_slot(const SplitContext& c, const RefineInfo& t, const PositionFrame& f, uint32_t index,
-                       const uint32_t classes[3], const int64_t d[3]) {
-  constexpr uint32_t sized = kSlotPosition + 2 * kRadiusClasses;
-  if (index == 0) return kSlotPosition + position_class(c, t);
+uint32_t position_slot(const SplitContext& c, const PositionFrame& f, uint32_t index, const uint32_t classes[3],
+                       const int64_t d[3]) {
+  constexpr uint32_t sized = kSlotPosition + kRadiusClasses;
+  if (index == 0) return kSlotPosition + position_class(c);
   if (index == 1) return sized + std::min(classes[0], kSizeClasses - 1);
   if (f.plane) return sized + 2 * kSizeClasses + plane_context(f, d);
   return sized + kSizeClasses + std::min(std::max(classes[0], classes[1]), kSizeClasses - 1);
@@ -249,6 +258,12 @@ uint32_t cut_slot(uint32_t base, const SplitContext& c, uint32_t max_depth, int 
   return base + (2 * uint32_t(side) + (leaf_reference ? 1 : 0)) * kCutHeights + cut_height(c, max_depth);
 }
 uint32_t chain_context(uint32_t previous_symbol) { return std::min(previous_symbol, kChainContexts - 1); }
+// v_s's sphere is v_t's moved or v_u's, so how close v_t's radius came to its bound says about v_u's.
+constexpr uint32_t kNoRadiusSymbol = UINT32_MAX;
+uint32_t radius_slot(const SplitContext& c, uint32_t max_depth, uint32_t child, uint32_t t_radius_symbol) {
+  if (child == 0 || t_radius_symbol == kNoRadiusSymbol) return kSlotRadius + child * kFlagContexts + height_context(c, max_depth);
+  return kSlotRadius + 2 * kFlagContexts + chain_context(t_radius_symbol);
+}
 // A child's cone lies inside its parent's, so its axis moves at most about the angle left between them.
 uint32_t axis_context(const RefineInfo& s, const RefineInfo& v) {
   if (s.cone_angle == kNoCone) return 0;
@@ -309,6 +324,19 @@ template <class Out> void SplitCodec::emit(const SplitContext& c, const SplitPay
     put_int(out, cut_slot(kSlotCutRest, c, max_depth_, side, refs[best].leaf), best_parting.depth_step, topology);
     out.raw(cut.node, best_parting.rest, topology);
   }
+  // Position of v_t against v_s's.
+  const PositionFrame frame = position_frame(c.info_s, steps_, position_bits_);
+  int64_t d[3] = {0, 0, 0};
+  uint32_t classes[3] = {0, 0, 0};
+  for (uint32_t index = 0; index < 3; ++index) {
+    const uint32_t axis = frame.order[index];
+    if (position_bits_ < 32 && p.position_t[axis] >> position_bits_)
+      fail("split record", "split of " + to_string(c.vs) + ": position outside the grid");
+    d[axis] = int64_t(p.position_t[axis]) - int64_t(c.position_s[axis]);
+    const int64_t predicted = index == 2 && frame.plane ? plane_prediction(frame, d) : 0;
+    const uint32_t sym = put_int(out, position_slot(c, frame, index, classes, d), d[axis] - predicted, geometry);
+    classes[index] = (sym + 1) / 2;
+  }
   // Refinement info of v_t and v_u against v_s's.
   const RefineInfo* child[2] = {&p.info_t, &p.info_u};
   for (const RefineInfo* info : child)
@@ -316,12 +344,15 @@ template <class Out> void SplitCodec::emit(const SplitContext& c, const SplitPay
       fail("split record", "split of " + to_string(c.vs) + ": refinement info is not as sent");
   const RefineInfo& s = c.info_s;
   out.symbol(kSlotInfoFlags + height_context(c, max_depth_), (never_refines(p.info_t) ? 1u : 0u) | (never_refines(p.info_u) ? 2u : 0u), refinement);
+  uint32_t t_radius = kNoRadiusSymbol;
   for (uint32_t k = 0; k < 2; ++k) {
     const RefineInfo& v = *child[k];
     if (never_refines(v)) continue;
-    uint32_t slot = kSlotRadius + k * kFlagContexts + height_context(c, max_depth_);
+    uint32_t slot = radius_slot(c, max_depth_, k, t_radius);
     for (uint32_t f = 0; f < 3; ++f) {
-      const uint32_t sym = put_int(out, slot, length_code(s.*kLengths[f]) - length_code(v.*kLengths[f]), refinement);
+      const int64_t reference = f == 0 ? radius_reference(s, k, d, steps_, grid_step_) : length_code(s.*kLengths[f]);
+      const uint32_t sym = put_int(out, slot, reference - length_code(v.*kLengths[f]), refinement);
+      if (f == 0 && k == 0) t_radius = sym;
       slot = (f == 0 ? kSlotMu : kSlotDelta) + k * kChainContexts + chain_context(sym);
     }
     const bool parent_cone = s.cone_angle != kNoCone;
@@ -334,19 +365,6 @@ template <class Out> void SplitCodec::emit(const SplitContext& c, const SplitPay
     const uint32_t axis_slot = kSlotAxis + k * kAxisContexts + axis_context(s, v);
     put_int(out, axis_slot, int64_t(int16_t(v.cone_x)) - int16_t(s.cone_x), refinement);
     put_int(out, axis_slot, int64_t(int16_t(v.cone_y)) - int16_t(s.cone_y), refinement);
-  }
-  // Position of v_t against v_s's.
-  const PositionFrame frame = position_frame(c.info_s, steps_, position_bits_);
-  int64_t d[3] = {0, 0, 0};
-  uint32_t classes[3] = {0, 0, 0};
-  for (uint32_t index = 0; index < 3; ++index) {
-    const uint32_t axis = frame.order[index];
-    if (position_bits_ < 32 && p.position_t[axis] >> position_bits_)
-      fail("split record", "split of " + to_string(c.vs) + ": position outside the grid");
-    d[axis] = int64_t(p.position_t[axis]) - int64_t(c.position_s[axis]);
-    const int64_t predicted = index == 2 && frame.plane ? plane_prediction(frame, d) : 0;
-    const uint32_t sym = put_int(out, position_slot(c, p.info_t, frame, index, classes, d), d[axis] - predicted, geometry);
-    classes[index] = (sym + 1) / 2;
   }
 }
 
@@ -397,8 +415,23 @@ SplitPayload SplitCodec::decode(const SplitContext& c, BitReader& r) const {
     (side == 0 ? p.cut_l : p.cut_r) = cut;
   }
   if (!is_vertex(p.cut_l) && !is_vertex(p.cut_r)) r.fail_field("v̂_r", "neither v̂_l nor v̂_r is present");
+  const PositionFrame frame = position_frame(c.info_s, steps_, position_bits_);
+  int64_t d[3] = {0, 0, 0};
+  uint32_t classes[3] = {0, 0, 0};
+  const int64_t top = position_bits_ >= 32 ? int64_t(UINT32_MAX) : (int64_t(1) << position_bits_) - 1;
+  for (uint32_t index = 0; index < 3; ++index) {
+    const uint32_t axis = frame.order[index];
+    const uint32_t sym = codes_[position_slot(c, frame, index, classes, d)].read(r, "position");
+    const int64_t predicted = index == 2 && frame.plane ? plane_prediction(frame, d) : 0;
+    d[axis] = predicted + get_int(sym, r, "position");
+    classes[index] = (sym + 1) / 2;
+    const int64_t v = int64_t(c.position_s[axis]) + d[axis];
+    if (v < 0 || v > top) r.fail_field("position", "outside the grid");
+    p.position_t[axis] = uint32_t(v);
+  }
   const RefineInfo& s = c.info_s;
   const uint32_t flags = codes_[kSlotInfoFlags + height_context(c, max_depth_)].read(r, "info flags");
+  uint32_t t_radius = kNoRadiusSymbol;
   RefineInfo* child[2] = {&p.info_t, &p.info_u};
   for (uint32_t k = 0; k < 2; ++k) {
     const char* field = k == 0 ? "info_t" : "info_u";
@@ -407,12 +440,14 @@ SplitPayload SplitCodec::decode(const SplitContext& c, BitReader& r) const {
       v = as_sent(RefineInfo{});
       continue;
     }
-    uint32_t slot = kSlotRadius + k * kFlagContexts + height_context(c, max_depth_);
+    uint32_t slot = radius_slot(c, max_depth_, k, t_radius);
     for (uint32_t f = 0; f < 3; ++f) {
       const uint32_t sym = codes_[slot].read(r, field);
-      const int64_t value = length_code(s.*kLengths[f]) - get_int(sym, r, field);
+      const int64_t reference = f == 0 ? radius_reference(s, k, d, steps_, grid_step_) : length_code(s.*kLengths[f]);
+      const int64_t value = reference - get_int(sym, r, field);
       if (value < 0 || value > (0x7C00 >> kLengthDroppedBits)) r.fail_field(field, "length outside the half-float range");
       v.*kLengths[f] = uint16_t(value << kLengthDroppedBits);
+      if (f == 0 && k == 0) t_radius = sym;
       slot = (f == 0 ? kSlotMu : kSlotDelta) + k * kChainContexts + chain_context(sym);
     }
     const bool parent_cone = s.cone_angle != kNoCone;
@@ -434,20 +469,6 @@ SplitPayload SplitCodec::decode(const SplitContext& c, BitReader& r) const {
     }
     if (!is_canonical(v) || never_refines(v)) r.fail_field(field, "not a value the quantizer produces");
   }
-  const PositionFrame frame = position_frame(c.info_s, steps_, position_bits_);
-  int64_t d[3] = {0, 0, 0};
-  uint32_t classes[3] = {0, 0, 0};
-  const int64_t top = position_bits_ >= 32 ? int64_t(UINT32_MAX) : (int64_t(1) << position_bits_) - 1;
-  for (uint32_t index = 0; index < 3; ++index) {
-    const uint32_t axis = frame.order[index];
-    const uint32_t sym = codes_[position_slot(c, p.info_t, frame, index, classes, d)].read(r, "position");
-    const int64_t predicted = index == 2 && frame.plane ? plane_prediction(frame, d) : 0;
-    d[axis] = predicted + get_int(sym, r, "position");
-    classes[index] = (sym + 1) / 2;
-    const int64_t v = int64_t(c.position_s[axis]) + d[axis];
-    if (v < 0 || v > top) r.fail_field("position", "outside the grid");
-    p.position_t[axis] = uint32_t(v);
-  }
   return p;
 }
 
@@ -459,6 +480,7 @@ SplitCodec SplitCodec::build(const ModelData& model, std::span<const uint32_t> p
   codec.root_count_ = model.root_count;
   codec.position_bits_ = position_bits;
   codec.steps_ = grid_step_ratios(model);
+  codec.grid_step_ = largest_grid_step(model, position_bits);
   for (size_t n = 0; n < model.node_count(); ++n) codec.max_depth_ = std::max<uint32_t>(codec.max_depth_, uint32_t(model.id(uint32_t(n)).depth()));
   // Two fits: the first chooses references by their rest alone, the second by the first fit's costs.
   for (int pass = 0; pass < 2; ++pass) {
@@ -482,6 +504,7 @@ void SplitCodec::serialize(BitWriter& w) const {
   w.bits(max_depth_, 8);
   w.bits(position_bits_, 8);
   for (uint16_t step : steps_) w.bits(step, 16);
+  w.bits(std::bit_cast<uint32_t>(grid_step_), 32);
   for (const PrefixCode& code : codes_) code.serialize(w);
 }
 
@@ -491,6 +514,8 @@ SplitCodec SplitCodec::deserialize(BitReader& r) {
   codec.max_depth_ = uint32_t(r.bits(8, "max depth"));
   codec.position_bits_ = uint32_t(r.bits(8, "position bits"));
   for (uint16_t& step : codec.steps_) step = uint16_t(r.bits(16, "grid steps"));
+  codec.grid_step_ = std::bit_cast<float>(uint32_t(r.bits(32, "grid step")));
+  if (!std::isfinite(codec.grid_step_) || codec.grid_step_ < 0) r.fail_field("grid step", "not a finite length >= 0");
   if (codec.root_count_ == 0) r.fail_field("root count", "0");
   if (codec.max_depth_ > 63) r.fail_field("max depth", "above 63");
   if (codec.position_bits_ < 1 || codec.position_bits_ > 32) r.fail_field("position bits", "outside 1..32");
@@ -533,6 +558,14 @@ std::array<uint16_t, 3> grid_step_ratios(const ModelData& model) {
   std::array<uint16_t, 3> steps{};
   for (int i = 0; i < 3; ++i) steps[i] = largest > 0 ? uint16_t(std::lround(65535 * extent[i] / largest)) : 0;
   return steps;
+}
+
+float largest_grid_step(const ModelData& model, uint32_t position_bits) {
+  if (position_bits > kGridBits) return 0;
+  double largest = 0;
+  for (int i = 0; i < 3; ++i) largest = std::max(largest, double(model.bbox_max[i]) - double(model.bbox_min[i]));
+  const double scale = model.scale > 0 && std::isfinite(model.scale) ? model.scale : 1;
+  return float(largest / double((uint64_t(1) << position_bits) - 1) / scale);
 }
 
 PositionGrid model_grid(const ModelData& model, uint32_t position_bits) {

@@ -71,7 +71,8 @@ class SplitCodec {
   // inside v_s's subtree, values the quantizer never produces.
   SplitPayload decode(const SplitContext& context, BitReader& r) const;
 
-  // u32 root count, u8 max depth, u8 position bits, u16 grid step ratios x, y, z, then every table (PrefixCode::serialize).
+  // u32 root count, u8 max depth, u8 position bits, u16 grid step ratios x, y, z, f32 largest grid step
+  // over the model's scale, then every table (PrefixCode::serialize).
   void serialize(BitWriter& w) const;
   static SplitCodec deserialize(BitReader& r);
 
@@ -85,6 +86,7 @@ class SplitCodec {
 
   uint32_t root_count_ = 0, max_depth_ = 0, position_bits_ = 0;
   std::array<uint16_t, 3> steps_{};  // each axis's grid step over the largest, in 1/65535
+  float grid_step_ = 0;              // the largest grid step over the model's scale; 0 without a grid
   std::vector<PrefixCode> codes_;  // one per slot (split_codec.cpp)
 };
 
@@ -94,6 +96,8 @@ PositionGrid model_grid(const ModelData& model, uint32_t position_bits);
 // Each axis's grid step over the largest one (the box's extents), in 1/65535: what makes a direction on
 // the grid a direction in space.
 std::array<uint16_t, 3> grid_step_ratios(const ModelData& model);
+// The largest axis's grid step in the refinement info's length unit (the model's scale); 0 for float positions.
+float largest_grid_step(const ModelData& model, uint32_t position_bits);
 std::vector<uint32_t> grid_positions(const ModelData& model, uint32_t position_bits);
 
 // Every internal node's record, in node order, as the .pms file stores them (pms-format.md, SRTB, SROF,
