@@ -1,4 +1,4 @@
-// On-disk layout of .pms version 3, shared by the writer and the reader (docs/pms-format.md).
+// On-disk layout of .pms version 4, shared by the writer and the reader (docs/pms-format.md).
 // Sections are used in place (spans into the mapping), so the layout is the host's: little-endian.
 #pragma once
 #include <array>
@@ -18,9 +18,10 @@ namespace pms::format {
 static_assert(std::endian::native == std::endian::little, ".pms sections are little-endian and mapped in place");
 
 constexpr char kMagic[8] = {'P', 'M', 'S', 'T', 'R', 'E', 'A', 'M'};
-// Version 3 adds the compressed split records (SRTB, SROF, SREC); version 2 stored refinement info at the
+// Version 4 predicts v_t in v_s's tangent plane (the split tables carry the grid's step ratios); version 3
+// added the compressed split records (SRTB, SROF, SREC); version 2 stored refinement info at the
 // precision the wire carries (version 1 had finer RINF).
-constexpr uint32_t kVersion = 3;
+constexpr uint32_t kVersion = 4;
 constexpr uint64_t kAlignment = 64;  // every section starts here, so spans into a mapping are aligned
 
 struct FileHeader {

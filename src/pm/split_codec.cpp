@@ -16,6 +16,7 @@
 
 #include <algorithm>
 #include <bit>
+#include <cmath>
 #include <string>
 
 #include "common/error.h"
@@ -38,25 +39,30 @@ constexpr uint32_t kEscapeSymbol = 0;
 constexpr uint32_t kAbsentSymbol = kReferences + 1;
 constexpr uint32_t kRefSymbols = kReferences + 2;
 constexpr uint32_t kRadiusClasses = 64;   // v_s's radius by half octaves (half-float exponent and top mantissa bit)
-constexpr uint32_t kPositionContexts = kRadiusClasses + 2 * 26;  // x: radius class; y, z: classes of x, max(x, y)
+constexpr uint32_t kGridBits = 24;          // finer than this, positions are float bits (position_grid.h)
+constexpr uint32_t kSizeClasses = 26;      // magnitude classes of a coordinate difference, clamped
+// First axis: radius class; second: class of the first; third: the larger class of the other two, or,
+// predicted in v_s's tangent plane, the class of the offset the plane allows (plane_context).
+constexpr uint32_t kPositionContexts = kRadiusClasses + 3 * kSizeClasses;
 constexpr uint32_t kFlagContexts = 10;    // v_s never refines, or the class of its radius over its mu
 constexpr uint32_t kChainContexts = 12;   // the previous field's symbol, clamped
 constexpr uint32_t kAxisContexts = 13;    // no parent cone, or the class of the angle the child leaves inside it
 
 // Code slots, in serialization order; [..] are the contexts.
+constexpr uint32_t kCutHeights = 12;  // v_s's height above the deepest level, clamped
 constexpr uint32_t kSlotCutRef = 0;                                 // [v̂_l; v̂_r after each v̂_l symbol]
-constexpr uint32_t kSlotCutUp = kSlotCutRef + 1 + kRefSymbols;      // [side][reference is v_s: 0, a leaf: 1]
-constexpr uint32_t kSlotCutRest = kSlotCutUp + 4;                   // [side][same]
-constexpr uint32_t kSlotCutDepth = kSlotCutRest + 4;                // escaped ids
+constexpr uint32_t kSlotCutUp = kSlotCutRef + 1 + kRefSymbols;      // [side][reference is v_s: 0, a leaf: 1][height]
+constexpr uint32_t kSlotCutRest = kSlotCutUp + 4 * kCutHeights;     // [side][same][height]
+constexpr uint32_t kSlotCutDepth = kSlotCutRest + 4 * kCutHeights;  // escaped ids
 constexpr uint32_t kSlotPosition = kSlotCutDepth + 1;               // [axis][radius class]
 constexpr uint32_t kSlotInfoFlags = kSlotPosition + kPositionContexts;  // [flag context]
-constexpr uint32_t kSlotRadius = kSlotInfoFlags + kFlagContexts;    // [child][height context]
-constexpr uint32_t kSlotMu = kSlotRadius + 2 * kFlagContexts;                       // [child][radius symbol]
+constexpr uint32_t kSlotRadius = kSlotInfoFlags + kFlagContexts;    // [t, or u without t: height; u: t's radius symbol]
+constexpr uint32_t kSlotMu = kSlotRadius + 2 * kFlagContexts + kChainContexts;                      // [child][radius symbol]
 constexpr uint32_t kSlotDelta = kSlotMu + 2 * kChainContexts;       // [child][mu symbol]
 constexpr uint32_t kSlotAngle = kSlotDelta + 2 * kChainContexts;    // [child][parent has a cone]
 constexpr uint32_t kSlotAxis = kSlotAngle + 4;                      // [child][axis context]
 constexpr uint32_t kSlotCount = kSlotAxis + 2 * kAxisContexts;
-static_assert(kSlotCount == 244, "docs/protocol.md, \"Split records\", gives the count");
+static_assert(kSlotCount == 374, "docs/protocol.md, \"Split records\", gives the count");
 
 uint32_t alphabet(uint32_t slot) {
   if (slot < kSlotCutUp) return kRefSymbols;
@@ -166,14 +172,98 @@ void references(const SplitContext& c, int side, VertexId cut_l, Reference out[k
   out[kReferences - 1] = {side == 1 ? cut_l : kNoVertex, true};
 }
 
-uint32_t position_class(const SplitContext& c) { return (c.info_s.radius >> 9) & (kRadiusClasses - 1); }
+// A half float's exponent and top mantissa bit.
+uint32_t half_octave(uint16_t half) { return (half >> 9) & (kRadiusClasses - 1); }
+uint32_t position_class(const SplitContext& c) { return half_octave(c.info_s.radius); }
+
+// v_s's sphere holds v_t's moved by the offset (refinement_info.cpp), and is that sphere whenever v_t's
+// reaches further than v_u's: r(v_s) - |p_t - p_s| bounds r(v_t) and is close to it. `grid_step` is the
+// largest axis's grid step over the model's scale (0: no grid, no prediction).
+int64_t radius_reference(const RefineInfo& s, uint32_t child, const int64_t d[3], const std::array<uint16_t, 3>& steps,
+                         float grid_step) {
+  if (child != 0 || !(grid_step > 0)) return length_code(s.radius);
+  double offset = 0;
+  for (int i = 0; i < 3; ++i) {
+    const double x = double(d[i]) * (double(steps[i]) / 65535) * double(grid_step);
+    offset += x * x;
+  }
+  const double room = double(float_from_half(s.radius)) - std::sqrt(offset);
+  return length_code(half_from_float_up(float(std::max(room, 0.0))));
+}
+
+// v_t - v_s is an edge of the surface under v_s, so it lies near the plane normal to v_s's cone axis:
+// the axis where that normal is largest is predicted from the other two, the others coded first. The
+// normal is the octahedral axis decoded in integers (L1 norm kAxisSteps), scaled by each axis's grid step.
+struct PositionFrame {
+  uint32_t order[3] = {0, 1, 2};
+  bool plane = false;
+  int64_t normal[3] = {0, 0, 0};
+  int64_t angle = 0;
+};
+PositionFrame position_frame(const RefineInfo& s, const std::array<uint16_t, 3>& steps, uint32_t position_bits) {
+  PositionFrame f;
+  if (s.cone_angle == kNoCone || position_bits > kGridBits) return f;
+  int64_t x = int16_t(s.cone_x), y = int16_t(s.cone_y);
+  const int64_t z = kAxisSteps - std::abs(x) - std::abs(y);
+  if (z < 0) {  // the lower hemisphere, folded over the diagonals
+    const int64_t fx = (x >= 0 ? 1 : -1) * (kAxisSteps - std::abs(y)), fy = (y >= 0 ? 1 : -1) * (kAxisSteps - std::abs(x));
+    x = fx, y = fy;
+  }
+  const int64_t n[3] = {x * steps[0], y * steps[1], z * steps[2]};
+  uint32_t major = 0;
+  for (uint32_t a = 1; a < 3; ++a)
+    if (std::abs(n[a]) > std::abs(n[major])) major = a;
+  if (n[major] == 0) return f;
+  f.plane = true;
+  f.order[0] = major == 0 ? 1 : 0;
+  f.order[1] = major == 2 ? 1 : 2;
+  f.order[2] = major;
+  std::copy_n(n, 3, f.normal);
+  f.angle = s.cone_angle;
+  return f;
+}
+// The major axis's difference on the plane through v_s, rounded to the grid.
+int64_t plane_prediction(const PositionFrame& f, const int64_t d[3]) {
+  const int64_t num = -(f.normal[f.order[0]] * d[f.order[0]] + f.normal[f.order[1]] * d[f.order[1]]);
+  const int64_t den = f.normal[f.order[2]];
+  const int64_t q = (2 * std::abs(num) + std::abs(den)) / (2 * std::abs(den));  // |num / den| rounded
+  return (num < 0) != (den < 0) ? -q : q;
+}
+// How far off the plane v_t may lie grows with the in-plane offset and the cone's width.
+uint32_t plane_context(const PositionFrame& f, const int64_t d[3]) {
+  const uint64_t offset = uint64_t(std::max(std::abs(d[f.order[0]]), std::abs(d[f.order[1]])));
+  return std::min<uint32_t>(uint32_t(std::bit_width((offset * uint64_t(f.angle + 1)) >> 8)), kSizeClasses - 1);
+}
+// The slot of the position code for the axis at `index` in the frame's order, given the symbols before it.
+uint32_t position_slot(const SplitContext& c, const PositionFrame& f, uint32_t index, const uint32_t classes[3],
+                       const int64_t d[3]) {
+  constexpr uint32_t sized = kSlotPosition + kRadiusClasses;
+  if (index == 0) return kSlotPosition + position_class(c);
+  if (index == 1) return sized + std::min(classes[0], kSizeClasses - 1);
+  if (f.plane) return sized + 2 * kSizeClasses + plane_context(f, d);
+  return sized + kSizeClasses + std::min(std::max(classes[0], classes[1]), kSizeClasses - 1);
+}
 
 // Whether v_s's children never refine, and how far below v_s their bounds are, depend on how far v_s is
 // from the deepest level.
 uint32_t height_context(const SplitContext& c, uint32_t max_depth) {
   return std::min<uint32_t>(uint32_t(std::max(0, int(max_depth) - c.vs.depth())), kFlagContexts - 1);
 }
+// How far a cut vertex parts from its reference, and how deep it goes, depends on how far v_s is from the
+// deepest level (the cut vertices are leaves).
+uint32_t cut_height(const SplitContext& c, uint32_t max_depth) {
+  return std::min<uint32_t>(uint32_t(std::max(0, int(max_depth) - c.vs.depth())), kCutHeights - 1);
+}
+uint32_t cut_slot(uint32_t base, const SplitContext& c, uint32_t max_depth, int side, bool leaf_reference) {
+  return base + (2 * uint32_t(side) + (leaf_reference ? 1 : 0)) * kCutHeights + cut_height(c, max_depth);
+}
 uint32_t chain_context(uint32_t previous_symbol) { return std::min(previous_symbol, kChainContexts - 1); }
+// v_s's sphere is v_t's moved or v_u's, so how close v_t's radius came to its bound says about v_u's.
+constexpr uint32_t kNoRadiusSymbol = UINT32_MAX;
+uint32_t radius_slot(const SplitContext& c, uint32_t max_depth, uint32_t child, uint32_t t_radius_symbol) {
+  if (child == 0 || t_radius_symbol == kNoRadiusSymbol) return kSlotRadius + child * kFlagContexts + height_context(c, max_depth);
+  return kSlotRadius + 2 * kFlagContexts + chain_context(t_radius_symbol);
+}
 // A child's cone lies inside its parent's, so its axis moves at most about the angle left between them.
 uint32_t axis_context(const RefineInfo& s, const RefineInfo& v) {
   if (s.cone_angle == kNoCone) return 0;
@@ -210,10 +300,9 @@ template <class Out> void SplitCodec::emit(const SplitContext& c, const SplitPay
       if (!parting(refs[i].id, cut, pt) || (pt.equal && !refs[i].leaf)) continue;
       uint64_t cost = pt.rest;
       if (!codes_.empty()) {
-        const uint32_t kind = refs[i].leaf ? 1 : 0;
         const PrefixCode& ref_code = codes_[ref_slot];
-        const PrefixCode& up_code = codes_[kSlotCutUp + 2 * uint32_t(side) + kind];
-        const PrefixCode& step_code = codes_[kSlotCutRest + 2 * uint32_t(side) + kind];
+        const PrefixCode& up_code = codes_[cut_slot(kSlotCutUp, c, max_depth_, side, refs[i].leaf)];
+        const PrefixCode& step_code = codes_[cut_slot(kSlotCutRest, c, max_depth_, side, refs[i].leaf)];
         const uint32_t up = pt.equal ? kEqualSymbol : pt.up, step = int_symbol(pt.depth_step);
         if (!ref_code.has(1 + i) || !up_code.has(up) || (!pt.equal && !step_code.has(step))) continue;
         cost += ref_code.cost(1 + i) + up_code.cost(up);
@@ -230,20 +319,23 @@ template <class Out> void SplitCodec::emit(const SplitContext& c, const SplitPay
       out.raw(cut.node, unsigned(cut.depth()), topology);
       continue;
     }
-    const uint32_t kind = refs[best].leaf ? 1 : 0;
-    out.symbol(kSlotCutUp + 2 * uint32_t(side) + kind, best_parting.equal ? kEqualSymbol : best_parting.up, topology);
+    out.symbol(cut_slot(kSlotCutUp, c, max_depth_, side, refs[best].leaf), best_parting.equal ? kEqualSymbol : best_parting.up, topology);
     if (best_parting.equal) continue;
-    put_int(out, kSlotCutRest + 2 * uint32_t(side) + kind, best_parting.depth_step, topology);
+    put_int(out, cut_slot(kSlotCutRest, c, max_depth_, side, refs[best].leaf), best_parting.depth_step, topology);
     out.raw(cut.node, best_parting.rest, topology);
   }
   // Position of v_t against v_s's.
-  uint32_t pslot = kSlotPosition + position_class(c), largest = 0;
-  for (uint32_t axis = 0; axis < 3; ++axis) {
+  const PositionFrame frame = position_frame(c.info_s, steps_, position_bits_);
+  int64_t d[3] = {0, 0, 0};
+  uint32_t classes[3] = {0, 0, 0};
+  for (uint32_t index = 0; index < 3; ++index) {
+    const uint32_t axis = frame.order[index];
     if (position_bits_ < 32 && p.position_t[axis] >> position_bits_)
       fail("split record", "split of " + to_string(c.vs) + ": position outside the grid");
-    const uint32_t sym = put_int(out, pslot, int64_t(p.position_t[axis]) - int64_t(c.position_s[axis]), geometry);
-    largest = std::max(largest, (sym + 1) / 2);
-    pslot = kSlotPosition + kRadiusClasses + (axis == 0 ? 0 : 26) + std::min(largest, 25u);
+    d[axis] = int64_t(p.position_t[axis]) - int64_t(c.position_s[axis]);
+    const int64_t predicted = index == 2 && frame.plane ? plane_prediction(frame, d) : 0;
+    const uint32_t sym = put_int(out, position_slot(c, frame, index, classes, d), d[axis] - predicted, geometry);
+    classes[index] = (sym + 1) / 2;
   }
   // Refinement info of v_t and v_u against v_s's.
   const RefineInfo* child[2] = {&p.info_t, &p.info_u};
@@ -252,12 +344,15 @@ template <class Out> void SplitCodec::emit(const SplitContext& c, const SplitPay
       fail("split record", "split of " + to_string(c.vs) + ": refinement info is not as sent");
   const RefineInfo& s = c.info_s;
   out.symbol(kSlotInfoFlags + height_context(c, max_depth_), (never_refines(p.info_t) ? 1u : 0u) | (never_refines(p.info_u) ? 2u : 0u), refinement);
+  uint32_t t_radius = kNoRadiusSymbol;
   for (uint32_t k = 0; k < 2; ++k) {
     const RefineInfo& v = *child[k];
     if (never_refines(v)) continue;
-    uint32_t slot = kSlotRadius + k * kFlagContexts + height_context(c, max_depth_);
+    uint32_t slot = radius_slot(c, max_depth_, k, t_radius);
     for (uint32_t f = 0; f < 3; ++f) {
-      const uint32_t sym = put_int(out, slot, length_code(s.*kLengths[f]) - length_code(v.*kLengths[f]), refinement);
+      const int64_t reference = f == 0 ? radius_reference(s, k, d, steps_, grid_step_) : length_code(s.*kLengths[f]);
+      const uint32_t sym = put_int(out, slot, reference - length_code(v.*kLengths[f]), refinement);
+      if (f == 0 && k == 0) t_radius = sym;
       slot = (f == 0 ? kSlotMu : kSlotDelta) + k * kChainContexts + chain_context(sym);
     }
     const bool parent_cone = s.cone_angle != kNoCone;
@@ -300,8 +395,7 @@ SplitPayload SplitCodec::decode(const SplitContext& c, BitReader& r) const {
       references(c, side, p.cut_l, refs);
       const Reference& ref = refs[sym - 1];
       if (!is_vertex(ref.id)) r.fail_field(field, "names a reference the client does not hold");
-      const uint32_t kind = ref.leaf ? 1 : 0;
-      const uint32_t up = codes_[kSlotCutUp + 2 * uint32_t(side) + kind].read(r, field);
+      const uint32_t up = codes_[cut_slot(kSlotCutUp, c, max_depth_, side, ref.leaf)].read(r, field);
       if (up == kEqualSymbol) {
         if (!ref.leaf) r.fail_field(field, "equal to v_s");
         cut = ref.id;
@@ -311,7 +405,7 @@ SplitPayload SplitCodec::decode(const SplitContext& c, BitReader& r) const {
         const int common = dr - 1 - int(up);
         const uint64_t prefix = ref.id.node >> (dr - common);
         const uint64_t other = ((ref.id.node >> (dr - common - 1)) & 1) ^ 1;
-        const int64_t rest = get_int(codes_[kSlotCutRest + 2 * uint32_t(side) + kind].read(r, field), r, field) + int64_t(up);
+        const int64_t rest = get_int(codes_[cut_slot(kSlotCutRest, c, max_depth_, side, ref.leaf)].read(r, field), r, field) + int64_t(up);
         if (rest < 0 || common + 1 + rest > int64_t(max_depth_)) r.fail_field(field, "depth outside the model");
         cut = {ref.id.tree, (((prefix << 1) | other) << rest) | r.bits(unsigned(rest), field)};
       }
@@ -321,18 +415,23 @@ SplitPayload SplitCodec::decode(const SplitContext& c, BitReader& r) const {
     (side == 0 ? p.cut_l : p.cut_r) = cut;
   }
   if (!is_vertex(p.cut_l) && !is_vertex(p.cut_r)) r.fail_field("v̂_r", "neither v̂_l nor v̂_r is present");
-  uint32_t pslot = kSlotPosition + position_class(c), largest = 0;
-  for (uint32_t axis = 0; axis < 3; ++axis) {
-    const uint32_t sym = codes_[pslot].read(r, "position");
-    const int64_t v = int64_t(c.position_s[axis]) + get_int(sym, r, "position");
-    largest = std::max(largest, (sym + 1) / 2);
-    pslot = kSlotPosition + kRadiusClasses + (axis == 0 ? 0 : 26) + std::min(largest, 25u);
-    const int64_t top = position_bits_ >= 32 ? int64_t(UINT32_MAX) : (int64_t(1) << position_bits_) - 1;
+  const PositionFrame frame = position_frame(c.info_s, steps_, position_bits_);
+  int64_t d[3] = {0, 0, 0};
+  uint32_t classes[3] = {0, 0, 0};
+  const int64_t top = position_bits_ >= 32 ? int64_t(UINT32_MAX) : (int64_t(1) << position_bits_) - 1;
+  for (uint32_t index = 0; index < 3; ++index) {
+    const uint32_t axis = frame.order[index];
+    const uint32_t sym = codes_[position_slot(c, frame, index, classes, d)].read(r, "position");
+    const int64_t predicted = index == 2 && frame.plane ? plane_prediction(frame, d) : 0;
+    d[axis] = predicted + get_int(sym, r, "position");
+    classes[index] = (sym + 1) / 2;
+    const int64_t v = int64_t(c.position_s[axis]) + d[axis];
     if (v < 0 || v > top) r.fail_field("position", "outside the grid");
     p.position_t[axis] = uint32_t(v);
   }
   const RefineInfo& s = c.info_s;
   const uint32_t flags = codes_[kSlotInfoFlags + height_context(c, max_depth_)].read(r, "info flags");
+  uint32_t t_radius = kNoRadiusSymbol;
   RefineInfo* child[2] = {&p.info_t, &p.info_u};
   for (uint32_t k = 0; k < 2; ++k) {
     const char* field = k == 0 ? "info_t" : "info_u";
@@ -341,12 +440,14 @@ SplitPayload SplitCodec::decode(const SplitContext& c, BitReader& r) const {
       v = as_sent(RefineInfo{});
       continue;
     }
-    uint32_t slot = kSlotRadius + k * kFlagContexts + height_context(c, max_depth_);
+    uint32_t slot = radius_slot(c, max_depth_, k, t_radius);
     for (uint32_t f = 0; f < 3; ++f) {
       const uint32_t sym = codes_[slot].read(r, field);
-      const int64_t value = length_code(s.*kLengths[f]) - get_int(sym, r, field);
+      const int64_t reference = f == 0 ? radius_reference(s, k, d, steps_, grid_step_) : length_code(s.*kLengths[f]);
+      const int64_t value = reference - get_int(sym, r, field);
       if (value < 0 || value > (0x7C00 >> kLengthDroppedBits)) r.fail_field(field, "length outside the half-float range");
       v.*kLengths[f] = uint16_t(value << kLengthDroppedBits);
+      if (f == 0 && k == 0) t_radius = sym;
       slot = (f == 0 ? kSlotMu : kSlotDelta) + k * kChainContexts + chain_context(sym);
     }
     const bool parent_cone = s.cone_angle != kNoCone;
@@ -378,6 +479,8 @@ SplitCodec SplitCodec::build(const ModelData& model, std::span<const uint32_t> p
   SplitCodec codec;
   codec.root_count_ = model.root_count;
   codec.position_bits_ = position_bits;
+  codec.steps_ = grid_step_ratios(model);
+  codec.grid_step_ = largest_grid_step(model, position_bits);
   for (size_t n = 0; n < model.node_count(); ++n) codec.max_depth_ = std::max<uint32_t>(codec.max_depth_, uint32_t(model.id(uint32_t(n)).depth()));
   // Two fits: the first chooses references by their rest alone, the second by the first fit's costs.
   for (int pass = 0; pass < 2; ++pass) {
@@ -400,6 +503,8 @@ void SplitCodec::serialize(BitWriter& w) const {
   w.bits(root_count_, 32);
   w.bits(max_depth_, 8);
   w.bits(position_bits_, 8);
+  for (uint16_t step : steps_) w.bits(step, 16);
+  w.bits(std::bit_cast<uint32_t>(grid_step_), 32);
   for (const PrefixCode& code : codes_) code.serialize(w);
 }
 
@@ -408,6 +513,9 @@ SplitCodec SplitCodec::deserialize(BitReader& r) {
   codec.root_count_ = uint32_t(r.bits(32, "root count"));
   codec.max_depth_ = uint32_t(r.bits(8, "max depth"));
   codec.position_bits_ = uint32_t(r.bits(8, "position bits"));
+  for (uint16_t& step : codec.steps_) step = uint16_t(r.bits(16, "grid steps"));
+  codec.grid_step_ = std::bit_cast<float>(uint32_t(r.bits(32, "grid step")));
+  if (!std::isfinite(codec.grid_step_) || codec.grid_step_ < 0) r.fail_field("grid step", "not a finite length >= 0");
   if (codec.root_count_ == 0) r.fail_field("root count", "0");
   if (codec.max_depth_ > 63) r.fail_field("max depth", "above 63");
   if (codec.position_bits_ < 1 || codec.position_bits_ > 32) r.fail_field("position bits", "outside 1..32");
@@ -442,6 +550,22 @@ SplitPayload split_payload(const ModelData& model, std::span<const uint32_t> pos
   p.info_t = as_sent(model.refine[t]);
   p.info_u = as_sent(model.refine[t + 1]);
   return p;
+}
+
+std::array<uint16_t, 3> grid_step_ratios(const ModelData& model) {
+  double extent[3], largest = 0;
+  for (int i = 0; i < 3; ++i) largest = std::max(largest, extent[i] = double(model.bbox_max[i]) - double(model.bbox_min[i]));
+  std::array<uint16_t, 3> steps{};
+  for (int i = 0; i < 3; ++i) steps[i] = largest > 0 ? uint16_t(std::lround(65535 * extent[i] / largest)) : 0;
+  return steps;
+}
+
+float largest_grid_step(const ModelData& model, uint32_t position_bits) {
+  if (position_bits > kGridBits) return 0;
+  double largest = 0;
+  for (int i = 0; i < 3; ++i) largest = std::max(largest, double(model.bbox_max[i]) - double(model.bbox_min[i]));
+  const double scale = model.scale > 0 && std::isfinite(model.scale) ? model.scale : 1;
+  return float(largest / double((uint64_t(1) << position_bits) - 1) / scale);
 }
 
 PositionGrid model_grid(const ModelData& model, uint32_t position_bits) {

@@ -20,7 +20,7 @@
 namespace pms {
 
 // How many of v_s's nearest ancestors lend their cut vertices as references for v_s's own.
-constexpr int kCutAncestors = 3;
+constexpr int kCutAncestors = 5;
 
 template <size_t N> constexpr std::array<VertexId, N> no_vertices() {
   std::array<VertexId, N> ids;
@@ -71,7 +71,8 @@ class SplitCodec {
   // inside v_s's subtree, values the quantizer never produces.
   SplitPayload decode(const SplitContext& context, BitReader& r) const;
 
-  // u32 root count, u8 max depth, u8 position bits, then every table (PrefixCode::serialize).
+  // u32 root count, u8 max depth, u8 position bits, u16 grid step ratios x, y, z, f32 largest grid step
+  // over the model's scale, then every table (PrefixCode::serialize).
   void serialize(BitWriter& w) const;
   static SplitCodec deserialize(BitReader& r);
 
@@ -84,12 +85,19 @@ class SplitCodec {
   template <class Out> void emit(const SplitContext& context, const SplitPayload& payload, Out& out) const;
 
   uint32_t root_count_ = 0, max_depth_ = 0, position_bits_ = 0;
+  std::array<uint16_t, 3> steps_{};  // each axis's grid step over the largest, in 1/65535
+  float grid_step_ = 0;              // the largest grid step over the model's scale; 0 without a grid
   std::vector<PrefixCode> codes_;  // one per slot (split_codec.cpp)
 };
 
 // The grid of `position_bits` per axis over the model's box, and the 3 quantized coordinates per node on
 // it that records carry.
 PositionGrid model_grid(const ModelData& model, uint32_t position_bits);
+// Each axis's grid step over the largest one (the box's extents), in 1/65535: what makes a direction on
+// the grid a direction in space.
+std::array<uint16_t, 3> grid_step_ratios(const ModelData& model);
+// The largest axis's grid step in the refinement info's length unit (the model's scale); 0 for float positions.
+float largest_grid_step(const ModelData& model, uint32_t position_bits);
 std::vector<uint32_t> grid_positions(const ModelData& model, uint32_t position_bits);
 
 // Every internal node's record, in node order, as the .pms file stores them (pms-format.md, SRTB, SROF,

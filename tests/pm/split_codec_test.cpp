@@ -3,8 +3,10 @@
 // The real models' round trips and bits per part are in tests/protocol/split_records_test.cpp.
 #include <gtest/gtest.h>
 
+#include <bit>
 #include <cmath>
 #include <cstdint>
+#include <limits>
 #include <random>
 #include <vector>
 
@@ -85,6 +87,24 @@ TEST(SplitCodec, TablesRoundTripThroughTheirSerialization) {
   for (uint64_t end = 0; end < w.size(); end += 7) {
     BitReader cut(w.bytes(), 0, end, "tables");
     EXPECT_THROW(SplitCodec::deserialize(cut), Error) << end;
+  }
+}
+
+TEST(SplitCodec, TablesWithABadGridStepAreRefused) {
+  const auto& [h, model, q, codec] = forest();
+  BitWriter w;
+  codec.serialize(w);
+  // The largest grid step follows u32 root count, u8 depth, u8 position bits and three u16 step ratios.
+  constexpr size_t kGridStepAt = 32 + 8 + 8 + 3 * 16;
+  for (const float bad : {std::numeric_limits<float>::quiet_NaN(), std::numeric_limits<float>::infinity(), -1.0f}) {
+    BitWriter changed;
+    BitReader all(w.bytes(), 0, w.size(), "tables");
+    changed.bits(all.bits(kGridStepAt, "head"), kGridStepAt);
+    all.bits(32, "grid step");
+    changed.bits(std::bit_cast<uint32_t>(bad), 32);
+    while (all.bits_left() > 0) changed.bit(unsigned(all.bits(1, "rest")));
+    BitReader r(changed.bytes(), 0, changed.size(), "tables");
+    EXPECT_THROW(SplitCodec::deserialize(r), Error) << bad;
   }
 }
 
