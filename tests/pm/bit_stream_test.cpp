@@ -23,12 +23,12 @@ TEST(BitStream, FieldsOfEveryWidthRoundTripAtEveryOffset) {
     const uint64_t value = rng();
     fields.push_back({low_bits(value, n), n});
     for (unsigned k = 0; k < n; ++k) model.push_back(int(value >> k) & 1);
-    if (i % 3 == 0) {
-      w.bit(unsigned(value & 1));
-      fields.push_back({value & 1, 1});
-      model.push_back(int(value & 1));
-    }
     w.bits(value, n);  // bits above n are ignored
+    if (i % 3 == 0) {  // single bits between the fields shift every later offset
+      w.bit(unsigned(value >> 63));
+      fields.push_back({value >> 63, 1});
+      model.push_back(int(value >> 63));
+    }
   }
   ASSERT_EQ(w.size(), model.size());
   ASSERT_EQ(w.bytes().size(), (model.size() + 7) / 8);
