@@ -70,9 +70,7 @@ size_t ClientSession::apply_dag_ops(const protocol::DagOps& ops) {
   }
   for (const SplitRecord& split : ops.splits) {
     uint32_t slot = hierarchy_->find(split.vs);
-    if (slot != kNone && !hierarchy_->is_leaf(slot)) {
-      hierarchy_->set_cuts(slot, split.cut_l, split.cut_r);
-    } else {
+    if (slot == kNone || hierarchy_->is_leaf(slot)) {  // a node split before keeps its record
       hierarchy_->add_split(split);
       ++splits_received_;
       slot = hierarchy_->find(split.vs);

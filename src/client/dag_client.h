@@ -1,7 +1,7 @@
 // The DAG mode on the client (zheng-chan 2006, StreamMode::dag): a thin client with no criteria and no
 // hierarchy walk of its own. Each frame sends DAG_VIEW (the view, N, the traversal, FREE or BUDGET and its
-// budget) and applies the DAG_OPS that answer it as they come: collapses, then splits whose cut vertices
-// are already this mesh's. Its mesh is the server's cut of the DAG after every frame.
+// budget) and applies the DAG_OPS that answer it as they come: collapses, then splits, each legal on this
+// mesh when it comes. Its mesh is the server's cut of the DAG after every frame.
 // Shared with the browser build: single-threaded, no std::ranges algorithms, std::format or coroutines.
 #pragma once
 #include "client/client_mode.h"

@@ -64,7 +64,7 @@ struct VSplits {
 };
 
 // DAG_OPS (StreamMode::dag): one DAG_VIEW's operations in the order the client applies them, collapses
-// (v_s ids: v_t and v_u merge back) before splits (packets whose cut ids are the client's active vertices);
+// (v_s ids: v_t and v_u merge back) before splits (packets as in VSPLITS, without refinement info);
 // an answer may take several messages, the last has `final` set.
 struct DagOps {
   uint32_t frame = 0;

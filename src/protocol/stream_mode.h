@@ -18,7 +18,7 @@ namespace pms::protocol {
 // sender-driven mode (OPEN flag bit 2).
 // dag: zheng-chan 2006 for a thin client: the server keeps the client's cut of the DAG of operations
 // (refine/dag_cut.h) and answers each DAG_VIEW with MANAGE-TRAVERSAL's collapses and splits, the splits with
-// their geometry and actual cut vertices; the client applies them in order and walks nothing (OPEN flag bit 3).
+// their geometry; the client applies them in order and evaluates nothing itself (OPEN flag bit 3).
 enum class StreamMode : uint8_t { sender_driven, view_independent, sender_plain, dag };
 
 // The CLI's name of a mode ("sender", "vi", "sender-plain", "dag"), and back; every name, comma-separated, for help texts.

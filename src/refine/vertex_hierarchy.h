@@ -30,11 +30,6 @@ class VertexHierarchy {
   // an unknown or already split v_s, a record without cut vertices, or cut ids that cannot be leaves
   // outside v_s's subtree.
   uint32_t add_split(const SplitRecord& split);
-  // Replaces the cut vertices of split `slot` (a client told its actual ones again for a new split of it).
-  void set_cuts(uint32_t slot, VertexId cut_l, VertexId cut_r) {
-    cut_[first_child_[slot]] = cut_l;
-    cut_[first_child_[slot] + 1] = cut_r;
-  }
 
   uint32_t find(VertexId id) const;  // slot, or kNone when the node is not known
   void reserve(size_t slots);

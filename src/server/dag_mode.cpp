@@ -1,4 +1,4 @@
-// The DAG mode: MANAGE-TRAVERSAL on the session's cut, its operations as DAG_OPS with the client's cut vertices.
+// The DAG mode: MANAGE-TRAVERSAL on the session's cut, its operations as DAG_OPS.
 #include "server/dag_mode.h"
 
 #include <algorithm>
@@ -8,7 +8,7 @@
 #include "pm/hierarchy.h"
 #include "protocol/message_types.h"
 #include "protocol/server_messages.h"
-#include "server/plain_packets.h"
+#include "pm/split_record.h"
 
 namespace pms::server {
 
@@ -40,9 +40,7 @@ void DagSessionMode::pump(uint64_t& work) {
 void DagSessionMode::stop() {
   pending_ = answering_ = false;
   ops_ = {};
-  cuts_ = {};
-  split_at_ = {};
-  sent_ = cuts_sent_ = 0;
+  sent_ = 0;
 }
 
 void DagSessionMode::traverse(uint64_t& work) {
@@ -51,45 +49,9 @@ void DagSessionMode::traverse(uint64_t& work) {
   ops_.clear();
   const DagFrameStats stats = traverser_.manage(options_, ops_);
   work += stats.evaluated + ops_.size();
-  record_cuts();
-  sent_ = cuts_sent_ = 0;
+  sent_ = 0;
   answer_frame_ = view_.frame;
   answering_ = true;
-}
-
-// The cut vertices each split has on the client's mesh when it comes: the active ancestors of its
-// fundamental ones on the cut as it stands after the collapses and the splits before it.
-void DagSessionMode::record_cuts() {
-  split_at_.clear();
-  for (uint32_t i = 0; i < ops_.size(); ++i)
-    if (ops_[i].split) split_at_.emplace_back(ops_[i].node, i);
-  std::sort(split_at_.begin(), split_at_.end());
-  const ModelData& model = context_.served.model();
-  const Dag& dag = *context_.served.dag;
-  cuts_.clear();
-  for (uint32_t i = 0; i < ops_.size(); ++i) {
-    if (!ops_[i].split) continue;
-    const uint32_t v = dag.model_node(ops_[i].node);
-    cuts_.push_back({actual_cut(model.cut_left[v], i), actual_cut(model.cut_right[v], i)});
-  }
-}
-
-// Whether `model_node` is split when operation `op` is made (the cut holds the answer's end state).
-bool DagSessionMode::split_before(uint32_t model_node, uint32_t op) const {
-  const uint32_t n = context_.served.dag->node_of(model_node);
-  if (n == kNone || !cut_.is_split(n)) return false;
-  const auto at = std::lower_bound(split_at_.begin(), split_at_.end(), std::make_pair(n, uint32_t(0)));
-  // Split by this answer: only once its own split has been made (a node is split at most once per answer).
-  return at == split_at_.end() || at->first != n || at->second < op;
-}
-
-uint32_t DagSessionMode::actual_cut(uint32_t fundamental, uint32_t op) const {
-  if (fundamental == kNone) return kNone;
-  const ModelData& model = context_.served.model();
-  if (split_before(fundamental, op)) fail("DAG mode", "a fundamental cut vertex is split below the cut");
-  uint32_t a = fundamental;
-  for (uint32_t p = model.parent[a]; p != kNone && !split_before(p, op); p = model.parent[a]) a = p;
-  return a;
 }
 
 // The next batch_splits operations of the answer; the last batch (possibly empty) is final.
@@ -106,7 +68,7 @@ void DagSessionMode::emit_batch(uint64_t& work) {
       message.collapses.push_back(model.id(v));
       continue;
     }
-    message.splits.push_back(plain_split(model, v, cuts_[cuts_sent_++]));
+    message.splits.push_back(split_record(model, v));
   }
   message.final = sent_ == ops_.size();
   work += message.collapses.size() + message.splits.size();
@@ -115,14 +77,11 @@ void DagSessionMode::emit_batch(uint64_t& work) {
   if (message.final) {
     answering_ = false;
     ops_.clear();
-    cuts_.clear();
-    split_at_.clear();
   }
 }
 
 size_t DagSessionMode::state_bytes() const {
-  return sizeof(*this) + cut_.memory_bytes() + traverser_.memory_bytes() + ops_.capacity() * sizeof(DagOp) +
-         cuts_.capacity() * sizeof(ActualCuts) + split_at_.capacity() * sizeof(split_at_[0]);
+  return sizeof(*this) + cut_.memory_bytes() + traverser_.memory_bytes() + ops_.capacity() * sizeof(DagOp);
 }
 
 }  // namespace pms::server

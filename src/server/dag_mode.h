@@ -2,19 +2,17 @@
 // of its own, driven by the server. The session holds the client's cut of the model's DAG of operations
 // (refine/dag_cut.h, about a byte per node) and a traverser; each DAG_VIEW runs MANAGE-TRAVERSAL once on it
 // and the operations go down as DAG_OPS in batches, collapses first, then splits with their geometry and
-// the cut vertices they have on the client's mesh, so the client's mesh is the server's cut after every
-// answer. No resume yet: OPEN with a resume front is refused.
+// fundamental cut vertices (docs/internals.md, "The DAG mode": why not the actual ones), so the client's
+// mesh is the server's cut after every answer. No resume yet: OPEN with a resume front is refused.
 #pragma once
 #include <cstddef>
 #include <cstdint>
-#include <utility>
 #include <vector>
 
 #include "protocol/client_messages.h"
 #include "protocol/stream_context.h"
 #include "refine/dag_cut.h"
 #include "refine/dag_traversal.h"
-#include "server/selective_streaming.h"
 #include "server/session_mode.h"
 
 namespace pms::server {
@@ -39,9 +37,6 @@ class DagSessionMode : public SessionMode {
 
  private:
   void traverse(uint64_t& work);
-  void record_cuts();
-  bool split_before(uint32_t model_node, uint32_t op) const;
-  uint32_t actual_cut(uint32_t fundamental, uint32_t op) const;
   void emit_batch(uint64_t& work);
 
   ModeContext context_;
@@ -53,10 +48,8 @@ class DagSessionMode : public SessionMode {
   bool pending_ = false;    // a DAG_VIEW waits for its traversal
   bool answering_ = false;  // the final DAG_OPS of the traversed view is still to send
   uint32_t answer_frame_ = 0;
-  std::vector<DagOp> ops_;                              // the answer: collapses, then splits
-  std::vector<ActualCuts> cuts_;                        // per split of ops_, in order
-  std::vector<std::pair<uint32_t, uint32_t>> split_at_;  // (DAG node, index in ops_) of its splits, sorted
-  size_t sent_ = 0, cuts_sent_ = 0;
+  std::vector<DagOp> ops_;  // the answer: collapses, then splits
+  size_t sent_ = 0;
   uint64_t splits_sent_ = 0;
 };
 
