@@ -139,6 +139,8 @@ TEST(DagStreaming, PriorityWithLargeNConvergesToLocalRefinement) {
     if (report.vsplits == 0 && p.client->session().mesh().face_count() == before) break;
   }
   ASSERT_LT(frames, 50) << "no convergence";
+  EXPECT_GT(frames, 0);
+  EXPECT_GT(p.client->session().mesh().face_count(), f.catalogue->find(f.name)->dag->base_faces()) << "a view with detail";
   EXPECT_EQ(faces_by_id(p.client->session().mesh()), test::local_faces(f.snapped, camera, 1.0f));
 }
 
