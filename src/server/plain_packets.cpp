@@ -18,13 +18,6 @@ VertexId actual_id(const ModelData& model, VertexId fundamental, uint32_t actual
 
 }  // namespace
 
-SplitRecord plain_split(const ModelData& model, uint32_t node, const ActualCuts& cuts) {
-  SplitRecord split = split_record(model, node);
-  split.cut_l = actual_id(model, split.cut_l, cuts.left);
-  split.cut_r = actual_id(model, split.cut_r, cuts.right);
-  return split;
-}
-
 std::vector<uint8_t> encode_plain_batch(const ModelData& model, const protocol::StreamContext& wire, uint32_t frame,
                                         bool final, std::span<const uint32_t> nodes, std::span<const ActualCuts> cuts) {
   if (nodes.size() != cuts.size()) fail("VSPLITS", "one set of actual cut vertices per split is needed");
@@ -33,7 +26,12 @@ std::vector<uint8_t> encode_plain_batch(const ModelData& model, const protocol::
   message.frame = frame;
   message.final = final;
   message.splits.reserve(nodes.size());
-  for (size_t i = 0; i < nodes.size(); ++i) message.splits.push_back(plain_split(model, nodes[i], cuts[i]));
+  for (size_t i = 0; i < nodes.size(); ++i) {
+    SplitRecord split = split_record(model, nodes[i]);
+    split.cut_l = actual_id(model, split.cut_l, cuts[i].left);
+    split.cut_r = actual_id(model, split.cut_r, cuts[i].right);
+    message.splits.push_back(split);
+  }
   return protocol::encode(message, wire);
 }
 

@@ -9,15 +9,10 @@
 #include <vector>
 
 #include "pm/hierarchy.h"
-#include "pm/split_record.h"
 #include "protocol/stream_context.h"
 #include "server/selective_streaming.h"
 
 namespace pms::server {
-
-// The split record of internal `node` with `cuts` (node indices, kNone for a missing side) as its cut
-// vertices, for a client that applies it without a walk. pms::Error for cuts that do not match its sides.
-SplitRecord plain_split(const ModelData& model, uint32_t node, const ActualCuts& cuts);
 
 // VSPLITS{frame, final, the splits of `nodes`} with cuts[i] as node i's cut vertices. `wire` has no
 // refinement info. pms::Error for a node that is not internal or cuts that do not match the nodes.
