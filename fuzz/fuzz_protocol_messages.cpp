@@ -1,5 +1,5 @@
 // libFuzzer target for every protocol message decoder (docs/architecture.md, "Correctness properties", 5): the
-// first byte picks the decoder, VSPLITS takes its stream context from the next 8 bytes, the rest is the
+// first byte picks the decoder, VSPLITS and DAG_OPS take its stream context from the next 8 bytes, the rest is the
 // payload. Any bytes must decode or throw ProtocolError — never crash, hang, over-allocate or throw anything
 // else — and what decodes must re-encode and decode to the same message (byte for byte where no quantization
 // is involved).
@@ -56,7 +56,7 @@ bool same_split(const pms::SplitRecord& a, const pms::SplitRecord& b) {
 }
 
 void fuzz_one(uint8_t which, std::span<const uint8_t> payload, const StreamContext& context) {
-  switch (which % 10) {
+  switch (which % 12) {
     case 0: check(same(payload_of(encode(decode_hello(payload))), payload)); break;
     case 1: check(same(payload_of(encode(decode_list(payload))), payload)); break;
     case 2: check(same(payload_of(encode(decode_open(payload, 1u << 16))), payload)); break;
@@ -81,6 +81,15 @@ void fuzz_one(uint8_t which, std::span<const uint8_t> payload, const StreamConte
       break;
     }
     case 9: check(same(payload_of(encode(decode_error(payload))), payload)); break;
+    case 10: check(same(payload_of(encode(decode_dag_view(payload))), payload)); break;
+    case 11: {
+      const DagOps ops = decode_dag_ops(payload, context);
+      const DagOps back = decode_dag_ops(payload_of(encode(ops, context)), context);
+      check(back.frame == ops.frame && back.final == ops.final && back.collapses == ops.collapses &&
+            back.splits.size() == ops.splits.size());
+      for (size_t i = 0; i < ops.splits.size(); ++i) check(same_split(back.splits[i], ops.splits[i]));
+      break;
+    }
   }
 }
 

@@ -21,6 +21,7 @@
 #include "io/mesh.h"
 #include "protocol/client_messages.h"
 #include "protocol/stream_mode.h"
+#include "refine/dag_traversal.h"
 #include "refine/selective_mesh.h"
 #include "render/render.h"
 
@@ -34,6 +35,8 @@ struct StreamArgs {
   uint32_t timeout_ms = 30000, connect_timeout_ms = 5000;
   uint32_t in_flight = 4, ids_per_request = 64, block_depth = client::ReceiverOptions{}.block_depth;  // receiver
   std::string fetch = client::fetch_policy_name(client::ReceiverOptions{}.fetch);
+  std::string traversal = "priority";  // dag mode
+  uint64_t budget = 0;
   bool json = false;
 };
 
@@ -158,6 +161,19 @@ void run_receiver(const StreamArgs& args) {
                client.session().mesh().face_count(), clock.seconds());
 }
 
+// --mode dag: MANAGE-TRAVERSAL's parameters; --budget 0 is FREE mode, --max-ops 0 the paper's N = 300.
+protocol::DagView dag_request(const StreamArgs& args) {
+  protocol::DagView request;
+  if (args.traversal == "priority") request.traversal = DagTraversal::priority;
+  else if (args.traversal == "linear") request.traversal = DagTraversal::linear;
+  else if (args.traversal == "constant") request.traversal = DagTraversal::constant_time;
+  else fail("--traversal", "'" + args.traversal + "': priority, linear or constant");
+  request.management = args.budget ? DagMode::budget : DagMode::free;
+  request.budget = args.budget;
+  request.max_ops = args.max_ops ? args.max_ops : 300;
+  return request;
+}
+
 void run_stream(const StreamArgs& args) {
   if (args.mode == "receiver") return run_receiver(args);
   const std::optional<protocol::StreamMode> mode = protocol::mode_named(args.mode);
@@ -174,6 +190,7 @@ void run_stream(const StreamArgs& args) {
   options.morph_frames = args.morph_frames;
   options.max_ops = args.max_ops;
   options.mode = *mode;
+  if (*mode == protocol::StreamMode::dag) options.dag = dag_request(args);
   options.reconnect_attempts = args.reconnect;
   options.answer_timeout = std::chrono::milliseconds(args.timeout_ms);
   options.connect_timeout = std::chrono::milliseconds(args.connect_timeout_ms);
@@ -209,7 +226,8 @@ void add_stream_command(CLI::App& app) {
   cmd->add_option("--model", args->model, "Model name in the server's catalogue")->required();
   cmd->add_option("--path", args->path, "PATH.json (pmstream path ...)")->required();
   cmd->add_option("--mode", args->mode, "Streaming mode: sender (view-dependent), sender-plain (the same splits as plain vsplits for a viewer that "
-                 "does not refine), vi (plain PM order until the view is satisfied) or receiver (the client asks for splits by id over HTTP); docs/cli.md")
+                 "does not refine), vi (plain PM order until the view is satisfied) receiver (the client asks for splits by id over HTTP) or dag (a thin client driven by the server's DAG "
+                 "traversal); docs/cli.md")
       ->capture_default_str();
   cmd->add_option("--tolerance", args->tolerance, "Screen-space error tolerance in pixels")
       ->check(CLI::NonNegativeNumber)
@@ -242,7 +260,15 @@ void add_stream_command(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--geomorph-frames", args->morph_frames, "Blend splits and collapses over N frames (0 = off)")
       ->capture_default_str();
-  cmd->add_option("--max-ops", args->max_ops, "vsplits + ecols per frame (0 = no cap)")->capture_default_str();
+  cmd->add_option("--max-ops", args->max_ops, "vsplits + ecols per frame (0 = no cap; dag: N, 0 = 300)")
+      ->check(CLI::Range(0u, protocol::kMaxDagOps))
+      ->capture_default_str();
+  cmd->add_option("--traversal", args->traversal, "dag: priority, linear or constant")
+      ->check(CLI::IsMember({"priority", "linear", "constant"}))
+      ->capture_default_str();
+  cmd->add_option("--budget", args->budget, "dag: BUDGET mode with this many triangles (0 = FREE mode)")
+      ->check(CLI::Range(uint64_t(0), protocol::kMaxDagBudget))
+      ->capture_default_str();
   cmd->add_option("--save-mesh", args->save_mesh, "Write the client's mesh after the last frame (PLY)");
   cmd->add_option("--snapshots", args->snapshots, "Write a PNG per frame into this directory");
   cmd->add_flag("--json", args->json, "Print one JSON object");

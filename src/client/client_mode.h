@@ -37,6 +37,9 @@ class ViewRequests {
   // attached by the session and then handed to `on_batch`. Returns the splits received; fills the
   // report's requested and latency.
   virtual size_t request_view(const Camera& camera, const BatchHandler& on_batch, FrameReport& report) = 0;
+  // DAG_VIEW for `camera` with the session's traversal options, then every DAG_OPS up to its answer's final
+  // one, each applied to the session's mesh. Returns the splits received.
+  virtual size_t request_dag_view(const Camera& camera, FrameReport& report) = 0;
 };
 
 class ClientMode {

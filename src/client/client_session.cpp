@@ -61,6 +61,25 @@ void ClientSession::apply_as_they_come(const protocol::VSplits& batch, const cha
       fail("VSPLITS", "split of " + to_string(split.vs) + " cannot be made on this mesh yet (" + promise + ")");
 }
 
+size_t ClientSession::apply_dag_ops(const protocol::DagOps& ops) {
+  if (!has_model()) fail("DAG_OPS", "received before BASE");
+  for (VertexId v : ops.collapses) {
+    const uint32_t slot = hierarchy_->find(v);
+    if (slot == kNone || hierarchy_->is_leaf(slot) || !mesh_->ecol(slot))
+      fail("DAG_OPS", "collapse of " + to_string(v) + " cannot be made on this mesh");
+  }
+  for (const SplitRecord& split : ops.splits) {
+    uint32_t slot = hierarchy_->find(split.vs);
+    if (slot == kNone || hierarchy_->is_leaf(slot)) {  // a node split before keeps its record
+      hierarchy_->add_split(split);
+      ++splits_received_;
+      slot = hierarchy_->find(split.vs);
+    }
+    if (!mesh_->vsplit(slot).done) fail("DAG_OPS", "split of " + to_string(split.vs) + " cannot be made on this mesh");
+  }
+  return ops.splits.size();
+}
+
 ViewParams ClientSession::view_params(const Camera& camera) const {
   return make_view(camera, base_.bbox_min, base_.bbox_max);
 }

@@ -34,6 +34,9 @@ class ClientSession {
   // Makes every split of an attached batch on the mesh, in order: for the modes whose client applies
   // splits as they arrive. pms::Error naming `promise` (the order the server owes) when one cannot be made.
   void apply_as_they_come(const protocol::VSplits& batch, const char* promise);
+  // The DAG mode's operations, in order: collapses, then splits (attached first if not yet known). pms::Error
+  // when one cannot be made on this mesh. Returns the splits made.
+  size_t apply_dag_ops(const protocol::DagOps& ops);
 
   bool has_model() const { return refinement_ != nullptr; }
   const protocol::StreamContext& context() const { return context_; }

@@ -40,6 +40,12 @@ void ServerConnection::send_view(const Camera& camera, float tolerance, uint32_t
   transport_->send(protocol::encode(protocol::View{camera, tolerance, frame}));
 }
 
+void ServerConnection::send(const std::vector<uint8_t>& frame) { transport_->send(frame); }
+
+protocol::DagOps ServerConnection::next_dag_ops(const protocol::StreamContext& context) {
+  return protocol::decode_dag_ops(expect(protocol::MessageType::dag_ops).payload, context);
+}
+
 protocol::VSplits ServerConnection::next_batch(const protocol::StreamContext& context) {
   return protocol::decode_vsplits(expect(protocol::MessageType::vsplits).payload, context);
 }

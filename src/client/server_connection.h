@@ -28,6 +28,9 @@ class ServerConnection {
   void send_view(const Camera& camera, float tolerance, uint32_t frame);
   // The next VSPLITS batch (of this VIEW's answer or an earlier one's).
   protocol::VSplits next_batch(const protocol::StreamContext& context);
+  // Any client frame (DAG_VIEW), and the next DAG_OPS of an answer.
+  void send(const std::vector<uint8_t>& frame);
+  protocol::DagOps next_dag_ops(const protocol::StreamContext& context);
   // The next frame, which must be of `type`.
   protocol::Frame expect(protocol::MessageType type);
 

@@ -104,6 +104,22 @@ size_t StreamingClient::request_view(const Camera& camera, const BatchHandler& o
   return received;
 }
 
+size_t StreamingClient::request_dag_view(const Camera& camera, FrameReport& report) {
+  protocol::DagView request = options_.dag;
+  request.view = {camera, options_.tolerance, ++frame_};
+  const Clock::time_point sent = Clock::now();
+  server_->send(protocol::encode(request));
+  report.requested = true;
+  size_t received = 0;
+  for (;;) {
+    const protocol::DagOps ops = server_->next_dag_ops(session_.context());
+    received += session_.apply_dag_ops(ops);
+    if (ops.frame == request.view.frame && ops.final) break;
+  }
+  report.latency_ms = std::max(report.latency_ms, milliseconds_since(sent));
+  return received;
+}
+
 FrameReport StreamingClient::frame(const Camera& camera) {
   uint32_t attempts = 0;  // over the whole frame: a server that takes the session and drops it again ends too
   for (;;) {

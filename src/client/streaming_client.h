@@ -30,6 +30,8 @@ struct ClientOptions {
   std::string name = "pmstream-client";
   // The streaming mode (client_mode.h): sender-driven, or the view-independent baseline.
   protocol::StreamMode mode = protocol::StreamMode::sender_driven;
+  // The DAG mode's MANAGE-TRAVERSAL parameters (its view and frame are filled per frame).
+  protocol::DagView dag = {};
   // A frame that loses a TCP connection reconnects and resumes the session (kim-lee-kobbelt §5.3) up to
   // this many times, waiting reconnect_delay, then twice that, and so on (capped at 8 s); 0 = fail at once.
   uint32_t reconnect_attempts = 0;
@@ -66,6 +68,7 @@ class StreamingClient : private ViewRequests {
   FrameReport frame_once(const Camera& camera);
   void reconnect(std::string reason, uint32_t& attempts);
   size_t request_view(const Camera& camera, const BatchHandler& on_batch, FrameReport& report) override;
+  size_t request_dag_view(const Camera& camera, FrameReport& report) override;
   void greet(std::unique_ptr<Transport> transport);
 
   ClientOptions options_;

@@ -1,4 +1,5 @@
-// What a client sends (docs/protocol.md): HELLO, LIST, OPEN (with a resume front), VIEW, CLOSE, and their codecs.
+// What a client sends (docs/protocol.md): HELLO, LIST, OPEN (with a resume front), VIEW, CLOSE, DAG_VIEW, and
+// their codecs.
 // Shared with the browser build: single-threaded, no std::ranges algorithms, std::format or coroutines.
 #pragma once
 #include <cstddef>
@@ -11,6 +12,7 @@
 #include "protocol/message_types.h"
 #include "protocol/stream_mode.h"
 #include "refine/camera.h"
+#include "refine/dag_traversal.h"
 
 namespace pms::protocol {
 
@@ -39,6 +41,17 @@ struct View {
   uint32_t frame = 0;   // echoed in the VSPLITS that answer it
 };
 struct Close {};
+// DAG_VIEW (StreamMode::dag): the view as VIEW carries it and MANAGE-TRAVERSAL's parameters (zheng-chan
+// §4): N, the traversal, FREE or BUDGET and the budget. Bounded so one message asks for bounded work.
+constexpr uint32_t kMaxDagOps = 65536;
+constexpr uint64_t kMaxDagBudget = uint64_t(1) << 32;
+struct DagView {
+  View view;
+  uint32_t max_ops = 300;  // N, 1..kMaxDagOps
+  DagTraversal traversal = DagTraversal::priority;
+  DagMode management = DagMode::free;
+  uint64_t budget = 0;  // triangles: 1..kMaxDagBudget in BUDGET mode, 0 in FREE mode
+};
 
 // OPEN up to its resume front. A front may list millions of leaves; a server decodes it with FrontDecoder a
 // slice at a time instead of all at once inside one message handler.
@@ -80,6 +93,7 @@ std::vector<uint8_t> encode(const List& m);
 std::vector<uint8_t> encode(const Open& m);
 std::vector<uint8_t> encode(const View& m);
 std::vector<uint8_t> encode(const Close& m);
+std::vector<uint8_t> encode(const DagView& m);
 
 // ---- decoders: payload (without the frame header) -> message; throw ProtocolError ----------------------
 Hello decode_hello(std::span<const uint8_t> payload);  // checks the magic; the version is the server's call
@@ -88,5 +102,6 @@ Open decode_open(std::span<const uint8_t> payload, uint64_t max_resume_leaves = 
 OpenHeader decode_open_header(std::span<const uint8_t> payload);  // the front is left to a FrontDecoder
 View decode_view(std::span<const uint8_t> payload);  // also rejects cameras make_view() would refuse
 Close decode_close(std::span<const uint8_t> payload);
+DagView decode_dag_view(std::span<const uint8_t> payload);  // the checks of VIEW and the bounds above
 
 }  // namespace pms::protocol

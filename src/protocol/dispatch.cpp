@@ -24,6 +24,7 @@ ClientMessage decode_client_message(const Frame& frame, uint64_t max_resume_leav
     case MessageType::open: return decode_open(frame.payload, max_resume_leaves);
     case MessageType::view: return decode_view(frame.payload);
     case MessageType::close: return decode_close(frame.payload);
+    case MessageType::dag_view: return decode_dag_view(frame.payload);
     default: unexpected(frame.type, "client");
   }
 }
@@ -36,6 +37,9 @@ ServerMessage decode_server_message(const Frame& frame, const StreamContext* con
     case MessageType::vsplits:
       if (!context) throw ProtocolError(ErrorCode::out_of_order, "VSPLITS: before any BASE");
       return decode_vsplits(frame.payload, *context);
+    case MessageType::dag_ops:
+      if (!context) throw ProtocolError(ErrorCode::out_of_order, "DAG_OPS: before any BASE");
+      return decode_dag_ops(frame.payload, *context);
     case MessageType::error: return decode_error(frame.payload);
     default: unexpected(frame.type, "server");
   }

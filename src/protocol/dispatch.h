@@ -11,10 +11,10 @@
 
 namespace pms::protocol {
 
-using ClientMessage = std::variant<Hello, List, Open, View, Close>;
-using ServerMessage = std::variant<HelloOk, Catalogue, Base, VSplits, ErrorMessage>;
+using ClientMessage = std::variant<Hello, List, Open, View, Close, DagView>;
+using ServerMessage = std::variant<HelloOk, Catalogue, Base, VSplits, ErrorMessage, DagOps>;
 // Dispatch on the frame's type; a server type (or unknown byte) from a client is bad_message and vice
-// versa. VSPLITS needs the context of the BASE before it: without one (nullptr) it is out_of_order.
+// versa. VSPLITS and DAG_OPS need the context of the BASE before it: without one (nullptr) it is out_of_order.
 ClientMessage decode_client_message(const Frame& frame, uint64_t max_resume_leaves = kDefaultMaxResumeLeaves);
 ServerMessage decode_server_message(const Frame& frame, const StreamContext* context);
 

@@ -28,11 +28,13 @@ enum class MessageType : uint8_t {
   open = 0x03,
   view = 0x04,
   close = 0x05,
+  dag_view = 0x06,
   hello_ok = 0x81,
   catalogue = 0x82,
   base = 0x83,
   vsplits = 0x84,
   error = 0x85,
+  dag_ops = 0x86,
 };
 std::string to_string(MessageType type);  // "VSPLITS", or "type 0x42" for an unknown byte
 

@@ -19,6 +19,7 @@ constexpr uint8_t kFlagResume = 1;
 constexpr uint8_t kFlagViewIndependent = 2;  // StreamMode::view_independent
 // StreamMode::sender_plain: an option of the sender-driven mode (actual cut vertices, no refinement info).
 constexpr uint8_t kFlagPlain = 4;
+constexpr uint8_t kFlagDag = 8;  // StreamMode::dag
 
 // Preorder: in the same tree, left-aligned path bits compare like the bit strings they are (for ids
 // where neither is an ancestor of the other, which is the case inside a front).
@@ -51,9 +52,11 @@ struct FrontWriter {
 std::vector<uint8_t> encode(const Open& m) {
   Writer w(MessageType::open);
   w.string(m.model, kMaxNameBytes, "model");
-  const bool vi = m.mode == StreamMode::view_independent, plain = m.mode == StreamMode::sender_plain;
-  if (!vi && !plain && m.mode != StreamMode::sender_driven) fail("OPEN", "mode: not a mode this protocol knows");
-  w.u8(uint8_t((m.resume.empty() ? 0 : kFlagResume) | (vi ? kFlagViewIndependent : 0) | (plain ? kFlagPlain : 0)));
+  const bool vi = m.mode == StreamMode::view_independent, plain = m.mode == StreamMode::sender_plain,
+             dag = m.mode == StreamMode::dag;
+  if (!vi && !plain && !dag && m.mode != StreamMode::sender_driven) fail("OPEN", "mode: not a mode this protocol knows");
+  w.u8(uint8_t((m.resume.empty() ? 0 : kFlagResume) | (vi ? kFlagViewIndependent : 0) | (plain ? kFlagPlain : 0) |
+               (dag ? kFlagDag : 0)));
   if (!m.resume.empty()) {
     std::vector<VertexId> leaves = m.resume;
     for (VertexId v : leaves)
@@ -74,11 +77,15 @@ OpenHeader decode_open_header(std::span<const uint8_t> payload) {
   OpenHeader m;
   m.model = r.string(kMaxNameBytes, "model");
   const uint8_t flags = r.u8("flags");
-  if (flags & ~(kFlagResume | kFlagViewIndependent | kFlagPlain)) r.fail(ErrorCode::bad_message, "flags", "unknown bits set");
+  if (flags & ~(kFlagResume | kFlagViewIndependent | kFlagPlain | kFlagDag))
+    r.fail(ErrorCode::bad_message, "flags", "unknown bits set");
+  if ((flags & kFlagDag) && (flags & (kFlagViewIndependent | kFlagPlain)))
+    r.fail(ErrorCode::bad_message, "flags", "the DAG mode takes neither the view-independent nor the plain bit");
   if ((flags & kFlagViewIndependent) && (flags & kFlagPlain))
     r.fail(ErrorCode::bad_message, "flags", "plain is an option of the sender-driven mode, not of view-independent");
   if (flags & kFlagViewIndependent) m.mode = StreamMode::view_independent;
   if (flags & kFlagPlain) m.mode = StreamMode::sender_plain;
+  if (flags & kFlagDag) m.mode = StreamMode::dag;
   if (flags & kFlagResume) {
     m.resume = true;
     m.resume_trees = r.u32("resume tree count");

@@ -1,4 +1,4 @@
-// What a server sends (docs/protocol.md): HELLO_OK, CATALOGUE, BASE, VSPLITS, ERROR, and their codecs.
+// What a server sends (docs/protocol.md): HELLO_OK, CATALOGUE, BASE, VSPLITS, DAG_OPS, ERROR, and their codecs.
 // Shared with the browser build: single-threaded, no std::ranges algorithms, std::format or coroutines.
 #pragma once
 #include <cstdint>
@@ -63,6 +63,16 @@ struct VSplits {
   std::vector<SplitRecord> splits;  // in the order the client must apply them (parents and partial order first)
 };
 
+// DAG_OPS (StreamMode::dag): one DAG_VIEW's operations in the order the client applies them, collapses
+// (v_s ids: v_t and v_u merge back) before splits (packets as in VSPLITS, without refinement info);
+// an answer may take several messages, the last has `final` set.
+struct DagOps {
+  uint32_t frame = 0;
+  bool final = false;
+  std::vector<VertexId> collapses;
+  std::vector<SplitRecord> splits;
+};
+
 struct ErrorMessage {
   ErrorCode code = ErrorCode::internal;
   std::string text;
@@ -76,13 +86,15 @@ std::vector<uint8_t> encode(const Catalogue& m);
 std::vector<uint8_t> encode(const Base& m);
 std::vector<uint8_t> encode(const VSplits& m, const StreamContext& context);
 std::vector<uint8_t> encode(const ErrorMessage& m);
+std::vector<uint8_t> encode(const DagOps& m, const StreamContext& context);
 
 // ---- decoders: payload (without the frame header) -> message; throw ProtocolError ----------------------
 HelloOk decode_hello_ok(std::span<const uint8_t> payload);
 Catalogue decode_catalogue(std::span<const uint8_t> payload);
 Base decode_base(std::span<const uint8_t> payload);
 VSplits decode_vsplits(std::span<const uint8_t> payload, const StreamContext& context);
-ErrorMessage decode_error(std::span<const uint8_t> payload);  // codes this build does not know pass through
+ErrorMessage decode_error(std::span<const uint8_t> payload);
+DagOps decode_dag_ops(std::span<const uint8_t> payload, const StreamContext& context);  // codes this build does not know pass through
 
 // What a receiver decodes for `info` (pm/refine_info.h): every mode, split records included, delivers it.
 using pms::as_sent;

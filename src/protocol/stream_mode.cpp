@@ -11,6 +11,7 @@ constexpr NamedMode kModes[] = {
     {StreamMode::sender_driven, "sender"},
     {StreamMode::view_independent, "vi"},
     {StreamMode::sender_plain, "sender-plain"},
+    {StreamMode::dag, "dag"},
 };
 
 }  // namespace

@@ -16,9 +16,12 @@ namespace pms::protocol {
 // it has on the client's mesh (the active ancestors of the fundamental ones) and carries no refinement
 // info; the client applies every split as it arrives and never coarsens. On the wire an option of the
 // sender-driven mode (OPEN flag bit 2).
-enum class StreamMode : uint8_t { sender_driven, view_independent, sender_plain };
+// dag: zheng-chan 2006 for a thin client: the server keeps the client's cut of the DAG of operations
+// (refine/dag_cut.h) and answers each DAG_VIEW with MANAGE-TRAVERSAL's collapses and splits, the splits with
+// their geometry; the client applies them in order and evaluates nothing itself (OPEN flag bit 3).
+enum class StreamMode : uint8_t { sender_driven, view_independent, sender_plain, dag };
 
-// The CLI's name of a mode ("sender", "vi", "sender-plain"), and back; every name, comma-separated, for help texts.
+// The CLI's name of a mode ("sender", "vi", "sender-plain", "dag"), and back; every name, comma-separated, for help texts.
 const char* mode_name(StreamMode mode);
 std::optional<StreamMode> mode_named(std::string_view name);
 std::string mode_names();

@@ -5,7 +5,8 @@
 // the model's worst case. Then v_t's quantized position (v_u keeps v_s's), info_t and info_u (43 or 65
 // bits each) and the optional normal / color of v_t (info_t and info_u only when the session's context
 // has refinement info: not in a view-independent session). The whole batch is one bit stream padded once at the end: packets are not
-// byte-aligned (docs/protocol.md has the measurements that chose this).
+// byte-aligned (docs/protocol.md has the measurements that chose this). DAG_OPS (StreamMode::dag) is the same
+// packets after a list of collapse ids in the same id code.
 #include <bit>
 #include <cmath>
 
@@ -161,22 +162,70 @@ std::vector<uint8_t> encode(const VSplits& m, const StreamContext& c) {
   return w.finish();
 }
 
+namespace {
+
+// A packet count and its packets, checked against the bytes left before anything is allocated.
+std::vector<SplitRecord> read_packets(Reader& r, const StreamContext& c) {
+  const uint32_t count = r.u32("packet count");
+  r.check_count(count, min_packet_bits(c), "packet count");
+  std::vector<SplitRecord> splits(count);
+  for (uint32_t i = 0; i < count; ++i) {
+    r.set_item("packet", i);
+    read_packet(r, c, splits[i]);
+  }
+  r.clear_item();
+  return splits;
+}
+
+// The frame number and the flags byte of VSPLITS and DAG_OPS: whether the batch is its answer's last.
+bool read_final_flag(Reader& r) {
+  const uint8_t flags = r.u8("flags");
+  if (flags & ~kFlagFinal) r.fail(ErrorCode::bad_message, "flags", "unknown bits set");
+  return flags & kFlagFinal;
+}
+
+}  // namespace
+
 VSplits decode_vsplits(std::span<const uint8_t> payload, const StreamContext& c) {
   Reader r(payload, MessageType::vsplits);
   if (const std::string why = check_context(c); !why.empty()) r.fail(ErrorCode::internal, "stream context", why);
   VSplits m;
   m.frame = r.u32("frame");
-  const uint8_t flags = r.u8("flags");
-  if (flags & ~kFlagFinal) r.fail(ErrorCode::bad_message, "flags", "unknown bits set");
-  m.final = flags & kFlagFinal;
-  const uint32_t count = r.u32("packet count");
-  r.check_count(count, min_packet_bits(c), "packet count");
-  m.splits.resize(count);
-  for (uint32_t i = 0; i < count; ++i) {
-    r.set_item("packet", i);
-    read_packet(r, c, m.splits[i]);
+  m.final = read_final_flag(r);
+  m.splits = read_packets(r, c);
+  r.expect_end();
+  return m;
+}
+
+std::vector<uint8_t> encode(const DagOps& m, const StreamContext& c) {
+  if (const std::string why = check_context(c); !why.empty()) fail("DAG_OPS", "stream context: " + why);
+  if (m.collapses.size() > UINT32_MAX || m.splits.size() > UINT32_MAX) fail("DAG_OPS", "too many operations");
+  Writer w(MessageType::dag_ops);
+  w.reserve_payload(13 + m.splits.size() * min_packet_bits(c) / 8 + m.collapses.size() * 4);
+  w.u32(m.frame);
+  w.u8(m.final ? kFlagFinal : 0);
+  w.u32(uint32_t(m.collapses.size()));
+  for (VertexId v : m.collapses) write_id(w, v, c, "collapse");
+  w.u32(uint32_t(m.splits.size()));
+  for (const SplitRecord& s : m.splits) write_packet(w, s, c);
+  return w.finish();
+}
+
+DagOps decode_dag_ops(std::span<const uint8_t> payload, const StreamContext& c) {
+  Reader r(payload, MessageType::dag_ops);
+  if (const std::string why = check_context(c); !why.empty()) r.fail(ErrorCode::internal, "stream context", why);
+  DagOps m;
+  m.frame = r.u32("frame");
+  m.final = read_final_flag(r);
+  const uint32_t collapses = r.u32("collapse count");
+  r.check_count(collapses, c.tree_id_bits + depth_field_bits(c.node_id_bits), "collapse count");
+  m.collapses.resize(collapses);
+  for (uint32_t i = 0; i < collapses; ++i) {
+    r.set_item("collapse", i);
+    m.collapses[i] = read_id(r, c, "v_s");
   }
   r.clear_item();
+  m.splits = read_packets(r, c);
   r.expect_end();
   return m;
 }

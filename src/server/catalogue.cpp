@@ -54,6 +54,14 @@ std::vector<NodeCriteria> decode_criteria(const ModelData& model, const protocol
   return criteria;
 }
 
+// Every node's position as the clients hold it, for the DAG's ERROR-EVALUATE.
+std::vector<float> snapped_positions(const ModelData& model, const protocol::PositionGrid& grid) {
+  std::vector<float> positions(3 * size_t(model.node_count()));
+  for (size_t n = 0; n < model.node_count(); ++n)
+    protocol::snap_position(grid, &model.position[3 * n], &positions[3 * n]);
+  return positions;
+}
+
 // Format 2 for a model without normals and colors. The .pms holds records at the grid it was built for;
 // a server started with other position bits codes its own once.
 void attach_records(ServedModel& model, const protocol::Base& base) {
@@ -91,6 +99,7 @@ std::unique_ptr<ServedModel> open_model(const std::string& path, uint32_t positi
   model->split_rank.assign(data.node_count(), kNone);
   for (uint32_t i = 0; i < data.split_order.size(); ++i) model->split_rank[data.split_order[i]] = i;
   model->dependencies = DependencyFilter(data);
+  model->dag = std::make_unique<const Dag>(data, snapped_positions(data, model->context.grid));
   protocol::StreamContext sender = model->context;
   sender.has_refinement = true;
   model->packets = protocol::PacketTable(data, sender);

@@ -13,6 +13,7 @@
 #include "protocol/split_bands.h"
 #include "protocol/stream_context.h"
 #include "refine/criteria.h"
+#include "refine/dag.h"
 #include "server/limits.h"
 #include "server/selective_streaming.h"
 
@@ -32,6 +33,7 @@ struct ServedModel {
   std::vector<uint32_t> split_rank;    // per node: its index in split_order (view-independent mode); leaves kNone
   DependencyFilter dependencies;
   protocol::PacketTable packets;  // sender-driven packets (with refinement info)
+  std::unique_ptr<const Dag> dag;  // the DAG mode's operations, on the wire grid's positions
   // The receiver-driven answers' body format (server/split_records_body.h): 2, the compact records, which
   // carry no normals or colors; 1, VSPLITS packets, for a model that has either.
   uint32_t records_format = 1;

@@ -47,6 +47,7 @@ class Session {
   bool closing() const { return closing_; }
   bool greeted() const { return greeted_; }
   bool opened() const { return mode_ && mode_->opened(); }  // BASE queued
+  const SessionMode* session_mode() const { return mode_.get(); }  // nullptr before OPEN
   // Bytes this session holds beyond the shared model (the outbox is the transport's and counted there),
   // and the part of them that grows with the client's front.
   size_t state_bytes() const { return sizeof(*this) + (mode_ ? mode_->state_bytes() : 0); }

@@ -1,6 +1,7 @@
 // The one place a server's streaming modes are chosen: a new mode adds its case here and its own files.
 #include "server/session_mode.h"
 
+#include "server/dag_mode.h"
 #include "server/sender_driven_mode.h"
 #include "server/view_independent_mode.h"
 
@@ -12,6 +13,7 @@ std::unique_ptr<SessionMode> open_session_mode(const protocol::OpenHeader& open,
     case protocol::StreamMode::sender_driven:
     case protocol::StreamMode::sender_plain: return std::make_unique<SenderDrivenMode>(open, open_frame, context);
     case protocol::StreamMode::view_independent: return std::make_unique<ViewIndependentMode>(open, context);
+    case protocol::StreamMode::dag: return std::make_unique<DagSessionMode>(open, context);
   }
   throw protocol::ProtocolError(protocol::ErrorCode::bad_message, "OPEN: a mode this server does not stream");
 }

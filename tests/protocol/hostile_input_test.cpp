@@ -54,6 +54,7 @@ std::vector<Sample> samples() {
       {MessageType::open, encode(Open{"m", test::random_front(rng, 5, 10)}), [](auto p) { decode_open(p); }},
       {MessageType::view, encode(view), [](auto p) { decode_view(p); }},
       {MessageType::close, encode(Close{}), [](auto p) { decode_close(p); }},
+      {MessageType::dag_view, encode(DagView{}), [](auto p) { decode_dag_view(p); }},
       {MessageType::hello_ok, encode(HelloOk{kProtocolVersion, "srv", 1000, 2000}), [](auto p) { decode_hello_ok(p); }},
       {MessageType::catalogue, encode(Catalogue{{model_info(sphere.model(), "sphere"), ModelInfo{}}}),
        [](auto p) { decode_catalogue(p); }},
@@ -145,6 +146,32 @@ TEST(HostileInput, ViewFields) {
                   "eye and target must differ");
 }
 
+TEST(HostileInput, DagViewFields) {
+  DagView budget;
+  budget.management = DagMode::budget;
+  budget.budget = 60000;
+  const Payload good = payload_of(encode(budget), MessageType::dag_view);
+  const DagView back = decode_dag_view(good);
+  EXPECT_EQ(back.max_ops, 300u);
+  EXPECT_EQ(back.management, DagMode::budget);
+  EXPECT_EQ(back.budget, 60000u);
+  // Offsets: the view's 56 bytes, max ops 56, traversal 60, management 61, budget 62.
+  auto with = [&](size_t offset, uint64_t v, size_t bytes) {
+    Payload p = good;
+    std::memcpy(&p[offset], &v, bytes);
+    return p;
+  };
+  expect_rejected([&] { decode_dag_view(with(56, 0, 4)); }, ErrorCode::bad_message, "DAG_VIEW: max ops");
+  expect_rejected([&] { decode_dag_view(with(56, kMaxDagOps + 1, 4)); }, ErrorCode::bad_message, "DAG_VIEW: max ops");
+  expect_rejected([&] { decode_dag_view(with(60, 3, 1)); }, ErrorCode::bad_message, "DAG_VIEW: traversal");
+  expect_rejected([&] { decode_dag_view(with(61, 2, 1)); }, ErrorCode::bad_message, "DAG_VIEW: management");
+  expect_rejected([&] { decode_dag_view(with(62, 0, 8)); }, ErrorCode::bad_message, "DAG_VIEW: budget");
+  expect_rejected([&] { decode_dag_view(with(62, UINT64_MAX, 8)); }, ErrorCode::bad_message, "DAG_VIEW: budget");
+  expect_rejected([&] { decode_dag_view(with(61, 0, 1)); }, ErrorCode::bad_message, "DAG_VIEW: budget: must be 0");
+  expect_rejected([&] { decode_dag_view(with(40, 0, 4)); }, ErrorCode::bad_message, "DAG_VIEW: viewport");
+  expect_rejected([&] { decode_dag_view(Payload(good.begin(), good.end() - 1)); }, ErrorCode::bad_message, "DAG_VIEW");
+}
+
 TEST(HostileInput, OpenResume) {
   auto open_payload = [](uint8_t flags, std::initializer_list<uint32_t> words, const std::vector<int>& bits) {
     Writer w(MessageType::open);
@@ -154,7 +181,9 @@ TEST(HostileInput, OpenResume) {
     for (int b : bits) w.bits(uint64_t(b), 1);
     return payload_of(w.finish(), MessageType::open);
   };
-  expect_rejected([&] { decode_open(open_payload(8, {}, {})); }, ErrorCode::bad_message, "OPEN: flags: unknown bits");
+  expect_rejected([&] { decode_open(open_payload(16, {}, {})); }, ErrorCode::bad_message, "OPEN: flags: unknown bits");
+  expect_rejected([&] { decode_open(open_payload(8 | 2, {}, {})); }, ErrorCode::bad_message, "OPEN: flags: the DAG mode");
+  EXPECT_EQ(decode_open(open_payload(8, {}, {})).mode, StreamMode::dag);
   expect_rejected([&] { decode_open(open_payload(0x80, {}, {})); }, ErrorCode::bad_message, "OPEN: flags: unknown bits");
   // Plain (bit 2) is an option of the sender-driven mode: never with view-independent (bit 1), resume or not.
   expect_rejected([&] { decode_open(open_payload(6, {}, {})); }, ErrorCode::bad_message, "OPEN: flags: plain");

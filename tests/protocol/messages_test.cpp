@@ -337,5 +337,39 @@ TEST(Messages, DispatchByDirection) {
   EXPECT_EQ(std::get<VSplits>(decode_server_message(frame, &c)).frame, 7u);
 }
 
+// DAG_OPS: collapse ids then packets, through the dispatcher (which needs a BASE's context, as VSPLITS does).
+TEST(Messages, DagOpsAndDagViewRoundTrip) {
+  Rng rng(11);
+  StreamContext c = test::random_context(rng);
+  c.has_refinement = false;
+  DagOps ops{12, true, {}, {}};
+  for (int i = 0; i < 5; ++i) {
+    ops.collapses.push_back(test::random_split(rng, c).vs);
+    ops.splits.push_back(test::random_split(rng, c));
+  }
+  const std::vector<uint8_t> bytes = encode(ops, c);
+  Frame frame{MessageType::dag_ops, payload_of(bytes, MessageType::dag_ops)};
+  test::expect_rejected([&] { decode_server_message(frame, nullptr); }, ErrorCode::out_of_order, "DAG_OPS: before any BASE");
+  const DagOps back = std::get<DagOps>(decode_server_message(frame, &c));
+  EXPECT_EQ(back.frame, 12u);
+  EXPECT_TRUE(back.final);
+  EXPECT_EQ(back.collapses, ops.collapses);
+  ASSERT_EQ(back.splits.size(), ops.splits.size());
+  EXPECT_EQ(encode(back, c), bytes);
+
+  DagView view;
+  view.view.frame = 3;
+  view.traversal = DagTraversal::linear;
+  view.max_ops = 77;
+  const std::vector<uint8_t> request = encode(view);
+  EXPECT_EQ(request.size(), kFrameHeaderBytes + 70);
+  frame = {MessageType::dag_view, payload_of(request, MessageType::dag_view)};
+  const DagView got = std::get<DagView>(decode_client_message(frame));
+  EXPECT_EQ(got.view.frame, 3u);
+  EXPECT_EQ(got.traversal, DagTraversal::linear);
+  EXPECT_EQ(got.max_ops, 77u);
+  EXPECT_EQ(got.management, DagMode::free);
+}
+
 }  // namespace
 }  // namespace pms::protocol

@@ -56,30 +56,11 @@ client::ClientOptions options_for(StreamMode mode, float tolerance = 1.0f) {
   return options;
 }
 
-// A client bound to a server Session in this process, so a test reads the session's tags frame by frame.
-struct InProcess {
-  std::shared_ptr<server::Session> session;
-  std::unique_ptr<client::StreamingClient> client;
-};
+using test::InProcess;
 
 InProcess in_process(const Fixture& f, StreamMode mode, float tolerance) {
   static const server::ServerLimits limits;
-  InProcess p;
-  p.session = std::make_shared<server::Session>(f.catalogue, limits);
-  client::LocalEndpoint endpoint;
-  endpoint.receive = [s = p.session](protocol::Frame frame) { s->receive(std::move(frame)); };
-  endpoint.next_frame = [s = p.session]() -> server::Buffer {
-    while (s->outbox().empty())
-      if (!s->pump()) return nullptr;
-    server::Buffer frame = std::move(s->outbox().front());
-    s->outbox().pop_front();
-    return frame;
-  };
-  p.client = std::make_unique<client::StreamingClient>(
-      std::make_unique<client::LocalTransport>(std::move(endpoint), limits.max_client_message),
-      options_for(mode, tolerance));
-  p.client->open(f.name);
-  return p;
+  return test::in_process(f, options_for(mode, tolerance), limits);
 }
 
 // The splits a client holds, in the order they arrived: its hierarchy allocates each split's children as
@@ -293,7 +274,8 @@ TEST(SenderPlain, HostileOpenFlagsGetAnError) {
   };
   EXPECT_EQ(answer(2 | 4, 0), ErrorCode::bad_message) << "plain with view-independent";
   EXPECT_EQ(answer(1 | 2 | 4, roots), ErrorCode::bad_message) << "plain with view-independent, resuming";
-  EXPECT_EQ(answer(8 | 4, 0), ErrorCode::bad_message) << "an unknown bit beside plain";
+  EXPECT_EQ(answer(16 | 4, 0), ErrorCode::bad_message) << "an unknown bit beside plain";
+  EXPECT_EQ(answer(8 | 4, 0), ErrorCode::bad_message) << "the DAG bit beside plain";
   EXPECT_EQ(answer(0xFF, roots), ErrorCode::bad_message) << "every bit";
   EXPECT_EQ(answer(1 | 4, roots + 1), ErrorCode::bad_id) << "a plain resume over more trees than the model has";
   // The server goes on serving a good plain session.

@@ -285,5 +285,32 @@ TEST(Session, PlainAnswersAreSlicedAndNameHeldCutVertices) {
   EXPECT_TRUE(reader.batches.back().final);
 }
 
+// The DAG mode: a DAG_VIEW is only recorded; one pump runs the traversal, whose work the message bounds
+// (constant-time: at most N nodes evaluated and N operations per phase), and every later pump sends one
+// DAG_OPS of at most batch_splits operations.
+TEST(Session, DagAnswersAreBoundedSlices) {
+  const Hierarchy& h = terrain().hierarchy;
+  server::ServerLimits limits;
+  limits.batch_splits = 128;
+  server::Session session(terrain().catalogue, limits);
+  greet(session);
+  session.receive(frame_of(protocol::encode(protocol::Open{"terrain", {}, protocol::StreamMode::dag})));
+  protocol::DagView request;
+  request.view = {close_camera(h), 0.0f, 1};
+  request.traversal = DagTraversal::constant_time;
+  request.max_ops = 500;
+  session.receive(frame_of(protocol::encode(request)));
+  EXPECT_EQ(session.last_work(), 0u) << "a DAG_VIEW is only recorded";
+  ASSERT_TRUE(session.pump());
+  EXPECT_GT(session.last_work(), 0u);
+  EXPECT_LE(session.last_work(), 4u * request.max_ops) << "the traversal: N evaluated and N made per phase";
+  size_t batches = 0;
+  while (session.pump()) {
+    ++batches;
+    EXPECT_LE(session.last_work(), limits.batch_splits) << "one DAG_OPS a pump";
+  }
+  EXPECT_GT(batches, 1u);
+}
+
 }  // namespace
 }  // namespace pms

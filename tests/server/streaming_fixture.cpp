@@ -20,6 +20,7 @@
 #include "refine/adapt.h"
 #include "refine/selective_mesh.h"
 #include "refine/vertex_hierarchy.h"
+#include "client/local_transport.h"
 #include "server/catalogue.h"
 #include "test_support.h"
 
@@ -91,6 +92,24 @@ Faces local_faces(const Hierarchy& snapped, const Camera& camera, float toleranc
   refinement.set_view(make_view(camera, model.bbox_min, model.bbox_max));
   refinement.converge([&](std::span<const uint32_t> leaves) { return add_model_splits(hierarchy, model, leaves); });
   return faces_by_id(mesh);
+}
+
+InProcess in_process(const Fixture& f, const client::ClientOptions& options, const server::ServerLimits& limits) {
+  InProcess p;
+  p.session = std::make_shared<server::Session>(f.catalogue, limits);
+  client::LocalEndpoint endpoint;
+  endpoint.receive = [s = p.session](protocol::Frame frame) { s->receive(std::move(frame)); };
+  endpoint.next_frame = [s = p.session]() -> server::Buffer {
+    while (s->outbox().empty())
+      if (!s->pump()) return nullptr;
+    server::Buffer frame = std::move(s->outbox().front());
+    s->outbox().pop_front();
+    return frame;
+  };
+  p.client = std::make_unique<client::StreamingClient>(
+      std::make_unique<client::LocalTransport>(std::move(endpoint), limits.max_client_message), options);
+  p.client->open(f.name);
+  return p;
 }
 
 std::optional<protocol::ErrorCode> send_raw(uint16_t port, const std::vector<std::vector<uint8_t>>& messages) {

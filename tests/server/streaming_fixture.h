@@ -14,7 +14,10 @@
 #include "protocol/server_messages.h"
 #include "refine/camera.h"
 #include "refine/selective_mesh.h"
+#include "client/streaming_client.h"
 #include "server/catalogue.h"
+#include "server/limits.h"
+#include "server/session.h"
 
 namespace pms::test {
 
@@ -40,6 +43,14 @@ Faces faces_by_id(SelectiveMesh& mesh);
 
 // Local refinement of the same model (positions as the wire carries them) for one view.
 Faces local_faces(const Hierarchy& snapped, const Camera& camera, float tolerance);
+
+// A client bound to a server Session in this process (LocalTransport), so a test reads the session frame
+// by frame; the model is open. `limits` must outlive it.
+struct InProcess {
+  std::shared_ptr<server::Session> session;
+  std::unique_ptr<client::StreamingClient> client;
+};
+InProcess in_process(const Fixture& f, const client::ClientOptions& options, const server::ServerLimits& limits);
 
 // A raw connection to 127.0.0.1:port that sends `messages` and reads until the server closes; the code of
 // the ERROR it got, if any.

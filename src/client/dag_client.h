@@ -1,0 +1,19 @@
+// The DAG mode on the client (zheng-chan 2006, StreamMode::dag): a thin client with no criteria and no
+// hierarchy walk of its own. Each frame sends DAG_VIEW (the view, N, the traversal, FREE or BUDGET and its
+// budget) and applies the DAG_OPS that answer it as they come: collapses, then splits, each legal on this
+// mesh when it comes. Its mesh is the server's cut of the DAG after every frame.
+// Shared with the browser build: single-threaded, no std::ranges algorithms, std::format or coroutines.
+#pragma once
+#include "client/client_mode.h"
+
+namespace pms::client {
+
+class DagClient : public ClientMode {
+ public:
+  protocol::StreamMode wire_mode() const override { return protocol::StreamMode::dag; }
+  void prepare(ClientSession& session) const override { session.refinement_info = false; }
+  void frame(const Camera& camera, ClientSession& session, ViewRequests& server, FrameReport& report) override;
+  void settle(ClientSession&) override {}
+};
+
+}  // namespace pms::client

@@ -1,0 +1,56 @@
+// The DAG mode (zheng-chan 2006 §4–5, StreamMode::dag): a thin client with no hierarchy walk and no criteria
+// of its own, driven by the server. The session holds the client's cut of the model's DAG of operations
+// (refine/dag_cut.h, about a byte per node) and a traverser; each DAG_VIEW runs MANAGE-TRAVERSAL once on it
+// and the operations go down as DAG_OPS in batches, collapses first, then splits with their geometry and
+// fundamental cut vertices (docs/internals.md, "The DAG mode": why not the actual ones), so the client's
+// mesh is the server's cut after every answer. No resume yet: OPEN with a resume front is refused.
+#pragma once
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+#include "protocol/client_messages.h"
+#include "protocol/stream_context.h"
+#include "refine/dag_cut.h"
+#include "refine/dag_traversal.h"
+#include "server/session_mode.h"
+
+namespace pms::server {
+
+class DagSessionMode : public SessionMode {
+ public:
+  // Queues BASE at once. ProtocolError for an OPEN with a resume front.
+  DagSessionMode(const protocol::OpenHeader& open, const ModeContext& context);
+
+  void receive(const protocol::ClientMessage& message) override;
+  bool has_work() const override { return pending_ || sent_ < ops_.size() || answering_; }
+  // Either one MANAGE-TRAVERSAL for the latest DAG_VIEW or one DAG_OPS batch of its answer (docs/internals.md,
+  // "The DAG mode": why one traversal is a bounded slice).
+  void pump(uint64_t& work) override;
+  bool opened() const override { return true; }
+  void stop() override;
+  size_t state_bytes() const override;
+  size_t front_bytes() const override { return cut_.memory_bytes(); }
+  uint64_t splits_sent() const override { return splits_sent_; }
+
+  const DagCut& cut() const { return cut_; }  // for tests and fuzzers: the client's mesh is this cut's
+
+ private:
+  void traverse(uint64_t& work);
+  void emit_batch(uint64_t& work);
+
+  ModeContext context_;
+  protocol::StreamContext wire_;  // no refinement info: the client has no criteria
+  DagCut cut_;
+  DagTraverser traverser_;
+  LatestView view_;
+  DagManageOptions options_;
+  bool pending_ = false;    // a DAG_VIEW waits for its traversal
+  bool answering_ = false;  // the final DAG_OPS of the traversed view is still to send
+  uint32_t answer_frame_ = 0;
+  std::vector<DagOp> ops_;  // the answer: collapses, then splits
+  size_t sent_ = 0;
+  uint64_t splits_sent_ = 0;
+};
+
+}  // namespace pms::server
