@@ -68,7 +68,6 @@ constexpr const char* kFigure13 = R"(#2-level progressive mesh
 4, 1, 7}
 )";
 
-constexpr uint32_t kNo = MultilevelMesh::kNoRepresentative;
 
 void expect_same(const MultilevelMesh& a, const MultilevelMesh& b) {
   EXPECT_EQ(a.dimension, b.dimension);
