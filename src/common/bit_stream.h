@@ -60,7 +60,8 @@ class BitReader {
     ++pos_;
     return b;
   }
-  uint64_t bits(unsigned n, const char* field) {  // n <= 64
+  uint64_t bits(unsigned n, const char* field) {
+    if (n > 64) fail(what_, std::string(field) + ": a field of " + std::to_string(n) + " bits");
     if (n > end_ - pos_) fail(what_, std::string(field) + ": truncated");
     uint64_t value = 0;
     for (unsigned got = 0; got < n;) {

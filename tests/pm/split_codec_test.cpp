@@ -99,7 +99,7 @@ TEST(SplitCodec, TablesWithABadGridStepAreRefused) {
   for (const float bad : {std::numeric_limits<float>::quiet_NaN(), std::numeric_limits<float>::infinity(), -1.0f}) {
     BitWriter changed;
     BitReader all(w.bytes(), 0, w.size(), "tables");
-    changed.bits(all.bits(kGridStepAt, "head"), kGridStepAt);
+    for (size_t i = 0; i < kGridStepAt; ++i) changed.bit(unsigned(all.bits(1, "head")));
     all.bits(32, "grid step");
     changed.bits(std::bit_cast<uint32_t>(bad), 32);
     while (all.bits_left() > 0) changed.bit(unsigned(all.bits(1, "rest")));
