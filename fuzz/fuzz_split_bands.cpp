@@ -1,7 +1,8 @@
 // libFuzzer target for records format 2's reader (protocol/split_bands.h), the receiver-driven client's
 // decoder of every split answer: the input is u8 depth | u8 id count | a body. A real model's code tables
 // and a client holding its base mesh read the hostile body as the answer to the first ids' bands; it
-// either attaches valid splits (the hierarchy stays one the mesh can use) or throws pms::Error.
+// either attaches splits or throws pms::Error, and the mesh refined by what it attached stays valid or
+// refuses a split with pms::Error.
 #include <cstddef>
 #include <cstdint>
 #include <span>
@@ -60,10 +61,16 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     pms::protocol::read_split_bands(std::span(data + 2, size - 2), request, m.codec, m.grid, h, kMaxRecords);
   } catch (const pms::Error&) {
   }
-  // Whatever was attached before an error, the base mesh refined by it must stay a valid mesh.
+  // Whatever was attached, refining the base mesh by it either keeps a valid mesh or stops with
+  // pms::Error at a split whose cut vertices do not fit (a hostile server's records decode to ids the
+  // model has, not necessarily to its splits): the client then drops the model, it never corrupts it.
   pms::SelectiveMesh mesh(h, m.model.base_faces);
-  for (uint32_t slot = 0; slot < h.size(); ++slot)
-    if (!h.is_leaf(slot)) mesh.vsplit(slot);
+  try {
+    for (uint32_t slot = 0; slot < h.size(); ++slot)
+      if (!h.is_leaf(slot)) mesh.vsplit(slot);
+  } catch (const pms::Error&) {
+    return 0;
+  }
   if (!mesh.check_invariants(nullptr)) __builtin_trap();
   return 0;
 }
