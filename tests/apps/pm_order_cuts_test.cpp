@@ -15,6 +15,7 @@
 #include "pm/hierarchy.h"
 #include "pm/pms_file.h"
 #include "pm/split_codec.h"
+#include "record_bits_model.h"
 #include "test_support.h"
 
 namespace pms::app {
@@ -67,16 +68,7 @@ void measure(const char* name, const ModelData& model) {
 }
 
 TEST(PmOrderCuts, TopologyBitsAgainstFundamentalCuts) {
-  if (const char* path = std::getenv("PMSTREAM_RECORD_BITS_PMS")) {
-    const auto file = PmsFile::open(path);
-    measure(path, file->model());
-    return;
-  }
-  PMS_REQUIRE_SHARED_MODEL(path, "bunny.ply.xz");
-  Mesh mesh = load_mesh(path.string());
-  clean_mesh(mesh);
-  const Hierarchy h = build_progressive_mesh(mesh).hierarchy;
-  measure("bunny", model_of(h));
+  PMS_MEASURE_RECORD_BITS_MODEL(measure);
 }
 
 }  // namespace
