@@ -51,6 +51,8 @@ void run_sender_group(BenchContext& context);
 void run_receiver_group(BenchContext& context);
 // Requirement 8's soak: many resuming clients against one server for minutes (bench_soak.cpp).
 void run_soak_group(BenchContext& context);
+// E9: the DAG mode's three traversals along a scan route (bench_dag.cpp).
+void run_dag_group(BenchContext& context);
 
 // The directory holding models/: `explicit_dir` (--shared) if given, else $PMSTREAM_SHARED_DIR, else
 // ../shared or ../../shared relative to the working directory and then to `exe_dir`. An explicit

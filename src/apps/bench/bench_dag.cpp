@@ -1,0 +1,237 @@
+// The "dag" group, E9 (zheng-chan 2006 §6, Figs. 6–9): dragon along the 180-frame scan route, τ = 0.1 % of
+// the viewport height, N = 300, a 60,000-triangle budget. Per traversal (priority, linear, constant-time):
+// the time of MANAGE-TRAVERSAL per frame, the accuracy of linear and constant-time against priority (the share
+// of priority's triangles their mesh also has, every 5 frames), the fronts against the mesh, the server's
+// state per session and the bytes down per frame.
+//
+// Each traversal runs twice in lockstep on the same views: once as the real DAG mode (a server Session in this
+// process, a StreamingClient applying its DAG_OPS, for bytes, session state and the client's mesh), once as a
+// bare DagTraverser over its own cut, timed alone. Both are deterministic, so the two cuts must agree; the
+// bench fails if they do not.
+#include <algorithm>
+#include <array>
+#include <cstdio>
+
+#include "apps/bench/bench.h"
+#include "apps/bench/bench_model.h"
+#include "apps/bench/bench_refine.h"
+#include "apps/bench/gnuplot.h"
+#include "apps/bench/report.h"
+#include "apps/camera_path.h"
+#include "apps/percentile.h"
+#include "apps/resource_usage.h"
+#include "client/streaming_client.h"
+#include "common/error.h"
+#include "refine/dag_traversal.h"
+#include "server/dag_mode.h"
+#include "server/session_mode.h"
+
+namespace pms::app {
+namespace {
+
+using nlohmann::json;
+
+constexpr uint32_t kFrames = 180, kQuickFrames = 40;
+constexpr uint32_t kMaxOps = 300;
+constexpr uint64_t kBudget = 60000;
+constexpr float kToleranceOfHeight = 0.001f;
+constexpr uint32_t kAccuracyEvery = 5;
+
+constexpr DagTraversal kTraversals[] = {DagTraversal::priority, DagTraversal::linear, DagTraversal::constant_time};
+constexpr const char* kTraversalNames[] = {"priority", "linear", "constant-time"};
+
+// A face as its three vertex ids, rotated to start at the smallest: equal faces of two meshes compare equal.
+using IdFace = std::array<uint64_t, 6>;
+
+std::vector<IdFace> faces_by_id(const SelectiveMesh& mesh) {
+  const VertexHierarchy& h = mesh.hierarchy();
+  std::vector<IdFace> faces;
+  faces.reserve(mesh.face_count());
+  for (uint32_t f = 0; f < mesh.face_capacity(); ++f) {
+    if (!mesh.face_alive(f)) continue;
+    std::array<std::array<uint64_t, 2>, 3> ids;
+    for (int k = 0; k < 3; ++k) ids[size_t(k)] = {h.id(mesh.face(f)[k]).tree, h.id(mesh.face(f)[k]).node};
+    std::rotate(ids.begin(), std::min_element(ids.begin(), ids.end()), ids.end());
+    faces.push_back({ids[0][0], ids[0][1], ids[1][0], ids[1][1], ids[2][0], ids[2][1]});
+  }
+  std::sort(faces.begin(), faces.end());
+  return faces;
+}
+
+// The share of `reference`'s faces that `faces` holds too, in percent (both sorted).
+double shared_percent(const std::vector<IdFace>& faces, const std::vector<IdFace>& reference) {
+  size_t common = 0;
+  for (size_t i = 0, j = 0; i < faces.size() && j < reference.size();) {
+    if (faces[i] < reference[j]) ++i;
+    else if (reference[j] < faces[i]) ++j;
+    else ++common, ++i, ++j;
+  }
+  return reference.empty() ? 100 : 100.0 * double(common) / double(reference.size());
+}
+
+struct TraversalRun {
+  std::vector<double> frame_ms, evaluated, ops, down_bytes, triangles, front_share;
+  size_t max_session_bytes = 0, max_cut_bytes = 0, max_traverser_bytes = 0;
+  uint64_t max_triangles = 0;
+  std::vector<std::vector<IdFace>> samples;  // the client's mesh every kAccuracyEvery frames
+  std::vector<double> accuracy;              // against priority's samples
+};
+
+const server::DagSessionMode& dag_mode_of(const InProcessSession& local) {
+  return dynamic_cast<const server::DagSessionMode&>(*local.session->session_mode());
+}
+
+TraversalRun run_traversal(const BenchModel& m, const std::vector<Camera>& route, DagTraversal traversal) {
+  const float tolerance = kToleranceOfHeight * float(route[0].height);
+  InProcessSession local = in_process_session(m);
+  client::ClientOptions options{tolerance};
+  options.mode = protocol::StreamMode::dag;
+  options.dag.traversal = traversal;
+  options.dag.management = DagMode::budget;
+  options.dag.budget = kBudget;
+  options.dag.max_ops = kMaxOps;
+  client::StreamingClient client(std::move(local.transport), options);
+  client.open(m.name);
+
+  const Dag& dag = *m.served->dag;
+  DagCut cut(dag);
+  DagTraverser traverser(cut);
+  const DagManageOptions manage{traversal, DagMode::budget, kMaxOps, kBudget};
+  server::LatestView view;
+  std::vector<DagOp> ops;
+  TraversalRun run;
+  for (uint32_t i = 0; i < route.size(); ++i) {
+    view.record({route[i], tolerance, i + 1}, m.served->model());
+    ops.clear();
+    Stopwatch clock;
+    traverser.set_view(view.criteria);
+    const DagFrameStats stats = traverser.manage(manage, ops);
+    run.frame_ms.push_back(1000 * clock.seconds());
+
+    const client::FrameReport report = client.frame(route[i]);
+    const server::DagSessionMode& mode = dag_mode_of(local);
+    if (mode.cut().split_count() != cut.split_count() || mode.cut().triangles() != cut.triangles() ||
+        client.session().mesh().face_count() != cut.triangles())
+      fail("bench dag", "frame " + std::to_string(i) + ": the session's cut or the client's mesh is not the traverser's");
+    run.evaluated.push_back(stats.evaluated);
+    run.ops.push_back(double(ops.size()));
+    run.down_bytes.push_back(double(report.down_bytes));
+    run.triangles.push_back(double(cut.triangles()));
+    run.front_share.push_back(double(cut.fc_size() + cut.fs_size()) / double(std::max<uint64_t>(cut.triangles(), 1)));
+    run.max_triangles = std::max(run.max_triangles, cut.triangles());
+    run.max_session_bytes = std::max(run.max_session_bytes, mode.state_bytes());
+    run.max_cut_bytes = std::max(run.max_cut_bytes, cut.memory_bytes());
+    run.max_traverser_bytes = std::max(run.max_traverser_bytes, traverser.memory_bytes());
+    if (i % kAccuracyEvery == 0) run.samples.push_back(faces_by_id(client.session().mesh()));
+  }
+  return run;
+}
+
+double mean(const std::vector<double>& v) {
+  double sum = 0;
+  for (double x : v) sum += x;
+  return v.empty() ? 0 : sum / double(v.size());
+}
+
+std::vector<double> sample_frames(size_t count) {
+  std::vector<double> frames;
+  for (size_t k = 0; k < count; ++k) frames.push_back(double(k * kAccuracyEvery));
+  return frames;
+}
+
+std::vector<double> all_frames(size_t count) {
+  std::vector<double> frames;
+  for (size_t k = 0; k < count; ++k) frames.push_back(double(k));
+  return frames;
+}
+
+// Draws `plot` into out_dir/png and returns the report's line for it.
+std::string plot_line(const BenchContext& context, const Plot& plot, const std::string& png, const std::string& alt) {
+  const std::string skipped = plot_png(plot, context.options.out_dir / png);
+  if (skipped.empty()) return "![" + alt + "](" + png + ")\n\n";
+  std::fprintf(stderr, "bench: %s\n", skipped.c_str());
+  return "No plot " + png + ": " + skipped + ".\n\n";
+}
+
+std::string plots(const BenchContext& context, const TraversalRun (&runs)[3]) {
+  Plot time{"DAG traversal time per frame", "frame", "ms (log)", "", false, true, {}};
+  Plot accuracy{"Correct triangles against priority, every 5 frames", "frame", "% of priority's triangles", "", false, false, {}};
+  Plot fronts{"Fronts against the mesh", "frame", "(Fc + Fs) / triangles", "triangles", false, false, {}};
+  for (int t = 0; t < 3; ++t) {
+    const std::vector<double> frames = all_frames(runs[t].frame_ms.size());
+    time.series.push_back({kTraversalNames[t], frames, runs[t].frame_ms});
+    if (t > 0) accuracy.series.push_back({kTraversalNames[t], sample_frames(runs[t].accuracy.size()), runs[t].accuracy});
+    fronts.series.push_back({kTraversalNames[t], frames, runs[t].front_share});
+    fronts.series.push_back({std::string(kTraversalNames[t]) + " triangles", frames, runs[t].triangles, true});
+  }
+  return plot_line(context, time, "dag-time.png", "traversal ms per frame") +
+         plot_line(context, accuracy, "dag-accuracy.png", "accuracy against priority") +
+         plot_line(context, fronts, "dag-fronts.png", "front size against mesh size");
+}
+
+json run_json(const TraversalRun& run, uint32_t nodes) {
+  return {{"frame_ms", run.frame_ms},
+          {"evaluated", run.evaluated},
+          {"ops", run.ops},
+          {"down_bytes", run.down_bytes},
+          {"triangles", run.triangles},
+          {"front_share", run.front_share},
+          {"accuracy_every_5_frames", run.accuracy},
+          {"max_session_bytes", run.max_session_bytes},
+          {"max_cut_bytes", run.max_cut_bytes},
+          {"max_traverser_bytes", run.max_traverser_bytes},
+          {"session_bytes_per_node", double(run.max_session_bytes) / nodes}};
+}
+
+}  // namespace
+
+void run_dag_group(BenchContext& context) {
+  std::string section = "## dag: E9, the DAG of operations' traversals (zheng-chan 2006 §6)\n\n";
+  if (skipped_without_models(context, section)) return;
+  const bool quick = context.options.quick;
+  const std::string name = context.options.models.empty() ? (quick ? "bunny" : "dragon") : context.options.models[0];
+  const BenchModel m = prepare_model(context, name);
+  const std::vector<Camera> route = path_of(m, PathKind::scan, quick ? kQuickFrames : kFrames);
+  const uint32_t nodes = m.served->dag->size();
+  const float tolerance = kToleranceOfHeight * float(route[0].height);
+
+  TraversalRun runs[3];
+  for (int t = 0; t < 3; ++t) {
+    std::fprintf(stderr, "bench: dag %s along %zu frames ...\n", kTraversalNames[t], route.size());
+    runs[t] = run_traversal(m, route, kTraversals[t]);
+  }
+  for (TraversalRun& run : runs)
+    for (size_t k = 0; k < run.samples.size(); ++k) run.accuracy.push_back(shared_percent(run.samples[k], runs[0].samples[k]));
+
+  Table table({{"traversal", false}, {"median ms", true}, {"p99 ms", true}, {"evaluated / frame", true},
+               {"ops / frame", true}, {"max triangles", true}, {"(Fc + Fs) / triangles", true}, {"accuracy %", true},
+               {"session B / node", true}, {"session KB", true}, {"cut KB", true}, {"bytes down / frame", true}});
+  json out = {{"command", context.options.command_line}, {"machine", machine_json()}, {"model", name},
+              {"frames", route.size()}, {"nodes", nodes}, {"tolerance_px", tolerance}, {"max_ops", kMaxOps},
+              {"budget", kBudget}, {"dag_bytes", m.served->dag->memory_bytes()}};
+  for (int t = 0; t < 3; ++t) {
+    const TraversalRun& run = runs[t];
+    table.add_row({kTraversalNames[t], fixed(percentile(run.frame_ms, 0.5), 3), fixed(percentile(run.frame_ms, 0.99), 3),
+                   thousands(uint64_t(mean(run.evaluated))), thousands(uint64_t(mean(run.ops))), thousands(run.max_triangles),
+                   fixed(percentile(run.front_share, 0.5), 2), t == 0 ? "—" : fixed(mean(run.accuracy), 1),
+                   fixed(double(run.max_session_bytes) / nodes, 3), fixed(double(run.max_session_bytes) / 1e3, 1),
+                   fixed(double(run.max_cut_bytes) / 1e3, 1), thousands(uint64_t(mean(run.down_bytes)))});
+    out[kTraversalNames[t]] = run_json(run, nodes);
+  }
+  const std::string settings = name + ", " + std::to_string(route.size()) + "-frame scan route, τ = " + fixed(tolerance, 3) +
+                               " px (0.1 % of the height), N = " + std::to_string(kMaxOps) + ", BUDGET " +
+                               thousands(kBudget) + " triangles, " + thousands(nodes) + " DAG nodes";
+  print_now("\nE9: DAG traversals, " + settings +
+            " (targets: constant-time ≤ 0.1 ms, priority ≤ 2 ms median; accuracy linear ≥ 80 %, constant-time ≥ 70 %; "
+            "session ≤ 0.1 B / node)\n" + table.markdown());
+  section += "### Traversals along the route (" + settings + ")\n\n" + table.markdown() +
+             "\nms: MANAGE-TRAVERSAL alone on a bare cut, fed the same views as the session. Accuracy: the share of "
+             "priority's triangles (by vertex ids) the client's mesh also has, every 5 frames, averaged. Session: the "
+             "DAG mode's `state_bytes()` at its largest along the route; cut: `DagCut::memory_bytes()`. Bytes down: "
+             "DAG_OPS frames as received, mean per frame. docs/internals.md, \"E9\", says what each figure is.\n\n";
+  section += plots(context, runs);
+  write_text_file(context.options.out_dir / "dag.json", out.dump(2) + "\n");
+  context.report += section;
+}
+
+}  // namespace pms::app
