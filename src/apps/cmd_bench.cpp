@@ -25,9 +25,9 @@ constexpr BenchGroup kGroups[] = {
      run_sender_group},
     {"receiver", "whole-model bits per vertex against meshoptimizer, gzip, zstd and Draco; E7 server CPU and bytes per split",
      run_receiver_group},
-    {"dag", "E9 DAG traversals: time per frame, accuracy against priority, fronts, session memory, bytes down", run_dag_group},
     {"soak", "many clients resuming and reconnecting for minutes: server RSS over time, failures, latency per minute",
      run_soak_group},
+    {"dag", "E9 DAG traversals: time per frame, accuracy against priority, fronts, session memory, bytes down", run_dag_group},
 };
 
 std::span<const BenchGroup> bench_groups() { return kGroups; }
