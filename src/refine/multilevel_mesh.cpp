@@ -108,12 +108,37 @@ std::vector<uint32_t> representatives_per_level(const MultilevelMesh& m) {
   return count;
 }
 
+std::vector<float> multilevel_level_errors(const MultilevelMesh& m) {
+  std::vector<float> errors(m.level_count(), 0);
+  std::vector<uint32_t> at(m.vertices());
+  const uint32_t d = m.dimension, n = m.vertices();
+  for (uint32_t l = 1; l < m.level_count(); ++l) {
+    const uint32_t n_l = m.vertex_count[l];
+    double worst = 0;
+    for (uint32_t v = n_l; v < n; ++v) {
+      const uint32_t r = m.representative[v];
+      at[v] = r == kNoRep || r < n_l ? r : at[r];
+      if (at[v] == kNoRep) continue;
+      double sq = 0;
+      for (uint32_t k = 0; k < d; ++k) {
+        const double delta = double(m.positions[size_t(v) * d + k]) - m.positions[size_t(at[v]) * d + k];
+        sq += delta * delta;
+      }
+      worst = std::max(worst, sq);
+    }
+    errors[l] = float(std::sqrt(worst));
+  }
+  return errors;
+}
+
 MultilevelLod::MultilevelLod(const MultilevelMesh& mesh) : mesh_(mesh) {}
 
 void MultilevelLod::connect(uint32_t level) {
   if (level == connected_) return;
   const MultilevelMesh& m = mesh_;
-  const uint32_t n_l = m.vertex_count[level], n = m.vertices();
+  // Up to every vertex the representatives cover: while levels are loading, the loaded triangles name
+  // vertices of levels still to come (multilevel_loader.h).
+  const uint32_t n_l = m.vertex_count[level], n = uint32_t(m.representative.size());
   // The copy is path-compressed against n_l in one pass: a representative is below its vertex, so it was
   // compressed before it.
   pc_rep_.resize(n);
@@ -220,6 +245,19 @@ std::span<const uint8_t> MultilevelLod::colors() const {
   if (mesh_.colors.empty()) return {};
   if (morphed_) return morph_colors_;
   return {mesh_.colors.data(), size_t(vertex_count_) * 4};
+}
+
+Mesh lod_mesh(const MultilevelMesh& m, const MultilevelLod& lod) {
+  Mesh out;
+  const uint32_t n = lod.vertex_count(), d = m.dimension;
+  const auto positions = lod.positions();
+  out.positions.resize(size_t(n) * 3, 0.0f);  // a 2D file lies in z = 0
+  for (uint32_t v = 0; v < n; ++v)
+    for (uint32_t k = 0; k < d; ++k) out.positions[3 * size_t(v) + k] = positions[size_t(v) * d + k];
+  out.normals.assign(lod.normals().begin(), lod.normals().end());
+  out.colors.assign(lod.colors().begin(), lod.colors().end());
+  out.indices.assign(lod.indices().begin(), lod.indices().end());
+  return out;
 }
 
 }  // namespace pms
