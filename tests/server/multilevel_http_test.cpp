@@ -116,7 +116,9 @@ TEST(MultilevelHttp, CloserCamerasWantFinerLevels) {
     c.eye[2] = distance;
     const client::MultilevelFrame frame = client.frame(c);
     EXPECT_LE(frame.wanted_level, previous) << "distance " << distance;
-    if (shown >= 0) EXPECT_LE(std::abs(frame.level - shown), 0.25f + 1e-5f);
+    if (shown >= 0) {
+      EXPECT_LE(std::abs(frame.level - shown), 0.25f + 1e-5f);
+    }
     previous = frame.wanted_level;
     shown = frame.level;
   }
