@@ -133,12 +133,38 @@ std::vector<float> multilevel_level_errors(const MultilevelMesh& m) {
 
 MultilevelLod::MultilevelLod(const MultilevelMesh& mesh) : mesh_(mesh) {}
 
+// A coarse LOD has few triangles but many vertices above n_l: following each corner's chain costs less
+// than the path-compressed copy, whose reads land all over the array. The walk gives up (and the copy is
+// made) once it has taken as many steps as the copy would, so a level costs at most twice the copy.
+bool MultilevelLod::connect_by_walking(uint32_t level) {
+  const MultilevelMesh& m = mesh_;
+  const uint32_t n_l = m.vertex_count[level], n = uint32_t(m.representative.size());
+  const uint32_t corners = 3 * m.triangle_count[level];
+  uint64_t budget = n - n_l;
+  if (corners > budget) return false;
+  budget -= corners;
+  indices_.resize(corners);
+  const uint32_t* tri = m.triangles.data();
+  for (uint32_t c = 0; c < corners; ++c) {
+    uint32_t v = tri[c];
+    while (v >= n_l) {
+      if (budget-- == 0) return false;
+      v = m.representative[v];  // never kNoRep: every corner of the LOD resolves (validate_multilevel)
+    }
+    indices_[c] = v;
+  }
+  return true;
+}
+
 void MultilevelLod::connect(uint32_t level) {
   if (level == connected_) return;
   const MultilevelMesh& m = mesh_;
   // Up to every vertex the representatives cover: while levels are loading, the loaded triangles name
   // vertices of levels still to come (multilevel_loader.h).
   const uint32_t n_l = m.vertex_count[level], n = uint32_t(m.representative.size());
+  connected_ = level;
+  vertex_count_ = n_l;
+  if (connect_by_walking(level)) return;
   // The copy is path-compressed against n_l in one pass: a representative is below its vertex, so it was
   // compressed before it.
   pc_rep_.resize(n);
@@ -153,8 +179,6 @@ void MultilevelLod::connect(uint32_t level) {
     const uint32_t v = tri[c];
     indices_[c] = v < n_l ? v : pc_rep_[v];
   }
-  connected_ = level;
-  vertex_count_ = n_l;
 }
 
 void MultilevelLod::set_level(uint32_t level) {

@@ -79,6 +79,7 @@ class MultilevelLod {
 
  private:
   void connect(uint32_t level);
+  bool connect_by_walking(uint32_t level);
   void prepare_morph(uint32_t lo);
 
   const MultilevelMesh& mesh_;
