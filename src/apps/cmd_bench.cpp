@@ -25,6 +25,8 @@ constexpr BenchGroup kGroups[] = {
      run_sender_group},
     {"receiver", "whole-model bits per vertex against meshoptimizer, gzip, zstd and Draco; E7 server CPU and bytes per split",
      run_receiver_group},
+    {"multilevel", "E10 multilevel memory against a plain mesh, LOD switch and geomorph times, bytes per level loaded",
+     run_multilevel_group},
     {"soak", "many clients resuming and reconnecting for minutes: server RSS over time, failures, latency per minute",
      run_soak_group},
     {"dag", "E9 DAG traversals: time per frame, accuracy against priority, fronts, session memory, bytes down", run_dag_group},

@@ -226,19 +226,6 @@ void run_multilevel_info(const std::string& path, bool json) {
                 row["set_level_ms"].get<double>(), row["geomorph_ms"].get<double>());
 }
 
-Mesh lod_mesh(const MultilevelMesh& m, const MultilevelLod& lod) {
-  Mesh out;
-  const uint32_t n = lod.vertex_count(), d = m.dimension;
-  const auto positions = lod.positions();
-  out.positions.resize(size_t(n) * 3, 0.0f);  // a 2D file lies in z = 0
-  for (uint32_t v = 0; v < n; ++v)
-    for (uint32_t k = 0; k < d; ++k) out.positions[3 * size_t(v) + k] = positions[size_t(v) * d + k];
-  out.normals.assign(lod.normals().begin(), lod.normals().end());
-  out.colors.assign(lod.colors().begin(), lod.colors().end());
-  out.indices.assign(lod.indices().begin(), lod.indices().end());
-  return out;
-}
-
 void run_multilevel_level(const std::string& path, double level, const std::string& output) {
   const MultilevelMesh m = read_multilevel(path);
   const double top = m.level_count() - 1;

@@ -1,6 +1,7 @@
 // pmstream stream --server HOST:PORT --model NAME --path PATH.json --mode MODE --tolerance PX
 //                 (--mode receiver: --server http://HOST:PORT[/prefix] [--in-flight N] [--fetch lists|blocks]
 //                  [--ids-per-request N] [--block-depth K])
+//                 (--mode multilevel: --server http://HOST:PORT[/prefix] [--budget TRIANGLES | --tolerance PX])
 //                 [--laps K] [--reconnect N] [--timeout-ms N] [--connect-timeout-ms N] [--save-mesh OUT.ply]
 //                 [--snapshots DIR] [--json]
 // The headless viewer: follows a camera path, streaming what each frame needs, and reports per frame.
@@ -14,6 +15,7 @@
 #include "apps/refine_pipeline.h"
 #include "apps/resource_usage.h"
 #include "client/http_connection.h"
+#include "client/multilevel_client.h"
 #include "client/receiver_client.h"
 #include "client/streaming_client.h"
 #include "client/transport.h"
@@ -53,6 +55,15 @@ void split_host_port(const std::string& text, std::string& host, uint16_t& port)
   }
 }
 
+// The multilevel client holds no session: its mesh and view are its own.
+Mesh current_mesh(client::MultilevelClient& client) { return client.current_mesh(); }
+ViewParams view_of(client::MultilevelClient& client, const Camera& camera) { return client.view_params(camera); }
+
+template <class Client>
+ViewParams view_of(Client& client, const Camera& camera) {
+  return client.session().view_params(camera);
+}
+
 template <class Client>
 Mesh current_mesh(Client& client) {
   MeshArrays arrays;
@@ -64,7 +75,7 @@ template <class Client>
 void snapshot(Client& client, const Camera& camera, const std::string& dir, size_t index,
               Renderer& renderer, Image& image) {
   const Mesh mesh = current_mesh(client);
-  renderer.render({mesh.positions, mesh.indices, mesh.colors}, client.session().view_params(camera), image);
+  renderer.render({mesh.positions, mesh.indices, mesh.colors}, view_of(client, camera), image);
   char name[32];
   std::snprintf(name, sizeof name, "frame_%05zu.png", index);
   save_png((std::filesystem::path(dir) / name).string(), image);
@@ -82,12 +93,12 @@ void progress(const StreamArgs& args, size_t index, size_t frames, const client:
 }
 
 void print_report(const StreamArgs& args, nlohmann::json& out, size_t frames, uint64_t splits, uint64_t up,
-                  uint64_t down, uint64_t faces, double seconds) {
+                  uint64_t down, uint64_t faces, double seconds, const char* received = "vsplits") {
   if (args.json) {
     std::printf("%s\n", out.dump().c_str());
   } else {
-    std::printf("%s: %zu frames, %llu vsplits received, %llu B up, %llu B down, %llu faces at the end (%.2f s)\n",
-                args.model.c_str(), frames, (unsigned long long)splits, (unsigned long long)up,
+    std::printf("%s: %zu frames, %llu %s received, %llu B up, %llu B down, %llu faces at the end (%.2f s)\n",
+                args.model.c_str(), frames, (unsigned long long)splits, received, (unsigned long long)up,
                 (unsigned long long)down, (unsigned long long)faces, seconds);
   }
 }
@@ -161,6 +172,66 @@ void run_receiver(const StreamArgs& args) {
                client.session().mesh().face_count(), clock.seconds());
 }
 
+// --mode multilevel: levels over HTTP, coarsest first (client/multilevel_client.h); byte counts are HTTP's.
+void run_multilevel(const StreamArgs& args) {
+  const client::HttpUrl url = client::parse_http_url(args.server);
+  const std::vector<Camera> path = load_path(args.path);
+  if (!args.snapshots.empty()) std::filesystem::create_directories(args.snapshots);
+  Stopwatch clock;
+  client::MultilevelOptions options;
+  options.budget = args.budget;
+  options.tolerance = args.tolerance;
+  options.morph_frames = args.morph_frames;
+  options.http.in_flight = args.in_flight;
+  options.http.io_timeout = std::chrono::milliseconds(args.timeout_ms);
+  options.http.connect_timeout = std::chrono::milliseconds(args.connect_timeout_ms);
+  client::MultilevelClient client(url, options);
+  client.open(args.model);
+  uint64_t levels_received = 0;
+  const auto [frames, index] = fly(args, path, client, [&](const Camera& camera, size_t frame, uint32_t lap) {
+    const client::MultilevelFrame r = client.frame(camera);
+    nlohmann::json f = frame_json(r.report, frame, lap);
+    f.erase("vsplits");
+    f["levels_received"] = r.report.vsplits;
+    f["down_payload_bytes"] = r.payload_down;
+    f["wanted_level"] = r.wanted_level;
+    f["level"] = r.level;
+    f["levels_loaded"] = r.levels_loaded;
+    f["lod_ms"] = r.lod_ms;
+    levels_received += r.report.vsplits;
+    return std::pair{std::move(f), r.report};
+  });
+  nlohmann::json arrivals = nlohmann::json::array();
+  for (const client::LevelArrival& a : client.arrivals())
+    arrivals.push_back({{"level", a.level}, {"bytes", a.bytes}, {"down_bytes", a.down_bytes},
+                        {"down_payload_bytes", a.payload_down}, {"ms", a.ms}});
+  const client::HttpCounters& c = client.counters();
+  nlohmann::json out = {{"frames", frames},
+                        {"total_up_bytes", c.bytes_up},
+                        {"total_down_bytes", c.bytes_down},
+                        {"total_down_payload_bytes", c.payload_down},
+                        {"http_requests", c.requests},
+                        {"http_connections", c.connections},
+                        {"rule", args.budget ? "budget" : "screen"},
+                        {"levels", client.loader().level_count()},
+                        {"levels_received", client.arrivals().size()},
+                        {"arrivals", arrivals},
+                        {"seconds", clock.seconds()}};
+  if (!client.arrivals().empty()) {
+    const client::LevelArrival& first = client.arrivals().front();
+    out["first_picture_ms"] = first.ms;
+    out["first_picture_bytes"] = first.down_bytes;
+    out["first_picture_payload_bytes"] = first.payload_down;
+  }
+  if (!args.json)
+    std::printf("%s: first picture after %.1f ms and %llu B; %zu of %u levels received\n", args.model.c_str(),
+                client.arrivals().empty() ? 0.0 : client.arrivals().front().ms,
+                (unsigned long long)(client.arrivals().empty() ? 0 : client.arrivals().front().down_bytes),
+                client.arrivals().size(), client.loader().level_count());
+  print_report(args, out, index, client.arrivals().size(), c.bytes_up, c.bytes_down, client.lod().indices().size() / 3,
+               clock.seconds(), "levels");
+}
+
 // --mode dag: MANAGE-TRAVERSAL's parameters; --budget 0 is FREE mode, --max-ops 0 the paper's N = 300.
 protocol::DagView dag_request(const StreamArgs& args) {
   protocol::DagView request;
@@ -176,6 +247,7 @@ protocol::DagView dag_request(const StreamArgs& args) {
 
 void run_stream(const StreamArgs& args) {
   if (args.mode == "receiver") return run_receiver(args);
+  if (args.mode == "multilevel") return run_multilevel(args);
   const std::optional<protocol::StreamMode> mode = protocol::mode_named(args.mode);
   if (!mode) fail("--mode", "'" + args.mode + "': this build streams in the modes " + protocol::mode_names());
   std::string host;
@@ -222,11 +294,11 @@ void run_stream(const StreamArgs& args) {
 void add_stream_command(CLI::App& app) {
   auto args = std::make_shared<StreamArgs>();
   CLI::App* cmd = app.add_subcommand("stream", "Headless viewer: stream a model from a server along a camera path");
-  cmd->add_option("--server", args->server, "HOST:PORT of the server's TCP port; for --mode receiver http://HOST:PORT[/prefix] of its HTTP port")->required();
+  cmd->add_option("--server", args->server, "HOST:PORT of the server's TCP port; for --mode receiver and multilevel http://HOST:PORT[/prefix] of its HTTP port")->required();
   cmd->add_option("--model", args->model, "Model name in the server's catalogue")->required();
   cmd->add_option("--path", args->path, "PATH.json (pmstream path ...)")->required();
   cmd->add_option("--mode", args->mode, "Streaming mode: sender (view-dependent), sender-plain (the same splits as plain vsplits for a viewer that "
-                 "does not refine), vi (plain PM order until the view is satisfied) receiver (the client asks for splits by id over HTTP) or dag (a thin client driven by the server's DAG "
+                 "does not refine), vi (plain PM order until the view is satisfied) receiver (the client asks for splits by id over HTTP), multilevel (levels of a multilevel mesh over HTTP, coarsest first) or dag (a thin client driven by the server's DAG "
                  "traversal); docs/cli.md")
       ->capture_default_str();
   cmd->add_option("--tolerance", args->tolerance, "Screen-space error tolerance in pixels")
@@ -244,7 +316,7 @@ void add_stream_command(CLI::App& app) {
   cmd->add_option("--connect-timeout-ms", args->connect_timeout_ms, "Give up a connection attempt after this long")
       ->check(CLI::Range(1u, 3600000u))
       ->capture_default_str();
-  cmd->add_option("--in-flight", args->in_flight, "receiver: HTTP requests sent ahead of the answer being read")
+  cmd->add_option("--in-flight", args->in_flight, "receiver, multilevel: HTTP requests sent ahead of the answer being read")
       ->check(CLI::Range(1u, 64u))
       ->capture_default_str();
   cmd->add_option("--fetch", args->fetch,
@@ -266,7 +338,7 @@ void add_stream_command(CLI::App& app) {
   cmd->add_option("--traversal", args->traversal, "dag: priority, linear or constant")
       ->check(CLI::IsMember({"priority", "linear", "constant"}))
       ->capture_default_str();
-  cmd->add_option("--budget", args->budget, "dag: BUDGET mode with this many triangles (0 = FREE mode)")
+  cmd->add_option("--budget", args->budget, "dag: BUDGET mode with this many triangles (0 = FREE mode); multilevel: the finest LOD of at most this many triangles (0 = the screen-size rule with --tolerance)")
       ->check(CLI::Range(uint64_t(0), protocol::kMaxDagBudget))
       ->capture_default_str();
   cmd->add_option("--save-mesh", args->save_mesh, "Write the client's mesh after the last frame (PLY)");

@@ -5,10 +5,10 @@
 
 #include <bit>
 #include <cstring>
-#include <unordered_set>
 
 #include "common/error.h"
 #include "refine/multilevel_file.h"
+#include "refine/multilevel_loader.h"
 
 namespace pms {
 namespace {
@@ -18,8 +18,6 @@ static_assert(std::endian::native == std::endian::little, "multilevel files are 
 constexpr char kMagic[8] = {'P', 'M', 'S', 'M', 'U', 'L', 'T', 'I'};
 constexpr uint32_t kVersion = 1;
 constexpr uint64_t kAlignment = 8;
-constexpr uint32_t kHasNormals = 1, kHasColors = 2;
-constexpr uint32_t kNoRep = MultilevelMesh::kNoRepresentative;
 
 struct FileHeader {
   char magic[8];
@@ -41,55 +39,12 @@ struct SectionEntry {
 };
 static_assert(sizeof(SectionEntry) == 32);
 
-struct HeadSection {
-  uint32_t level_count, dimension, flags, vertex_count, triangle_count, representative_count, reserved[2];
-};
-static_assert(sizeof(HeadSection) == 32);
-
-struct LevelHeader {
-  uint32_t level, vertices, triangles, representatives;
-};
-
 std::string str(uint64_t v) { return std::to_string(v); }
 
 uint64_t checksum_of(const uint8_t* header_and_table, uint64_t bytes) {
   std::vector<uint8_t> copy(header_and_table, header_and_table + bytes);
   std::memset(copy.data() + offsetof(FileHeader, header_checksum), 0, sizeof(uint64_t));
   return XXH64(copy.data(), copy.size(), 0);
-}
-
-template <typename T>
-void append(std::vector<uint32_t>& words, const T* data, size_t count) {
-  static_assert(sizeof(T) == 4);
-  if (count == 0) return;  // data() may be null
-  const size_t at = words.size();
-  words.resize(at + count);
-  std::memcpy(words.data() + at, data, count * 4);
-}
-
-// One level's section: its header, vertices (positions, normals, colours), triangles, then the
-// representatives its triangles state, in the order the ASCII form states them.
-std::vector<uint32_t> level_words(const MultilevelMesh& m, uint32_t level, std::vector<uint8_t>& stated) {
-  const uint32_t v_end = m.vertex_count[level], t_end = m.triangle_count[level];
-  const uint32_t v_begin = v_end - m.level_vertices(level), t_begin = t_end - m.level_triangles(level);
-  std::vector<uint32_t> reps;
-  for (uint32_t t = t_begin; t < t_end; ++t) representatives_stated_by(m, t, v_end, stated, reps);
-  if (level == 0)  // what no triangle states travels with the finest level
-    for (uint32_t v = 0; v < m.vertices(); ++v)
-      if (m.representative[v] != kNoRep && !stated[v]) reps.insert(reps.end(), {v, m.representative[v]});
-  const LevelHeader h{level, v_end - v_begin, t_end - t_begin, uint32_t(reps.size() / 2)};
-  std::vector<uint32_t> words;
-  append(words, &h.level, 4);
-  append(words, m.positions.data() + size_t(v_begin) * m.dimension, size_t(h.vertices) * m.dimension);
-  if (!m.normals.empty()) append(words, m.normals.data() + size_t(v_begin) * 3, size_t(h.vertices) * 3);
-  if (!m.colors.empty()) {
-    const size_t at = words.size();
-    words.resize(at + h.vertices);
-    std::memcpy(words.data() + at, m.colors.data() + size_t(v_begin) * 4, size_t(h.vertices) * 4);
-  }
-  append(words, m.triangles.data() + size_t(t_begin) * 3, size_t(h.triangles) * 3);
-  append(words, reps.data(), reps.size());
-  return words;
 }
 
 class SectionReader {
@@ -140,35 +95,6 @@ class SectionReader {
 
 bool tag_is(const SectionEntry& e, const char* tag) { return std::memcmp(e.tag, tag, 4) == 0; }
 
-// Reads one LEVL section into `m` (levels arrive coarsest first); representatives go to `reps`.
-void read_level(const SectionReader& in, const SectionEntry& e, const uint8_t* base, uint32_t expected_level,
-                uint32_t flags, MultilevelMesh& m, std::vector<uint32_t>& reps) {
-  const bool normals = flags & kHasNormals, colors = flags & kHasColors;
-  const std::string name = "section LEVL of level " + str(expected_level);
-  if (e.element_size != 4) in.error(e.offset, name + ": element size " + str(e.element_size) + " (4 expected)");
-  if (e.count < 4) in.error(e.offset, name + ": " + str(e.count) + " words, too short for its header");
-  LevelHeader h;
-  std::memcpy(&h, base + e.offset, sizeof h);
-  if (h.level != expected_level) in.error(e.offset, name + ": says it is level " + str(h.level));
-  const uint64_t per_vertex = m.dimension + (normals ? 3 : 0) + (colors ? 1 : 0);
-  const uint64_t words = 4 + per_vertex * h.vertices + 3 * uint64_t(h.triangles) + 2 * uint64_t(h.representatives);
-  if (words != e.count)
-    in.error(e.offset, name + ": " + str(e.count) + " words but its counts need " + str(words));
-  const uint8_t* p = base + e.offset + sizeof h;
-  auto take = [&](auto& out, uint64_t count, size_t elem) {
-    if (count == 0) return;  // data() may be null
-    const size_t at = out.size();
-    out.resize(at + count);
-    std::memcpy(out.data() + at, p, count * elem);
-    p += count * elem;
-  };
-  take(m.positions, uint64_t(h.vertices) * m.dimension, 4);
-  if (normals) take(m.normals, uint64_t(h.vertices) * 3, 4);
-  if (colors) take(m.colors, uint64_t(h.vertices) * 4, 1);
-  take(m.triangles, uint64_t(h.triangles) * 3, 4);
-  take(reps, uint64_t(h.representatives) * 2, 4);
-}
-
 }  // namespace
 
 void reseal_multilevel_binary(std::span<uint8_t> bytes) {
@@ -193,24 +119,17 @@ bool is_multilevel_binary(std::span<const uint8_t> bytes) {
 }
 
 std::vector<uint8_t> format_multilevel_binary(const MultilevelMesh& m) {
-  validate_multilevel("", m);
-  const uint32_t levels = m.level_count();
-  std::vector<std::vector<uint32_t>> sections;
-  std::vector<uint8_t> stated(m.vertices(), 0);
-  for (uint32_t level = levels; level-- > 0;) sections.push_back(level_words(m, level, stated));
-  const HeadSection head{levels,      m.dimension, (m.normals.empty() ? 0 : kHasNormals) | (m.colors.empty() ? 0 : kHasColors),
-                         m.vertices(), m.faces(),  uint32_t(m.stored_representatives()), {0, 0}};
-
-  const uint32_t section_count = levels + 1;
+  const MultilevelParts parts = multilevel_parts(m);
+  const uint32_t section_count = uint32_t(parts.levels.size()) + 1;
   auto align = [](uint64_t x) { return (x + kAlignment - 1) / kAlignment * kAlignment; };
   std::vector<SectionEntry> table(section_count);
   uint64_t at = align(sizeof(FileHeader) + uint64_t(section_count) * sizeof(SectionEntry));
-  table[0] = {{'H', 'E', 'A', 'D'}, sizeof head, at, 1, XXH64(&head, sizeof head, 0)};
-  at = align(at + sizeof head);
-  for (uint32_t i = 0; i < levels; ++i) {
-    const auto& w = sections[i];
-    table[i + 1] = {{'L', 'E', 'V', 'L'}, 4, at, w.size(), XXH64(w.data(), w.size() * 4, 0)};
-    at = align(at + w.size() * 4);
+  table[0] = {{'H', 'E', 'A', 'D'}, uint32_t(parts.head.size()), at, 1, XXH64(parts.head.data(), parts.head.size(), 0)};
+  at = align(at + parts.head.size());
+  for (size_t i = 0; i < parts.levels.size(); ++i) {
+    const auto& bytes = parts.levels[i];
+    table[i + 1] = {{'L', 'E', 'V', 'L'}, 4, at, bytes.size() / 4, XXH64(bytes.data(), bytes.size(), 0)};
+    at = align(at + bytes.size());
   }
   const uint64_t file_size = table.back().offset + table.back().count * table.back().element_size;
   std::vector<uint8_t> out(file_size, 0);
@@ -222,9 +141,9 @@ std::vector<uint8_t> format_multilevel_binary(const MultilevelMesh& m) {
   h.file_size = file_size;
   std::memcpy(out.data(), &h, sizeof h);
   std::memcpy(out.data() + sizeof h, table.data(), table.size() * sizeof(SectionEntry));
-  std::memcpy(out.data() + table[0].offset, &head, sizeof head);
-  for (uint32_t i = 0; i < levels; ++i)
-    std::memcpy(out.data() + table[i + 1].offset, sections[i].data(), sections[i].size() * 4);
+  std::memcpy(out.data() + table[0].offset, parts.head.data(), parts.head.size());
+  for (size_t i = 0; i < parts.levels.size(); ++i)
+    std::memcpy(out.data() + table[i + 1].offset, parts.levels[i].data(), parts.levels[i].size());
   h.header_checksum = checksum_of(out.data(), sizeof h + table.size() * sizeof(SectionEntry));
   std::memcpy(out.data(), &h, sizeof h);
   return out;
@@ -239,42 +158,19 @@ MultilevelMesh parse_multilevel_binary(const std::string& where, std::span<const
   while (i < table.size() && !tag_is(table[i], "HEAD")) ++i;  // unknown sections before it are skipped
   if (i == table.size()) in.error(0, "no HEAD section");
   const SectionEntry& he = table[i];
-  if (he.element_size != sizeof(HeadSection) || he.count != 1) in.error(he.offset, "section HEAD: wrong size");
-  HeadSection head;
-  std::memcpy(&head, bytes.data() + he.offset, sizeof head);
-  if (head.level_count == 0 || head.level_count > limits.max_levels)
-    in.error(he.offset, "section HEAD: " + str(head.level_count) + " levels (1 to " + str(limits.max_levels) + ")");
-  if (head.dimension < 2 || head.dimension > 3) in.error(he.offset + 4, "section HEAD: dimension " + str(head.dimension));
-  if (head.flags & ~(kHasNormals | kHasColors)) in.error(he.offset + 8, "section HEAD: unknown flags");
-
-  MultilevelMesh m;
-  m.dimension = head.dimension;
-  m.vertex_count.assign(head.level_count, 0);
-  m.triangle_count.assign(head.level_count, 0);
-  std::vector<uint32_t> reps;
-  uint32_t level = head.level_count;
+  if (he.count != 1) in.error(he.offset, "section HEAD: wrong size");
+  MultilevelLoader loader(where + ": offset " + str(he.offset), bytes.subspan(he.offset, he.element_size), limits);
   for (++i; i < table.size(); ++i) {
-    if (!tag_is(table[i], "LEVL")) continue;
-    if (level == 0) in.error(table[i].offset, "more LEVL sections than HEAD's " + str(head.level_count) + " levels");
-    --level;
-    read_level(in, table[i], bytes.data(), level, head.flags, m, reps);
-    if (m.positions.size() / m.dimension > 0x7FFFFFFFu || m.triangles.size() / 3 > 0x7FFFFFFFu)
-      in.error(table[i].offset, "more than 2^31 vertices or triangles");
-    m.vertex_count[level] = uint32_t(m.positions.size() / m.dimension);
-    m.triangle_count[level] = uint32_t(m.triangles.size() / 3);
+    const SectionEntry& e = table[i];
+    if (!tag_is(e, "LEVL")) continue;
+    if (e.element_size != 4)
+      in.error(e.offset, "section LEVL: element size " + str(e.element_size) + " (4 expected)");
+    loader.add_level(where, bytes.subspan(e.offset, e.count * 4), e.offset);
   }
-  if (level != 0) in.error(bytes.size(), str(level) + " of HEAD's " + str(head.level_count) + " LEVL sections are missing");
-  if (m.vertices() != head.vertex_count || m.faces() != head.triangle_count || reps.size() / 2 != head.representative_count)
-    in.error(he.offset, "section HEAD: its totals disagree with the LEVL sections");
-  m.representative.assign(m.vertices(), kNoRep);
-  for (size_t k = 0; k < reps.size(); k += 2) {
-    const uint32_t v = reps[k];
-    if (v >= m.vertices()) fail(where, "a representative of vertex " + str(v) + ", beyond the file's " + str(m.vertices()));
-    if (m.representative[v] != kNoRep) fail(where, "vertex " + str(v) + " has two representatives");
-    m.representative[v] = reps[k + 1];
-  }
-  validate_multilevel(where, m);
-  return m;
+  if (!loader.complete())
+    in.error(bytes.size(), str(loader.level_count() - loader.levels_loaded()) + " of HEAD's " +
+                               str(loader.level_count()) + " LEVL sections are missing");
+  return loader.release();
 }
 
 }  // namespace pms

@@ -108,12 +108,63 @@ std::vector<uint32_t> representatives_per_level(const MultilevelMesh& m) {
   return count;
 }
 
+std::vector<float> multilevel_level_errors(const MultilevelMesh& m) {
+  std::vector<float> errors(m.level_count(), 0);
+  std::vector<uint32_t> at(m.vertices());
+  const uint32_t d = m.dimension, n = m.vertices();
+  for (uint32_t l = 1; l < m.level_count(); ++l) {
+    const uint32_t n_l = m.vertex_count[l];
+    double worst = 0;
+    for (uint32_t v = n_l; v < n; ++v) {
+      const uint32_t r = m.representative[v];
+      at[v] = r == kNoRep || r < n_l ? r : at[r];
+      if (at[v] == kNoRep) continue;
+      double sq = 0;
+      for (uint32_t k = 0; k < d; ++k) {
+        const double delta = double(m.positions[size_t(v) * d + k]) - m.positions[size_t(at[v]) * d + k];
+        sq += delta * delta;
+      }
+      worst = std::max(worst, sq);
+    }
+    errors[l] = float(std::sqrt(worst));
+  }
+  return errors;
+}
+
 MultilevelLod::MultilevelLod(const MultilevelMesh& mesh) : mesh_(mesh) {}
+
+// A coarse LOD has few triangles but many vertices above n_l: following each corner's chain costs less
+// than the path-compressed copy, whose reads land all over the array. The walk gives up (and the copy is
+// made) once it has taken as many steps as the copy would, so a level costs at most twice the copy.
+bool MultilevelLod::connect_by_walking(uint32_t level) {
+  const MultilevelMesh& m = mesh_;
+  const uint32_t n_l = m.vertex_count[level], n = uint32_t(m.representative.size());
+  const uint32_t corners = 3 * m.triangle_count[level];
+  uint64_t budget = n - n_l;
+  if (corners > budget) return false;
+  budget -= corners;
+  indices_.resize(corners);
+  const uint32_t* tri = m.triangles.data();
+  for (uint32_t c = 0; c < corners; ++c) {
+    uint32_t v = tri[c];
+    while (v >= n_l) {
+      if (budget-- == 0) return false;
+      v = m.representative[v];  // never kNoRep: every corner of the LOD resolves (validate_multilevel)
+    }
+    indices_[c] = v;
+  }
+  return true;
+}
 
 void MultilevelLod::connect(uint32_t level) {
   if (level == connected_) return;
   const MultilevelMesh& m = mesh_;
-  const uint32_t n_l = m.vertex_count[level], n = m.vertices();
+  // Up to every vertex the representatives cover: while levels are loading, the loaded triangles name
+  // vertices of levels still to come (multilevel_loader.h).
+  const uint32_t n_l = m.vertex_count[level], n = uint32_t(m.representative.size());
+  connected_ = level;
+  vertex_count_ = n_l;
+  if (connect_by_walking(level)) return;
   // The copy is path-compressed against n_l in one pass: a representative is below its vertex, so it was
   // compressed before it.
   pc_rep_.resize(n);
@@ -128,8 +179,6 @@ void MultilevelLod::connect(uint32_t level) {
     const uint32_t v = tri[c];
     indices_[c] = v < n_l ? v : pc_rep_[v];
   }
-  connected_ = level;
-  vertex_count_ = n_l;
 }
 
 void MultilevelLod::set_level(uint32_t level) {
@@ -220,6 +269,19 @@ std::span<const uint8_t> MultilevelLod::colors() const {
   if (mesh_.colors.empty()) return {};
   if (morphed_) return morph_colors_;
   return {mesh_.colors.data(), size_t(vertex_count_) * 4};
+}
+
+Mesh lod_mesh(const MultilevelMesh& m, const MultilevelLod& lod) {
+  Mesh out;
+  const uint32_t n = lod.vertex_count(), d = m.dimension;
+  const auto positions = lod.positions();
+  out.positions.resize(size_t(n) * 3, 0.0f);  // a 2D file lies in z = 0
+  for (uint32_t v = 0; v < n; ++v)
+    for (uint32_t k = 0; k < d; ++k) out.positions[3 * size_t(v) + k] = positions[size_t(v) * d + k];
+  out.normals.assign(lod.normals().begin(), lod.normals().end());
+  out.colors.assign(lod.colors().begin(), lod.colors().end());
+  out.indices.assign(lod.indices().begin(), lod.indices().end());
+  return out;
 }
 
 }  // namespace pms

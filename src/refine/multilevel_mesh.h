@@ -7,6 +7,8 @@
 #include <string>
 #include <vector>
 
+#include "io/mesh.h"
+
 namespace pms {
 
 // Levels run from 0 (finest) to level_count() - 1 (coarsest). LOD l is made of the vertices and triangles
@@ -49,6 +51,11 @@ void representatives_stated_by(const MultilevelMesh& mesh, uint32_t t, uint32_t 
 // Per level, how many representatives its triangles state (what its file batch carries).
 std::vector<uint32_t> representatives_per_level(const MultilevelMesh& mesh);
 
+// Per level, the geometric error of its LOD: the longest distance from a vertex of a finer level to the
+// vertex it stands at in that LOD (its path-compressed representative); 0 for level 0. What a screen-size
+// rule projects to pixels. O(n) per level.
+std::vector<float> multilevel_level_errors(const MultilevelMesh& mesh);
+
 // One LOD of a multilevel mesh at a time (the paper's setLevel). The mesh must outlive it.
 class MultilevelLod {
  public:
@@ -72,6 +79,7 @@ class MultilevelLod {
 
  private:
   void connect(uint32_t level);
+  bool connect_by_walking(uint32_t level);
   void prepare_morph(uint32_t lo);
 
   const MultilevelMesh& mesh_;
@@ -86,5 +94,8 @@ class MultilevelLod {
   std::vector<float> morph_positions_, morph_normals_;
   std::vector<uint8_t> morph_colors_;
 };
+
+// The LOD `lod` holds as a plain indexed mesh (a 2D mesh lies in z = 0), with its normals and colours.
+Mesh lod_mesh(const MultilevelMesh& mesh, const MultilevelLod& lod);
 
 }  // namespace pms

@@ -30,7 +30,8 @@ std::vector<std::string> model_files(const std::vector<std::string>& paths) {
     if (fs::is_directory(path, ec)) {
       std::vector<std::string> found;
       for (const auto& entry : fs::directory_iterator(path, ec))
-        if (entry.is_regular_file() && entry.path().extension() == ".pms") found.push_back(entry.path().string());
+        if (entry.is_regular_file() && (entry.path().extension() == ".pms" || entry.path().extension() == ".pml"))
+          found.push_back(entry.path().string());
       if (ec) fail(path, "cannot list directory: " + ec.message());
       std::sort(found.begin(), found.end());
       files.insert(files.end(), found.begin(), found.end());
@@ -111,12 +112,22 @@ std::unique_ptr<ServedModel> open_model(const std::string& path, uint32_t positi
 
 std::shared_ptr<const Catalogue> Catalogue::open(const std::vector<std::string>& paths, uint32_t position_bits) {
   auto catalogue = std::make_shared<Catalogue>();
+  const auto check_unique = [&](const std::string& file, const std::string& name) {
+    if (catalogue->find(name) || catalogue->find_multilevel(name)) fail(file, "a model named '" + name + "' is already served");
+  };
   for (const std::string& file : model_files(paths)) {
+    if (fs::path(file).extension() == ".pml") {
+      auto model = open_multilevel(file);
+      check_unique(file, model->name);
+      catalogue->multilevel_.push_back(std::move(model));
+      continue;
+    }
     auto model = open_model(file, position_bits);
-    if (catalogue->find(model->name)) fail(file, "a model named '" + model->name + "' is already served");
+    check_unique(file, model->name);
     catalogue->models_.push_back(std::move(model));
   }
-  if (catalogue->models_.empty()) fail("serve", "no .pms models found in the paths given");
+  if (catalogue->models_.empty() && catalogue->multilevel_.empty())
+    fail("serve", "no .pms or .pml models found in the paths given");
   protocol::Catalogue message;
   for (const auto& model : catalogue->models_) message.models.push_back(model->info);
   catalogue->catalogue_frame_ = std::make_shared<const std::vector<uint8_t>>(protocol::encode(message));
@@ -143,6 +154,12 @@ void Catalogue::check_limits(const ServerLimits& limits) const {
 
 const ServedModel* Catalogue::find(const std::string& name) const {
   for (const auto& model : models_)
+    if (model->name == name) return model.get();
+  return nullptr;
+}
+
+const ServedMultilevel* Catalogue::find_multilevel(const std::string& name) const {
+  for (const auto& model : multilevel_)
     if (model->name == name) return model.get();
   return nullptr;
 }

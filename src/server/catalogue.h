@@ -16,6 +16,7 @@
 #include "refine/dag.h"
 #include "server/limits.h"
 #include "server/selective_streaming.h"
+#include "server/served_multilevel.h"
 
 namespace pms::server {
 
@@ -45,12 +46,15 @@ struct ServedModel {
 
 class Catalogue {
  public:
-  // Every FILE.pms given and every *.pms in the directories given; throws pms::Error naming the file
-  // for an unreadable or corrupt model, or two models with the same name.
+  // Every FILE.pms given and every *.pms in the directories given, and likewise multilevel meshes (.pml,
+  // served over HTTP only); throws pms::Error naming the file for an unreadable or corrupt model, or two
+  // models with the same name.
   static std::shared_ptr<const Catalogue> open(const std::vector<std::string>& paths,
                                                uint32_t position_bits = protocol::kDefaultPositionBits);
   const ServedModel* find(const std::string& name) const;
   const std::vector<std::unique_ptr<ServedModel>>& models() const { return models_; }
+  const ServedMultilevel* find_multilevel(const std::string& name) const;
+  const std::vector<std::unique_ptr<ServedMultilevel>>& multilevel_models() const { return multilevel_; }
   // The CATALOGUE frame, encoded once and shared by every LIST's answer.
   const std::shared_ptr<const std::vector<uint8_t>>& catalogue_frame() const { return catalogue_frame_; }
   uint64_t mapped_bytes() const;
@@ -60,6 +64,7 @@ class Catalogue {
 
  private:
   std::vector<std::unique_ptr<ServedModel>> models_;
+  std::vector<std::unique_ptr<ServedMultilevel>> multilevel_;
   std::shared_ptr<const std::vector<uint8_t>> catalogue_frame_;
 };
 

@@ -1,6 +1,6 @@
 // The routes of the receiver-driven mode: GET /models, GET /models/M/base, POST /models/M/splits and its
 // GET form /models/M/splits/CODE, and GET /models/M/blocks/TREE/NODE/DEPTH (docs/protocol.md,
-// "Receiver-driven over HTTP"). Each URL has one answer for a given model file: strong ETags, immutable.
+// "Receiver-driven over HTTP"); a multilevel model's go to multilevel_routes.h. Each URL has one answer for a given model file: strong ETags, immutable.
 #define XXH_INLINE_ALL
 #include <xxhash.h>
 #include <charconv>
@@ -11,7 +11,9 @@
 #include "protocol/base64url.h"
 #include "protocol/message_types.h"
 #include "protocol/split_request.h"
+#include "server/http_answers.h"
 #include "server/http_routes.h"
+#include "server/multilevel_routes.h"
 #include "server/split_lookup.h"
 #include "server/split_records_body.h"
 
@@ -30,13 +32,6 @@ std::vector<std::string_view> segments_of(std::string_view path) {
     path.remove_prefix(end);
   }
   return segments;
-}
-
-// Decimal without sign or leading zeros: one spelling per number, so one URL per resource.
-bool parse_decimal(std::string_view text, uint64_t& value) {
-  if (text.empty() || (text.size() > 1 && text[0] == '0')) return false;
-  const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), value);
-  return ec == std::errc() && end == text.data() + text.size();
 }
 
 std::string hex64(uint64_t v) {
@@ -80,16 +75,6 @@ int status_of(ErrorCode code) {
   }
 }
 
-// A 200 for `etag`, or a 304 when the client holds it already.
-HttpAnswer fresh(const HttpRequest& request, const std::string& etag, const char* content_type) {
-  HttpAnswer answer;
-  answer.status = matches(request.if_none_match, etag) ? 304 : 200;
-  answer.content_type = content_type;
-  answer.etag = etag;
-  answer.cacheable = true;
-  return answer;
-}
-
 HttpAnswer catalogue_answer(const Catalogue& catalogue, const HttpRequest& request) {
   nlohmann::json models = nlohmann::json::array();
   for (const auto& model : catalogue.models()) {
@@ -103,8 +88,10 @@ HttpAnswer catalogue_answer(const Catalogue& catalogue, const HttpRequest& reque
                       {"position_bits", model->context.grid.bits},
                       {"records_format", model->records_format},
                       {"block_depth", kSuggestedBlockDepth},
-                      {"etag_seed", hex64(model->file->content_checksum())}});
+                      {"etag_seed", hex64(model->file->content_checksum())},
+                      {"kind", "progressive"}});
   }
+  for (const auto& model : catalogue.multilevel_models()) models.push_back(multilevel_entry(*model));
   const std::string text = nlohmann::json{{"models", models}}.dump() + "\n";
   HttpAnswer answer = fresh(request, '"' + hex64(XXH64(text.data(), text.size(), 0)) + '"', "application/json");
   if (answer.status == 200) answer.owned.assign(text.begin(), text.end());
@@ -177,14 +164,10 @@ HttpAnswer block_answer(const ServedModel& model, const HttpLimits& limits, cons
   return splits_answer(model, limits, request, {uint32_t(depth), {id}}, resource);
 }
 
-HttpAnswer method_not_allowed(const char* allow) {
-  HttpAnswer answer = error_answer(405, std::string("this resource takes ") + allow);
-  answer.allow = allow;
-  return answer;
-}
-
 HttpAnswer model_route(const Catalogue& catalogue, const HttpLimits& limits, const HttpRequest& request,
                        std::span<const std::string_view> s) {
+  if (const ServedMultilevel* multilevel = catalogue.find_multilevel(std::string(s[1])))
+    return multilevel_route(*multilevel, request, s);
   const bool get = request.method == "GET" || request.method == "HEAD";
   const bool post_route = s.size() == 3 && s[2] == "splits";
   const bool get_route = (s.size() == 3 && (s[2] == "base" || s[2] == "codec")) || (s.size() == 4 && s[2] == "splits") ||
@@ -207,6 +190,27 @@ HttpAnswer model_route(const Catalogue& catalogue, const HttpLimits& limits, con
 }
 
 }  // namespace
+
+bool parse_decimal(std::string_view text, uint64_t& value) {
+  if (text.empty() || (text.size() > 1 && text[0] == '0')) return false;
+  const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), value);
+  return ec == std::errc() && end == text.data() + text.size();
+}
+
+HttpAnswer fresh(const HttpRequest& request, const std::string& etag, const char* content_type) {
+  HttpAnswer answer;
+  answer.status = matches(request.if_none_match, etag) ? 304 : 200;
+  answer.content_type = content_type;
+  answer.etag = etag;
+  answer.cacheable = true;
+  return answer;
+}
+
+HttpAnswer method_not_allowed(const char* allow) {
+  HttpAnswer answer = error_answer(405, std::string("this resource takes ") + allow);
+  answer.allow = allow;
+  return answer;
+}
 
 HttpAnswer error_answer(int status, const std::string& text) {
   HttpAnswer answer;

@@ -412,7 +412,7 @@ TEST(BenchCommand, RejectsUnknownGroupsAndMissingSharedDir) {
   const auto out = test::temp_dir() / "out";
   const ChildResult unknown = run_child({PMSTREAM_BINARY, "bench", "--only", "build,nope", "--out", out.string()});
   EXPECT_EQ(unknown.exit_code, 1);
-  EXPECT_NE(unknown.err.find("unknown experiment group 'nope' (known: build, refine, sender, receiver, soak, dag)"), std::string::npos) << unknown.err;
+  EXPECT_NE(unknown.err.find("unknown experiment group 'nope' (known: build, refine, sender, receiver, multilevel, soak, dag)"), std::string::npos) << unknown.err;
   EXPECT_FALSE(std::filesystem::exists(out));  // refused before creating anything
   const ChildResult shared =
       run_child({PMSTREAM_BINARY, "bench", "--shared", (test::temp_dir() / "none").string(), "--out", out.string()});

@@ -235,5 +235,35 @@ TEST_F(NginxCache, TenClientsOnDifferentPathsShareTheCache) {
   }
 }
 
+
+// The multilevel mode's levels are immutable resources too: a second viewer behind the cache loads every
+// level without the origin seeing a request, and ends on the same mesh.
+TEST_F(NginxCache, MultilevelLevelsComeFromTheCacheTheSecondTime) {
+  const fs::path pml = dir_ / "bunnyml.pml";
+  const test::CliRun build = test::run_pmstream("multilevel build " + test::shared_model("bunny.ply.xz").string() +
+                                                " -o " + pml.string() + " --levels 8");
+  ASSERT_EQ(build.exit_code, 0) << build.err;
+  ServeChild origin(PMSTREAM_BINARY, std::vector<std::string>{pml.string(), "--http-port", "0"});
+  Nginx nginx(nginx_, origin.listening()["http_port"].get<uint16_t>());
+  const fs::path path = make_path("zoom", 10);
+  const auto fly_levels = [&](const std::string& name) {
+    const fs::path mesh = dir_ / (name + ".ply");
+    const test::CliRun run = test::run_pmstream("stream --mode multilevel --server " + nginx.url() +
+                                                " --model bunnyml --path " + path.string() + " --save-mesh " +
+                                                mesh.string() + " --json");
+    if (run.exit_code != 0) fail("pmstream stream", run.err);
+    return Flight{nlohmann::json::parse(run.out), slurp(mesh)};
+  };
+  const Flight first = fly_levels("ml_first");
+  ASSERT_EQ(first.report["levels_received"], 8u);
+  const uint64_t origin_all = origin_requests(origin);
+  const Flight second = fly_levels("ml_second");
+  EXPECT_EQ(second.report["levels_received"], 8u);
+  EXPECT_EQ(origin_requests(origin), origin_all) << "the catalogue, the head and every level came from the cache";
+  EXPECT_EQ(second.report["total_down_payload_bytes"], first.report["total_down_payload_bytes"]);
+  ASSERT_FALSE(first.mesh.empty());
+  EXPECT_TRUE(second.mesh == first.mesh) << "the meshes differ";
+}
+
 }  // namespace
 }  // namespace pms

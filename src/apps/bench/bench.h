@@ -49,6 +49,8 @@ void run_refine_group(BenchContext& context);
 void run_sender_group(BenchContext& context);
 // Receiver-driven against sender-driven and single-rate codecs: whole-model bits, E7 (bench_receiver.cpp).
 void run_receiver_group(BenchContext& context);
+// E10: multilevel memory, LOD switch and geomorph times, bytes per level loaded (bench_multilevel.cpp).
+void run_multilevel_group(BenchContext& context);
 // Requirement 8's soak: many resuming clients against one server for minutes (bench_soak.cpp).
 void run_soak_group(BenchContext& context);
 // E9: the DAG mode's three traversals along a scan route (bench_dag.cpp).

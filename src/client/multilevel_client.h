@@ -1,0 +1,86 @@
+// The multilevel client (gueziec et al. 1999, progressive loading; docs/protocol.md, "Multilevel over
+// HTTP"): GET /models, the model's head, then its levels coarsest first, each added to the structure as it
+// arrives (MultilevelLoader::add_level) and usable at once; every frame picks a LOD by a triangle budget or
+// a screen-size rule and switches to it with setLevel (a geomorph over --geomorph-frames). No session, like
+// the receiver-driven client: a driver of its own over HttpConnection.
+#pragma once
+#include <chrono>
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "client/client_mode.h"
+#include "client/http_connection.h"
+#include "io/mesh.h"
+#include "refine/camera.h"
+#include "refine/multilevel_loader.h"
+#include "refine/multilevel_mesh.h"
+
+namespace pms::client {
+
+struct MultilevelOptions {
+  uint64_t budget = 0;   // > 0: the finest LOD of at most this many triangles; 0: the screen-size rule
+  float tolerance = 1;   // screen-size rule: the coarsest LOD whose error covers at most this many pixels
+  uint32_t morph_frames = 0;  // a LOD switch moves 1 / N level per frame (a geomorph); 0 = at once
+  HttpOptions http;
+  MultilevelLimits limits;  // what the head may announce
+};
+
+// When a level became usable: counted from the start of open().
+struct LevelArrival {
+  uint32_t level = 0;
+  uint64_t bytes = 0;          // its body
+  uint64_t down_bytes = 0;     // everything received on the wire by then (catalogue and head included)
+  uint64_t payload_down = 0;   // the bodies alone
+  double ms = 0;
+};
+
+struct MultilevelFrame {
+  FrameReport report;          // up/down bytes on the wire; vsplits: levels received this frame
+  uint64_t payload_down = 0;
+  uint32_t wanted_level = 0;   // what the rule asks for
+  float level = 0;             // what is shown (fractional during a geomorph)
+  uint32_t levels_loaded = 0;
+  double lod_ms = 0;           // setLevel for this frame
+};
+
+class MultilevelClient {
+ public:
+  MultilevelClient(const HttpUrl& server, const MultilevelOptions& options = {});
+
+  std::vector<std::string> list();  // GET /models: the multilevel models' names
+  void open(const std::string& model);  // GET /models (its entry), GET /models/{m}/head
+
+  MultilevelFrame frame(const Camera& camera);
+  void settle(const Camera& camera);  // the last camera's LOD loaded and reached, no geomorph left
+
+  uint32_t wanted_level(const Camera& camera) const;
+  ViewParams view_params(const Camera& camera) const;
+  const MultilevelMesh& mesh() const { return loader_->mesh(); }
+  const MultilevelLoader& loader() const { return *loader_; }
+  const MultilevelLod& lod() const { return *lod_; }
+  Mesh current_mesh() const { return lod_mesh(mesh(), *lod_); }
+  const std::vector<LevelArrival>& arrivals() const { return arrivals_; }
+  const HttpCounters& counters() const { return http_.counters(); }
+
+ private:
+  void read_entry(const std::string& model);
+  uint32_t load_to(uint32_t level);
+  void show(float level, MultilevelFrame& out);
+
+  MultilevelOptions options_;
+  HttpConnection http_;
+  std::string model_;
+  std::chrono::steady_clock::time_point opened_;
+  std::vector<uint32_t> lod_triangles_;  // per level (0 finest), from the catalogue
+  std::vector<float> level_errors_;
+  float center_[3] = {0, 0, 0}, radius_ = 1;
+  std::optional<MultilevelLoader> loader_;
+  std::optional<MultilevelLod> lod_;
+  std::vector<LevelArrival> arrivals_;
+  float shown_ = -1;
+  uint32_t frame_ = 0;
+};
+
+}  // namespace pms::client

@@ -1,0 +1,60 @@
+// GET /models/{m}/head and /models/{m}/levels/{level} (multilevel_routes.h): bytes cut once at start
+// (served_multilevel.h), answered without a copy.
+#include "server/multilevel_routes.h"
+
+#include <nlohmann/json.hpp>
+
+#include "server/http_answers.h"
+
+namespace pms::server {
+namespace {
+
+HttpAnswer shared_answer(const HttpRequest& request, const std::string& etag,
+                         const std::shared_ptr<const std::vector<uint8_t>>& bytes) {
+  HttpAnswer answer = fresh(request, etag, "application/octet-stream");
+  if (answer.status == 200) answer.shared = bytes;
+  return answer;
+}
+
+// Coarsest first, as a client loads them.
+template <typename T>
+nlohmann::json coarsest_first(const std::vector<T>& per_level) {
+  return nlohmann::json(std::vector<T>(per_level.rbegin(), per_level.rend()));
+}
+
+}  // namespace
+
+HttpAnswer multilevel_route(const ServedMultilevel& model, const HttpRequest& request,
+                            std::span<const std::string_view> s) {
+  const bool head = s.size() == 3 && s[2] == "head", level = s.size() == 4 && s[2] == "levels";
+  if (!head && !level)
+    return error_answer(404, "model '" + model.name + "' is a multilevel mesh: its resources are /head and /levels/LEVEL");
+  if (request.method != "GET" && request.method != "HEAD") return method_not_allowed("GET, HEAD");
+  if (head) return shared_answer(request, model.head_etag, model.head);
+  uint64_t l = 0;
+  if (!parse_decimal(s[3], l)) return error_answer(400, "a level is /models/M/levels/LEVEL in plain decimal");
+  if (l >= model.level_count())
+    return error_answer(404, "model '" + model.name + "' has levels 0 to " + std::to_string(model.level_count() - 1));
+  return shared_answer(request, model.level_etags[l], model.levels[l]);
+}
+
+nlohmann::json multilevel_entry(const ServedMultilevel& m) {
+  std::vector<uint64_t> level_bytes;
+  for (const auto& bytes : m.levels) level_bytes.push_back(bytes->size());
+  return {{"name", m.name},
+          {"kind", "multilevel"},
+          {"levels", m.level_count()},
+          {"dimension", m.dimension},
+          {"normals", m.normals},
+          {"colors", m.colors},
+          {"vertices", m.vertices},
+          {"faces", m.triangles},
+          {"lod_vertices", coarsest_first(m.lod_vertices)},
+          {"lod_triangles", coarsest_first(m.lod_triangles)},
+          {"level_bytes", coarsest_first(level_bytes)},
+          {"level_errors", coarsest_first(m.level_errors)},
+          {"center", m.center},
+          {"radius", m.radius}};
+}
+
+}  // namespace pms::server

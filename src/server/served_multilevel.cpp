@@ -1,0 +1,73 @@
+// A multilevel model's resources, cut and hashed once (served_multilevel.h).
+#define XXH_INLINE_ALL
+#include <xxhash.h>
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+
+#include "refine/multilevel_file.h"
+#include "refine/multilevel_loader.h"
+#include "refine/multilevel_mesh.h"
+#include "server/served_multilevel.h"
+
+namespace pms::server {
+namespace {
+
+// Strong: the bytes' own hash with the canonical URL, so one URL has one ETag whatever process serves it.
+std::string etag_of(const std::vector<uint8_t>& bytes, const std::string& resource) {
+  const uint64_t hashes[2] = {XXH64(bytes.data(), bytes.size(), 0), XXH64(resource.data(), resource.size(), 0)};
+  char text[20];
+  std::snprintf(text, sizeof text, "\"%016llx\"", (unsigned long long)XXH64(hashes, sizeof hashes, 0));
+  return text;
+}
+
+void bounding_sphere(const MultilevelMesh& mesh, ServedMultilevel& out) {
+  float lo[3] = {0, 0, 0}, hi[3] = {0, 0, 0};
+  const uint32_t d = mesh.dimension;
+  for (uint32_t v = 0; v < mesh.vertices(); ++v)
+    for (uint32_t k = 0; k < d; ++k) {
+      const float p = mesh.positions[size_t(v) * d + k];
+      lo[k] = v == 0 ? p : std::min(lo[k], p);
+      hi[k] = v == 0 ? p : std::max(hi[k], p);
+    }
+  double sq = 0;
+  for (int k = 0; k < 3; ++k) {
+    out.center[k] = 0.5f * (lo[k] + hi[k]);
+    sq += 0.25 * double(hi[k] - lo[k]) * (hi[k] - lo[k]);
+  }
+  out.radius = float(std::sqrt(sq));
+}
+
+}  // namespace
+
+std::unique_ptr<ServedMultilevel> open_multilevel(const std::string& path) {
+  const MultilevelMesh mesh = read_multilevel(path);
+  auto out = std::make_unique<ServedMultilevel>();
+  out->path = path;
+  out->name = std::filesystem::path(path).stem().string();
+  out->dimension = mesh.dimension;
+  out->normals = !mesh.normals.empty();
+  out->colors = !mesh.colors.empty();
+  out->vertices = mesh.vertices();
+  out->triangles = mesh.faces();
+  MultilevelParts parts = multilevel_parts(mesh);
+  const std::string prefix = "/models/" + out->name;
+  out->head_etag = etag_of(parts.head, prefix + "/head");
+  out->head = std::make_shared<const std::vector<uint8_t>>(std::move(parts.head));
+  const uint32_t levels = mesh.level_count();
+  out->levels.resize(levels);
+  out->level_etags.resize(levels);
+  for (uint32_t i = 0; i < levels; ++i) {  // parts.levels is coarsest first
+    const uint32_t level = levels - 1 - i;
+    out->level_etags[level] = etag_of(parts.levels[i], prefix + "/levels/" + std::to_string(level));
+    out->levels[level] = std::make_shared<const std::vector<uint8_t>>(std::move(parts.levels[i]));
+  }
+  out->lod_vertices = mesh.vertex_count;
+  out->lod_triangles = mesh.triangle_count;
+  out->level_errors = multilevel_level_errors(mesh);
+  bounding_sphere(mesh, *out);
+  return out;
+}
+
+}  // namespace pms::server

@@ -1,0 +1,34 @@
+// A multilevel mesh (gueziec et al. 1999) as the HTTP server offers it: the binary form cut into its HEAD
+// and one resource per level, coarsest first, each with its strong ETag, built once at start
+// (docs/protocol.md, "Multilevel over HTTP").
+#pragma once
+#include <array>
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace pms::server {
+
+struct ServedMultilevel {
+  std::string name;  // file name without .pml
+  std::string path;
+  uint32_t dimension = 3;
+  bool normals = false, colors = false;
+  uint32_t vertices = 0, triangles = 0;
+  std::shared_ptr<const std::vector<uint8_t>> head;  // the HEAD section
+  std::string head_etag;
+  // Per level, index = the level (0 finest): its LEVL section, ETag, and its LOD's size and error.
+  std::vector<std::shared_ptr<const std::vector<uint8_t>>> levels;
+  std::vector<std::string> level_etags;
+  std::vector<uint32_t> lod_vertices, lod_triangles;
+  std::vector<float> level_errors;  // multilevel_level_errors: what a screen-size rule projects
+  std::array<float, 3> center{};    // bounding sphere of every vertex (the box's centre)
+  float radius = 0;
+  uint32_t level_count() const { return uint32_t(levels.size()); }
+};
+
+// Reads either form (refine/multilevel_file.h); pms::Error naming the file.
+std::unique_ptr<ServedMultilevel> open_multilevel(const std::string& path);
+
+}  // namespace pms::server

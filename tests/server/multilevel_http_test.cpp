@@ -1,0 +1,160 @@
+// The multilevel mode over real loopback HTTP: `serve` offers a .pml file as a head and one resource per
+// level; the client loads the levels coarsest first, adding each as it arrives, and after the last one
+// holds exactly the file's structure; a budget stops it at the LOD it needs; hostile URLs get 4xx.
+#include <gtest/gtest.h>
+#include <algorithm>
+#include <string>
+
+#include "builder/build.h"
+#include "client/multilevel_client.h"
+#include "common/error.h"
+#include "io/shapes.h"
+#include "refine/multilevel_build.h"
+#include "refine/multilevel_file.h"
+#include "refine/multilevel_mesh.h"
+#include "server/catalogue.h"
+#include "server/http_server.h"
+#include "http_test_client.h"
+#include "test_support.h"
+
+namespace pms {
+namespace {
+
+struct MultilevelModel {
+  std::string path;
+  MultilevelMesh mesh;  // as read back from the file
+};
+
+const MultilevelModel& sphere_model() {
+  static const MultilevelModel model = [] {
+    const Mesh mesh = make_sphere(40, 60);
+    const BuildResult built = build_progressive_mesh(mesh);
+    MultilevelModel m;
+    m.path = (test::temp_dir() / "ball.pml").string();
+    write_multilevel(m.path, build_multilevel(mesh, collapses_of(built.hierarchy), 12), false);
+    m.mesh = read_multilevel(m.path);
+    return m;
+  }();
+  return model;
+}
+
+struct Server {
+  Server() : http(server::Catalogue::open({sphere_model().path}), {}, "127.0.0.1", 0) { http.start(); }
+  client::HttpUrl url() const { return client::HttpUrl{"127.0.0.1", http.port(), ""}; }
+  server::HttpServer http;
+};
+
+Camera far_camera() {
+  Camera c;
+  c.eye[2] = 1000;
+  return c;
+}
+
+TEST(MultilevelHttp, LevelsArriveCoarsestFirstAndTheLastGivesTheFilesMesh) {
+  const MultilevelModel& model = sphere_model();
+  Server server;
+  client::MultilevelOptions options;
+  options.budget = uint64_t(1) << 40;  // every level
+  client::MultilevelClient client(server.url(), options);
+  ASSERT_EQ(client.list(), std::vector<std::string>{"ball"});
+  client.open("ball");
+  const client::MultilevelFrame frame = client.frame(far_camera());
+  const uint32_t levels = model.mesh.level_count();
+  ASSERT_GE(levels, 4u);
+  ASSERT_EQ(client.arrivals().size(), levels);
+  for (uint32_t i = 0; i < levels; ++i) EXPECT_EQ(client.arrivals()[i].level, levels - 1 - i) << "arrival " << i;
+  for (uint32_t i = 1; i < levels; ++i) EXPECT_GT(client.arrivals()[i].down_bytes, client.arrivals()[i - 1].down_bytes);
+  EXPECT_EQ(frame.report.vsplits, levels);
+  EXPECT_EQ(frame.wanted_level, 0u);
+  EXPECT_EQ(frame.report.faces, model.mesh.faces());
+  ASSERT_TRUE(client.loader().complete());
+  const MultilevelMesh& got = client.mesh();
+  EXPECT_EQ(got.positions, model.mesh.positions);
+  EXPECT_EQ(got.triangles, model.mesh.triangles);
+  EXPECT_EQ(got.representative, model.mesh.representative);
+  EXPECT_EQ(got.vertex_count, model.mesh.vertex_count);
+  EXPECT_EQ(got.triangle_count, model.mesh.triangle_count);
+  const uint64_t requests = server.http.stats().requests.load();
+  client.frame(far_camera());
+  EXPECT_EQ(server.http.stats().requests.load(), requests) << "a loaded model asks for nothing more";
+}
+
+// A budget stops the load at the finest LOD within it, and that LOD is usable and already the file's.
+TEST(MultilevelHttp, ABudgetLoadsOnlyTheLevelsItNeedsAndTheirLodIsTheFiles) {
+  const MultilevelModel& model = sphere_model();
+  const uint32_t levels = model.mesh.level_count(), wanted = levels / 2;
+  Server server;
+  client::MultilevelOptions options;
+  options.budget = model.mesh.triangle_count[wanted];
+  client::MultilevelClient client(server.url(), options);
+  client.open("ball");
+  const client::MultilevelFrame frame = client.frame(far_camera());
+  EXPECT_EQ(frame.wanted_level, wanted);
+  EXPECT_EQ(client.loader().finest_loaded(), wanted);
+  EXPECT_EQ(client.arrivals().size(), levels - wanted);
+  EXPECT_LE(frame.report.faces, options.budget);
+  MultilevelLod full(model.mesh);
+  full.set_level(wanted);
+  const auto got = client.lod().indices(), expected = full.indices();
+  EXPECT_TRUE(std::equal(got.begin(), got.end(), expected.begin(), expected.end()));
+  ASSERT_EQ(client.lod().vertex_count(), full.vertex_count());
+  const auto p = client.lod().positions(), q = full.positions();
+  EXPECT_TRUE(std::equal(p.begin(), p.end(), q.begin(), q.end()));
+}
+
+// The screen-size rule asks for finer levels as the camera closes in, and geomorphs move one step at a time.
+TEST(MultilevelHttp, CloserCamerasWantFinerLevels) {
+  Server server;
+  client::MultilevelOptions options;
+  options.morph_frames = 4;
+  client::MultilevelClient client(server.url(), options);
+  client.open("ball");
+  uint32_t previous = ~0u;
+  float shown = -1;
+  for (float distance : {400.0f, 40.0f, 8.0f, 3.0f, 1.5f}) {
+    Camera c;
+    c.eye[2] = distance;
+    const client::MultilevelFrame frame = client.frame(c);
+    EXPECT_LE(frame.wanted_level, previous) << "distance " << distance;
+    if (shown >= 0) {
+      EXPECT_LE(std::abs(frame.level - shown), 0.25f + 1e-5f);
+    }
+    previous = frame.wanted_level;
+    shown = frame.level;
+  }
+  EXPECT_LT(previous, sphere_model().mesh.level_count() - 1);
+}
+
+TEST(MultilevelHttp, ResourcesAreCacheableAndHostileUrlsGet4xx) {
+  const MultilevelModel& model = sphere_model();
+  Server server;
+  test::HttpTestClient http(server.http.port());
+  const test::HttpReply head = http.get("/models/ball/head");
+  ASSERT_EQ(head.status, 200);
+  EXPECT_EQ(head.body.size(), 32u);
+  const test::HttpReply level = http.get("/models/ball/levels/0");
+  ASSERT_EQ(level.status, 200);
+  EXPECT_EQ(level.header("cache-control"), "public, max-age=31536000, immutable");
+  const std::string etag = level.header("etag");
+  ASSERT_FALSE(etag.empty());
+  EXPECT_EQ(http.get("/models/ball/levels/0").body, level.body) << "the same bytes for the same URL";
+  EXPECT_EQ(http.get("/models/ball/levels/0", {{"If-None-Match", etag}}).status, 304);
+  EXPECT_NE(http.get("/models/ball/levels/1").header("etag"), etag);
+  const std::string last = std::to_string(model.mesh.level_count());
+  EXPECT_EQ(http.get("/models/ball/levels/" + last).status, 404);
+  EXPECT_EQ(http.get("/models/ball/levels/01").status, 400);
+  EXPECT_EQ(http.get("/models/ball/levels/-1").status, 400);
+  EXPECT_EQ(http.get("/models/ball/levels/99999999999999999999999").status, 400);
+  EXPECT_EQ(http.get("/models/ball/levels").status, 404);
+  EXPECT_EQ(http.get("/models/ball/base").status, 404);
+  EXPECT_EQ(http.get("/models/nosuch/head").status, 404);
+  EXPECT_EQ(http.post("/models/ball/head", {1, 2}).status, 405);
+  const test::HttpReply catalogue = http.get("/models");
+  EXPECT_NE(catalogue.text().find("\"kind\":\"multilevel\""), std::string::npos) << catalogue.text();
+
+  client::MultilevelClient client(server.url());
+  EXPECT_THROW(client.open("nosuch"), Error);
+}
+
+}  // namespace
+}  // namespace pms
