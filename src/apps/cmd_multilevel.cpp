@@ -301,6 +301,8 @@ void run_local_refinement(const MultilevelLevelArgs& args, const MultilevelMesh&
               (unsigned long long)dag.edge_count(), double(dag.memory_bytes()) / 1e6, dag_seconds);
   std::printf("  splits: %zu wanted, %zu made in topological order (%.3f s with the mesh)\n", wanted.size(), splits,
               refine_seconds);
+  std::printf("  state:  %zu non-zero constraint counts in the hash tables, %.1f MB\n", refinement.constraint_entries(),
+              double(refinement.memory_bytes()) / 1e6);
 }
 
 void run_multilevel_level(const MultilevelLevelArgs& args) {
