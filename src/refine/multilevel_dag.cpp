@@ -78,11 +78,12 @@ class CollapseReplay {
   std::vector<uint32_t> producer_;  // per vertex: the latest collapse onto it (the paper's "list or hash table")
 };
 
-std::vector<uint32_t> triangle_levels(const MultilevelMesh& m) {
-  std::vector<uint32_t> level(m.faces());
-  for (uint32_t l = 0; l < m.level_count(); ++l) {
-    const uint32_t begin = l + 1 < m.level_count() ? m.triangle_count[l + 1] : 0;
-    std::fill(level.begin() + begin, level.begin() + m.triangle_count[l], l);
+// Per element of a prefix-by-level numbering (counts[l]: elements of levels >= l), its level.
+std::vector<uint32_t> levels_of(const std::vector<uint32_t>& counts) {
+  std::vector<uint32_t> level(counts.empty() ? 0 : counts[0]);
+  for (uint32_t l = 0; l < counts.size(); ++l) {
+    const uint32_t begin = l + 1 < counts.size() ? counts[l + 1] : 0;
+    std::fill(level.begin() + begin, level.begin() + counts[l], l);
   }
   return level;
 }
@@ -132,22 +133,13 @@ uint64_t MultilevelDag::memory_bytes() const {
          sizeof(float) * radius.size();
 }
 
-std::vector<uint32_t> vertex_levels(const MultilevelMesh& m) {
-  std::vector<uint32_t> level(m.vertices());
-  for (uint32_t l = 0; l < m.level_count(); ++l) {
-    const uint32_t begin = l + 1 < m.level_count() ? m.vertex_count[l + 1] : 0;
-    std::fill(level.begin() + begin, level.begin() + m.vertex_count[l], l);
-  }
-  return level;
-}
-
 MultilevelDag build_multilevel_dag(const MultilevelMesh& m) {
   MultilevelDag dag;
   dag.vertices = m.vertices();
   dag.top_vertices = m.vertex_count.back();
   dag.remover.assign(m.faces(), kNone);
   dag.radius.assign(dag.vertices - dag.top_vertices, 0.0f);
-  const std::vector<uint32_t> triangle_level = triangle_levels(m);
+  const std::vector<uint32_t> triangle_level = levels_of(m.triangle_count);
   CollapseReplay replay(m);
   std::vector<Requirement> pairs;
   std::vector<uint32_t> neighbours, star, producers;

@@ -51,7 +51,4 @@ struct MultilevelDag {
 // v's own neighbours must be there for v's triangles to be, so v's split needs theirs.
 MultilevelDag build_multilevel_dag(const MultilevelMesh& mesh);
 
-// Per vertex, its level (the highest l with v < vertex_count[l]).
-std::vector<uint32_t> vertex_levels(const MultilevelMesh& mesh);
-
 }  // namespace pms

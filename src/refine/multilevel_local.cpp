@@ -82,34 +82,34 @@ void MultilevelRefinement::close_over_prerequisites(std::span<const uint32_t> wa
   }
 }
 
+// Kahn's algorithm on the counts themselves. Collapsing: a split node nothing kept needs has only
+// dependents that are leaving too, so its collapse constraints fall to zero once they are collapsed.
+// Splitting: a kept node's collapsed prerequisites are all kept, so its split constraints fall to zero once
+// they are split. A node is queued when its count reaches zero, which happens once.
+void MultilevelRefinement::change_status(bool splitting, const std::vector<uint8_t>& kept, std::vector<uint32_t>& done) {
+  const auto ready_to_change = [&](uint32_t v) {
+    return splitting ? kept[v] && !split_[v] && split_constraints(v) == 0
+                     : !kept[v] && split_[v] && collapse_constraints(v) == 0;
+  };
+  std::vector<uint32_t> ready;
+  for (uint32_t v = dag_.top_vertices; v < dag_.vertices; ++v)
+    if (ready_to_change(v)) ready.push_back(v);
+  while (!ready.empty()) {
+    const uint32_t v = ready.back();
+    ready.pop_back();
+    splitting ? split(v) : collapse(v);
+    done.push_back(v);
+    for (uint32_t u : splitting ? dag_.dependents_of(v) : dag_.prerequisites_of(v))
+      if (ready_to_change(u)) ready.push_back(u);
+  }
+}
+
 MultilevelRefinement::Changes MultilevelRefinement::refine_to(std::span<const uint32_t> wanted) {
   std::vector<uint8_t> kept(dag_.vertices, 0);
   close_over_prerequisites(wanted, kept);
   Changes changes;
-  // Kahn's algorithm twice, on the counts themselves: a split node nothing kept needs has only dependents
-  // that are leaving too, so its collapse constraints fall to zero once they are collapsed; a kept node's
-  // collapsed prerequisites are all kept, so its split constraints fall to zero once they are split.
-  std::vector<uint32_t> ready;
-  for (uint32_t v = dag_.top_vertices; v < dag_.vertices; ++v)
-    if (split_[v] && !kept[v] && collapse_constraints(v) == 0) ready.push_back(v);
-  while (!ready.empty()) {
-    const uint32_t v = ready.back();
-    ready.pop_back();
-    collapse(v);
-    changes.collapses.push_back(v);
-    for (uint32_t p : dag_.prerequisites_of(v))
-      if (split_[p] && !kept[p] && collapse_constraints(p) == 0) ready.push_back(p);
-  }
-  for (uint32_t v = dag_.top_vertices; v < dag_.vertices; ++v)
-    if (kept[v] && !split_[v] && split_constraints(v) == 0) ready.push_back(v);
-  while (!ready.empty()) {
-    const uint32_t v = ready.back();
-    ready.pop_back();
-    split(v);
-    changes.splits.push_back(v);
-    for (uint32_t d : dag_.dependents_of(v))
-      if (kept[d] && !split_[d] && split_constraints(d) == 0) ready.push_back(d);
-  }
+  change_status(false, kept, changes.collapses);
+  change_status(true, kept, changes.splits);
   return changes;
 }
 

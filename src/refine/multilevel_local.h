@@ -53,6 +53,8 @@ class MultilevelRefinement {
   static void add(CountTable& table, uint32_t v, int delta);
   // Marks `wanted` and its prerequisites, transitively (1 per vertex in `mark`).
   void close_over_prerequisites(std::span<const uint32_t> wanted, std::vector<uint8_t>& mark) const;
+  // Splits (or collapses) every node `kept` says should be (or not be) split, in a topological order.
+  void change_status(bool splitting, const std::vector<uint8_t>& kept, std::vector<uint32_t>& done);
 
   const MultilevelDag& dag_;
   std::vector<uint8_t> split_;  // per vertex
