@@ -1,6 +1,7 @@
 // pmstream multilevel build IN -o OUT [--levels L] [--cluster grid:N,...|FILE.json] [--ascii] [--base-vertices N] [--json]
 // pmstream multilevel info FILE [--json]
 // pmstream multilevel level FILE --level X -o OUT.ply
+// pmstream multilevel level FILE (--region x0,y0,z0,x1,y1,z1 | --sphere x,y,z,r | --camera CAM.json [--pixels P]) [--level X] -o OUT.ply
 // Progressive multilevel meshes (gueziec et al. 1999; docs/multilevel-format.md, docs/cli.md).
 #include <algorithm>
 #include <cmath>
@@ -10,6 +11,7 @@
 #include <fstream>
 
 #include "apps/build_pipeline.h"
+#include "apps/camera_json.h"
 #include "apps/commands.h"
 #include "apps/progress_bar.h"
 #include "apps/resource_usage.h"
@@ -19,6 +21,8 @@
 #include "refine/multilevel_build.h"
 #include "refine/multilevel_cluster.h"
 #include "refine/multilevel_file.h"
+#include "refine/multilevel_local.h"
+#include "refine/multilevel_region.h"
 #include "refine/multilevel_mesh.h"
 
 namespace pms::app {
@@ -226,20 +230,86 @@ void run_multilevel_info(const std::string& path, bool json) {
                 row["set_level_ms"].get<double>(), row["geomorph_ms"].get<double>());
 }
 
-void run_multilevel_level(const std::string& path, double level, const std::string& output) {
-  const MultilevelMesh m = read_multilevel(path);
-  const double top = m.level_count() - 1;
-  if (!(level >= 0 && level <= top)) {
-    char text[96];
-    std::snprintf(text, sizeof text, "level %g is outside 0..%u", level, m.level_count() - 1);
-    fail(path, text);
+// --level X and, for a local refinement, where (gueziec et al. 1999, Fig. 15).
+struct MultilevelLevelArgs {
+  std::string input, output;
+  double level = -1;  // unset: 0 for a local refinement, required otherwise
+  std::vector<float> region, sphere;
+  std::string camera;
+  float pixels = 1.0f;
+  bool local() const { return !region.empty() || !sphere.empty() || !camera.empty(); }
+};
+
+void check_level(const std::string& path, const MultilevelMesh& m, double level) {
+  if (level >= 0 && level <= m.level_count() - 1) return;
+  char text[96];
+  std::snprintf(text, sizeof text, "level %g is outside 0..%u", level, m.level_count() - 1);
+  fail(path, text);
+}
+
+std::vector<uint32_t> wanted_splits(const MultilevelLevelArgs& args, const MultilevelMesh& m, const MultilevelDag& dag) {
+  if (!args.camera.empty()) {
+    float lo[3], hi[3];
+    for (int k = 0; k < 3; ++k) lo[k] = 1e30f, hi[k] = -1e30f;
+    for (uint32_t v = 0; v < m.vertices(); ++v)
+      for (uint32_t k = 0; k < m.dimension; ++k) {
+        lo[k] = std::min(lo[k], m.positions[size_t(v) * m.dimension + k]);
+        hi[k] = std::max(hi[k], m.positions[size_t(v) * m.dimension + k]);
+      }
+    if (m.dimension == 2) lo[2] = hi[2] = 0;
+    return splits_for_view(m, dag, make_view(load_camera(args.camera), lo, hi), args.pixels);
+  }
+  Region region;
+  if (!args.sphere.empty()) {
+    region.sphere = true;
+    std::copy_n(args.sphere.begin(), 3, region.lo);
+    region.radius = args.sphere[3];
+  } else {
+    std::copy_n(args.region.begin(), 3, region.lo);
+    std::copy_n(args.region.begin() + 3, 3, region.hi);
+  }
+  return splits_in_region(m, dag, region, uint32_t(args.level));
+}
+
+void run_local_refinement(const MultilevelLevelArgs& args, const MultilevelMesh& m) {
+  Stopwatch dag_time;
+  const MultilevelDag dag = build_multilevel_dag(m);
+  const double dag_seconds = dag_time.seconds();
+  Stopwatch refine_time;
+  MultilevelRefinement refinement(dag);
+  const std::vector<uint32_t> wanted = wanted_splits(args, m, dag);
+  const size_t splits = refinement.refine_to(wanted).splits.size();
+  const LocalMesh local = local_mesh(m, dag, refinement);
+  const double refine_seconds = refine_time.seconds();
+  save_ply(local.mesh, args.output);
+  std::printf("%s local refinement -> %s: %zu vertices, %zu triangles\n", args.input.c_str(), args.output.c_str(),
+              local.mesh.vertex_count(), local.mesh.face_count());
+  std::printf("  DAG:    %u collapses, %llu edges, %.1f MB, built in %.3f s\n", dag.vertices - dag.top_vertices,
+              (unsigned long long)dag.edge_count(), double(dag.memory_bytes()) / 1e6, dag_seconds);
+  std::printf("  splits: %zu wanted, %zu made in topological order (%.3f s with the mesh)\n", wanted.size(), splits,
+              refine_seconds);
+  std::printf("  state:  %zu non-zero constraint counts in the hash tables, %.1f MB\n", refinement.constraint_entries(),
+              double(refinement.memory_bytes()) / 1e6);
+}
+
+void run_multilevel_level(const MultilevelLevelArgs& args) {
+  const MultilevelMesh m = read_multilevel(args.input);
+  const double level = args.local() && args.level < 0 ? 0 : args.level;
+  if (args.level < 0 && !args.local()) fail(args.input, "--level is required without --region, --sphere or --camera");
+  check_level(args.input, m, level);
+  if (args.local()) {
+    if (level != std::floor(level)) fail(args.input, "a local refinement takes a whole --level");
+    MultilevelLevelArgs whole = args;
+    whole.level = level;
+    run_local_refinement(whole, m);
+    return;
   }
   MultilevelLod lod(m);
   if (level == std::floor(level)) lod.set_level(uint32_t(level));
   else lod.set_level(float(level));
-  save_ply(lod_mesh(m, lod), output);
-  std::printf("%s level %g -> %s: %u vertices, %zu triangles\n", path.c_str(), level, output.c_str(), lod.vertex_count(),
-              lod.indices().size() / 3);
+  save_ply(lod_mesh(m, lod), args.output);
+  std::printf("%s level %g -> %s: %u vertices, %zu triangles\n", args.input.c_str(), level, args.output.c_str(),
+              lod.vertex_count(), lod.indices().size() / 3);
 }
 
 }  // namespace
@@ -270,14 +340,20 @@ void add_multilevel_command(CLI::App& app) {
   info->add_flag("--json", *info_json, "Print one JSON object");
   info->callback([info_path, info_json] { run_multilevel_info(*info_path, *info_json); });
 
-  auto level_path = std::make_shared<std::string>();
-  auto level_out = std::make_shared<std::string>();
-  auto level_x = std::make_shared<double>(0);
-  CLI::App* level = cmd->add_subcommand("level", "Write the LOD at a level (fractional: a geomorph) as PLY");
-  level->add_option("file", *level_path, "Multilevel file (ASCII or binary)")->required();
-  level->add_option("--level", *level_x, "Level, 0 = finest; e.g. 2.5 is halfway from level 3 to level 2")->required();
-  level->add_option("-o,--output", *level_out, "Output .ply")->required();
-  level->callback([level_path, level_x, level_out] { run_multilevel_level(*level_path, *level_x, *level_out); });
+  auto l = std::make_shared<MultilevelLevelArgs>();
+  CLI::App* level = cmd->add_subcommand("level", "Write the LOD at a level (fractional: a geomorph) or a local refinement as PLY");
+  level->add_option("file", l->input, "Multilevel file (ASCII or binary)")->required();
+  level->add_option("--level", l->level,
+                    "Level, 0 = finest; e.g. 2.5 is halfway from level 3 to level 2; with --region or --sphere, the "
+                    "level inside it (default 0)");
+  auto* region = level->add_option("--region", l->region, "Refine the box x0,y0,z0,x1,y1,z1; the rest stays coarse")
+                     ->delimiter(',')->expected(6);
+  auto* sphere = level->add_option("--sphere", l->sphere, "Refine the ball x,y,z,r; the rest stays coarse")
+                     ->delimiter(',')->expected(4)->excludes(region);
+  level->add_option("--camera", l->camera, "Refine for the view of CAM.json (screen-size rule)")->excludes(region)->excludes(sphere);
+  level->add_option("--pixels", l->pixels, "With --camera: split collapses wider than this many pixels")->capture_default_str();
+  level->add_option("-o,--output", l->output, "Output .ply")->required();
+  level->callback([l] { run_multilevel_level(*l); });
 }
 
 }  // namespace pms::app

@@ -61,6 +61,32 @@ TEST(MultilevelCli, BuildInfoLevelInBothForms) {
   EXPECT_NE(beyond.err.find("level 6 is outside 0..5"), std::string::npos) << beyond.err;
 }
 
+TEST(MultilevelCli, LevelOfARegion) {
+  const auto dir = test::temp_dir();
+  const Mesh input = make_torus(30, 12, 2.0f, 0.5f);
+  const std::string ply = (dir / "torus.ply").string(), out = (dir / "torus.pml").string(), lod = (dir / "r.ply").string();
+  save_ply(input, ply);
+  ASSERT_EQ(test::run_pmstream("multilevel build " + ply + " -o " + out + " --levels 6").exit_code, 0);
+  const auto faces = [&](const std::string& args) {
+    const test::CliRun run = test::run_pmstream("multilevel level " + out + " " + args + " -o " + lod);
+    EXPECT_EQ(run.exit_code, 0) << args << ": " << run.err;
+    return load_mesh(lod).face_count();
+  };
+  const size_t coarsest = faces("--level 5");
+  EXPECT_EQ(faces("--region -3,-3,-3,3,3,3"), input.face_count());
+  EXPECT_EQ(faces("--region -3,-3,-3,3,3,3 --level 2"), faces("--level 2"));
+  EXPECT_EQ(faces("--region 10,10,10,11,11,11"), coarsest);
+  const size_t half = faces("--region -3,-3,-3,0,3,3");
+  EXPECT_GT(half, coarsest);
+  EXPECT_LT(half, input.face_count());
+  const size_t ball = faces("--sphere 2,0,0,0.8");
+  EXPECT_GT(ball, coarsest);
+  EXPECT_LT(ball, half);
+  const test::CliRun no_level = test::run_pmstream("multilevel level " + out + " -o " + lod);
+  EXPECT_NE(no_level.exit_code, 0);
+  EXPECT_NE(no_level.err.find("--level is required"), std::string::npos) << no_level.err;
+}
+
 TEST(MultilevelCli, GridClusteringInput) {
   const auto dir = test::temp_dir();
   const std::string ply = (dir / "torus.ply").string(), out = (dir / "c.txt").string();
