@@ -128,6 +128,14 @@ std::pair<nlohmann::json, size_t> fly(const StreamArgs& args, const std::vector<
   return {std::move(frames), index};
 }
 
+client::HttpOptions http_options(const StreamArgs& args) {
+  client::HttpOptions http;
+  http.in_flight = args.in_flight;
+  http.io_timeout = std::chrono::milliseconds(args.timeout_ms);
+  http.connect_timeout = std::chrono::milliseconds(args.connect_timeout_ms);
+  return http;
+}
+
 // --mode receiver: no session, GETs over HTTP (client/receiver_client.h); byte counts are HTTP's, headers
 // included, with the payload apart.
 void run_receiver(const StreamArgs& args) {
@@ -142,9 +150,7 @@ void run_receiver(const StreamArgs& args) {
   options.fetch = client::fetch_policy_named(args.fetch);
   options.ids_per_request = args.ids_per_request;
   options.block_depth = args.block_depth;
-  options.http.in_flight = args.in_flight;
-  options.http.io_timeout = std::chrono::milliseconds(args.timeout_ms);
-  options.http.connect_timeout = std::chrono::milliseconds(args.connect_timeout_ms);
+  options.http = http_options(args);
   client::ReceiverClient client(url, options);
   client.open(args.model);
   const auto [frames, index] = fly(args, path, client, [&](const Camera& camera, size_t frame, uint32_t lap) {
@@ -182,9 +188,7 @@ void run_multilevel(const StreamArgs& args) {
   options.budget = args.budget;
   options.tolerance = args.tolerance;
   options.morph_frames = args.morph_frames;
-  options.http.in_flight = args.in_flight;
-  options.http.io_timeout = std::chrono::milliseconds(args.timeout_ms);
-  options.http.connect_timeout = std::chrono::milliseconds(args.connect_timeout_ms);
+  options.http = http_options(args);
   client::MultilevelClient client(url, options);
   client.open(args.model);
   uint64_t levels_received = 0;
