@@ -2,7 +2,7 @@
 // --json` as a child process on loopback, flies a good client along a path once in quiet, then again while
 // one kind of attacker works on the server from raw sockets, and asks of every attack the same: the good
 // client ends with the mesh local refinement gives and its p99 latency stays within 3x of the quiet flight
-// (asserted in the release build; a sanitizer build reports it);
+// (asserted in the release build; a sanitizer build, which does not assert it, skips the quiet flight);
 // within 3 s of the attack's end the server is back under 10 % of a core with every session slot free; SIGTERM
 // ends it within 1 s with its totals. The deadlines are cut to a second (the idle timeout to three) so each
 // attack meets them within the test.
@@ -101,6 +101,9 @@ class Attack : public ::testing::Test {
                                                  "--idle-timeout-ms", std::to_string(kIdleTimeout.count()),
                                                  "--max-client-message", std::to_string(kMaxClientMessage)});
     good_mesh();  // built before any timing
+    // Only the p99 bound reads the quiet flight, and a sanitizer build does not assert it: the attacked
+    // flight's mesh and the sessions after it are checked in both builds.
+    if (test::kSanitized) return;
     const double cpu_before = server_->cpu_seconds();
     quiet_ = fly(port(), "terrain", good_path(), kTolerance);
     quiet_cpu_ = server_->cpu_seconds() - cpu_before;
@@ -138,8 +141,8 @@ class Attack : public ::testing::Test {
     const double quiet_p99 = percentile(quiet_.latency_ms, 99), attacked_p99 = percentile(attacked_.latency_ms, 99);
     EXPECT_EQ(attacked_.mesh, good_mesh()) << "the attacked flight does not end with local refinement's mesh";
     if (!test::kSanitized) {
-    EXPECT_LE(attacked_p99, 3 * quiet_p99) << "p99 over " << attacked_.latency_ms.size() << " answers";
-  }
+      EXPECT_LE(attacked_p99, 3 * quiet_p99) << "p99 over " << attacked_.latency_ms.size() << " answers";
+    }
     const double cpu = server_->wait_for_idle(0.10, remaining(deadline));
     EXPECT_LT(cpu, 0.10) << "server CPU (share of one core over a second) within 3 s of the attack's end";
     const uint64_t sessions = server_->wait_for_sessions(0, remaining(deadline));
@@ -162,7 +165,7 @@ class Attack : public ::testing::Test {
                 (unsigned long long)stats.at("protocol_errors").get<uint64_t>(),
                 (unsigned long long)stats.at("sessions_refused").get<uint64_t>(),
                 (unsigned long long)stats.value("longest_turn_us", uint64_t(0)),
-                test::kSanitized ? " (sanitizer build: the p99 bound is the release run's)" : "");
+                test::kSanitized ? " (sanitizer build: no quiet flight, the p99 bound is the release run's)" : "");
   }
 
   static milliseconds remaining(Clock::time_point deadline) {
