@@ -128,6 +128,18 @@ std::pair<nlohmann::json, size_t> fly(const StreamArgs& args, const std::vector<
   return {std::move(frames), index};
 }
 
+// What the HTTP modes need before they fly: the server's URL, the path, the snapshot folder made.
+struct HttpFlight {
+  client::HttpUrl url;
+  std::vector<Camera> path;
+};
+
+HttpFlight http_flight(const StreamArgs& args) {
+  HttpFlight flight{client::parse_http_url(args.server), load_path(args.path)};
+  if (!args.snapshots.empty()) std::filesystem::create_directories(args.snapshots);
+  return flight;
+}
+
 client::HttpOptions http_options(const StreamArgs& args) {
   client::HttpOptions http;
   http.in_flight = args.in_flight;
@@ -139,9 +151,8 @@ client::HttpOptions http_options(const StreamArgs& args) {
 // --mode receiver: no session, GETs over HTTP (client/receiver_client.h); byte counts are HTTP's, headers
 // included, with the payload apart.
 void run_receiver(const StreamArgs& args) {
-  const client::HttpUrl url = client::parse_http_url(args.server);
-  const std::vector<Camera> path = load_path(args.path);
-  if (!args.snapshots.empty()) std::filesystem::create_directories(args.snapshots);
+  const HttpFlight flight = http_flight(args);
+  const std::vector<Camera>& path = flight.path;
   Stopwatch clock;
   client::ReceiverOptions options;
   options.tolerance = args.tolerance;
@@ -151,7 +162,7 @@ void run_receiver(const StreamArgs& args) {
   options.ids_per_request = args.ids_per_request;
   options.block_depth = args.block_depth;
   options.http = http_options(args);
-  client::ReceiverClient client(url, options);
+  client::ReceiverClient client(flight.url, options);
   client.open(args.model);
   const auto [frames, index] = fly(args, path, client, [&](const Camera& camera, size_t frame, uint32_t lap) {
     const client::ReceiverFrame r = client.frame(camera);
@@ -180,16 +191,15 @@ void run_receiver(const StreamArgs& args) {
 
 // --mode multilevel: levels over HTTP, coarsest first (client/multilevel_client.h); byte counts are HTTP's.
 void run_multilevel(const StreamArgs& args) {
-  const client::HttpUrl url = client::parse_http_url(args.server);
-  const std::vector<Camera> path = load_path(args.path);
-  if (!args.snapshots.empty()) std::filesystem::create_directories(args.snapshots);
+  const HttpFlight flight = http_flight(args);
+  const std::vector<Camera>& path = flight.path;
   Stopwatch clock;
   client::MultilevelOptions options;
   options.budget = args.budget;
   options.tolerance = args.tolerance;
   options.morph_frames = args.morph_frames;
   options.http = http_options(args);
-  client::MultilevelClient client(url, options);
+  client::MultilevelClient client(flight.url, options);
   client.open(args.model);
   uint64_t levels_received = 0;
   const auto [frames, index] = fly(args, path, client, [&](const Camera& camera, size_t frame, uint32_t lap) {
