@@ -82,7 +82,10 @@ std::string shell_quote(const std::string& arg) {
 std::string command_line() {
   std::ifstream in("/proc/self/cmdline", std::ios::binary);
   std::string line, arg;
-  while (std::getline(in, arg, '\0')) line += (line.empty() ? "" : " ") + shell_quote(arg);
+  while (std::getline(in, arg, '\0')) {
+    if (!line.empty()) line += ' ';
+    line += shell_quote(arg);
+  }
   return line;
 }
 
@@ -159,28 +162,31 @@ void run_bench(const BenchArgs& args) {
 
 }  // namespace
 
-void add_bench_command(CLI::App& app) {
+void add_bench_command(CliCommand& app) {
   auto args = std::make_shared<BenchArgs>();
-  CLI::App* cmd = app.add_subcommand("bench", "Run the experiments (docs/architecture.md, \"Experiments\"): tables "
-                                              "on stdout, report.md, JSON and PNG in --out");
-  cmd->add_flag("--quick", args->quick, "Only the small end of every series (a smoke run)");
-  cmd->add_option("--models", args->models, "Comma-separated model names in ../shared/models (default per group; "
-                                            "build: bunny,horse,feline,skull,dragon)")
-      ->delimiter(',');
-  cmd->add_option("--only", args->only, "Comma-separated experiment groups (default: all; known: " + group_names() + ")")
-      ->delimiter(',');
-  cmd->add_option("--shared", args->shared, "Directory holding models/ (default: $PMSTREAM_SHARED_DIR, else ../shared "
-                                            "or ../../shared from here or from the binary)");
-  cmd->add_option("--out", args->out, "Output directory")->capture_default_str();
-  CLI::Option* clients = cmd->add_option("--soak-clients", args->soak_clients, "Clients of the soak group (--quick: 10)")
-                             ->check(CLI::Range(1u, 10000u))
-                             ->capture_default_str();
-  CLI::Option* minutes = cmd->add_option("--soak-minutes", args->soak_minutes, "Minutes the soak runs (--quick: 1)")
-                             ->check(CLI::Range(1u, 24u * 60u))
-                             ->capture_default_str();
-  cmd->callback([args, clients, minutes] {
-    if (args->quick && clients->count() == 0) args->soak_clients = kQuickSoakClients;
-    if (args->quick && minutes->count() == 0) args->soak_minutes = kQuickSoakMinutes;
+  CliCommand cmd = app.subcommand("bench",
+                                  "Run the experiments (docs/architecture.md, \"Experiments\"): tables "
+                                  "on stdout, report.md, JSON and PNG in --out");
+  cmd.flag("--quick", args->quick, "Only the small end of every series (a smoke run)");
+  cmd.option("--models", args->models,
+             "Comma-separated model names in ../shared/models (default per group; "
+             "build: bunny,horse,feline,skull,dragon)")
+      .delimiter(',');
+  cmd.option("--only", args->only, "Comma-separated experiment groups (default: all; known: " + group_names() + ")")
+      .delimiter(',');
+  cmd.option("--shared", args->shared,
+             "Directory holding models/ (default: $PMSTREAM_SHARED_DIR, else ../shared "
+             "or ../../shared from here or from the binary)");
+  cmd.option("--out", args->out, "Output directory").show_default();
+  CliOption clients = cmd.option("--soak-clients", args->soak_clients, "Clients of the soak group (--quick: 10)")
+                          .range(1u, 10000u)
+                          .show_default();
+  CliOption minutes = cmd.option("--soak-minutes", args->soak_minutes, "Minutes the soak runs (--quick: 1)")
+                          .range(1u, 24u * 60u)
+                          .show_default();
+  cmd.on_run([args, clients, minutes] {
+    if (args->quick && !clients.given()) args->soak_clients = kQuickSoakClients;
+    if (args->quick && !minutes.given()) args->soak_minutes = kQuickSoakMinutes;
     run_bench(*args);
   });
 }

@@ -48,23 +48,23 @@ void run_build(const BuildArgs& args) {
 
 }  // namespace
 
-void add_build_command(CLI::App& app) {
+void add_build_command(CliCommand& app) {
   auto args = std::make_shared<BuildArgs>();
-  CLI::App* cmd = app.add_subcommand("build", "Build a view-dependent progressive mesh (.pms) from a mesh file");
-  cmd->add_option("input", args->input, "Input mesh (PLY, OBJ, OFF, STL, glTF/GLB; may end in .gz or .xz)")
-      ->required();
-  cmd->add_option("-o,--output", args->output, "Output .pms file")->required();
-  cmd->add_flag("--greedy", args->greedy, "Classic one-at-a-time PM order (view-independent baseline)");
-  cmd->add_option("--base-vertices", args->base_vertices, "Stop when the base mesh has this many vertices (0: as coarse as the mesh allows)")
-      ->capture_default_str();
-  cmd->add_option("--deviation", args->deviation,
-                  "Error each node claims: 'estimate' is Hoppe 1997's, measured at points of the input surface below it "
-                  "(the default); 'bound' covers that surface with a margin summed level by level: ~1.4x the splits for the "
-                  "same tolerance, which the view then keeps within it")
-      ->check(CLI::IsMember({"bound", "estimate"}))
-      ->capture_default_str();
-  cmd->add_flag("--json", args->json, "Print one JSON object with the statistics");
-  cmd->callback([args] { run_build(*args); });
+  CliCommand cmd = app.subcommand("build", "Build a view-dependent progressive mesh (.pms) from a mesh file");
+  cmd.option("input", args->input, "Input mesh (PLY, OBJ, OFF, STL, glTF/GLB; may end in .gz or .xz)").required();
+  cmd.option("-o,--output", args->output, "Output .pms file").required();
+  cmd.flag("--greedy", args->greedy, "Classic one-at-a-time PM order (view-independent baseline)");
+  cmd.option("--base-vertices", args->base_vertices,
+             "Stop when the base mesh has this many vertices (0: as coarse as the mesh allows)")
+      .show_default();
+  cmd.option("--deviation", args->deviation,
+             "Error each node claims: 'estimate' is Hoppe 1997's, measured at points of the input surface below it "
+             "(the default); 'bound' covers that surface with a margin summed level by level: ~1.4x the splits for the "
+             "same tolerance, which the view then keeps within it")
+      .one_of({"bound", "estimate"})
+      .show_default();
+  cmd.flag("--json", args->json, "Print one JSON object with the statistics");
+  cmd.on_run([args] { run_build(*args); });
 }
 
 }  // namespace pms::app

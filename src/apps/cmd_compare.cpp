@@ -51,16 +51,16 @@ void run_compare(const CompareArgs& args) {
 
 }  // namespace
 
-void add_compare_command(CLI::App& app) {
+void add_compare_command(CliCommand& app) {
   auto args = std::make_shared<CompareArgs>();
-  CLI::App* cmd = app.add_subcommand("compare", "Render two meshes with one camera and compare the images");
-  cmd->add_option("mesh_a", args->a, "Mesh file, terrain:FACES, or .pms model")->required();
-  cmd->add_option("mesh_b", args->b, "Mesh file, terrain:FACES, or .pms model")->required();
-  cmd->add_option("--camera", args->camera, "Camera JSON (CAM.json, docs/cli.md)")->required();
-  cmd->add_option("--width", args->width, "Image width (overrides the camera's)")->check(CLI::Range(1, 16384));
-  cmd->add_option("--height", args->height, "Image height (overrides the camera's)")->check(CLI::Range(1, 16384));
-  cmd->add_flag("--json", args->json, "Print one JSON object: psnr error_pixels error_fraction");
-  cmd->callback([args] { run_compare(*args); });
+  CliCommand cmd = app.subcommand("compare", "Render two meshes with one camera and compare the images");
+  cmd.option("mesh_a", args->a, "Mesh file, terrain:FACES, or .pms model").required();
+  cmd.option("mesh_b", args->b, "Mesh file, terrain:FACES, or .pms model").required();
+  cmd.option("--camera", args->camera, "Camera JSON (CAM.json, docs/cli.md)").required();
+  cmd.option("--width", args->width, "Image width (overrides the camera's)").range(1, 16384);
+  cmd.option("--height", args->height, "Image height (overrides the camera's)").range(1, 16384);
+  cmd.flag("--json", args->json, "Print one JSON object: psnr error_pixels error_fraction");
+  cmd.on_run([args] { run_compare(*args); });
 }
 
 }  // namespace pms::app

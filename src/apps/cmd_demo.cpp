@@ -112,19 +112,18 @@ void run_demo(const DemoArgs& args) {
 
 }  // namespace
 
-void add_demo_command(CLI::App& app) {
+void add_demo_command(CliCommand& app) {
   auto args = std::make_shared<DemoArgs>();
-  CLI::App* cmd = app.add_subcommand("demo", "Build the built-in terrain and stream it to a headless client over loopback (no input needed)");
-  cmd->add_option("--model", args->model,
-                  "Your own model instead of the terrain: a .pms file, or a mesh file (PLY, OBJ, OFF, STL, glTF/GLB; may "
-                  "end in .gz or .xz) built into the output directory first (cached)");
-  cmd->add_option("--out", args->out_dir, "Output directory")->capture_default_str();
-  cmd->add_flag("--rebuild", args->rebuild, "Ignore the cached build");
-  cmd->add_option("--frames", args->frames, "Frames of the flight")->check(CLI::Range(1u, 100000u))->capture_default_str();
-  cmd->add_option("--tolerance", args->tolerance, "Screen-space error tolerance in pixels")
-      ->check(CLI::NonNegativeNumber)
-      ->capture_default_str();
-  cmd->callback([args] { run_demo(*args); });
+  CliCommand cmd = app.subcommand(
+      "demo", "Build the built-in terrain and stream it to a headless client over loopback (no input needed)");
+  cmd.option("--model", args->model,
+             "Your own model instead of the terrain: a .pms file, or a mesh file (PLY, OBJ, OFF, STL, glTF/GLB; may "
+             "end in .gz or .xz) built into the output directory first (cached)");
+  cmd.option("--out", args->out_dir, "Output directory").show_default();
+  cmd.flag("--rebuild", args->rebuild, "Ignore the cached build");
+  cmd.option("--frames", args->frames, "Frames of the flight").range(1u, 100000u).show_default();
+  cmd.option("--tolerance", args->tolerance, "Screen-space error tolerance in pixels").non_negative().show_default();
+  cmd.on_run([args] { run_demo(*args); });
 }
 
 }  // namespace pms::app

@@ -51,13 +51,13 @@ void run_info(const std::string& path, bool json) {
 
 }  // namespace
 
-void add_info_command(CLI::App& app) {
+void add_info_command(CliCommand& app) {
   auto path = std::make_shared<std::string>();
   auto json = std::make_shared<bool>(false);
-  CLI::App* cmd = app.add_subcommand("info", "Print the statistics of a .pms file");
-  cmd->add_option("file", *path, ".pms file")->required();
-  cmd->add_flag("--json", *json, "Print one JSON object");
-  cmd->callback([path, json] { run_info(*path, *json); });
+  CliCommand cmd = app.subcommand("info", "Print the statistics of a .pms file");
+  cmd.option("file", *path, ".pms file").required();
+  cmd.flag("--json", *json, "Print one JSON object");
+  cmd.on_run([path, json] { run_info(*path, *json); });
 }
 
 }  // namespace pms::app

@@ -314,46 +314,53 @@ void run_multilevel_level(const MultilevelLevelArgs& args) {
 
 }  // namespace
 
-void add_multilevel_command(CLI::App& app) {
-  CLI::App* cmd = app.add_subcommand("multilevel", "Progressive multilevel meshes (gueziec et al. 1999)");
-  cmd->require_subcommand(1);
+void add_multilevel_command(CliCommand& app) {
+  CliCommand cmd = app.subcommand("multilevel", "Progressive multilevel meshes (gueziec et al. 1999)");
+  cmd.require_subcommand();
 
   auto b = std::make_shared<MultilevelBuildArgs>();
-  CLI::App* build = cmd->add_subcommand("build", "Build a multilevel mesh from the builder's edge collapses");
-  build->add_option("input", b->input, "Input mesh (PLY, OBJ, OFF, STL, glTF/GLB; .gz/.xz), or terrain:FACES")->required();
-  build->add_option("-o,--output", b->output, "Output file (binary unless --ascii)")->required();
-  build->add_option("--levels", b->levels, "Merge consecutive levels down to this many (0: every level)")
-      ->capture_default_str();
-  build->add_option("--base-vertices", b->base_vertices, "Collapse until this many vertices are left (0: as far as possible)")
-      ->capture_default_str();
-  build->add_option("--cluster", b->cluster,
-                    "Levels from vertex clusterings instead of collapses: grid:N,... (N^3 cells each, finest first) or a "
-                    "JSON clustering file; the mesh is not cleaned, non-manifold results allowed");
-  build->add_flag("--ascii", b->ascii, "Write the paper's ASCII form (Fig. 6) instead of the binary one");
-  build->add_flag("--json", b->json, "Print one JSON object with the statistics");
-  build->callback([b] { run_multilevel_build(*b); });
+  CliCommand build = cmd.subcommand("build", "Build a multilevel mesh from the builder's edge collapses");
+  build.option("input", b->input, "Input mesh (PLY, OBJ, OFF, STL, glTF/GLB; .gz/.xz), or terrain:FACES").required();
+  build.option("-o,--output", b->output, "Output file (binary unless --ascii)").required();
+  build.option("--levels", b->levels, "Merge consecutive levels down to this many (0: every level)").show_default();
+  build
+      .option("--base-vertices", b->base_vertices, "Collapse until this many vertices are left (0: as far as possible)")
+      .show_default();
+  build.option("--cluster", b->cluster,
+               "Levels from vertex clusterings instead of collapses: grid:N,... (N^3 cells each, finest first) or a "
+               "JSON clustering file; the mesh is not cleaned, non-manifold results allowed");
+  build.flag("--ascii", b->ascii, "Write the paper's ASCII form (Fig. 6) instead of the binary one");
+  build.flag("--json", b->json, "Print one JSON object with the statistics");
+  build.on_run([b] { run_multilevel_build(*b); });
 
   auto info_path = std::make_shared<std::string>();
   auto info_json = std::make_shared<bool>(false);
-  CLI::App* info = cmd->add_subcommand("info", "Per level: the LOD's vertices and triangles, representatives, switch times");
-  info->add_option("file", *info_path, "Multilevel file (ASCII or binary)")->required();
-  info->add_flag("--json", *info_json, "Print one JSON object");
-  info->callback([info_path, info_json] { run_multilevel_info(*info_path, *info_json); });
+  CliCommand info =
+      cmd.subcommand("info", "Per level: the LOD's vertices and triangles, representatives, switch times");
+  info.option("file", *info_path, "Multilevel file (ASCII or binary)").required();
+  info.flag("--json", *info_json, "Print one JSON object");
+  info.on_run([info_path, info_json] { run_multilevel_info(*info_path, *info_json); });
 
   auto l = std::make_shared<MultilevelLevelArgs>();
-  CLI::App* level = cmd->add_subcommand("level", "Write the LOD at a level (fractional: a geomorph) or a local refinement as PLY");
-  level->add_option("file", l->input, "Multilevel file (ASCII or binary)")->required();
-  level->add_option("--level", l->level,
-                    "Level, 0 = finest; e.g. 2.5 is halfway from level 3 to level 2; with --region or --sphere, the "
-                    "level inside it (default 0)");
-  auto* region = level->add_option("--region", l->region, "Refine the box x0,y0,z0,x1,y1,z1; the rest stays coarse")
-                     ->delimiter(',')->expected(6);
-  auto* sphere = level->add_option("--sphere", l->sphere, "Refine the ball x,y,z,r; the rest stays coarse")
-                     ->delimiter(',')->expected(4)->excludes(region);
-  level->add_option("--camera", l->camera, "Refine for the view of CAM.json (screen-size rule)")->excludes(region)->excludes(sphere);
-  level->add_option("--pixels", l->pixels, "With --camera: split collapses wider than this many pixels")->capture_default_str();
-  level->add_option("-o,--output", l->output, "Output .ply")->required();
-  level->callback([l] { run_multilevel_level(*l); });
+  CliCommand level =
+      cmd.subcommand("level", "Write the LOD at a level (fractional: a geomorph) or a local refinement as PLY");
+  level.option("file", l->input, "Multilevel file (ASCII or binary)").required();
+  level.option("--level", l->level,
+               "Level, 0 = finest; e.g. 2.5 is halfway from level 3 to level 2; with --region or --sphere, the "
+               "level inside it (default 0)");
+  auto region = level.option("--region", l->region, "Refine the box x0,y0,z0,x1,y1,z1; the rest stays coarse")
+                    .delimiter(',')
+                    .expected(6);
+  auto sphere = level.option("--sphere", l->sphere, "Refine the ball x,y,z,r; the rest stays coarse")
+                    .delimiter(',')
+                    .expected(4)
+                    .excludes(region);
+  level.option("--camera", l->camera, "Refine for the view of CAM.json (screen-size rule)")
+      .excludes(region)
+      .excludes(sphere);
+  level.option("--pixels", l->pixels, "With --camera: split collapses wider than this many pixels").show_default();
+  level.option("-o,--output", l->output, "Output .ply").required();
+  level.on_run([l] { run_multilevel_level(*l); });
 }
 
 }  // namespace pms::app

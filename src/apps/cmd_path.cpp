@@ -26,18 +26,19 @@ void run_path(const PathArgs& args) {
 
 }  // namespace
 
-void add_path_command(CLI::App& app) {
+void add_path_command(CliCommand& app) {
   auto args = std::make_shared<PathArgs>();
-  CLI::App* cmd = app.add_subcommand("path", "Write a scripted camera path (PATH.json) around a .pms model");
-  cmd->add_option("kind", args->kind, "orbit (circle around the model), scan (close, bottom to top) or zoom (far to close-up)")
-      ->required();
-  cmd->add_option("--model", args->model, ".pms file the path is made for")->required();
-  cmd->add_option("--frames", args->options.frames, "Number of cameras")->required();
-  cmd->add_option("-o,--output", args->output, "Output PATH.json")->required();
-  cmd->add_option("--width", args->options.width, "Viewport width in pixels (default 800)");
-  cmd->add_option("--height", args->options.height, "Viewport height in pixels (default 600)");
-  cmd->add_option("--fovy", args->options.fovy_deg, "Vertical field of view in degrees (default 45)");
-  cmd->callback([args] { run_path(*args); });
+  CliCommand cmd = app.subcommand("path", "Write a scripted camera path (PATH.json) around a .pms model");
+  cmd.option("kind", args->kind,
+             "orbit (circle around the model), scan (close, bottom to top) or zoom (far to close-up)")
+      .required();
+  cmd.option("--model", args->model, ".pms file the path is made for").required();
+  cmd.option("--frames", args->options.frames, "Number of cameras").required();
+  cmd.option("-o,--output", args->output, "Output PATH.json").required();
+  cmd.option("--width", args->options.width, "Viewport width in pixels (default 800)");
+  cmd.option("--height", args->options.height, "Viewport height in pixels (default 600)");
+  cmd.option("--fovy", args->options.fovy_deg, "Vertical field of view in degrees (default 45)");
+  cmd.on_run([args] { run_path(*args); });
 }
 
 }  // namespace pms::app

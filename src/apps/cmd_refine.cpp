@@ -58,19 +58,19 @@ void run_refine(const RefineArgs& args, bool splits_given, bool tolerance_given)
 
 }  // namespace
 
-void add_refine_command(CLI::App& app) {
+void add_refine_command(CliCommand& app) {
   auto args = std::make_shared<RefineArgs>();
-  CLI::App* cmd = app.add_subcommand("refine", "Refine a .pms model and write the mesh as PLY");
-  cmd->add_option("file", args->input, ".pms file")->required();
-  cmd->add_flag("--full", args->full, "Apply every vertex split (the finest mesh = the cleaned input)");
-  CLI::Option* splits = cmd->add_option("--splits", args->splits, "Apply the first K vertex splits in stream order");
-  cmd->add_option("--camera", args->camera,
-                  "Refine for the view in CAM.json (Hoppe 1997 criteria: frustum, back faces, screen-space error)");
-  CLI::Option* tolerance =
-      cmd->add_option("--tolerance", args->tolerance, "Screen-space error tolerance in pixels with --camera (default 1)");
-  cmd->add_option("-o,--output", args->output, "Output .ply file")->required();
-  cmd->add_flag("--json", args->json, "Print one JSON object");
-  cmd->callback([args, splits, tolerance] { run_refine(*args, splits->count() > 0, tolerance->count() > 0); });
+  CliCommand cmd = app.subcommand("refine", "Refine a .pms model and write the mesh as PLY");
+  cmd.option("file", args->input, ".pms file").required();
+  cmd.flag("--full", args->full, "Apply every vertex split (the finest mesh = the cleaned input)");
+  CliOption splits = cmd.option("--splits", args->splits, "Apply the first K vertex splits in stream order");
+  cmd.option("--camera", args->camera,
+             "Refine for the view in CAM.json (Hoppe 1997 criteria: frustum, back faces, screen-space error)");
+  CliOption tolerance =
+      cmd.option("--tolerance", args->tolerance, "Screen-space error tolerance in pixels with --camera (default 1)");
+  cmd.option("-o,--output", args->output, "Output .ply file").required();
+  cmd.flag("--json", args->json, "Print one JSON object");
+  cmd.on_run([args, splits, tolerance] { run_refine(*args, splits.given(), tolerance.given()); });
 }
 
 }  // namespace pms::app

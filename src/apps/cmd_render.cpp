@@ -33,15 +33,15 @@ void run_render(const RenderArgs& args) {
 
 }  // namespace
 
-void add_render_command(CLI::App& app) {
+void add_render_command(CliCommand& app) {
   auto args = std::make_shared<RenderArgs>();
-  CLI::App* cmd = app.add_subcommand("render", "Render a mesh or a .pms model (its finest mesh) to PNG");
-  cmd->add_option("input", args->input, "Mesh file, terrain:FACES, or .pms model")->required();
-  cmd->add_option("--camera", args->camera, "Camera JSON (CAM.json, docs/cli.md)")->required();
-  cmd->add_option("-o,--output", args->output, "Output .png file")->required();
-  cmd->add_option("--width", args->width, "Image width (overrides the camera's)")->check(CLI::Range(1, 16384));
-  cmd->add_option("--height", args->height, "Image height (overrides the camera's)")->check(CLI::Range(1, 16384));
-  cmd->callback([args] { run_render(*args); });
+  CliCommand cmd = app.subcommand("render", "Render a mesh or a .pms model (its finest mesh) to PNG");
+  cmd.option("input", args->input, "Mesh file, terrain:FACES, or .pms model").required();
+  cmd.option("--camera", args->camera, "Camera JSON (CAM.json, docs/cli.md)").required();
+  cmd.option("-o,--output", args->output, "Output .png file").required();
+  cmd.option("--width", args->width, "Image width (overrides the camera's)").range(1, 16384);
+  cmd.option("--height", args->height, "Image height (overrides the camera's)").range(1, 16384);
+  cmd.on_run([args] { run_render(*args); });
 }
 
 }  // namespace pms::app

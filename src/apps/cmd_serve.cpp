@@ -179,21 +179,24 @@ void run_serve(ServeArgs args) {
   print_stats("stopped", args, tcp, http.get(), uptime);
 }
 
-void add_limit(CLI::App* cmd, const char* name, uint32_t& value, const char* help) {
-  cmd->add_option(name, value, help)->capture_default_str();
+void add_limit(CliCommand& cmd, const char* name, uint32_t& value, const char* help) {
+  cmd.option(name, value, help).show_default();
 }
 
 }  // namespace
 
-void add_serve_command(CLI::App& app) {
+void add_serve_command(CliCommand& app) {
   auto args = std::make_shared<ServeArgs>();
   server::ServerLimits& limits = args->limits;
-  CLI::App* cmd = app.add_subcommand("serve", "Serve .pms models to streaming clients (sender-driven over TCP; receiver-driven over HTTP with --http-port)");
-  cmd->add_option("paths", args->paths, ".pms files or directories holding them")->required();
-  cmd->add_option("--host", args->host, "Address to listen on")->capture_default_str();
-  cmd->add_option("--port", args->port, "TCP port (0: any free port, printed at start)")->capture_default_str();
-  cmd->add_option("--http-port", args->http_port,
-                  "Also serve the receiver-driven mode over HTTP on this port (0: any free port, printed at start)");
+  CliCommand cmd = app.subcommand(
+      "serve",
+      "Serve .pms models to streaming clients (sender-driven over TCP; receiver-driven over HTTP with --http-port)");
+  cmd.option("paths", args->paths, ".pms files or directories holding them").required();
+  cmd.option("--host", args->host, "Address to listen on").show_default();
+  cmd.option("--port", args->port, "TCP port (0: any free port, printed at start)").show_default();
+  const CliOption http_port =
+      cmd.option("--http-port", args->http_port,
+                 "Also serve the receiver-driven mode over HTTP on this port (0: any free port, printed at start)");
   server::HttpLimits& http = args->http;
   add_limit(cmd, "--http-max-connections", http.max_connections, "Concurrent HTTP connections; more get 503");
   add_limit(cmd, "--http-idle-timeout-ms", http.idle_timeout_ms,
@@ -205,7 +208,7 @@ void add_serve_command(CLI::App& app) {
   add_limit(cmd, "--http-max-request-ids", http.max_request_ids, "Ids one request code may name (413 over it)");
   add_limit(cmd, "--http-max-response-splits", http.max_response_splits,
             "Split records one answer may carry, descendants included (413 over it)");
-  cmd->add_flag("--json", args->json, "Print one JSON object per line: listening, stats (SIGUSR1), stopped");
+  cmd.flag("--json", args->json, "Print one JSON object per line: listening, stats (SIGUSR1), stopped");
   add_limit(cmd, "--max-sessions", limits.max_sessions, "Concurrent sessions; more are refused (server_full)");
   add_limit(cmd, "--threads", limits.threads, "I/O threads (0 = one per core)");
   add_limit(cmd, "--idle-timeout-ms", limits.idle_timeout_ms,
@@ -220,18 +223,17 @@ void add_serve_command(CLI::App& app) {
   add_limit(cmd, "--turn-us", limits.turn_us, "One session's turn on an I/O thread, in microseconds");
   add_limit(cmd, "--max-message-rate", limits.max_message_rate,
             "Messages per second a session may send (bursts of as many); more wait, unread (0 = no limit)");
-  add_limit(cmd, "--max-client-message", limits.max_client_message, "Largest message payload a client may send (bytes)");
+  add_limit(cmd, "--max-client-message", limits.max_client_message,
+            "Largest message payload a client may send (bytes)");
   add_limit(cmd, "--max-server-message", limits.max_server_message,
             "Largest message payload the server sends (bytes); a model whose BASE is larger is refused at start");
-  cmd->add_option("--send-queue-bytes", limits.send_queue_bytes,
-                  "Answer bytes queued per session before it waits for the peer to read")
-      ->capture_default_str();
-  cmd->add_option("--batch", limits.batch_splits, "vsplit packets per VSPLITS message")
-      ->check(CLI::Range(1u, 1u << 16))
-      ->capture_default_str();
+  cmd.option("--send-queue-bytes", limits.send_queue_bytes,
+             "Answer bytes queued per session before it waits for the peer to read")
+      .show_default();
+  cmd.option("--batch", limits.batch_splits, "vsplit packets per VSPLITS message").range(1u, 1u << 16).show_default();
   add_limit(cmd, "--position-bits", limits.position_bits, "Bits per coordinate on the wire (1-24, or 32)");
-  cmd->callback([args, cmd] {
-    args->http_port_given = cmd->count("--http-port") > 0;
+  cmd.on_run([args, http_port] {
+    args->http_port_given = http_port.given();
     run_serve(*args);
   });
 }

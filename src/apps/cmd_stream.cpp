@@ -305,60 +305,66 @@ void run_stream(const StreamArgs& args) {
 
 }  // namespace
 
-void add_stream_command(CLI::App& app) {
+void add_stream_command(CliCommand& app) {
   auto args = std::make_shared<StreamArgs>();
-  CLI::App* cmd = app.add_subcommand("stream", "Headless viewer: stream a model from a server along a camera path");
-  cmd->add_option("--server", args->server, "HOST:PORT of the server's TCP port; for --mode receiver and multilevel http://HOST:PORT[/prefix] of its HTTP port")->required();
-  cmd->add_option("--model", args->model, "Model name in the server's catalogue")->required();
-  cmd->add_option("--path", args->path, "PATH.json (pmstream path ...)")->required();
-  cmd->add_option("--mode", args->mode, "Streaming mode: sender (view-dependent), sender-plain (the same splits as plain vsplits for a viewer that "
-                 "does not refine), vi (plain PM order until the view is satisfied) receiver (the client asks for splits by id over HTTP), multilevel (levels of a multilevel mesh over HTTP, coarsest first) or dag (a thin client driven by the server's DAG "
-                 "traversal); docs/cli.md")
-      ->capture_default_str();
-  cmd->add_option("--tolerance", args->tolerance, "Screen-space error tolerance in pixels")
-      ->check(CLI::NonNegativeNumber)
-      ->capture_default_str();
-  cmd->add_option("--laps", args->laps, "Times the path is flown")->check(CLI::Range(1u, 1000u))->capture_default_str();
-  cmd->add_option("--reconnect", args->reconnect,
-                  "On a lost connection, reconnect and resume the session up to N times (0.5 s apart, doubling)")
-      ->check(CLI::Range(0u, 100u))
-      ->capture_default_str();
-  cmd->add_option("--timeout-ms", args->timeout_ms,
-                  "A server silent this long while an answer is due, or stuck mid-message, is lost")
-      ->check(CLI::Range(1u, 3600000u))
-      ->capture_default_str();
-  cmd->add_option("--connect-timeout-ms", args->connect_timeout_ms, "Give up a connection attempt after this long")
-      ->check(CLI::Range(1u, 3600000u))
-      ->capture_default_str();
-  cmd->add_option("--in-flight", args->in_flight, "receiver, multilevel: HTTP requests sent ahead of the answer being read")
-      ->check(CLI::Range(1u, 64u))
-      ->capture_default_str();
-  cmd->add_option("--fetch", args->fetch,
-                  "receiver: lists (GET the ids it lacks) or blocks (GET the fixed subtree bands holding them, "
-                  "shared by clients behind a cache); docs/protocol.md")
-      ->check(CLI::IsMember({"lists", "blocks"}))
-      ->capture_default_str();
-  cmd->add_option("--ids-per-request", args->ids_per_request, "receiver, lists: split ids in one GET")
-      ->check(CLI::Range(1u, 1024u))
-      ->capture_default_str();
-  cmd->add_option("--block-depth", args->block_depth, "receiver, blocks: levels below a block's root")
-      ->check(CLI::Range(0u, 8u))
-      ->capture_default_str();
-  cmd->add_option("--geomorph-frames", args->morph_frames, "Blend splits and collapses over N frames (0 = off)")
-      ->capture_default_str();
-  cmd->add_option("--max-ops", args->max_ops, "vsplits + ecols per frame (0 = no cap; dag: N, 0 = 300)")
-      ->check(CLI::Range(0u, protocol::kMaxDagOps))
-      ->capture_default_str();
-  cmd->add_option("--traversal", args->traversal, "dag: priority, linear or constant")
-      ->check(CLI::IsMember({"priority", "linear", "constant"}))
-      ->capture_default_str();
-  cmd->add_option("--budget", args->budget, "dag: BUDGET mode with this many triangles (0 = FREE mode); multilevel: the finest LOD of at most this many triangles (0 = the screen-size rule with --tolerance)")
-      ->check(CLI::Range(uint64_t(0), protocol::kMaxDagBudget))
-      ->capture_default_str();
-  cmd->add_option("--save-mesh", args->save_mesh, "Write the client's mesh after the last frame (PLY)");
-  cmd->add_option("--snapshots", args->snapshots, "Write a PNG per frame into this directory");
-  cmd->add_flag("--json", args->json, "Print one JSON object");
-  cmd->callback([args] { run_stream(*args); });
+  CliCommand cmd = app.subcommand("stream", "Headless viewer: stream a model from a server along a camera path");
+  cmd.option("--server", args->server,
+             "HOST:PORT of the server's TCP port; for --mode receiver and multilevel http://HOST:PORT[/prefix] of its "
+             "HTTP port")
+      .required();
+  cmd.option("--model", args->model, "Model name in the server's catalogue").required();
+  cmd.option("--path", args->path, "PATH.json (pmstream path ...)").required();
+  cmd.option(
+         "--mode", args->mode,
+         "Streaming mode: sender (view-dependent), sender-plain (the same splits as plain vsplits for a viewer that "
+         "does not refine), vi (plain PM order until the view is satisfied) receiver (the client asks for splits by id "
+         "over HTTP), multilevel (levels of a multilevel mesh over HTTP, coarsest first) or dag (a thin client driven "
+         "by the server's DAG traversal); docs/cli.md")
+      .show_default();
+  cmd.option("--tolerance", args->tolerance, "Screen-space error tolerance in pixels").non_negative().show_default();
+  cmd.option("--laps", args->laps, "Times the path is flown").range(1u, 1000u).show_default();
+  cmd.option("--reconnect", args->reconnect,
+             "On a lost connection, reconnect and resume the session up to N times (0.5 s apart, doubling)")
+      .range(0u, 100u)
+      .show_default();
+  cmd.option("--timeout-ms", args->timeout_ms,
+             "A server silent this long while an answer is due, or stuck mid-message, is lost")
+      .range(1u, 3600000u)
+      .show_default();
+  cmd.option("--connect-timeout-ms", args->connect_timeout_ms, "Give up a connection attempt after this long")
+      .range(1u, 3600000u)
+      .show_default();
+  cmd.option("--in-flight", args->in_flight, "receiver, multilevel: HTTP requests sent ahead of the answer being read")
+      .range(1u, 64u)
+      .show_default();
+  cmd.option("--fetch", args->fetch,
+             "receiver: lists (GET the ids it lacks) or blocks (GET the fixed subtree bands holding them, "
+             "shared by clients behind a cache); docs/protocol.md")
+      .one_of({"lists", "blocks"})
+      .show_default();
+  cmd.option("--ids-per-request", args->ids_per_request, "receiver, lists: split ids in one GET")
+      .range(1u, 1024u)
+      .show_default();
+  cmd.option("--block-depth", args->block_depth, "receiver, blocks: levels below a block's root")
+      .range(0u, 8u)
+      .show_default();
+  cmd.option("--geomorph-frames", args->morph_frames, "Blend splits and collapses over N frames (0 = off)")
+      .show_default();
+  cmd.option("--max-ops", args->max_ops, "vsplits + ecols per frame (0 = no cap; dag: N, 0 = 300)")
+      .range(0u, protocol::kMaxDagOps)
+      .show_default();
+  cmd.option("--traversal", args->traversal, "dag: priority, linear or constant")
+      .one_of({"priority", "linear", "constant"})
+      .show_default();
+  cmd.option("--budget", args->budget,
+             "dag: BUDGET mode with this many triangles (0 = FREE mode); multilevel: the finest LOD of at most this "
+             "many triangles (0 = the screen-size rule with --tolerance)")
+      .range(uint64_t(0), protocol::kMaxDagBudget)
+      .show_default();
+  cmd.option("--save-mesh", args->save_mesh, "Write the client's mesh after the last frame (PLY)");
+  cmd.option("--snapshots", args->snapshots, "Write a PNG per frame into this directory");
+  cmd.flag("--json", args->json, "Print one JSON object");
+  cmd.on_run([args] { run_stream(*args); });
 }
 
 }  // namespace pms::app

@@ -1,19 +1,19 @@
-// Each subcommand of the `pmstream` binary registers itself on the CLI11 app.
+// Each subcommand of the `pmstream` binary registers itself on the command line (apps/cli.h).
 #pragma once
-#include <CLI/CLI.hpp>
+#include "apps/cli.h"
 
 namespace pms::app {
 
-void add_build_command(CLI::App& app);
-void add_info_command(CLI::App& app);
-void add_refine_command(CLI::App& app);
-void add_path_command(CLI::App& app);
-void add_demo_command(CLI::App& app);
-void add_bench_command(CLI::App& app);
-void add_render_command(CLI::App& app);
-void add_compare_command(CLI::App& app);
-void add_serve_command(CLI::App& app);
-void add_stream_command(CLI::App& app);
-void add_multilevel_command(CLI::App& app);
+void add_build_command(CliCommand& app);
+void add_info_command(CliCommand& app);
+void add_refine_command(CliCommand& app);
+void add_path_command(CliCommand& app);
+void add_demo_command(CliCommand& app);
+void add_bench_command(CliCommand& app);
+void add_render_command(CliCommand& app);
+void add_compare_command(CliCommand& app);
+void add_serve_command(CliCommand& app);
+void add_stream_command(CliCommand& app);
+void add_multilevel_command(CliCommand& app);
 
 }  // namespace pms::app
