@@ -205,7 +205,11 @@ void add_serve_command(CliCommand& app) {
             "An HTTP request, once begun, must arrive whole within this");
   add_limit(cmd, "--http-write-timeout-ms", http.write_timeout_ms,
             "Close an HTTP peer that takes no answer byte for this long");
+  add_limit(cmd, "--http-max-url-bytes", http.max_target_bytes, "Longest request URL (414 over it; POST takes longer codes)");
+  add_limit(cmd, "--http-max-header-bytes", http.max_header_bytes, "Request line and headers together (431 over it)");
+  add_limit(cmd, "--http-max-body-bytes", http.max_body_bytes, "A POSTed request code (413 over it)");
   add_limit(cmd, "--http-max-request-ids", http.max_request_ids, "Ids one request code may name (413 over it)");
+  add_limit(cmd, "--http-max-request-depth", http.max_request_depth, "Descendant depth one request may ask for (400 over it)");
   add_limit(cmd, "--http-max-response-splits", http.max_response_splits,
             "Split records one answer may carry, descendants included (413 over it)");
   cmd.flag("--json", args->json, "Print one JSON object per line: listening, stats (SIGUSR1), stopped");

@@ -7,6 +7,7 @@
 #include <nlohmann/json.hpp>
 
 #include "common/error.h"
+#include "protocol/url_segment.h"
 
 namespace pms::client {
 namespace {
@@ -52,8 +53,7 @@ std::vector<T> per_level(const nlohmann::json& entry, const char* key, uint32_t 
 }
 
 std::string level_target(const std::string& model, uint32_t level) {
-  std::string target = "/models/";
-  target += model;
+  std::string target = protocol::model_path(model);
   target += "/levels/";
   target += std::to_string(level);
   return target;
@@ -96,7 +96,7 @@ void MultilevelClient::open(const std::string& model) {
   if (loader_) fail("open", "this client already holds '" + model_ + "'");
   opened_ = Clock::now();
   read_entry(model);
-  const std::string target = "/models/" + model + "/head";
+  const std::string target = protocol::model_path(model) + "/head";
   const HttpAnswer head = http_.get(target);
   if (head.status != 200) refused(target, head);
   loader_.emplace("GET " + target, head.body, options_.limits);

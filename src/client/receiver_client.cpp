@@ -13,6 +13,7 @@
 #include "protocol/base64url.h"
 #include "protocol/server_messages.h"
 #include "protocol/split_request.h"
+#include "protocol/url_segment.h"
 #include "refine/adapt.h"
 
 namespace pms::client {
@@ -38,8 +39,7 @@ void adapt_for_view(SelectiveRefinement& refinement) {
 
 // Appended piece by piece: GCC 12 warns wrongly (-Wrestrict) on a chain of `+` with to_string().
 std::string block_target(const std::string& model, VertexId root, uint32_t depth) {
-  std::string target = "/models/";
-  target += model;
+  std::string target = protocol::model_path(model);
   target += "/blocks/";
   target += std::to_string(root.tree);
   target += '/';
@@ -90,7 +90,7 @@ std::vector<std::string> ReceiverClient::list() {
 
 void ReceiverClient::open(const std::string& model) {
   if (session_.has_model()) fail("open", "this client already holds '" + model_ + "'");
-  const std::string target = "/models/" + model + "/base";
+  const std::string target = protocol::model_path(model) + "/base";
   const HttpAnswer answer = http_.get(target);
   if (answer.status != 200) refused(target, answer);
   session_.on_base(protocol::decode_base(answer.body));
@@ -98,7 +98,7 @@ void ReceiverClient::open(const std::string& model) {
   for (const nlohmann::json& entry : catalogue())
     if (entry.is_object() && entry.value("name", "") == model) records_format_ = entry.value("records_format", 1u);
   if (records_format_ == 2) {
-    const std::string tables = "/models/" + model + "/codec";
+    const std::string tables = protocol::model_path(model) + "/codec";
     const HttpAnswer codec = http_.get(tables);
     if (codec.status != 200) refused(tables, codec);
     BitReader r(codec.body, "GET " + tables);
@@ -146,7 +146,7 @@ ReceiverClient::Requests ReceiverClient::list_requests(const std::vector<VertexI
     // The answer comes in code order, which format 2's bands are read in.
     std::sort(out.requests.back().ids.begin(), out.requests.back().ids.end(), protocol::code_order);
     const std::vector<uint8_t> code = protocol::encode_split_request(out.requests.back());
-    out.targets.push_back("/models/" + model_ + "/splits/" + protocol::base64url_encode(code));
+    out.targets.push_back(protocol::model_path(model_) + "/splits/" + protocol::base64url_encode(code));
   }
   return out;
 }

@@ -11,6 +11,7 @@
 #include "protocol/base64url.h"
 #include "protocol/message_types.h"
 #include "protocol/split_request.h"
+#include "protocol/url_segment.h"
 #include "server/http_answers.h"
 #include "server/http_routes.h"
 #include "server/multilevel_routes.h"
@@ -166,7 +167,9 @@ HttpAnswer block_answer(const ServedModel& model, const HttpLimits& limits, cons
 
 HttpAnswer model_route(const Catalogue& catalogue, const HttpLimits& limits, const HttpRequest& request,
                        std::span<const std::string_view> s) {
-  if (const ServedMultilevel* multilevel = catalogue.find_multilevel(std::string(s[1])))
+  const std::optional<std::string> name = protocol::url_segment_decode(s[1]);
+  if (!name) return error_answer(400, "the model name in the URL is not a path segment (RFC 3986: escape it as %XX)");
+  if (const ServedMultilevel* multilevel = catalogue.find_multilevel(*name))
     return multilevel_route(*multilevel, request, s);
   const bool get = request.method == "GET" || request.method == "HEAD";
   const bool post_route = s.size() == 3 && s[2] == "splits";
@@ -175,8 +178,8 @@ HttpAnswer model_route(const Catalogue& catalogue, const HttpLimits& limits, con
   if (!post_route && !get_route) return error_answer(404, "no such resource (docs/protocol.md lists them)");
   if (post_route && request.method != "POST") return method_not_allowed("POST");
   if (get_route && !get) return method_not_allowed("GET, HEAD");
-  const ServedModel* model = catalogue.find(std::string(s[1]));
-  if (!model) return error_answer(404, "no model named '" + std::string(s[1]) + "'");
+  const ServedModel* model = catalogue.find(*name);
+  if (!model) return error_answer(404, "no model named '" + *name + "'");
   if (s[2] == "base") return base_answer(*model, request);
   if (s[2] == "codec") return codec_answer(*model, request);
   if (s[2] == "blocks") return block_answer(*model, limits, request, s.subspan(3));

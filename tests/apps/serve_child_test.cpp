@@ -134,6 +134,21 @@ TEST(ServeChild, ServesHttpBesideTcpAndCountsIt) {
   EXPECT_EQ(stopped.sessions_opened, 0u);  // HTTP has no sessions
 }
 
+// The HTTP size limits are the command line's: a URL one byte over --http-max-url-bytes gets 414, one at
+// the limit is served; headers over --http-max-header-bytes get 431.
+TEST(ServeChild, HttpSizeLimitsComeFromTheCommandLine) {
+  const auto pms = small_model(test::temp_dir());
+  ServeChild server(PMSTREAM_BINARY, {pms.string(), "--http-port", "0", "--http-max-url-bytes", "24",
+                                      "--http-max-header-bytes", "200"});
+  const uint16_t http_port = server.listening()["http_port"];
+  const std::string at_limit = "/models/terrain/base" + std::string(4, '/');  // 24 bytes: a route, not found
+  ASSERT_EQ(at_limit.size(), 24u);
+  EXPECT_EQ(http_exchange(http_port, at_limit).rfind("HTTP/1.1 404", 0), 0u);
+  EXPECT_EQ(http_exchange(http_port, at_limit + "/").rfind("HTTP/1.1 414", 0), 0u);
+  EXPECT_EQ(http_exchange(http_port, "/models/terrain/base").rfind("HTTP/1.1 200", 0), 0u);
+  EXPECT_EQ(http_exchange(http_port, "/models?" + std::string(200, 'x')).rfind("HTTP/1.1 431", 0), 0u);
+}
+
 TEST(ServeChild, AServerThatDoesNotStartSaysWhy) {
   const std::string error =
       error_of([] { ServeChild server(PMSTREAM_BINARY, {(test::temp_dir() / "missing.pms").string()}); });

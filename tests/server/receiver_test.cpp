@@ -143,6 +143,21 @@ TEST(Receiver, AModelWithColorsTravelsInRecordsFormatOne) {
   EXPECT_GT(client.session().splits_received(), 0u);
 }
 
+// A model's name comes from its file's: spaces, '%' and UTF-8 travel escaped (RFC 3986), both ways.
+TEST(Receiver, AModelWhoseNameNeedsEscapesIsStreamedByName) {
+  const std::string name = "terrain 50% \xC3\xBC";  // "terrain 50% ü"
+  const Fixture f = make_fixture(make_terrain(4000, 2), name);
+  Server server(f.catalogue);
+  client::ReceiverClient client(server.url());
+  ASSERT_EQ(client.list(), std::vector<std::string>{name});
+  client.open(name);
+  for (const Camera& camera : orbit_path(f.hierarchy, 4, 0.1f)) {
+    client.frame(camera);
+    EXPECT_EQ(faces_by_id(client.session().mesh()), local_faces(f.snapped, camera, 1.0f));
+  }
+  EXPECT_GT(client.session().splits_received(), 0u);
+}
+
 TEST(Receiver, SurvivesTheServerClosingIdleKeptAliveConnections) {
   const Fixture& f = terrain();
   server::HttpLimits limits;

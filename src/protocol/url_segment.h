@@ -1,0 +1,22 @@
+// A model's name as one segment of a URL path (RFC 3986 §3.3), and the path of its resources. Names come
+// from file names, so they may hold spaces, '%' or UTF-8. Shared with the browser build.
+#pragma once
+#include <optional>
+#include <string>
+#include <string_view>
+
+namespace pms::protocol {
+
+// Every byte outside the unreserved set (ALPHA, DIGIT, "-", ".", "_", "~") as %XX in upper-case hex: one
+// name has one URL, so clients behind a cache share its entries.
+std::string url_segment_encode(std::string_view name);
+
+// The name a segment stands for, decoding %XX in either case and taking RFC 3986's other path characters
+// (sub-delims, ':', '@') as they are, as a hand-typed URL may hold them; nothing for a '%' without two hex
+// digits, a byte no path segment may hold raw, or a decoded '/' or NUL (no name holds them).
+std::optional<std::string> url_segment_decode(std::string_view segment);
+
+// "/models/" and the encoded name: where every resource of the model starts.
+std::string model_path(std::string_view name);
+
+}  // namespace pms::protocol
