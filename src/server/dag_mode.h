@@ -47,6 +47,7 @@ class DagSessionMode : public SessionMode {
   DagManageOptions options_;
   bool pending_ = false;    // a DAG_VIEW waits for its traversal
   bool answering_ = false;  // the final DAG_OPS of the traversed view is still to send
+  bool answered_ = false;   // a view was traversed: the next ones are N-limited
   uint32_t answer_frame_ = 0;
   std::vector<DagOp> ops_;  // the answer: collapses, then splits
   size_t sent_ = 0;
