@@ -3,8 +3,8 @@
 // the same decoded numbers), the mesh-change constraint N and, in BUDGET mode, the client's triangle budget.
 // Three algorithms: priority-oriented (every front node evaluated, two priority queues), linear (the cut's
 // FIFO queues, continued from frame to frame, at most N operations) and constant-time (at most N nodes
-// evaluated). docs/internals.md ("The DAG of operations") has the rules and why priority converges to the
-// adaptation loop's mesh.
+// evaluated, the front nodes its own operations made first). docs/internals.md ("The DAG of operations") has
+// the rules and why priority converges to the adaptation loop's mesh.
 // Shared with the browser build: single-threaded, no std::ranges algorithms, std::format or coroutines.
 #pragma once
 #include <cstdint>
