@@ -12,6 +12,12 @@ namespace {
 
 constexpr const char* kWhere = "dag cut";
 
+// A session's first answer (the converged cut) fills the queues far beyond what a frame of N operations
+// needs: give back the room once they hold less than a quarter of it (amortized: O(size) when it happens).
+void shrink(std::vector<uint32_t>& v) {
+  if (v.capacity() > 4 * v.size() + 1024) v.shrink_to_fit();
+}
+
 }  // namespace
 
 DagCut::DagCut(const Dag& dag, uint32_t inline_limit) : dag_(&dag), state_(dag.size(), 0) {
@@ -148,6 +154,7 @@ uint32_t DagCut::pop(Queue& q, uint8_t bit, InFront in_front) {
     if (q.head > 4096 && 2 * q.head > q.items.size()) {  // amortized: drop the consumed half
       q.items.erase(q.items.begin(), q.items.begin() + ptrdiff_t(q.head));
       q.head = 0;
+      shrink(q.items);
     }
     if (in_front(n)) return n;
   }
@@ -164,6 +171,7 @@ std::span<const uint32_t> DagCut::compact(Queue& q, uint8_t bit, InFront in_fron
   }
   q.items.resize(kept);
   q.head = 0;
+  shrink(q.items);
   return q.items;
 }
 
@@ -194,6 +202,7 @@ void DagCut::mark(uint32_t n) {
 void DagCut::clear_marks() {
   for (uint32_t n : marked_) state_[n] &= uint8_t(~kMark);
   marked_.clear();
+  shrink(marked_);
 }
 
 bool DagCut::check(std::string* why) const {

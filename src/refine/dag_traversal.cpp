@@ -11,11 +11,23 @@
 #include "refine/dag_traversal.h"
 
 #include <algorithm>
+#include <cstddef>
 
 #include "common/error.h"
 #include "refine/criteria_inline.h"
 
 namespace pms {
+
+DagTraverser::Scratch& DagTraverser::scratch() {
+  static thread_local Scratch s;
+  return s;
+}
+
+size_t DagTraverser::thread_scratch_bytes() {
+  const Scratch& s = scratch();
+  return (s.collapse_heap.capacity() + s.split_heap.capacity()) * sizeof(Ranked) + s.stack.capacity() * sizeof(uint64_t) +
+         s.hot.capacity() * sizeof(uint32_t);
+}
 
 bool DagTraverser::qrefine(uint32_t n, DagFrameStats& stats) {
   ++stats.evaluated;
@@ -35,12 +47,13 @@ void DagTraverser::justify(DagFrameStats& stats) {
   DagCut& cut = *cut_;
   const Dag& dag = cut.dag();
   cut.clear_marks();
-  split_heap_.clear();
-  stack_.clear();
-  for (uint32_t r : dag.roots()) stack_.push_back(uint64_t(r) << 1);
-  while (!stack_.empty()) {
-    const uint64_t entry = stack_.back();
-    stack_.pop_back();
+  scratch().split_heap.clear();
+  std::vector<uint64_t>& stack = scratch().stack;
+  stack.clear();
+  for (uint32_t r : dag.roots()) stack.push_back(uint64_t(r) << 1);
+  while (!stack.empty()) {
+    const uint64_t entry = stack.back();
+    stack.pop_back();
     const uint32_t v = uint32_t(entry >> 1);
     if (cut.marked(v)) continue;
     if (entry & 1) {
@@ -55,14 +68,15 @@ void DagTraverser::justify(DagFrameStats& stats) {
     }
     if (cut.is_split(v))
       for (int k = 0; k < 2; ++k)
-        if (const uint32_t c = dag.hierarchy_child(v, k); c != kNone) stack_.push_back(uint64_t(c) << 1);
-    for (uint32_t p : dag.parents(v)) stack_.push_back(uint64_t(p) << 1 | 1);
+        if (const uint32_t c = dag.hierarchy_child(v, k); c != kNone) stack.push_back(uint64_t(c) << 1);
+    for (uint32_t p : dag.parents(v)) stack.push_back(uint64_t(p) << 1 | 1);
   }
 }
 
 void DagTraverser::push_split(float key, uint32_t n) {
-  split_heap_.push_back({key, n});
-  std::push_heap(split_heap_.begin(), split_heap_.end(), [](const Ranked& a, const Ranked& b) { return a.key < b.key; });
+  std::vector<Ranked>& heap = scratch().split_heap;
+  heap.push_back({key, n});
+  std::push_heap(heap.begin(), heap.end(), [](const Ranked& a, const Ranked& b) { return a.key < b.key; });
 }
 
 void DagTraverser::push_split_candidate(uint32_t n, DagFrameStats& stats) {
@@ -114,18 +128,19 @@ void DagTraverser::collapse(uint32_t n, DagFrameStats& stats, std::vector<DagOp>
 // evaluated for their priority.
 void DagTraverser::priority_collapse(const Limits& limits, DagFrameStats& stats, std::vector<DagOp>& ops) {
   DagCut& cut = *cut_;
+  std::vector<Ranked>& heap = scratch().collapse_heap;
   const auto later = [](const Ranked& a, const Ranked& b) { return a.key > b.key; };
   const auto push = [&](uint32_t n) {
     if (cut.marked(n)) return;  // kept: NEED-APPLY fails
-    collapse_heap_.push_back({priority(n, stats), n});
-    std::push_heap(collapse_heap_.begin(), collapse_heap_.end(), later);
+    heap.push_back({priority(n, stats), n});
+    std::push_heap(heap.begin(), heap.end(), later);
   };
-  collapse_heap_.clear();
+  heap.clear();
   for (uint32_t n : cut.collapse_front()) push(n);
-  while (!collapse_heap_.empty() && !(limits.max_ops && stats.collapses >= limits.max_ops)) {
-    std::pop_heap(collapse_heap_.begin(), collapse_heap_.end(), later);
-    const uint32_t n = collapse_heap_.back().node;
-    collapse_heap_.pop_back();
+  while (!heap.empty() && !(limits.max_ops && stats.collapses >= limits.max_ops)) {
+    std::pop_heap(heap.begin(), heap.end(), later);
+    const uint32_t n = heap.back().node;
+    heap.pop_back();
     if (!cut.in_fc(n)) continue;
     collapse(n, stats, ops);
     for (uint32_t p : cut.dag().parents(n))
@@ -137,12 +152,13 @@ void DagTraverser::priority_collapse(const Limits& limits, DagFrameStats& stats,
 // children of what it splits.
 void DagTraverser::priority_split(Limits& limits, DagFrameStats& stats, std::vector<DagOp>& ops) {
   DagCut& cut = *cut_;
+  std::vector<Ranked>& heap = scratch().split_heap;
   const auto less = [](const Ranked& a, const Ranked& b) { return a.key < b.key; };
   cut.trim_split_queue();  // nothing pops it here: keep it from filling with nodes that left
-  while (!split_heap_.empty()) {
-    std::pop_heap(split_heap_.begin(), split_heap_.end(), less);
-    const uint32_t n = split_heap_.back().node;
-    split_heap_.pop_back();
+  while (!heap.empty()) {
+    std::pop_heap(heap.begin(), heap.end(), less);
+    const uint32_t n = heap.back().node;
+    heap.pop_back();
     if (!cut.is_candidate(n)) continue;  // split meanwhile, for a node that needed it
     if (!split_with_needs(n, limits, stats, ops)) return;
   }
@@ -151,23 +167,37 @@ void DagTraverser::priority_split(Limits& limits, DagFrameStats& stats, std::vec
 // Figs. 4 and 5 over the cut's FIFO queues. A node that does not need applying goes to the back. A phase
 // stops at the operation or evaluation limit, at an empty queue, or at the first node it already
 // evaluated (a whole pass without anything left to apply, Fig. 4 line 11: NEED-APPLY depends only on the
-// view, so a second look would say the same). Each node is evaluated at most once a phase.
-template <class Pop, class Requeue, class TryApply>
-void DagTraverser::fifo_phase(const uint32_t& applied, const Limits& limits, DagFrameStats& stats, Pop pop,
-                              Requeue requeue, TryApply try_apply) {
+// view, so a second look would say the same). Each node is evaluated at most once a phase from the queue.
+// With `hot` (constant-time), the front nodes the phase's own operations made are evaluated first, last made
+// first: where the view wanted a change, the next level of the same region most likely wants one too, and
+// behind a front of tens of thousands of nodes at N a call the queue would reach it only frames later.
+// A hot node is in its queue too (DagCut queued it when it entered its front), so it is not requeued.
+template <class Live, class Pop, class Requeue, class TryApply>
+void DagTraverser::fifo_phase(const uint32_t& applied, const Limits& limits, DagFrameStats& stats,
+                              std::vector<uint32_t>* hot, Live live, Pop pop, Requeue requeue, TryApply try_apply) {
   DagCut& cut = *cut_;
   const uint32_t evaluated_before = stats.evaluated;
+  if (hot) hot->clear();  // a phase's own: the nodes left are in their queue
   while (!(limits.max_ops && applied >= limits.max_ops) &&
          !(limits.max_evaluated && stats.evaluated - evaluated_before >= limits.max_evaluated)) {
-    const uint32_t n = pop();
-    if (n == kNone) break;
-    if (cut.marked(n)) {
-      requeue(n);
-      break;
+    uint32_t n = kNone;
+    while (hot && !hot->empty() && n == kNone) {
+      n = hot->back();
+      hot->pop_back();
+      if (!live(n)) n = kNone;
+    }
+    const bool from_hot = n != kNone;
+    if (!from_hot) {
+      n = pop();
+      if (n == kNone) break;
+      if (cut.marked(n)) {
+        requeue(n);
+        break;
+      }
     }
     const Outcome outcome = try_apply(n);
     if (outcome == Outcome::stopped) break;
-    if (outcome == Outcome::not_needed) {
+    if (outcome == Outcome::not_needed && !from_hot) {
       cut.mark(n);
       requeue(n);
     }
@@ -175,24 +205,37 @@ void DagTraverser::fifo_phase(const uint32_t& applied, const Limits& limits, Dag
   cut.clear_marks();
 }
 
-void DagTraverser::fifo_collapse(const Limits& limits, DagFrameStats& stats, std::vector<DagOp>& ops) {
+void DagTraverser::fifo_collapse(const Limits& limits, DagFrameStats& stats, std::vector<DagOp>& ops,
+                                 std::vector<uint32_t>* hot) {
   DagCut& cut = *cut_;
   fifo_phase(
-      stats.collapses, limits, stats, [&] { return cut.pop_collapse(); }, [&](uint32_t n) { cut.requeue_collapse(n); },
+      stats.collapses, limits, stats, hot, [&](uint32_t n) { return cut.in_fc(n); }, [&] { return cut.pop_collapse(); },
+      [&](uint32_t n) { cut.requeue_collapse(n); },
       [&](uint32_t n) {
         if (qrefine(n, stats)) return Outcome::not_needed;
         collapse(n, stats, ops);
+        if (hot)
+          for (uint32_t p : cut.dag().parents(n))
+            if (cut.in_fc(p)) hot->push_back(p);
         return Outcome::applied;
       });
 }
 
-void DagTraverser::fifo_split(Limits& limits, DagFrameStats& stats, std::vector<DagOp>& ops) {
+void DagTraverser::fifo_split(Limits& limits, DagFrameStats& stats, std::vector<DagOp>& ops, std::vector<uint32_t>* hot) {
   DagCut& cut = *cut_;
+  const Dag& dag = cut.dag();
   fifo_phase(
-      stats.splits, limits, stats, [&] { return cut.pop_split(); }, [&](uint32_t n) { cut.requeue_split(n); },
+      stats.splits, limits, stats, hot, [&](uint32_t n) { return cut.is_candidate(n); }, [&] { return cut.pop_split(); },
+      [&](uint32_t n) { cut.requeue_split(n); },
       [&](uint32_t n) {
         if (!qrefine(n, stats)) return Outcome::not_needed;
-        if (split_with_needs(n, limits, stats, ops)) return Outcome::applied;
+        const size_t first = ops.size();
+        const bool done = split_with_needs(n, limits, stats, ops);
+        if (hot)
+          for (size_t i = first; i < ops.size(); ++i)
+            for (int k = 0; k < 2; ++k)
+              if (const uint32_t c = dag.hierarchy_child(ops[i].node, k); c != kNone && cut.is_candidate(c)) hot->push_back(c);
+        if (done) return Outcome::applied;
         if (cut.is_candidate(n)) cut.requeue_split(n);  // a limit stopped it, maybe halfway
         return Outcome::stopped;
       });
@@ -203,21 +246,41 @@ DagFrameStats DagTraverser::manage(const DagManageOptions& options, std::vector<
   if (!has_view_) fail("dag traversal", "no view set");
   DagFrameStats stats;
   Limits limits;
-  if (options.traversal == DagTraversal::constant_time) limits.max_evaluated = options.max_ops;
+  const bool constant_time = options.traversal == DagTraversal::constant_time;
+  if (constant_time) limits.max_evaluated = options.max_ops;
   else limits.max_ops = options.max_ops;
   justified_ = options.traversal == DagTraversal::priority;
   if (justified_) justify(stats);
   if (justified_) priority_collapse(limits, stats, ops);
-  else fifo_collapse(limits, stats, ops);
+  else fifo_collapse(limits, stats, ops, constant_time ? &scratch().hot : nullptr);
   if (options.mode == DagMode::budget) {
     const uint64_t t = cut_->triangles();
     limits.room = options.budget > t ? options.budget - t : 0;
   }
   if (justified_) priority_split(limits, stats, ops);
-  else fifo_split(limits, stats, ops);
+  else fifo_split(limits, stats, ops, constant_time ? &scratch().hot : nullptr);
   if (justified_) cut_->clear_marks();
   justified_ = false;
   return stats;
+}
+
+DagFrameStats DagTraverser::converge(const DagManageOptions& options, std::vector<DagOp>& ops) {
+  DagManageOptions unlimited = options;
+  unlimited.traversal = DagTraversal::priority;
+  unlimited.max_ops = 0;
+  DagFrameStats total;
+  // Each round but the last changes the cut; the bound only guards against a cycle no test has found.
+  for (int round = 0; round < 64; ++round) {
+    const size_t before = ops.size();
+    const DagFrameStats stats = manage(unlimited, ops);
+    total.splits += stats.splits;
+    total.collapses += stats.collapses;
+    total.forced += stats.forced;
+    total.evaluated += stats.evaluated;
+    total.stopped_by_budget |= stats.stopped_by_budget;
+    if (ops.size() == before) break;
+  }
+  return total;
 }
 
 }  // namespace pms

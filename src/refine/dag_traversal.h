@@ -3,8 +3,8 @@
 // the same decoded numbers), the mesh-change constraint N and, in BUDGET mode, the client's triangle budget.
 // Three algorithms: priority-oriented (every front node evaluated, two priority queues), linear (the cut's
 // FIFO queues, continued from frame to frame, at most N operations) and constant-time (at most N nodes
-// evaluated). docs/internals.md ("The DAG of operations") has the rules and why priority converges to the
-// adaptation loop's mesh.
+// evaluated, the front nodes its own operations made first). docs/internals.md ("The DAG of operations") has
+// the rules and why priority converges to the adaptation loop's mesh.
 // Shared with the browser build: single-threaded, no std::ranges algorithms, std::format or coroutines.
 #pragma once
 #include <cstdint>
@@ -51,12 +51,16 @@ class DagTraverser {
   // MANAGE-TRAVERSAL (Fig. 2): applies the operations to the cut and appends them to `ops` in that order.
   // pms::Error before set_view().
   DagFrameStats manage(const DagManageOptions& options, std::vector<DagOp>& ops);
+  // The cut converged for the view within options' mode and budget: the priority traversal without an
+  // operation limit, repeated until a round makes no operation (a DAG session's first answer; its traversal
+  // and N only apply from the second view on). Stats summed over the rounds.
+  DagFrameStats converge(const DagManageOptions& options, std::vector<DagOp>& ops);
 
   DagCut& cut() { return *cut_; }
-  // Scratch the traversals keep between frames (heaps, the justification stack), beyond the cut.
-  size_t memory_bytes() const {
-    return (collapse_heap_.capacity() + split_heap_.capacity()) * sizeof(Ranked) + stack_.capacity() * sizeof(uint64_t);
-  }
+  // Between frames a traverser holds nothing beyond the cut and the view. The calling thread's scratch,
+  // shared by every traverser manage() runs on it (the priority traversal's heaps and justification stack,
+  // constant-time's hot nodes): a server has a few I/O threads and many sessions.
+  static size_t thread_scratch_bytes();
 
  private:
   struct Limits {
@@ -78,18 +82,22 @@ class DagTraverser {
   void push_split(float key, uint32_t n);
   void push_split_candidate(uint32_t n, DagFrameStats& stats);
   enum class Outcome { not_needed, applied, stopped };
-  template <class Pop, class Requeue, class TryApply>
-  void fifo_phase(const uint32_t& applied, const Limits& limits, DagFrameStats& stats, Pop pop, Requeue requeue,
-                  TryApply try_apply);
-  void fifo_collapse(const Limits& limits, DagFrameStats& stats, std::vector<DagOp>& ops);
-  void fifo_split(Limits& limits, DagFrameStats& stats, std::vector<DagOp>& ops);
+  template <class Live, class Pop, class Requeue, class TryApply>
+  void fifo_phase(const uint32_t& applied, const Limits& limits, DagFrameStats& stats, std::vector<uint32_t>* hot,
+                  Live live, Pop pop, Requeue requeue, TryApply try_apply);
+  void fifo_collapse(const Limits& limits, DagFrameStats& stats, std::vector<DagOp>& ops, std::vector<uint32_t>* hot);
+  void fifo_split(Limits& limits, DagFrameStats& stats, std::vector<DagOp>& ops, std::vector<uint32_t>* hot);
 
   DagCut* cut_;
   ViewCriteria view_;
   bool has_view_ = false;
   bool justified_ = false;  // priority: marks say which split nodes the view's target mesh keeps
-  std::vector<Ranked> collapse_heap_, split_heap_;
-  std::vector<uint64_t> stack_;  // node << 1 | forced
+  struct Scratch {
+    std::vector<Ranked> collapse_heap, split_heap;
+    std::vector<uint64_t> stack;  // node << 1 | forced
+    std::vector<uint32_t> hot;    // constant-time: the front nodes the phase's own operations made
+  };
+  static Scratch& scratch();
 };
 
 }  // namespace pms

@@ -39,7 +39,7 @@ void DagSessionMode::pump(uint64_t& work) {
 
 void DagSessionMode::stop() {
   pending_ = answering_ = false;
-  ops_ = {};
+  std::vector<DagOp>().swap(ops_);
   sent_ = 0;
 }
 
@@ -47,7 +47,11 @@ void DagSessionMode::traverse(uint64_t& work) {
   pending_ = false;
   traverser_.set_view(view_.criteria);
   ops_.clear();
-  const DagFrameStats stats = traverser_.manage(options_, ops_);
+  // The first picture is the converged mesh of the first view: N amortizes a view change over frames, and
+  // before its first answer the client has no picture whose frame rate N would keep (docs/internals.md,
+  // "The DAG mode").
+  const DagFrameStats stats = answered_ ? traverser_.manage(options_, ops_) : traverser_.converge(options_, ops_);
+  answered_ = true;
   work += stats.evaluated + ops_.size();
   sent_ = 0;
   answer_frame_ = view_.frame;
@@ -76,12 +80,12 @@ void DagSessionMode::emit_batch(uint64_t& work) {
   context_.queue(protocol::encode(message, wire_));
   if (message.final) {
     answering_ = false;
-    ops_.clear();
+    std::vector<DagOp>().swap(ops_);  // a first answer is the whole converged cut: do not keep its capacity
   }
 }
 
 size_t DagSessionMode::state_bytes() const {
-  return sizeof(*this) + cut_.memory_bytes() + traverser_.memory_bytes() + ops_.capacity() * sizeof(DagOp);
+  return sizeof(*this) + cut_.memory_bytes() + ops_.capacity() * sizeof(DagOp);
 }
 
 }  // namespace pms::server

@@ -1,9 +1,10 @@
 // The DAG mode (zheng-chan 2006 §4–5, StreamMode::dag): a thin client with no hierarchy walk and no criteria
 // of its own, driven by the server. The session holds the client's cut of the model's DAG of operations
 // (refine/dag_cut.h, about a byte per node) and a traverser; each DAG_VIEW runs MANAGE-TRAVERSAL once on it
-// and the operations go down as DAG_OPS in batches, collapses first, then splits with their geometry and
-// fundamental cut vertices (docs/internals.md, "The DAG mode": why not the actual ones), so the client's
-// mesh is the server's cut after every answer. No resume yet: OPEN with a resume front is refused.
+// (the first one: the converged cut of its view) and the operations go down as DAG_OPS in batches, collapses
+// first, then splits with their geometry and fundamental cut vertices (docs/internals.md, "The DAG mode": why
+// not the actual ones), so the client's mesh is the server's cut after every answer. No resume yet: OPEN
+// with a resume front is refused.
 #pragma once
 #include <cstddef>
 #include <cstdint>
@@ -47,6 +48,7 @@ class DagSessionMode : public SessionMode {
   DagManageOptions options_;
   bool pending_ = false;    // a DAG_VIEW waits for its traversal
   bool answering_ = false;  // the final DAG_OPS of the traversed view is still to send
+  bool answered_ = false;   // a view was traversed: the next ones are N-limited
   uint32_t answer_frame_ = 0;
   std::vector<DagOp> ops_;  // the answer: collapses, then splits
   size_t sent_ = 0;

@@ -377,6 +377,98 @@ TEST(DagTraversal, FromBaseEqualsAdaptBunny) {
   expect_from_base(*test::built_bunny(), 1);
 }
 
+// converge() (a DAG session's first answer) reaches the adaptation loop's mesh in one call, from the base
+// mesh and from a cut another view left, whatever traversal the options name; in BUDGET mode it never
+// exceeds the budget; a second call changes nothing.
+void expect_converge(const BuiltModel& model, float tolerance) {
+  const Dag dag(model.model());
+  const std::vector<Camera> route = route_of(model);
+  for (DagTraversal traversal : {DagTraversal::priority, DagTraversal::linear, DagTraversal::constant_time}) {
+    SCOPED_TRACE(int(traversal));
+    DagCut cut(dag);
+    Mirror mirror(model, dag);
+    DagTraverser traverser(cut);
+    DagManageOptions options;
+    options.traversal = traversal;
+    for (size_t i : {size_t(2), route.size() - 2}) {
+      const ViewParams view = test::view_for(model, route[i]);
+      traverser.set_view(make_criteria(view, tolerance));
+      std::vector<DagOp> ops;
+      const DagFrameStats stats = traverser.converge(options, ops);
+      mirror.apply(ops);
+      ASSERT_FALSE(::testing::Test::HasFatalFailure());
+      EXPECT_EQ(stats.splits + stats.collapses, ops.size());
+      EXPECT_GT(stats.splits, options.max_ops) << "not limited by N";
+      EXPECT_TRUE(test::id_faces(mirror.mesh) == adapt_mesh(model, view, tolerance)) << "view " << i;
+      ASSERT_EQ(audit(cut), "ok");
+      std::vector<DagOp> again;
+      traverser.converge(options, again);
+      EXPECT_TRUE(again.empty());
+    }
+  }
+  // BUDGET mode: the converged cut stops at the budget, the most visible splits first.
+  DagCut cut(dag);
+  DagTraverser traverser(cut);
+  traverser.set_view(make_criteria(test::view_for(model, route[route.size() - 2]), tolerance));
+  DagManageOptions options;
+  options.mode = DagMode::budget;
+  options.budget = dag.base_faces() + 2 * 450;
+  std::vector<DagOp> ops;
+  const DagFrameStats stats = traverser.converge(options, ops);
+  EXPECT_TRUE(stats.stopped_by_budget);
+  EXPECT_LE(cut.triangles(), options.budget);
+  EXPECT_GT(cut.triangles(), options.budget - 8);
+  EXPECT_EQ(audit(cut), "ok");
+}
+
+TEST(DagTraversal, ConvergeIsTheAdaptationLoopsMeshTerrain) { expect_converge(test::built_terrain(), 1); }
+TEST(DagTraversal, ConvergeIsTheAdaptationLoopsMeshBunny) {
+  PMS_REQUIRE_SHARED_MODEL(path, "bunny.ply.xz");
+  expect_converge(*test::built_bunny(), 1);
+}
+
+// Constant-time evaluates its own operations' new front nodes first: with a queue far longer than N, the
+// paper's FIFO (new nodes at the back) would never split, within one call, a child of a split of that call;
+// here most of a call's splits after its first wanted one are such children, and it still evaluates at
+// most N nodes a phase.
+TEST(DagTraversal, ConstantTimeFollowsItsOwnChangesFirst) {
+  const BuiltModel& model = test::built_terrain();
+  const Dag dag(model.model());
+  DagCut cut(dag);
+  Mirror mirror(model, dag);
+  DagTraverser traverser(cut);
+  traverser.set_view(make_criteria(test::view_for(model, test::framing_camera(model, {0.3f, 0.2f, 1}, 4)), 1));
+  std::vector<DagOp> ops;
+  traverser.converge({}, ops);
+  mirror.apply(ops);
+  traverser.set_view(make_criteria(test::view_for(model, test::framing_camera(model, {-0.4f, 0.3f, 1}, 0.35f)), 1));
+  DagManageOptions options;
+  options.traversal = DagTraversal::constant_time;
+  options.max_ops = 40;
+  uint32_t splits = 0, cascaded = 0;
+  for (int frame = 0; frame < 10; ++frame) {
+    ASSERT_GT(cut.split_queue_size(), 4 * options.max_ops) << "a queue the FIFO would not wrap in one call";
+    ops.clear();
+    const DagFrameStats stats = traverser.manage(options, ops);
+    mirror.apply(ops);
+    ASSERT_FALSE(::testing::Test::HasFatalFailure());
+    ASSERT_LE(stats.evaluated, 2 * options.max_ops);
+    std::vector<uint32_t> split_here;
+    for (const DagOp& op : ops) {
+      if (!op.split) continue;
+      const uint32_t p = dag.hierarchy_parent(op.node);
+      if (!split_here.empty()) {
+        ++splits;
+        cascaded += std::find(split_here.begin(), split_here.end(), p) != split_here.end();
+      }
+      split_here.push_back(op.node);
+    }
+  }
+  EXPECT_EQ(audit(cut), "ok");
+  EXPECT_GT(splits, 50u);
+  EXPECT_GT(2 * cascaded, splits) << cascaded << " of " << splits << " splits are children of the call's own";
+}
+
 // Constant-time evaluates at most N nodes per phase, however large the front.
 TEST(DagTraversal, ConstantTimeEvaluatesAtMostN) {
   const BuiltModel& model = test::built_terrain();

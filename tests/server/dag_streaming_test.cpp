@@ -144,6 +144,26 @@ TEST(DagStreaming, PriorityWithLargeNConvergesToLocalRefinement) {
   EXPECT_EQ(faces_by_id(p.client->session().mesh()), test::local_faces(f.snapped, camera, 1.0f));
 }
 
+// A session's first view is answered with its converged mesh, whatever traversal and N the client asked
+// for (docs/internals.md, "The DAG mode"); the next views are N-limited again.
+TEST(DagStreaming, FirstAnswerIsTheConvergedMesh) {
+  const Fixture& f = terrain();
+  const std::vector<Camera> path = orbit_path(f.hierarchy, 8, 0.1f);
+  for (DagTraversal t : {DagTraversal::priority, DagTraversal::linear, DagTraversal::constant_time}) {
+    SCOPED_TRACE(int(t));
+    test::InProcess p = in_process(f, dag_options(t, 0, 50, 1.0f));
+    const client::FrameReport first = p.client->frame(path.back());
+    EXPECT_GT(first.vsplits, 50u);
+    EXPECT_EQ(faces_by_id(p.client->session().mesh()), test::local_faces(f.snapped, path.back(), 1.0f));
+    const client::FrameReport second = p.client->frame(path.front());
+    if (t != DagTraversal::constant_time) {  // constant-time bounds evaluations, not operations
+      EXPECT_LE(second.vsplits, 50u);
+    }
+    std::string why;
+    EXPECT_TRUE(dag_mode(p).cut().check(&why)) << why;
+  }
+}
+
 // A DAG session holds its cut, about a byte per node, and a few KB of scratch between answers.
 TEST(DagStreaming, StateIsAboutAByteANode) {
   const Fixture& f = terrain();

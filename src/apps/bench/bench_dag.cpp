@@ -70,8 +70,12 @@ double shared_percent(const std::vector<IdFace>& faces, const std::vector<IdFace
 }
 
 struct TraversalRun {
-  std::vector<double> frame_ms, evaluated, ops, down_bytes, triangles, front_share;
-  size_t max_session_bytes = 0, max_cut_bytes = 0, max_traverser_bytes = 0;
+  struct First {
+    double ms = 0, evaluated = 0, ops = 0, down_bytes = 0;
+  } first;  // the first view's converged answer
+  std::vector<double> frame_ms, evaluated, ops, down_bytes;  // frames 1..
+  std::vector<double> triangles, front_share;                // every frame
+  size_t max_session_bytes = 0, max_cut_bytes = 0, max_scratch_bytes = 0;
   uint64_t max_triangles = 0;
   std::vector<std::vector<IdFace>> samples;  // the client's mesh every kAccuracyEvery frames
   std::vector<double> accuracy;              // against priority's samples
@@ -105,23 +109,29 @@ TraversalRun run_traversal(const BenchModel& m, const std::vector<Camera>& route
     ops.clear();
     Stopwatch clock;
     traverser.set_view(view.criteria);
-    const DagFrameStats stats = traverser.manage(manage, ops);
-    run.frame_ms.push_back(1000 * clock.seconds());
+    // As the DAG mode answers a session's first view: converged (docs/internals.md, "The DAG mode").
+    const DagFrameStats stats = i == 0 ? traverser.converge(manage, ops) : traverser.manage(manage, ops);
+    const double ms = 1000 * clock.seconds();
 
     const client::FrameReport report = client.frame(route[i]);
     const server::DagSessionMode& mode = dag_mode_of(local);
     if (mode.cut().split_count() != cut.split_count() || mode.cut().triangles() != cut.triangles() ||
         client.session().mesh().face_count() != cut.triangles())
       fail("bench dag", "frame " + std::to_string(i) + ": the session's cut or the client's mesh is not the traverser's");
-    run.evaluated.push_back(stats.evaluated);
-    run.ops.push_back(double(ops.size()));
-    run.down_bytes.push_back(double(report.down_bytes));
+    if (i == 0) {
+      run.first = {ms, double(stats.evaluated), double(ops.size()), double(report.down_bytes)};
+    } else {
+      run.frame_ms.push_back(ms);
+      run.evaluated.push_back(stats.evaluated);
+      run.ops.push_back(double(ops.size()));
+      run.down_bytes.push_back(double(report.down_bytes));
+    }
     run.triangles.push_back(double(cut.triangles()));
     run.front_share.push_back(double(cut.fc_size() + cut.fs_size()) / double(std::max<uint64_t>(cut.triangles(), 1)));
     run.max_triangles = std::max(run.max_triangles, cut.triangles());
     run.max_session_bytes = std::max(run.max_session_bytes, mode.state_bytes());
     run.max_cut_bytes = std::max(run.max_cut_bytes, cut.memory_bytes());
-    run.max_traverser_bytes = std::max(run.max_traverser_bytes, traverser.memory_bytes());
+    run.max_scratch_bytes = std::max(run.max_scratch_bytes, DagTraverser::thread_scratch_bytes());
     if (i % kAccuracyEvery == 0) run.samples.push_back(faces_by_id(client.session().mesh()));
   }
   return run;
@@ -139,9 +149,9 @@ std::vector<double> sample_frames(size_t count) {
   return frames;
 }
 
-std::vector<double> all_frames(size_t count) {
+std::vector<double> all_frames(size_t count, size_t first = 0) {
   std::vector<double> frames;
-  for (size_t k = 0; k < count; ++k) frames.push_back(double(k));
+  for (size_t k = first; k < first + count; ++k) frames.push_back(double(k));
   return frames;
 }
 
@@ -158,8 +168,8 @@ std::string plots(const BenchContext& context, const TraversalRun (&runs)[3]) {
   Plot accuracy{"Correct triangles against priority, every 5 frames", "frame", "% of priority's triangles", "", false, false, {}};
   Plot fronts{"Fronts against the mesh", "frame", "(Fc + Fs) / triangles", "triangles", false, false, {}};
   for (int t = 0; t < 3; ++t) {
-    const std::vector<double> frames = all_frames(runs[t].frame_ms.size());
-    time.series.push_back({kTraversalNames[t], frames, runs[t].frame_ms});
+    const std::vector<double> frames = all_frames(runs[t].triangles.size());
+    time.series.push_back({kTraversalNames[t], all_frames(runs[t].frame_ms.size(), 1), runs[t].frame_ms});
     if (t > 0) accuracy.series.push_back({kTraversalNames[t], sample_frames(runs[t].accuracy.size()), runs[t].accuracy});
     fronts.series.push_back({kTraversalNames[t], frames, runs[t].front_share});
     fronts.series.push_back({std::string(kTraversalNames[t]) + " triangles", frames, runs[t].triangles, true});
@@ -170,7 +180,9 @@ std::string plots(const BenchContext& context, const TraversalRun (&runs)[3]) {
 }
 
 json run_json(const TraversalRun& run, uint32_t nodes) {
-  return {{"frame_ms", run.frame_ms},
+  return {{"first_view", {{"ms", run.first.ms}, {"evaluated", run.first.evaluated}, {"ops", run.first.ops},
+                          {"down_bytes", run.first.down_bytes}}},
+          {"frame_ms", run.frame_ms},
           {"evaluated", run.evaluated},
           {"ops", run.ops},
           {"down_bytes", run.down_bytes},
@@ -179,7 +191,7 @@ json run_json(const TraversalRun& run, uint32_t nodes) {
           {"accuracy_every_5_frames", run.accuracy},
           {"max_session_bytes", run.max_session_bytes},
           {"max_cut_bytes", run.max_cut_bytes},
-          {"max_traverser_bytes", run.max_traverser_bytes},
+          {"max_thread_scratch_bytes", run.max_scratch_bytes},
           {"session_bytes_per_node", double(run.max_session_bytes) / nodes}};
 }
 
@@ -202,20 +214,28 @@ void run_dag_group(BenchContext& context) {
   }
   for (TraversalRun& run : runs)
     for (size_t k = 0; k < run.samples.size(); ++k) run.accuracy.push_back(shared_percent(run.samples[k], runs[0].samples[k]));
+  // Frame 0 is every traversal's converged first view, the same mesh: left out of the average.
+  const auto route_accuracy = [](const TraversalRun& run) {
+    return mean(std::vector<double>(run.accuracy.begin() + std::min<ptrdiff_t>(1, ptrdiff_t(run.accuracy.size())), run.accuracy.end()));
+  };
 
-  Table table({{"traversal", false}, {"median ms", true}, {"p99 ms", true}, {"evaluated / frame", true},
+  Table table({{"traversal", false}, {"first view ms", true}, {"first view ops", true}, {"median ms", true},
+               {"p99 ms", true}, {"evaluated / frame", true},
                {"ops / frame", true}, {"max triangles", true}, {"(Fc + Fs) / triangles", true}, {"accuracy %", true},
-               {"session B / node", true}, {"session KB", true}, {"cut KB", true}, {"bytes down / frame", true}});
+               {"session B / node", true}, {"session KB", true}, {"cut KB", true}, {"thread scratch KB", true},
+               {"bytes down / frame", true}});
   json out = {{"command", context.options.command_line}, {"machine", machine_json()}, {"model", name},
               {"frames", route.size()}, {"nodes", nodes}, {"tolerance_px", tolerance}, {"max_ops", kMaxOps},
               {"budget", kBudget}, {"dag_bytes", m.served->dag->memory_bytes()}};
   for (int t = 0; t < 3; ++t) {
     const TraversalRun& run = runs[t];
-    table.add_row({kTraversalNames[t], fixed(percentile(run.frame_ms, 0.5), 3), fixed(percentile(run.frame_ms, 0.99), 3),
+    table.add_row({kTraversalNames[t], fixed(run.first.ms, 1), thousands(uint64_t(run.first.ops)),
+                   fixed(percentile(run.frame_ms, 0.5), 3), fixed(percentile(run.frame_ms, 0.99), 3),
                    thousands(uint64_t(mean(run.evaluated))), thousands(uint64_t(mean(run.ops))), thousands(run.max_triangles),
-                   fixed(percentile(run.front_share, 0.5), 2), t == 0 ? "—" : fixed(mean(run.accuracy), 1),
+                   fixed(percentile(run.front_share, 0.5), 2), t == 0 ? "—" : fixed(route_accuracy(run), 1),
                    fixed(double(run.max_session_bytes) / nodes, 3), fixed(double(run.max_session_bytes) / 1e3, 1),
-                   fixed(double(run.max_cut_bytes) / 1e3, 1), thousands(uint64_t(mean(run.down_bytes)))});
+                   fixed(double(run.max_cut_bytes) / 1e3, 1), fixed(double(run.max_scratch_bytes) / 1e3, 1),
+                   thousands(uint64_t(mean(run.down_bytes)))});
     out[kTraversalNames[t]] = run_json(run, nodes);
   }
   const std::string settings = name + ", " + std::to_string(route.size()) + "-frame scan route, τ = " + fixed(tolerance, 3) +
@@ -225,9 +245,12 @@ void run_dag_group(BenchContext& context) {
             " (targets: constant-time ≤ 0.1 ms, priority ≤ 2 ms median; accuracy linear ≥ 80 %, constant-time ≥ 70 %; "
             "session ≤ 0.1 B / node)\n" + table.markdown());
   section += "### Traversals along the route (" + settings + ")\n\n" + table.markdown() +
-             "\nms: MANAGE-TRAVERSAL alone on a bare cut, fed the same views as the session. Accuracy: the share of "
-             "priority's triangles (by vertex ids) the client's mesh also has, every 5 frames, averaged. Session: the "
-             "DAG mode's `state_bytes()` at its largest along the route; cut: `DagCut::memory_bytes()`. Bytes down: "
+             "\nFirst view: the converged answer to the session's first view (the same for every traversal). ms: "
+             "MANAGE-TRAVERSAL alone on a bare cut, fed the same views as the session, frames 1 on. Accuracy: the share "
+             "of priority's triangles (by vertex ids) the client's mesh also has, every 5 frames from frame 5, averaged. "
+             "Session: the "
+             "DAG mode's `state_bytes()` at its largest along the route; cut: `DagCut::memory_bytes()`; thread scratch: the traversals' per-thread heaps and stack (shared by the sessions of "
+             "a thread, not per session), run so far. Bytes down: "
              "DAG_OPS frames as received, mean per frame. docs/internals.md, \"E9\", says what each figure is.\n\n";
   section += plots(context, runs);
   write_text_file(context.options.out_dir / "dag.json", out.dump(2) + "\n");
