@@ -96,6 +96,16 @@ void representatives_stated_by(const MultilevelMesh& m, uint32_t t, uint32_t n_l
   }
 }
 
+std::vector<uint32_t> level_representatives(const MultilevelMesh& m, uint32_t level, std::vector<uint8_t>& stated) {
+  const uint32_t t_end = m.triangle_count[level], t_begin = t_end - m.level_triangles(level);
+  std::vector<uint32_t> reps;
+  for (uint32_t t = t_begin; t < t_end; ++t) representatives_stated_by(m, t, m.vertex_count[level], stated, reps);
+  if (level == 0)  // what no triangle states travels with the finest level
+    for (uint32_t v = 0; v < m.vertices(); ++v)
+      if (m.representative[v] != kNoRep && !stated[v]) reps.insert(reps.end(), {v, m.representative[v]});
+  return reps;
+}
+
 std::vector<uint32_t> representatives_per_level(const MultilevelMesh& m) {
   std::vector<uint32_t> count(m.level_count(), 0);
   std::vector<uint8_t> stated(m.vertices(), 0);

@@ -48,6 +48,11 @@ void validate_multilevel(const std::string& where, const MultilevelMesh& mesh);
 void representatives_stated_by(const MultilevelMesh& mesh, uint32_t t, uint32_t n_l, std::vector<uint8_t>& stated,
                                std::vector<uint32_t>& out);
 
+// The (vertex, representative) pairs level `level`'s batch carries, in the order its triangles state them;
+// level 0 adds every representative no triangle states. Levels are taken coarsest first with one `stated`
+// (a flag per vertex) across them.
+std::vector<uint32_t> level_representatives(const MultilevelMesh& mesh, uint32_t level, std::vector<uint8_t>& stated);
+
 // Per level, how many representatives its triangles state (what its file batch carries).
 std::vector<uint32_t> representatives_per_level(const MultilevelMesh& mesh);
 
