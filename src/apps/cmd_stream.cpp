@@ -40,6 +40,7 @@ struct StreamArgs {
   std::string traversal = "priority";  // dag mode
   uint64_t budget = 0;
   bool json = false;
+  bool plain_levels = false;  // multilevel mode
 };
 
 void split_host_port(const std::string& text, std::string& host, uint16_t& port) {
@@ -198,6 +199,7 @@ void run_multilevel(const StreamArgs& args) {
   options.budget = args.budget;
   options.tolerance = args.tolerance;
   options.morph_frames = args.morph_frames;
+  options.compressed = !args.plain_levels;
   options.http = http_options(args);
   client::MultilevelClient client(flight.url, options);
   client.open(args.model);
@@ -227,6 +229,7 @@ void run_multilevel(const StreamArgs& args) {
                         {"http_requests", c.requests},
                         {"http_connections", c.connections},
                         {"rule", args.budget ? "budget" : "screen"},
+                        {"form", options.compressed ? "compressed" : "plain"},
                         {"levels", client.loader().level_count()},
                         {"levels_received", client.arrivals().size()},
                         {"arrivals", arrivals},
@@ -355,6 +358,8 @@ void add_stream_command(CLI::App& app) {
   cmd->add_option("--budget", args->budget, "dag: BUDGET mode with this many triangles (0 = FREE mode); multilevel: the finest LOD of at most this many triangles (0 = the screen-size rule with --tolerance)")
       ->check(CLI::Range(uint64_t(0), protocol::kMaxDagBudget))
       ->capture_default_str();
+  cmd->add_flag("--plain-levels", args->plain_levels,
+                "multilevel: fetch the binary form's levels (exact float positions) instead of the compressed ones");
   cmd->add_option("--save-mesh", args->save_mesh, "Write the client's mesh after the last frame (PLY)");
   cmd->add_option("--snapshots", args->snapshots, "Write a PNG per frame into this directory");
   cmd->add_flag("--json", args->json, "Print one JSON object");
