@@ -219,7 +219,7 @@ class LevelDecoder {
   }
 
   void read_representatives() {
-    const uint64_t n = c_.representative.size();
+    const uint64_t n = c_.representative->size();
     pairs_.reserve(2 * size_t(h_.representatives));
     int64_t previous = -1;
     for (uint32_t i = 0; i < h_.representatives; ++i) {
@@ -235,7 +235,8 @@ class LevelDecoder {
   // A vertex's representative as the encoder saw it: from a coarser level, else from this one's pairs
   // (sorted by vertex, so one cursor walks them along the vertices).
   uint32_t representative_of(uint32_t v, size_t& cursor) const {
-    if (c_.representative[v] != kNoRep) return c_.representative[v];
+    const uint32_t r = (*c_.representative)[v];
+    if (r != kNoRep) return r;
     while (cursor < pairs_.size() && pairs_[cursor] < v) cursor += 2;
     return cursor < pairs_.size() && pairs_[cursor] == v ? pairs_[cursor + 1] : kNoRep;
   }
@@ -267,7 +268,7 @@ class LevelDecoder {
   }
 
   void read_triangles() {
-    const uint64_t n = c_.representative.size();
+    const uint64_t n = c_.representative->size();
     triangles_.reserve(3 * size_t(h_.triangles));
     RecentCorners recent;
     int64_t last_miss = 0;

@@ -39,7 +39,7 @@ struct CompressedLevelContext {
   uint32_t level = 0, dimension = 3;
   bool normals = false, colors = false;
   PositionGrid grid;
-  std::span<const uint32_t> representative;  // every vertex's, as loaded so far
+  const RepresentativeArray* representative = nullptr;  // every vertex's, as loaded so far
   uint32_t vertices_loaded = 0;
   uint32_t vertices_left = 0, triangles_left = 0, representatives_left = 0;  // what the head's totals allow
 };

@@ -156,7 +156,7 @@ void MultilevelLoader::add_level(const std::string& where, std::span<const uint8
                                        (flags_ & kHasNormals) != 0,
                                        (flags_ & kHasColors) != 0,
                                        grid_,
-                                       mesh_.representative,
+                                       &mesh_.representative,
                                        mesh_.vertices(),
                                        total_vertices_ - mesh_.vertices(),
                                        total_triangles_ - mesh_.faces(),

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "io/mesh.h"
+#include "refine/representative_array.h"
 
 namespace pms {
 
@@ -16,14 +17,14 @@ namespace pms {
 // LOD l that names a vertex >= vertex_count[l] follows representatives (each lower than the vertex it
 // stands for) until it falls below vertex_count[l].
 struct MultilevelMesh {
-  static constexpr uint32_t kNoRepresentative = 0xFFFFFFFFu;
+  static constexpr uint32_t kNoRepresentative = RepresentativeArray::kNone;
 
   uint32_t dimension = 3;                // coordinates per vertex (the paper's Fig. 6 is 2D)
   std::vector<float> positions;          // dimension per vertex
   std::vector<float> normals;            // 3 per vertex, or empty
   std::vector<uint8_t> colors;           // r g b a per vertex, or empty
   std::vector<uint32_t> triangles;       // 3 per triangle
-  std::vector<uint32_t> representative;  // per vertex; kNoRepresentative where none is stored
+  RepresentativeArray representative;    // per vertex; kNoRepresentative where none is stored
   std::vector<uint32_t> vertex_count;    // n_l per level: vertices of levels >= l (non-increasing in l)
   std::vector<uint32_t> triangle_count;  // likewise for triangles
 

@@ -68,9 +68,10 @@ LodTimes lod_times(const MultilevelMesh& m, int repeats) {
   return out;
 }
 
-// Bytes of the structure's arrays, and of the plain indexed mesh of the same positions and attributes.
+// Bytes of the structure's arrays (representatives as stored: 3 or 4 bytes each), and of the plain indexed
+// mesh of the same positions and attributes.
 uint64_t multilevel_bytes(const MultilevelMesh& m) {
-  return 4 * (m.positions.size() + m.normals.size() + m.triangles.size() + m.representative.size()) + m.colors.size() +
+  return 4 * (m.positions.size() + m.normals.size() + m.triangles.size()) + m.representative.bytes() + m.colors.size() +
          4 * (m.vertex_count.size() + m.triangle_count.size());
 }
 uint64_t plain_bytes(const MultilevelMesh& m) {
