@@ -13,30 +13,16 @@
 #include "refine/multilevel_codec.h"
 #include "refine/multilevel_file.h"
 #include "refine/multilevel_loader.h"
+#include "error_of.h"
+#include "multilevel_expect.h"
 #include "view_models.h"
 
 namespace pms {
 namespace {
 
-std::string error_of(const std::function<void()>& fn) {
-  try {
-    fn();
-  } catch (const Error& e) {
-    return e.what();
-  }
-  return "";
-}
+using test::error_of;
 
-void expect_same(const MultilevelMesh& got, const MultilevelMesh& want) {
-  EXPECT_EQ(got.dimension, want.dimension);
-  EXPECT_EQ(got.positions, want.positions);
-  EXPECT_EQ(got.normals, want.normals);
-  EXPECT_EQ(got.colors, want.colors);
-  EXPECT_EQ(got.triangles, want.triangles);
-  EXPECT_EQ(got.representative, want.representative);
-  EXPECT_EQ(got.vertex_count, want.vertex_count);
-  EXPECT_EQ(got.triangle_count, want.triangle_count);
-}
+const auto expect_same = test::expect_same_multilevel;
 
 // Loads every compressed level through addLevel, checking after each that the loaded levels are the
 // snapped mesh's, and returns the whole structure.
