@@ -12,20 +12,12 @@
 #include "common/error.h"
 #include "refine/multilevel_file.h"
 #include "refine/multilevel_mesh.h"
+#include "multilevel_touch.h"
 
 namespace {
 
-void touch(const pms::MultilevelMesh& m) {
-  pms::MultilevelLod lod(m);
-  for (uint32_t l = m.level_count(); l-- > 0;) {
-    lod.set_level(l);
-    for (uint32_t i : lod.indices())
-      if (i >= lod.vertex_count()) __builtin_trap();
-    lod.set_level(float(l) + 0.5f);
-  }
-}
-
-const pms::MultilevelLimits kLimits{uint64_t(1) << 24, 1024};
+using fuzz::kLimits;
+using fuzz::touch;
 
 }  // namespace
 

@@ -20,6 +20,7 @@
 #include "io/mesh.h"
 #include "refine/multilevel_build.h"
 #include "refine/multilevel_cluster.h"
+#include "refine/multilevel_codec.h"
 #include "refine/multilevel_file.h"
 #include "refine/multilevel_local.h"
 #include "refine/multilevel_region.h"
@@ -191,9 +192,14 @@ void run_multilevel_info(const std::string& path, bool json) {
   const MultilevelMesh m = read_multilevel(path);
   const uint64_t bytes = std::filesystem::file_size(path);
   const std::vector<uint32_t> reps = representatives_per_level(m);
+  std::vector<CompressedLevelBits> bits;  // coarsest first, like the rows
+  const MultilevelParts compressed = multilevel_compressed_parts(m, kDefaultPositionBits, &bits);
+  uint64_t compressed_bytes = compressed.head.size();
   nlohmann::json levels = nlohmann::json::array();
   for (uint32_t l = m.level_count(); l-- > 0;) {
     const SwitchTimes t = time_switches(m, l);
+    const CompressedLevelBits& b = bits[levels.size()];
+    compressed_bytes += compressed.levels[levels.size()].size();
     levels.push_back({{"level", l},
                       {"vertices", m.vertex_count[l]},
                       {"triangles", m.triangle_count[l]},
@@ -201,7 +207,10 @@ void run_multilevel_info(const std::string& path, bool json) {
                       {"level_triangles", m.level_triangles(l)},
                       {"representatives", reps[l]},
                       {"set_level_ms", t.jump_ms},
-                      {"geomorph_ms", t.morph_ms}});
+                      {"geomorph_ms", t.morph_ms},
+                      {"compressed_bytes", compressed.levels[levels.size()].size()},
+                      {"compressed_bits", {{"header", b.header}, {"representatives", b.representatives},
+                                           {"vertices", b.vertices}, {"triangles", b.triangles}}}});
   }
   if (json) {
     const nlohmann::json j = {{"file", path},
@@ -213,6 +222,8 @@ void run_multilevel_info(const std::string& path, bool json) {
                               {"vertices", m.vertices()},
                               {"triangles", m.faces()},
                               {"representatives", m.stored_representatives()},
+                              {"compressed_bytes", compressed_bytes},
+                              {"position_bits", kDefaultPositionBits},
                               {"per_level", levels}};
     std::printf("%s\n", j.dump().c_str());
     return;
@@ -221,6 +232,8 @@ void run_multilevel_info(const std::string& path, bool json) {
               (unsigned long long)bytes, m.level_count(), m.vertices(), m.faces(), m.dimension,
               m.normals.empty() ? "" : ", normals", m.colors.empty() ? "" : ", colors");
   std::printf("  representatives: %llu stored\n", (unsigned long long)m.stored_representatives());
+  std::printf("  compressed (%u-bit grid): %llu bytes, head and every level\n", kDefaultPositionBits,
+              (unsigned long long)compressed_bytes);
   std::printf("  %5s %10s %10s %10s %10s %8s %10s %10s\n", "level", "LOD verts", "LOD tris", "+verts", "+tris", "reps",
               "setLevel", "geomorph");
   for (const auto& row : levels)

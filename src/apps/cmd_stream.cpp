@@ -40,6 +40,7 @@ struct StreamArgs {
   std::string traversal = "priority";  // dag mode
   uint64_t budget = 0;
   bool json = false;
+  bool plain_levels = false;  // multilevel mode
 };
 
 void split_host_port(const std::string& text, std::string& host, uint16_t& port) {
@@ -198,6 +199,7 @@ void run_multilevel(const StreamArgs& args) {
   options.budget = args.budget;
   options.tolerance = args.tolerance;
   options.morph_frames = args.morph_frames;
+  options.compressed = !args.plain_levels;
   options.http = http_options(args);
   client::MultilevelClient client(flight.url, options);
   client.open(args.model);
@@ -227,6 +229,7 @@ void run_multilevel(const StreamArgs& args) {
                         {"http_requests", c.requests},
                         {"http_connections", c.connections},
                         {"rule", args.budget ? "budget" : "screen"},
+                        {"form", options.compressed ? "compressed" : "plain"},
                         {"levels", client.loader().level_count()},
                         {"levels_received", client.arrivals().size()},
                         {"arrivals", arrivals},
@@ -363,6 +366,8 @@ void add_stream_command(CliCommand& app) {
       .show_default();
   cmd.option("--save-mesh", args->save_mesh, "Write the client's mesh after the last frame (PLY)");
   cmd.option("--snapshots", args->snapshots, "Write a PNG per frame into this directory");
+  cmd.flag("--plain-levels", args->plain_levels,
+           "multilevel: fetch the binary form's levels (exact float positions) instead of the compressed ones");
   cmd.flag("--json", args->json, "Print one JSON object");
   cmd.on_run([args] { run_stream(*args); });
 }

@@ -52,9 +52,14 @@ std::vector<T> per_level(const nlohmann::json& entry, const char* key, uint32_t 
   return out;
 }
 
-std::string level_target(const std::string& model, uint32_t level) {
-  std::string target = protocol::model_path(model);
-  target += "/levels/";
+// /models/{m}/ or /models/{m}/compressed/, where the model's head and levels are.
+std::string model_prefix(const std::string& model, bool compressed) {
+  return protocol::model_path(model) + (compressed ? "/compressed/" : "/");
+}
+
+std::string level_target(const std::string& prefix, uint32_t level) {
+  std::string target = prefix;
+  target += "levels/";
   target += std::to_string(level);
   return target;
 }
@@ -96,10 +101,11 @@ void MultilevelClient::open(const std::string& model) {
   if (loader_) fail("open", "this client already holds '" + model_ + "'");
   opened_ = Clock::now();
   read_entry(model);
-  const std::string target = protocol::model_path(model) + "/head";
+  const std::string target = model_prefix(model, options_.compressed) + "head";
   const HttpAnswer head = http_.get(target);
   if (head.status != 200) refused(target, head);
-  loader_.emplace("GET " + target, head.body, options_.limits);
+  loader_.emplace("GET " + target, head.body, options_.limits,
+                  options_.compressed ? MultilevelForm::compressed : MultilevelForm::plain);
   if (loader_->level_count() != lod_triangles_.size()) fail("GET " + target, "its level count is not the catalogue's");
   lod_.emplace(loader_->mesh());
   model_ = model;
@@ -137,7 +143,8 @@ ViewParams MultilevelClient::view_params(const Camera& camera) const {
 uint32_t MultilevelClient::load_to(uint32_t level) {
   if (loader_->complete() || loader_->finest_loaded() <= level) return 0;
   std::vector<std::string> targets;
-  for (uint32_t l = loader_->finest_loaded(); l-- > level;) targets.push_back(level_target(model_, l));
+  const std::string prefix = model_prefix(model_, options_.compressed);
+  for (uint32_t l = loader_->finest_loaded(); l-- > level;) targets.push_back(level_target(prefix, l));
   uint32_t added = 0;
   http_.get_all(targets, [&](size_t index, HttpAnswer&& answer) {
     if (answer.status != 200) refused(targets[index], answer);

@@ -1,5 +1,6 @@
 // The multilevel client (gueziec et al. 1999, progressive loading; docs/protocol.md, "Multilevel over
-// HTTP"): GET /models, the model's head, then its levels coarsest first, each added to the structure as it
+// HTTP"): GET /models, the model's head, then its levels coarsest first (compressed unless asked otherwise),
+// each added to the structure as it
 // arrives (MultilevelLoader::add_level) and usable at once; every frame picks a LOD by a triangle budget or
 // a screen-size rule and switches to it with setLevel (a geomorph over --geomorph-frames). No session, like
 // the receiver-driven client: a driver of its own over HttpConnection.
@@ -23,6 +24,7 @@ struct MultilevelOptions {
   uint64_t budget = 0;   // > 0: the finest LOD of at most this many triangles; 0: the screen-size rule
   float tolerance = 1;   // screen-size rule: the coarsest LOD whose error covers at most this many pixels
   uint32_t morph_frames = 0;  // a LOD switch moves 1 / N level per frame (a geomorph); 0 = at once
+  bool compressed = true;     // the compressed levels (positions on the server's grid), or the binary form's
   HttpOptions http;
   MultilevelLimits limits;  // what the head may announce
 };

@@ -186,7 +186,7 @@ MultilevelMesh parse_multilevel_ascii(const std::string& where, std::string_view
     if (m.triangles.size() / 3 > kMaxIndex) lex.error("more than " + str(kMaxIndex) + " triangles");
     m.triangle_count[level] = uint32_t(m.triangles.size() / 3);
   }
-  m.representative = std::move(stated);
+  m.representative = RepresentativeArray(stated);
   validate_multilevel(where, m);
   return m;
 }

@@ -2,6 +2,10 @@
 // reader and writer and by the progressive loader, which takes the same records one at a time. Not public.
 #pragma once
 #include <cstdint>
+#include <span>
+#include <vector>
+
+#include "refine/multilevel_mesh.h"
 
 namespace pms::multilevel_binary {
 
@@ -17,5 +21,23 @@ struct LevelHeader {
   uint32_t level, vertices, triangles, representatives;
 };
 static_assert(sizeof(LevelHeader) == 16);
+
+// The compressed form's head (docs/multilevel-format.md, "Compressed levels"): HEAD, then the grid every
+// level's positions are quantized on.
+struct CompressedHead {
+  HeadSection head;
+  uint32_t position_bits;
+  float min[3], max[3];
+  uint32_t reserved;
+};
+static_assert(sizeof(CompressedHead) == 64);
+
+// The HEAD section of a (validated) mesh.
+HeadSection head_section(const MultilevelMesh& mesh);
+
+// A LEVL section from its parts, in the section's order.
+std::vector<uint8_t> level_section_bytes(const LevelHeader& header, std::span<const float> positions,
+                                         std::span<const float> normals, std::span<const uint8_t> colors,
+                                         std::span<const uint32_t> triangles, std::span<const uint32_t> representatives);
 
 }  // namespace pms::multilevel_binary

@@ -2,19 +2,23 @@
 // form's records, with every check a level needs before its LOD is used.
 #include "refine/multilevel_loader.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 
 #include "common/error.h"
 #include "refine/multilevel_binary_internal.h"
+#include "refine/multilevel_codec.h"
 
 namespace pms {
 namespace {
 
+using multilevel_binary::CompressedHead;
 using multilevel_binary::HeadSection;
 using multilevel_binary::kHasColors;
 using multilevel_binary::kHasNormals;
 using multilevel_binary::LevelHeader;
+using multilevel_binary::level_section_bytes;
 
 constexpr uint32_t kNoRep = MultilevelMesh::kNoRepresentative;
 
@@ -33,20 +37,15 @@ void append_bytes(std::vector<uint8_t>& out, const T* data, size_t count) {
 std::vector<uint8_t> level_section(const MultilevelMesh& m, uint32_t level, std::vector<uint8_t>& stated) {
   const uint32_t v_end = m.vertex_count[level], t_end = m.triangle_count[level];
   const uint32_t v_begin = v_end - m.level_vertices(level), t_begin = t_end - m.level_triangles(level);
-  std::vector<uint32_t> reps;
-  for (uint32_t t = t_begin; t < t_end; ++t) representatives_stated_by(m, t, v_end, stated, reps);
-  if (level == 0)  // what no triangle states travels with the finest level
-    for (uint32_t v = 0; v < m.vertices(); ++v)
-      if (m.representative[v] != kNoRep && !stated[v]) reps.insert(reps.end(), {v, m.representative[v]});
+  const std::vector<uint32_t> reps = level_representatives(m, level, stated);
   const LevelHeader h{level, v_end - v_begin, t_end - t_begin, uint32_t(reps.size() / 2)};
-  std::vector<uint8_t> out;
-  append_bytes(out, &h, 1);
-  append_bytes(out, m.positions.data() + size_t(v_begin) * m.dimension, size_t(h.vertices) * m.dimension);
-  if (!m.normals.empty()) append_bytes(out, m.normals.data() + size_t(v_begin) * 3, size_t(h.vertices) * 3);
-  if (!m.colors.empty()) append_bytes(out, m.colors.data() + size_t(v_begin) * 4, size_t(h.vertices) * 4);
-  append_bytes(out, m.triangles.data() + size_t(t_begin) * 3, size_t(h.triangles) * 3);
-  append_bytes(out, reps.data(), reps.size());
-  return out;
+  const auto part = [](const auto& array, size_t begin, size_t count) {
+    return array.empty() ? std::span(array.data(), 0) : std::span(array.data() + begin, count);
+  };
+  const size_t d = m.dimension;
+  return level_section_bytes(h, part(m.positions, v_begin * d, h.vertices * d), part(m.normals, v_begin * 3, h.vertices * 3),
+                             part(m.colors, v_begin * 4, h.vertices * 4), part(m.triangles, t_begin * 3, h.triangles * 3),
+                             reps);
 }
 
 // Appends `count` elements of `out`'s type from `p` and moves `p` past them.
@@ -61,16 +60,35 @@ void take(std::vector<T>& out, const uint8_t*& p, uint64_t count) {
 
 }  // namespace
 
+HeadSection multilevel_binary::head_section(const MultilevelMesh& m) {
+  return {m.level_count(),
+          m.dimension,
+          (m.normals.empty() ? 0 : kHasNormals) | (m.colors.empty() ? 0 : kHasColors),
+          m.vertices(),
+          m.faces(),
+          uint32_t(m.stored_representatives()),
+          {0, 0}};
+}
+
+std::vector<uint8_t> multilevel_binary::level_section_bytes(const LevelHeader& h, std::span<const float> positions,
+                                                            std::span<const float> normals, std::span<const uint8_t> colors,
+                                                            std::span<const uint32_t> triangles,
+                                                            std::span<const uint32_t> representatives) {
+  std::vector<uint8_t> out;
+  out.reserve(sizeof h + 4 * (positions.size() + normals.size() + triangles.size() + representatives.size()) + colors.size());
+  append_bytes(out, &h, 1);
+  append_bytes(out, positions.data(), positions.size());
+  append_bytes(out, normals.data(), normals.size());
+  append_bytes(out, colors.data(), colors.size());
+  append_bytes(out, triangles.data(), triangles.size());
+  append_bytes(out, representatives.data(), representatives.size());
+  return out;
+}
+
 MultilevelParts multilevel_parts(const MultilevelMesh& m) {
   validate_multilevel("", m);
   MultilevelParts parts;
-  const HeadSection head{m.level_count(),
-                         m.dimension,
-                         (m.normals.empty() ? 0 : kHasNormals) | (m.colors.empty() ? 0 : kHasColors),
-                         m.vertices(),
-                         m.faces(),
-                         uint32_t(m.stored_representatives()),
-                         {0, 0}};
+  const HeadSection head = multilevel_binary::head_section(m);
   append_bytes(parts.head, &head, 1);
   std::vector<uint8_t> stated(m.vertices(), 0);
   for (uint32_t level = m.level_count(); level-- > 0;) parts.levels.push_back(level_section(m, level, stated));
@@ -78,7 +96,12 @@ MultilevelParts multilevel_parts(const MultilevelMesh& m) {
 }
 
 MultilevelLoader::MultilevelLoader(const std::string& where, std::span<const uint8_t> head,
-                                   const MultilevelLimits& limits) {
+                                   const MultilevelLimits& limits, MultilevelForm form)
+    : form_(form) {
+  if (form == MultilevelForm::compressed) {
+    read_compressed_head(where, head);
+    head = head.first(sizeof(HeadSection));
+  }
   if (head.size() != sizeof(HeadSection))
     fail(where, "section HEAD: " + str(head.size()) + " bytes (" + str(sizeof(HeadSection)) + " expected)");
   HeadSection h;
@@ -106,8 +129,44 @@ MultilevelLoader::MultilevelLoader(const std::string& where, std::span<const uin
   resolved_.assign(h.vertex_count, 0);
 }
 
+// The grid is checked here; the HEAD it starts with, by the constructor.
+void MultilevelLoader::read_compressed_head(const std::string& where, std::span<const uint8_t> head) {
+  if (head.size() != sizeof(CompressedHead))
+    fail(where, "compressed head: " + str(head.size()) + " bytes (" + str(sizeof(CompressedHead)) + " expected)");
+  CompressedHead h;
+  std::memcpy(&h, head.data(), sizeof h);
+  if (h.position_bits < 1 || h.position_bits > 24) fail(where, "compressed head: " + str(h.position_bits) + " position bits (1 to 24)");
+  for (int k = 0; k < 3; ++k)
+    if (!std::isfinite(h.min[k]) || !std::isfinite(h.max[k]) || h.min[k] > h.max[k])
+      fail(where, "compressed head: the grid's box is not a box");
+  if (h.reserved != 0) fail(where, "compressed head: reserved word is not 0");
+  grid_.bits = h.position_bits;
+  std::copy_n(h.min, 3, grid_.min);
+  std::copy_n(h.max, 3, grid_.max);
+}
+
 void MultilevelLoader::add_level(const std::string& where, std::span<const uint8_t> section, uint64_t offset) {
   if (complete()) fail(where, "more LEVL sections than HEAD's " + str(level_count()) + " levels");
+  if (form_ == MultilevelForm::plain) {
+    add_plain_level(where, section, offset);
+    return;
+  }
+  const CompressedLevelContext context{next_level(),
+                                       mesh_.dimension,
+                                       (flags_ & kHasNormals) != 0,
+                                       (flags_ & kHasColors) != 0,
+                                       grid_,
+                                       &mesh_.representative,
+                                       mesh_.vertices(),
+                                       total_vertices_ - mesh_.vertices(),
+                                       total_triangles_ - mesh_.faces(),
+                                       total_representatives_ - representatives_};
+  const std::vector<uint8_t> plain = decode_compressed_level(where, section, context, quantized_);
+  add_plain_level(where, plain, offset);
+  if (complete()) quantized_ = {};  // only later levels predict from it
+}
+
+void MultilevelLoader::add_plain_level(const std::string& where, std::span<const uint8_t> section, uint64_t offset) {
   const uint32_t level = next_level();
   const std::string name = "offset " + str(offset) + ": section LEVL of level " + str(level);
   if (section.size() % 4 || section.size() < sizeof(LevelHeader))

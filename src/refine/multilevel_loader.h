@@ -9,6 +9,7 @@
 #include <utility>
 #include <vector>
 
+#include "pm/position_grid.h"
 #include "refine/multilevel_file.h"
 #include "refine/multilevel_mesh.h"
 
@@ -28,14 +29,19 @@ MultilevelParts multilevel_parts(const MultilevelMesh& mesh);
 // loaded triangles name vertices of levels still to come. Everything a peer sends is hostile: the head's
 // totals are bounded by limits.max_file_bytes (the bytes the whole mesh would take), and each level is
 // checked before it is kept, so that every LOD of what is loaded resolves.
+// The binary form's levels, or the compressed form's (refine/multilevel_codec.h), which a loader decodes
+// into the LEVL section each stands for.
+enum class MultilevelForm { plain, compressed };
+
 class MultilevelLoader {
  public:
-  // pms::Error "WHERE: what" for a head that is not one.
-  MultilevelLoader(const std::string& where, std::span<const uint8_t> head, const MultilevelLimits& limits = {});
+  // pms::Error "WHERE: what" for a head that is not one: the HEAD section, or the compressed head.
+  MultilevelLoader(const std::string& where, std::span<const uint8_t> head, const MultilevelLimits& limits = {},
+                   MultilevelForm form = MultilevelForm::plain);
 
-  // addLevel: the LEVL section of next_level(). `offset` is where the section starts in what it came in,
-  // for the errors about its layout ("WHERE: offset N: section LEVL of level L: ..."). On an error the
-  // loader is unchanged only up to the level's own arrays: discard it.
+  // addLevel: the LEVL section (or compressed level) of next_level(). `offset` is where the section starts
+  // in what it came in, for the errors about its layout ("WHERE: offset N: section LEVL of level L: ...").
+  // On an error the loader is unchanged only up to the level's own arrays: discard it.
   void add_level(const std::string& where, std::span<const uint8_t> section, uint64_t offset = 0);
 
   uint32_t level_count() const { return mesh_.level_count(); }
@@ -48,6 +54,8 @@ class MultilevelLoader {
   MultilevelMesh release() { return std::move(mesh_); }
 
  private:
+  void add_plain_level(const std::string& where, std::span<const uint8_t> section, uint64_t offset);
+  void read_compressed_head(const std::string& where, std::span<const uint8_t> head);
   void take_representatives(const std::string& where, std::span<const uint32_t> pairs);
   void check_level_triangles(const std::string& where, uint32_t t_begin, uint32_t n_l);
 
@@ -56,6 +64,9 @@ class MultilevelLoader {
   uint32_t total_vertices_ = 0, total_triangles_ = 0, total_representatives_ = 0, representatives_ = 0;
   uint32_t loaded_ = 0;
   std::vector<uint8_t> resolved_;  // per vertex: its chain is known to reach a loaded vertex
+  MultilevelForm form_;
+  PositionGrid grid_;               // the compressed form's
+  std::vector<uint32_t> quantized_;  // the compressed form's: grid coordinates of the loaded vertices
 };
 
 }  // namespace pms

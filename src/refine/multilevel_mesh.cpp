@@ -46,7 +46,9 @@ void for_each_triangle_by_level(const MultilevelMesh& m, Fn&& fn) {
 }  // namespace
 
 uint64_t MultilevelMesh::stored_representatives() const {
-  return uint64_t(std::count_if(representative.begin(), representative.end(), [](uint32_t r) { return r != kNoRep; }));
+  uint64_t count = 0;
+  for (size_t v = 0; v < representative.size(); ++v) count += representative[v] != kNoRep;
+  return count;
 }
 
 uint32_t MultilevelMesh::level_vertices(uint32_t l) const {
@@ -94,6 +96,16 @@ void representatives_stated_by(const MultilevelMesh& m, uint32_t t, uint32_t n_l
       v = r;
     }
   }
+}
+
+std::vector<uint32_t> level_representatives(const MultilevelMesh& m, uint32_t level, std::vector<uint8_t>& stated) {
+  const uint32_t t_end = m.triangle_count[level], t_begin = t_end - m.level_triangles(level);
+  std::vector<uint32_t> reps;
+  for (uint32_t t = t_begin; t < t_end; ++t) representatives_stated_by(m, t, m.vertex_count[level], stated, reps);
+  if (level == 0)  // what no triangle states travels with the finest level
+    for (uint32_t v = 0; v < m.vertices(); ++v)
+      if (m.representative[v] != kNoRep && !stated[v]) reps.insert(reps.end(), {v, m.representative[v]});
+  return reps;
 }
 
 std::vector<uint32_t> representatives_per_level(const MultilevelMesh& m) {
@@ -145,15 +157,17 @@ bool MultilevelLod::connect_by_walking(uint32_t level) {
   budget -= corners;
   indices_.resize(corners);
   const uint32_t* tri = m.triangles.data();
-  for (uint32_t c = 0; c < corners; ++c) {
-    uint32_t v = tri[c];
-    while (v >= n_l) {
-      if (budget-- == 0) return false;
-      v = m.representative[v];  // never kNoRep: every corner of the LOD resolves (validate_multilevel)
+  return m.representative.visit([&](auto representative) {
+    for (uint32_t c = 0; c < corners; ++c) {
+      uint32_t v = tri[c];
+      while (v >= n_l) {
+        if (budget-- == 0) return false;
+        v = representative[v];  // never kNoRep: every corner of the LOD resolves (validate_multilevel)
+      }
+      indices_[c] = v;
     }
-    indices_[c] = v;
-  }
-  return true;
+    return true;
+  });
 }
 
 void MultilevelLod::connect(uint32_t level) {
@@ -168,10 +182,12 @@ void MultilevelLod::connect(uint32_t level) {
   // The copy is path-compressed against n_l in one pass: a representative is below its vertex, so it was
   // compressed before it.
   pc_rep_.resize(n);
-  for (uint32_t v = n_l; v < n; ++v) {
-    const uint32_t r = m.representative[v];
-    pc_rep_[v] = r == kNoRep || r < n_l ? r : pc_rep_[r];
-  }
+  m.representative.visit([&](auto representative) {
+    for (uint32_t v = n_l; v < n; ++v) {
+      const uint32_t r = representative[v];
+      pc_rep_[v] = r == kNoRep || r < n_l ? r : pc_rep_[r];
+    }
+  });
   const uint32_t corners = 3 * m.triangle_count[level];
   indices_.resize(corners);
   const uint32_t* tri = m.triangles.data();
@@ -195,10 +211,12 @@ void MultilevelLod::prepare_morph(uint32_t lo) {
   // Where each vertex of level lo stands at level lo + 1; one without a representative (no triangle of a
   // coarser level needs it) has no place there and stays put.
   morph_source_.resize(n_lo - n_hi);
-  for (uint32_t v = n_hi; v < n_lo; ++v) {
-    const uint32_t r = m.representative[v];
-    morph_source_[v - n_hi] = r == kNoRep ? v : r < n_hi ? r : morph_source_[r - n_hi];
-  }
+  m.representative.visit([&](auto representative) {
+    for (uint32_t v = n_hi; v < n_lo; ++v) {
+      const uint32_t r = representative[v];
+      morph_source_[v - n_hi] = r == kNoRep ? v : r < n_hi ? r : morph_source_[r - n_hi];
+    }
+  });
   const uint32_t d = m.dimension;
   morph_positions_.assign(m.positions.begin(), m.positions.begin() + size_t(n_lo) * d);
   morph_normals_.assign(m.normals.begin(), m.normals.begin() + (m.normals.empty() ? 0 : size_t(n_lo) * 3));

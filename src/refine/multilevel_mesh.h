@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "io/mesh.h"
+#include "refine/representative_array.h"
 
 namespace pms {
 
@@ -16,14 +17,14 @@ namespace pms {
 // LOD l that names a vertex >= vertex_count[l] follows representatives (each lower than the vertex it
 // stands for) until it falls below vertex_count[l].
 struct MultilevelMesh {
-  static constexpr uint32_t kNoRepresentative = 0xFFFFFFFFu;
+  static constexpr uint32_t kNoRepresentative = RepresentativeArray::kNone;
 
   uint32_t dimension = 3;                // coordinates per vertex (the paper's Fig. 6 is 2D)
   std::vector<float> positions;          // dimension per vertex
   std::vector<float> normals;            // 3 per vertex, or empty
   std::vector<uint8_t> colors;           // r g b a per vertex, or empty
   std::vector<uint32_t> triangles;       // 3 per triangle
-  std::vector<uint32_t> representative;  // per vertex; kNoRepresentative where none is stored
+  RepresentativeArray representative;    // per vertex; kNoRepresentative where none is stored
   std::vector<uint32_t> vertex_count;    // n_l per level: vertices of levels >= l (non-increasing in l)
   std::vector<uint32_t> triangle_count;  // likewise for triangles
 
@@ -47,6 +48,11 @@ void validate_multilevel(const std::string& where, const MultilevelMesh& mesh);
 // `stated` (one flag per vertex) remembers what earlier triangles stated.
 void representatives_stated_by(const MultilevelMesh& mesh, uint32_t t, uint32_t n_l, std::vector<uint8_t>& stated,
                                std::vector<uint32_t>& out);
+
+// The (vertex, representative) pairs level `level`'s batch carries, in the order its triangles state them;
+// level 0 adds every representative no triangle states. Levels are taken coarsest first with one `stated`
+// (a flag per vertex) across them.
+std::vector<uint32_t> level_representatives(const MultilevelMesh& mesh, uint32_t level, std::vector<uint8_t>& stated);
 
 // Per level, how many representatives its triangles state (what its file batch carries).
 std::vector<uint32_t> representatives_per_level(const MultilevelMesh& mesh);

@@ -1,8 +1,9 @@
-// GET /models/{m}/head and /models/{m}/levels/{level} (multilevel_routes.h): bytes cut once at start
-// (served_multilevel.h), answered without a copy.
+// GET /models/{m}/[compressed/]head and /models/{m}/[compressed/]levels/{level} (multilevel_routes.h):
+// bytes cut once at start (served_multilevel.h), answered without a copy.
 #include "server/multilevel_routes.h"
 
 #include <nlohmann/json.hpp>
+#include <vector>
 
 #include "server/http_answers.h"
 
@@ -25,22 +26,30 @@ nlohmann::json coarsest_first(const std::vector<T>& per_level) {
 }  // namespace
 
 HttpAnswer multilevel_route(const ServedMultilevel& model, const HttpRequest& request,
-                            std::span<const std::string_view> s) {
+                            std::span<const std::string_view> segments) {
+  // /models/{m}/compressed/... names the same resources in the compressed form.
+  const bool compressed = segments.size() >= 3 && segments[2] == "compressed";
+  std::vector<std::string_view> s(segments.begin(), segments.end());
+  if (compressed) s.erase(s.begin() + 2);
   const bool head = s.size() == 3 && s[2] == "head", level = s.size() == 4 && s[2] == "levels";
   if (!head && !level)
-    return error_answer(404, "model '" + model.name + "' is a multilevel mesh: its resources are /head and /levels/LEVEL");
+    return error_answer(404, "model '" + model.name + "' is a multilevel mesh: its resources are /head and /levels/LEVEL, "
+                             "and /compressed/head and /compressed/levels/LEVEL");
   if (request.method != "GET" && request.method != "HEAD") return method_not_allowed("GET, HEAD");
-  if (head) return shared_answer(request, model.head_etag, model.head);
+  if (head) return compressed ? shared_answer(request, model.compressed_head_etag, model.compressed_head)
+                              : shared_answer(request, model.head_etag, model.head);
   uint64_t l = 0;
   if (!parse_decimal(s[3], l)) return error_answer(400, "a level is /models/M/levels/LEVEL in plain decimal");
   if (l >= model.level_count())
     return error_answer(404, "model '" + model.name + "' has levels 0 to " + std::to_string(model.level_count() - 1));
-  return shared_answer(request, model.level_etags[l], model.levels[l]);
+  return compressed ? shared_answer(request, model.compressed_level_etags[l], model.compressed_levels[l])
+                    : shared_answer(request, model.level_etags[l], model.levels[l]);
 }
 
 nlohmann::json multilevel_entry(const ServedMultilevel& m) {
-  std::vector<uint64_t> level_bytes;
+  std::vector<uint64_t> level_bytes, compressed_bytes;
   for (const auto& bytes : m.levels) level_bytes.push_back(bytes->size());
+  for (const auto& bytes : m.compressed_levels) compressed_bytes.push_back(bytes->size());
   return {{"name", m.name},
           {"kind", "multilevel"},
           {"levels", m.level_count()},
@@ -52,6 +61,8 @@ nlohmann::json multilevel_entry(const ServedMultilevel& m) {
           {"lod_vertices", coarsest_first(m.lod_vertices)},
           {"lod_triangles", coarsest_first(m.lod_triangles)},
           {"level_bytes", coarsest_first(level_bytes)},
+          {"compressed_level_bytes", coarsest_first(compressed_bytes)},
+          {"position_bits", m.position_bits},
           {"level_errors", coarsest_first(m.level_errors)},
           {"center", m.center},
           {"radius", m.radius}};

@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <filesystem>
 
+#include "refine/multilevel_codec.h"
 #include "refine/multilevel_file.h"
 #include "refine/multilevel_loader.h"
 #include "refine/multilevel_mesh.h"
@@ -20,6 +21,23 @@ std::string etag_of(const std::vector<uint8_t>& bytes, const std::string& resour
   char text[20];
   std::snprintf(text, sizeof text, "\"%016llx\"", (unsigned long long)XXH64(hashes, sizeof hashes, 0));
   return text;
+}
+
+using Bytes = std::shared_ptr<const std::vector<uint8_t>>;
+
+// One form's head and levels (parts.levels is coarsest first) as resources under `prefix`, indexed by level.
+void cut(MultilevelParts parts, const std::string& prefix, Bytes& head, std::string& head_etag, std::vector<Bytes>& levels,
+         std::vector<std::string>& level_etags) {
+  head_etag = etag_of(parts.head, prefix + "/head");
+  head = std::make_shared<const std::vector<uint8_t>>(std::move(parts.head));
+  const auto count = uint32_t(parts.levels.size());
+  levels.resize(count);
+  level_etags.resize(count);
+  for (uint32_t i = 0; i < count; ++i) {
+    const uint32_t level = count - 1 - i;
+    level_etags[level] = etag_of(parts.levels[i], prefix + "/levels/" + std::to_string(level));
+    levels[level] = std::make_shared<const std::vector<uint8_t>>(std::move(parts.levels[i]));
+  }
 }
 
 void bounding_sphere(const MultilevelMesh& mesh, ServedMultilevel& out) {
@@ -51,18 +69,11 @@ std::unique_ptr<ServedMultilevel> open_multilevel(const std::string& path) {
   out->colors = !mesh.colors.empty();
   out->vertices = mesh.vertices();
   out->triangles = mesh.faces();
-  MultilevelParts parts = multilevel_parts(mesh);
   const std::string prefix = "/models/" + out->name;
-  out->head_etag = etag_of(parts.head, prefix + "/head");
-  out->head = std::make_shared<const std::vector<uint8_t>>(std::move(parts.head));
-  const uint32_t levels = mesh.level_count();
-  out->levels.resize(levels);
-  out->level_etags.resize(levels);
-  for (uint32_t i = 0; i < levels; ++i) {  // parts.levels is coarsest first
-    const uint32_t level = levels - 1 - i;
-    out->level_etags[level] = etag_of(parts.levels[i], prefix + "/levels/" + std::to_string(level));
-    out->levels[level] = std::make_shared<const std::vector<uint8_t>>(std::move(parts.levels[i]));
-  }
+  cut(multilevel_parts(mesh), prefix, out->head, out->head_etag, out->levels, out->level_etags);
+  out->position_bits = kDefaultPositionBits;
+  cut(multilevel_compressed_parts(mesh, out->position_bits), prefix + "/compressed", out->compressed_head,
+      out->compressed_head_etag, out->compressed_levels, out->compressed_level_etags);
   out->lod_vertices = mesh.vertex_count;
   out->lod_triangles = mesh.triangle_count;
   out->level_errors = multilevel_level_errors(mesh);

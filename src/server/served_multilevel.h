@@ -1,5 +1,6 @@
 // A multilevel mesh (gueziec et al. 1999) as the HTTP server offers it: the binary form cut into its HEAD
-// and one resource per level, coarsest first, each with its strong ETag, built once at start
+// and one resource per level, coarsest first, each with its strong ETag, and the same in the compressed
+// form; built once at start
 // (docs/protocol.md, "Multilevel over HTTP").
 #pragma once
 #include <array>
@@ -21,6 +22,12 @@ struct ServedMultilevel {
   // Per level, index = the level (0 finest): its LEVL section, ETag, and its LOD's size and error.
   std::vector<std::shared_ptr<const std::vector<uint8_t>>> levels;
   std::vector<std::string> level_etags;
+  // The compressed form (refine/multilevel_codec.h): its head and levels, indexed likewise.
+  uint32_t position_bits = 0;
+  std::shared_ptr<const std::vector<uint8_t>> compressed_head;
+  std::string compressed_head_etag;
+  std::vector<std::shared_ptr<const std::vector<uint8_t>>> compressed_levels;
+  std::vector<std::string> compressed_level_etags;
   std::vector<uint32_t> lod_vertices, lod_triangles;
   std::vector<float> level_errors;  // multilevel_level_errors: what a screen-size rule projects
   std::array<float, 3> center{};    // bounding sphere of every vertex (the box's centre)

@@ -39,8 +39,18 @@ TEST(MultilevelCli, BuildInfoLevelInBothForms) {
     EXPECT_EQ(j["colors"], !ascii);
     ASSERT_EQ(j["per_level"].size(), 6u);
     uint64_t reps = 0;
-    for (const auto& row : j["per_level"]) reps += row["representatives"].get<uint64_t>();
+    uint64_t compressed = 64;  // the compressed head
+    for (const auto& row : j["per_level"]) {
+      reps += row["representatives"].get<uint64_t>();
+      compressed += row["compressed_bytes"].get<uint64_t>();
+      const auto& bits = row["compressed_bits"];
+      EXPECT_EQ(8 * row["compressed_bytes"].get<uint64_t>(),
+                bits["header"].get<uint64_t>() + bits["representatives"].get<uint64_t>() +
+                    bits["vertices"].get<uint64_t>() + bits["triangles"].get<uint64_t>());
+    }
     EXPECT_EQ(reps, j["representatives"]);
+    EXPECT_EQ(j["compressed_bytes"], compressed);
+    EXPECT_EQ(j["position_bits"], 16);
     const auto& finest = j["per_level"].back();
     EXPECT_EQ(finest["level"], 0);
     EXPECT_EQ(finest["triangles"], input.face_count());

@@ -10,6 +10,8 @@
 #include "refine/multilevel_build.h"
 #include "refine/multilevel_file.h"
 #include "test_support.h"
+#include "error_of.h"
+#include "multilevel_expect.h"
 #include "view_models.h"
 
 namespace pms {
@@ -69,25 +71,9 @@ constexpr const char* kFigure13 = R"(#2-level progressive mesh
 )";
 
 
-void expect_same(const MultilevelMesh& a, const MultilevelMesh& b) {
-  EXPECT_EQ(a.dimension, b.dimension);
-  EXPECT_EQ(a.vertex_count, b.vertex_count);
-  EXPECT_EQ(a.triangle_count, b.triangle_count);
-  EXPECT_EQ(a.positions, b.positions);
-  EXPECT_EQ(a.normals, b.normals);
-  EXPECT_EQ(a.colors, b.colors);
-  EXPECT_EQ(a.triangles, b.triangles);
-  EXPECT_EQ(a.representative, b.representative);
-}
+const auto expect_same = test::expect_same_multilevel;
 
-std::string error_of(const std::function<void()>& fn) {
-  try {
-    fn();
-  } catch (const Error& e) {
-    return e.what();
-  }
-  return "(no error)";
-}
+using test::error_of;
 
 std::string ascii_error(const std::string& text) {
   return error_of([&] { parse_multilevel_ascii("m.txt", text); });

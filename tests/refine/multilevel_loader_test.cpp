@@ -10,6 +10,7 @@
 #include "refine/multilevel_build.h"
 #include "refine/multilevel_loader.h"
 #include "refine/multilevel_mesh.h"
+#include "error_of.h"
 #include "view_models.h"
 
 namespace pms {
@@ -23,14 +24,7 @@ const MultilevelMesh& terrain_levels() {
   return m;
 }
 
-std::string error_of(const std::function<void()>& fn) {
-  try {
-    fn();
-  } catch (const Error& e) {
-    return e.what();
-  }
-  return "";
-}
+using test::error_of;
 
 TEST(MultilevelLoader, EveryLoadedLodIsTheWholeMeshsAndTheLastLevelGivesTheMesh) {
   const MultilevelMesh& m = terrain_levels();

@@ -10,6 +10,7 @@
 #include "common/error.h"
 #include "io/shapes.h"
 #include "refine/multilevel_build.h"
+#include "refine/multilevel_codec.h"
 #include "refine/multilevel_file.h"
 #include "refine/multilevel_mesh.h"
 #include "server/catalogue.h"
@@ -50,11 +51,15 @@ Camera far_camera() {
   return c;
 }
 
-TEST(MultilevelHttp, LevelsArriveCoarsestFirstAndTheLastGivesTheFilesMesh) {
+// Every level, in either form: the plain levels give the file's structure exactly, the compressed ones the
+// same structure with its positions on the server's grid.
+void expect_every_level_arrives(bool compressed) {
   const MultilevelModel& model = sphere_model();
+  const MultilevelMesh want = compressed ? snapped_multilevel(model.mesh, kDefaultPositionBits) : model.mesh;
   Server server;
   client::MultilevelOptions options;
   options.budget = uint64_t(1) << 40;  // every level
+  options.compressed = compressed;
   client::MultilevelClient client(server.url(), options);
   ASSERT_EQ(client.list(), std::vector<std::string>{"ball"});
   client.open("ball");
@@ -69,15 +74,21 @@ TEST(MultilevelHttp, LevelsArriveCoarsestFirstAndTheLastGivesTheFilesMesh) {
   EXPECT_EQ(frame.report.faces, model.mesh.faces());
   ASSERT_TRUE(client.loader().complete());
   const MultilevelMesh& got = client.mesh();
-  EXPECT_EQ(got.positions, model.mesh.positions);
-  EXPECT_EQ(got.triangles, model.mesh.triangles);
-  EXPECT_EQ(got.representative, model.mesh.representative);
-  EXPECT_EQ(got.vertex_count, model.mesh.vertex_count);
-  EXPECT_EQ(got.triangle_count, model.mesh.triangle_count);
+  EXPECT_EQ(got.positions, want.positions);
+  EXPECT_EQ(got.triangles, want.triangles);
+  EXPECT_EQ(got.representative, want.representative);
+  EXPECT_EQ(got.vertex_count, want.vertex_count);
+  EXPECT_EQ(got.triangle_count, want.triangle_count);
   const uint64_t requests = server.http.stats().requests.load();
   client.frame(far_camera());
   EXPECT_EQ(server.http.stats().requests.load(), requests) << "a loaded model asks for nothing more";
 }
+
+TEST(MultilevelHttp, CompressedLevelsArriveCoarsestFirstAndTheLastGivesTheMeshOnTheGrid) {
+  expect_every_level_arrives(true);
+}
+
+TEST(MultilevelHttp, PlainLevelsArriveCoarsestFirstAndTheLastGivesTheFilesMesh) { expect_every_level_arrives(false); }
 
 // A budget stops the load at the finest LOD within it, and that LOD is usable and already the file's.
 TEST(MultilevelHttp, ABudgetLoadsOnlyTheLevelsItNeedsAndTheirLodIsTheFiles) {
@@ -93,7 +104,8 @@ TEST(MultilevelHttp, ABudgetLoadsOnlyTheLevelsItNeedsAndTheirLodIsTheFiles) {
   EXPECT_EQ(client.loader().finest_loaded(), wanted);
   EXPECT_EQ(client.arrivals().size(), levels - wanted);
   EXPECT_LE(frame.report.faces, options.budget);
-  MultilevelLod full(model.mesh);
+  const MultilevelMesh on_grid = snapped_multilevel(model.mesh, kDefaultPositionBits);
+  MultilevelLod full(on_grid);
   full.set_level(wanted);
   const auto got = client.lod().indices(), expected = full.indices();
   EXPECT_TRUE(std::equal(got.begin(), got.end(), expected.begin(), expected.end()));
@@ -146,6 +158,22 @@ TEST(MultilevelHttp, ResourcesAreCacheableAndHostileUrlsGet4xx) {
   EXPECT_EQ(http.get("/models/ball/levels/-1").status, 400);
   EXPECT_EQ(http.get("/models/ball/levels/99999999999999999999999").status, 400);
   EXPECT_EQ(http.get("/models/ball/levels").status, 404);
+  // The compressed form: its own resources, as cacheable, smaller, with ETags of their own.
+  const test::HttpReply zhead = http.get("/models/ball/compressed/head");
+  ASSERT_EQ(zhead.status, 200);
+  EXPECT_EQ(zhead.body.size(), 64u);
+  const test::HttpReply zlevel = http.get("/models/ball/compressed/levels/0");
+  ASSERT_EQ(zlevel.status, 200);
+  EXPECT_LT(zlevel.body.size(), level.body.size());
+  EXPECT_EQ(zlevel.header("cache-control"), "public, max-age=31536000, immutable");
+  const std::string zetag = zlevel.header("etag");
+  EXPECT_FALSE(zetag.empty());
+  EXPECT_NE(zetag, etag);
+  EXPECT_EQ(http.get("/models/ball/compressed/levels/0", {{"If-None-Match", zetag}}).status, 304);
+  EXPECT_EQ(http.get("/models/ball/compressed/levels/" + last).status, 404);
+  EXPECT_EQ(http.get("/models/ball/compressed/levels/01").status, 400);
+  EXPECT_EQ(http.get("/models/ball/compressed").status, 404);
+  EXPECT_EQ(http.get("/models/ball/compressed/compressed/head").status, 404);
   EXPECT_EQ(http.get("/models/ball/base").status, 404);
   EXPECT_EQ(http.get("/models/nosuch/head").status, 404);
   EXPECT_EQ(http.post("/models/ball/head", {1, 2}).status, 405);

@@ -10,8 +10,10 @@
 
 #include "apps/bench/bench.h"
 #include "apps/bench/child_process.h"
+#include "apps/bench/multilevel_sizes.h"
 #include "apps/bench/report.h"
 #include "common/error.h"
+#include "refine/multilevel_codec.h"
 #include "refine/multilevel_file.h"
 #include "refine/multilevel_loader.h"
 #include "refine/multilevel_mesh.h"
@@ -66,9 +68,10 @@ LodTimes lod_times(const MultilevelMesh& m, int repeats) {
   return out;
 }
 
-// Bytes of the structure's arrays, and of the plain indexed mesh of the same positions and attributes.
+// Bytes of the structure's arrays (representatives as stored: 3 or 4 bytes each), and of the plain indexed
+// mesh of the same positions and attributes.
 uint64_t multilevel_bytes(const MultilevelMesh& m) {
-  return 4 * (m.positions.size() + m.normals.size() + m.triangles.size() + m.representative.size()) + m.colors.size() +
+  return 4 * (m.positions.size() + m.normals.size() + m.triangles.size()) + m.representative.bytes() + m.colors.size() +
          4 * (m.vertex_count.size() + m.triangle_count.size());
 }
 uint64_t plain_bytes(const MultilevelMesh& m) {
@@ -86,8 +89,11 @@ void run_multilevel_group(BenchContext& context) {
   Table table({{"model", false}, {"levels"}, {"vertices"}, {"triangles"}, {"multilevel B"}, {"plain B"}, {"ratio"},
                {"switch max ms"}, {"to finest ms"}, {"geomorph max ms"}, {"first picture B"}, {"first picture triangles"},
                {"all levels B"}});
+  Table sizes({{"model", false}, {"compressed B"}, {"bits / vertex"}, {"bits / triangle"}, {"first picture B"},
+               {"binary B"}, {"binary gzip B"}, {"ASCII B"}, {"ASCII gzip B"}, {"meshopt v + i B"}});
   std::printf("\n## %s\n\n%s\n", section.c_str(), table.header().c_str());
   nlohmann::json rows = nlohmann::json::array();
+  std::vector<std::string> size_rows;
   for (const std::string& name : models) {
     const std::string input = find_model(context.models_dir, name).string();
     const std::string output = (context.temp_dir / (name + ".pml")).string();
@@ -116,17 +122,38 @@ void run_multilevel_group(BenchContext& context) {
                                        fixed(times.geomorph_max_ms, 3), thousands(first),
                                        thousands(m.triangle_count.back()), thousands(bytes)})
                             .c_str());
+    nlohmann::json levels_compressed;
+    const MultilevelSizes z = multilevel_sizes(m, kDefaultPositionBits, levels_compressed);
+    const uint64_t first_z = multilevel_compressed_parts(m).head.size() + levels_compressed[0]["compressed_bytes"].get<uint64_t>();
+    size_rows.push_back(sizes.add_row({name, thousands(z.compressed), fixed(double(z.vertex_bits) / m.vertices(), 2),
+                                       fixed(double(z.triangle_bits) / m.faces(), 2), thousands(first_z),
+                                       thousands(z.binary), thousands(z.binary_gzip), thousands(z.ascii),
+                                       thousands(z.ascii_gzip), thousands(z.meshopt_vertex + z.meshopt_index)}));
     rows.push_back({{"model", name}, {"levels", m.level_count()}, {"vertices", m.vertices()}, {"triangles", m.faces()},
                     {"representatives", m.stored_representatives()}, {"multilevel_bytes", ml}, {"plain_bytes", plain},
                     {"memory_ratio", double(ml) / double(plain)}, {"switch_max_ms", times.switch_max_ms},
                     {"switch_to_finest_ms", times.switch_to_finest_ms}, {"geomorph_max_ms", times.geomorph_max_ms},
-                    {"first_picture_bytes", first}, {"levels_bytes", per_level}, {"build_seconds", build.wall_seconds}});
+                    {"first_picture_bytes", first}, {"levels_bytes", per_level}, {"build_seconds", build.wall_seconds},
+                    {"compressed", {{"position_bits", kDefaultPositionBits}, {"bytes", z.compressed},
+                                    {"first_picture_bytes", first_z}, {"vertex_bits", z.vertex_bits},
+                                    {"triangle_bits", z.triangle_bits}, {"binary_bytes", z.binary},
+                                    {"binary_gzip_bytes", z.binary_gzip}, {"ascii_bytes", z.ascii},
+                                    {"ascii_gzip_bytes", z.ascii_gzip}, {"meshopt_vertex_bytes", z.meshopt_vertex},
+                                    {"meshopt_index_bytes", z.meshopt_index}, {"levels", levels_compressed}}}});
   }
+  std::printf("\nTransmission, every level on its own (positions on a %u-bit grid):\n\n%s\n", kDefaultPositionBits,
+              sizes.header().c_str());
+  for (const std::string& row : size_rows) std::printf("%s\n", row.c_str());
   context.report += "\n## " + section + "\n\nTargets: memory ≤ 1.1× the plain indexed mesh, a switch between any "
                     "two LODs ≤ 10 ms, a geomorph frame ≤ 5 ms on one core. Switch: the fastest of " +
                     std::to_string(repeats) + " jumps to each level from the far end (a jump's cost depends only on "
                     "its target), the maximum over the levels. Bytes: HTTP bodies (head + levels), headers aside.\n\n" +
-                    table.markdown();
+                    table.markdown() +
+                    "\nTransmission: every level on its own, summed; the compressed form's bits per vertex (positions) "
+                    "and per triangle (connectivity and representatives), each level's header and code tables shared "
+                    "out between them; gzip -9 of each level's binary section and ASCII batches; meshoptimizer's "
+                    "vertex codec and index-sequence codec per level on the same grid.\n\n" +
+                    sizes.markdown();
   write_text_file(context.options.out_dir / "multilevel.json",
                   nlohmann::json{{"machine", machine_json()}, {"models", rows}}.dump(2) + "\n");
 }

@@ -30,21 +30,6 @@ std::vector<GridVertex> grid_vertices(const Mesh& mesh, const PositionGrid& grid
   return out;
 }
 
-std::vector<uint8_t> gzip9(const std::vector<uint8_t>& in) {
-  z_stream z{};
-  if (deflateInit2(&z, 9, Z_DEFLATED, 15 + 16, 8, Z_DEFAULT_STRATEGY) != Z_OK) fail("gzip", "deflateInit2 failed");
-  std::vector<uint8_t> out(deflateBound(&z, uLong(in.size())));
-  z.next_in = const_cast<Bytef*>(in.data());
-  z.avail_in = uInt(in.size());
-  z.next_out = out.data();
-  z.avail_out = uInt(out.size());
-  const int status = deflate(&z, Z_FINISH);
-  out.resize(z.total_out);
-  deflateEnd(&z);
-  if (status != Z_STREAM_END) fail("gzip", "deflate did not finish");
-  return out;
-}
-
 std::vector<uint8_t> zstd19(const std::vector<uint8_t>& in) {
   std::vector<uint8_t> out(ZSTD_compressBound(in.size()));
   const size_t n = ZSTD_compress(out.data(), out.size(), in.data(), in.size(), 19);
@@ -133,6 +118,21 @@ void draco_size(const Mesh& mesh, const PositionGrid& grid, SingleRateSizes& siz
 }
 
 }  // namespace
+
+std::vector<uint8_t> gzip9(const std::vector<uint8_t>& in) {
+  z_stream z{};
+  if (deflateInit2(&z, 9, Z_DEFLATED, 15 + 16, 8, Z_DEFAULT_STRATEGY) != Z_OK) fail("gzip", "deflateInit2 failed");
+  std::vector<uint8_t> out(deflateBound(&z, uLong(in.size())));
+  z.next_in = const_cast<Bytef*>(in.data());
+  z.avail_in = uInt(in.size());
+  z.next_out = out.data();
+  z.avail_out = uInt(out.size());
+  const int status = deflate(&z, Z_FINISH);
+  out.resize(z.total_out);
+  deflateEnd(&z);
+  if (status != Z_STREAM_END) fail("gzip", "deflate did not finish");
+  return out;
+}
 
 SingleRateSizes single_rate_codecs(const Mesh& mesh, const PositionGrid& grid) {
   if (grid.bits > 16) fail("single-rate codecs", "positions over 16 bits do not fit meshoptimizer's lanes");

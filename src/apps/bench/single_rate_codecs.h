@@ -5,6 +5,7 @@
 #pragma once
 #include <cstdint>
 #include <string>
+#include <vector>
 
 #include "io/mesh.h"
 #include "pm/position_grid.h"
@@ -26,5 +27,8 @@ struct SingleRateSizes {
 // encoding is decoded again and checked against its input, so a figure is never of a broken stream
 // (pms::Error naming the codec when one does not round-trip).
 SingleRateSizes single_rate_codecs(const Mesh& mesh, const PositionGrid& grid);
+
+// zlib's gzip stream at level 9 (what `gzip -9` writes, header and trailer included).
+std::vector<uint8_t> gzip9(const std::vector<uint8_t>& in);
 
 }  // namespace pms::app
