@@ -264,14 +264,16 @@ DagFrameStats DagTraverser::manage(const DagManageOptions& options, std::vector<
   return stats;
 }
 
-DagFrameStats DagTraverser::converge(const DagManageOptions& options, std::vector<DagOp>& ops) {
+DagFrameStats DagTraverser::converge(const DagManageOptions& options, std::vector<DagOp>& ops, uint32_t max_ops) {
   DagManageOptions unlimited = options;
   unlimited.traversal = DagTraversal::priority;
-  unlimited.max_ops = 0;
+  const size_t start = ops.size();
   DagFrameStats total;
   // Each round but the last changes the cut; the bound only guards against a cycle no test has found.
   for (int round = 0; round < 64; ++round) {
     const size_t before = ops.size();
+    if (max_ops && before - start >= max_ops) break;
+    unlimited.max_ops = max_ops ? uint32_t(max_ops - (before - start)) : 0;
     const DagFrameStats stats = manage(unlimited, ops);
     total.splits += stats.splits;
     total.collapses += stats.collapses;

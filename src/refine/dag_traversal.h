@@ -53,8 +53,9 @@ class DagTraverser {
   DagFrameStats manage(const DagManageOptions& options, std::vector<DagOp>& ops);
   // The cut converged for the view within options' mode and budget: the priority traversal without an
   // operation limit, repeated until a round makes no operation (a DAG session's first answer; its traversal
-  // and N only apply from the second view on). Stats summed over the rounds.
-  DagFrameStats converge(const DagManageOptions& options, std::vector<DagOp>& ops);
+  // and N only apply from the second view on). Stats summed over the rounds. At most `max_ops` operations
+  // (0: no limit): a server bounds a first answer as it bounds any other.
+  DagFrameStats converge(const DagManageOptions& options, std::vector<DagOp>& ops, uint32_t max_ops = 0);
 
   DagCut& cut() { return *cut_; }
   // Between frames a traverser holds nothing beyond the cut and the view. The calling thread's scratch,

@@ -6,6 +6,7 @@
 
 #include "common/error.h"
 #include "pm/hierarchy.h"
+#include "protocol/client_messages.h"
 #include "protocol/message_types.h"
 #include "protocol/server_messages.h"
 #include "pm/split_record.h"
@@ -49,8 +50,9 @@ void DagSessionMode::traverse(uint64_t& work) {
   ops_.clear();
   // The first picture is the converged mesh of the first view: N amortizes a view change over frames, and
   // before its first answer the client has no picture whose frame rate N would keep (docs/internals.md,
-  // "The DAG mode").
-  const DagFrameStats stats = answered_ ? traverser_.manage(options_, ops_) : traverser_.converge(options_, ops_);
+  // "The DAG mode"). It is bounded as any view is: at most the largest N a client may ask for.
+  const DagFrameStats stats =
+      answered_ ? traverser_.manage(options_, ops_) : traverser_.converge(options_, ops_, protocol::kMaxDagOps);
   answered_ = true;
   work += stats.evaluated + ops_.size();
   sent_ = 0;

@@ -427,6 +427,26 @@ TEST(DagTraversal, ConvergeIsTheAdaptationLoopsMeshBunny) {
   expect_converge(*test::built_bunny(), 1);
 }
 
+// A capped convergence stops at the cap with a legal cut, and the rest of the way is ordinary frames.
+TEST(DagTraversal, ConvergeStopsAtItsOperationCap) {
+  const BuiltModel& model = test::built_terrain();
+  const Dag dag(model.model());
+  DagCut cut(dag);
+  Mirror mirror(model, dag);
+  DagTraverser traverser(cut);
+  traverser.set_view(make_criteria(test::view_for(model, test::framing_camera(model, {0.3f, 0.2f, 1}, 4)), 1));
+  std::vector<DagOp> ops;
+  traverser.converge({}, ops, 25);
+  EXPECT_EQ(ops.size(), 25u);
+  mirror.apply(ops);
+  EXPECT_EQ(audit(cut), "ok");
+  ops.clear();
+  traverser.converge({}, ops);
+  EXPECT_GT(ops.size(), 0u) << "the cap left work for later";
+  mirror.apply(ops);
+  EXPECT_EQ(audit(cut), "ok");
+}
+
 // Constant-time evaluates its own operations' new front nodes first: with a queue far longer than N, the
 // paper's FIFO (new nodes at the back) would never split, within one call, a child of a split of that call;
 // here most of a call's splits after its first wanted one are such children, and it still evaluates at

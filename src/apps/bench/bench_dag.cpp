@@ -22,6 +22,7 @@
 #include "apps/resource_usage.h"
 #include "client/streaming_client.h"
 #include "common/error.h"
+#include "protocol/client_messages.h"
 #include "refine/dag_traversal.h"
 #include "server/dag_mode.h"
 #include "server/session_mode.h"
@@ -110,7 +111,7 @@ TraversalRun run_traversal(const BenchModel& m, const std::vector<Camera>& route
     Stopwatch clock;
     traverser.set_view(view.criteria);
     // As the DAG mode answers a session's first view: converged (docs/internals.md, "The DAG mode").
-    const DagFrameStats stats = i == 0 ? traverser.converge(manage, ops) : traverser.manage(manage, ops);
+    const DagFrameStats stats = i == 0 ? traverser.converge(manage, ops, protocol::kMaxDagOps) : traverser.manage(manage, ops);
     const double ms = 1000 * clock.seconds();
 
     const client::FrameReport report = client.frame(route[i]);
