@@ -427,14 +427,22 @@ TEST(DagTraversal, ConvergeIsTheAdaptationLoopsMeshBunny) {
   expect_converge(*test::built_bunny(), 1);
 }
 
+// The terrain's DAG, a cut of it with its mirror mesh, and a traverser viewing it from afar.
+struct FarTerrain {
+  const BuiltModel& model = test::built_terrain();
+  const Dag dag{model.model()};
+  DagCut cut{dag};
+  Mirror mirror{model, dag};
+  DagTraverser traverser{cut};
+  FarTerrain() {
+    traverser.set_view(make_criteria(test::view_for(model, test::framing_camera(model, {0.3f, 0.2f, 1}, 4)), 1));
+  }
+};
+
 // A capped convergence stops at the cap with a legal cut, and the rest of the way is ordinary frames.
 TEST(DagTraversal, ConvergeStopsAtItsOperationCap) {
-  const BuiltModel& model = test::built_terrain();
-  const Dag dag(model.model());
-  DagCut cut(dag);
-  Mirror mirror(model, dag);
-  DagTraverser traverser(cut);
-  traverser.set_view(make_criteria(test::view_for(model, test::framing_camera(model, {0.3f, 0.2f, 1}, 4)), 1));
+  FarTerrain t;
+  auto& [model, dag, cut, mirror, traverser] = t;
   std::vector<DagOp> ops;
   traverser.converge({}, ops, 25);
   EXPECT_EQ(ops.size(), 25u);
@@ -452,12 +460,8 @@ TEST(DagTraversal, ConvergeStopsAtItsOperationCap) {
 // here most of a call's splits after its first wanted one are such children, and it still evaluates at
 // most N nodes a phase.
 TEST(DagTraversal, ConstantTimeFollowsItsOwnChangesFirst) {
-  const BuiltModel& model = test::built_terrain();
-  const Dag dag(model.model());
-  DagCut cut(dag);
-  Mirror mirror(model, dag);
-  DagTraverser traverser(cut);
-  traverser.set_view(make_criteria(test::view_for(model, test::framing_camera(model, {0.3f, 0.2f, 1}, 4)), 1));
+  FarTerrain t;
+  auto& [model, dag, cut, mirror, traverser] = t;
   std::vector<DagOp> ops;
   traverser.converge({}, ops);
   mirror.apply(ops);
