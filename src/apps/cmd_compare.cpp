@@ -15,13 +15,13 @@ namespace pms::app {
 namespace {
 
 struct CompareArgs {
-  std::string a, b, camera;
-  uint32_t width = 0, height = 0;
+  std::string a, b;
+  CameraArgs view;
   bool json = false;
 };
 
 void run_compare(const CompareArgs& args) {
-  const Camera camera = load_camera_sized(args.camera, args.width, args.height);
+  const Camera camera = load_camera_sized(args.view);
   const Mesh mesh_a = load_render_input(args.a);
   const Mesh mesh_b = load_render_input(args.b);
   float lo[3], hi[3];
@@ -29,7 +29,7 @@ void run_compare(const CompareArgs& args) {
   std::fill(hi, hi + 3, -std::numeric_limits<float>::infinity());
   extend_bounds(mesh_a, lo, hi);
   extend_bounds(mesh_b, lo, hi);
-  const ViewParams view = render_view(camera, args.camera, lo, hi);
+  const ViewParams view = render_view(camera, args.view.camera, lo, hi);
   Renderer renderer;
   Image image_a, image_b;
   renderer.render(render_mesh(mesh_a), view, image_a);
@@ -56,9 +56,7 @@ void add_compare_command(CliCommand& app) {
   CliCommand cmd = app.subcommand("compare", "Render two meshes with one camera and compare the images");
   cmd.option("mesh_a", args->a, "Mesh file, terrain:FACES, or .pms model").required();
   cmd.option("mesh_b", args->b, "Mesh file, terrain:FACES, or .pms model").required();
-  cmd.option("--camera", args->camera, "Camera JSON (CAM.json, docs/cli.md)").required();
-  cmd.option("--width", args->width, "Image width (overrides the camera's)").range(1, 16384);
-  cmd.option("--height", args->height, "Image height (overrides the camera's)").range(1, 16384);
+  add_camera_options(cmd, args->view);
   cmd.flag("--json", args->json, "Print one JSON object: psnr error_pixels error_fraction");
   cmd.on_run([args] { run_compare(*args); });
 }

@@ -62,4 +62,10 @@ ViewParams render_view(const Camera& camera, const std::string& camera_path, con
   }
 }
 
+void add_camera_options(CliCommand& cmd, CameraArgs& args) {
+  cmd.option("--camera", args.camera, "Camera JSON (CAM.json, docs/cli.md)").required();
+  cmd.option("--width", args.width, "Image width (overrides the camera's)").range(1, 16384);
+  cmd.option("--height", args.height, "Image height (overrides the camera's)").range(1, 16384);
+}
+
 }  // namespace pms::app

@@ -3,6 +3,7 @@
 #include <cstdint>
 #include <string>
 
+#include "apps/cli.h"
 #include "io/mesh.h"
 #include "refine/camera.h"
 #include "render/render.h"
@@ -21,6 +22,14 @@ void extend_bounds(const Mesh& mesh, float box_min[3], float box_max[3]);
 
 // The camera of CAM.json with --width / --height applied (0 = keep the file's).
 Camera load_camera_sized(const std::string& path, uint32_t width, uint32_t height);
+
+// --camera CAM.json (required), --width and --height, as `render` and `compare` take them.
+struct CameraArgs {
+  std::string camera;
+  uint32_t width = 0, height = 0;  // 0: the camera file's
+};
+void add_camera_options(CliCommand& cmd, CameraArgs& args);
+inline Camera load_camera_sized(const CameraArgs& args) { return load_camera_sized(args.camera, args.width, args.height); }
 
 // make_view() with near/far around [box_min, box_max] (an empty box, min > max, becomes the camera's
 // target point); a degenerate camera is reported against `camera_path`.
