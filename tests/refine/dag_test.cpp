@@ -223,10 +223,10 @@ void expect_random_operations_legal(const BuiltModel& model, int steps, uint32_t
     const bool split = std::uniform_int_distribution<int>(0, 99)(rng) < (step < steps / 2 ? 75 : 35);
     std::vector<uint32_t> front;
     if (split) {
-      for (uint32_t n : cut.split_front())
+      for (uint32_t n = cut.next_candidate(0); n != kNone; n = cut.next_candidate(n + 1))
         if (cut.in_fs(n)) front.push_back(n);
     } else {
-      for (uint32_t n : cut.collapse_front()) front.push_back(n);
+      for (uint32_t n = cut.next_fc(0); n != kNone; n = cut.next_fc(n + 1)) front.push_back(n);
     }
     if (front.empty()) continue;
     const uint32_t n = front[std::uniform_int_distribution<size_t>(0, front.size() - 1)(rng)];
@@ -284,12 +284,12 @@ void expect_route(const BuiltModel& model, DagTraversal traversal, DagMode mode,
     traverser.set_view(make_criteria(test::view_for(model, camera), tolerance));
     for (int frame = 0; frame < 4; ++frame) {
       std::vector<DagOp> ops;
-      const size_t queued = cut.collapse_queue_size() + cut.split_queue_size();
+      const size_t queued = cut.fc_size() + cut.candidate_count();
       const DagFrameStats stats = traverser.manage(options, ops);
       mirror.apply(ops);
       ASSERT_FALSE(::testing::Test::HasFatalFailure());
       ops_total += ops.size();
-      if (traversal != DagTraversal::priority) {  // each queued or new front node evaluated once at most
+      if (traversal != DagTraversal::priority) {  // each front or new front node evaluated once at most
         ASSERT_LE(stats.evaluated, queued + ops.size() * (3 + dag.stats().max_children));
       }
       budget_stopped |= stats.stopped_by_budget;
@@ -471,7 +471,7 @@ TEST(DagTraversal, ConstantTimeFollowsItsOwnChangesFirst) {
   options.max_ops = 40;
   uint32_t splits = 0, cascaded = 0;
   for (int frame = 0; frame < 10; ++frame) {
-    ASSERT_GT(cut.split_queue_size(), 4 * options.max_ops) << "a queue the FIFO would not wrap in one call";
+    ASSERT_GT(cut.candidate_count(), 4 * options.max_ops) << "a front the sweep would not wrap in one call";
     ops.clear();
     const DagFrameStats stats = traverser.manage(options, ops);
     mirror.apply(ops);
