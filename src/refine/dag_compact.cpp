@@ -61,6 +61,7 @@ CompactDagCut::CompactDagCut(const DagCut& cut, std::vector<uint32_t>* split) {
 }
 
 void CompactDagCut::split_nodes(const Dag& dag, std::vector<uint32_t>& out) const {
+  if (bits_ == 0) return;  // a default one: the base mesh
   uint64_t bit = 0;
   walk_split_nodes(dag, out, [&](uint32_t) {
     if (bit >= bits_) fail(kWhere, "the code ends before the cut does");

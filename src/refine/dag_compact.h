@@ -21,7 +21,7 @@ namespace pms {
 // plus one per root.
 class CompactDagCut {
  public:
-  CompactDagCut() = default;  // the base mesh
+  CompactDagCut() = default;  // the base mesh (an empty code)
   // Encodes `cut`, appending its split nodes (in the code's order) to `split` when given.
   explicit CompactDagCut(const DagCut& cut, std::vector<uint32_t>* split = nullptr);
 

@@ -17,6 +17,7 @@
 #include "refine/adapt.h"
 #include "refine/criteria.h"
 #include "refine/dag.h"
+#include "refine/dag_compact.h"
 #include "refine/dag_cut.h"
 #include "refine/dag_traversal.h"
 #include "refine/selective_mesh.h"
@@ -587,6 +588,115 @@ TEST(Dag, CutRebuildsFromItsSplitNodes) {
   EXPECT_THROW(DagCut(dag, holed), Error);
   holed.push_back(dag.size());
   EXPECT_THROW(DagCut(dag, holed), Error);
+}
+
+// A route flown as a server does it: each frame loads the compact cut into this thread's dense one,
+// traverses, and stores it back. Every frame's operations are those of a traverser that kept its dense cut
+// (the code and the cursors are the whole state), the code takes at most 2 bits per split node and one per
+// root, and after each store the thread's cut is the base mesh again.
+void expect_compact_route(const BuiltModel& model, DagTraversal traversal, DagMode mode, float tolerance) {
+  const Dag dag(model.model());
+  DagCut kept(dag);
+  DagTraverser kept_traverser(kept);
+  CompactDagCut compact;
+  DagManageOptions options;
+  options.traversal = traversal;
+  options.mode = mode;
+  options.max_ops = 60;
+  options.budget = dag.base_faces() + 600;
+  for (const Camera& camera : route_of(model)) {
+    const ViewCriteria view = make_criteria(test::view_for(model, camera), tolerance);
+    kept_traverser.set_view(view);
+    for (int frame = 0; frame < 3; ++frame) {
+      std::vector<DagOp> expected, ops;
+      kept_traverser.manage(options, expected);
+      {
+        LoadedDagCut loaded(dag, compact);
+        ASSERT_EQ(loaded.cut().split_count(), compact.split_count());
+        DagTraverser traverser(loaded.cut());
+        traverser.set_view(view);
+        traverser.manage(options, ops);
+        compact = loaded.store();
+      }
+      ASSERT_EQ(ops.size(), expected.size());
+      for (size_t i = 0; i < ops.size(); ++i) {
+        ASSERT_EQ(ops[i].node, expected[i].node) << "operation " << i;
+        ASSERT_EQ(ops[i].split, expected[i].split) << "operation " << i;
+      }
+      ASSERT_EQ(compact.split_count(), kept.split_count());
+      ASSERT_EQ(compact.triangles(), kept.triangles());
+      ASSERT_LE(compact.code_bits(), 2 * uint64_t(kept.split_count()) + dag.roots().size());
+      const DagCut dense = compact.dense(dag);
+      ASSERT_EQ(audit(dense), "ok");
+      ASSERT_EQ(dense.collapse_cursor(), kept.collapse_cursor());
+      ASSERT_EQ(dense.split_cursor(), kept.split_cursor());
+      for (uint32_t n = 0; n < dag.size(); ++n) ASSERT_EQ(dense.is_split(n), kept.is_split(n)) << n;
+    }
+  }
+  LoadedDagCut base(dag, CompactDagCut{});
+  EXPECT_EQ(base.cut().split_count(), 0u);
+  EXPECT_EQ(audit(base.cut()), "ok") << "the thread's cut is not the base mesh after the stores";
+}
+
+TEST(DagCompact, RoutesAreThoseOfAKeptCutTerrain) {
+  for (DagTraversal traversal : {DagTraversal::priority, DagTraversal::linear, DagTraversal::constant_time})
+    for (DagMode mode : {DagMode::free, DagMode::budget}) {
+      SCOPED_TRACE("traversal " + std::to_string(int(traversal)) + " mode " + std::to_string(int(mode)));
+      expect_compact_route(test::built_terrain(), traversal, mode, 1);
+      if (::testing::Test::HasFatalFailure()) return;
+    }
+}
+TEST(DagCompact, RoutesAreThoseOfAKeptCutBunny) {
+  PMS_REQUIRE_SHARED_MODEL(path, "bunny.ply.xz");
+  for (DagTraversal traversal : {DagTraversal::priority, DagTraversal::linear, DagTraversal::constant_time}) {
+    SCOPED_TRACE(int(traversal));
+    expect_compact_route(*test::built_bunny(), traversal, DagMode::free, 1);
+    if (::testing::Test::HasFatalFailure()) return;
+  }
+}
+
+// A split set that is not a cut is refused and leaves the thread's cut at the base mesh; a second loan of
+// the same DAG while the first is alive gets a cut of its own; a loan that ends without store() (an
+// exception on the way) still gives the base mesh back.
+TEST(DagCompact, LoansAlwaysGiveTheBaseMeshBack) {
+  const BuiltModel& model = test::built_terrain();
+  const Dag dag(model.model());
+  DagCut cut(dag);
+  DagTraverser traverser(cut);
+  traverser.set_view(make_criteria(test::view_for(model, test::framing_camera(model, {1, 0.3f, 0.08f}, 0.45f, 60)), 1));
+  std::vector<DagOp> ops;
+  traverser.converge({}, ops);
+  std::vector<uint32_t> split;
+  for (uint32_t n = 0; n < dag.size(); ++n)
+    if (cut.is_split(n)) split.push_back(n);
+  ASSERT_GT(split.size(), 100u);
+  uint32_t needed = kNone;
+  for (uint32_t n : split)
+    if (!cut.in_fc(n)) needed = n;
+  std::vector<uint32_t> holed;
+  for (uint32_t n : split)
+    if (n != needed) holed.push_back(n);
+  EXPECT_THROW(LoadedDagCut(dag, holed), Error);
+  holed.push_back(dag.size());
+  EXPECT_THROW(LoadedDagCut(dag, holed), Error);
+  {
+    LoadedDagCut base(dag, CompactDagCut{});
+    EXPECT_EQ(base.cut().split_count(), 0u);
+    EXPECT_EQ(audit(base.cut()), "ok");
+  }
+  const CompactDagCut compact(cut);
+  {
+    LoadedDagCut outer(dag, compact);
+    LoadedDagCut inner(dag, compact);
+    EXPECT_NE(&outer.cut(), &inner.cut());
+    EXPECT_EQ(inner.cut().triangles(), cut.triangles());
+    inner.cut().collapse(inner.cut().next_fc(0));
+    EXPECT_EQ(outer.cut().triangles(), cut.triangles()) << "the loans share a cut";
+    outer.cut().mark(split[0]);  // ends without store(), a mark left
+  }
+  LoadedDagCut again(dag, CompactDagCut{});
+  EXPECT_EQ(again.cut().split_count(), 0u);
+  EXPECT_EQ(audit(again.cut()), "ok");
 }
 
 }  // namespace
