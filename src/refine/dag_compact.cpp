@@ -85,7 +85,7 @@ struct LoadedDagCut::Slot {
   const Dag* dag = nullptr;
   uint64_t serial = 0;
   std::unique_ptr<DagCut> cut;
-  std::vector<uint32_t> split;  // what load() was given, then what store() walked
+  std::vector<uint32_t> split;  // the decoded split nodes
   bool busy = false;
   uint64_t used = 0;  // for eviction: the least recently used goes
 };
@@ -154,27 +154,20 @@ LoadedDagCut::LoadedDagCut(const Dag& dag, std::span<const uint32_t> split) {
 
 CompactDagCut LoadedDagCut::store() {
   if (!slot_->busy) fail(kWhere, "a loan stored twice");
-  DagCut& cut = *slot_->cut;
-  cut.clear_marks();
   slot_->split.clear();
-  CompactDagCut compact(cut, &slot_->split);
+  const CompactDagCut compact(*slot_->cut, &slot_->split);  // the walk's queue is the thread's too
   give_back();
   return compact;
 }
 
 void LoadedDagCut::give_back() {
-  DagCut& cut = *slot_->cut;
-  cut.clear_marks();
-  cut.reset(slot_->split);
+  slot_->cut->reset();
   slot_->split.clear();  // its capacity is the thread's, for the next turn
   slot_->busy = false;
 }
 
 LoadedDagCut::~LoadedDagCut() {
-  if (!slot_->busy) return;
-  slot_->split.clear();
-  walk_split_nodes(slot_->cut->dag(), slot_->split, [&](uint32_t n) { return slot_->cut->is_split(n); });
-  give_back();
+  if (slot_->busy) give_back();
 }
 
 size_t LoadedDagCut::thread_scratch_bytes() {

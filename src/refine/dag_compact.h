@@ -22,7 +22,7 @@ namespace pms {
 class CompactDagCut {
  public:
   CompactDagCut() = default;  // the base mesh (an empty code)
-  // Encodes `cut`, appending its split nodes (in the code's order) to `split` when given.
+  // Encodes `cut`, appending its split nodes (in the code's order, the walk's queue) to `split` when given.
   explicit CompactDagCut(const DagCut& cut, std::vector<uint32_t>* split = nullptr);
 
   // Appends the split nodes in the code's order (parents before hierarchy children). pms::Error for a code

@@ -28,7 +28,10 @@ DagCut::DagCut(const Dag& dag, uint32_t inline_limit)
 }
 
 DagCut::DagCut(const Dag& dag, std::span<const uint32_t> split, uint32_t inline_limit) : DagCut(dag, inline_limit) {
-  load(split);
+  std::vector<uint32_t> once(split.begin(), split.end());
+  std::sort(once.begin(), once.end());
+  once.erase(std::unique(once.begin(), once.end()), once.end());
+  load(once);
 }
 
 void DagCut::init_wide(uint32_t inline_limit) {
@@ -83,7 +86,7 @@ void DagCut::recount() {
       triangles_ += dag.faces(n);
       ++split_count_;
     } else {
-      for (uint32_t p : dag.parents(n)) count += !is_split(p);
+      for (uint32_t p : dag.parents(n)) count += is_split(p);
     }
     set_counter(n, count);
     enter_fronts(n);
@@ -93,65 +96,59 @@ void DagCut::recount() {
   if (split_count_ == 0) base_fs_ = fs_size_;
 }
 
+// The split bits first (a dependency may come after the node that needs it), then the counters, which only
+// grow from the base mesh's zeros, then Fc.
 void DagCut::load(std::span<const uint32_t> split) {
   if (split_count_ != 0 || !marked_.empty()) fail(kWhere, "load() needs the base mesh");
   const Dag& dag = *dag_;
-  loaded_.clear();
-  for (uint32_t n : split) {  // the split bits, counters 0 until the second pass counts split children
+  for (uint32_t n : split) {
     if (n >= dag.size()) {
-      reset(loaded_);
+      reset();
       fail(kWhere, "a split node out of range");
     }
     if (is_split(n)) continue;
-    leave_fronts(n);
+    fs_size_ -= in_fs(n);
     state_[n] |= kSplit;
-    set_counter(n, 0);
     set_candidate(n, false);
     ++split_count_;
     triangles_ += dag.faces(n);
-    loaded_.push_back(n);
   }
-  for (uint32_t n : loaded_) {
+  if (split.size() != split_count_) {
+    reset();
+    fail(kWhere, "load() takes each split node once");
+  }
+  for (uint32_t n : split) {
     const uint32_t hp = dag.hierarchy_parent(n);
     bool cut = hp == kNone || is_split(hp);
-    for (uint32_t p : dag.parents(n)) cut = cut && is_split(p);
+    for (uint32_t p : dag.parents(n)) {
+      cut = cut && is_split(p);
+      add_counter(p, 1);
+    }
     if (!cut) {
-      reset(loaded_);
+      reset();
       fail(kWhere, "a split node below a collapsed one or whose dependency is collapsed: not a cut");
     }
-  }
-  for (uint32_t n : loaded_) {
-    for (uint32_t p : dag.parents(n)) add_counter(p, 1);
     for (uint32_t c : dag.children(n))
       if (!is_split(c)) {
-        leave_fronts(c);
-        add_counter(c, -1);
-        enter_fronts(c);
+        add_counter(c, 1);
+        fs_size_ += in_fs(c);
       }
     for (int k = 0; k < 2; ++k)
       if (const uint32_t c = dag.hierarchy_child(n, k); c != kNone && !is_split(c)) set_candidate(c, true);
   }
-  for (uint32_t n : loaded_) enter_fronts(n);
+  for (uint32_t n : split) enter_fronts(n);
 }
 
-// A node's base-mesh state: collapsed, every DAG parent collapsed, a candidate when it is a root.
-void DagCut::reset_node(uint32_t n) {
-  const Dag& dag = *dag_;
-  state_[n] &= uint8_t(~(kSplit | kMark));
-  set_counter(n, uint32_t(dag.parents(n).size()));
-  set_bit(fc_bits_, n, false);
-  set_candidate(n, dag.hierarchy_parent(n) == kNone);
-}
-
-void DagCut::reset(std::span<const uint32_t> split) {
-  const Dag& dag = *dag_;
-  for (uint32_t n : split) {
-    reset_node(n);
-    for (uint32_t c : dag.children(n)) reset_node(c);
-    for (int k = 0; k < 2; ++k)
-      if (const uint32_t c = dag.hierarchy_child(n, k); c != kNone) reset_node(c);
-  }
-  triangles_ = dag.base_faces();
+void DagCut::reset() {
+  std::fill(state_.begin(), state_.end(), uint8_t(0));
+  for (uint32_t n : wide_nodes_) state_[n] = kWide;
+  std::fill(wide_counters_.begin(), wide_counters_.end(), uint16_t(0));
+  std::fill(fc_bits_.begin(), fc_bits_.end(), uint64_t(0));
+  std::fill(candidate_bits_.begin(), candidate_bits_.end(), uint64_t(0));
+  candidate_count_ = 0;
+  for (uint32_t r : dag_->roots()) set_candidate(r, true);
+  marked_.clear();
+  triangles_ = dag_->base_faces();
   split_count_ = fc_size_ = 0;
   fs_size_ = base_fs_;
   collapse_cursor_ = split_cursor_ = 0;
@@ -161,7 +158,8 @@ void DagCut::split(uint32_t n) {
   if (!in_fs(n)) fail(kWhere, "split of a node not in Fs");
   const Dag& dag = *dag_;
   leave_fronts(n);
-  state_[n] |= kSplit;  // counter stays 0: its children are collapsed, since they need it
+  state_[n] |= kSplit;
+  set_counter(n, 0);  // its split children: none, they need it
   enter_fronts(n);
   set_candidate(n, false);
   for (uint32_t p : dag.parents(n)) {
@@ -171,7 +169,7 @@ void DagCut::split(uint32_t n) {
   }
   for (uint32_t c : dag.children(n)) {
     leave_fronts(c);
-    add_counter(c, -1);
+    add_counter(c, 1);
     enter_fronts(c);
   }
   for (int k = 0; k < 2; ++k)
@@ -184,7 +182,8 @@ void DagCut::collapse(uint32_t n) {
   if (!in_fc(n)) fail(kWhere, "collapse of a node not in Fc");
   const Dag& dag = *dag_;
   leave_fronts(n);
-  state_[n] &= uint8_t(~kSplit);  // counter 0 either way: no split child before, no collapsed parent now
+  state_[n] &= uint8_t(~kSplit);
+  set_counter(n, uint32_t(dag.parents(n).size()));  // its split parents: all, since it was split
   enter_fronts(n);
   set_candidate(n, true);  // its hierarchy parent is split, since it was
   for (uint32_t p : dag.parents(n)) {
@@ -194,7 +193,7 @@ void DagCut::collapse(uint32_t n) {
   }
   for (uint32_t c : dag.children(n)) {
     leave_fronts(c);
-    add_counter(c, 1);
+    add_counter(c, -1);
     enter_fronts(c);
   }
   for (int k = 0; k < 2; ++k)  // collapsed, as every DAG descendant of an Fc node is
@@ -251,7 +250,7 @@ bool DagCut::check(std::string* why) const {
       triangles += dag.faces(n);
       ++splits;
     } else {
-      for (uint32_t p : dag.parents(n)) count += !is_split(p);
+      for (uint32_t p : dag.parents(n)) count += is_split(p);
     }
     if (count != counter(n)) return bad("counter " + std::to_string(counter(n)) + " != recount " + std::to_string(count), n);
     fc += in_fc(n);
@@ -271,7 +270,7 @@ bool DagCut::check(std::string* why) const {
 
 size_t DagCut::memory_bytes() const {
   return state_.capacity() + (fc_bits_.capacity() + candidate_bits_.capacity()) * 8 + wide_nodes_.capacity() * 4 +
-         wide_counters_.capacity() * 2 + 4 * (marked_.capacity() + loaded_.capacity());
+         wide_counters_.capacity() * 2 + 4 * marked_.capacity();
 }
 
 }  // namespace pms

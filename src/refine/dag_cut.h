@@ -1,7 +1,7 @@
 // One cut of the DAG of operations (Zheng & Chan 2006 §3, Fig. 1): which nodes are split, a counter per
 // node, and the two fronts kept incrementally. A split node's counter is the number of its split DAG
-// children (0: in Fc, legal to collapse); a collapsed node's the number of its collapsed DAG parents
-// (0: in Fs, legal to split). Each front is a bit per node, swept in node order (depth, then deviation)
+// children (0: in Fc, legal to collapse); a collapsed node's the number of its split DAG parents (all of
+// them: in Fs, legal to split). So the base mesh is all zeros, and a return to it is a clear of the arrays. Each front is a bit per node, swept in node order (depth, then deviation)
 // from a cursor that outlives a frame: the linear and constant-time traversals continue where they
 // stopped. This dense form is a traversal's working copy (a per-thread scratch, refine/dag_compact.h); a
 // session keeps its cut between turns as a CompactDagCut, a few bits per split node.
@@ -37,7 +37,7 @@ class DagCut {
     return c == kWide ? wide_counter(n) : c;
   }
   bool in_fc(uint32_t n) const { return is_split(n) && counter(n) == 0; }
-  bool in_fs(uint32_t n) const { return !is_split(n) && counter(n) == 0; }
+  bool in_fs(uint32_t n) const { return !is_split(n) && counter(n) == dag_->parents(n).size(); }
   // Collapsed with its hierarchy parent split (or a root): an active vertex of the mesh that has a split.
   // Every Fs node is one; the others wait for a dependency and split only with it (forced).
   bool is_candidate(uint32_t n) const { return (candidate_bits_[n / 64] >> (n % 64)) & 1; }
@@ -73,13 +73,12 @@ class DagCut {
   void mark(uint32_t n);
   void clear_marks();
 
-  // From the base mesh (nothing split, no mark) to the cut whose split nodes are `split` (duplicates
-  // allowed): O(split nodes × degree). pms::Error, leaving the base mesh, for a node out of range or a set
-  // that is not a cut.
+  // From the base mesh (nothing split, no mark) to the cut whose split nodes are `split`, each once:
+  // O(split nodes × degree). pms::Error, leaving the base mesh, for a node out of range or listed twice, or
+  // a set that is not a cut.
   void load(std::span<const uint32_t> split);
-  // Back to the base mesh from a cut whose split nodes are `split` (as split_nodes() lists them, or a set
-  // load() refused): O(split nodes × degree).
-  void reset(std::span<const uint32_t> split);
+  // Back to the base mesh, cursors at 0: a clear of the state and the two bit arrays (~1.25 B per node).
+  void reset();
 
   // Audit for tests: counters, fronts, cursors and the triangle count equal a recount from scratch, every
   // split node's DAG parents and hierarchy parent are split. On failure `why` (if given) says what.
@@ -100,7 +99,6 @@ class DagCut {
   void add_counter(uint32_t n, int delta);
   void set_candidate(uint32_t n, bool on);
   void recount();
-  void reset_node(uint32_t n);
   void leave_fronts(uint32_t n) { fc_size_ -= in_fc(n); fs_size_ -= in_fs(n); }
   void enter_fronts(uint32_t n);
 
@@ -110,10 +108,9 @@ class DagCut {
   std::vector<uint32_t> wide_nodes_;     // ascending: the nodes whose counters are in the side table
   std::vector<uint16_t> wide_counters_;  // theirs
   std::vector<uint32_t> marked_;
-  std::vector<uint32_t> loaded_;  // load()'s set without its duplicates
   uint64_t triangles_ = 0;
   uint32_t split_count_ = 0, fc_size_ = 0, fs_size_ = 0, candidate_count_ = 0;
-  uint32_t base_fs_ = 0;  // Fs of the base mesh: the nodes without a DAG parent
+  uint32_t base_fs_ = 0;  // Fs of the base mesh: the nodes without a DAG parent (the roots)
   uint32_t collapse_cursor_ = 0, split_cursor_ = 0;
 };
 
