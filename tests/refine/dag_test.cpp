@@ -440,6 +440,13 @@ struct FarTerrain {
   }
 };
 
+// The same, viewed close and low.
+struct CloseTerrain : FarTerrain {
+  CloseTerrain() {
+    traverser.set_view(make_criteria(test::view_for(model, test::framing_camera(model, {1, 0.3f, 0.08f}, 0.45f, 60)), 1));
+  }
+};
+
 // A capped convergence stops at the cap with a legal cut, and the rest of the way is ordinary frames.
 TEST(DagTraversal, ConvergeStopsAtItsOperationCap) {
   FarTerrain t;
@@ -552,24 +559,36 @@ TEST(Dag, RefusesBadModelsAndIllegalOperations) {
   EXPECT_EQ(audit(cut), "ok");
 }
 
+// A cut's split nodes, and the same without one node another split node needs (no cut).
+struct SplitSets {
+  std::vector<uint32_t> split, holed;
+};
+SplitSets split_sets(const DagCut& cut) {
+  SplitSets sets;
+  for (uint32_t n = 0; n < cut.dag().size(); ++n)
+    if (cut.is_split(n)) sets.split.push_back(n);
+  uint32_t needed = kNone;
+  for (uint32_t n : sets.split)
+    if (!cut.in_fc(n)) needed = n;
+  for (uint32_t n : sets.split)
+    if (n != needed) sets.holed.push_back(n);
+  return sets;
+}
+
 // A cut rebuilt from its split nodes alone (what a resuming client's mesh tells) is the same cut; a set
 // that is not a cut is refused.
 TEST(Dag, CutRebuildsFromItsSplitNodes) {
-  const BuiltModel& model = test::built_terrain();
-  const Dag dag(model.model());
-  DagCut cut(dag);
-  DagTraverser traverser(cut);
-  traverser.set_view(make_criteria(test::view_for(model, test::framing_camera(model, {1, 0.3f, 0.08f}, 0.45f, 60)), 1));
+  CloseTerrain t;
+  auto& [model, dag, cut, mirror, traverser] = t;
   DagManageOptions options;
   options.traversal = DagTraversal::linear;
   for (int frame = 0; frame < 20; ++frame) {
     std::vector<DagOp> ops;
     traverser.manage(options, ops);
   }
-  std::vector<uint32_t> split;
-  for (uint32_t n = 0; n < dag.size(); ++n)
-    if (cut.is_split(n)) split.push_back(n);
+  auto [split, holed] = split_sets(cut);
   ASSERT_GT(split.size(), 100u);
+  ASSERT_LT(holed.size(), split.size());
   std::reverse(split.begin(), split.end());
   const DagCut rebuilt(dag, split);
   EXPECT_EQ(audit(rebuilt), "ok");
@@ -578,13 +597,6 @@ TEST(Dag, CutRebuildsFromItsSplitNodes) {
   EXPECT_EQ(rebuilt.fs_size(), cut.fs_size());
   for (uint32_t n = 0; n < dag.size(); ++n) ASSERT_EQ(rebuilt.counter(n), cut.counter(n)) << n;
   // Without a node some split node needs, it is no cut.
-  uint32_t needed = kNone;
-  for (uint32_t n : split)
-    if (!cut.in_fc(n)) needed = n;
-  ASSERT_NE(needed, kNone);
-  std::vector<uint32_t> holed;
-  for (uint32_t n : split)
-    if (n != needed) holed.push_back(n);
   EXPECT_THROW(DagCut(dag, holed), Error);
   holed.push_back(dag.size());
   EXPECT_THROW(DagCut(dag, holed), Error);
@@ -659,23 +671,13 @@ TEST(DagCompact, RoutesAreThoseOfAKeptCutBunny) {
 // the same DAG while the first is alive gets a cut of its own; a loan that ends without store() (an
 // exception on the way) still gives the base mesh back.
 TEST(DagCompact, LoansAlwaysGiveTheBaseMeshBack) {
-  const BuiltModel& model = test::built_terrain();
-  const Dag dag(model.model());
-  DagCut cut(dag);
-  DagTraverser traverser(cut);
-  traverser.set_view(make_criteria(test::view_for(model, test::framing_camera(model, {1, 0.3f, 0.08f}, 0.45f, 60)), 1));
+  CloseTerrain t;
+  auto& [model, dag, cut, mirror, traverser] = t;
   std::vector<DagOp> ops;
   traverser.converge({}, ops);
-  std::vector<uint32_t> split;
-  for (uint32_t n = 0; n < dag.size(); ++n)
-    if (cut.is_split(n)) split.push_back(n);
+  auto [split, holed] = split_sets(cut);
   ASSERT_GT(split.size(), 100u);
-  uint32_t needed = kNone;
-  for (uint32_t n : split)
-    if (!cut.in_fc(n)) needed = n;
-  std::vector<uint32_t> holed;
-  for (uint32_t n : split)
-    if (n != needed) holed.push_back(n);
+  ASSERT_LT(holed.size(), split.size());
   EXPECT_THROW(LoadedDagCut(dag, holed), Error);
   holed.push_back(dag.size());
   EXPECT_THROW(LoadedDagCut(dag, holed), Error);
