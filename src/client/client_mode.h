@@ -9,8 +9,10 @@
 #include <cstdint>
 #include <functional>
 #include <memory>
+#include <vector>
 
 #include "client/client_session.h"
+#include "pm/vertex_id.h"
 #include "protocol/client_messages.h"
 #include "protocol/server_messages.h"
 #include "refine/camera.h"
@@ -49,6 +51,8 @@ class ClientMode {
   virtual protocol::StreamMode wire_mode() const = 0;
   // Before BASE: how the session must read this mode's packets.
   virtual void prepare(ClientSession& session) const = 0;
+  // What OPEN lists to resume a session: by default the leaves of the partial hierarchy held.
+  virtual std::vector<VertexId> resume_front(const ClientSession& session) const { return session.known_leaves(); }
   // One frame at `camera`: adapt and request as the mode does, until it has what the view needs.
   virtual void frame(const Camera& camera, ClientSession& session, ViewRequests& server, FrameReport& report) = 0;
   // After the last camera: finish what is still in motion (geomorphs).

@@ -91,4 +91,11 @@ std::vector<VertexId> ClientSession::known_leaves() const {
   return leaves;
 }
 
+std::vector<VertexId> ClientSession::mesh_vertices() const {
+  std::vector<VertexId> ids;
+  ids.reserve(mesh_->vertex_count());
+  for (uint32_t slot : mesh_->active_vertices()) ids.push_back(hierarchy_->id(slot));
+  return ids;
+}
+
 }  // namespace pms::client

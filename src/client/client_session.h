@@ -47,6 +47,8 @@ class ClientSession {
   ViewParams view_params(const Camera& camera) const;
   // The leaves of the partial hierarchy: what a resumed session sends in OPEN.
   std::vector<VertexId> known_leaves() const;
+  // The ids of the mesh's vertices: a complete front too (what a DAG session resumes from).
+  std::vector<VertexId> mesh_vertices() const;
   uint64_t splits_received() const { return splits_received_; }
 
   AdaptOptions adapt_options;

@@ -12,6 +12,9 @@ class DagClient : public ClientMode {
  public:
   protocol::StreamMode wire_mode() const override { return protocol::StreamMode::dag; }
   void prepare(ClientSession& session) const override { session.refinement_info = false; }
+  // The vertices of the mesh, not the leaves held: they name the server's cut (records of collapsed nodes
+  // stay in the hierarchy, their splits come again in full).
+  std::vector<VertexId> resume_front(const ClientSession& session) const override { return session.mesh_vertices(); }
   void frame(const Camera& camera, ClientSession& session, ViewRequests& server, FrameReport& report) override;
   void settle(ClientSession&) override {}
 };

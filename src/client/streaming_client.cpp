@@ -72,7 +72,7 @@ protocol::Catalogue StreamingClient::list() { return server_->list(); }
 void StreamingClient::open(const std::string& model) {
   model_ = model;
   protocol::Open message{model, {}, mode_->wire_mode()};
-  if (session_.has_model()) message.resume = session_.known_leaves();
+  if (session_.has_model()) message.resume = mode_->resume_front(session_);
   session_.on_base(server_->open(message));
 }
 

@@ -9,6 +9,7 @@
 #include "refine/dag.h"
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 
 #include "common/error.h"
@@ -65,6 +66,8 @@ struct RawEdges {
 }  // namespace
 
 Dag::Dag(const ModelData& model, std::span<const float> positions) {
+  static std::atomic<uint64_t> built{0};
+  serial_ = ++built;
   const auto start = std::chrono::steady_clock::now();
   check_node_arrays(model);
   const size_t count = model.node_count();

@@ -58,6 +58,9 @@ class Dag {
   std::span<const uint32_t> roots() const { return roots_; }  // nodes without a hierarchy parent
   const DagStats& stats() const { return stats_; }
   size_t memory_bytes() const;
+  // A number no other Dag built in this process has: a per-thread cache keyed by it and the address never
+  // takes a Dag built where a freed one was for the old one (refine/dag_compact.h).
+  uint64_t serial() const { return serial_; }
 
  private:
   std::vector<uint32_t> model_node_, node_of_, hierarchy_parent_, roots_;
@@ -66,6 +69,7 @@ class Dag {
   std::vector<uint8_t> faces_;
   std::vector<NodeCriteria> criteria_;
   uint64_t base_faces_ = 0;
+  uint64_t serial_ = 0;
   DagStats stats_;
 };
 

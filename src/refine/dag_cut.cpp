@@ -4,6 +4,7 @@
 #include "refine/dag_cut.h"
 
 #include <algorithm>
+#include <bit>
 
 #include "common/error.h"
 
@@ -12,33 +13,25 @@ namespace {
 
 constexpr const char* kWhere = "dag cut";
 
-// A session's first answer (the converged cut) fills the queues far beyond what a frame of N operations
-// needs: give back the room once they hold less than a quarter of it (amortized: O(size) when it happens).
-void shrink(std::vector<uint32_t>& v) {
-  if (v.capacity() > 4 * v.size() + 1024) v.shrink_to_fit();
+void set_bit(std::vector<uint64_t>& bits, uint32_t n, bool on) {
+  const uint64_t mask = uint64_t(1) << (n % 64);
+  uint64_t& word = bits[n / 64];
+  word = (word & ~mask) | (on ? mask : 0);
 }
 
 }  // namespace
 
-DagCut::DagCut(const Dag& dag, uint32_t inline_limit) : dag_(&dag), state_(dag.size(), 0) {
+DagCut::DagCut(const Dag& dag, uint32_t inline_limit)
+    : dag_(&dag), state_(dag.size(), 0), fc_bits_((dag.size() + 63) / 64, 0), candidate_bits_(fc_bits_.size(), 0) {
   init_wide(inline_limit);
   recount();
 }
 
-DagCut::DagCut(const Dag& dag, std::span<const uint32_t> split, uint32_t inline_limit)
-    : dag_(&dag), state_(dag.size(), 0) {
-  init_wide(inline_limit);
-  for (uint32_t n : split) {
-    if (n >= dag.size()) fail(kWhere, "a split node out of range");
-    state_[n] |= kSplit;
-  }
-  for (uint32_t n : split) {
-    const uint32_t hp = dag.hierarchy_parent(n);
-    if (hp != kNone && !is_split(hp)) fail(kWhere, "a split node below a collapsed one: not a cut");
-    for (uint32_t p : dag.parents(n))
-      if (!is_split(p)) fail(kWhere, "a split node whose dependency is collapsed: not a cut");
-  }
-  recount();
+DagCut::DagCut(const Dag& dag, std::span<const uint32_t> split, uint32_t inline_limit) : DagCut(dag, inline_limit) {
+  std::vector<uint32_t> once(split.begin(), split.end());
+  std::sort(once.begin(), once.end());
+  once.erase(std::unique(once.begin(), once.end()), once.end());
+  load(once);
 }
 
 void DagCut::init_wide(uint32_t inline_limit) {
@@ -69,11 +62,23 @@ void DagCut::add_counter(uint32_t n, int delta) {
   else state_[n] = uint8_t(state_[n] + delta);  // stays within the low bits: 0 <= counter <= degree
 }
 
-// Counters, front sizes, triangles and queues from the split bits alone.
+void DagCut::set_candidate(uint32_t n, bool on) {
+  candidate_count_ += uint32_t(on) - uint32_t(is_candidate(n));
+  set_bit(candidate_bits_, n, on);
+}
+
+void DagCut::enter_fronts(uint32_t n) {
+  const bool fc = in_fc(n);
+  fc_size_ += fc;
+  fs_size_ += in_fs(n);
+  set_bit(fc_bits_, n, fc);
+}
+
+// Counters, fronts and triangles from the split bits alone.
 void DagCut::recount() {
   const Dag& dag = *dag_;
   triangles_ = dag.base_faces();
-  split_count_ = fc_size_ = fs_size_ = 0;
+  split_count_ = fc_size_ = fs_size_ = candidate_count_ = 0;
   for (uint32_t n = 0; n < dag.size(); ++n) {
     uint32_t count = 0;
     if (is_split(n)) {
@@ -81,29 +86,82 @@ void DagCut::recount() {
       triangles_ += dag.faces(n);
       ++split_count_;
     } else {
-      for (uint32_t p : dag.parents(n)) count += !is_split(p);
+      for (uint32_t p : dag.parents(n)) count += is_split(p);
     }
     set_counter(n, count);
     enter_fronts(n);
+    const uint32_t hp = dag.hierarchy_parent(n);
+    set_candidate(n, !is_split(n) && (hp == kNone || is_split(hp)));
   }
-  for (uint32_t n = 0; n < dag.size(); ++n) {
-    if (in_fc(n)) enqueue(collapse_queue_, n, kQueuedC);
-    if (is_candidate(n)) enqueue(split_queue_, n, kQueuedS);
-  }
+  if (split_count_ == 0) base_fs_ = fs_size_;
 }
 
-void DagCut::enqueue(Queue& q, uint32_t n, uint8_t bit) {
-  if (state_[n] & bit) return;
-  state_[n] |= bit;
-  q.items.push_back(n);
+// The split bits first (a dependency may come after the node that needs it), then the counters, which only
+// grow from the base mesh's zeros, then Fc.
+void DagCut::load(std::span<const uint32_t> split) {
+  if (split_count_ != 0 || !marked_.empty()) fail(kWhere, "load() needs the base mesh");
+  const Dag& dag = *dag_;
+  for (uint32_t n : split) {
+    if (n >= dag.size()) {
+      reset();
+      fail(kWhere, "a split node out of range");
+    }
+    if (is_split(n)) continue;
+    fs_size_ -= in_fs(n);
+    state_[n] |= kSplit;
+    set_candidate(n, false);
+    ++split_count_;
+    triangles_ += dag.faces(n);
+  }
+  if (split.size() != split_count_) {
+    reset();
+    fail(kWhere, "load() takes each split node once");
+  }
+  for (uint32_t n : split) {
+    const uint32_t hp = dag.hierarchy_parent(n);
+    bool cut = hp == kNone || is_split(hp);
+    for (uint32_t p : dag.parents(n)) {
+      cut = cut && is_split(p);
+      add_counter(p, 1);
+    }
+    if (!cut) {
+      reset();
+      fail(kWhere, "a split node below a collapsed one or whose dependency is collapsed: not a cut");
+    }
+    for (uint32_t c : dag.children(n))
+      if (!is_split(c)) {
+        add_counter(c, 1);
+        fs_size_ += in_fs(c);
+      }
+    for (int k = 0; k < 2; ++k)
+      if (const uint32_t c = dag.hierarchy_child(n, k); c != kNone && !is_split(c)) set_candidate(c, true);
+  }
+  for (uint32_t n : split) enter_fronts(n);
+}
+
+void DagCut::reset() {
+  std::fill(state_.begin(), state_.end(), uint8_t(0));
+  for (uint32_t n : wide_nodes_) state_[n] = kWide;
+  std::fill(wide_counters_.begin(), wide_counters_.end(), uint16_t(0));
+  std::fill(fc_bits_.begin(), fc_bits_.end(), uint64_t(0));
+  std::fill(candidate_bits_.begin(), candidate_bits_.end(), uint64_t(0));
+  candidate_count_ = 0;
+  for (uint32_t r : dag_->roots()) set_candidate(r, true);
+  marked_.clear();
+  triangles_ = dag_->base_faces();
+  split_count_ = fc_size_ = 0;
+  fs_size_ = base_fs_;
+  collapse_cursor_ = split_cursor_ = 0;
 }
 
 void DagCut::split(uint32_t n) {
   if (!in_fs(n)) fail(kWhere, "split of a node not in Fs");
   const Dag& dag = *dag_;
   leave_fronts(n);
-  state_[n] |= kSplit;  // counter stays 0: its children are collapsed, since they need it
+  state_[n] |= kSplit;
+  set_counter(n, 0);  // its split children: none, they need it
   enter_fronts(n);
+  set_candidate(n, false);
   for (uint32_t p : dag.parents(n)) {
     leave_fronts(p);
     add_counter(p, 1);
@@ -111,15 +169,11 @@ void DagCut::split(uint32_t n) {
   }
   for (uint32_t c : dag.children(n)) {
     leave_fronts(c);
-    add_counter(c, -1);
+    add_counter(c, 1);
     enter_fronts(c);
-    if (in_fs(c) && is_candidate(c)) enqueue(split_queue_, c, kQueuedS);
   }
-  for (int k = 0; k < 2; ++k) {
-    const uint32_t c = dag.hierarchy_child(n, k);
-    if (c != kNone) enqueue(split_queue_, c, kQueuedS);
-  }
-  enqueue(collapse_queue_, n, kQueuedC);
+  for (int k = 0; k < 2; ++k)
+    if (const uint32_t c = dag.hierarchy_child(n, k); c != kNone) set_candidate(c, true);
   triangles_ += dag.faces(n);
   ++split_count_;
 }
@@ -128,69 +182,42 @@ void DagCut::collapse(uint32_t n) {
   if (!in_fc(n)) fail(kWhere, "collapse of a node not in Fc");
   const Dag& dag = *dag_;
   leave_fronts(n);
-  state_[n] &= uint8_t(~kSplit);  // counter 0 either way: no split child before, no collapsed parent now
+  state_[n] &= uint8_t(~kSplit);
+  set_counter(n, uint32_t(dag.parents(n).size()));  // its split parents: all, since it was split
   enter_fronts(n);
+  set_candidate(n, true);  // its hierarchy parent is split, since it was
   for (uint32_t p : dag.parents(n)) {
     leave_fronts(p);
     add_counter(p, -1);
     enter_fronts(p);
-    if (in_fc(p)) enqueue(collapse_queue_, p, kQueuedC);
   }
   for (uint32_t c : dag.children(n)) {
     leave_fronts(c);
-    add_counter(c, 1);
+    add_counter(c, -1);
     enter_fronts(c);
   }
-  enqueue(split_queue_, n, kQueuedS);
+  for (int k = 0; k < 2; ++k)  // collapsed, as every DAG descendant of an Fc node is
+    if (const uint32_t c = dag.hierarchy_child(n, k); c != kNone) set_candidate(c, false);
   triangles_ -= dag.faces(n);
   --split_count_;
 }
 
-template <class InFront>
-uint32_t DagCut::pop(Queue& q, uint8_t bit, InFront in_front) {
-  while (q.head < q.items.size()) {
-    const uint32_t n = q.items[q.head++];
-    state_[n] &= uint8_t(~bit);
-    if (q.head > 4096 && 2 * q.head > q.items.size()) {  // amortized: drop the consumed half
-      q.items.erase(q.items.begin(), q.items.begin() + ptrdiff_t(q.head));
-      q.head = 0;
-      shrink(q.items);
-    }
-    if (in_front(n)) return n;
+uint32_t DagCut::next_bit(const std::vector<uint64_t>& bits, uint32_t from) {
+  size_t w = from / 64;
+  if (w >= bits.size()) return kNone;
+  uint64_t word = bits[w] & (~uint64_t(0) << (from % 64));
+  while (word == 0) {
+    if (++w == bits.size()) return kNone;
+    word = bits[w];
   }
-  return kNone;
+  return uint32_t(w * 64 + size_t(std::countr_zero(word)));
 }
 
-template <class InFront>
-std::span<const uint32_t> DagCut::compact(Queue& q, uint8_t bit, InFront in_front) {
-  size_t kept = 0;
-  for (size_t i = q.head; i < q.items.size(); ++i) {
-    const uint32_t n = q.items[i];
-    if (in_front(n)) q.items[kept++] = n;
-    else state_[n] &= uint8_t(~bit);
-  }
-  q.items.resize(kept);
-  q.head = 0;
-  shrink(q.items);
-  return q.items;
-}
-
-uint32_t DagCut::pop_collapse() {
-  return pop(collapse_queue_, kQueuedC, [this](uint32_t n) { return in_fc(n); });
-}
-uint32_t DagCut::pop_split() {
-  return pop(split_queue_, kQueuedS, [this](uint32_t n) { return is_candidate(n); });
-}
-std::span<const uint32_t> DagCut::collapse_front() {
-  return compact(collapse_queue_, kQueuedC, [this](uint32_t n) { return in_fc(n); });
-}
-std::span<const uint32_t> DagCut::split_front() {
-  return compact(split_queue_, kQueuedS, [this](uint32_t n) { return is_candidate(n); });
-}
-
-void DagCut::trim_split_queue() {
-  if (split_queue_size() <= 2 * split_queue_trimmed_ + 1024) return;
-  split_queue_trimmed_ = split_front().size();
+uint32_t DagCut::pop(const std::vector<uint64_t>& bits, uint32_t& cursor) {
+  uint32_t n = next_bit(bits, cursor);
+  if (n == kNone) n = next_bit(bits, 0);
+  if (n != kNone) cursor = n + 1;
+  return n;
 }
 
 void DagCut::mark(uint32_t n) {
@@ -202,7 +229,6 @@ void DagCut::mark(uint32_t n) {
 void DagCut::clear_marks() {
   for (uint32_t n : marked_) state_[n] &= uint8_t(~kMark);
   marked_.clear();
-  shrink(marked_);
 }
 
 bool DagCut::check(std::string* why) const {
@@ -212,40 +238,39 @@ bool DagCut::check(std::string* why) const {
   };
   const Dag& dag = *dag_;
   uint64_t triangles = dag.base_faces();
-  uint32_t splits = 0, fc = 0, fs = 0;
-  std::vector<uint8_t> queued_c(dag.size(), 0), queued_s(dag.size(), 0);
-  for (size_t i = collapse_queue_.head; i < collapse_queue_.items.size(); ++i) ++queued_c[collapse_queue_.items[i]];
-  for (size_t i = split_queue_.head; i < split_queue_.items.size(); ++i) ++queued_s[split_queue_.items[i]];
+  uint32_t splits = 0, fc = 0, fs = 0, candidates = 0;
   for (uint32_t n = 0; n < dag.size(); ++n) {
     uint32_t count = 0;
+    const uint32_t hp = dag.hierarchy_parent(n);
     if (is_split(n)) {
       for (uint32_t p : dag.parents(n))
         if (!is_split(p)) return bad("a split node with a collapsed DAG parent", n);
-      const uint32_t hp = dag.hierarchy_parent(n);
       if (hp != kNone && !is_split(hp)) return bad("a split node with a collapsed hierarchy parent", n);
       for (uint32_t c : dag.children(n)) count += is_split(c);
       triangles += dag.faces(n);
       ++splits;
     } else {
-      for (uint32_t p : dag.parents(n)) count += !is_split(p);
+      for (uint32_t p : dag.parents(n)) count += is_split(p);
     }
     if (count != counter(n)) return bad("counter " + std::to_string(counter(n)) + " != recount " + std::to_string(count), n);
     fc += in_fc(n);
     fs += in_fs(n);
-    if (queued_c[n] > 1 || queued_s[n] > 1) return bad("queued twice", n);
-    if (bool(queued_c[n]) != bool(state_[n] & kQueuedC) || bool(queued_s[n]) != bool(state_[n] & kQueuedS))
-      return bad("queue bit without its entry or the reverse", n);
-    if (in_fc(n) && !queued_c[n]) return bad("an Fc node not queued", n);
-    if (is_candidate(n) && !queued_s[n]) return bad("a split candidate not queued", n);
+    const bool fc_bit = (fc_bits_[n / 64] >> (n % 64)) & 1;
+    if (fc_bit != in_fc(n)) return bad("the Fc bit is not the node's state", n);
+    if (is_candidate(n) != (!is_split(n) && (hp == kNone || is_split(hp))))
+      return bad("the candidate bit is not the node's state", n);
+    candidates += is_candidate(n);
+    if (marked(n)) return bad("a mark left between traversals", n);
   }
   if (triangles != triangles_) return bad("triangle count", 0);
-  if (splits != split_count_ || fc != fc_size_ || fs != fs_size_) return bad("front sizes", 0);
+  if (splits != split_count_ || fc != fc_size_ || fs != fs_size_ || candidates != candidate_count_)
+    return bad("front sizes", 0);
   return true;
 }
 
 size_t DagCut::memory_bytes() const {
-  return state_.capacity() + wide_nodes_.capacity() * 4 + wide_counters_.capacity() * 2 +
-         4 * (collapse_queue_.items.capacity() + split_queue_.items.capacity() + marked_.capacity());
+  return state_.capacity() + (fc_bits_.capacity() + candidate_bits_.capacity()) * 8 + wide_nodes_.capacity() * 4 +
+         wide_counters_.capacity() * 2 + 4 * marked_.capacity();
 }
 
 }  // namespace pms

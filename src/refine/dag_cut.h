@@ -1,9 +1,10 @@
 // One cut of the DAG of operations (Zheng & Chan 2006 §3, Fig. 1): which nodes are split, a counter per
 // node, and the two fronts kept incrementally. A split node's counter is the number of its split DAG
-// children (0: in Fc, legal to collapse); a collapsed node's the number of its collapsed DAG parents
-// (0: in Fs, legal to split). The nodes of the two fronts sit in FIFO queues that outlive a frame (the
-// linear and constant-time traversals continue where they stopped); a queue may hold nodes that left
-// its front since, dropped when met.
+// children (0: in Fc, legal to collapse); a collapsed node's the number of its split DAG parents (all of
+// them: in Fs, legal to split). So the base mesh is all zeros, and a return to it is a clear of the arrays. Each front is a bit per node, swept in node order (depth, then deviation)
+// from a cursor that outlives a frame: the linear and constant-time traversals continue where they
+// stopped. This dense form is a traversal's working copy (a per-thread scratch, refine/dag_compact.h); a
+// session keeps its cut between turns as a CompactDagCut, a few bits per split node.
 // Shared with the browser build: single-threaded, no std::ranges algorithms, std::format or coroutines.
 #pragma once
 #include <cstdint>
@@ -36,16 +37,13 @@ class DagCut {
     return c == kWide ? wide_counter(n) : c;
   }
   bool in_fc(uint32_t n) const { return is_split(n) && counter(n) == 0; }
-  bool in_fs(uint32_t n) const { return !is_split(n) && counter(n) == 0; }
+  bool in_fs(uint32_t n) const { return !is_split(n) && counter(n) == dag_->parents(n).size(); }
   // Collapsed with its hierarchy parent split (or a root): an active vertex of the mesh that has a split.
   // Every Fs node is one; the others wait for a dependency and split only with it (forced).
-  bool is_candidate(uint32_t n) const {
-    const uint32_t p = dag_->hierarchy_parent(n);
-    return !is_split(n) && (p == kNone || is_split(p));
-  }
+  bool is_candidate(uint32_t n) const { return (candidate_bits_[n / 64] >> (n % 64)) & 1; }
 
-  // ADJUST-FRONTS after the operation: counters of the node's DAG parents and children, both fronts
-  // and queues. pms::Error unless n is in Fs (split) or Fc (collapse).
+  // ADJUST-FRONTS after the operation: counters of the node's DAG parents and children, both fronts.
+  // pms::Error unless n is in Fs (split) or Fc (collapse).
   void split(uint32_t n);
   void collapse(uint32_t n);
 
@@ -53,22 +51,21 @@ class DagCut {
   uint32_t split_count() const { return split_count_; }
   uint32_t fc_size() const { return fc_size_; }
   uint32_t fs_size() const { return fs_size_; }
+  uint32_t candidate_count() const { return candidate_count_; }
 
-  // The queues of the two fronts: Fc (collapse) and the split candidates (Fs and the waiting ones).
-  // pop returns the first node still in its front, or kNone when the queue is empty; requeue appends a
-  // popped node that stays in its front.
-  uint32_t pop_collapse();
-  uint32_t pop_split();
-  void requeue_collapse(uint32_t n) { enqueue(collapse_queue_, n, kQueuedC); }
-  void requeue_split(uint32_t n) { enqueue(split_queue_, n, kQueuedS); }
-  size_t collapse_queue_size() const { return collapse_queue_.items.size() - collapse_queue_.head; }
-  size_t split_queue_size() const { return split_queue_.items.size() - split_queue_.head; }
-  // The queued nodes still in their fronts, in queue order (drops the others).
-  std::span<const uint32_t> collapse_front();
-  std::span<const uint32_t> split_front();
-  // Compacts the split queue once it holds twice the entries it held after the last compaction (a
-  // traversal that does not pop it calls this; amortized O(1) per operation).
-  void trim_split_queue();
+  // The fronts in node order: the first Fc node / split candidate (Fs and the waiting ones) >= from, or
+  // kNone.
+  uint32_t next_fc(uint32_t from) const { return next_bit(fc_bits_, from); }
+  uint32_t next_candidate(uint32_t from) const { return next_bit(candidate_bits_, from); }
+  // The sweeps: the next node of the front from its cursor on, wrapping at the end (kNone when the front is
+  // empty); the cursor moves past it. rewind puts the cursor back on a node, so that the next pop starts
+  // there.
+  uint32_t pop_collapse() { return pop(fc_bits_, collapse_cursor_); }
+  uint32_t pop_split() { return pop(candidate_bits_, split_cursor_); }
+  void rewind_collapse(uint32_t n) { collapse_cursor_ = n; }
+  void rewind_split(uint32_t n) { split_cursor_ = n; }
+  uint32_t collapse_cursor() const { return collapse_cursor_; }
+  uint32_t split_cursor() const { return split_cursor_; }
 
   // One bit per node for a traversal's marks (the priority traversal's justification); clear_marks
   // clears the marked ones.
@@ -76,44 +73,45 @@ class DagCut {
   void mark(uint32_t n);
   void clear_marks();
 
-  // Audit for tests: counters, fronts, queues and the triangle count equal a recount from scratch, every
+  // From the base mesh (nothing split, no mark) to the cut whose split nodes are `split`, each once:
+  // O(split nodes × degree). pms::Error, leaving the base mesh, for a node out of range or listed twice, or
+  // a set that is not a cut.
+  void load(std::span<const uint32_t> split);
+  // Back to the base mesh, cursors at 0: a clear of the state and the two bit arrays (~1.25 B per node).
+  void reset();
+
+  // Audit for tests: counters, fronts, cursors and the triangle count equal a recount from scratch, every
   // split node's DAG parents and hierarchy parent are split. On failure `why` (if given) says what.
   bool check(std::string* why) const;
   size_t memory_bytes() const;
 
  private:
-  // The state byte: split, queued in Fc's queue, queued in the split queue, marked, 4-bit counter
-  // (kWide: the counter is in the side table).
-  static constexpr uint8_t kSplit = 0x80, kQueuedC = 0x40, kQueuedS = 0x20, kMark = 0x10, kCounter = 0x0F;
+  // The state byte: split, marked, 4-bit counter (kWide: the counter is in the side table).
+  static constexpr uint8_t kSplit = 0x80, kMark = 0x10, kCounter = 0x0F;
   static constexpr uint8_t kWide = 0x0F;
   static_assert(kInlineLimit < kWide && Dag::kMaxChildren <= UINT16_MAX);
-  struct Queue {
-    std::vector<uint32_t> items;
-    size_t head = 0;
-  };
-  void enqueue(Queue& q, uint32_t n, uint8_t bit);
-  template <class InFront>
-  uint32_t pop(Queue& q, uint8_t bit, InFront in_front);
-  template <class InFront>
-  std::span<const uint32_t> compact(Queue& q, uint8_t bit, InFront in_front);
+  static uint32_t next_bit(const std::vector<uint64_t>& bits, uint32_t from);
+  uint32_t pop(const std::vector<uint64_t>& bits, uint32_t& cursor);
   void init_wide(uint32_t inline_limit);
   uint32_t wide_counter(uint32_t n) const;
   uint16_t& wide_slot(uint32_t n);
   void set_counter(uint32_t n, uint32_t value);
   void add_counter(uint32_t n, int delta);
+  void set_candidate(uint32_t n, bool on);
   void recount();
   void leave_fronts(uint32_t n) { fc_size_ -= in_fc(n); fs_size_ -= in_fs(n); }
-  void enter_fronts(uint32_t n) { fc_size_ += in_fc(n); fs_size_ += in_fs(n); }
+  void enter_fronts(uint32_t n);
 
   const Dag* dag_;
   std::vector<uint8_t> state_;
+  std::vector<uint64_t> fc_bits_, candidate_bits_;  // a bit per node: in Fc, a split candidate
   std::vector<uint32_t> wide_nodes_;     // ascending: the nodes whose counters are in the side table
   std::vector<uint16_t> wide_counters_;  // theirs
-  Queue collapse_queue_, split_queue_;
-  size_t split_queue_trimmed_ = 0;  // entries after the last compaction
   std::vector<uint32_t> marked_;
   uint64_t triangles_ = 0;
-  uint32_t split_count_ = 0, fc_size_ = 0, fs_size_ = 0;
+  uint32_t split_count_ = 0, fc_size_ = 0, fs_size_ = 0, candidate_count_ = 0;
+  uint32_t base_fs_ = 0;  // Fs of the base mesh: the nodes without a DAG parent (the roots)
+  uint32_t collapse_cursor_ = 0, split_cursor_ = 0;
 };
 
 }  // namespace pms

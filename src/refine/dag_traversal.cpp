@@ -136,7 +136,7 @@ void DagTraverser::priority_collapse(const Limits& limits, DagFrameStats& stats,
     std::push_heap(heap.begin(), heap.end(), later);
   };
   heap.clear();
-  for (uint32_t n : cut.collapse_front()) push(n);
+  for (uint32_t n = cut.next_fc(0); n != kNone; n = cut.next_fc(n + 1)) push(n);
   while (!heap.empty() && !(limits.max_ops && stats.collapses >= limits.max_ops)) {
     std::pop_heap(heap.begin(), heap.end(), later);
     const uint32_t n = heap.back().node;
@@ -154,7 +154,6 @@ void DagTraverser::priority_split(Limits& limits, DagFrameStats& stats, std::vec
   DagCut& cut = *cut_;
   std::vector<Ranked>& heap = scratch().split_heap;
   const auto less = [](const Ranked& a, const Ranked& b) { return a.key < b.key; };
-  cut.trim_split_queue();  // nothing pops it here: keep it from filling with nodes that left
   while (!heap.empty()) {
     std::pop_heap(heap.begin(), heap.end(), less);
     const uint32_t n = heap.back().node;
@@ -164,20 +163,21 @@ void DagTraverser::priority_split(Limits& limits, DagFrameStats& stats, std::vec
   }
 }
 
-// Figs. 4 and 5 over the cut's FIFO queues. A node that does not need applying goes to the back. A phase
-// stops at the operation or evaluation limit, at an empty queue, or at the first node it already
-// evaluated (a whole pass without anything left to apply, Fig. 4 line 11: NEED-APPLY depends only on the
-// view, so a second look would say the same). Each node is evaluated at most once a phase from the queue.
+// Figs. 4 and 5, with the cut's sweeps in node order for the paper's FIFO queues (a session keeps two
+// cursors between frames, not the queues: docs/internals.md, "Per-session memory"). A node that does not
+// need applying stays in its front, met again on the next lap. A phase stops at the operation or evaluation
+// limit, at an empty front, or at the first node it already evaluated (a whole lap without anything left to
+// apply, Fig. 4 line 11: NEED-APPLY depends only on the view, so a second look would say the same); the
+// sweep is rewound to that node. Each node is evaluated at most once a phase from the sweep.
 // With `hot` (constant-time), the front nodes the phase's own operations made are evaluated first, last made
 // first: where the view wanted a change, the next level of the same region most likely wants one too, and
-// behind a front of tens of thousands of nodes at N a call the queue would reach it only frames later.
-// A hot node is in its queue too (DagCut queued it when it entered its front), so it is not requeued.
-template <class Live, class Pop, class Requeue, class TryApply>
+// behind a front of tens of thousands of nodes at N a call the sweep would reach it only frames later.
+template <class Live, class Pop, class Rewind, class TryApply>
 void DagTraverser::fifo_phase(const uint32_t& applied, const Limits& limits, DagFrameStats& stats,
-                              std::vector<uint32_t>* hot, Live live, Pop pop, Requeue requeue, TryApply try_apply) {
+                              std::vector<uint32_t>* hot, Live live, Pop pop, Rewind rewind, TryApply try_apply) {
   DagCut& cut = *cut_;
   const uint32_t evaluated_before = stats.evaluated;
-  if (hot) hot->clear();  // a phase's own: the nodes left are in their queue
+  if (hot) hot->clear();  // a phase's own: the nodes left are in their front
   while (!(limits.max_ops && applied >= limits.max_ops) &&
          !(limits.max_evaluated && stats.evaluated - evaluated_before >= limits.max_evaluated)) {
     uint32_t n = kNone;
@@ -191,16 +191,13 @@ void DagTraverser::fifo_phase(const uint32_t& applied, const Limits& limits, Dag
       n = pop();
       if (n == kNone) break;
       if (cut.marked(n)) {
-        requeue(n);
+        rewind(n);
         break;
       }
     }
     const Outcome outcome = try_apply(n);
     if (outcome == Outcome::stopped) break;
-    if (outcome == Outcome::not_needed && !from_hot) {
-      cut.mark(n);
-      requeue(n);
-    }
+    if (outcome == Outcome::not_needed && !from_hot) cut.mark(n);
   }
   cut.clear_marks();
 }
@@ -210,7 +207,7 @@ void DagTraverser::fifo_collapse(const Limits& limits, DagFrameStats& stats, std
   DagCut& cut = *cut_;
   fifo_phase(
       stats.collapses, limits, stats, hot, [&](uint32_t n) { return cut.in_fc(n); }, [&] { return cut.pop_collapse(); },
-      [&](uint32_t n) { cut.requeue_collapse(n); },
+      [&](uint32_t n) { cut.rewind_collapse(n); },
       [&](uint32_t n) {
         if (qrefine(n, stats)) return Outcome::not_needed;
         collapse(n, stats, ops);
@@ -226,7 +223,7 @@ void DagTraverser::fifo_split(Limits& limits, DagFrameStats& stats, std::vector<
   const Dag& dag = cut.dag();
   fifo_phase(
       stats.splits, limits, stats, hot, [&](uint32_t n) { return cut.is_candidate(n); }, [&] { return cut.pop_split(); },
-      [&](uint32_t n) { cut.requeue_split(n); },
+      [&](uint32_t n) { cut.rewind_split(n); },
       [&](uint32_t n) {
         if (!qrefine(n, stats)) return Outcome::not_needed;
         const size_t first = ops.size();
@@ -236,7 +233,7 @@ void DagTraverser::fifo_split(Limits& limits, DagFrameStats& stats, std::vector<
             for (int k = 0; k < 2; ++k)
               if (const uint32_t c = dag.hierarchy_child(ops[i].node, k); c != kNone && cut.is_candidate(c)) hot->push_back(c);
         if (done) return Outcome::applied;
-        if (cut.is_candidate(n)) cut.requeue_split(n);  // a limit stopped it, maybe halfway
+        if (cut.is_candidate(n)) cut.rewind_split(n);  // a limit stopped it, maybe halfway: first next time
         return Outcome::stopped;
       });
 }

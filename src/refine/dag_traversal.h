@@ -2,7 +2,7 @@
 // splits, under the fidelity constraint (the view and τ, evaluated by the refinement engine's own qrefine on
 // the same decoded numbers), the mesh-change constraint N and, in BUDGET mode, the client's triangle budget.
 // Three algorithms: priority-oriented (every front node evaluated, two priority queues), linear (the cut's
-// FIFO queues, continued from frame to frame, at most N operations) and constant-time (at most N nodes
+// sweeps of its fronts, continued from frame to frame, at most N operations) and constant-time (at most N nodes
 // evaluated, the front nodes its own operations made first). docs/internals.md ("The DAG of operations") has
 // the rules and why priority converges to the adaptation loop's mesh.
 // Shared with the browser build: single-threaded, no std::ranges algorithms, std::format or coroutines.
@@ -83,9 +83,9 @@ class DagTraverser {
   void push_split(float key, uint32_t n);
   void push_split_candidate(uint32_t n, DagFrameStats& stats);
   enum class Outcome { not_needed, applied, stopped };
-  template <class Live, class Pop, class Requeue, class TryApply>
+  template <class Live, class Pop, class Rewind, class TryApply>
   void fifo_phase(const uint32_t& applied, const Limits& limits, DagFrameStats& stats, std::vector<uint32_t>* hot,
-                  Live live, Pop pop, Requeue requeue, TryApply try_apply);
+                  Live live, Pop pop, Rewind rewind, TryApply try_apply);
   void fifo_collapse(const Limits& limits, DagFrameStats& stats, std::vector<DagOp>& ops, std::vector<uint32_t>* hot);
   void fifo_split(Limits& limits, DagFrameStats& stats, std::vector<DagOp>& ops, std::vector<uint32_t>* hot);
 

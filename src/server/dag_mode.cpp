@@ -2,10 +2,13 @@
 #include "server/dag_mode.h"
 
 #include <algorithm>
+#include <string>
+#include <utility>
 #include <variant>
 
 #include "common/error.h"
 #include "pm/hierarchy.h"
+#include "pm/vertex_id.h"
 #include "protocol/client_messages.h"
 #include "protocol/message_types.h"
 #include "protocol/server_messages.h"
@@ -16,10 +19,62 @@ namespace pms::server {
 using protocol::ErrorCode;
 using protocol::ProtocolError;
 
-DagSessionMode::DagSessionMode(const protocol::OpenHeader& open, const ModeContext& context)
-    : context_(context), wire_(context.served.context), cut_(*context.served.dag), traverser_(cut_) {
-  if (open.resume) throw ProtocolError(ErrorCode::bad_message, "OPEN: the DAG mode does not resume a session");
+// The vertices of the client's mesh are a complete front of the forest, and the split nodes of its cut are
+// the front's inner nodes: each is found once, from the last leaf of its subtree in preorder (the climb
+// through v_u children), so a slice of leaves costs at most 63 steps each.
+struct DagSessionMode::Resume {
+  Resume(std::vector<uint8_t> front, const protocol::OpenHeader& h)
+      : payload(std::move(front)), header(h), decoder(payload, header, protocol::kDefaultMaxResumeLeaves) {}
+
+  std::vector<uint8_t> payload;
+  protocol::OpenHeader header;
+  protocol::FrontDecoder decoder;
+  std::vector<VertexId> leaves;  // one slice's
+  std::vector<uint32_t> split;   // DAG nodes
+};
+
+DagSessionMode::DagSessionMode(const protocol::OpenHeader& open, protocol::Frame& open_frame, const ModeContext& context)
+    : context_(context), wire_(context.served.context) {
   wire_.has_refinement = false;
+  if (!open.resume) {
+    context_.outbox.push_back(context_.served.base_frame);
+    return;
+  }
+  const uint32_t roots = context_.served.model().root_count;
+  if (open.resume_trees != roots)
+    throw ProtocolError(ErrorCode::bad_id, "OPEN: resume: the front covers " + std::to_string(open.resume_trees) +
+                                               " trees, the model has " + std::to_string(roots));
+  resume_ = std::make_unique<Resume>(std::move(open_frame.payload), open);
+}
+
+DagSessionMode::~DagSessionMode() = default;
+
+void DagSessionMode::pump_resume(uint64_t& work) {
+  Resume& r = *resume_;
+  const ModelData& model = context_.served.model();
+  const Dag& dag = *context_.served.dag;
+  r.leaves.clear();
+  const bool decoded = r.decoder.next(context_.limits.slice_work, r.leaves);
+  work += r.leaves.size();
+  for (const VertexId& id : r.leaves) {
+    uint32_t node = model.find(id);
+    if (node == kNone) throw ProtocolError(ErrorCode::bad_id, "OPEN: resume id " + to_string(id) + " is not in the model");
+    while ((model.node_id[node] & 1) && model.node_id[node] > 1) {  // v_u: the last leaf of its parent's subtree
+      node = model.parent[node];
+      r.split.push_back(dag.node_of(node));
+    }
+  }
+  if (!decoded) return;
+  try {
+    LoadedDagCut loaded(dag, r.split);  // one turn, O(split nodes): as bounded as a traversal of that cut
+    work += r.split.size();
+    cut_ = loaded.store();
+  } catch (const Error& e) {
+    throw ProtocolError(ErrorCode::bad_id, std::string("OPEN: resume: the mesh is not a cut of the model's DAG (") +
+                                               e.what() + ")");
+  }
+  answered_ = cut_.split_count() > 0;  // the client has a picture: N applies from its first DAG_VIEW
+  resume_.reset();
   context_.outbox.push_back(context_.served.base_frame);
 }
 
@@ -34,11 +89,13 @@ void DagSessionMode::receive(const protocol::ClientMessage& message) {
 }
 
 void DagSessionMode::pump(uint64_t& work) {
+  if (resume_) return pump_resume(work);
   if (sent_ < ops_.size() || answering_) return emit_batch(work);
   if (pending_) traverse(work);
 }
 
 void DagSessionMode::stop() {
+  resume_.reset();
   pending_ = answering_ = false;
   std::vector<DagOp>().swap(ops_);
   sent_ = 0;
@@ -46,15 +103,18 @@ void DagSessionMode::stop() {
 
 void DagSessionMode::traverse(uint64_t& work) {
   pending_ = false;
-  traverser_.set_view(view_.criteria);
+  LoadedDagCut loaded(*context_.served.dag, cut_);  // O(split nodes × degree) each way
+  DagTraverser traverser(loaded.cut());
+  traverser.set_view(view_.criteria);
   ops_.clear();
   // The first picture is the converged mesh of the first view: N amortizes a view change over frames, and
   // before its first answer the client has no picture whose frame rate N would keep (docs/internals.md,
   // "The DAG mode"). It is bounded as any view is: at most the largest N a client may ask for.
   const DagFrameStats stats =
-      answered_ ? traverser_.manage(options_, ops_) : traverser_.converge(options_, ops_, protocol::kMaxDagOps);
+      answered_ ? traverser.manage(options_, ops_) : traverser.converge(options_, ops_, protocol::kMaxDagOps);
+  cut_ = loaded.store();
   answered_ = true;
-  work += stats.evaluated + ops_.size();
+  work += stats.evaluated + ops_.size() + cut_.split_count();
   sent_ = 0;
   answer_frame_ = view_.frame;
   answering_ = true;
@@ -87,7 +147,11 @@ void DagSessionMode::emit_batch(uint64_t& work) {
 }
 
 size_t DagSessionMode::state_bytes() const {
-  return sizeof(*this) + cut_.memory_bytes() + ops_.capacity() * sizeof(DagOp);
+  size_t bytes = sizeof(*this) + cut_.memory_bytes() + ops_.capacity() * sizeof(DagOp);
+  if (resume_)
+    bytes += sizeof(Resume) + resume_->payload.capacity() + resume_->leaves.capacity() * sizeof(VertexId) +
+             resume_->split.capacity() * sizeof(uint32_t);
+  return bytes;
 }
 
 }  // namespace pms::server

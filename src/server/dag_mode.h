@@ -8,11 +8,13 @@
 #pragma once
 #include <cstddef>
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 #include "protocol/client_messages.h"
 #include "protocol/stream_context.h"
-#include "refine/dag_cut.h"
+#include "protocol/framing.h"
+#include "refine/dag_compact.h"
 #include "refine/dag_traversal.h"
 #include "server/session_mode.h"
 
@@ -20,30 +22,35 @@ namespace pms::server {
 
 class DagSessionMode : public SessionMode {
  public:
-  // Queues BASE at once. ProtocolError for an OPEN with a resume front.
-  DagSessionMode(const protocol::OpenHeader& open, const ModeContext& context);
+  // Queues BASE at once for a fresh session; a resumed one decodes its front first (pump()). ProtocolError
+  // for a front over another number of trees.
+  DagSessionMode(const protocol::OpenHeader& open, protocol::Frame& open_frame, const ModeContext& context);
+  ~DagSessionMode() override;
 
   void receive(const protocol::ClientMessage& message) override;
-  bool has_work() const override { return pending_ || sent_ < ops_.size() || answering_; }
+  bool has_work() const override { return resume_ || pending_ || sent_ < ops_.size() || answering_; }
   // Either one MANAGE-TRAVERSAL for the latest DAG_VIEW or one DAG_OPS batch of its answer (docs/internals.md,
   // "The DAG mode": why one traversal is a bounded slice).
   void pump(uint64_t& work) override;
-  bool opened() const override { return true; }
+  bool opened() const override { return !resume_; }
   void stop() override;
   size_t state_bytes() const override;
   size_t front_bytes() const override { return cut_.memory_bytes(); }
   uint64_t splits_sent() const override { return splits_sent_; }
 
-  const DagCut& cut() const { return cut_; }  // for tests and fuzzers: the client's mesh is this cut's
+  // For tests and fuzzers: the client's mesh is this cut's (CompactDagCut::dense for a DagCut).
+  const CompactDagCut& cut() const { return cut_; }
 
  private:
+  struct Resume;  // an OPEN's resume front, decoded a slice at a time into the cut's split nodes
+  void pump_resume(uint64_t& work);
   void traverse(uint64_t& work);
   void emit_batch(uint64_t& work);
 
   ModeContext context_;
   protocol::StreamContext wire_;  // no refinement info: the client has no criteria
-  DagCut cut_;
-  DagTraverser traverser_;
+  std::unique_ptr<Resume> resume_;
+  CompactDagCut cut_;  // between turns: the dense cut is the I/O thread's (LoadedDagCut)
   LatestView view_;
   DagManageOptions options_;
   bool pending_ = false;    // a DAG_VIEW waits for its traversal

@@ -17,6 +17,7 @@
 #include "refine/adapt.h"
 #include "refine/criteria.h"
 #include "refine/dag.h"
+#include "refine/dag_compact.h"
 #include "refine/dag_cut.h"
 #include "refine/dag_traversal.h"
 #include "refine/selective_mesh.h"
@@ -223,10 +224,10 @@ void expect_random_operations_legal(const BuiltModel& model, int steps, uint32_t
     const bool split = std::uniform_int_distribution<int>(0, 99)(rng) < (step < steps / 2 ? 75 : 35);
     std::vector<uint32_t> front;
     if (split) {
-      for (uint32_t n : cut.split_front())
+      for (uint32_t n = cut.next_candidate(0); n != kNone; n = cut.next_candidate(n + 1))
         if (cut.in_fs(n)) front.push_back(n);
     } else {
-      for (uint32_t n : cut.collapse_front()) front.push_back(n);
+      for (uint32_t n = cut.next_fc(0); n != kNone; n = cut.next_fc(n + 1)) front.push_back(n);
     }
     if (front.empty()) continue;
     const uint32_t n = front[std::uniform_int_distribution<size_t>(0, front.size() - 1)(rng)];
@@ -284,12 +285,12 @@ void expect_route(const BuiltModel& model, DagTraversal traversal, DagMode mode,
     traverser.set_view(make_criteria(test::view_for(model, camera), tolerance));
     for (int frame = 0; frame < 4; ++frame) {
       std::vector<DagOp> ops;
-      const size_t queued = cut.collapse_queue_size() + cut.split_queue_size();
+      const size_t queued = cut.fc_size() + cut.candidate_count();
       const DagFrameStats stats = traverser.manage(options, ops);
       mirror.apply(ops);
       ASSERT_FALSE(::testing::Test::HasFatalFailure());
       ops_total += ops.size();
-      if (traversal != DagTraversal::priority) {  // each queued or new front node evaluated once at most
+      if (traversal != DagTraversal::priority) {  // each front or new front node evaluated once at most
         ASSERT_LE(stats.evaluated, queued + ops.size() * (3 + dag.stats().max_children));
       }
       budget_stopped |= stats.stopped_by_budget;
@@ -439,6 +440,13 @@ struct FarTerrain {
   }
 };
 
+// The same, viewed close and low.
+struct CloseTerrain : FarTerrain {
+  CloseTerrain() {
+    traverser.set_view(make_criteria(test::view_for(model, test::framing_camera(model, {1, 0.3f, 0.08f}, 0.45f, 60)), 1));
+  }
+};
+
 // A capped convergence stops at the cap with a legal cut, and the rest of the way is ordinary frames.
 TEST(DagTraversal, ConvergeStopsAtItsOperationCap) {
   FarTerrain t;
@@ -471,7 +479,7 @@ TEST(DagTraversal, ConstantTimeFollowsItsOwnChangesFirst) {
   options.max_ops = 40;
   uint32_t splits = 0, cascaded = 0;
   for (int frame = 0; frame < 10; ++frame) {
-    ASSERT_GT(cut.split_queue_size(), 4 * options.max_ops) << "a queue the FIFO would not wrap in one call";
+    ASSERT_GT(cut.candidate_count(), 4 * options.max_ops) << "a front the sweep would not wrap in one call";
     ops.clear();
     const DagFrameStats stats = traverser.manage(options, ops);
     mirror.apply(ops);
@@ -551,24 +559,36 @@ TEST(Dag, RefusesBadModelsAndIllegalOperations) {
   EXPECT_EQ(audit(cut), "ok");
 }
 
+// A cut's split nodes, and the same without one node another split node needs (no cut).
+struct SplitSets {
+  std::vector<uint32_t> split, holed;
+};
+SplitSets split_sets(const DagCut& cut) {
+  SplitSets sets;
+  for (uint32_t n = 0; n < cut.dag().size(); ++n)
+    if (cut.is_split(n)) sets.split.push_back(n);
+  uint32_t needed = kNone;
+  for (uint32_t n : sets.split)
+    if (!cut.in_fc(n)) needed = n;
+  for (uint32_t n : sets.split)
+    if (n != needed) sets.holed.push_back(n);
+  return sets;
+}
+
 // A cut rebuilt from its split nodes alone (what a resuming client's mesh tells) is the same cut; a set
 // that is not a cut is refused.
 TEST(Dag, CutRebuildsFromItsSplitNodes) {
-  const BuiltModel& model = test::built_terrain();
-  const Dag dag(model.model());
-  DagCut cut(dag);
-  DagTraverser traverser(cut);
-  traverser.set_view(make_criteria(test::view_for(model, test::framing_camera(model, {1, 0.3f, 0.08f}, 0.45f, 60)), 1));
+  CloseTerrain t;
+  auto& [model, dag, cut, mirror, traverser] = t;
   DagManageOptions options;
   options.traversal = DagTraversal::linear;
   for (int frame = 0; frame < 20; ++frame) {
     std::vector<DagOp> ops;
     traverser.manage(options, ops);
   }
-  std::vector<uint32_t> split;
-  for (uint32_t n = 0; n < dag.size(); ++n)
-    if (cut.is_split(n)) split.push_back(n);
+  auto [split, holed] = split_sets(cut);
   ASSERT_GT(split.size(), 100u);
+  ASSERT_LT(holed.size(), split.size());
   std::reverse(split.begin(), split.end());
   const DagCut rebuilt(dag, split);
   EXPECT_EQ(audit(rebuilt), "ok");
@@ -577,16 +597,108 @@ TEST(Dag, CutRebuildsFromItsSplitNodes) {
   EXPECT_EQ(rebuilt.fs_size(), cut.fs_size());
   for (uint32_t n = 0; n < dag.size(); ++n) ASSERT_EQ(rebuilt.counter(n), cut.counter(n)) << n;
   // Without a node some split node needs, it is no cut.
-  uint32_t needed = kNone;
-  for (uint32_t n : split)
-    if (!cut.in_fc(n)) needed = n;
-  ASSERT_NE(needed, kNone);
-  std::vector<uint32_t> holed;
-  for (uint32_t n : split)
-    if (n != needed) holed.push_back(n);
   EXPECT_THROW(DagCut(dag, holed), Error);
   holed.push_back(dag.size());
   EXPECT_THROW(DagCut(dag, holed), Error);
+}
+
+// A route flown as a server does it: each frame loads the compact cut into this thread's dense one,
+// traverses, and stores it back. Every frame's operations are those of a traverser that kept its dense cut
+// (the code and the cursors are the whole state), the code takes at most 2 bits per split node and one per
+// root, and after each store the thread's cut is the base mesh again.
+void expect_compact_route(const BuiltModel& model, DagTraversal traversal, DagMode mode, float tolerance) {
+  const Dag dag(model.model());
+  DagCut kept(dag);
+  DagTraverser kept_traverser(kept);
+  CompactDagCut compact;
+  DagManageOptions options;
+  options.traversal = traversal;
+  options.mode = mode;
+  options.max_ops = 60;
+  options.budget = dag.base_faces() + 600;
+  for (const Camera& camera : route_of(model)) {
+    const ViewCriteria view = make_criteria(test::view_for(model, camera), tolerance);
+    kept_traverser.set_view(view);
+    for (int frame = 0; frame < 3; ++frame) {
+      std::vector<DagOp> expected, ops;
+      kept_traverser.manage(options, expected);
+      {
+        LoadedDagCut loaded(dag, compact);
+        ASSERT_EQ(loaded.cut().split_count(), compact.split_count());
+        DagTraverser traverser(loaded.cut());
+        traverser.set_view(view);
+        traverser.manage(options, ops);
+        compact = loaded.store();
+      }
+      ASSERT_EQ(ops.size(), expected.size());
+      for (size_t i = 0; i < ops.size(); ++i) {
+        ASSERT_EQ(ops[i].node, expected[i].node) << "operation " << i;
+        ASSERT_EQ(ops[i].split, expected[i].split) << "operation " << i;
+      }
+      ASSERT_EQ(compact.split_count(), kept.split_count());
+      ASSERT_EQ(compact.triangles(), kept.triangles());
+      ASSERT_LE(compact.code_bits(), 2 * uint64_t(kept.split_count()) + dag.roots().size());
+      const DagCut dense = compact.dense(dag);
+      ASSERT_EQ(audit(dense), "ok");
+      ASSERT_EQ(dense.collapse_cursor(), kept.collapse_cursor());
+      ASSERT_EQ(dense.split_cursor(), kept.split_cursor());
+      for (uint32_t n = 0; n < dag.size(); ++n) ASSERT_EQ(dense.is_split(n), kept.is_split(n)) << n;
+    }
+  }
+  LoadedDagCut base(dag, CompactDagCut{});
+  EXPECT_EQ(base.cut().split_count(), 0u);
+  EXPECT_EQ(audit(base.cut()), "ok") << "the thread's cut is not the base mesh after the stores";
+}
+
+TEST(DagCompact, RoutesAreThoseOfAKeptCutTerrain) {
+  for (DagTraversal traversal : {DagTraversal::priority, DagTraversal::linear, DagTraversal::constant_time})
+    for (DagMode mode : {DagMode::free, DagMode::budget}) {
+      SCOPED_TRACE("traversal " + std::to_string(int(traversal)) + " mode " + std::to_string(int(mode)));
+      expect_compact_route(test::built_terrain(), traversal, mode, 1);
+      if (::testing::Test::HasFatalFailure()) return;
+    }
+}
+TEST(DagCompact, RoutesAreThoseOfAKeptCutBunny) {
+  PMS_REQUIRE_SHARED_MODEL(path, "bunny.ply.xz");
+  for (DagTraversal traversal : {DagTraversal::priority, DagTraversal::linear, DagTraversal::constant_time}) {
+    SCOPED_TRACE(int(traversal));
+    expect_compact_route(*test::built_bunny(), traversal, DagMode::free, 1);
+    if (::testing::Test::HasFatalFailure()) return;
+  }
+}
+
+// A split set that is not a cut is refused and leaves the thread's cut at the base mesh; a second loan of
+// the same DAG while the first is alive gets a cut of its own; a loan that ends without store() (an
+// exception on the way) still gives the base mesh back.
+TEST(DagCompact, LoansAlwaysGiveTheBaseMeshBack) {
+  CloseTerrain t;
+  auto& [model, dag, cut, mirror, traverser] = t;
+  std::vector<DagOp> ops;
+  traverser.converge({}, ops);
+  auto [split, holed] = split_sets(cut);
+  ASSERT_GT(split.size(), 100u);
+  ASSERT_LT(holed.size(), split.size());
+  EXPECT_THROW(LoadedDagCut(dag, holed), Error);
+  holed.push_back(dag.size());
+  EXPECT_THROW(LoadedDagCut(dag, holed), Error);
+  {
+    LoadedDagCut base(dag, CompactDagCut{});
+    EXPECT_EQ(base.cut().split_count(), 0u);
+    EXPECT_EQ(audit(base.cut()), "ok");
+  }
+  const CompactDagCut compact(cut);
+  {
+    LoadedDagCut outer(dag, compact);
+    LoadedDagCut inner(dag, compact);
+    EXPECT_NE(&outer.cut(), &inner.cut());
+    EXPECT_EQ(inner.cut().triangles(), cut.triangles());
+    inner.cut().collapse(inner.cut().next_fc(0));
+    EXPECT_EQ(outer.cut().triangles(), cut.triangles()) << "the loans share a cut";
+    outer.cut().mark(split[0]);  // ends without store(), a mark left
+  }
+  LoadedDagCut again(dag, CompactDagCut{});
+  EXPECT_EQ(again.cut().split_count(), 0u);
+  EXPECT_EQ(audit(again.cut()), "ok");
 }
 
 }  // namespace

@@ -6,8 +6,9 @@
 //
 // Each traversal runs twice in lockstep on the same views: once as the real DAG mode (a server Session in this
 // process, a StreamingClient applying its DAG_OPS, for bytes, session state and the client's mesh), once as a
-// bare DagTraverser over its own cut, timed alone. Both are deterministic, so the two cuts must agree; the
-// bench fails if they do not.
+// bare DagTraverser over its own cut, timed alone: as the session does, each frame loads the compact cut into
+// the thread's dense one, traverses, and stores it back (the load and the store timed apart from the
+// traversal). Both are deterministic, so the two cuts must agree; the bench fails if they do not.
 #include <algorithm>
 #include <array>
 #include <cstdio>
@@ -23,6 +24,7 @@
 #include "client/streaming_client.h"
 #include "common/error.h"
 #include "protocol/client_messages.h"
+#include "refine/dag_compact.h"
 #include "refine/dag_traversal.h"
 #include "server/dag_mode.h"
 #include "server/session_mode.h"
@@ -75,6 +77,7 @@ struct TraversalRun {
     double ms = 0, evaluated = 0, ops = 0, down_bytes = 0;
   } first;  // the first view's converged answer
   std::vector<double> frame_ms, evaluated, ops, down_bytes;  // frames 1..
+  std::vector<double> load_ms, store_ms;                     // frames 1..: the compact cut to dense and back
   std::vector<double> triangles, front_share;                // every frame
   size_t max_session_bytes = 0, max_cut_bytes = 0, max_scratch_bytes = 0;
   uint64_t max_triangles = 0;
@@ -99,8 +102,7 @@ TraversalRun run_traversal(const BenchModel& m, const std::vector<Camera>& route
   client.open(m.name);
 
   const Dag& dag = *m.served->dag;
-  DagCut cut(dag);
-  DagTraverser traverser(cut);
+  CompactDagCut compact;
   const DagManageOptions manage{traversal, DagMode::budget, kMaxOps, kBudget};
   server::LatestView view;
   std::vector<DagOp> ops;
@@ -108,31 +110,44 @@ TraversalRun run_traversal(const BenchModel& m, const std::vector<Camera>& route
   for (uint32_t i = 0; i < route.size(); ++i) {
     view.record({route[i], tolerance, i + 1}, m.served->model());
     ops.clear();
+    Stopwatch load_clock;
+    LoadedDagCut loaded(dag, compact);
+    const double load_ms = 1000 * load_clock.seconds();
+    DagCut& cut = loaded.cut();
+    DagTraverser traverser(cut);
     Stopwatch clock;
     traverser.set_view(view.criteria);
     // As the DAG mode answers a session's first view: converged (docs/internals.md, "The DAG mode").
     const DagFrameStats stats = i == 0 ? traverser.converge(manage, ops, protocol::kMaxDagOps) : traverser.manage(manage, ops);
     const double ms = 1000 * clock.seconds();
+    const uint64_t triangles = cut.triangles();
+    const double front_share = double(cut.fc_size() + cut.fs_size()) / double(std::max<uint64_t>(triangles, 1));
+    Stopwatch store_clock;
+    compact = loaded.store();  // and the dense cut back to the base mesh
+    const double store_ms = 1000 * store_clock.seconds();
 
     const client::FrameReport report = client.frame(route[i]);
     const server::DagSessionMode& mode = dag_mode_of(local);
-    if (mode.cut().split_count() != cut.split_count() || mode.cut().triangles() != cut.triangles() ||
-        client.session().mesh().face_count() != cut.triangles())
+    if (mode.cut().split_count() != compact.split_count() || mode.cut().triangles() != triangles ||
+        client.session().mesh().face_count() != triangles)
       fail("bench dag", "frame " + std::to_string(i) + ": the session's cut or the client's mesh is not the traverser's");
     if (i == 0) {
       run.first = {ms, double(stats.evaluated), double(ops.size()), double(report.down_bytes)};
     } else {
       run.frame_ms.push_back(ms);
+      run.load_ms.push_back(load_ms);
+      run.store_ms.push_back(store_ms);
       run.evaluated.push_back(stats.evaluated);
       run.ops.push_back(double(ops.size()));
       run.down_bytes.push_back(double(report.down_bytes));
     }
-    run.triangles.push_back(double(cut.triangles()));
-    run.front_share.push_back(double(cut.fc_size() + cut.fs_size()) / double(std::max<uint64_t>(cut.triangles(), 1)));
-    run.max_triangles = std::max(run.max_triangles, cut.triangles());
+    run.triangles.push_back(double(triangles));
+    run.front_share.push_back(front_share);
+    run.max_triangles = std::max(run.max_triangles, triangles);
     run.max_session_bytes = std::max(run.max_session_bytes, mode.state_bytes());
-    run.max_cut_bytes = std::max(run.max_cut_bytes, cut.memory_bytes());
-    run.max_scratch_bytes = std::max(run.max_scratch_bytes, DagTraverser::thread_scratch_bytes());
+    run.max_cut_bytes = std::max(run.max_cut_bytes, compact.memory_bytes());
+    run.max_scratch_bytes =
+        std::max(run.max_scratch_bytes, DagTraverser::thread_scratch_bytes() + LoadedDagCut::thread_scratch_bytes());
     if (i % kAccuracyEvery == 0) run.samples.push_back(faces_by_id(client.session().mesh()));
   }
   return run;
@@ -184,6 +199,8 @@ json run_json(const TraversalRun& run, uint32_t nodes) {
   return {{"first_view", {{"ms", run.first.ms}, {"evaluated", run.first.evaluated}, {"ops", run.first.ops},
                           {"down_bytes", run.first.down_bytes}}},
           {"frame_ms", run.frame_ms},
+          {"load_ms", run.load_ms},
+          {"store_ms", run.store_ms},
           {"evaluated", run.evaluated},
           {"ops", run.ops},
           {"down_bytes", run.down_bytes},
@@ -221,7 +238,7 @@ void run_dag_group(BenchContext& context) {
   };
 
   Table table({{"traversal", false}, {"first view ms", true}, {"first view ops", true}, {"median ms", true},
-               {"p99 ms", true}, {"evaluated / frame", true},
+               {"p99 ms", true}, {"load + store ms", true}, {"evaluated / frame", true},
                {"ops / frame", true}, {"max triangles", true}, {"(Fc + Fs) / triangles", true}, {"accuracy %", true},
                {"session B / node", true}, {"session KB", true}, {"cut KB", true}, {"thread scratch KB", true},
                {"bytes down / frame", true}});
@@ -232,6 +249,7 @@ void run_dag_group(BenchContext& context) {
     const TraversalRun& run = runs[t];
     table.add_row({kTraversalNames[t], fixed(run.first.ms, 1), thousands(uint64_t(run.first.ops)),
                    fixed(percentile(run.frame_ms, 0.5), 3), fixed(percentile(run.frame_ms, 0.99), 3),
+                   fixed(percentile(run.load_ms, 0.5), 3) + " + " + fixed(percentile(run.store_ms, 0.5), 3),
                    thousands(uint64_t(mean(run.evaluated))), thousands(uint64_t(mean(run.ops))), thousands(run.max_triangles),
                    fixed(percentile(run.front_share, 0.5), 2), t == 0 ? "—" : fixed(route_accuracy(run), 1),
                    fixed(double(run.max_session_bytes) / nodes, 3), fixed(double(run.max_session_bytes) / 1e3, 1),
@@ -247,11 +265,14 @@ void run_dag_group(BenchContext& context) {
             "session ≤ 0.1 B / node)\n" + table.markdown());
   section += "### Traversals along the route (" + settings + ")\n\n" + table.markdown() +
              "\nFirst view: the converged answer to the session's first view (the same for every traversal). ms: "
-             "MANAGE-TRAVERSAL alone on a bare cut, fed the same views as the session, frames 1 on. Accuracy: the share "
+             "MANAGE-TRAVERSAL alone on a bare cut, fed the same views as the session, frames 1 on; load + store: the "
+             "medians of decoding the compact cut into the thread's dense one and encoding it back (each turn of a session "
+             "does both). Accuracy: the share "
              "of priority's triangles (by vertex ids) the client's mesh also has, every 5 frames from frame 5, averaged. "
              "Session: the "
-             "DAG mode's `state_bytes()` at its largest along the route; cut: `DagCut::memory_bytes()`; thread scratch: the traversals' per-thread heaps and stack (shared by the sessions of "
-             "a thread, not per session), run so far. Bytes down: "
+             "DAG mode's `state_bytes()` at its largest along the route; cut: `CompactDagCut::memory_bytes()` (what a "
+             "session keeps between turns); thread scratch: the dense cut and the traversals' heaps and stack one I/O "
+             "thread keeps (shared by the sessions of a thread, not per session), run so far. Bytes down: "
              "DAG_OPS frames as received, mean per frame. docs/internals.md, \"E9\", says what each figure is.\n\n";
   section += plots(context, runs);
   write_text_file(context.options.out_dir / "dag.json", out.dump(2) + "\n");
