@@ -1,8 +1,8 @@
 // Kim, Lee, Kobbelt 2005 §6.2 (balanced vertex hierarchy); Xia & Varshney 1996 (independent sets of
 // collapses); Garland & Heckbert 1997 (quadric error). Each round takes the cheapest valid
 // half-edge collapses such that no vertex takes part in two of them, so a round raises any
-// subtree by at most one level; the cost is weighted by the height the new node would have, so
-// short subtrees merge first and node ids stay short.
+// subtree by at most one level and node ids stay short. The last rounds above the base are
+// smaller and weight the cost by the height the new node would have (see RoundRule).
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -16,28 +16,45 @@ namespace {
 
 // Targets kept per vertex: the best one may be blocked this round while the next is fine.
 constexpr int kTargetsPerVertex = 3;
-// Share of the live vertices one round may remove: a lower share keeps the order closer to the
-// greedy quadric order (better intermediate meshes), a higher one gives fewer levels.
-constexpr double kRoundShare = 0.25;
-// Height weighting: key = (cost + epsilon) * 4^height. Exponential, because quadric
-// costs span orders of magnitude and a polynomial weight barely reorders them.
-constexpr int kHeightBaseLog2 = 2;  // base 4
-// A round removing fewer than this share of the live vertices ends the simplification: past that
-// point (components stuck at a few vertices) every further round would add a level to the
-// hierarchy, i.e. one more bit to every node id, for a handful of vertices.
-constexpr double kMinRoundShare = 0.10;
-constexpr size_t kPrefetchDistance = 8;
 constexpr uint32_t kTabulatedHeights = 64;  // far above any real hierarchy: ids must fit 64 bits
 
-// 4^height, as ldexp would scale by it (exactly: a power of two), without a libm call per edge.
-double height_weight(uint32_t height) {
-  static const auto table = [] {
-    std::array<double, kTabulatedHeights> t;
-    for (uint32_t h = 0; h < kTabulatedHeights; ++h) t[h] = std::ldexp(1.0, kHeightBaseLog2 * int(h));
-    return t;
-  }();
-  return height < kTabulatedHeights ? table[height] : std::ldexp(1.0, kHeightBaseLog2 * int(height));
-}
+// How one round chooses: the share of the live vertices it may remove (a lower share keeps the order
+// closer to the greedy quadric order, a higher one gives fewer levels and fewer rounds) and the height
+// weighting, key = (cost + epsilon) * height_base^height (exponential, because quadric costs span orders
+// of magnitude and a polynomial weight barely reorders them; base 1: the quadric cost alone).
+struct RoundRule {
+  double share;
+  double height_base;
+};
+// While many vertices are live, the independent sets alone keep the trees shallow (a round raises a
+// subtree by at most one level) and a height weight only trades quality for depth.
+constexpr RoundRule kEarlyRounds{0.25, 1.0};
+// The last rounds above the base build the nodes far views use: smaller rounds keep their order near the
+// greedy one, and a mild height weight stops the survivors of the few big components from chaining a
+// level per round. docs/internals.md ("Builder") has the measurements.
+constexpr RoundRule kLateRounds{0.10, 1.5};
+// The late rounds start below this many times the base size (2,048 live vertices for the default 64).
+constexpr uint32_t kLateRoundsBelowBase = 32;
+// A round removing fewer than this share of its quota ends the simplification: past that point
+// (components stuck at a few vertices) every further round would add a level to the hierarchy for
+// a handful of vertices.
+constexpr double kMinQuotaShare = 0.40;
+constexpr size_t kPrefetchDistance = 8;
+
+// height_base^height, tabulated: no libm call per edge.
+class HeightWeights {
+ public:
+  explicit HeightWeights(double base) : base_(base) {
+    for (uint32_t h = 0; h < kTabulatedHeights; ++h) table_[h] = std::pow(base, double(h));
+  }
+  double operator()(uint32_t height) const {
+    return height < kTabulatedHeights ? table_[height] : std::pow(base_, double(height));
+  }
+
+ private:
+  double base_;
+  std::array<double, kTabulatedHeights> table_;
+};
 
 struct Entry {
   double key;
@@ -50,8 +67,8 @@ bool by_key(const Entry& a, const Entry& b) {
 }
 
 // Best targets of the vertices in [begin, end): read-only on the mesh, so chunks run in parallel.
-void collect_range(const CollapseMesh& mesh, const CollapseRecorder& recorder, double epsilon, uint32_t begin,
-                   uint32_t end, NeighbourScratch& marks, std::vector<Entry>& out) {
+void collect_range(const CollapseMesh& mesh, const CollapseRecorder& recorder, const HeightWeights& weight,
+                   double epsilon, uint32_t begin, uint32_t end, NeighbourScratch& marks, std::vector<Entry>& out) {
   out.clear();
   std::vector<uint32_t> neighbours;
   for (uint32_t t = begin; t < end; ++t) {
@@ -62,7 +79,7 @@ void collect_range(const CollapseMesh& mesh, const CollapseRecorder& recorder, d
     const uint32_t height_t = recorder.height(t);
     for (uint32_t u : neighbours) {
       const double cost = mesh.quadric(t).error_sum(mesh.quadric(u), mesh.position(u));
-      const Entry e{(cost + epsilon) * height_weight(std::max(height_t, recorder.height(u))), t, u};
+      const Entry e{(cost + epsilon) * weight(std::max(height_t, recorder.height(u))), t, u};
       int i;
       if (kept < kTargetsPerVertex) {
         i = kept++;
@@ -88,16 +105,17 @@ class CandidateCollector {
     for (unsigned i = 1; i < threads; ++i) parts_[i].reserve(kTargetsPerVertex * (vertices / threads + 1));
   }
 
-  void collect(const CollapseMesh& mesh, const CollapseRecorder& recorder, double epsilon, std::vector<Entry>& out) {
+  void collect(const CollapseMesh& mesh, const CollapseRecorder& recorder, const HeightWeights& weight, double epsilon,
+               std::vector<Entry>& out) {
     const uint32_t n = mesh.vertex_count();
     const unsigned threads = unsigned(parts_.size());
     std::vector<std::thread> workers;
     for (unsigned i = 1; i < threads; ++i)
       workers.emplace_back([&, i] {
-        collect_range(mesh, recorder, epsilon, chunk(n, i), chunk(n, i + 1), marks_[i], parts_[i]);
+        collect_range(mesh, recorder, weight, epsilon, chunk(n, i), chunk(n, i + 1), marks_[i], parts_[i]);
       });
     // The first chunk goes straight to `out` (parts_[0] stays empty): one copy of it less per round.
-    collect_range(mesh, recorder, epsilon, 0, chunk(n, 1), marks_[0], out);
+    collect_range(mesh, recorder, weight, epsilon, 0, chunk(n, 1), marks_[0], out);
     for (std::thread& w : workers) w.join();
     for (unsigned i = 1; i < threads; ++i) out.insert(out.end(), parts_[i].begin(), parts_[i].end());
   }
@@ -116,9 +134,10 @@ CollapseForest simplify_balanced(const Mesh& input, const BuildOptions& options)
   const uint32_t start = mesh.alive_vertex_count();
   const uint32_t target = uint32_t(std::clamp<uint64_t>(options.base_vertices, 1, start));  // 0 -> 1: no limit
   const double diagonal = bounds_of(input.positions).diagonal();
-  // Keeps zero-error collapses (flat regions) ordered by height too.
+  // Keeps zero-error collapses (flat regions) ordered by height too where a round weights height.
   const double epsilon = 1e-10 * diagonal * diagonal;
 
+  const HeightWeights early_weights(kEarlyRounds.height_base), late_weights(kLateRounds.height_base);
   std::vector<Entry> entries;
   entries.reserve(kTargetsPerVertex * size_t(mesh.vertex_count()));
   CandidateCollector collector(mesh.vertex_count(), std::clamp(std::thread::hardware_concurrency(), 1u, 8u));
@@ -126,9 +145,11 @@ CollapseForest simplify_balanced(const Mesh& input, const BuildOptions& options)
   std::vector<uint32_t> new_index;
   CollapseSite site;
   while (mesh.alive_vertex_count() > target) {
-    collector.collect(mesh, recorder, epsilon, entries);
     const uint32_t alive = mesh.alive_vertex_count();
-    const uint32_t quota = std::min<uint32_t>(alive - target, std::max<uint32_t>(1, uint32_t(alive * kRoundShare)));
+    const bool late = uint64_t(alive) < uint64_t(kLateRoundsBelowBase) * target;
+    const RoundRule& rule = late ? kLateRounds : kEarlyRounds;
+    collector.collect(mesh, recorder, late ? late_weights : early_weights, epsilon, entries);
+    const uint32_t quota = std::min<uint32_t>(alive - target, std::max<uint32_t>(1, uint32_t(alive * rule.share)));
     std::fill(touched.begin(), touched.end(), 0);
     // Usually the quota fills from the cheapest few quota-sized chunks: sort only what is walked.
     uint32_t accepted = 0;
@@ -157,7 +178,7 @@ CollapseForest simplify_balanced(const Mesh& input, const BuildOptions& options)
       ++accepted;
     }
     recorder.flush();
-    if (accepted == 0 || accepted < kMinRoundShare * alive) break;
+    if (accepted == 0 || accepted < kMinQuotaShare * quota) break;
     if (mesh.alive_vertex_count() < mesh.vertex_count() / 2) {
       recorder.compact(new_index);
       touched.resize(mesh.vertex_count());
