@@ -57,18 +57,14 @@ void check_collapse(const CollapsePlayback& p, const EdgeCollapse& c, size_t i) 
     fail("", "collapse " + str(i) + " names a vertex an earlier collapse removed");
 }
 
-// What `x` is represented by once levels may have merged: the first parent of a higher level.
-uint32_t effective_parent(const CollapseLevels& levels, uint32_t x) {
-  uint32_t p = levels.parent[x];
-  while (p != kNoRep && levels.vertex_level[p] <= levels.vertex_level[x]) p = levels.parent[p];
-  return p;
-}
-
-// Indices sorted by decreasing level, ties in input order.
-std::vector<uint32_t> by_decreasing_level(const std::vector<uint32_t>& level) {
+// Indices sorted by decreasing level, then by decreasing `tie_level` (when given), then in input order.
+std::vector<uint32_t> by_decreasing_level(const std::vector<uint32_t>& level, const std::vector<uint32_t>& tie_level = {}) {
   std::vector<uint32_t> order(level.size());
   std::iota(order.begin(), order.end(), 0u);
-  std::stable_sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) { return level[a] > level[b]; });
+  std::stable_sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) {
+    if (level[a] != level[b] || tie_level.empty()) return level[a] > level[b];
+    return tie_level[a] > tie_level[b];
+  });
   return order;
 }
 
@@ -140,7 +136,7 @@ CollapseLevels assign_levels(const Mesh& mesh, std::span<const EdgeCollapse> col
 
 MultilevelMesh assemble_multilevel(const Mesh& mesh, const CollapseLevels& levels) {
   const uint32_t n = uint32_t(mesh.vertex_count()), f = uint32_t(mesh.face_count());
-  const std::vector<uint32_t> vertex_order = by_decreasing_level(levels.vertex_level);
+  const std::vector<uint32_t> vertex_order = by_decreasing_level(levels.vertex_level, levels.unmerged_vertex_level);
   const std::vector<uint32_t> face_order = by_decreasing_level(levels.triangle_level);
   std::vector<uint32_t> new_index(n);
   for (uint32_t i = 0; i < n; ++i) new_index[vertex_order[i]] = i;
@@ -169,12 +165,12 @@ MultilevelMesh assemble_multilevel(const Mesh& mesh, const CollapseLevels& level
     const uint32_t k = levels.triangle_level[t];
     for (int c = 0; c < 3; ++c)
       for (uint32_t x = mesh.indices[3 * size_t(t) + c]; x != kNoRep && levels.vertex_level[x] < k && needed[x] <= k;
-           x = effective_parent(levels, x))
+           x = levels.parent[x])
         needed[x] = k + 1;
   }
   m.representative.assign(n, kNoRep);
   for (uint32_t x = 0; x < n; ++x)
-    if (needed[x]) m.representative[new_index[x]] = new_index[effective_parent(levels, x)];
+    if (needed[x]) m.representative[new_index[x]] = new_index[levels.parent[x]];
   return m;
 }
 
@@ -187,6 +183,7 @@ std::vector<uint32_t> merge_level_map(uint32_t from, uint32_t to) {
 void merge_levels(CollapseLevels& levels, uint32_t level_count) {
   if (level_count == 0 || level_count >= levels.level_count) return;
   const std::vector<uint32_t> map = merge_level_map(levels.level_count, level_count);
+  if (levels.unmerged_vertex_level.empty()) levels.unmerged_vertex_level = levels.vertex_level;
   for (uint32_t& l : levels.vertex_level) l = map[l];
   for (uint32_t& l : levels.triangle_level) l = map[l];
   levels.level_count = level_count;

@@ -29,14 +29,19 @@ struct CollapseLevels {
   uint32_t level_count = 0;
   std::vector<uint32_t> vertex_level, triangle_level;
   std::vector<uint32_t> parent;  // per vertex: what it collapsed onto (kNoRepresentative if it survived)
+  // Per vertex, its level before merge_levels (empty if never merged). A merged level numbers its vertices
+  // by this, coarsest first, so that replaying them from the last (multilevel_dag.h) makes its collapses
+  // in an order equivalent to the builder's, and a parent of the same merged level is below its child.
+  std::vector<uint32_t> unmerged_vertex_level;
 };
 
 // pms::Error when a collapse names a vertex out of range, already removed, or collapses onto itself.
 CollapseLevels assign_levels(const Mesh& mesh, std::span<const EdgeCollapse> collapses);
 
 // Sorts the mesh by decreasing level and keeps only the representatives a triangle needs: vertex v of a
-// triangle of level k with level(v) < k needs its chain of parents until one of level >= k. A parent of
-// the same level as its child (after merging) is skipped, so every representative is of a higher level.
+// triangle of level k with level(v) < k needs its chain of parents until one of level >= k. Each
+// representative is the vertex's parent, after merging possibly of its own level and then numbered below
+// it (unmerged_vertex_level), so the chains are the collapses themselves (multilevel_dag.h replays them).
 MultilevelMesh assemble_multilevel(const Mesh& mesh, const CollapseLevels& levels);
 
 // Merges consecutive levels down to `level_count` (merge_level_map); 0 or more than there are: unchanged.
