@@ -29,10 +29,10 @@ struct CollapseLevels {
   uint32_t level_count = 0;
   std::vector<uint32_t> vertex_level, triangle_level;
   std::vector<uint32_t> parent;  // per vertex: what it collapsed onto (kNoRepresentative if it survived)
-  // Per vertex, its level before merge_levels (empty if never merged). A merged level numbers its vertices
-  // by this, coarsest first, so that replaying them from the last (multilevel_dag.h) makes its collapses
-  // in an order equivalent to the builder's, and a parent of the same merged level is below its child.
-  std::vector<uint32_t> unmerged_vertex_level;
+  // Per collapse in sequence order (empty for clusterings): its blue vertex, and as CSR the blue vertices
+  // of the earlier collapses that last touched a vertex of its edge's star. Any order that keeps these
+  // (and children before parents) makes the builder's mesh at every step of every level.
+  std::vector<uint32_t> collapse_removed, earlier_offsets, earlier;
 };
 
 // pms::Error when a collapse names a vertex out of range, already removed, or collapses onto itself.
@@ -40,8 +40,10 @@ CollapseLevels assign_levels(const Mesh& mesh, std::span<const EdgeCollapse> col
 
 // Sorts the mesh by decreasing level and keeps only the representatives a triangle needs: vertex v of a
 // triangle of level k with level(v) < k needs its chain of parents until one of level >= k. Each
-// representative is the vertex's parent, after merging possibly of its own level and then numbered below
-// it (unmerged_vertex_level), so the chains are the collapses themselves (multilevel_dag.h replays them).
+// representative is the vertex's parent, after merging possibly of its own level. Within a level, vertices
+// are numbered so that replaying their collapses from the last vertex to the first (multilevel_dag.h) keeps
+// the order `earlier` gives, children before parents, otherwise in input order (unmerged levels keep input
+// order: their collapses are independent).
 MultilevelMesh assemble_multilevel(const Mesh& mesh, const CollapseLevels& levels);
 
 // Merges consecutive levels down to `level_count` (merge_level_map); 0 or more than there are: unchanged.
