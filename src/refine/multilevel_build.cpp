@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <numeric>
+#include <queue>
 
 #include "common/error.h"
 
@@ -23,10 +24,13 @@ struct CollapsePlayback {
   std::vector<std::vector<uint32_t>> faces;  // per live vertex: triangles that were live when added
   std::vector<uint8_t> removed_vertex, removed_face;
   std::vector<uint32_t> running_level;       // 1-based, as in the paper
+  std::vector<uint32_t> last_touched_by;     // per vertex: the blue vertex of the last collapse that set its level
+  std::vector<uint32_t> listed_for;          // per blue vertex: 1 + the collapse whose touchers last listed it
 
   explicit CollapsePlayback(const Mesh& mesh)
       : corners(mesh.indices), faces(mesh.vertex_count()), removed_vertex(mesh.vertex_count()),
-        removed_face(mesh.face_count()), running_level(mesh.vertex_count()) {
+        removed_face(mesh.face_count()), running_level(mesh.vertex_count()), last_touched_by(mesh.vertex_count(), kNoRep),
+        listed_for(mesh.vertex_count(), 0) {
     for (uint32_t t = 0; t < mesh.face_count(); ++t) {
       if (degenerate(&corners[3 * size_t(t)])) {
         removed_face[t] = 1;  // never part of a surface: level 0
@@ -36,13 +40,24 @@ struct CollapsePlayback {
     }
   }
 
-  // The highest running level over the star of edge (a, b): its endpoints and their neighbours.
-  uint32_t star_level(uint32_t a, uint32_t b) const {
-    uint32_t level = std::max(running_level[a], running_level[b]);
+  // The highest running level over the star of edge (a, b), its endpoints and their neighbours; appends
+  // the collapses that last touched them to `touchers`, once each (`collapse` is the sequence index).
+  uint32_t star_level(uint32_t a, uint32_t b, uint32_t collapse, std::vector<uint32_t>& touchers) {
+    uint32_t level = 0;
+    auto visit = [&](uint32_t v) {
+      level = std::max(level, running_level[v]);
+      const uint32_t u = last_touched_by[v];
+      if (u != kNoRep && listed_for[u] != collapse + 1) {
+        listed_for[u] = collapse + 1;
+        touchers.push_back(u);
+      }
+    };
+    visit(a);
+    visit(b);
     for (uint32_t v : {a, b})
       for (uint32_t t : faces[v]) {
         if (removed_face[t]) continue;
-        for (int k = 0; k < 3; ++k) level = std::max(level, running_level[corners[3 * size_t(t) + k]]);
+        for (int k = 0; k < 3; ++k) visit(corners[3 * size_t(t) + k]);
       }
     return level;
   }
@@ -57,19 +72,59 @@ void check_collapse(const CollapsePlayback& p, const EdgeCollapse& c, size_t i) 
     fail("", "collapse " + str(i) + " names a vertex an earlier collapse removed");
 }
 
-// What `x` is represented by once levels may have merged: the first parent of a higher level.
-uint32_t effective_parent(const CollapseLevels& levels, uint32_t x) {
-  uint32_t p = levels.parent[x];
-  while (p != kNoRep && levels.vertex_level[p] <= levels.vertex_level[x]) p = levels.parent[p];
-  return p;
-}
-
 // Indices sorted by decreasing level, ties in input order.
 std::vector<uint32_t> by_decreasing_level(const std::vector<uint32_t>& level) {
   std::vector<uint32_t> order(level.size());
   std::iota(order.begin(), order.end(), 0u);
   std::stable_sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) { return level[a] > level[b]; });
   return order;
+}
+
+// Vertices by decreasing level; within a level, numbered so that the replay from the last vertex makes
+// each collapse after those `earlier` names and after its children's: Kahn's algorithm taking the highest
+// input index first, the first taken numbered last (so independent collapses keep input order).
+std::vector<uint32_t> replay_numbering(const CollapseLevels& levels) {
+  const std::vector<uint32_t>& level = levels.vertex_level;
+  const uint32_t n = uint32_t(level.size());
+  std::vector<uint32_t> order = by_decreasing_level(level);
+  // Edges "u's collapse before a's" within one level, as successor rows.
+  std::vector<uint32_t> offsets(size_t(n) + 1, 0), successors, waiting(n, 0);
+  auto for_each_edge = [&](auto&& edge) {
+    for (size_t i = 0; i < levels.collapse_removed.size(); ++i) {
+      const uint32_t a = levels.collapse_removed[i];
+      for (uint32_t k = levels.earlier_offsets[i]; k < levels.earlier_offsets[i + 1]; ++k)
+        if (level[levels.earlier[k]] == level[a]) edge(levels.earlier[k], a);
+    }
+    for (uint32_t a = 0; a < n; ++a)
+      if (levels.parent[a] != kNoRep && level[levels.parent[a]] == level[a]) edge(a, levels.parent[a]);
+  };
+  for_each_edge([&](uint32_t u, uint32_t a) { ++offsets[u + 1], ++waiting[a]; });
+  if (std::all_of(waiting.begin(), waiting.end(), [](uint32_t w) { return w == 0; })) return order;  // unmerged
+  for (uint32_t v = 0; v < n; ++v) offsets[v + 1] += offsets[v];
+  successors.resize(offsets[n]);
+  std::vector<uint32_t> fill(offsets.begin(), offsets.end() - 1);
+  for_each_edge([&](uint32_t u, uint32_t a) { successors[fill[u]++] = a; });
+
+  std::vector<uint32_t> numbered(n);
+  std::priority_queue<uint32_t> ready;
+  for (uint32_t begin = 0; begin < n;) {
+    uint32_t end = begin;
+    while (end < n && level[order[end]] == level[order[begin]]) ++end;
+    for (uint32_t i = begin; i < end; ++i)
+      if (waiting[order[i]] == 0) ready.push(order[i]);
+    uint32_t next = end;
+    while (!ready.empty()) {
+      const uint32_t v = ready.top();
+      ready.pop();
+      numbered[--next] = v;
+      for (uint32_t k = offsets[v]; k < offsets[v + 1]; ++k)
+        if (--waiting[successors[k]] == 0) ready.push(successors[k]);
+    }
+    // The edges follow the collapse sequence, so they cannot close a cycle.
+    if (next != begin) fail("", "the collapses' order has a cycle");
+    begin = end;
+  }
+  return numbered;
 }
 
 std::vector<uint32_t> counts_per_level(const std::vector<uint32_t>& level, uint32_t level_count) {
@@ -102,13 +157,22 @@ CollapseLevels assign_levels(const Mesh& mesh, std::span<const EdgeCollapse> col
   out.vertex_level.assign(mesh.vertex_count(), 0);
   out.triangle_level.assign(mesh.face_count(), 0);
   out.parent.assign(mesh.vertex_count(), kNoRep);
+  out.collapse_removed.reserve(collapses.size());
+  out.earlier_offsets.reserve(collapses.size() + 1);
+  out.earlier_offsets.push_back(0);
   uint32_t top = 0;
+  std::vector<uint32_t> touchers;
   for (size_t i = 0; i < collapses.size(); ++i) {
     const auto [a, b] = collapses[i];
     check_collapse(p, collapses[i], i);
-    const uint32_t level = p.star_level(a, b) + 1;
+    touchers.clear();
+    const uint32_t level = p.star_level(a, b, uint32_t(i), touchers) + 1;
+    out.earlier.insert(out.earlier.end(), touchers.begin(), touchers.end());
+    out.earlier_offsets.push_back(uint32_t(out.earlier.size()));
+    out.collapse_removed.push_back(a);
     top = std::max(top, level);
     p.running_level[a] = p.running_level[b] = level;
+    p.last_touched_by[a] = p.last_touched_by[b] = a;
     out.vertex_level[a] = level - 1;
     out.parent[a] = b;
     p.removed_vertex[a] = 1;
@@ -140,7 +204,7 @@ CollapseLevels assign_levels(const Mesh& mesh, std::span<const EdgeCollapse> col
 
 MultilevelMesh assemble_multilevel(const Mesh& mesh, const CollapseLevels& levels) {
   const uint32_t n = uint32_t(mesh.vertex_count()), f = uint32_t(mesh.face_count());
-  const std::vector<uint32_t> vertex_order = by_decreasing_level(levels.vertex_level);
+  const std::vector<uint32_t> vertex_order = replay_numbering(levels);
   const std::vector<uint32_t> face_order = by_decreasing_level(levels.triangle_level);
   std::vector<uint32_t> new_index(n);
   for (uint32_t i = 0; i < n; ++i) new_index[vertex_order[i]] = i;
@@ -169,12 +233,12 @@ MultilevelMesh assemble_multilevel(const Mesh& mesh, const CollapseLevels& level
     const uint32_t k = levels.triangle_level[t];
     for (int c = 0; c < 3; ++c)
       for (uint32_t x = mesh.indices[3 * size_t(t) + c]; x != kNoRep && levels.vertex_level[x] < k && needed[x] <= k;
-           x = effective_parent(levels, x))
+           x = levels.parent[x])
         needed[x] = k + 1;
   }
   m.representative.assign(n, kNoRep);
   for (uint32_t x = 0; x < n; ++x)
-    if (needed[x]) m.representative[new_index[x]] = new_index[effective_parent(levels, x)];
+    if (needed[x]) m.representative[new_index[x]] = new_index[levels.parent[x]];
   return m;
 }
 

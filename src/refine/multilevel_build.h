@@ -29,14 +29,21 @@ struct CollapseLevels {
   uint32_t level_count = 0;
   std::vector<uint32_t> vertex_level, triangle_level;
   std::vector<uint32_t> parent;  // per vertex: what it collapsed onto (kNoRepresentative if it survived)
+  // Per collapse in sequence order (empty for clusterings): its blue vertex, and as CSR the blue vertices
+  // of the earlier collapses that last touched a vertex of its edge's star. Any order that keeps these
+  // (and children before parents) makes the builder's mesh at every step of every level.
+  std::vector<uint32_t> collapse_removed, earlier_offsets, earlier;
 };
 
 // pms::Error when a collapse names a vertex out of range, already removed, or collapses onto itself.
 CollapseLevels assign_levels(const Mesh& mesh, std::span<const EdgeCollapse> collapses);
 
 // Sorts the mesh by decreasing level and keeps only the representatives a triangle needs: vertex v of a
-// triangle of level k with level(v) < k needs its chain of parents until one of level >= k. A parent of
-// the same level as its child (after merging) is skipped, so every representative is of a higher level.
+// triangle of level k with level(v) < k needs its chain of parents until one of level >= k. Each
+// representative is the vertex's parent, after merging possibly of its own level. Within a level, vertices
+// are numbered so that replaying their collapses from the last vertex to the first (multilevel_dag.h) keeps
+// the order `earlier` gives, children before parents, otherwise in input order (unmerged levels keep input
+// order: their collapses are independent).
 MultilevelMesh assemble_multilevel(const Mesh& mesh, const CollapseLevels& levels);
 
 // Merges consecutive levels down to `level_count` (merge_level_map); 0 or more than there are: unchanged.

@@ -48,7 +48,9 @@ struct MultilevelDag {
 // and a level's remaining triangles go at its end. The edges of collapse v are the paper's, from the star
 // of the collapsed edge (v and its representative, and their neighbours): each star vertex a previous
 // collapse produced (the latest collapse onto it) must be collapsed before v, so its split needs v's; and
-// v's own neighbours must be there for v's triangles to be, so v's split needs theirs.
+// v's own neighbours must be there for v's triangles to be, so v's split needs theirs. For a mesh from
+// assemble_multilevel (merged or not) that order makes the builder's collapses in an equivalent order,
+// but for the vertices no coarser triangle needs, which vanish with triangles of their own level only.
 MultilevelDag build_multilevel_dag(const MultilevelMesh& mesh);
 
 }  // namespace pms

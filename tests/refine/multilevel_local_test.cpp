@@ -19,10 +19,11 @@
 namespace pms {
 namespace {
 
-MultilevelMesh collapse_build(uint32_t levels) {
-  const test::BuiltModel& model = test::built_sphere();
+MultilevelMesh collapse_build(const test::BuiltModel& model, uint32_t levels) {
   return build_multilevel(model.input, collapses_of(model.h), levels);
 }
+
+MultilevelMesh collapse_build(uint32_t levels) { return collapse_build(test::built_sphere(), levels); }
 
 MultilevelMesh cluster_build() {
   const Mesh torus = make_torus(48, 24, 2.0f, 0.5f);
@@ -142,9 +143,14 @@ void expect_local_refinement_works(const MultilevelMesh& m, bool manifold) {
 }
 
 TEST(MultilevelLocal, EdgeCollapseBuild) { expect_local_refinement_works(collapse_build(0), true); }
-// Merged levels replay a level's collapses in vertex order, not the builder's, so a region's border may
-// pair two faces on one directed edge (docs/internals.md); references stay valid.
-TEST(MultilevelLocal, EdgeCollapseBuildMergedLevels) { expect_local_refinement_works(collapse_build(6), false); }
+// Merged levels too: a merged level numbers its vertices coarsest original level first and keeps parents of
+// its own level as representatives, so the replay makes the builder's collapses (docs/internals.md).
+TEST(MultilevelLocal, EdgeCollapseBuildMergedLevels) {
+  for (uint32_t levels : {3u, 6u}) {
+    SCOPED_TRACE(std::to_string(levels) + " levels");
+    expect_local_refinement_works(collapse_build(levels), true);
+  }
+}
 TEST(MultilevelLocal, VertexClusteringBuild) { expect_local_refinement_works(cluster_build(), false); }
 
 TEST(MultilevelLocal, SplitAndCollapseFollowTheConstraints) {
@@ -170,17 +176,32 @@ TEST(MultilevelLocal, SplitAndCollapseFollowTheConstraints) {
   EXPECT_EQ(r.split_count(), 0u);
 }
 
-TEST(MultilevelLocal, ViewRefinesNearTheEyeMore) {
-  const test::BuiltModel& model = test::built_terrain();
-  const MultilevelMesh m = build_multilevel(model.input, collapses_of(model.h));
+// A view from nearby: some splits, not all, consistent, edge-manifold and consistently oriented.
+void expect_view_refinement_works(const test::BuiltModel& model, const MultilevelMesh& m) {
   const MultilevelDag dag = build_multilevel_dag(m);
   MultilevelRefinement r(dag);
-  const ViewParams view = test::view_for(model, test::framing_camera(model, {1, 0, 0.5f}, 0.6f));
-  r.refine_to(splits_for_view(m, dag, view, 1.0f));
-  expect_consistent(dag, r);
-  EXPECT_GT(r.split_count(), 0u);
-  EXPECT_LT(r.split_count(), dag.vertices - dag.top_vertices);
-  expect_valid_mesh(local_mesh(m, dag, r), r, true);
+  for (float distance : {0.6f, 0.3f}) {
+    const ViewParams view = test::view_for(model, test::framing_camera(model, {1, 0, 0.5f}, distance));
+    r.refine_to(splits_for_view(m, dag, view, 1.0f));
+    expect_consistent(dag, r);
+    EXPECT_GT(r.split_count(), 0u);
+    EXPECT_LT(r.split_count(), dag.vertices - dag.top_vertices);
+    expect_valid_mesh(local_mesh(m, dag, r), r, true);
+  }
+}
+
+TEST(MultilevelLocal, ViewRefinesNearTheEyeMore) {
+  const test::BuiltModel& terrain = test::built_terrain();
+  expect_view_refinement_works(terrain, collapse_build(terrain, 0));
+  expect_view_refinement_works(terrain, collapse_build(terrain, 6));
+}
+
+TEST(MultilevelLocal, BunnyMergedLevels) {
+  const test::BuiltModel* bunny = test::built_bunny();
+  if (!bunny) GTEST_SKIP() << "../shared/models/bunny.ply.xz not found: this test needs the shared test meshes";
+  const MultilevelMesh m = collapse_build(*bunny, 8);
+  expect_local_refinement_works(m, true);
+  expect_view_refinement_works(*bunny, m);
 }
 
 }  // namespace

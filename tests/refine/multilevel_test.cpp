@@ -160,6 +160,15 @@ TEST(Multilevel, MergedLevelsAreLevelsOfTheUnmergedMesh) {
     validate_multilevel("merged", merged);
     ASSERT_EQ(merged.level_count(), L);
     EXPECT_LE(merged.stored_representatives(), full.stored_representatives());
+    // Parents of a vertex's own merged level stay its representatives (multilevel_build.h).
+    uint32_t own_level = 0;
+    for (uint32_t l = 0; l + 1 < L; ++l)
+      for (uint32_t v = merged.vertex_count[l + 1]; v < merged.vertex_count[l]; ++v)
+        own_level += merged.representative[v] != MultilevelMesh::kNoRepresentative &&
+                     merged.representative[v] >= merged.vertex_count[l + 1];
+    if (L > 1) {
+      EXPECT_GT(own_level, 0u) << L << " levels";
+    }
     const std::vector<uint32_t> map = merge_level_map(full.level_count(), L);
     MultilevelLod a(merged), b(full);
     for (uint32_t m = 0; m < L; ++m) {
