@@ -23,7 +23,9 @@ constexpr BenchGroup kGroups[] = {
     {"refine", "adaptation time and ops/s on a scan path, renderer speed, image quality at far/mid/close", run_refine_group},
     {"sender", "E2 packet bits, E3 server memory, E4 two laps, E5 bytes to satisfy tolerance, E11 many clients",
      run_sender_group},
-    {"receiver", "whole-model bits per vertex against meshoptimizer, gzip, zstd and Draco; E7 server CPU and bytes per split",
+    {"receiver",
+     "whole-model bits per vertex against meshoptimizer, gzip, zstd and Draco; E7 server CPU and bytes per split; "
+     "E6 PSNR against bytes received; E8 visible splits only",
      run_receiver_group},
     {"multilevel", "E10 multilevel memory against a plain mesh, LOD switch and geomorph times, bytes per level loaded",
      run_multilevel_group},

@@ -179,11 +179,12 @@ size_t ReceiverClient::fetch(const std::vector<VertexId>& ids) {
     cache_hits_ += answer.cache_status == "HIT";
     if (records_format_ == 2) {
       attached += session_.on_split_bands(answer.body, asked.requests[index], codec_);
-      return;
+    } else {
+      const protocol::VSplits batch = protocol::decode_vsplits(answer.body, session_.context());
+      session_.on_vsplits(batch);
+      attached += batch.splits.size();
     }
-    const protocol::VSplits batch = protocol::decode_vsplits(answer.body, session_.context());
-    session_.on_vsplits(batch);
-    attached += batch.splits.size();
+    if (options_.on_attached) options_.on_attached();
   });
   split_requests_ += asked.targets.size();
   return attached;

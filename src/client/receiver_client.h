@@ -6,6 +6,7 @@
 #include <chrono>
 #include <nlohmann/json.hpp>
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -37,6 +38,9 @@ struct ReceiverOptions {
   uint32_t ids_per_request = 64;   // lists: split ids in one GET /splits/{code}
   uint32_t block_depth = 2;        // blocks: levels below a block's root; GET /models suggests the same
   HttpOptions http;                // deadlines, requests in flight, answer limits
+  // Called after each answer's splits are attached, before the next answer is read (a progress display's
+  // hook; the bench's E6 samples the mesh there). It may adapt the session's mesh; it must not fetch.
+  std::function<void()> on_attached = {};
 };
 
 struct ReceiverFrame {

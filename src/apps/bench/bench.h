@@ -47,7 +47,7 @@ void run_build_group(BenchContext& context);
 void run_refine_group(BenchContext& context);
 // E2, E3, E4, E5 and E11 of the sender-driven mode (bench_sender.cpp).
 void run_sender_group(BenchContext& context);
-// Receiver-driven against sender-driven and single-rate codecs: whole-model bits, E7 (bench_receiver.cpp).
+// Receiver-driven against sender-driven and single-rate codecs: whole-model bits, E7, E6, E8 (bench_receiver.cpp).
 void run_receiver_group(BenchContext& context);
 // E10: multilevel memory, LOD switch and geomorph times, bytes per level loaded (bench_multilevel.cpp).
 void run_multilevel_group(BenchContext& context);

@@ -171,14 +171,6 @@ std::vector<double> all_frames(size_t count, size_t first = 0) {
   return frames;
 }
 
-// Draws `plot` into out_dir/png and returns the report's line for it.
-std::string plot_line(const BenchContext& context, const Plot& plot, const std::string& png, const std::string& alt) {
-  const std::string skipped = plot_png(plot, context.options.out_dir / png);
-  if (skipped.empty()) return "![" + alt + "](" + png + ")\n\n";
-  std::fprintf(stderr, "bench: %s\n", skipped.c_str());
-  return "No plot " + png + ": " + skipped + ".\n\n";
-}
-
 std::string plots(const BenchContext& context, const TraversalRun (&runs)[3]) {
   Plot time{"DAG traversal time per frame", "frame", "ms (log)", "", false, true, {}};
   Plot accuracy{"Correct triangles against priority, every 5 frames", "frame", "% of priority's triangles", "", false, false, {}};
@@ -190,9 +182,9 @@ std::string plots(const BenchContext& context, const TraversalRun (&runs)[3]) {
     fronts.series.push_back({kTraversalNames[t], frames, runs[t].front_share});
     fronts.series.push_back({std::string(kTraversalNames[t]) + " triangles", frames, runs[t].triangles, true});
   }
-  return plot_line(context, time, "dag-time.png", "traversal ms per frame") +
-         plot_line(context, accuracy, "dag-accuracy.png", "accuracy against priority") +
-         plot_line(context, fronts, "dag-fronts.png", "front size against mesh size");
+  return plot_markdown(context.options.out_dir, time, "dag-time.png", "traversal ms per frame") +
+         plot_markdown(context.options.out_dir, accuracy, "dag-accuracy.png", "accuracy against priority") +
+         plot_markdown(context.options.out_dir, fronts, "dag-fronts.png", "front size against mesh size");
 }
 
 json run_json(const TraversalRun& run, uint32_t nodes) {

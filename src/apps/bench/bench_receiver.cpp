@@ -1,7 +1,8 @@
 // The "receiver" group: cheng-ooi 2008's receiver-driven mode against the sender-driven one and against
 // single-rate web codecs. The whole model's bits per vertex through each (pmstream's split records and BASE
 // against meshoptimizer + gzip / zstd and Draco, on the same grid); E7, what serving a split costs the
-// server in CPU time and bytes out, sender- vs receiver-driven, along the same path.
+// server in CPU time and bytes out, sender- vs receiver-driven, along the same path; E6 and E8, image
+// quality against bytes received and with only the visible splits fetched (receiver_quality.h).
 #include <algorithm>
 #include <cstdio>
 #include <limits>
@@ -9,6 +10,7 @@
 
 #include "apps/bench/bench.h"
 #include "apps/bench/bench_model.h"
+#include "apps/bench/receiver_quality.h"
 #include "apps/bench/report.h"
 #include "apps/bench/serve_child.h"
 #include "apps/bench/single_rate_codecs.h"
@@ -238,7 +240,9 @@ json cost_record(const ServerCost& c) {
 
 void run_receiver_group(BenchContext& context) {
   json out = {{"command", context.options.command_line}, {"machine", machine_json()}, {"models", json::array()}};
-  std::string section = "## receiver: whole-model bits against single-rate codecs, E7 server cost per split\n\n";
+  std::string section =
+      "## receiver: whole-model bits against single-rate codecs, E7 server cost per split, E6 PSNR against bytes, E8 "
+      "visible splits only\n\n";
   if (skipped_without_models(context, section)) return;
   const bool quick = context.options.quick;
   std::vector<std::string> names = context.options.models.empty() ? kDefaultModels : context.options.models;
@@ -261,6 +265,7 @@ void run_receiver_group(BenchContext& context) {
     add_e7_rows(context, m.name, sender, receiver, e7);
     out["models"][i]["e7"] = {{"frames", path.size()}, {"sender", cost_record(sender)}, {"receiver", cost_record(receiver)}};
   }
+  const std::string quality = e6_e8_sections(context, models, out["models"]);
 
   section += "### The whole model, bits per vertex\n\n" + whole.markdown() +
              "\nEvery split of the model at the default 16-bit grid. \"records + base + tables\" = BASE (as `GET "
@@ -278,6 +283,7 @@ void run_receiver_group(BenchContext& context) {
              "over the flight (its counters read by SIGUSR1 before and after, so loading the model is not counted); "
              "bytes out are the server's own count (TCP payload, or HTTP headers and bodies). Issue 19's targets: "
              "CPU per split ≥ 30 % and bytes out ≥ 40 % below the sender-driven mode's (cheng-ooi: −24 % and −40 %).\n\n";
+  section += quality;
   write_text_file(context.options.out_dir / "receiver.json", out.dump(2) + "\n");
   context.report += section;
 }

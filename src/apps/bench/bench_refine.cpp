@@ -11,6 +11,7 @@
 #include "apps/bench/bench_refine.h"
 #include "apps/bench/child_process.h"
 #include "apps/bench/report.h"
+#include "apps/bench/image_quality.h"
 #include "apps/camera_path.h"
 #include "apps/percentile.h"
 #include "apps/resource_usage.h"
@@ -101,8 +102,6 @@ double engine_ops_per_second(const ModelData& model, uint64_t& ops) {
   return double(ops) / seconds;
 }
 
-RenderMesh as_render(const MeshArrays& m) { return {m.positions, m.indices, m.colors}; }
-
 struct Quality {
   uint64_t faces = 0;
   ImageMetrics metrics;
@@ -141,8 +140,6 @@ MeshArrays view_independent(const ModelData& model, uint64_t faces) {
   return mesh;
 }
 
-std::string psnr_text(double psnr) { return std::isinf(psnr) ? "inf" : fixed(psnr, 2); }
-double psnr_json(double psnr) { return std::isinf(psnr) ? kPsnrIdenticalJson : psnr; }
 std::string face_share(uint64_t faces, double full_faces) { return fixed(100 * double(faces) / full_faces, 1); }
 
 // In a child process, as a user runs `pmstream build`; `deviation` as its --deviation takes it.
@@ -189,18 +186,6 @@ std::string renderer_section(const ModelData& model, const MeshArrays& full, con
   print_now("\nRenderer: " + thousands(uint64_t(triangles_per_second)) + " triangles/s (" + thousands(full.indices.size() / 3) +
         " faces, " + std::to_string(camera.width) + "x" + std::to_string(camera.height) + ")\n");
   return "Renderer: " + thousands(uint64_t(triangles_per_second)) + " triangles/s on the full mesh.\n\n";
-}
-
-struct Viewpoint {
-  const char* label;
-  Camera camera;
-};
-
-// Far and close are the zoom path's ends; mid is the first orbit view moved halfway to its target.
-std::vector<Viewpoint> viewpoints(const std::vector<Camera>& zoom, const std::vector<Camera>& orbit) {
-  Camera mid = orbit[0];
-  for (int k = 0; k < 3; ++k) mid.eye[k] = 0.5f * (mid.eye[k] + mid.target[k]);
-  return {{"far", zoom[0]}, {"mid", mid}, {"close", zoom[2]}};
 }
 
 // One viewpoint's meshes, each against the full mesh's image there.
@@ -310,12 +295,11 @@ void run_refine_group(BenchContext& context) {
 
   const MeshArrays full = refine_in_stream_order(model, model.split_order.size());
   Renderer renderer;
-  PathOptions view_options;
-  view_options.frames = 3;
-  const std::vector<Camera> zoom = make_camera_path(PathKind::zoom, model, view_options);
-  const std::vector<Camera> orbit = make_camera_path(PathKind::orbit, model, view_options);
+  PathOptions orbit_options;
+  orbit_options.frames = 3;
+  const std::vector<Camera> orbit = make_camera_path(PathKind::orbit, model, orbit_options);
   section += renderer_section(model, full, orbit[0], renderer, out);
-  section += quality_sections(context, name, model, full, viewpoints(zoom, orbit), renderer, out);
+  section += quality_sections(context, name, model, full, quality_viewpoints(model), renderer, out);
   write_text_file(context.options.out_dir / "refine.json", out.dump(2) + "\n");
   context.report += section;
 }
