@@ -134,12 +134,16 @@ void run_multilevel_build(const MultilevelBuildArgs& args) {
   const double write_seconds = write_time.seconds();
   const uint64_t bytes = std::filesystem::file_size(args.output);
   const bool dropped = args.ascii && (!ml.normals.empty() || !ml.colors.empty());
+  const uint64_t morph = geomorph_representative_count(ml);
+  const uint64_t written = ml.stored_representatives() - (args.ascii ? morph : 0);
   if (args.json) {
     nlohmann::json j = {{"input", args.input},         {"output", args.output},
                         {"format", args.ascii ? "ascii" : "binary"},
                         {"vertices", ml.vertices()},   {"triangles", ml.faces()},
                         {"levels", ml.level_count()},  {operations, source.operations},
-                        {"representatives", ml.stored_representatives()},
+                        {"representatives", written},
+                        {"geomorph_representatives", args.ascii ? 0 : morph},
+                        {"geomorph_representatives_dropped", args.ascii ? morph : 0},
                         {"output_bytes", bytes},       {"attributes_dropped", dropped},
                         {"load_seconds", load_seconds}, {args.cluster.empty() ? "collapse_seconds" : "cluster_seconds", pm_seconds},
                         {"multilevel_seconds", ml_seconds}, {"write_seconds", write_seconds},
@@ -153,11 +157,15 @@ void run_multilevel_build(const MultilevelBuildArgs& args) {
               (unsigned long long)source.operations, operations);
   std::printf("  levels:          %u (coarsest: %u vertices, %u triangles)\n", ml.level_count(), ml.vertex_count.back(),
               ml.triangle_count.back());
-  std::printf("  representatives: %llu stored\n", (unsigned long long)ml.stored_representatives());
+  std::printf("  representatives: %llu stored (%llu only for geomorphs)\n", (unsigned long long)written,
+              (unsigned long long)(args.ascii ? 0 : morph));
   std::printf("  time:            %.2f s (load %.2f, %s %.2f, multilevel %.3f, write %.3f)\n", total.seconds(),
               load_seconds, operations, pm_seconds, ml_seconds, write_seconds);
   std::printf("  output:          %llu bytes\n", (unsigned long long)bytes);
   if (dropped) std::printf("  note:            the ASCII form has no normals or colours; they were left out\n");
+  if (args.ascii && morph)
+    std::printf("  note:            the ASCII form has no place for the %llu representatives only geomorphs use;"
+                " they were left out\n", (unsigned long long)morph);
 }
 
 // Milliseconds of a set_level jump to `level` from the opposite end, and of a geomorph frame there: the
@@ -191,7 +199,7 @@ SwitchTimes time_switches(const MultilevelMesh& m, uint32_t level) {
 void run_multilevel_info(const std::string& path, bool json) {
   const MultilevelMesh m = read_multilevel(path);
   const uint64_t bytes = std::filesystem::file_size(path);
-  const std::vector<uint32_t> reps = representatives_per_level(m);
+  const std::vector<uint32_t> reps = representatives_per_level(m), morph = geomorph_representatives_per_level(m);
   std::vector<CompressedLevelBits> bits;  // coarsest first, like the rows
   const MultilevelParts compressed = multilevel_compressed_parts(m, kDefaultPositionBits, &bits);
   uint64_t compressed_bytes = compressed.head.size();
@@ -206,6 +214,7 @@ void run_multilevel_info(const std::string& path, bool json) {
                       {"level_vertices", m.level_vertices(l)},
                       {"level_triangles", m.level_triangles(l)},
                       {"representatives", reps[l]},
+                      {"geomorph_representatives", morph[l]},
                       {"set_level_ms", t.jump_ms},
                       {"geomorph_ms", t.morph_ms},
                       {"compressed_bytes", compressed.levels[levels.size()].size()},
@@ -222,6 +231,7 @@ void run_multilevel_info(const std::string& path, bool json) {
                               {"vertices", m.vertices()},
                               {"triangles", m.faces()},
                               {"representatives", m.stored_representatives()},
+                              {"geomorph_representatives", geomorph_representative_count(m)},
                               {"compressed_bytes", compressed_bytes},
                               {"position_bits", kDefaultPositionBits},
                               {"per_level", levels}};
@@ -231,15 +241,17 @@ void run_multilevel_info(const std::string& path, bool json) {
   std::printf("%s (%llu bytes): %u levels, %u vertices, %u triangles, %uD%s%s\n", path.c_str(),
               (unsigned long long)bytes, m.level_count(), m.vertices(), m.faces(), m.dimension,
               m.normals.empty() ? "" : ", normals", m.colors.empty() ? "" : ", colors");
-  std::printf("  representatives: %llu stored\n", (unsigned long long)m.stored_representatives());
+  std::printf("  representatives: %llu stored (%llu only for geomorphs)\n", (unsigned long long)m.stored_representatives(),
+              (unsigned long long)geomorph_representative_count(m));
   std::printf("  compressed (%u-bit grid): %llu bytes, head and every level\n", kDefaultPositionBits,
               (unsigned long long)compressed_bytes);
-  std::printf("  %5s %10s %10s %10s %10s %8s %10s %10s\n", "level", "LOD verts", "LOD tris", "+verts", "+tris", "reps",
-              "setLevel", "geomorph");
+  std::printf("  %5s %10s %10s %10s %10s %8s %8s %10s %10s\n", "level", "LOD verts", "LOD tris", "+verts", "+tris", "reps",
+              "+morph", "setLevel", "geomorph");
   for (const auto& row : levels)
-    std::printf("  %5u %10u %10u %10u %10u %8u %8.3f ms %8.3f ms\n", row["level"].get<uint32_t>(),
+    std::printf("  %5u %10u %10u %10u %10u %8u %8u %8.3f ms %8.3f ms\n", row["level"].get<uint32_t>(),
                 row["vertices"].get<uint32_t>(), row["triangles"].get<uint32_t>(), row["level_vertices"].get<uint32_t>(),
                 row["level_triangles"].get<uint32_t>(), row["representatives"].get<uint32_t>(),
+                row["geomorph_representatives"].get<uint32_t>(),
                 row["set_level_ms"].get<double>(), row["geomorph_ms"].get<double>());
 }
 

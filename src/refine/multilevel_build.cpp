@@ -202,7 +202,7 @@ CollapseLevels assign_levels(const Mesh& mesh, std::span<const EdgeCollapse> col
   return out;
 }
 
-MultilevelMesh assemble_multilevel(const Mesh& mesh, const CollapseLevels& levels) {
+MultilevelMesh assemble_multilevel(const Mesh& mesh, const CollapseLevels& levels, MultilevelRepresentatives kind) {
   const uint32_t n = uint32_t(mesh.vertex_count()), f = uint32_t(mesh.face_count());
   const std::vector<uint32_t> vertex_order = replay_numbering(levels);
   const std::vector<uint32_t> face_order = by_decreasing_level(levels.triangle_level);
@@ -226,13 +226,16 @@ MultilevelMesh assemble_multilevel(const Mesh& mesh, const CollapseLevels& level
   for (uint32_t i = 0; i < f; ++i)
     for (int k = 0; k < 3; ++k) m.triangles[3 * size_t(i) + k] = new_index[mesh.indices[3 * size_t(face_order[i]) + k]];
 
-  // needed[x] = 1 + the highest triangle level whose LODs miss x: a chain already marked that high
-  // stops the walk, so every vertex is visited O(1) times per level.
+  // needed[x] = 1 + the highest triangle level k whose LOD misses x, or for a geomorph (k below the top)
+  // whose LOD k + 1 does: a chain already marked that high stops the walk, so every vertex is visited O(1)
+  // times per level.
+  const bool morph = kind == MultilevelRepresentatives::geomorph;
   std::vector<uint32_t> needed(n, 0);
   for (uint32_t t = 0; t < f; ++t) {
     const uint32_t k = levels.triangle_level[t];
+    const uint32_t end = morph && k + 1 < levels.level_count ? k + 1 : k;  // chains run below level `end`
     for (int c = 0; c < 3; ++c)
-      for (uint32_t x = mesh.indices[3 * size_t(t) + c]; x != kNoRep && levels.vertex_level[x] < k && needed[x] <= k;
+      for (uint32_t x = mesh.indices[3 * size_t(t) + c]; x != kNoRep && levels.vertex_level[x] < end && needed[x] <= k;
            x = levels.parent[x])
         needed[x] = k + 1;
   }
@@ -256,10 +259,11 @@ void merge_levels(CollapseLevels& levels, uint32_t level_count) {
   levels.level_count = level_count;
 }
 
-MultilevelMesh build_multilevel(const Mesh& mesh, std::span<const EdgeCollapse> collapses, uint32_t level_count) {
+MultilevelMesh build_multilevel(const Mesh& mesh, std::span<const EdgeCollapse> collapses, uint32_t level_count,
+                                MultilevelRepresentatives kind) {
   CollapseLevels levels = assign_levels(mesh, collapses);
   merge_levels(levels, level_count);
-  return assemble_multilevel(mesh, levels);
+  return assemble_multilevel(mesh, levels, kind);
 }
 
 }  // namespace pms

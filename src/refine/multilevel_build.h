@@ -38,20 +38,32 @@ struct CollapseLevels {
 // pms::Error when a collapse names a vertex out of range, already removed, or collapses onto itself.
 CollapseLevels assign_levels(const Mesh& mesh, std::span<const EdgeCollapse> collapses);
 
-// Sorts the mesh by decreasing level and keeps only the representatives a triangle needs: vertex v of a
-// triangle of level k with level(v) < k needs its chain of parents until one of level >= k. Each
-// representative is the vertex's parent, after merging possibly of its own level. Within a level, vertices
-// are numbered so that replaying their collapses from the last vertex to the first (multilevel_dag.h) keeps
-// the order `earlier` gives, children before parents, otherwise in input order (unmerged levels keep input
-// order: their collapses are independent).
-MultilevelMesh assemble_multilevel(const Mesh& mesh, const CollapseLevels& levels);
+// Which representatives assemble_multilevel stores.
+enum class MultilevelRepresentatives {
+  // Only those the discrete LODs need (the paper's minimum): vertex v of a triangle of level k with
+  // level(v) < k needs its chain of parents until one of level >= k.
+  discrete,
+  // Also those a geomorph needs so that at t = 0 it is LOD k + 1 exactly: the chain continues through
+  // vertices of level k until one of level > k (the paper's "more representatives ... than those required
+  // strictly for discrete levels"). No triangle states them: multilevel_mesh.h, geomorph_representatives.
+  geomorph,
+};
+
+// Sorts the mesh by decreasing level and keeps the representatives `kind` asks for. Each representative is
+// the vertex's parent, after merging possibly of its own level. Within a level, vertices are numbered so
+// that replaying their collapses from the last vertex to the first (multilevel_dag.h) keeps the order
+// `earlier` gives, children before parents, otherwise in input order (unmerged levels keep input order:
+// their collapses are independent).
+MultilevelMesh assemble_multilevel(const Mesh& mesh, const CollapseLevels& levels, MultilevelRepresentatives kind);
 
 // Merges consecutive levels down to `level_count` (merge_level_map); 0 or more than there are: unchanged.
 void merge_levels(CollapseLevels& levels, uint32_t level_count);
 
 // The whole path: levels from the collapses, then assembled; `level_count` > 0 merges consecutive levels
-// down to that many (merge_level_map).
-MultilevelMesh build_multilevel(const Mesh& mesh, std::span<const EdgeCollapse> collapses, uint32_t level_count = 0);
+// down to that many (merge_level_map). Geomorph representatives by default: they make every geomorph's
+// ends its two LODs, for about 1-2% of the binary file on merged levels (docs/internals.md).
+MultilevelMesh build_multilevel(const Mesh& mesh, std::span<const EdgeCollapse> collapses, uint32_t level_count = 0,
+                                MultilevelRepresentatives kind = MultilevelRepresentatives::geomorph);
 
 // Level k of `from` levels goes to floor(k * to / from): consecutive levels merge, level 0 and the top stay
 // the extremes, and LOD m of the result is LOD min{k : map[k] = m} of the original. to >= from: identity.

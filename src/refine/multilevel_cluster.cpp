@@ -129,7 +129,7 @@ MultilevelMesh build_multilevel_from_clusterings(const Mesh& mesh, std::span<con
                                                  uint32_t level_count) {
   CollapseLevels levels = assign_cluster_levels(mesh, clusterings);
   merge_levels(levels, level_count);
-  return assemble_multilevel(mesh, levels);
+  return assemble_multilevel(mesh, levels, MultilevelRepresentatives::discrete);  // Fig. 12: no more than necessary
 }
 
 }  // namespace pms

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numeric>
 
 #include "common/error.h"
 
@@ -102,15 +103,22 @@ std::vector<uint32_t> level_representatives(const MultilevelMesh& m, uint32_t le
   const uint32_t t_end = m.triangle_count[level], t_begin = t_end - m.level_triangles(level);
   std::vector<uint32_t> reps;
   for (uint32_t t = t_begin; t < t_end; ++t) representatives_stated_by(m, t, m.vertex_count[level], stated, reps);
-  if (level == 0)  // what no triangle states travels with the finest level
-    for (uint32_t v = 0; v < m.vertices(); ++v)
-      if (m.representative[v] != kNoRep && !stated[v]) reps.insert(reps.end(), {v, m.representative[v]});
+  // The coarser levels' triangles, the only ones that could state these, have been taken.
+  const uint32_t v_end = m.vertex_count[level];
+  for (uint32_t v = v_end - m.level_vertices(level); v < v_end; ++v)
+    if (m.representative[v] != kNoRep && !stated[v]) {
+      stated[v] = 1;
+      reps.insert(reps.end(), {v, m.representative[v]});
+    }
   return reps;
 }
 
-std::vector<uint32_t> representatives_per_level(const MultilevelMesh& m) {
+namespace {
+
+// Per level, the representatives its triangles state; `stated` flags their vertices.
+std::vector<uint32_t> count_stated(const MultilevelMesh& m, std::vector<uint8_t>& stated) {
   std::vector<uint32_t> count(m.level_count(), 0);
-  std::vector<uint8_t> stated(m.vertices(), 0);
+  stated.assign(m.vertices(), 0);
   std::vector<uint32_t> reps;
   for_each_triangle_by_level(m, [&](uint32_t t, uint32_t l) {
     reps.clear();
@@ -118,6 +126,29 @@ std::vector<uint32_t> representatives_per_level(const MultilevelMesh& m) {
     count[l] += uint32_t(reps.size() / 2);
   });
   return count;
+}
+
+}  // namespace
+
+std::vector<uint32_t> representatives_per_level(const MultilevelMesh& m) {
+  std::vector<uint8_t> stated;
+  return count_stated(m, stated);
+}
+
+std::vector<uint32_t> geomorph_representatives_per_level(const MultilevelMesh& m) {
+  std::vector<uint8_t> stated;
+  count_stated(m, stated);
+  std::vector<uint32_t> count(m.level_count(), 0);
+  for (uint32_t l = 0; l < m.level_count(); ++l) {
+    const uint32_t v_end = m.vertex_count[l];
+    for (uint32_t v = v_end - m.level_vertices(l); v < v_end; ++v) count[l] += m.representative[v] != kNoRep && !stated[v];
+  }
+  return count;
+}
+
+uint64_t geomorph_representative_count(const MultilevelMesh& m) {
+  const std::vector<uint32_t> count = geomorph_representatives_per_level(m);
+  return std::accumulate(count.begin(), count.end(), uint64_t(0));
 }
 
 std::vector<float> multilevel_level_errors(const MultilevelMesh& m) {
@@ -208,8 +239,8 @@ void MultilevelLod::prepare_morph(uint32_t lo) {
   if (lo == morph_level_) return;
   const MultilevelMesh& m = mesh_;
   const uint32_t n_hi = m.vertex_count[lo + 1], n_lo = m.vertex_count[lo];
-  // Where each vertex of level lo stands at level lo + 1; one without a representative (no triangle of a
-  // coarser level needs it) has no place there and stays put.
+  // Where each vertex of level lo stands at level lo + 1; one without a representative (a structure with
+  // only the discrete LODs' representatives, e.g. read from the ASCII form) has no place there and stays put.
   morph_source_.resize(n_lo - n_hi);
   m.representative.visit([&](auto representative) {
     for (uint32_t v = n_hi; v < n_lo; ++v) {

@@ -49,13 +49,21 @@ void validate_multilevel(const std::string& where, const MultilevelMesh& mesh);
 void representatives_stated_by(const MultilevelMesh& mesh, uint32_t t, uint32_t n_l, std::vector<uint8_t>& stated,
                                std::vector<uint32_t>& out);
 
-// The (vertex, representative) pairs level `level`'s batch carries, in the order its triangles state them;
-// level 0 adds every representative no triangle states. Levels are taken coarsest first with one `stated`
-// (a flag per vertex) across them.
+// The (vertex, representative) pairs level `level`'s batch carries: in the order its triangles state them,
+// then those of its own vertices that no triangle states (only geomorphs use them), by vertex. Levels are
+// taken coarsest first with one `stated` (a flag per vertex) across them.
 std::vector<uint32_t> level_representatives(const MultilevelMesh& mesh, uint32_t level, std::vector<uint8_t>& stated);
 
-// Per level, how many representatives its triangles state (what its file batch carries).
+// Per level, how many representatives its triangles state (what its ASCII batch carries).
 std::vector<uint32_t> representatives_per_level(const MultilevelMesh& mesh);
+
+// Per level, how many of its own vertices have a representative that no triangle states. No discrete LOD
+// needs one (a triangle of level k states every representative LOD k needs, and a vertex of level l is
+// below n_l, so only coarser triangles can state its); a geomorph from level l to l + 1 puts the vertex
+// there at t = 0 (MultilevelRepresentatives::geomorph). The binary and compressed forms carry them with
+// the vertex's level; the paper's ASCII form has no place for them and leaves them out.
+std::vector<uint32_t> geomorph_representatives_per_level(const MultilevelMesh& mesh);
+uint64_t geomorph_representative_count(const MultilevelMesh& mesh);  // their sum
 
 // Per level, the geometric error of its LOD: the longest distance from a vertex of a finer level to the
 // vertex it stands at in that LOD (its path-compressed representative); 0 for level 0. What a screen-size
@@ -73,7 +81,9 @@ class MultilevelLod {
   // setLevel(float): geomorph(floor(x), floor(x) + 1 - x); integral x is set_level(uint32_t).
   void set_level(float x);
   // LOD lo's connectivity with the vertices of level lo at (1 - t) * their representative's position at
-  // level lo + 1 + t * their own (attributes likewise): t = 0 looks like LOD lo + 1, t = 1 is LOD lo.
+  // level lo + 1 + t * their own (attributes likewise): t = 1 is LOD lo; t = 0 is LOD lo + 1 as a surface
+  // (level lo's triangles have zero area) when every vertex of level lo that the LOD names has a
+  // representative, which the geomorph representatives ensure; one without stays put.
   void geomorph(uint32_t lo, float t);
 
   float level() const { return level_; }

@@ -36,12 +36,20 @@ TEST(MultilevelCli, BuildInfoLevelInBothForms) {
     const auto j = nlohmann::json::parse(info.out);
     EXPECT_EQ(j["levels"], 6);
     EXPECT_EQ(j["representatives"], b["representatives"]);
+    // Merged levels of a build need representatives that only geomorphs use; the ASCII form leaves them out.
+    EXPECT_EQ(j["geomorph_representatives"], b["geomorph_representatives"]);
+    if (ascii) {
+      EXPECT_EQ(j["geomorph_representatives"], 0);
+      EXPECT_GT(b["geomorph_representatives_dropped"].get<uint64_t>(), 0u);
+    } else {
+      EXPECT_GT(j["geomorph_representatives"].get<uint64_t>(), 0u);
+    }
     EXPECT_EQ(j["colors"], !ascii);
     ASSERT_EQ(j["per_level"].size(), 6u);
     uint64_t reps = 0;
     uint64_t compressed = 64;  // the compressed head
     for (const auto& row : j["per_level"]) {
-      reps += row["representatives"].get<uint64_t>();
+      reps += row["representatives"].get<uint64_t>() + row["geomorph_representatives"].get<uint64_t>();
       compressed += row["compressed_bytes"].get<uint64_t>();
       const auto& bits = row["compressed_bits"];
       EXPECT_EQ(8 * row["compressed_bytes"].get<uint64_t>(),

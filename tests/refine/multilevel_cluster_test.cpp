@@ -110,7 +110,7 @@ std::vector<std::array<float, 9>> lod_faces(const MultilevelMesh& m, uint32_t l)
 void expect_grid_levels_are_the_clusterings(const Mesh& mesh, std::vector<uint32_t> grids) {
   const std::vector<VertexClustering> clusterings = grid_clusterings(mesh, grids);
   const CollapseLevels levels = assign_cluster_levels(mesh, clusterings);
-  const MultilevelMesh m = assemble_multilevel(mesh, levels);
+  const MultilevelMesh m = assemble_multilevel(mesh, levels, MultilevelRepresentatives::discrete);
   validate_multilevel("grid", m);
   ASSERT_EQ(m.level_count(), grids.size() + 1);
   for (uint32_t l = 0; l < m.level_count(); ++l) EXPECT_EQ(lod_faces(m, l), applied(mesh, levels, l)) << "level " << l;

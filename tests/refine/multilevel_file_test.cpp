@@ -137,7 +137,8 @@ TEST(MultilevelFile, Figure13GivesFigure11sTriangleCountsWithThreeRepresentative
   expect_same(parse_multilevel_binary("again", format_multilevel_binary(m)), m);
 }
 
-MultilevelMesh built_terrain_multilevel(bool attributes) {
+MultilevelMesh built_terrain_multilevel(bool attributes,
+                                        MultilevelRepresentatives kind = MultilevelRepresentatives::geomorph) {
   const test::BuiltModel& model = test::built_terrain();
   Mesh input = model.input;
   if (attributes) {
@@ -148,13 +149,16 @@ MultilevelMesh built_terrain_multilevel(bool attributes) {
       input.colors[4 * v] = uint8_t(v), input.colors[4 * v + 1] = uint8_t(v >> 8);
     }
   }
-  return build_multilevel(input, collapses_of(model.h));
+  return build_multilevel(input, collapses_of(model.h), 0, kind);
 }
 
 TEST(MultilevelFile, BuiltMeshRoundTripsExactlyInBothForms) {
-  const MultilevelMesh plain = built_terrain_multilevel(false);
+  // The ASCII form holds the discrete LODs' representatives (the paper's form has no place for a
+  // geomorph's): a geomorph build reads back as the discrete build.
+  const MultilevelMesh plain = built_terrain_multilevel(false, MultilevelRepresentatives::discrete);
   const std::string text = format_multilevel_ascii(plain);
   expect_same(parse_multilevel_ascii("terrain.txt", text), plain);
+  expect_same(parse_multilevel_ascii("terrain.txt", format_multilevel_ascii(built_terrain_multilevel(false))), plain);
   const MultilevelMesh rich = built_terrain_multilevel(true);
   const std::vector<uint8_t> bytes = format_multilevel_binary(rich);
   expect_same(parse_multilevel_binary("terrain.pml", bytes), rich);
@@ -172,8 +176,14 @@ TEST(MultilevelFile, BunnyRoundTripsExactly) {
   const test::BuiltModel* bunny = test::built_bunny();
   if (!bunny) GTEST_SKIP() << "../shared/models/bunny.ply.xz not found: this test needs the shared test meshes";
   const MultilevelMesh m = build_multilevel(bunny->input, collapses_of(bunny->h), 8);
-  expect_same(parse_multilevel_ascii("bunny.txt", format_multilevel_ascii(m)), m);
+  ASSERT_GT(geomorph_representative_count(m), 0u) << "merged levels need representatives for geomorphs";
   expect_same(parse_multilevel_binary("bunny.pml", format_multilevel_binary(m)), m);
+  const MultilevelMesh discrete = build_multilevel(bunny->input, collapses_of(bunny->h), 8, MultilevelRepresentatives::discrete);
+  const std::string text = format_multilevel_ascii(m);
+  EXPECT_NE(text.find("#(without the " + std::to_string(geomorph_representative_count(m)) +
+                      " representatives only geomorphs use)\n"),
+            std::string::npos);
+  expect_same(parse_multilevel_ascii("bunny.txt", text), discrete);
 }
 
 TEST(MultilevelFile, MalformedAsciiNamesTheLine) {

@@ -60,7 +60,7 @@ std::vector<Face> lod_faces(const MultilevelLod& lod, uint32_t dimension) {
 void expect_every_level_is_its_collapses(const test::BuiltModel& model) {
   const std::vector<EdgeCollapse> collapses = collapses_of(model.h);
   const CollapseLevels levels = assign_levels(model.input, collapses);
-  const MultilevelMesh ml = assemble_multilevel(model.input, levels);
+  const MultilevelMesh ml = assemble_multilevel(model.input, levels, MultilevelRepresentatives::geomorph);
   validate_multilevel(model.name, ml);
   ASSERT_GT(ml.level_count(), 2u) << model.name;
   EXPECT_EQ(ml.vertices(), model.input.vertex_count());
@@ -151,6 +151,86 @@ TEST(Multilevel, GeomorphEndsAreTheLevels) {
   }
 }
 
+// Exact ends of every geomorph, merged or not: at t = 1 LOD lo itself; at t = 0 every triangle of level lo
+// has two corners at one position (zero area) and every coarser triangle has each corner where LOD lo + 1
+// puts it (the same triangle index: LODs are prefixes), colours too. Bit for bit: t = 0 copies the
+// representative's values.
+void expect_exact_geomorph_ends(const test::BuiltModel& model, uint32_t level_count) {
+  Mesh input = model.input;
+  input.colors.assign(input.vertex_count() * 4, 0);
+  for (size_t v = 0; v < input.vertex_count(); ++v) input.colors[4 * v + 1] = uint8_t(v * 53), input.colors[4 * v + 3] = 255;
+  const MultilevelMesh ml = build_multilevel(input, collapses_of(model.h), level_count);
+  const std::string name = model.name + " " + std::to_string(ml.level_count()) + " levels";
+  ASSERT_GT(ml.level_count(), 1u) << name;
+  MultilevelLod lod(ml), exact(ml);
+  for (uint32_t lo = 0; lo + 1 < ml.level_count(); ++lo) {
+    lod.geomorph(lo, 1);
+    exact.set_level(lo);
+    ASSERT_TRUE(std::ranges::equal(lod.indices(), exact.indices())) << name << ", t = 1, level " << lo;
+    ASSERT_TRUE(std::ranges::equal(lod.positions(), exact.positions())) << name << ", t = 1, level " << lo;
+    ASSERT_TRUE(std::ranges::equal(lod.colors(), exact.colors())) << name << ", t = 1, level " << lo;
+
+    lod.geomorph(lo, 0);
+    exact.set_level(lo + 1);
+    const auto at = [](const MultilevelLod& l, uint32_t v) { return Corner{l.positions()[3 * size_t(v)], l.positions()[3 * size_t(v) + 1], l.positions()[3 * size_t(v) + 2]}; };
+    const auto colour = [](const MultilevelLod& l, uint32_t v) { return std::array<uint8_t, 4>{l.colors()[4 * size_t(v)], l.colors()[4 * size_t(v) + 1], l.colors()[4 * size_t(v) + 2], l.colors()[4 * size_t(v) + 3]}; };
+    const uint32_t t_hi = ml.triangle_count[lo + 1], t_lo = ml.triangle_count[lo];
+    size_t flat = 0, wrong_corners = 0;
+    for (uint32_t t = t_hi; t < t_lo; ++t) {
+      const Corner a = at(lod, lod.indices()[3 * size_t(t)]), b = at(lod, lod.indices()[3 * size_t(t) + 1]),
+                   c = at(lod, lod.indices()[3 * size_t(t) + 2]);
+      flat += a == b || b == c || c == a;
+    }
+    for (uint32_t t = 0; t < t_hi; ++t)
+      for (int k = 0; k < 3; ++k) {
+        const uint32_t u = lod.indices()[3 * size_t(t) + k], w = exact.indices()[3 * size_t(t) + k];
+        wrong_corners += at(lod, u) != at(exact, w) || colour(lod, u) != colour(exact, w);
+      }
+    EXPECT_EQ(flat, t_lo - t_hi) << name << ", t = 0, level " << lo << ": level " << lo << "'s triangles have zero area";
+    EXPECT_EQ(wrong_corners, 0u) << name << ", t = 0, level " << lo << ": coarser triangles are LOD " << lo + 1 << "'s";
+  }
+}
+
+TEST(Multilevel, GeomorphEndsAreTheLevelsMergedSphere) {
+  for (uint32_t L : {0u, 2u, 3u, 6u, 8u}) expect_exact_geomorph_ends(test::built_sphere(), L);
+}
+
+TEST(Multilevel, GeomorphEndsAreTheLevelsMergedTerrain) {
+  for (uint32_t L : {0u, 2u, 5u, 8u, 16u}) expect_exact_geomorph_ends(test::built_terrain(), L);
+}
+
+TEST(Multilevel, GeomorphEndsAreTheLevelsMergedBunny) {
+  const test::BuiltModel* bunny = test::built_bunny();
+  if (!bunny) GTEST_SKIP() << "../shared/models/bunny.ply.xz not found: this test needs the shared test meshes";
+  for (uint32_t L : {0u, 4u, 8u, 16u}) expect_exact_geomorph_ends(*bunny, L);
+}
+
+// The geomorph build is the discrete one plus representatives that no triangle states: the same arrays
+// otherwise, every discrete representative kept, and the discrete one is valid without the extra ones.
+TEST(Multilevel, GeomorphRepresentativesOnlyAddToTheDiscreteOnes) {
+  const test::BuiltModel& model = test::built_terrain();
+  const std::vector<EdgeCollapse> collapses = collapses_of(model.h);
+  for (uint32_t L : {0u, 3u, 8u}) {
+    const MultilevelMesh discrete = build_multilevel(model.input, collapses, L, MultilevelRepresentatives::discrete);
+    const MultilevelMesh morph = build_multilevel(model.input, collapses, L, MultilevelRepresentatives::geomorph);
+    EXPECT_EQ(morph.positions, discrete.positions);
+    EXPECT_EQ(morph.triangles, discrete.triangles);
+    EXPECT_EQ(morph.vertex_count, discrete.vertex_count);
+    validate_multilevel("discrete", discrete);
+    EXPECT_EQ(geomorph_representative_count(discrete), 0u) << L << " levels";
+    for (uint32_t v = 0; v < morph.vertices(); ++v) {
+      if (discrete.representative[v] != MultilevelMesh::kNoRepresentative) {
+        ASSERT_EQ(morph.representative[v], discrete.representative[v]) << L << " levels, vertex " << v;
+      }
+    }
+    EXPECT_EQ(morph.stored_representatives(), discrete.stored_representatives() + geomorph_representative_count(morph));
+    EXPECT_EQ(representatives_per_level(morph), representatives_per_level(discrete));
+    if (L == 8) {
+      EXPECT_GT(geomorph_representative_count(morph), 0u) << "merged levels need some";
+    }
+  }
+}
+
 TEST(Multilevel, MergedLevelsAreLevelsOfTheUnmergedMesh) {
   const test::BuiltModel& model = test::built_terrain();
   const std::vector<EdgeCollapse> collapses = collapses_of(model.h);
@@ -159,7 +239,10 @@ TEST(Multilevel, MergedLevelsAreLevelsOfTheUnmergedMesh) {
     const MultilevelMesh merged = build_multilevel(model.input, collapses, L);
     validate_multilevel("merged", merged);
     ASSERT_EQ(merged.level_count(), L);
-    EXPECT_LE(merged.stored_representatives(), full.stored_representatives());
+    // The discrete LODs' representatives can only drop; a geomorph's cover at most the removed vertices.
+    EXPECT_LE(build_multilevel(model.input, collapses, L, MultilevelRepresentatives::discrete).stored_representatives(),
+              build_multilevel(model.input, collapses, 0, MultilevelRepresentatives::discrete).stored_representatives());
+    EXPECT_LE(merged.stored_representatives(), merged.vertices() - merged.vertex_count.back());
     // Parents of a vertex's own merged level stay its representatives (multilevel_build.h).
     uint32_t own_level = 0;
     for (uint32_t l = 0; l + 1 < L; ++l)
