@@ -33,7 +33,8 @@ void append_bytes(std::vector<uint8_t>& out, const T* data, size_t count) {
 }
 
 // One level's LEVL section: its header, vertices (positions, normals, colours), triangles, then the
-// representatives its triangles state, in the order the ASCII form states them.
+// representatives it carries (level_representatives: what its triangles state, in the ASCII form's order,
+// then its own vertices' geomorph representatives).
 std::vector<uint8_t> level_section(const MultilevelMesh& m, uint32_t level, std::vector<uint8_t>& stated) {
   const uint32_t v_end = m.vertex_count[level], t_end = m.triangle_count[level];
   const uint32_t v_begin = v_end - m.level_vertices(level), t_begin = t_end - m.level_triangles(level);
