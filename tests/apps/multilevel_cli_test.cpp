@@ -20,6 +20,7 @@ TEST(MultilevelCli, BuildInfoLevelInBothForms) {
   input.colors.assign(input.vertex_count() * 4, 200);
   const std::string ply = (dir / "torus.ply").string();
   save_ply(input, ply);
+  uint64_t binary_morph = 0;
   for (const bool ascii : {false, true}) {
     const std::string out = (dir / (ascii ? "torus.txt" : "torus.pml")).string();
     const test::CliRun build =
@@ -36,13 +37,15 @@ TEST(MultilevelCli, BuildInfoLevelInBothForms) {
     const auto j = nlohmann::json::parse(info.out);
     EXPECT_EQ(j["levels"], 6);
     EXPECT_EQ(j["representatives"], b["representatives"]);
-    // Merged levels of a build need representatives that only geomorphs use; the ASCII form leaves them out.
+    // The representatives only geomorphs use (merged levels may need some; this torus happens to need none,
+    // GeomorphRepresentativesOfABuiltInModel has a model that does): the ASCII form leaves them out.
     EXPECT_EQ(j["geomorph_representatives"], b["geomorph_representatives"]);
     if (ascii) {
       EXPECT_EQ(j["geomorph_representatives"], 0);
-      EXPECT_GT(b["geomorph_representatives_dropped"].get<uint64_t>(), 0u);
+      EXPECT_EQ(b["geomorph_representatives_dropped"], binary_morph);
     } else {
-      EXPECT_GT(j["geomorph_representatives"].get<uint64_t>(), 0u);
+      binary_morph = j["geomorph_representatives"].get<uint64_t>();
+      EXPECT_EQ(b["geomorph_representatives_dropped"], 0);
     }
     EXPECT_EQ(j["colors"], !ascii);
     ASSERT_EQ(j["per_level"].size(), 6u);
@@ -77,6 +80,30 @@ TEST(MultilevelCli, BuildInfoLevelInBothForms) {
   const test::CliRun beyond = test::run_pmstream("multilevel level " + (dir / "torus.pml").string() + " --level 6 -o x.ply");
   EXPECT_NE(beyond.exit_code, 0);
   EXPECT_NE(beyond.err.find("level 6 is outside 0..5"), std::string::npos) << beyond.err;
+}
+
+// Merged levels of the built-in terrain need representatives that only geomorphs use: the binary form
+// keeps them, the ASCII form says how many it left out.
+TEST(MultilevelCli, GeomorphRepresentativesOfABuiltInModel) {
+  const auto dir = test::temp_dir();
+  uint64_t kept = 0;
+  for (const bool ascii : {false, true}) {
+    const std::string out = (dir / (ascii ? "terrain.txt" : "terrain.pml")).string();
+    const test::CliRun build =
+        test::run_pmstream("multilevel build terrain:2000 -o " + out + " --levels 6 --json" + (ascii ? " --ascii" : ""));
+    ASSERT_EQ(build.exit_code, 0) << build.err;
+    const auto b = nlohmann::json::parse(build.out);
+    if (!ascii) {
+      kept = b["geomorph_representatives"].get<uint64_t>();
+      EXPECT_GT(kept, 0u);
+    } else {
+      EXPECT_EQ(b["geomorph_representatives"], 0);
+      EXPECT_EQ(b["geomorph_representatives_dropped"], kept);
+    }
+    const test::CliRun info = test::run_pmstream("multilevel info " + out + " --json");
+    ASSERT_EQ(info.exit_code, 0) << info.err;
+    EXPECT_EQ(nlohmann::json::parse(info.out)["geomorph_representatives"], ascii ? 0 : kept);
+  }
 }
 
 TEST(MultilevelCli, LevelOfARegion) {
