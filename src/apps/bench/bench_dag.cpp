@@ -82,7 +82,8 @@ struct TraversalRun {
   size_t max_session_bytes = 0, max_cut_bytes = 0, max_scratch_bytes = 0;
   uint64_t max_triangles = 0;
   std::vector<std::vector<IdFace>> samples;  // the client's mesh every kAccuracyEvery frames
-  std::vector<double> accuracy;              // against priority's samples
+  std::vector<double> accuracy;              // against priority's samples: the share of priority's triangles it has
+  std::vector<double> precision;             // the share of its own triangles that priority's mesh has
 };
 
 const server::DagSessionMode& dag_mode_of(const InProcessSession& local) {
@@ -199,6 +200,7 @@ json run_json(const TraversalRun& run, uint32_t nodes) {
           {"triangles", run.triangles},
           {"front_share", run.front_share},
           {"accuracy_every_5_frames", run.accuracy},
+          {"precision_every_5_frames", run.precision},
           {"max_session_bytes", run.max_session_bytes},
           {"max_cut_bytes", run.max_cut_bytes},
           {"max_thread_scratch_bytes", run.max_scratch_bytes},
@@ -223,15 +225,18 @@ void run_dag_group(BenchContext& context) {
     runs[t] = run_traversal(m, route, kTraversals[t]);
   }
   for (TraversalRun& run : runs)
-    for (size_t k = 0; k < run.samples.size(); ++k) run.accuracy.push_back(shared_percent(run.samples[k], runs[0].samples[k]));
+    for (size_t k = 0; k < run.samples.size(); ++k) {
+      run.accuracy.push_back(shared_percent(run.samples[k], runs[0].samples[k]));
+      run.precision.push_back(shared_percent(runs[0].samples[k], run.samples[k]));
+    }
   // Frame 0 is every traversal's converged first view, the same mesh: left out of the average.
-  const auto route_accuracy = [](const TraversalRun& run) {
-    return mean(std::vector<double>(run.accuracy.begin() + std::min<ptrdiff_t>(1, ptrdiff_t(run.accuracy.size())), run.accuracy.end()));
+  const auto route_mean = [](const std::vector<double>& samples) {
+    return mean(std::vector<double>(samples.begin() + std::min<ptrdiff_t>(1, ptrdiff_t(samples.size())), samples.end()));
   };
 
   Table table({{"traversal", false}, {"first view ms", true}, {"first view ops", true}, {"median ms", true},
                {"p99 ms", true}, {"load + store ms", true}, {"evaluated / frame", true},
-               {"ops / frame", true}, {"max triangles", true}, {"(Fc + Fs) / triangles", true}, {"accuracy %", true},
+               {"ops / frame", true}, {"max triangles", true}, {"(Fc + Fs) / triangles", true}, {"accuracy %", true}, {"precision %", true},
                {"session B / node", true}, {"session KB", true}, {"cut KB", true}, {"thread scratch KB", true},
                {"bytes down / frame", true}});
   json out = {{"command", context.options.command_line}, {"machine", machine_json()}, {"model", name},
@@ -243,7 +248,7 @@ void run_dag_group(BenchContext& context) {
                    fixed(percentile(run.frame_ms, 0.5), 3), fixed(percentile(run.frame_ms, 0.99), 3),
                    fixed(percentile(run.load_ms, 0.5), 3) + " + " + fixed(percentile(run.store_ms, 0.5), 3),
                    thousands(uint64_t(mean(run.evaluated))), thousands(uint64_t(mean(run.ops))), thousands(run.max_triangles),
-                   fixed(percentile(run.front_share, 0.5), 2), t == 0 ? "—" : fixed(route_accuracy(run), 1),
+                   fixed(percentile(run.front_share, 0.5), 2), t == 0 ? "—" : fixed(route_mean(run.accuracy), 1), t == 0 ? "—" : fixed(route_mean(run.precision), 1),
                    fixed(double(run.max_session_bytes) / nodes, 3), fixed(double(run.max_session_bytes) / 1e3, 1),
                    fixed(double(run.max_cut_bytes) / 1e3, 1), fixed(double(run.max_scratch_bytes) / 1e3, 1),
                    thousands(uint64_t(mean(run.down_bytes)))});
@@ -260,7 +265,8 @@ void run_dag_group(BenchContext& context) {
              "MANAGE-TRAVERSAL alone on a bare cut, fed the same views as the session, frames 1 on; load + store: the "
              "medians of decoding the compact cut into the thread's dense one and encoding it back (each turn of a session "
              "does both). Accuracy: the share "
-             "of priority's triangles (by vertex ids) the client's mesh also has, every 5 frames from frame 5, averaged. "
+             "of priority's triangles (by vertex ids) the client's mesh also has, every 5 frames from frame 5, averaged; "
+             "precision: the share of the client's own triangles that priority's mesh has, averaged alike. "
              "Session: the "
              "DAG mode's `state_bytes()` at its largest along the route; cut: `CompactDagCut::memory_bytes()` (what a "
              "session keeps between turns); thread scratch: the dense cut and the traversals' heaps and stack one I/O "
