@@ -367,8 +367,8 @@ uint32_t ReceiverClient::count_prefetch_used() {
 
 ReceiverFrame ReceiverClient::frame(const Camera& camera) { return run(camera, false); }
 
-// Rounds of adapt -> rank -> GET -> attach until the view wants nothing more or, for a frame (not the
-// settling), the budget is spent. A round ends when the answers to what it asked for are in; a frame's
+// Rounds of adapt -> rank -> GET -> attach until the view wants nothing more or the budget is spent;
+// prefetch only in a path's frames, not while settling. A round ends when the answers to what it asked for are in; a frame's
 // first round re-ranks what the last frame left queued.
 ReceiverFrame ReceiverClient::run(const Camera& camera, bool settling) {
   if (!session_.has_model()) fail("stream", "no model open");
@@ -380,7 +380,7 @@ ReceiverFrame ReceiverClient::run(const Camera& camera, bool settling) {
   if (cameras_.size() == 2) cameras_.erase(cameras_.begin());
   cameras_.push_back(camera);
   session_.refinement().set_view(session_.view_params(camera));
-  const bool may_prefetch = options_.prefetch && !settling;
+  const bool may_prefetch = options_.prefetch && !settling;  // nothing follows the settling
   bool prefetched = false;
   bool wants = rerank(camera);
   out.rounds = wants;
@@ -393,7 +393,7 @@ ReceiverFrame ReceiverClient::run(const Camera& camera, bool settling) {
       prefetch();
       prefetched = true;
     }
-    if (!settling && answers > 0 && over_budget(answers, start)) break;
+    if (answers > 0 && over_budget(answers, start)) break;
     if (wire_.empty()) break;
     attached += receive_one(out);
     ++answers;
@@ -426,8 +426,16 @@ ReceiverFrame ReceiverClient::run(const Camera& camera, bool settling) {
 }
 
 void ReceiverClient::settle(const Camera& camera) {
-  ReceiverFrame last = run(camera, true);
-  while (!wire_.empty()) receive_one(last);  // prefetched or stale: read, as every GET sent is
+  // Each frame reads an answer or sends nothing more: a frame that brought nothing and left nothing in
+  // flight will not be followed by one that does.
+  settle_frames_ = 0;
+  for (;;) {
+    const ReceiverFrame r = run(camera, true);
+    ++settle_frames_;
+    if (r.satisfied || (r.report.vsplits == 0 && r.in_flight == 0)) break;
+  }
+  ReceiverFrame rest;
+  while (!wire_.empty()) receive_one(rest);  // prefetched or stale: read, as every GET sent is
   session_.refinement().converge();
 }
 

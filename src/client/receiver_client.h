@@ -87,8 +87,10 @@ class ReceiverClient {
   // in that order with several requests in flight, attach what arrives, adapt again; within the frame
   // budget, if any.
   ReceiverFrame frame(const Camera& camera);
-  // The last frame, without budget or prefetch; then reads what is still in flight and converges.
+  // Holds the last camera for frames (within the budget, without prefetch) until its view is satisfied,
+  // then reads what is still in flight and converges. settle_frames(): how many it took (1 unbudgeted).
   void settle(const Camera& camera);
+  uint32_t settle_frames() const { return settle_frames_; }
 
   ClientSession& session() { return session_; }
   const HttpCounters& counters() const { return http_.counters(); }
@@ -131,6 +133,7 @@ class ReceiverClient {
   uint32_t records_format_ = 1;  // the catalogue's word for the model: 2 = compact records, coded by codec_
   SplitCodec codec_;
   uint32_t frame_ = 0;
+  uint32_t settle_frames_ = 0;
   ReceiverTotals totals_;
   std::deque<Request> queue_;  // ranked for the last view, not yet sent
   std::deque<Request> wire_;   // sent, in the order their answers come
