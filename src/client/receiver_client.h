@@ -40,7 +40,7 @@ struct ReceiverOptions {
   uint32_t ids_per_request = 64;   // lists: split ids in one GET /splits/{code}
   uint32_t block_depth = 2;        // blocks: levels below a block's root; GET /models suggests the same
   HttpOptions http;                // deadlines, requests in flight, answer limits
-  // The frame budget (docs/protocol.md, "Frame budget"): with either set, a frame also ends once it has
+  // The frame budget (docs/protocol.md, "Frame budget, cancel and prefetch"): with either set, a frame also ends once it has
   // read frame_answers answers or spent frame_budget_ms (checked between answers, so a frame overruns by at
   // most one answer; one answer is always read when one is due). The rest carries to the next frame: GETs
   // sent stay in flight and are read then, ids not yet sent stay queued and are re-ranked for the next view,
@@ -137,7 +137,9 @@ class ReceiverClient {
   ReceiverTotals totals_;
   std::deque<Request> queue_;  // ranked for the last view, not yet sent
   std::deque<Request> wire_;   // sent, in the order their answers come
-  std::vector<VertexId> prefetched_;  // prefetched ids whose splits the mesh has not made yet
+  // Prefetched ids whose splits the mesh has not made yet: each id at most once (it is a leaf until its
+  // answer comes, and on the wire till then), so bounded by the model's splits.
+  std::vector<VertexId> prefetched_;
   std::vector<Camera> cameras_;       // the last two frames' (prefetch extrapolates them)
 };
 
