@@ -1,6 +1,8 @@
 // The receiver-driven client against the HTTP server over real loopback: its mesh is local refinement's
-// for the same view and τ, a second lap asks for nothing, the ids asked for match the splits received, and a
-// server that stalls or closes mid-answer is a clear error within the deadline.
+// for the same view and τ, a second lap asks for nothing, the ids asked for match the splits received, a
+// frame budget carries work between frames (cancelling what a new view no longer wants, prefetching along
+// the path) and still ends on local refinement's mesh, and a server that stalls or closes mid-answer is a
+// clear error within the deadline.
 #include <utility>  // before asio with C++20 (docs/architecture.md, "Stack")
 #include <boost/asio.hpp>
 #include <gtest/gtest.h>
@@ -88,6 +90,7 @@ uint32_t frames_to_satisfy(client::ReceiverClient& client, const Camera& camera,
 
 // With a budget of a few answers a frame, a frame ends with its view unfinished, GETs in flight and ids
 // queued; they carry over, and holding the last camera the client ends on local refinement's mesh.
+// (A time budget is the same loop with a clock; the next test checks only where it ends.)
 TEST(Receiver, AFrameBudgetCarriesTheRestAndConvergesToLocalRefinement) {
   const Fixture& f = terrain();
   for (const client::FetchPolicy fetch : {client::FetchPolicy::lists, client::FetchPolicy::blocks}) {
@@ -115,6 +118,19 @@ TEST(Receiver, AFrameBudgetCarriesTheRestAndConvergesToLocalRefinement) {
         << client::fetch_policy_name(fetch) << ": the budgeted flight ends on local refinement's mesh";
     EXPECT_GE(server.http.stats().splits_served.load(), client.session().splits_received());
   }
+}
+
+TEST(Receiver, ATimeBudgetEndsFramesEarlyAndStillConverges) {
+  const Fixture& f = terrain();
+  Server server(f.catalogue);
+  client::ReceiverOptions options;
+  options.ids_per_request = 16;
+  options.frame_budget_ms = 1;  // about an answer a frame
+  client::ReceiverClient client(server.url(), options);
+  client.open("terrain");
+  const Camera camera = orbit_path(f.hierarchy, 10, 0.3f).back();
+  EXPECT_GT(frames_to_satisfy(client, camera), 1u);
+  EXPECT_EQ(faces_by_id(client.session().mesh()), local_faces(f.snapped, camera, 1.0f));
 }
 
 // A view jump while ids are queued for the old view: the new ranking drops those it does not want before
@@ -266,6 +282,31 @@ TEST(Receiver, SurvivesTheServerClosingIdleKeptAliveConnections) {
     client.frame(camera);
     EXPECT_EQ(faces_by_id(client.session().mesh()), local_faces(f.snapped, camera, 1.0f));
   }
+  EXPECT_GT(client.counters().connections, 1u);
+}
+
+// The same with GETs left in flight across the pause: their answers came before the close and are read
+// from the socket; what was not yet written goes on a new connection.
+TEST(Receiver, GetsInFlightSurviveTheServerClosingBetweenFrames) {
+  const Fixture& f = terrain();
+  server::HttpLimits limits;
+  limits.idle_timeout_ms = 100;
+  Server server(f.catalogue, limits);
+  client::ReceiverOptions options;
+  options.ids_per_request = 16;
+  options.frame_answers = 2;
+  client::ReceiverClient client(server.url(), options);
+  client.open("terrain");
+  const std::vector<Camera> path = orbit_path(f.hierarchy, 6, 0.1f);
+  uint32_t paused_in_flight = 0;
+  for (const Camera& camera : path) {
+    const client::ReceiverFrame r = client.frame(camera);
+    paused_in_flight += r.in_flight > 0;
+    std::this_thread::sleep_for(std::chrono::milliseconds(250));
+  }
+  EXPECT_GT(paused_in_flight, 0u);
+  frames_to_satisfy(client, path.back());
+  EXPECT_EQ(faces_by_id(client.session().mesh()), local_faces(f.snapped, path.back(), 1.0f));
   EXPECT_GT(client.counters().connections, 1u);
 }
 
