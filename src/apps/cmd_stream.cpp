@@ -1,6 +1,6 @@
 // pmstream stream --server HOST:PORT --model NAME --path PATH.json --mode MODE --tolerance PX
 //                 (--mode receiver: --server http://HOST:PORT[/prefix] [--in-flight N] [--fetch lists|blocks]
-//                  [--ids-per-request N] [--block-depth K])
+//                  [--ids-per-request N] [--block-depth K] [--frame-budget-ms MS] [--frame-answers N] [--prefetch])
 //                 (--mode multilevel: --server http://HOST:PORT[/prefix] [--budget TRIANGLES | --tolerance PX])
 //                 [--laps K] [--reconnect N] [--timeout-ms N] [--connect-timeout-ms N] [--save-mesh OUT.ply]
 //                 [--snapshots DIR] [--json]
@@ -37,6 +37,8 @@ struct StreamArgs {
   uint32_t timeout_ms = 30000, connect_timeout_ms = 5000;
   uint32_t in_flight = 4, ids_per_request = 64, block_depth = client::ReceiverOptions{}.block_depth;  // receiver
   std::string fetch = client::fetch_policy_name(client::ReceiverOptions{}.fetch);
+  uint32_t frame_budget_ms = 0, frame_answers = 0;
+  bool prefetch = false;
   std::string traversal = "priority";  // dag mode
   uint64_t budget = 0;
   bool json = false;
@@ -162,9 +164,13 @@ void run_receiver(const StreamArgs& args) {
   options.fetch = client::fetch_policy_named(args.fetch);
   options.ids_per_request = args.ids_per_request;
   options.block_depth = args.block_depth;
+  options.frame_budget_ms = args.frame_budget_ms;
+  options.frame_answers = args.frame_answers;
+  options.prefetch = args.prefetch;
   options.http = http_options(args);
   client::ReceiverClient client(flight.url, options);
   client.open(args.model);
+  uint64_t unsatisfied = 0;
   const auto [frames, index] = fly(args, path, client, [&](const Camera& camera, size_t frame, uint32_t lap) {
     const client::ReceiverFrame r = client.frame(camera);
     nlohmann::json f = frame_json(r.report, frame, lap);
@@ -172,6 +178,14 @@ void run_receiver(const StreamArgs& args) {
     f["split_requests"] = r.split_requests;
     f["cache_hits"] = r.cache_hits;
     f["rounds"] = r.rounds;
+    f["satisfied"] = r.satisfied;
+    f["queued"] = r.queued;
+    f["in_flight"] = r.in_flight;
+    f["cancelled"] = r.cancelled;
+    f["stale_arrivals"] = r.stale_arrivals;
+    f["prefetched"] = r.prefetched;
+    f["prefetch_used"] = r.prefetch_used;
+    unsatisfied += !r.satisfied;
     return std::pair{std::move(f), r.report};
   });
   const client::HttpCounters& c = client.counters();
@@ -183,6 +197,15 @@ void run_receiver(const StreamArgs& args) {
                         {"split_requests", client.split_requests()},
                         {"cache_hits", client.cache_hits()},
                         {"fetch", args.fetch},
+                        {"frame_budget_ms", args.frame_budget_ms},
+                        {"frame_answers", args.frame_answers},
+                        {"prefetch", args.prefetch},
+                        {"frames_unsatisfied", unsatisfied},
+                        {"settle_frames", client.settle_frames()},
+                        {"cancelled", client.totals().cancelled},
+                        {"stale_arrivals", client.totals().stale_arrivals},
+                        {"prefetched", client.totals().prefetched},
+                        {"prefetch_used", client.totals().prefetch_used},
                         {"http_connections", c.connections},
                         {"vsplits_received", client.session().splits_received()},
                         {"seconds", clock.seconds()}};
@@ -351,6 +374,19 @@ void add_stream_command(CliCommand& app) {
   cmd.option("--block-depth", args->block_depth, "receiver, blocks: levels below a block's root")
       .range(0u, 8u)
       .show_default();
+  cmd.option("--frame-budget-ms", args->frame_budget_ms,
+             "receiver: end a frame after this long (checked between answers; 0 = until the view is satisfied); "
+             "what is left carries to the next frame")
+      .range(0u, 3600000u)
+      .show_default();
+  cmd.option("--frame-answers", args->frame_answers,
+             "receiver: end a frame after this many answers (0 = until the view is satisfied); what is left "
+             "carries to the next frame")
+      .range(0u, 1000000u)
+      .show_default();
+  cmd.flag("--prefetch", args->prefetch,
+           "receiver: with the view's wants all sent, fill the pipe with what the camera extrapolated from the last "
+           "two frames would want");
   cmd.option("--geomorph-frames", args->morph_frames, "Blend splits and collapses over N frames (0 = off)")
       .show_default();
   cmd.option("--max-ops", args->max_ops, "vsplits + ecols per frame (0 = no cap; dag: N, 0 = 300)")

@@ -5,6 +5,7 @@
 #include <boost/asio.hpp>
 #include <boost/beast/core.hpp>
 #include <boost/beast/http.hpp>
+#include <deque>
 #include <optional>
 
 #include "client/http_connection.h"
@@ -56,6 +57,9 @@ struct HttpConnection::Impl {
   asio::io_context io;
   std::optional<beast::tcp_stream> stream;
   beast::flat_buffer buffer;
+  std::deque<std::string> pending;  // GETs sent (or to send again on a new connection) and not yet answered
+  size_t written = 0;               // of `pending`, those written on this connection
+  bool fresh = false;  // no answer yet on this connection: a close now is the server's answer, not an idle close
 
   std::string origin() const { return "http://" + url.host + ":" + std::to_string(url.port); }
 
@@ -66,6 +70,8 @@ struct HttpConnection::Impl {
 
   [[noreturn]] void lost(const std::string& what) {
     stream.reset();
+    pending.clear();
+    written = 0;
     throw ConnectionError(origin() + ": " + what);
   }
 
@@ -155,33 +161,71 @@ bool closed_by_peer(const error_code& ec) {
 
 }  // namespace
 
-void HttpConnection::get_all(const std::vector<std::string>& targets, const OnAnswer& on_answer) {
+void HttpConnection::send(const std::string& target) {
   Impl& c = *impl_;
-  size_t sent = 0, answered = 0;
-  bool fresh = false;  // no answer yet on this connection: a close now is the server's answer, not an idle close
-  while (answered < targets.size()) {
-    if (!c.stream) {
-      c.connect();
-      ++counters_.connections;
-      sent = answered;
-      fresh = true;
-    }
+  if (c.pending.size() >= c.options.in_flight) fail("http", "more than in_flight GETs pending");
+  c.pending.push_back(target);
+  flush();
+}
+
+// Writes what is pending and not yet written, on a new connection if there is none. A kept-alive
+// connection the server closed is dropped, for receive() to send again on a new one.
+void HttpConnection::flush() {
+  Impl& c = *impl_;
+  if (!c.stream) {
+    c.connect();
+    ++counters_.connections;
+    c.written = 0;
+    c.fresh = true;
+  }
+  while (c.written < c.pending.size()) {
     error_code ec;
-    bool ok = true;
-    while (ok && sent < targets.size() && sent - answered < c.options.in_flight) ok = c.write(targets[sent++], counters_, ec);
+    if (!c.write(c.pending[c.written], counters_, ec)) {
+      if (!c.fresh && closed_by_peer(ec)) {
+        c.stream.reset();
+        return;
+      }
+      c.lost(c.reason(ec, c.options.io_timeout) + " (" + c.pending[c.written] + ")");
+    }
+    ++c.written;
+  }
+}
+
+// At most two passes an answer: a closed kept-alive connection is replaced by a fresh one, and a fresh
+// one that fails is an error.
+HttpAnswer HttpConnection::receive() {
+  Impl& c = *impl_;
+  if (c.pending.empty()) fail("http", "receive() with no GET pending");
+  for (;;) {
+    flush();
+    if (!c.stream) continue;
+    error_code ec;
     bool keep_alive = false;
-    std::optional<HttpAnswer> answer;
-    if (ok) answer = c.read(counters_, keep_alive, ec);
+    std::optional<HttpAnswer> answer = c.read(counters_, keep_alive, ec);
     if (!answer) {
-      if (!fresh && closed_by_peer(ec)) {
+      if (!c.fresh && closed_by_peer(ec)) {
         c.stream.reset();  // a kept-alive connection the server closed: again on a new one
         continue;
       }
-      c.lost(c.reason(ec, c.options.io_timeout) + " (" + targets[answered] + ")");
+      c.lost(c.reason(ec, c.options.io_timeout) + " (" + c.pending.front() + ")");
     }
-    fresh = false;
-    on_answer(answered++, std::move(*answer));
+    c.fresh = false;
+    c.pending.pop_front();
+    --c.written;
     if (!keep_alive) c.stream.reset();
+    return std::move(*answer);
+  }
+}
+
+size_t HttpConnection::pending() const { return impl_->pending.size(); }
+size_t HttpConnection::room() const { return impl_->options.in_flight - impl_->pending.size(); }
+
+void HttpConnection::get_all(const std::vector<std::string>& targets, const OnAnswer& on_answer) {
+  if (pending() != 0) fail("http", "get_all() with GETs of another caller pending");
+  size_t sent = 0;
+  for (size_t answered = 0; answered < targets.size(); ++answered) {
+    while (sent < targets.size() && room() > 0) send(targets[sent++]);
+    on_answer(answered, receive());
   }
 }
 

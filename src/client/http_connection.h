@@ -57,9 +57,20 @@ class HttpConnection {
   void get_all(const std::vector<std::string>& targets, const OnAnswer& on_answer);
   HttpAnswer get(const std::string& target);
 
+  // The same pipeline by hand, for a caller that keeps GETs in flight between calls (the receiver-driven
+  // client's frame budget): send() writes a GET now, connecting first if need be, and at most
+  // options.in_flight may be pending; receive() reads the answer to the oldest pending one, with the same
+  // reconnect and deadlines as get_all. HTTP/1.1 cannot take a GET back once written: only closing the
+  // connection would, so what is sent is read.
+  void send(const std::string& target);
+  HttpAnswer receive();
+  size_t pending() const;
+  size_t room() const;  // GETs send() may still write: options.in_flight - pending()
+
   const HttpCounters& counters() const { return counters_; }
 
  private:
+  void flush();
   struct Impl;
   std::unique_ptr<Impl> impl_;
   HttpCounters counters_;

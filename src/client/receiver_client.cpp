@@ -1,9 +1,14 @@
 // The receiver-driven client (receiver_client.h): the sender-driven client's frame loop, with the client
 // choosing the splits itself — the leaves qrefine wants split, most screen area first — and fetching them
-// by id with the cacheable GET form.
+// by id with the cacheable GET form. With a frame budget it keeps, between frames, the ranked ids not yet
+// sent and the GETs on the wire; each view ranks the queue anew (cheng-ooi §4.2) and drops what it no
+// longer wants, and spare room in the pipe goes to the extrapolated next view's splits (prefetch).
 #include "client/receiver_client.h"
 
 #include <algorithm>
+#include <cmath>
+#include <iterator>
+#include <optional>
 #include <set>
 #include <utility>
 #include <nlohmann/json.hpp>
@@ -15,6 +20,7 @@
 #include "protocol/split_request.h"
 #include "protocol/url_segment.h"
 #include "refine/adapt.h"
+#include "refine/criteria.h"
 
 namespace pms::client {
 namespace {
@@ -110,25 +116,23 @@ void ReceiverClient::open(const std::string& model) {
   }
 }
 
-// The leaves the last adapt() could not split, the visible ones by the pixels of their faces, then the
-// rest (forced chains' leaves can be out of sight) in the order adapt() found them.
-std::vector<VertexId> ReceiverClient::ranked_missing(const Camera& camera) {
-  SelectiveRefinement& refinement = session_.refinement();
-  const std::span<const uint32_t> missing = refinement.missing();
-  std::vector<uint32_t> sorted(missing.begin(), missing.end());
+// `slots` (leaves the client holds) as ids: the visible ones by the pixels of their faces as `view` sees
+// the mesh, then the rest (forced chains' leaves can be out of sight) in the order given.
+std::vector<VertexId> ReceiverClient::ranked(std::span<const uint32_t> slots, const ViewParams& view) {
+  std::vector<uint32_t> sorted(slots.begin(), slots.end());
   std::sort(sorted.begin(), sorted.end());
   sorted.erase(std::unique(sorted.begin(), sorted.end()), sorted.end());
   const auto wanted = [&sorted](uint32_t slot) { return std::binary_search(sorted.begin(), sorted.end(), slot); };
-  const std::vector<VertexArea>& ranked = importance_.rank(session_.mesh(), session_.view_params(camera), wanted);
+  const std::vector<VertexArea>& by_area = importance_.rank(session_.mesh(), view, wanted);
   VertexHierarchy& hierarchy = session_.hierarchy();
   std::vector<uint8_t> taken(sorted.size(), 0);
   std::vector<VertexId> ids;
   ids.reserve(sorted.size());
-  for (const VertexArea& area : ranked) {
+  for (const VertexArea& area : by_area) {
     taken[size_t(std::lower_bound(sorted.begin(), sorted.end(), area.slot) - sorted.begin())] = 1;
     ids.push_back(hierarchy.id(area.slot));
   }
-  for (const uint32_t slot : missing) {
+  for (const uint32_t slot : slots) {
     const size_t at = size_t(std::lower_bound(sorted.begin(), sorted.end(), slot) - sorted.begin());
     if (taken[at]) continue;
     taken[at] = 1;
@@ -137,16 +141,35 @@ std::vector<VertexId> ReceiverClient::ranked_missing(const Camera& camera) {
   return ids;
 }
 
+// What a GET names for `id`: the id itself (lists) or the root of the block holding it (blocks).
+VertexId ReceiverClient::key(VertexId id) const {
+  if (options_.fetch == FetchPolicy::lists) return id;
+  const int band = int(options_.block_depth) + 1;
+  return ancestor_at_depth(id, id.depth() / band * band);
+}
+
+// The ids the GETs on the wire name, in code order.
+std::vector<VertexId> ReceiverClient::keys_on_wire() const {
+  std::vector<VertexId> keys;
+  for (const Request& sent : wire_) keys.insert(keys.end(), sent.request.ids.begin(), sent.request.ids.end());
+  std::sort(keys.begin(), keys.end(), protocol::code_order);
+  return keys;
+}
+
+std::vector<ReceiverClient::Request> ReceiverClient::requests_for(const std::vector<VertexId>& ids) const {
+  return options_.fetch == FetchPolicy::blocks ? block_requests(ids) : list_requests(ids);
+}
+
 // ids_per_request ids to a URL, in rank order: each URL is the code of its id set.
-ReceiverClient::Requests ReceiverClient::list_requests(const std::vector<VertexId>& ids) const {
-  Requests out;
+std::vector<ReceiverClient::Request> ReceiverClient::list_requests(const std::vector<VertexId>& ids) const {
+  std::vector<Request> out;
   for (size_t begin = 0; begin < ids.size(); begin += options_.ids_per_request) {
     const size_t end = std::min(ids.size(), begin + options_.ids_per_request);
-    out.requests.push_back({0, std::vector<VertexId>(ids.begin() + begin, ids.begin() + end)});
+    Request& r = out.emplace_back();
+    r.request = {0, std::vector<VertexId>(ids.begin() + begin, ids.begin() + end)};
     // The answer comes in code order, which format 2's bands are read in.
-    std::sort(out.requests.back().ids.begin(), out.requests.back().ids.end(), protocol::code_order);
-    const std::vector<uint8_t> code = protocol::encode_split_request(out.requests.back());
-    out.targets.push_back(protocol::model_path(model_) + "/splits/" + protocol::base64url_encode(code));
+    std::sort(r.request.ids.begin(), r.request.ids.end(), protocol::code_order);
+    r.target = protocol::model_path(model_) + "/splits/" + protocol::base64url_encode(protocol::encode_split_request(r.request));
   }
   return out;
 }
@@ -156,73 +179,265 @@ ReceiverClient::Requests ReceiverClient::list_requests(const std::vector<VertexI
 // above it would have come with its own block, so the id is that block's root, a vertex the client has,
 // and no block is fetched twice (it would have brought the id): no record arrives twice. A block's answer is that of the request
 // "its root, block_depth levels down", which is how format 2's bands are read.
-ReceiverClient::Requests ReceiverClient::block_requests(const std::vector<VertexId>& ids) const {
-  const int band = int(options_.block_depth) + 1;
+std::vector<ReceiverClient::Request> ReceiverClient::block_requests(const std::vector<VertexId>& ids) const {
   std::set<std::pair<uint32_t, uint64_t>> asked;
-  Requests out;
+  std::vector<Request> out;
   for (const VertexId id : ids) {
-    const VertexId root = ancestor_at_depth(id, id.depth() / band * band);
+    const VertexId root = key(id);
     if (!asked.emplace(root.tree, root.node).second) continue;
-    out.targets.push_back(block_target(model_, root, options_.block_depth));
-    out.requests.push_back({options_.block_depth, {root}});
+    Request& r = out.emplace_back();
+    r.target = block_target(model_, root, options_.block_depth);
+    r.request = {options_.block_depth, {root}};
   }
   return out;
 }
 
-// GETs the splits of `ids` in their order (as the policy shapes the URLs) and attaches every answer as it
-// arrives. Returns the splits attached.
-size_t ReceiverClient::fetch(const std::vector<VertexId>& ids) {
-  const Requests asked = options_.fetch == FetchPolicy::blocks ? block_requests(ids) : list_requests(ids);
+// Adapts to the view set and ranks what it wants anew (cheng-ooi §4.2): the GETs on the wire learn whether
+// this view still wants their ids (HTTP/1.1 cannot take them back: their answers are read and attached, the
+// unwanted ids counted as stale arrivals), and the queue becomes this view's wants not on the wire, in rank
+// order. Ids queued for an earlier view that this one does not want are dropped unsent: the cancel. Returns
+// whether the view wants anything it does not hold.
+bool ReceiverClient::rerank(const Camera& camera) {
+  SelectiveRefinement& refinement = session_.refinement();
+  adapt_for_view(refinement);
+  std::vector<VertexId> ids = ranked(refinement.missing(), session_.view_params(camera));
+  std::vector<VertexId> wanted;
+  wanted.reserve(ids.size());
+  for (const VertexId id : ids) wanted.push_back(key(id));
+  std::sort(wanted.begin(), wanted.end(), protocol::code_order);
+  const auto in = [](const std::vector<VertexId>& set, VertexId id) {
+    return std::binary_search(set.begin(), set.end(), id, protocol::code_order);
+  };
+  for (Request& sent : wire_) {
+    const auto unwanted = uint32_t(std::count_if(sent.request.ids.begin(), sent.request.ids.end(),
+                                                 [&](VertexId id) { return !in(wanted, id); }));
+    sent.wanted = unwanted < sent.request.ids.size();
+    if (!sent.prefetch) sent.stale = unwanted;
+  }
+  const std::vector<VertexId> on_wire = keys_on_wire();
+  std::erase_if(ids, [&](VertexId id) { return in(on_wire, key(id)); });
+  std::vector<Request> queue = requests_for(ids);
+  std::vector<VertexId> queued;
+  for (const Request& r : queue) queued.insert(queued.end(), r.request.ids.begin(), r.request.ids.end());
+  std::sort(queued.begin(), queued.end(), protocol::code_order);
+  for (const Request& r : queue_)
+    totals_.cancelled += uint64_t(std::count_if(r.request.ids.begin(), r.request.ids.end(),
+                                                [&](VertexId id) { return !in(queued, id); }));
+  queue_.assign(std::make_move_iterator(queue.begin()), std::make_move_iterator(queue.end()));
+  return round_open();
+}
+
+// The view wants something not in yet: queued, or on the wire.
+bool ReceiverClient::round_open() const {
+  return !queue_.empty() ||
+         std::any_of(wire_.begin(), wire_.end(), [](const Request& sent) { return sent.wanted; });
+}
+
+bool ReceiverClient::over_budget(uint32_t answers, std::chrono::steady_clock::time_point start) const {
+  if (options_.frame_answers != 0 && answers >= options_.frame_answers) return true;
+  return options_.frame_budget_ms != 0 &&
+         std::chrono::steady_clock::now() - start >= std::chrono::milliseconds(options_.frame_budget_ms);
+}
+
+void ReceiverClient::send(Request&& request) {
+  http_.send(request.target);
+  ++totals_.split_requests;
+  wire_.push_back(std::move(request));
+}
+
+// The queue's head onto the wire while the pipe has room.
+void ReceiverClient::fill_pipe() {
+  while (!queue_.empty() && http_.room() > 0) {
+    send(std::move(queue_.front()));
+    queue_.pop_front();
+  }
+}
+
+// Reads the oldest answer due and attaches its splits. Returns the splits attached.
+size_t ReceiverClient::receive_one(ReceiverFrame& out) {
+  const HttpAnswer answer = http_.receive();
+  const Request sent = std::move(wire_.front());
+  wire_.pop_front();
+  if (answer.status != 200) refused(sent.target, answer);
+  totals_.cache_hits += answer.cache_status == "HIT";
+  totals_.stale_arrivals += sent.stale;
   size_t attached = 0;
-  http_.get_all(asked.targets, [&](size_t index, HttpAnswer&& answer) {
-    if (answer.status != 200) refused(asked.targets[index], answer);
-    cache_hits_ += answer.cache_status == "HIT";
-    if (records_format_ == 2) {
-      attached += session_.on_split_bands(answer.body, asked.requests[index], codec_);
-    } else {
-      const protocol::VSplits batch = protocol::decode_vsplits(answer.body, session_.context());
-      session_.on_vsplits(batch);
-      attached += batch.splits.size();
-    }
-    if (options_.on_attached) options_.on_attached();
-  });
-  split_requests_ += asked.targets.size();
+  if (records_format_ == 2) {
+    attached = session_.on_split_bands(answer.body, sent.request, codec_);
+  } else {
+    const protocol::VSplits batch = protocol::decode_vsplits(answer.body, session_.context());
+    session_.on_vsplits(batch);
+    attached = batch.splits.size();
+  }
+  out.report.vsplits += attached;
+  if (options_.on_attached) options_.on_attached();
   return attached;
 }
 
-ReceiverFrame ReceiverClient::frame(const Camera& camera) {
+namespace {
+
+// The camera one frame on, if it moves as it did from `a` to `b`: the eye one step further, the view
+// direction turned on as far again (linearly, renormalised), at b's distance from its target; b's up, field
+// of view and viewport. Nothing when a direction is degenerate.
+std::optional<Camera> extrapolate(const Camera& a, const Camera& b) {
+  float da[3], db[3];
+  for (int i = 0; i < 3; ++i) {
+    da[i] = a.target[i] - a.eye[i];
+    db[i] = b.target[i] - b.eye[i];
+  }
+  const float la = std::sqrt(da[0] * da[0] + da[1] * da[1] + da[2] * da[2]);
+  const float lb = std::sqrt(db[0] * db[0] + db[1] * db[1] + db[2] * db[2]);
+  if (!(la > 0) || !(lb > 0)) return std::nullopt;
+  float d[3];
+  for (int i = 0; i < 3; ++i) d[i] = 2 * db[i] / lb - da[i] / la;
+  const float ld = std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+  if (!(ld > 1e-6f)) return std::nullopt;
+  Camera next = b;
+  for (int i = 0; i < 3; ++i) {
+    next.eye[i] = 2 * b.eye[i] - a.eye[i];
+    next.target[i] = next.eye[i] + d[i] / ld * lb;
+  }
+  return next;
+}
+
+}  // namespace
+
+// The leaves held that `view` would want split: reached from the roots through nodes qrefine wants split
+// (criteria.h, the same function adapt() evaluates), in walk order. Leaves of the model never qualify
+// (qrefine is strict), so each names a split the server has. A forced chain's leaf is not predicted.
+std::vector<uint32_t> ReceiverClient::leaves_wanted(const ViewParams& view) {
+  const ViewCriteria criteria = make_criteria(view, options_.tolerance);
+  const VertexHierarchy& hierarchy = session_.hierarchy();
+  const float scale = session_.base().scale;
+  std::vector<uint32_t> stack, leaves;
+  for (uint32_t tree = hierarchy.root_count(); tree-- > 0;) stack.push_back(hierarchy.root_slot(tree));
+  while (!stack.empty()) {
+    const uint32_t slot = stack.back();
+    stack.pop_back();
+    if (!qrefine(criteria, hierarchy.position(slot), dequantize_refine(hierarchy.refine(slot), scale))) continue;
+    if (hierarchy.is_leaf(slot)) {
+      leaves.push_back(slot);
+      continue;
+    }
+    stack.push_back(hierarchy.first_child(slot) + 1);
+    stack.push_back(hierarchy.first_child(slot));
+  }
+  return leaves;
+}
+
+// Prefetch along the predicted path: with the view's wants all sent, the pipe's free room goes to what the
+// next camera (extrapolated) would want and the client neither holds nor has asked for, in rank order as
+// that camera would see the mesh. Their splits are attached as held data like any answer's; adapt() makes
+// them only when a view wants them.
+void ReceiverClient::prefetch() {
+  if (cameras_.size() < 2 || http_.room() == 0) return;
+  const std::optional<Camera> next = extrapolate(cameras_[0], cameras_[1]);
+  if (!next) return;
+  const ViewParams view = session_.view_params(*next);
+  std::vector<VertexId> ids = ranked(leaves_wanted(view), view);
+  const std::vector<VertexId> on_wire = keys_on_wire();
+  std::erase_if(ids, [&](VertexId id) {
+    return std::binary_search(on_wire.begin(), on_wire.end(), key(id), protocol::code_order);
+  });
+  std::vector<Request> requests = requests_for(ids);
+  for (size_t i = 0; i < requests.size() && http_.room() > 0; ++i) {
+    requests[i].prefetch = true;
+    requests[i].wanted = false;
+    prefetched_.insert(prefetched_.end(), requests[i].request.ids.begin(), requests[i].request.ids.end());
+    totals_.prefetched += requests[i].request.ids.size();
+    send(std::move(requests[i]));
+  }
+}
+
+// Prefetched ids whose splits the mesh has made (the front runs below them), counted once and forgotten.
+uint32_t ReceiverClient::count_prefetch_used() {
+  const VertexHierarchy& hierarchy = session_.hierarchy();
+  const SelectiveMesh& mesh = session_.mesh();
+  const auto used = [&](VertexId id) {
+    const uint32_t slot = hierarchy.find(id);
+    if (slot == kNone || hierarchy.is_leaf(slot)) return false;  // not in yet
+    for (uint32_t s = slot; s != kNone; s = hierarchy.parent(s))
+      if (mesh.is_active(s)) return false;
+    return true;
+  };
+  const size_t before = prefetched_.size();
+  std::erase_if(prefetched_, used);
+  const auto count = uint32_t(before - prefetched_.size());
+  totals_.prefetch_used += count;
+  return count;
+}
+
+ReceiverFrame ReceiverClient::frame(const Camera& camera) { return run(camera, false); }
+
+// Rounds of adapt -> rank -> GET -> attach until the view wants nothing more or the budget is spent;
+// prefetch only in a path's frames, not while settling. A round ends when the answers to what it asked for are in; a frame's
+// first round re-ranks what the last frame left queued.
+ReceiverFrame ReceiverClient::run(const Camera& camera, bool settling) {
   if (!session_.has_model()) fail("stream", "no model open");
   ReceiverFrame out;
   out.report.frame = ++frame_;
   const HttpCounters before = http_.counters();
-  const uint64_t requests_before = split_requests_, hits_before = cache_hits_;
+  const ReceiverTotals totals_before = totals_;
   const auto start = std::chrono::steady_clock::now();
-  SelectiveRefinement& refinement = session_.refinement();
-  refinement.set_view(session_.view_params(camera));
-  // Each round's answers let adapt() go one level deeper into the front; a model's depth bounds the rounds.
-  for (uint32_t round = 0; round < 4096; ++round) {
-    adapt_for_view(refinement);
-    if (refinement.missing().empty()) break;
-    ++out.rounds;
-    out.report.requested = true;
-    const size_t received = fetch(ranked_missing(camera));
-    out.report.vsplits += received;
-    if (received == 0) break;
+  if (cameras_.size() == 2) cameras_.erase(cameras_.begin());
+  cameras_.push_back(camera);
+  session_.refinement().set_view(session_.view_params(camera));
+  const bool may_prefetch = options_.prefetch && !settling;  // nothing follows the settling
+  bool prefetched = false;
+  bool wants = rerank(camera);
+  out.rounds = wants;
+  uint32_t answers = 0;
+  size_t attached = 0;  // this round
+  // A round's answers let adapt() go one level deeper into the front; a model's depth bounds the rounds.
+  for (uint32_t round = 0; wants && round < 4096;) {
+    fill_pipe();
+    if (may_prefetch && !prefetched && queue_.empty()) {
+      prefetch();
+      prefetched = true;
+    }
+    if (answers > 0 && over_budget(answers, start)) break;
+    if (wire_.empty()) break;
+    attached += receive_one(out);
+    ++answers;
+    if (round_open()) continue;
+    if (attached == 0) break;  // a round that brought nothing: the server has no more for this view
+    attached = 0;
+    ++round;
+    wants = rerank(camera);
+    out.rounds += wants;
   }
+  if (may_prefetch && !prefetched && !wants) prefetch();
+  out.satisfied = !wants;
+  out.prefetch_used = count_prefetch_used();
+  out.report.requested = out.rounds > 0;
   if (out.report.requested)
     out.report.latency_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
   const HttpCounters& after = http_.counters();
   out.report.up_bytes = after.bytes_up - before.bytes_up;
   out.report.down_bytes = after.bytes_down - before.bytes_down;
   out.payload_down = after.payload_down - before.payload_down;
-  out.split_requests = uint32_t(split_requests_ - requests_before);
-  out.cache_hits = uint32_t(cache_hits_ - hits_before);
+  out.split_requests = uint32_t(totals_.split_requests - totals_before.split_requests);
+  out.cache_hits = uint32_t(totals_.cache_hits - totals_before.cache_hits);
+  out.cancelled = uint32_t(totals_.cancelled - totals_before.cancelled);
+  out.stale_arrivals = uint32_t(totals_.stale_arrivals - totals_before.stale_arrivals);
+  out.prefetched = uint32_t(totals_.prefetched - totals_before.prefetched);
+  for (const Request& r : queue_) out.queued += uint32_t(r.request.ids.size());
+  out.in_flight = uint32_t(wire_.size());
   out.report.faces = session_.mesh().face_count();
   return out;
 }
 
 void ReceiverClient::settle(const Camera& camera) {
-  frame(camera);
+  // Each frame reads an answer or sends nothing more: a frame that brought nothing and left nothing in
+  // flight will not be followed by one that does.
+  settle_frames_ = 0;
+  for (;;) {
+    const ReceiverFrame r = run(camera, true);
+    ++settle_frames_;
+    if (r.satisfied || (r.report.vsplits == 0 && r.in_flight == 0)) break;
+  }
+  ReceiverFrame rest;
+  while (!wire_.empty()) receive_one(rest);  // prefetched or stale: read, as every GET sent is
   session_.refinement().converge();
 }
 

@@ -6,7 +6,9 @@
 #include <chrono>
 #include <nlohmann/json.hpp>
 #include <cstdint>
+#include <deque>
 #include <functional>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -38,6 +40,16 @@ struct ReceiverOptions {
   uint32_t ids_per_request = 64;   // lists: split ids in one GET /splits/{code}
   uint32_t block_depth = 2;        // blocks: levels below a block's root; GET /models suggests the same
   HttpOptions http;                // deadlines, requests in flight, answer limits
+  // The frame budget (docs/protocol.md, "Frame budget, cancel and prefetch"): with either set, a frame also ends once it has
+  // read frame_answers answers or spent frame_budget_ms (checked between answers, so a frame overruns by at
+  // most one answer; one answer is always read when one is due). The rest carries to the next frame: GETs
+  // sent stay in flight and are read then, ids not yet sent stay queued and are re-ranked for the next view,
+  // which drops those it no longer wants. Both 0: each frame runs until its view is satisfied.
+  uint32_t frame_budget_ms = 0;
+  uint32_t frame_answers = 0;
+  // When the view's wants are all sent and the pipe has room, GET (one pipe-full a frame) the splits the
+  // camera extrapolated from the last two frames' would want.
+  bool prefetch = false;
   // Called after each answer's splits are attached, before the next answer is read (a progress display's
   // hook; the bench's E6 samples the mesh there). It may adapt the session's mesh; it must not fetch.
   std::function<void()> on_attached = {};
@@ -49,6 +61,19 @@ struct ReceiverFrame {
   uint32_t split_requests = 0; // GETs of split ids this frame
   uint32_t cache_hits = 0;     // of those, answers a cache in between served (X-Cache-Status: HIT)
   uint32_t rounds = 0;         // adapt -> request -> attach cycles
+  uint32_t cancelled = 0;      // queued ids (blocks: block roots) dropped unsent: this view no longer wants them
+  uint32_t stale_arrivals = 0; // ids whose answers came after the view stopped wanting them (attached all the same)
+  uint32_t prefetched = 0;     // ids asked for along the predicted path
+  uint32_t prefetch_used = 0;  // prefetched ids whose splits the mesh has made by this frame's end
+  uint32_t queued = 0;         // ids left queued at the frame's end
+  uint32_t in_flight = 0;      // GETs left on the wire at the frame's end
+  bool satisfied = true;       // the view wants nothing more: local refinement's mesh for it
+};
+
+// A client's counts since it opened the model.
+struct ReceiverTotals {
+  uint64_t split_requests = 0, cache_hits = 0;
+  uint64_t cancelled = 0, stale_arrivals = 0, prefetched = 0, prefetch_used = 0;
 };
 
 class ReceiverClient {
@@ -59,25 +84,46 @@ class ReceiverClient {
   void open(const std::string& model);  // GET /models/{m}/base
 
   // One frame: adapt; while qrefine wants splits the client lacks, rank them by screen area, GET them
-  // in that order with several requests in flight, attach what arrives, adapt again.
+  // in that order with several requests in flight, attach what arrives, adapt again; within the frame
+  // budget, if any.
   ReceiverFrame frame(const Camera& camera);
+  // Holds the last camera for frames (within the budget, without prefetch) until its view is satisfied,
+  // then reads what is still in flight and converges. settle_frames(): how many it took (1 unbudgeted).
   void settle(const Camera& camera);
+  uint32_t settle_frames() const { return settle_frames_; }
 
   ClientSession& session() { return session_; }
   const HttpCounters& counters() const { return http_.counters(); }
-  uint64_t split_requests() const { return split_requests_; }
-  uint64_t cache_hits() const { return cache_hits_; }
+  const ReceiverTotals& totals() const { return totals_; }
+  uint64_t split_requests() const { return totals_.split_requests; }
+  uint64_t cache_hits() const { return totals_.cache_hits; }
 
  private:
-  nlohmann::json catalogue();
-  std::vector<VertexId> ranked_missing(const Camera& camera);
-  struct Requests {
-    std::vector<std::string> targets;               // the URLs, in the order they are sent
-    std::vector<protocol::SplitRequest> requests;   // what each names: format 2's answers are read by it
+  // One GET: its URL and the ids it names (lists: the ids; blocks: the block's root).
+  struct Request {
+    std::string target;
+    protocol::SplitRequest request;  // format 2's answers are read by it
+    bool prefetch = false;           // asked for along the predicted path
+    bool wanted = true;              // the last ranking wants one of its ids
+    uint32_t stale = 0;              // of its ids, those the last ranking no longer wants (not prefetched ones)
   };
-  Requests list_requests(const std::vector<VertexId>& ids) const;
-  Requests block_requests(const std::vector<VertexId>& ids) const;
-  size_t fetch(const std::vector<VertexId>& ids);
+  nlohmann::json catalogue();
+  ReceiverFrame run(const Camera& camera, bool settling);
+  std::vector<VertexId> ranked(std::span<const uint32_t> slots, const ViewParams& view);
+  VertexId key(VertexId id) const;
+  std::vector<VertexId> keys_on_wire() const;
+  std::vector<Request> requests_for(const std::vector<VertexId>& ids) const;
+  std::vector<Request> list_requests(const std::vector<VertexId>& ids) const;
+  std::vector<Request> block_requests(const std::vector<VertexId>& ids) const;
+  bool rerank(const Camera& camera);
+  bool round_open() const;
+  bool over_budget(uint32_t answers, std::chrono::steady_clock::time_point start) const;
+  void fill_pipe();
+  void send(Request&& request);
+  size_t receive_one(ReceiverFrame& out);
+  std::vector<uint32_t> leaves_wanted(const ViewParams& view);
+  void prefetch();
+  uint32_t count_prefetch_used();
 
   ReceiverOptions options_;
   HttpConnection http_;
@@ -87,8 +133,14 @@ class ReceiverClient {
   uint32_t records_format_ = 1;  // the catalogue's word for the model: 2 = compact records, coded by codec_
   SplitCodec codec_;
   uint32_t frame_ = 0;
-  uint64_t split_requests_ = 0;
-  uint64_t cache_hits_ = 0;
+  uint32_t settle_frames_ = 0;
+  ReceiverTotals totals_;
+  std::deque<Request> queue_;  // ranked for the last view, not yet sent
+  std::deque<Request> wire_;   // sent, in the order their answers come
+  // Prefetched ids whose splits the mesh has not made yet: each id at most once (it is a leaf until its
+  // answer comes, and on the wire till then), so bounded by the model's splits.
+  std::vector<VertexId> prefetched_;
+  std::vector<Camera> cameras_;       // the last two frames' (prefetch extrapolates them)
 };
 
 }  // namespace pms::client

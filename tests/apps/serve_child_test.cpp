@@ -5,6 +5,7 @@
 #include <utility>  // before asio with C++20
 #include <boost/asio.hpp>
 #include <nlohmann/json.hpp>
+#include <fstream>
 #include <functional>
 #include <string>
 
@@ -132,6 +133,52 @@ TEST(ServeChild, ServesHttpBesideTcpAndCountsIt) {
   EXPECT_EQ(stopped.line["http"]["requests"], 3);
   EXPECT_EQ(stopped.line["http"]["client_errors"], 1);
   EXPECT_EQ(stopped.sessions_opened, 0u);  // HTTP has no sessions
+}
+
+// "element face N" of a PLY's header; 0 when there is none.
+uint64_t ply_face_count(const std::filesystem::path& ply) {
+  std::ifstream in(ply, std::ios::binary);
+  for (std::string line; std::getline(in, line) && line != "end_header";)
+    if (line.rfind("element face ", 0) == 0) return std::stoull(line.substr(13));
+  return 0;
+}
+
+// `stream --mode receiver` with a frame budget and prefetch: the JSON reports the work carried between
+// frames, and the flight ends on the faces of the unbudgeted one (the budget changes when, not what).
+TEST(ServeChild, StreamReceiverWithAFrameBudgetReportsWhatItCarried) {
+  const auto dir = test::temp_dir();
+  const auto pms = small_model(dir);
+  ServeChild server(PMSTREAM_BINARY, {pms.string(), "--http-port", "0"});
+  const uint16_t http_port = server.listening()["http_port"];
+  const std::string path = (dir / "zoom.json").string();
+  ASSERT_EQ(test::run_pmstream("path zoom --model " + pms.string() + " --frames 12 -o " + path).exit_code, 0);
+  const std::string stream = "stream --mode receiver --server http://127.0.0.1:" + std::to_string(http_port) +
+                             " --model terrain --path " + path + " --ids-per-request 16 --json";
+  const test::CliRun plain = test::run_pmstream(stream + " --save-mesh " + (dir / "plain.ply").string());
+  const test::CliRun budgeted = test::run_pmstream(stream + " --frame-answers 2 --prefetch --save-mesh " +
+                                                   (dir / "budgeted.ply").string());
+  ASSERT_EQ(plain.exit_code, 0) << plain.err;
+  ASSERT_EQ(budgeted.exit_code, 0) << budgeted.err;
+  const json a = json::parse(plain.out), b = json::parse(budgeted.out);
+  EXPECT_EQ(a["frame_answers"], 0);
+  EXPECT_EQ(a["frames_unsatisfied"], 0);
+  EXPECT_EQ(a["settle_frames"], 1);
+  EXPECT_EQ(b["frame_answers"], 2);
+  EXPECT_EQ(b["prefetch"], true);
+  EXPECT_GT(b["frames_unsatisfied"].get<uint64_t>(), 0u);
+  uint64_t carried = 0;
+  for (const json& frame : b["frames"]) {
+    for (const char* field : {"satisfied", "queued", "in_flight", "cancelled", "stale_arrivals", "prefetched",
+                              "prefetch_used"})
+      EXPECT_TRUE(frame.contains(field)) << field;
+    carried += frame["in_flight"].get<uint64_t>();
+  }
+  EXPECT_GT(carried, 0u) << "GETs left in flight at a frame's end";
+  for (const char* total : {"cancelled", "stale_arrivals", "prefetched", "prefetch_used"})
+    EXPECT_TRUE(b.contains(total)) << total;
+  // Settled on the last camera, both meshes are its local refinement (Receiver.* checks face by face).
+  EXPECT_EQ(ply_face_count(dir / "plain.ply"), ply_face_count(dir / "budgeted.ply"));
+  EXPECT_GT(ply_face_count(dir / "plain.ply"), 0u);
 }
 
 // The HTTP size limits are the command line's: a URL one byte over --http-max-url-bytes gets 414, one at

@@ -1,6 +1,8 @@
 // The receiver-driven client against the HTTP server over real loopback: its mesh is local refinement's
-// for the same view and τ, a second lap asks for nothing, the ids asked for match the splits received, and a
-// server that stalls or closes mid-answer is a clear error within the deadline.
+// for the same view and τ, a second lap asks for nothing, the ids asked for match the splits received, a
+// frame budget carries work between frames (cancelling what a new view no longer wants, prefetching along
+// the path) and still ends on local refinement's mesh, and a server that stalls or closes mid-answer is a
+// clear error within the deadline.
 #include <utility>  // before asio with C++20 (docs/architecture.md, "Stack")
 #include <boost/asio.hpp>
 #include <gtest/gtest.h>
@@ -60,6 +62,8 @@ TEST(Receiver, MeshEqualsLocalRefinementAndASecondLapAsksForNothing) {
     lap1_requests += r.split_requests;
     EXPECT_EQ(r.report.up_bytes > 0, r.split_requests > 0);
     EXPECT_GE(r.report.down_bytes, r.payload_down);
+    EXPECT_TRUE(r.satisfied);  // no budget: nothing carried to the next frame, nothing cancelled
+    EXPECT_EQ(r.queued + r.in_flight + r.cancelled + r.stale_arrivals + r.prefetched, 0u);
     EXPECT_EQ(faces_by_id(client.session().mesh()), local_faces(f.snapped, camera, 1.0f))
         << "frame " << r.report.frame << " differs from local refinement";
   }
@@ -75,6 +79,113 @@ TEST(Receiver, MeshEqualsLocalRefinementAndASecondLapAsksForNothing) {
     EXPECT_EQ(r.report.down_bytes, 0u);
   }
   EXPECT_EQ(server.http.stats().requests.load(), requests_after_lap1) << "a second lap sends no request";
+}
+
+// Frames until the view is satisfied (a budgeted client finishes a view over several), at most `most`.
+uint32_t frames_to_satisfy(client::ReceiverClient& client, const Camera& camera, uint32_t most = 500) {
+  for (uint32_t n = 1; n <= most; ++n)
+    if (client.frame(camera).satisfied) return n;
+  return most + 1;
+}
+
+// With a budget of a few answers a frame, a frame ends with its view unfinished, GETs in flight and ids
+// queued; they carry over, and holding the last camera the client ends on local refinement's mesh.
+// (A time budget is the same loop with a clock; the next test checks only where it ends.)
+TEST(Receiver, AFrameBudgetCarriesTheRestAndConvergesToLocalRefinement) {
+  const Fixture& f = terrain();
+  for (const client::FetchPolicy fetch : {client::FetchPolicy::lists, client::FetchPolicy::blocks}) {
+    Server server(f.catalogue);
+    client::ReceiverOptions options;
+    options.fetch = fetch;
+    options.ids_per_request = 16;
+    options.frame_answers = 2;
+    client::ReceiverClient client(server.url(), options);
+    client.open("terrain");
+    const std::vector<Camera> path = orbit_path(f.hierarchy, 10, 0.3f);
+    uint32_t unfinished = 0, carried = 0;
+    for (const Camera& camera : path) {
+      const client::ReceiverFrame r = client.frame(camera);
+      unfinished += !r.satisfied;
+      carried += r.in_flight > 0 && r.queued > 0;
+      EXPECT_LE(r.in_flight, options.http.in_flight);
+    }
+    EXPECT_GT(unfinished, 5u) << client::fetch_policy_name(fetch);
+    EXPECT_GT(carried, 0u) << "frames ending with GETs in flight and ids queued";
+    const uint32_t frames = frames_to_satisfy(client, path.back());
+    EXPECT_GT(frames, 1u);
+    EXPECT_LE(frames, 500u);
+    EXPECT_EQ(faces_by_id(client.session().mesh()), local_faces(f.snapped, path.back(), 1.0f))
+        << client::fetch_policy_name(fetch) << ": the budgeted flight ends on local refinement's mesh";
+    EXPECT_GE(server.http.stats().splits_served.load(), client.session().splits_received());
+  }
+}
+
+TEST(Receiver, ATimeBudgetEndsFramesEarlyAndStillConverges) {
+  const Fixture& f = terrain();
+  Server server(f.catalogue);
+  client::ReceiverOptions options;
+  options.ids_per_request = 16;
+  options.frame_budget_ms = 1;  // about an answer a frame
+  client::ReceiverClient client(server.url(), options);
+  client.open("terrain");
+  const Camera camera = orbit_path(f.hierarchy, 10, 0.3f).back();
+  EXPECT_GT(frames_to_satisfy(client, camera), 1u);
+  EXPECT_EQ(faces_by_id(client.session().mesh()), local_faces(f.snapped, camera, 1.0f));
+}
+
+// A view jump while ids are queued for the old view: the new ranking drops those it does not want before
+// they are sent, answers already on their way arrive stale and are kept, and the mesh still converges.
+TEST(Receiver, AViewJumpCancelsQueuedRequestsAndStillConverges) {
+  const Fixture& f = terrain();
+  Server server(f.catalogue);
+  client::ReceiverOptions options;
+  options.ids_per_request = 8;
+  options.frame_answers = 1;
+  client::ReceiverClient client(server.url(), options);
+  client.open("terrain");
+  const Camera near = orbit_path(f.hierarchy, 10, 0.3f).back();
+  const Camera across = orbit_path(f.hierarchy, 10, 0.3f + 3.1f).back();
+  client::ReceiverFrame first;
+  for (int n = 0; n < 30; ++n) first = client.frame(near);  // deep into the near view's part of the front
+  ASSERT_FALSE(first.satisfied);
+  ASSERT_GT(first.queued, 0u);
+  ASSERT_GT(first.in_flight, 0u);
+  const client::ReceiverFrame jump = client.frame(across);
+  EXPECT_GT(jump.cancelled, 0u) << "ids queued for the old view, dropped unsent";
+  EXPECT_LE(jump.cancelled, first.queued);
+  frames_to_satisfy(client, across);
+  EXPECT_GT(client.totals().stale_arrivals, 0u) << "GETs in flight at the jump, answered and attached";
+  EXPECT_EQ(faces_by_id(client.session().mesh()), local_faces(f.snapped, across, 1.0f));
+  EXPECT_EQ(client.totals().cancelled, jump.cancelled);
+}
+
+// Prefetch along a smooth path asks for splits a later frame uses, and changes no mesh: prefetched splits
+// are held data, made only when a view wants them. Unbudgeted, every frame is local refinement's.
+TEST(Receiver, PrefetchAlongASmoothPathIsUsedAndLeavesTheMeshAsItWas) {
+  const Fixture& f = terrain();
+  for (const uint32_t budget : {0u, 8u}) {
+    Server server(f.catalogue);
+    client::ReceiverOptions options;
+    options.ids_per_request = 16;
+    options.frame_answers = budget;
+    options.prefetch = true;
+    client::ReceiverClient client(server.url(), options);
+    client.open("terrain");
+    const std::vector<Camera> path = orbit_path(f.hierarchy, 40, 0.3f);
+    for (const Camera& camera : path) {
+      const client::ReceiverFrame r = client.frame(camera);
+      if (budget == 0) {
+        EXPECT_TRUE(r.satisfied);
+        EXPECT_EQ(faces_by_id(client.session().mesh()), local_faces(f.snapped, camera, 1.0f))
+            << "frame " << r.report.frame << " with prefetch differs from local refinement";
+      }
+    }
+    frames_to_satisfy(client, path.back());
+    EXPECT_EQ(faces_by_id(client.session().mesh()), local_faces(f.snapped, path.back(), 1.0f)) << "budget " << budget;
+    EXPECT_GT(client.totals().prefetched, 0u) << "budget " << budget;
+    EXPECT_GT(client.totals().prefetch_used, 0u) << "budget " << budget;
+    EXPECT_LE(client.totals().prefetch_used, client.totals().prefetched);
+  }
 }
 
 // Fetching by blocks brings whole subtree bands, more than the view needs, yet the mesh is still local
@@ -171,6 +282,31 @@ TEST(Receiver, SurvivesTheServerClosingIdleKeptAliveConnections) {
     client.frame(camera);
     EXPECT_EQ(faces_by_id(client.session().mesh()), local_faces(f.snapped, camera, 1.0f));
   }
+  EXPECT_GT(client.counters().connections, 1u);
+}
+
+// The same with GETs left in flight across the pause: their answers came before the close and are read
+// from the socket; what was not yet written goes on a new connection.
+TEST(Receiver, GetsInFlightSurviveTheServerClosingBetweenFrames) {
+  const Fixture& f = terrain();
+  server::HttpLimits limits;
+  limits.idle_timeout_ms = 100;
+  Server server(f.catalogue, limits);
+  client::ReceiverOptions options;
+  options.ids_per_request = 16;
+  options.frame_answers = 2;
+  client::ReceiverClient client(server.url(), options);
+  client.open("terrain");
+  const std::vector<Camera> path = orbit_path(f.hierarchy, 6, 0.1f);
+  uint32_t paused_in_flight = 0;
+  for (const Camera& camera : path) {
+    const client::ReceiverFrame r = client.frame(camera);
+    paused_in_flight += r.in_flight > 0;
+    std::this_thread::sleep_for(std::chrono::milliseconds(250));
+  }
+  EXPECT_GT(paused_in_flight, 0u);
+  frames_to_satisfy(client, path.back());
+  EXPECT_EQ(faces_by_id(client.session().mesh()), local_faces(f.snapped, path.back(), 1.0f));
   EXPECT_GT(client.counters().connections, 1u);
 }
 
