@@ -5,7 +5,11 @@
 // send_queue_bytes wait), and after every call checks the bounds a hostile peer must not break: the work of
 // one call, the session's memory, the outbox, no ERROR internal. Each session's outcome is checked against
 // what it was sent (session_client.h): the right ERROR or none, every request answered, no split sent twice,
-// also to a client that reconnected and resumed from its leaves.
+// also to a client that reconnected and resumed from its leaves. The DAG mode (issue 16) is a mode like the
+// others: OPEN and resume it (the client's mesh as the front), DAG_VIEWs with every traversal, FREE and BUDGET,
+// budgets and N at and over their bounds, wild views and repeated frame numbers, among VIEWs and the rest; the
+// simulated client mirrors the session's cut and applies every DAG_OPS operation to it (legal, within the
+// DAG_VIEW's budget and N), and a quiet session's cut must be that mirror.
 // Small limits (slices of 64 nodes, batches of 16 splits, a 4 KB send queue) so slicing, batching and
 // back-pressure happen on a model small enough for hundreds of runs a second under ASan.
 #include <unistd.h>
@@ -54,6 +58,7 @@ struct Fixture {
   server::ServerLimits limits;
   float center[3] = {0, 0, 0}, diagonal = 1;
   uint64_t work_bound = 0;   // units one receive() or pump() may do
+  uint64_t dag_work_bound = 0;  // the same in a DAG session, whose one turn is a whole traversal
   size_t tags_bound = 0;     // bytes of one set of active tags
   size_t state_bound = 0;    // Session::state_bytes()
   size_t outbox_bound = 0;   // bytes waiting in the outbox
@@ -91,6 +96,11 @@ Fixture make_fixture(const BuildOptions& options) {
   // per child it ranks, so 2 x 64 on top cover a chain of 42 splits, far longer than a chain up these
   // hierarchies (depth 6 and 12) can be.
   f.work_bound = f.limits.slice_work + 2 * 64;
+  // A DAG session's traversal is one turn bounded by the cut, not by slice_work (docs/internals.md, "The DAG
+  // mode"): nodes evaluated, operations made and the cut's load and store, a few units per node at most
+  // (Session.DagAnswersAreBoundedSlices: 8 per node for the converged first answer). A resume's last turn
+  // loads the cut: a slice of leaves and every split node.
+  f.dag_work_bound = 8 * uint64_t(f.served->dag->size()) + f.limits.slice_work;
   // A window over every node, one bit each, and what growing it may leave unused (doubling at worst).
   f.tags_bound = 2 * (model.node_count() / 8 + 8 * sizeof(uint64_t)) + 64;
   // The tags, a resume's second set and a VIEW prefix's copy; a pending resume frame; the ranking,
@@ -243,7 +253,8 @@ Camera wild_camera(Input& in) {
 
 // One connection: a session, what it was sent, and the client's frames the transport has not handed over.
 struct Connection {
-  explicit Connection(const Fixture& f) : session(f.catalogue, f.limits), expect(f.served->model(), f.served->name) {}
+  explicit Connection(const Fixture& f)
+      : session(f.catalogue, f.limits), expect(f.served->model(), *f.served->dag, f.served->name) {}
   server::Session session;
   Expectation expect;
   std::deque<Frame> inbound;
@@ -253,7 +264,11 @@ struct Connection {
 class Harness {
  public:
   explicit Harness(const Fixture& f)
-      : f_(f), model_(f.served->model()), client_(model_, f.limits), c_(std::make_unique<Connection>(f)) {}
+      : f_(f),
+        model_(f.served->model()),
+        dag_(*f.served->dag),
+        client_(model_, dag_, f.limits),
+        c_(std::make_unique<Connection>(f)) {}
 
   void run(Input& in) {
     for (int op = 0; op < kMaxOps && !in.empty(); ++op) step(in);
@@ -270,6 +285,7 @@ class Harness {
     mangled_open,
     view,
     wild_view,
+    dag_view,
     close,
     raw,
     pump,
@@ -299,6 +315,8 @@ class Harness {
         const Camera camera = wild_camera(in);
         return send_view(camera, wild_float(in));
       }
+      case Op::dag_view:
+        return send_dag_view(in);
       case Op::close:
         return send(protocol::encode(protocol::Close{}));
       case Op::raw:
@@ -343,21 +361,37 @@ class Harness {
   }
   static StreamMode any_mode(Input& in) {
     constexpr StreamMode kModes[] = {StreamMode::sender_driven, StreamMode::view_independent, StreamMode::sender_plain,
-                                     StreamMode::sender_driven};
+                                     StreamMode::dag};
     return kModes[in.byte() % 4];
   }
   void send_open(Input& in) {
     const StreamMode mode = any_mode(in);
     send(protocol::encode(protocol::Open{model_name(in), {}, mode}));
   }
-  // A cut of the real hierarchy, encoded as a client would: the server must accept it (sender-driven).
+  // A cut of the real hierarchy, encoded as a client would: the server must accept it (sender-driven). In the
+  // DAG mode the front is a mesh, which the server takes when it is a cut of the DAG: one grown by legal
+  // splits, or any front of the hierarchy (mostly refused).
   void send_resume(Input& in) {
     const uint8_t pick = in.byte() % 8;
-    const StreamMode mode = pick == 0 ? StreamMode::view_independent
+    const StreamMode mode = pick == 0   ? StreamMode::view_independent
                             : pick == 1 ? StreamMode::sender_plain
+                            : pick < 5  ? StreamMode::dag
                                         : StreamMode::sender_driven;
     const std::string name = model_name(in);
-    send(protocol::encode(protocol::Open{name, shape_front(in, model_, model_.root_count, false).leaves, mode}));
+    const bool dag_cut = mode == StreamMode::dag && in.bit();
+    const std::vector<VertexId> front =
+        dag_cut ? cut_front(model_, grow_cut(in)) : shape_front(in, model_, model_.root_count, false).leaves;
+    send(protocol::encode(protocol::Open{name, front, mode}));
+  }
+  // Up to 255 legal splits, each of a split candidate the input points at when it is in Fs.
+  DagCut grow_cut(Input& in) {
+    DagCut cut(dag_);
+    for (int k = in.byte(); k > 0; --k) {
+      uint32_t n = cut.next_candidate(in.u16() % dag_.size());
+      if (n == kNone) n = cut.next_candidate(0);
+      if (n != kNone && cut.in_fs(n)) cut.split(n);
+    }
+    return cut;
   }
   // Fronts the server must mostly refuse, written bit by bit as no encoder would: other tree counts,
   // leaves below the model's, a byte added, dropped or a bit flipped (Expectation sorts out which still hold).
@@ -382,7 +416,7 @@ class Harness {
         break;
     }
     const bool overreach = in.bit();
-    const uint8_t mode_bits = in.byte() % 4;  // bit 1 view-independent, bit 2 plain: both is refused
+    const uint8_t mode_bits = in.byte() % 8;  // bit 1 view-independent, 2 plain, 3 DAG: any two are refused
     const std::string name = model_name(in);
     protocol::Writer w(MessageType::open);
     w.string(name, protocol::kMaxNameBytes, "model");
@@ -408,11 +442,34 @@ class Harness {
   void send_view(const Camera& camera, float tolerance) {
     send(protocol::encode(protocol::View{camera, tolerance, next_frame_++}));
   }
+  // A well-formed DAG_VIEW with hostile choices: each traversal and management (or a code none is), budgets and
+  // N at and beyond their bounds, a near or wild view, a frame number new, repeated or from anywhere.
+  void send_dag_view(Input& in) {
+    protocol::DagView m;
+    const bool wild = in.byte() < 48;
+    m.view.camera = wild ? wild_camera(in) : near_camera(in, f_);
+    m.view.tolerance = wild ? wild_float(in) : pick(in, {0, 0.25f, 0.5f, 1, 2, 8, 100, 1e9f});
+    const uint8_t frame = in.byte();
+    m.view.frame = frame < 200 ? next_frame_++ : frame < 240 ? next_frame_ - 1 - frame % 4 : in.u32();
+    const uint8_t traversal = in.byte();
+    m.traversal = DagTraversal(traversal < 252 ? traversal % 3 : traversal);
+    const uint8_t management = in.byte();
+    m.management = DagMode(management < 252 ? management % 2 : management);
+    const uint64_t faces = dag_.base_faces();
+    const uint64_t budgets[] = {0, 1, 2, faces - 1, faces, faces + 16, 2 * faces, 500, 3000, 1u << 20,
+                                protocol::kMaxDagBudget, protocol::kMaxDagBudget + 1, UINT64_MAX, in.u32()};
+    const uint8_t budget = in.byte();
+    if (m.management == DagMode::budget || budget >= 240) m.budget = budgets[budget % std::size(budgets)];
+    const uint32_t max_ops[] = {0, 1, 2, 3, 16, 300, protocol::kMaxDagOps - 1, protocol::kMaxDagOps,
+                                protocol::kMaxDagOps + 1, UINT32_MAX, in.u16()};
+    m.max_ops = max_ops[in.byte() % std::size(max_ops)];
+    send(protocol::encode(m));
+  }
   void send_raw(Input& in) {
-    static const uint8_t kTypes[] = {0x01, 0x02, 0x03, 0x04, 0x05, 0x81, 0x84, 0x00};
+    static const uint8_t kTypes[] = {0x01, 0x02, 0x03, 0x04, 0x05, 0x06, 0x81, 0x86, 0x00};
     const uint8_t t = in.byte();
     Frame frame;
-    frame.type = MessageType(t < 240 ? kTypes[t % 8] : t);
+    frame.type = MessageType(t < 240 ? kTypes[t % std::size(kTypes)] : t);
     const uint8_t length = in.byte();
     const size_t size = length < 200   ? length % 64
                         : length < 248 ? size_t(in.u16() % 1024)
@@ -433,7 +490,7 @@ class Harness {
       check_outcome();
     }
     protocol::Open open{f_.served->name, {}, client_.has_front() ? client_.mode() : mode};
-    if (client_.has_front() && open.mode != StreamMode::view_independent) open.resume = client_.leaves();
+    if (client_.has_front() && open.mode != StreamMode::view_independent) open.resume = client_.resume_front();
     trace([&] { return "reconnect, resuming from " + std::to_string(open.resume.size()) + " leaves"; });
     c_ = std::make_unique<Connection>(f_);
     client_.reconnect();
@@ -510,8 +567,9 @@ class Harness {
     const bool was_closing = s.closing();
     const size_t before = s.outbox().size();
     fn();
-    if (s.last_work() > f_.work_bound)
-      fail("one call did " + std::to_string(s.last_work()) + " work units, over " + std::to_string(f_.work_bound));
+    const uint64_t work_bound = s.mode() == StreamMode::dag ? f_.dag_work_bound : f_.work_bound;
+    if (s.last_work() > work_bound)
+      fail("one call did " + std::to_string(s.last_work()) + " work units, over " + std::to_string(work_bound));
     if (s.state_bytes() > f_.state_bound)
       fail("state_bytes() " + std::to_string(s.state_bytes()) + " over " + std::to_string(f_.state_bound));
     if (s.tags().memory_bytes() > f_.tags_bound)
@@ -568,6 +626,7 @@ class Harness {
 
   const Fixture& f_;
   const ModelData& model_;
+  const Dag& dag_;
   SimulatedClient client_;
   std::unique_ptr<Connection> c_;
   uint32_t next_frame_ = 0;

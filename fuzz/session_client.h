@@ -1,8 +1,9 @@
 // The client's side of a fuzzed server session (fuzz_session.cpp). Expectation follows what the session
 // was sent and says which ERROR codes, if any, it may end with; SimulatedClient reads the outbox as a real
 // client would (decode with the context of the BASE it saw, apply every split to the leaves it holds) and
-// checks each promise of docs/protocol.md on the way. A broken promise is a finding: fail() says which and
-// traps, so libFuzzer keeps the input.
+// checks each promise of docs/protocol.md on the way. In the DAG mode it keeps the client's mesh as a DagCut
+// over the served model's DAG (the mirror of the session's cut) and applies every DAG_OPS operation to it with
+// DagCut's own checks. A broken promise is a finding: fail() says which and traps, so libFuzzer keeps the input.
 #pragma once
 #include <algorithm>
 #include <cstdint>
@@ -13,6 +14,7 @@
 #include <variant>
 #include <vector>
 
+#include "common/error.h"
 #include "pm/hierarchy.h"
 #include "pm/split_record.h"
 #include "pm/vertex_id.h"
@@ -24,7 +26,11 @@
 #include "protocol/position_grid.h"
 #include "protocol/server_messages.h"
 #include "protocol/stream_context.h"
+#include "refine/dag.h"
+#include "refine/dag_cut.h"
+#include "refine/dag_traversal.h"
 #include "server/catalogue.h"
+#include "server/dag_mode.h"
 #include "server/limits.h"
 #include "server/session.h"
 
@@ -48,10 +54,22 @@ void trace(Line&& line) {
   if (on) std::fprintf(stderr, "  %s\n", std::string(line()).c_str());
 }
 
+// The cut whose mesh has the vertices `front` (a complete front of the model's trees, each a model node; empty:
+// the base mesh), or none when that mesh is no cut of the DAG: what a DAG session's resume must rebuild or refuse.
+inline std::optional<DagCut> cut_of_front(const ModelData& model, const Dag& dag, const std::vector<VertexId>& front) {
+  std::vector<uint32_t> split;
+  for (const VertexId& id : front) append_closed_splits(model, dag, model.find(id), split);
+  try {
+    return DagCut(dag, split);
+  } catch (const Error&) {
+    return std::nullopt;
+  }
+}
+
 class SimulatedClient {
  public:
-  SimulatedClient(const ModelData& model, const server::ServerLimits& limits)
-      : model_(model), limits_(limits), held_(model.node_count(), 0) {}
+  SimulatedClient(const ModelData& model, const Dag& dag, const server::ServerLimits& limits)
+      : model_(model), dag_(dag), limits_(limits), held_(model.node_count(), 0) {}
 
   // A new connection: what the old one queued and the client did not read is lost; the leaves stay.
   void reconnect() { s_ = {}; }
@@ -68,6 +86,10 @@ class SimulatedClient {
     if (std::find(s_.views.begin(), s_.views.end(), frame) != s_.views.end()) s_.frames_distinct = false;
     s_.views.push_back(frame);
     s_.last_answered = false;
+  }
+  void dag_view_sent(const protocol::DagView& view) {
+    view_sent(view.view.frame);
+    s_.dag_views.push_back(view);
   }
 
   void read(const std::vector<uint8_t>& bytes) {
@@ -96,8 +118,10 @@ class SimulatedClient {
   }
 
   bool has_front() const { return has_front_; }
-  // The client's known leaves, to resume with.
-  std::vector<VertexId> leaves() const {
+  // What the client resumes with: the vertices of its mesh in the DAG mode (DagClient::resume_front), else the
+  // leaves it knows.
+  std::vector<VertexId> resume_front() const {
+    if (front_mode_ == protocol::StreamMode::dag) return cut_front(model_, *cut_);
     std::vector<VertexId> out;
     for (uint32_t n = 0; n < model_.node_count(); ++n)
       if (held_[n]) out.push_back(model_.id(n));
@@ -117,12 +141,21 @@ class SimulatedClient {
     if (!s_.views.empty() && s_.frames_distinct)
       check(s_.last_answered, "the last VIEW's answer did not end with a final VSPLITS");
     check(session.splits_sent() == s_.splits, "splits_sent() is not what the client received");
+    if (s_.mode == protocol::StreamMode::dag) return check_cut(session);
     for (uint32_t n = 0; n < model_.node_count(); ++n)
       if (session.tags().is_active(n) != bool(held_[n]))
         fail("the session's tags differ from the client's leaves at " + to_string(model_.id(n)));
   }
 
  private:
+  // The DAG answer being read: the limits of the DAG_VIEW it answers (when that one is known, else the loosest
+  // of the candidates) and what it has made so far.
+  struct DagAnswer {
+    uint32_t frame = 0;
+    std::optional<uint64_t> budget;              // BUDGET mode's
+    std::optional<uint32_t> max_collapses, max_splits;  // N, from the session's second answer on
+    uint32_t collapses = 0, splits = 0;
+  };
   struct PerSession {
     bool greeted = false;
     uint32_t hello_oks = 0, lists = 0, catalogues = 0;
@@ -133,6 +166,10 @@ class SimulatedClient {
     bool frames_distinct = true;
     bool last_answered = false;  // the latest VIEW's final VSPLITS arrived
     uint64_t splits = 0;
+    std::vector<protocol::DagView> dag_views;  // every DAG_VIEW sent, in order
+    size_t unanswered = 0;      // dag_views before this one were answered or replaced: an answer is to a later one
+    bool dag_answered = false;  // the converged first answer is behind (or the resumed cut has a split): N applies
+    std::optional<DagAnswer> answer;
     std::optional<protocol::ErrorCode> error;
     std::string error_text;
   };
@@ -156,11 +193,18 @@ class SimulatedClient {
     check(m.root_count() == model_.root_count, "BASE with another root count than the model's");
     s_.context = protocol::stream_context(m);
     s_.context->has_refinement = s_.mode == protocol::StreamMode::sender_driven;
+    has_front_ = true;
+    front_mode_ = s_.mode;
+    if (s_.mode == protocol::StreamMode::dag) {
+      // The session's cut: the base mesh, or the resumed one (Expectation has checked it is a cut).
+      cut_ = cut_of_front(model_, dag_, *s_.front);
+      check(cut_.has_value(), "a BASE for a resume front that is no cut of the DAG");
+      s_.dag_answered = cut_->split_count() > 0;
+      return;
+    }
     std::fill(held_.begin(), held_.end(), 0);
     if (s_.front->empty()) std::fill(held_.begin(), held_.begin() + model_.root_count, 1);
     for (const VertexId& id : *s_.front) held_[model_.find(id)] = 1;
-    has_front_ = true;
-    front_mode_ = s_.mode;
   }
   void on(const protocol::VSplits& m) {
     trace([&] {
@@ -176,17 +220,105 @@ class SimulatedClient {
     for (const SplitRecord& split : m.splits) apply(split);
     if (m.final && m.frame == s_.views.back()) s_.last_answered = true;
   }
-  // The DAG mode's answers are checked for their size only (a raw OPEN can open a dag session this client
-  // did not plan); mirroring the server's cut to check their operations is issue 16's next step here.
+  // A DAG answer's operations go to the mirror as the client applies them (ClientSession::apply_dag_ops: each
+  // batch's collapses, then its splits); each must be legal there, and the answer within its DAG_VIEW's limits.
   void on(const protocol::DagOps& m) {
-    trace([&] { return "<- DAG_OPS frame " + std::to_string(m.frame) + (m.final ? " final" : ""); });
+    trace([&] {
+      return "<- DAG_OPS frame " + std::to_string(m.frame) + (m.final ? " final, " : ", ") +
+             std::to_string(m.collapses.size()) + " collapses, " + std::to_string(m.splits.size()) + " splits";
+    });
+    check(s_.mode == protocol::StreamMode::dag && cut_, "a DAG_OPS in a session not in the DAG mode");
+    check(!(s_.frames_distinct && s_.last_answered), "a DAG_OPS after the last DAG_VIEW's answer was final");
     check(m.collapses.size() + m.splits.size() <= limits_.batch_splits, "a DAG_OPS batch over batch_splits");
+    if (!s_.answer) start_answer(m.frame);
+    DagAnswer& a = *s_.answer;
+    check(m.frame == a.frame, "a DAG_OPS of another frame before the answer it interrupts was final");
+    for (const VertexId& id : m.collapses) dag_collapse(id);
+    for (const SplitRecord& split : m.splits) dag_split(split, a.budget);
+    a.collapses += uint32_t(m.collapses.size());
+    a.splits += uint32_t(m.splits.size());
+    if (a.max_collapses && a.collapses > *a.max_collapses)
+      fail("an answer of " + std::to_string(a.collapses) + " collapses, over its N " + std::to_string(*a.max_collapses));
+    if (a.max_splits && a.splits > *a.max_splits)
+      fail("an answer of " + std::to_string(a.splits) + " splits, over its N " + std::to_string(*a.max_splits));
+    if (!m.final) return;
+    s_.answer.reset();
+    if (m.frame == s_.views.back()) s_.last_answered = true;
   }
   void on(const protocol::ErrorMessage& m) {
     trace([&] { return "<- ERROR " + protocol::to_string(m.code) + ": " + m.text; });
     check(m.code != protocol::ErrorCode::internal, "ERROR internal: the server's own fault");
     s_.error = m.code;
     s_.error_text = m.text;
+  }
+
+  // An answer is to the latest DAG_VIEW the session had when it traversed: one after the previous answer's,
+  // naming this frame. With frame numbers repeated several may fit; the checks take the loosest of their limits.
+  // The first answer is the converged cut, bounded by kMaxDagOps only (docs/internals.md, "The DAG mode"); from
+  // the second on, priority and linear make at most N collapses and N splits, constant-time evaluates at most N
+  // nodes (so at most N collapses; its forced splits are not evaluated).
+  void start_answer(uint32_t frame) {
+    DagAnswer a;
+    a.frame = frame;
+    bool named = false, free = false, unlimited_splits = false;
+    uint32_t n = 0;
+    for (size_t i = s_.unanswered; i < s_.dag_views.size(); ++i) {
+      const protocol::DagView& v = s_.dag_views[i];
+      if (v.view.frame != frame) continue;
+      if (!named) s_.unanswered = i + 1;
+      named = true;
+      if (v.management == DagMode::budget) a.budget = std::max(a.budget.value_or(0), v.budget);
+      else free = true;
+      unlimited_splits |= v.traversal == DagTraversal::constant_time;
+      n = std::max(n, v.max_ops);
+    }
+    if (!named) fail("a DAG_OPS for frame " + std::to_string(frame) + ", which no DAG_VIEW since the last answer named");
+    if (free) a.budget.reset();
+    if (s_.dag_answered) {
+      a.max_collapses = n;
+      if (!unlimited_splits) a.max_splits = n;
+    }
+    s_.dag_answered = true;
+    s_.answer = a;
+  }
+  uint32_t dag_node(const VertexId& v, const char* what) const {
+    const uint32_t node = model_.find(v);
+    if (node == kNone || model_.is_leaf(node)) fail(std::string(what) + " of " + to_string(v) + ", which the model does not split");
+    return dag_.node_of(node);
+  }
+  void dag_collapse(const VertexId& v) {
+    const uint32_t n = dag_node(v, "a collapse");
+    if (!cut_->in_fc(n)) fail("a collapse of " + to_string(v) + ", not in Fc of the client's cut");
+    cut_->collapse(n);
+  }
+  // A split is of a node in Fs with the model's geometry and fundamental cut vertices (docs/internals.md, "The DAG
+  // mode"); in BUDGET mode one that adds triangles leaves the cut within the budget: the traversal's room is the
+  // budget less the cut after the collapses, so a split never takes the cut over it, and from a cut over it (a
+  // lower budget than the last answer's) only collapses come.
+  void dag_split(const SplitRecord& split, std::optional<uint64_t> budget) {
+    const uint32_t n = dag_node(split.vs, "a split");
+    if (!cut_->in_fs(n)) fail("a split of " + to_string(split.vs) + ", not in Fs of the client's cut");
+    const uint32_t node = dag_.model_node(n);
+    check(split.cut_l == cut_id(model_.cut_left[node]) && split.cut_r == cut_id(model_.cut_right[node]),
+          "a DAG split's cut vertices are not the model's");
+    check_payload(split, model_.first_child[node]);
+    cut_->split(n);
+    ++s_.splits;
+    if (budget && dag_.faces(n) > 0 && cut_->triangles() > *budget)
+      fail("a split takes the cut to " + std::to_string(cut_->triangles()) + " triangles, over the budget " +
+           std::to_string(*budget));
+  }
+  // The session went quiet: its cut is the client's mesh.
+  void check_cut(const server::Session& session) const {
+    const auto* mode = dynamic_cast<const server::DagSessionMode*>(session.session_mode());
+    check(mode && mode->opened(), "a DAG session with no cut");
+    const DagCut theirs = mode->cut().dense(dag_);
+    std::string why;
+    if (!cut_->check(&why)) fail("the client's cut: " + why);
+    check(theirs.triangles() == cut_->triangles(), "the session's cut has other triangles than the client's mesh");
+    for (uint32_t n = 0; n < dag_.size(); ++n)
+      if (theirs.is_split(n) != cut_->is_split(n))
+        fail("the session's cut differs from the client's mesh at " + to_string(model_.id(dag_.model_node(n))));
   }
 
   // UpdateVHierarchy (kim-lee-kobbelt §5.3) on the leaf set: v_s must be a leaf the client holds, or the
@@ -234,8 +366,10 @@ class SimulatedClient {
   }
 
   const ModelData& model_;
+  const Dag& dag_;
   const server::ServerLimits& limits_;
   std::vector<uint8_t> held_;  // per node: a leaf of the client's partial hierarchy
+  std::optional<DagCut> cut_;  // the DAG mode: the client's mesh, once a DAG session's BASE came
   bool has_front_ = false;     // a BASE arrived in this or an earlier session
   protocol::StreamMode front_mode_ = protocol::StreamMode::sender_driven;
   PerSession s_;
@@ -249,7 +383,7 @@ class SimulatedClient {
 // bad OPEN still reach the session and may end it first.
 class Expectation {
  public:
-  Expectation(const ModelData& model, const std::string& name) : model_(model), name_(name) {}
+  Expectation(const ModelData& model, const Dag& dag, const std::string& name) : model_(model), dag_(dag), name_(name) {}
 
   void received(const protocol::Frame& frame, SimulatedClient& client) {
     using protocol::ErrorCode;
@@ -285,8 +419,18 @@ class Expectation {
                " " + std::to_string(c.target[1]) + " " + std::to_string(c.target[2]) + ", tolerance " +
                std::to_string(view->tolerance) + " px";
       });
-      if (!open_) return allow(ErrorCode::out_of_order);
+      if (!open_ || mode_ == protocol::StreamMode::dag) return allow(ErrorCode::out_of_order);
       return client.view_sent(view->frame);
+    }
+    if (const auto* view = std::get_if<protocol::DagView>(&message)) {
+      trace([&] {
+        return "   DAG_VIEW " + std::to_string(view->view.frame) + ": traversal " + std::to_string(int(view->traversal)) +
+               (view->management == DagMode::budget ? ", budget " + std::to_string(view->budget) : ", free") +
+               ", N " + std::to_string(view->max_ops) + ", tolerance " + std::to_string(view->view.tolerance) + " px";
+      });
+      // Only a DAG session takes it, and a sender-driven one only VIEW.
+      if (!open_ || mode_ != protocol::StreamMode::dag) return allow(ErrorCode::out_of_order);
+      return client.dag_view_sent(*view);
     }
     closed_ = true;  // CLOSE: no answer, no error
   }
@@ -307,12 +451,15 @@ class Expectation {
     if (open_) return allow(ErrorCode::out_of_order);
     if (open.model != name_) return allow(ErrorCode::unknown_model);
     open_ = true;  // the session holds the model from here on, even while it checks a front it will refuse
+    mode_ = open.mode;
     if (!open.resume.empty() && open.mode == protocol::StreamMode::view_independent)
       return allow(ErrorCode::bad_message);
     if (!covers_model(open.resume)) {
       allow(ErrorCode::bad_id);
       return allow(ErrorCode::too_large);  // a front longer than the model's leaves may be refused as such
     }
+    // A DAG session's front is the client's mesh: it resumes when that is a cut of the DAG.
+    if (open.mode == protocol::StreamMode::dag && !cut_of_front(model_, dag_, open.resume)) return allow(ErrorCode::bad_id);
     client.open_accepted(open.mode, open.resume);
   }
   // The decoder returns a complete front of trees 0..R-1 in preorder: it is a cut of the model's forest
@@ -326,8 +473,10 @@ class Expectation {
   }
 
   const ModelData& model_;
+  const Dag& dag_;
   std::string name_;
   bool greeted_ = false, open_ = false, closed_ = false;
+  protocol::StreamMode mode_ = protocol::StreamMode::sender_driven;  // of the OPEN taken
   std::vector<protocol::ErrorCode> allowed_;
 };
 

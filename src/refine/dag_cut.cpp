@@ -273,4 +273,30 @@ size_t DagCut::memory_bytes() const {
          wide_counters_.capacity() * 2 + 4 * marked_.capacity();
 }
 
+std::vector<VertexId> cut_front(const ModelData& model, const DagCut& cut) {
+  const Dag& dag = cut.dag();
+  std::vector<VertexId> front;
+  std::vector<uint32_t> stack;
+  for (uint32_t root = model.root_count; root-- > 0;) stack.push_back(root);
+  while (!stack.empty()) {
+    const uint32_t v = stack.back();
+    stack.pop_back();
+    const uint32_t n = model.is_leaf(v) ? kNone : dag.node_of(v);
+    if (n == kNone || !cut.is_split(n)) {
+      front.push_back(model.id(v));
+      continue;
+    }
+    stack.push_back(model.first_child[v] + 1);
+    stack.push_back(model.first_child[v]);
+  }
+  return front;
+}
+
+void append_closed_splits(const ModelData& model, const Dag& dag, uint32_t leaf, std::vector<uint32_t>& split) {
+  for (uint32_t v = leaf; (model.node_id[v] & 1) && model.node_id[v] > 1;) {  // v_u: its parent's last leaf
+    v = model.parent[v];
+    split.push_back(dag.node_of(v));
+  }
+}
+
 }  // namespace pms

@@ -114,4 +114,11 @@ class DagCut {
   uint32_t collapse_cursor_ = 0, split_cursor_ = 0;
 };
 
+// A cut as the mesh a DAG client holds (its resume front, docs/internals.md "The DAG mode"): the vertices of
+// the cut's mesh, tree by tree in preorder. Back: each leaf of a complete front closes the inner nodes whose
+// subtree ends at it in preorder (the climb through v_u children, at most 63 steps), so over the whole front
+// every inner node is appended once, as a DAG node.
+std::vector<VertexId> cut_front(const ModelData& model, const DagCut& cut);
+void append_closed_splits(const ModelData& model, const Dag& dag, uint32_t leaf, std::vector<uint32_t>& split);
+
 }  // namespace pms

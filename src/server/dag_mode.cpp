@@ -13,6 +13,7 @@
 #include "protocol/message_types.h"
 #include "protocol/server_messages.h"
 #include "pm/split_record.h"
+#include "refine/dag_cut.h"
 
 namespace pms::server {
 
@@ -57,12 +58,9 @@ void DagSessionMode::pump_resume(uint64_t& work) {
   const bool decoded = r.decoder.next(context_.limits.slice_work, r.leaves);
   work += r.leaves.size();
   for (const VertexId& id : r.leaves) {
-    uint32_t node = model.find(id);
+    const uint32_t node = model.find(id);
     if (node == kNone) throw ProtocolError(ErrorCode::bad_id, "OPEN: resume id " + to_string(id) + " is not in the model");
-    while ((model.node_id[node] & 1) && model.node_id[node] > 1) {  // v_u: the last leaf of its parent's subtree
-      node = model.parent[node];
-      r.split.push_back(dag.node_of(node));
-    }
+    append_closed_splits(model, dag, node, r.split);
   }
   if (!decoded) return;
   try {

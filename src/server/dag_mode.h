@@ -3,8 +3,8 @@
 // (refine/dag_cut.h, about a byte per node) and a traverser; each DAG_VIEW runs MANAGE-TRAVERSAL once on it
 // (the first one: the converged cut of its view) and the operations go down as DAG_OPS in batches, collapses
 // first, then splits with their geometry and fundamental cut vertices (docs/internals.md, "The DAG mode": why
-// not the actual ones), so the client's mesh is the server's cut after every answer. No resume yet: OPEN
-// with a resume front is refused.
+// not the actual ones), so the client's mesh is the server's cut after every answer. An OPEN with a resume
+// front lists the client's mesh (refine/dag_cut.h, cut_front), rebuilt here into the cut a slice at a time.
 #pragma once
 #include <cstddef>
 #include <cstdint>

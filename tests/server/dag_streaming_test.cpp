@@ -297,21 +297,7 @@ TEST(DagStreaming, HostileResumesGetErrorAndOthersAreServed) {
     cut.split(n);
     todo.pop_back();
   }
-  std::vector<VertexId> front;
-  for (uint32_t t = 0; t < model.root_count; ++t) {
-    std::vector<VertexId> stack{{t, 1}};
-    while (!stack.empty()) {
-      const VertexId v = stack.back();
-      stack.pop_back();
-      const uint32_t n = dag.node_of(model.find(v));
-      if (n == kNone || !cut.is_split(n)) {
-        front.push_back(v);
-        continue;
-      }
-      stack.push_back(v.child(1));
-      stack.push_back(v.child(0));
-    }
-  }
+  const std::vector<VertexId> front = cut_front(model, cut);
   server::Session session(f.catalogue, server::ServerLimits{});
   for (const auto& message : {hello, protocol::encode(protocol::Open{f.name, front, StreamMode::dag})}) {
     protocol::Frame frame;
