@@ -37,17 +37,23 @@ struct ObjParser {
     fail(name, "line " + std::to_string(text::line_number(begin, at)) + ": " + problem);
   }
 
-  // 'v' already consumed; p..eol is the rest of the line.
-  void vertex(const char* p, const char* eol) {
-    float value[7];
+  // Up to `max` numbers from p..eol (the rest of a line) into `value`; returns how many.
+  int numbers(const char* p, const char* eol, float* value, int max, const char* what) const {
     int n = 0;
-    for (p = text::skip_blanks(p, eol); p < eol && *p != '#' && n < 7; p = text::skip_blanks(p, eol)) {
+    for (p = text::skip_blanks(p, eol); p < eol && *p != '#' && n < max; p = text::skip_blanks(p, eol)) {
       const char* next = text::parse_real(p, eol, value[n]);
       if (!next || (next < eol && !text::is_blank(*next)))
-        bad(p, "expected a vertex coordinate, found " + text::quote_token(p, eol));
+        bad(p, std::string("expected ") + what + ", found " + text::quote_token(p, eol));
       p = next;
       ++n;
     }
+    return n;
+  }
+
+  // 'v' already consumed; p..eol is the rest of the line.
+  void vertex(const char* p, const char* eol) {
+    float value[7];
+    const int n = numbers(p, eol, value, 7, "a vertex coordinate");
     if (n < 3) bad(p, "a 'v' line needs x y z");
     mesh.positions.insert(mesh.positions.end(), value, value + 3);
     if (n == 6) {
@@ -61,15 +67,7 @@ struct ObjParser {
   // 'vt' already consumed: u, optional v (0 when absent), optional w (ignored).
   void texture_vertex(const char* p, const char* eol) {
     float value[3] = {0, 0, 0};
-    int n = 0;
-    for (p = text::skip_blanks(p, eol); p < eol && *p != '#' && n < 3; p = text::skip_blanks(p, eol)) {
-      const char* next = text::parse_real(p, eol, value[n]);
-      if (!next || (next < eol && !text::is_blank(*next)))
-        bad(p, "expected a texture coordinate, found " + text::quote_token(p, eol));
-      p = next;
-      ++n;
-    }
-    if (n < 1) bad(p, "a 'vt' line needs u");
+    if (numbers(p, eol, value, 3, "a texture coordinate") < 1) bad(p, "a 'vt' line needs u");
     uvs.insert(uvs.end(), value, value + 2);
   }
 

@@ -51,6 +51,20 @@ std::vector<uint8_t> level_section(const MultilevelMesh& m, uint32_t level, std:
                              part(m.triangles, t_begin * 3, h.triangles * 3), reps);
 }
 
+// A grid of the compressed head: 1 to 24 bits over a box of `d` finite axes (those past d stay flat).
+PositionGrid head_grid(const std::string& where, uint32_t bits, const float* min, const float* max, int d,
+                       const char* bits_name, const char* box_name) {
+  if (bits < 1 || bits > 24) fail(where, "compressed head: " + str(bits) + " " + bits_name + " (1 to 24)");
+  PositionGrid grid;
+  grid.bits = bits;
+  for (int k = 0; k < d; ++k) {
+    if (!std::isfinite(min[k]) || !std::isfinite(max[k]) || min[k] > max[k])
+      fail(where, std::string("compressed head: ") + box_name + " is not a box");
+    grid.min[k] = min[k], grid.max[k] = max[k];
+  }
+  return grid;
+}
+
 // Appends `count` elements of `out`'s type from `p` and moves `p` past them.
 template <typename T>
 void take(std::vector<T>& out, const uint8_t*& p, uint64_t count) {
@@ -145,27 +159,15 @@ void MultilevelLoader::read_compressed_head(const std::string& where, std::span<
   const size_t expected = sizeof h + (texcoords ? sizeof(TexcoordBox) : 0);
   if (head.size() != expected)
     fail(where, "compressed head: " + str(head.size()) + " bytes (" + str(expected) + " expected)");
-  if (h.position_bits < 1 || h.position_bits > 24) fail(where, "compressed head: " + str(h.position_bits) + " position bits (1 to 24)");
-  for (int k = 0; k < 3; ++k)
-    if (!std::isfinite(h.min[k]) || !std::isfinite(h.max[k]) || h.min[k] > h.max[k])
-      fail(where, "compressed head: the grid's box is not a box");
-  grid_.bits = h.position_bits;
-  std::copy_n(h.min, 3, grid_.min);
-  std::copy_n(h.max, 3, grid_.max);
+  grid_ = head_grid(where, h.position_bits, h.min, h.max, 3, "position bits", "the grid's box");
   if (!texcoords) {
     if (h.texcoord_bits != 0) fail(where, "compressed head: texture coordinate bits without texture coordinates");
     return;
   }
-  if (h.texcoord_bits < 1 || h.texcoord_bits > 24)
-    fail(where, "compressed head: " + str(h.texcoord_bits) + " texture coordinate bits (1 to 24)");
   TexcoordBox box;
   std::memcpy(&box, head.data() + sizeof h, sizeof box);
-  for (int k = 0; k < 2; ++k)
-    if (!std::isfinite(box.min[k]) || !std::isfinite(box.max[k]) || box.min[k] > box.max[k])
-      fail(where, "compressed head: the texture coordinates' box is not a box");
-  texcoord_grid_.bits = h.texcoord_bits;
-  std::copy_n(box.min, 2, texcoord_grid_.min);
-  std::copy_n(box.max, 2, texcoord_grid_.max);
+  texcoord_grid_ = head_grid(where, h.texcoord_bits, box.min, box.max, 2, "texture coordinate bits",
+                             "the texture coordinates' box");
 }
 
 void MultilevelLoader::add_level(const std::string& where, std::span<const uint8_t> section, uint64_t offset) {
