@@ -116,24 +116,27 @@ struct ObjParser {
     for (size_t c = 0; c < mesh.indices.size(); ++c) {
       uint32_t& v = mesh.indices[c];
       const uint32_t uv = corner_uv[c];
+      if (v >= n) continue;  // load_mesh reports it, naming the face
       if (first[v] == kNoTexcoord) first[v] = uv;
       if (first[v] == uv) continue;
       const auto [it, fresh] = copy_of.emplace(uint64_t(v) << 32 | uv, uint32_t(n + source.size()));
       if (fresh) {
+        if (n + source.size() >= UINT32_MAX) fail(name, "more than 2^32 - 1 vertices after splitting texture seams");
         source.push_back(v);
         source_uv.push_back(uv);
       }
       v = it->second;
     }
-    if (n + source.size() > UINT32_MAX) fail(name, "more than 2^32 vertices after splitting texture seams");
     mesh.texcoords.resize(2 * (n + source.size()), 0.0f);  // a vertex no face uses gets (0, 0)
     for (size_t v = 0; v < n; ++v)
       if (first[v] != kNoTexcoord) std::copy_n(&uvs[2 * size_t(first[v])], 2, &mesh.texcoords[2 * v]);
     for (size_t i = 0; i < source.size(); ++i) {
       const size_t v = source[i];
       std::copy_n(&uvs[2 * size_t(source_uv[i])], 2, &mesh.texcoords[2 * (n + i)]);
+      // By value: a range of the vector itself must not be inserted into it.
       mesh.positions.insert(mesh.positions.end(), {mesh.positions[3 * v], mesh.positions[3 * v + 1], mesh.positions[3 * v + 2]});
-      if (mesh.has_colors()) mesh.colors.insert(mesh.colors.end(), mesh.colors.begin() + 4 * v, mesh.colors.begin() + 4 * v + 4);
+      if (mesh.has_colors())
+        mesh.colors.insert(mesh.colors.end(), {mesh.colors[4 * v], mesh.colors[4 * v + 1], mesh.colors[4 * v + 2], mesh.colors[4 * v + 3]});
     }
   }
 

@@ -259,6 +259,9 @@ TEST(ImportObj, TextureVertexIndexOutOfRangeNamesTheLine) {
                     "line 5: texture vertex index 2 out of range");
   expect_load_error(write_file("bad_vt_token.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 x\nf 1 2 3\n"),
                     "line 4: expected a texture coordinate");
+  // A position index out of range is still load_mesh's to report, texture vertices or not.
+  expect_load_error(write_file("bad_v_textured.obj", "v 0 0 0\nv 1 0 0\nvt 0 0\nf 1/1 2/1 3/1\n"),
+                    "face 0 uses vertex 2 but there are only 2 vertices");
 }
 
 TEST(ImportObj, ColorsAreDroppedUnlessEveryVertexHasOne) {
