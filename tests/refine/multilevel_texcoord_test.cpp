@@ -145,10 +145,20 @@ TEST(MultilevelTexcoords, BinaryRoundTripIsExactAndCostsEightBytesAVertex) {
   EXPECT_TRUE(parse_multilevel_binary("t", without).texcoords.empty());
   // The ASCII form has no place for them (Fig. 6 "doesn't show this"): they are left out.
   EXPECT_TRUE(parse_multilevel_ascii("t", format_multilevel_ascii(m)).texcoords.empty());
-  // Like positions and normals, they must be finite.
+  // Like positions and normals, they must be finite: the writer refuses them, and so does the reader of a
+  // file whose first vertex's (in the coarsest level's section) were made NaN and resealed.
   MultilevelMesh broken = m;
   broken.texcoords[5] = std::nanf("");
   EXPECT_NE(error_of([&] { format_multilevel_binary(broken); }).find("texture coordinate is not finite"), std::string::npos);
+  std::vector<uint8_t> hostile = bytes;
+  const auto first = std::search(hostile.begin(), hostile.end(), reinterpret_cast<const uint8_t*>(&m.texcoords[0]),
+                                 reinterpret_cast<const uint8_t*>(&m.texcoords[0]) + 8);
+  ASSERT_NE(first, hostile.end());
+  const float nan = std::nanf("");
+  std::memcpy(&*first, &nan, 4);
+  reseal_multilevel_binary(hostile);
+  EXPECT_NE(error_of([&] { parse_multilevel_binary("t", hostile); }).find("a vertex texture coordinate of level 5 is not finite"),
+            std::string::npos);
 }
 
 // Loads every compressed level and returns the whole structure.
