@@ -239,14 +239,16 @@ TEST(ImportObj, ColorsCornerSyntaxNegativeIndicesAndPolygons) {
 // A texture seam: vertex 2 is used with texture vertices 2 and 4, so it is split in two; the copy comes
 // after the input's vertices with the same position and colour. Corners may name the texture vertex
 // counting back (-1) and carry a normal (a/t/n).
+const char* kSeamObj =
+    "v 0 0 0 1 0 0\nv 1 0 0 0 1 0\nv 0 1 0 0 0 1\nv 1 1 0 1 1 1\n"
+    "vt 0 0\nvt 1 0\nvt 0 1\nvt 0.5 0.5\nvn 0 0 1\n"
+    "f 1/1/1 2/2/1 3/3/1\n"
+    "vt 0.9 0.9 0\n"
+    "f 2/4/1 4/-1/1 3/3/1\n"
+    "f 2/2 4/5 3/3\n";
+
 TEST(ImportObj, TextureSeamSplitsTheVertex) {
-  const Mesh mesh = pms::load_mesh(write_file("seam.obj",
-                                              "v 0 0 0 1 0 0\nv 1 0 0 0 1 0\nv 0 1 0 0 0 1\nv 1 1 0 1 1 1\n"
-                                              "vt 0 0\nvt 1 0\nvt 0 1\nvt 0.5 0.5\nvn 0 0 1\n"
-                                              "f 1/1/1 2/2/1 3/3/1\n"
-                                              "vt 0.9 0.9 0\n"
-                                              "f 2/4/1 4/-1/1 3/3/1\n"
-                                              "f 2/2 4/5 3/3\n"));
+  const Mesh mesh = pms::load_mesh(write_file("seam.obj", kSeamObj));
   ASSERT_EQ(mesh.vertex_count(), 5u);
   EXPECT_EQ(mesh.indices, (std::vector<uint32_t>{0, 1, 2, 4, 3, 2, 1, 3, 2}));
   EXPECT_EQ(mesh.texcoords, (std::vector<float>{0, 0, 1, 0, 0, 1, 0.9f, 0.9f, 0.5f, 0.5f}));
