@@ -15,6 +15,7 @@ inline void touch(const pms::MultilevelMesh& m) {
     for (uint32_t i : lod.indices())
       if (i >= lod.vertex_count()) __builtin_trap();
     lod.set_level(float(l) + 0.5f);
+    if (!m.texcoords.empty() && lod.texcoords().size() != 2 * size_t(lod.vertex_count())) __builtin_trap();
   }
 }
 

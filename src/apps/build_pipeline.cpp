@@ -39,6 +39,8 @@ std::string describe(const CleanReport& r) {
 BuildRun build_mesh(Mesh mesh, const std::string& input_name, const std::string& out_path,
                     const BuildOptions& options) {
   BuildRun run;
+  run.texcoords_dropped = mesh.has_texcoords();
+  mesh.texcoords = {};  // .pms has no place for them (docs/pms-format.md); nothing below reads them
   Stopwatch clean_time;
   report(options.progress, "clean", 0);
   run.clean = clean_mesh(mesh);
@@ -130,6 +132,7 @@ nlohmann::json build_json(const BuildRun& run, double seconds, double peak_rss_m
   j["peak_rss_mb"] = peak_rss_mb;
   j["output_bytes"] = run.output_bytes;
   j["clean"] = describe(run.clean);
+  j["texcoords_dropped"] = run.texcoords_dropped;
   return j;
 }
 

@@ -17,6 +17,7 @@ struct BuildRun {
   double build_seconds = 0;  // simplification, hierarchy, cut vertices, refinement info
   double write_seconds = 0;
   uint64_t output_bytes = 0;
+  bool texcoords_dropped = false;  // the input had texture coordinates, which .pms does not carry
 };
 
 std::string describe(const CleanReport& report);

@@ -44,6 +44,7 @@ void run_build(const BuildArgs& args) {
   std::printf("  time:       %.2f s (load %.2f, clean %.2f, build+write %.2f), peak RSS %.0f MB\n", seconds,
               run.load_seconds, run.clean_seconds, run.build_seconds, peak_rss_mb());
   std::printf("  output:     %llu bytes\n", (unsigned long long)run.output_bytes);
+  if (run.texcoords_dropped) std::printf("  note:       .pms has no texture coordinates; they were left out\n");
 }
 
 }  // namespace

@@ -133,7 +133,7 @@ void run_multilevel_build(const MultilevelBuildArgs& args) {
   write_multilevel(args.output, ml, args.ascii);
   const double write_seconds = write_time.seconds();
   const uint64_t bytes = std::filesystem::file_size(args.output);
-  const bool dropped = args.ascii && (!ml.normals.empty() || !ml.colors.empty());
+  const bool dropped = args.ascii && (!ml.normals.empty() || !ml.colors.empty() || !ml.texcoords.empty());
   const uint64_t morph = geomorph_representative_count(ml);
   const uint64_t written = ml.stored_representatives() - (args.ascii ? morph : 0);
   if (args.json) {
@@ -162,7 +162,8 @@ void run_multilevel_build(const MultilevelBuildArgs& args) {
   std::printf("  time:            %.2f s (load %.2f, %s %.2f, multilevel %.3f, write %.3f)\n", total.seconds(),
               load_seconds, operations, pm_seconds, ml_seconds, write_seconds);
   std::printf("  output:          %llu bytes\n", (unsigned long long)bytes);
-  if (dropped) std::printf("  note:            the ASCII form has no normals or colours; they were left out\n");
+  if (dropped)
+    std::printf("  note:            the ASCII form has no normals, colours or texture coordinates; they were left out\n");
   if (args.ascii && morph)
     std::printf("  note:            the ASCII form has no place for the %llu representatives only geomorphs use;"
                 " they were left out\n", (unsigned long long)morph);
@@ -227,6 +228,7 @@ void run_multilevel_info(const std::string& path, bool json) {
                               {"dimension", m.dimension},
                               {"normals", !m.normals.empty()},
                               {"colors", !m.colors.empty()},
+                              {"texcoords", !m.texcoords.empty()},
                               {"levels", m.level_count()},
                               {"vertices", m.vertices()},
                               {"triangles", m.faces()},
@@ -234,13 +236,15 @@ void run_multilevel_info(const std::string& path, bool json) {
                               {"geomorph_representatives", geomorph_representative_count(m)},
                               {"compressed_bytes", compressed_bytes},
                               {"position_bits", kDefaultPositionBits},
+                              {"texcoord_bits", m.texcoords.empty() ? 0 : kDefaultTexcoordBits},
                               {"per_level", levels}};
     std::printf("%s\n", j.dump().c_str());
     return;
   }
-  std::printf("%s (%llu bytes): %u levels, %u vertices, %u triangles, %uD%s%s\n", path.c_str(),
+  std::printf("%s (%llu bytes): %u levels, %u vertices, %u triangles, %uD%s%s%s\n", path.c_str(),
               (unsigned long long)bytes, m.level_count(), m.vertices(), m.faces(), m.dimension,
-              m.normals.empty() ? "" : ", normals", m.colors.empty() ? "" : ", colors");
+              m.normals.empty() ? "" : ", normals", m.colors.empty() ? "" : ", colors",
+              m.texcoords.empty() ? "" : ", texture coordinates");
   std::printf("  representatives: %llu stored (%llu only for geomorphs)\n", (unsigned long long)m.stored_representatives(),
               (unsigned long long)geomorph_representative_count(m));
   std::printf("  compressed (%u-bit grid): %llu bytes, head and every level\n", kDefaultPositionBits,

@@ -8,7 +8,9 @@
 //     orientation wins; a glue that makes a component non-orientable is cut), then give every fan of
 //     glued faces around a vertex its own copy of the vertex.
 // Every step is linear or sorts only small buckets, and every choice is made in index order, so the same
-// input gives the same output bit for bit. Normals and colors move with their positions throughout.
+// input gives the same output bit for bit. Normals, colors and texture coordinates move with their
+// positions throughout; welding looks at positions only, so two coincident vertices that differ in any of
+// them (an OBJ seam's copies) become one with the first one's.
 #include <algorithm>
 #include <array>
 #include <cstring>
@@ -39,6 +41,7 @@ void gather_vertices(Mesh& mesh, const std::vector<uint32_t>& source) {
   gather(mesh.positions, 3);
   gather(mesh.normals, 3);
   gather(mesh.colors, 4);
+  gather(mesh.texcoords, 2);
 }
 
 void check_input(const Mesh& mesh) {
@@ -49,6 +52,8 @@ void check_input(const Mesh& mesh) {
   if (mesh.has_normals() && mesh.normals.size() != mesh.positions.size())
     fail("", "mesh: normal count differs from the vertex count");
   if (mesh.has_colors() && mesh.colors.size() != 4 * n) fail("", "mesh: color count differs from the vertex count");
+  if (mesh.has_texcoords() && mesh.texcoords.size() != 2 * n)
+    fail("", "mesh: texture coordinate count differs from the vertex count");
   for (size_t c = 0; c < mesh.indices.size(); ++c)
     if (mesh.indices[c] >= n)
       fail("", "mesh: face " + std::to_string(c / 3) + " uses vertex " + std::to_string(mesh.indices[c]) +

@@ -1,5 +1,7 @@
-// save_ply: the PLY that load_mesh reads back exactly. Binary is little-endian float32 (so positions
-// and normals survive bit for bit); ascii uses shortest round-trip float formatting for the same.
+// save_ply: the PLY that load_mesh reads back exactly. Binary is little-endian float32 (so positions,
+// normals and texture coordinates survive bit for bit); ascii uses shortest round-trip float formatting
+// for the same. Texture coordinates are written as `s t`, the names Blender writes and reads (the
+// importer also takes u v, texture_u texture_v and texture_s texture_t).
 #include <bit>
 #include <cerrno>
 #include <charconv>
@@ -22,6 +24,8 @@ void check_writable(const Mesh& mesh, const std::string& path) {
     fail(path, "cannot save: positions or indices are not whole triples");
   if (mesh.has_normals() && mesh.normals.size() != n * 3) fail(path, "cannot save: normals do not match the vertices");
   if (mesh.has_colors() && mesh.colors.size() != n * 4) fail(path, "cannot save: colors do not match the vertices");
+  if (mesh.has_texcoords() && mesh.texcoords.size() != n * 2)
+    fail(path, "cannot save: texture coordinates do not match the vertices");
   if (n > size_t(INT32_MAX)) fail(path, "cannot save: PLY 'int' indices hold at most 2^31-1 vertices");
   for (uint32_t index : mesh.indices)
     if (index >= n) fail(path, "cannot save: face index " + std::to_string(index) + " out of range");
@@ -35,6 +39,7 @@ std::string header(const Mesh& mesh, bool binary) {
   h += "property float x\nproperty float y\nproperty float z\n";
   if (mesh.has_normals()) h += "property float nx\nproperty float ny\nproperty float nz\n";
   if (mesh.has_colors()) h += "property uchar red\nproperty uchar green\nproperty uchar blue\nproperty uchar alpha\n";
+  if (mesh.has_texcoords()) h += "property float s\nproperty float t\n";
   h += "element face " + std::to_string(mesh.face_count()) + "\n";
   h += "property list uchar int vertex_indices\nend_header\n";
   return h;
@@ -74,6 +79,8 @@ void vertex_record(std::string& out, const Mesh& mesh, size_t v, bool binary) {
         out += ' ';
       }
     }
+  if (mesh.has_texcoords())
+    for (int c = 0; c < 2; ++c) put_float(mesh.texcoords[v * 2 + c]);
   if (!binary) out.back() = '\n';
 }
 

@@ -1,6 +1,8 @@
 // Formats without a hand-written path (STL, glTF/GLB, FBX, ...) go through assimp. All meshes of
 // the scene are merged with their node transforms applied, so a mesh instanced by two nodes gives
-// two copies; point and line primitives are dropped.
+// two copies; point and line primitives are dropped. Normals, colours (set 0) and texture coordinates
+// (set 0: glTF's TEXCOORD_0, as u v with v up, the convention assimp hands every format over in) are kept
+// when every merged mesh has them.
 #include <assimp/Importer.hpp>
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
@@ -21,6 +23,7 @@ struct Merge {
   Mesh mesh;
   bool every_mesh_has_normals = true;
   bool every_mesh_has_colors = true;
+  bool every_mesh_has_texcoords = true;
 
   // Appends the triangles of `source` placed by `transform`; vertices of a mesh without
   // triangles are not added at all.
@@ -33,6 +36,7 @@ struct Merge {
     normal_transform.Inverse().Transpose();
     every_mesh_has_normals &= source.HasNormals();
     every_mesh_has_colors &= source.HasVertexColors(0);
+    every_mesh_has_texcoords &= source.HasTextureCoords(0);
     for (unsigned v = 0; v < source.mNumVertices; ++v) {
       const aiVector3D p = transform * source.mVertices[v];
       mesh.positions.insert(mesh.positions.end(), {p.x, p.y, p.z});
@@ -44,6 +48,10 @@ struct Merge {
         const aiColor4D& c = source.mColors[0][v];
         mesh.colors.insert(mesh.colors.end(), {color_channel(c.r, true), color_channel(c.g, true),
                                                color_channel(c.b, true), color_channel(c.a, true)});
+      }
+      if (every_mesh_has_texcoords) {
+        const aiVector3D& t = source.mTextureCoords[0][v];
+        mesh.texcoords.insert(mesh.texcoords.end(), {t.x, t.y});
       }
     }
     for (unsigned f = 0; f < source.mNumFaces; ++f) {
@@ -59,6 +67,7 @@ struct Merge {
   void finish() {
     if (!every_mesh_has_normals) mesh.normals = {};
     if (!every_mesh_has_colors) mesh.colors = {};
+    if (!every_mesh_has_texcoords) mesh.texcoords = {};
   }
 };
 

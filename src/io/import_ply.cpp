@@ -1,7 +1,7 @@
 // PLY importer (Turk, "The PLY Polygon File Format", 1994): ascii, binary_little_endian and
 // binary_big_endian. The header declares elements (records) and their typed properties; the body
-// holds the records in header order. We keep vertex x y z, optional nx ny nz and red green blue
-// [alpha], and the face index list (vertex_indices or vertex_index), fan-triangulated; every other
+// holds the records in header order. We keep vertex x y z, optional nx ny nz, red green blue [alpha]
+// and texture coordinates (s t, u v, texture_u texture_v or texture_s texture_t), and the face index list (vertex_indices or vertex_index), fan-triangulated; every other
 // property and element is skipped by its type. Counts in the header are checked against the bytes
 // that follow before anything is allocated from them.
 #include <bit>
@@ -37,7 +37,7 @@ size_t scalar_size(Scalar type) {
 bool is_real(Scalar type) { return type == Scalar::f32 || type == Scalar::f64; }
 
 // Where a property's value goes: vertex attributes, the face corner list, or nowhere.
-enum Slot : uint8_t { kX, kY, kZ, kNx, kNy, kNz, kRed, kGreen, kBlue, kAlpha, kSlotCount, kCorners, kSkip };
+enum Slot : uint8_t { kX, kY, kZ, kNx, kNy, kNz, kRed, kGreen, kBlue, kAlpha, kU, kV, kSlotCount, kCorners, kSkip };
 
 struct Property {
   std::string name;
@@ -89,11 +89,19 @@ uint64_t parse_count(const std::string& name, std::string_view token) {
   return uint64_t(count);
 }
 
+// Texture coordinates go by four pairs of names in the wild (Blender writes s t, MeshLab texture_u
+// texture_v); the first property of a slot wins.
 Slot vertex_slot(std::string_view property) {
-  static constexpr std::string_view kNames[kSlotCount] = {"x",   "y",   "z",     "nx",   "ny",
-                                                          "nz",  "red", "green", "blue", "alpha"};
-  for (int slot = 0; slot < kSlotCount; ++slot)
-    if (kNames[slot] == property) return Slot(slot);
+  struct Name {
+    std::string_view name;
+    Slot slot;
+  };
+  static constexpr Name kNames[] = {
+      {"x", kX},   {"y", kY},         {"z", kZ},         {"nx", kNx},        {"ny", kNy},        {"nz", kNz},
+      {"red", kRed}, {"green", kGreen}, {"blue", kBlue}, {"alpha", kAlpha},  {"s", kU},          {"t", kV},
+      {"u", kU},   {"v", kV},         {"texture_u", kU}, {"texture_v", kV},  {"texture_s", kU},  {"texture_t", kV}};
+  for (const Name& entry : kNames)
+    if (entry.name == property) return entry.slot;
   return kSkip;
 }
 
@@ -352,14 +360,16 @@ void read_vertices(const Context& ctx, const Element& element, Reader& reader, M
   for (const Property& property : element.properties) {
     if (property.slot >= kSlotCount) continue;
     present[property.slot] = true;
-    if (property.slot >= kRed) color_type[property.slot - kRed] = property.type;
+    if (property.slot >= kRed && property.slot <= kAlpha) color_type[property.slot - kRed] = property.type;
   }
   const bool has_normals = present[kNx] && present[kNy] && present[kNz];
   const bool has_colors = present[kRed] && present[kGreen] && present[kBlue];
+  const bool has_texcoords = present[kU] && present[kV];
   const size_t n = size_t(element.count);  // fits: check_counts_fit bounded it by the file size
   mesh.positions.resize(n * 3);
   if (has_normals) mesh.normals.resize(n * 3);
   if (has_colors) mesh.colors.resize(n * 4);
+  if (has_texcoords) mesh.texcoords.resize(n * 2);
 
   double value[kSlotCount] = {};
   value[kAlpha] = is_real(color_type[3]) ? 1.0 : 255.0;  // opaque when the file has no alpha
@@ -373,6 +383,8 @@ void read_vertices(const Context& ctx, const Element& element, Reader& reader, M
       for (int c = 0; c < 3; ++c) mesh.normals[i * 3 + c] = float(value[kNx + c]);
     if (has_colors)
       for (int c = 0; c < 4; ++c) mesh.colors[i * 4 + c] = color_from(value[kRed + c], color_type[c]);
+    if (has_texcoords)
+      for (int c = 0; c < 2; ++c) mesh.texcoords[i * 2 + c] = float(value[kU + c]);
   });
 }
 

@@ -39,10 +39,10 @@ std::string lower_extension(std::string_view name) {
   return lower;
 }
 
-// Vertex of the first NaN or infinite value in an xyz array, or -1.
-ptrdiff_t first_non_finite_vertex(const std::vector<float>& xyz) {
-  const auto bad = std::find_if(xyz.begin(), xyz.end(), [](float x) { return !std::isfinite(x); });
-  return bad == xyz.end() ? -1 : (bad - xyz.begin()) / 3;
+// Vertex of the first NaN or infinite value in an array of `width` floats per vertex, or -1.
+ptrdiff_t first_non_finite_vertex(const std::vector<float>& values, ptrdiff_t width = 3) {
+  const auto bad = std::find_if(values.begin(), values.end(), [](float x) { return !std::isfinite(x); });
+  return bad == values.end() ? -1 : (bad - values.begin()) / width;
 }
 
 // The invariants the builder relies on, whatever format the mesh came from.
@@ -52,6 +52,8 @@ void validate(const std::string& name, const Mesh& mesh) {
     fail(name, "vertex " + std::to_string(v) + " has a NaN or infinite coordinate");
   if (const ptrdiff_t v = first_non_finite_vertex(mesh.normals); v >= 0)
     fail(name, "vertex " + std::to_string(v) + " has a NaN or infinite normal");
+  if (const ptrdiff_t v = first_non_finite_vertex(mesh.texcoords, 2); v >= 0)
+    fail(name, "vertex " + std::to_string(v) + " has a NaN or infinite texture coordinate");
   const size_t vertex_count = mesh.vertex_count();
   const auto out_of_range =
       std::find_if(mesh.indices.begin(), mesh.indices.end(), [&](uint32_t i) { return i >= vertex_count; });

@@ -14,12 +14,14 @@ struct Mesh {
   std::vector<float> positions;   // x y z per vertex
   std::vector<float> normals;     // x y z per vertex, or empty when the input had none
   std::vector<uint8_t> colors;    // r g b a per vertex, or empty when the input had none
+  std::vector<float> texcoords;   // u v per vertex, or empty when the input had none
   std::vector<uint32_t> indices;  // 3 per triangle, counter-clockwise seen from outside
 
   size_t vertex_count() const { return positions.size() / 3; }
   size_t face_count() const { return indices.size() / 3; }
   bool has_normals() const { return !normals.empty(); }
   bool has_colors() const { return !colors.empty(); }
+  bool has_texcoords() const { return !texcoords.empty(); }
 };
 
 // What clean_mesh() changed; every count is reported to the user.
@@ -42,7 +44,7 @@ Mesh load_mesh(const std::string& path, const ProgressFn& progress = {});
 // Same, from bytes already in memory; `name` is used for the format (extension) and in errors.
 Mesh load_mesh_from_memory(const std::string& name, const std::vector<uint8_t>& bytes);
 
-// Writes PLY (binary little-endian by default), with normals/colors when present.
+// Writes PLY (binary little-endian by default), with normals/colors/texture coordinates (`s t`) when present.
 void save_ply(const Mesh& mesh, const std::string& path, bool binary = true);
 
 // Welds exactly coincident vertices, drops unreferenced vertices, degenerate and duplicate faces,

@@ -216,11 +216,13 @@ MultilevelMesh assemble_multilevel(const Mesh& mesh, const CollapseLevels& level
   m.positions.resize(size_t(n) * 3);
   if (mesh.has_normals()) m.normals.resize(size_t(n) * 3);
   if (mesh.has_colors()) m.colors.resize(size_t(n) * 4);
+  if (mesh.has_texcoords()) m.texcoords.resize(size_t(n) * 2);
   for (uint32_t i = 0; i < n; ++i) {
     const uint32_t v = vertex_order[i];
     std::copy_n(&mesh.positions[3 * size_t(v)], 3, &m.positions[3 * size_t(i)]);
     if (mesh.has_normals()) std::copy_n(&mesh.normals[3 * size_t(v)], 3, &m.normals[3 * size_t(i)]);
     if (mesh.has_colors()) std::copy_n(&mesh.colors[4 * size_t(v)], 4, &m.colors[4 * size_t(i)]);
+    if (mesh.has_texcoords()) std::copy_n(&mesh.texcoords[2 * size_t(v)], 2, &m.texcoords[2 * size_t(i)]);
   }
   m.triangles.resize(size_t(f) * 3);
   for (uint32_t i = 0; i < f; ++i)

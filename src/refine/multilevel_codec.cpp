@@ -23,16 +23,22 @@ namespace {
 
 using multilevel_binary::CompressedHead;
 using multilevel_binary::LevelHeader;
+using multilevel_binary::TexcoordBox;
 
 constexpr uint32_t kNoRep = MultilevelMesh::kNoRepresentative;
 constexpr uint32_t kClasses = 33;  // bit lengths 0..32
 constexpr uint32_t kRecent = 16;   // corners the move-to-front list holds
 constexpr uint32_t kCornerSymbols = kRecent + kClasses;
 
-// One prefix code per kind of integer; kAxis + k for coordinate k.
-enum Slot : uint32_t { kRepGap, kRepDelta, kAxis, kCorner = kAxis + 3, kSlots };
+// One prefix code per kind of integer; kAxis + k for coordinate k, kTexcoord + k for texture coordinate k
+// (after the corner's, so that a mesh without texture coordinates codes as it did before them).
+enum Slot : uint32_t { kRepGap, kRepDelta, kAxis, kCorner = kAxis + 3, kTexcoord, kSlots = kTexcoord + 2 };
 constexpr uint32_t alphabet(uint32_t slot) { return slot == kCorner ? kCornerSymbols : kClasses; }
-constexpr const char* kSlotNames[kSlots] = {"representative vertex", "representative", "x", "y", "z", "corner"};
+constexpr const char* kSlotNames[kSlots] = {"representative vertex", "representative", "x", "y", "z", "corner", "u", "v"};
+
+// Grid coordinates per vertex in the encoder's and decoder's arrays: the position's, then the texture
+// coordinates' (when the mesh has them).
+uint32_t grid_width(uint32_t dimension, bool texcoords) { return dimension + (texcoords ? 2 : 0); }
 
 uint32_t zigzag(int64_t x) { return uint32_t(x >= 0 ? uint64_t(x) << 1 : (uint64_t(-x) << 1) - 1); }
 int64_t unzigzag(uint32_t z) { return z & 1 ? -int64_t(z >> 1) - 1 : int64_t(z >> 1); }
@@ -64,9 +70,9 @@ class RecentCorners {
 // What the encoder knows of one level and what its decoder will know.
 struct LevelInput {
   const MultilevelMesh& mesh;
-  std::span<const uint32_t> quantized;  // dimension per vertex
+  std::span<const uint32_t> quantized;  // grid_width per vertex
   std::span<const uint8_t> known;       // per vertex: its representative is stated by this level or a coarser one
-  uint32_t level, position_bits;
+  uint32_t level, position_bits, texcoord_bits;
   std::vector<uint32_t> pairs;          // (vertex, representative), by vertex
 };
 
@@ -89,16 +95,22 @@ void emit_level(const LevelInput& in, Sink& sink) {
   }
   sink.end_part(&CompressedLevelBits::representatives);
   const int64_t middle = int64_t(1) << (in.position_bits - 1);
+  const bool texcoords = !m.texcoords.empty();
+  const int64_t texcoord_middle = texcoords ? int64_t(1) << (in.texcoord_bits - 1) : 0;
+  const uint32_t w = grid_width(d, texcoords);
   for (uint32_t v = v_begin; v < v_end; ++v) {
     const uint32_t from = predictor(v, in.known[v] ? m.representative[v] : kNoRep);
-    for (uint32_t k = 0; k < d; ++k) {
-      const int64_t guess = from == kNoRep ? middle : in.quantized[size_t(from) * d + k];
-      sink.value(kAxis + k, zigzag(int64_t(in.quantized[size_t(v) * d + k]) - guess));
-    }
+    const auto axis = [&](uint32_t slot, uint32_t k, int64_t fallback) {
+      const int64_t guess = from == kNoRep ? fallback : in.quantized[size_t(from) * w + k];
+      sink.value(slot, zigzag(int64_t(in.quantized[size_t(v) * w + k]) - guess));
+    };
+    for (uint32_t k = 0; k < d; ++k) axis(kAxis + k, k, middle);
     if (!m.normals.empty())
       for (int k = 0; k < 3; ++k) sink.raw(std::bit_cast<uint32_t>(m.normals[size_t(v) * 3 + k]), 32);
     if (!m.colors.empty())
       for (int k = 0; k < 4; ++k) sink.raw(m.colors[size_t(v) * 4 + k], 8);
+    if (texcoords)
+      for (uint32_t k = 0; k < 2; ++k) axis(kTexcoord + k, d + k, texcoord_middle);
   }
   sink.end_part(&CompressedLevelBits::vertices);
   RecentCorners recent;
@@ -152,11 +164,13 @@ struct Writer {
 };
 
 // Which codes a level with these counts carries (a code for nothing is left out).
-std::array<bool, kSlots> slots_used(uint32_t dimension, uint32_t vertices, uint32_t triangles, uint32_t representatives) {
+std::array<bool, kSlots> slots_used(uint32_t dimension, bool texcoords, uint32_t vertices, uint32_t triangles,
+                                    uint32_t representatives) {
   std::array<bool, kSlots> used{};
   used[kRepGap] = used[kRepDelta] = representatives > 0;
   for (uint32_t k = 0; k < dimension; ++k) used[kAxis + k] = vertices > 0;
   used[kCorner] = triangles > 0;
+  used[kTexcoord] = used[kTexcoord + 1] = texcoords && vertices > 0;
   return used;
 }
 
@@ -165,7 +179,7 @@ std::vector<uint8_t> encode_level(const LevelInput& in, CompressedLevelBits& bit
   const LevelHeader h{in.level, m.level_vertices(in.level), m.level_triangles(in.level), uint32_t(in.pairs.size() / 2)};
   Counter counter;
   emit_level(in, counter);
-  const auto used = slots_used(m.dimension, h.vertices, h.triangles, h.representatives);
+  const auto used = slots_used(m.dimension, !m.texcoords.empty(), h.vertices, h.triangles, h.representatives);
   std::array<PrefixCode, kSlots> codes;
   BitWriter w;
   for (uint32_t field : {h.level, h.vertices, h.triangles, h.representatives}) w.bits(field, 32);
@@ -199,7 +213,7 @@ class LevelDecoder {
     read_representatives();
     read_vertices(quantized);
     read_triangles();
-    return multilevel_binary::level_section_bytes(h_, positions_, normals_, colors_, triangles_, pairs_);
+    return multilevel_binary::level_section_bytes(h_, positions_, normals_, colors_, texcoords_, triangles_, pairs_);
   }
 
  private:
@@ -213,7 +227,7 @@ class LevelDecoder {
     if (h_.level != c_.level) error("says it is level " + str(h_.level));
     if (h_.vertices > c_.vertices_left || h_.triangles > c_.triangles_left || h_.representatives > c_.representatives_left)
       error("more vertices, triangles or representatives than the head's totals leave");
-    const auto used = slots_used(c_.dimension, h_.vertices, h_.triangles, h_.representatives);
+    const auto used = slots_used(c_.dimension, c_.texcoords, h_.vertices, h_.triangles, h_.representatives);
     for (uint32_t s = 0; s < kSlots; ++s)
       if (used[s]) codes_[s] = PrefixCode::deserialize(r_, alphabet(s), kSlotNames[s]);
   }
@@ -242,21 +256,22 @@ class LevelDecoder {
   }
 
   void read_vertices(std::vector<uint32_t>& quantized) {
-    const uint32_t d = c_.dimension, v_begin = c_.vertices_loaded;
-    const int64_t steps = (int64_t(1) << c_.grid.bits) - 1, middle = int64_t(1) << (c_.grid.bits - 1);
+    const uint32_t d = c_.dimension, v_begin = c_.vertices_loaded, w = grid_width(d, c_.texcoords);
     positions_.reserve(size_t(h_.vertices) * d);
-    quantized.reserve(quantized.size() + size_t(h_.vertices) * d);
+    quantized.reserve(quantized.size() + size_t(h_.vertices) * w);
     size_t cursor = 0;
     for (uint32_t v = v_begin; v < v_begin + h_.vertices; ++v) {
       const uint32_t from = predictor(v, representative_of(v, cursor));
+      // Grid coordinate k of v (k < w), under `slot`, on a grid of `bits`.
+      const auto axis = [&](uint32_t slot, uint32_t k, uint32_t bits) {
+        const int64_t guess = from == kNoRep ? int64_t(1) << (bits - 1) : quantized[size_t(from) * w + k];
+        const int64_t x = guess + unzigzag(read_value(r_, codes_[slot], kSlotNames[slot]));
+        if (x < 0 || x > (int64_t(1) << bits) - 1) error("vertex " + str(v) + " is off the " + str(bits) + "-bit grid");
+        quantized.push_back(uint32_t(x));
+        return uint32_t(x);
+      };
       uint32_t q[3] = {0, 0, 0};
-      for (uint32_t k = 0; k < d; ++k) {
-        const int64_t guess = from == kNoRep ? middle : quantized[size_t(from) * d + k];
-        const int64_t x = guess + unzigzag(read_value(r_, codes_[kAxis + k], kSlotNames[kAxis + k]));
-        if (x < 0 || x > steps) error("vertex " + str(v) + " is off the " + str(c_.grid.bits) + "-bit grid");
-        q[k] = uint32_t(x);
-        quantized.push_back(q[k]);
-      }
+      for (uint32_t k = 0; k < d; ++k) q[k] = axis(kAxis + k, k, c_.grid.bits);
       float p[3];
       dequantize_position(c_.grid, q, p);
       positions_.insert(positions_.end(), p, p + d);
@@ -264,6 +279,12 @@ class LevelDecoder {
         for (int k = 0; k < 3; ++k) normals_.push_back(std::bit_cast<float>(uint32_t(r_.bits(32, "normal"))));
       if (c_.colors)
         for (int k = 0; k < 4; ++k) colors_.push_back(uint8_t(r_.bits(8, "colour")));
+      if (c_.texcoords) {
+        uint32_t t[3] = {0, 0, 0};
+        for (uint32_t k = 0; k < 2; ++k) t[k] = axis(kTexcoord + k, d + k, c_.texcoord_grid.bits);
+        dequantize_position(c_.texcoord_grid, t, p);
+        texcoords_.insert(texcoords_.end(), p, p + 2);
+      }
     }
   }
 
@@ -298,73 +319,92 @@ class LevelDecoder {
   LevelHeader h_{};
   std::array<PrefixCode, kSlots> codes_;
   std::vector<uint32_t> pairs_, triangles_;
-  std::vector<float> positions_, normals_;
+  std::vector<float> positions_, normals_, texcoords_;
   std::vector<uint8_t> colors_;
 };
 
 }  // namespace
 
-PositionGrid multilevel_grid(const MultilevelMesh& m, uint32_t bits) {
-  if (bits < 1 || bits > 24) fail("multilevel", "position bits " + str(bits) + " (1 to 24)");
+namespace {
+
+// A grid of `bits` per axis over the box of `d` values per vertex (the axes past d are flat).
+PositionGrid grid_over(const std::vector<float>& values, uint32_t d, uint32_t bits, const char* what) {
+  if (bits < 1 || bits > 24) fail("multilevel", std::string(what) + " bits " + str(bits) + " (1 to 24)");
   PositionGrid grid;
   grid.bits = bits;
-  const uint32_t d = m.dimension;
-  for (uint32_t v = 0; v < m.vertices(); ++v)
+  for (size_t v = 0; v < values.size() / d; ++v)
     for (uint32_t k = 0; k < d; ++k) {
-      const float p = m.positions[size_t(v) * d + k];
+      const float p = values[v * d + k];
       grid.min[k] = v == 0 ? p : std::min(grid.min[k], p);
       grid.max[k] = v == 0 ? p : std::max(grid.max[k], p);
     }
   return grid;
 }
 
-namespace {
-
-std::vector<uint32_t> quantize_all(const MultilevelMesh& m, const PositionGrid& grid) {
-  const uint32_t d = m.dimension;
-  std::vector<uint32_t> q(size_t(m.vertices()) * d);
-  for (uint32_t v = 0; v < m.vertices(); ++v) {
+// Every vertex's `d` values on `grid`, into columns [column, column + d) of `q` (`width` per vertex).
+void quantize_into(const std::vector<float>& values, uint32_t d, const PositionGrid& grid, std::vector<uint32_t>& q,
+                   uint32_t column, uint32_t width) {
+  for (size_t v = 0; v < values.size() / d; ++v) {
     float p[3] = {0, 0, 0};
     uint32_t out[3];
-    std::copy_n(m.positions.begin() + size_t(v) * d, d, p);
+    std::copy_n(values.begin() + v * d, d, p);
     quantize_position(grid, p, out);
-    std::copy_n(out, d, q.begin() + size_t(v) * d);
+    std::copy_n(out, d, q.begin() + v * width + column);
   }
-  return q;
+}
+
+// `values` (d per vertex) replaced by their grid points.
+void snap_all(std::vector<float>& values, uint32_t d, const PositionGrid& grid) {
+  for (size_t v = 0; v < values.size() / d; ++v) {
+    float p[3] = {0, 0, 0};
+    std::copy_n(values.begin() + v * d, d, p);
+    snap_position(grid, p, p);
+    std::copy_n(p, d, values.begin() + v * d);
+  }
 }
 
 }  // namespace
 
-MultilevelMesh snapped_multilevel(const MultilevelMesh& mesh, uint32_t bits) {
+PositionGrid multilevel_grid(const MultilevelMesh& m, uint32_t bits) { return grid_over(m.positions, m.dimension, bits, "position"); }
+
+PositionGrid multilevel_texcoord_grid(const MultilevelMesh& m, uint32_t bits) {
+  return grid_over(m.texcoords, 2, bits, "texture coordinate");
+}
+
+MultilevelMesh snapped_multilevel(const MultilevelMesh& mesh, uint32_t bits, uint32_t texcoord_bits) {
   MultilevelMesh out = mesh;
-  const PositionGrid grid = multilevel_grid(mesh, bits);
-  const std::vector<uint32_t> q = quantize_all(mesh, grid);
-  const uint32_t d = mesh.dimension;
-  for (uint32_t v = 0; v < mesh.vertices(); ++v) {
-    uint32_t c[3] = {0, 0, 0};
-    float p[3];
-    std::copy_n(q.begin() + size_t(v) * d, d, c);
-    dequantize_position(grid, c, p);
-    std::copy_n(p, d, out.positions.begin() + size_t(v) * d);
-  }
+  snap_all(out.positions, mesh.dimension, multilevel_grid(mesh, bits));
+  if (!mesh.texcoords.empty()) snap_all(out.texcoords, 2, multilevel_texcoord_grid(mesh, texcoord_bits));
   return out;
 }
 
 MultilevelParts multilevel_compressed_parts(const MultilevelMesh& m, uint32_t position_bits,
-                                            std::vector<CompressedLevelBits>* bits) {
+                                            std::vector<CompressedLevelBits>* bits, uint32_t texcoord_bits) {
   validate_multilevel("", m);
+  const bool texcoords = !m.texcoords.empty();
   const PositionGrid grid = multilevel_grid(m, position_bits);
-  CompressedHead head{multilevel_binary::head_section(m), position_bits, {}, {}, 0};
+  const PositionGrid texcoord_grid = texcoords ? multilevel_texcoord_grid(m, texcoord_bits) : PositionGrid{};
+  CompressedHead head{multilevel_binary::head_section(m), position_bits, {}, {}, texcoords ? texcoord_bits : 0};
   std::copy_n(grid.min, 3, head.min);
   std::copy_n(grid.max, 3, head.max);
   MultilevelParts parts;
   parts.head.resize(sizeof head);
   std::memcpy(parts.head.data(), &head, sizeof head);
-  const std::vector<uint32_t> quantized = quantize_all(m, grid);
+  const uint32_t w = grid_width(m.dimension, texcoords);
+  std::vector<uint32_t> quantized(size_t(m.vertices()) * w);
+  quantize_into(m.positions, m.dimension, grid, quantized, 0, w);
+  if (texcoords) {
+    TexcoordBox box;
+    std::copy_n(texcoord_grid.min, 2, box.min);
+    std::copy_n(texcoord_grid.max, 2, box.max);
+    parts.head.resize(sizeof head + sizeof box);
+    std::memcpy(parts.head.data() + sizeof head, &box, sizeof box);
+    quantize_into(m.texcoords, 2, texcoord_grid, quantized, m.dimension, w);
+  }
   std::vector<uint8_t> stated(m.vertices(), 0), known(m.vertices(), 0);
   if (bits) bits->clear();
   for (uint32_t level = m.level_count(); level-- > 0;) {
-    LevelInput in{m, quantized, known, level, position_bits, level_representatives(m, level, stated)};
+    LevelInput in{m, quantized, known, level, position_bits, texcoord_bits, level_representatives(m, level, stated)};
     std::vector<uint32_t> order(in.pairs.size() / 2);
     for (uint32_t i = 0; i < order.size(); ++i) order[i] = i;
     std::sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) { return in.pairs[2 * a] < in.pairs[2 * b]; });

@@ -19,7 +19,8 @@ struct MultilevelLimits {
 // ASCII: per level from the coarsest, `{` vertex coordinates `}` then `{` triangles, each followed by the
 // representatives it states `}`; `#` starts a comment to the end of the line; numbers are separated by
 // commas and/or white space. Errors name the line: "WHERE: line N: what". Positions only: the paper's
-// format has no normals or colours, and no place for the representatives only geomorphs use
+// format has no normals, colours or texture coordinates (its Fig. 9 model has them, but Fig. 6's file
+// "doesn't show this"), and no place for the representatives only geomorphs use
 // (geomorph_representatives_per_level): they are left out, so what reads back has the discrete LODs'.
 MultilevelMesh parse_multilevel_ascii(const std::string& where, std::string_view text, const MultilevelLimits& limits = {});
 std::string format_multilevel_ascii(const MultilevelMesh& mesh);

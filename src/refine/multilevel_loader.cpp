@@ -17,8 +17,10 @@ using multilevel_binary::CompressedHead;
 using multilevel_binary::HeadSection;
 using multilevel_binary::kHasColors;
 using multilevel_binary::kHasNormals;
+using multilevel_binary::kHasTexcoords;
 using multilevel_binary::LevelHeader;
 using multilevel_binary::level_section_bytes;
+using multilevel_binary::TexcoordBox;
 
 constexpr uint32_t kNoRep = MultilevelMesh::kNoRepresentative;
 
@@ -32,7 +34,7 @@ void append_bytes(std::vector<uint8_t>& out, const T* data, size_t count) {
   std::memcpy(out.data() + at, data, count * sizeof(T));
 }
 
-// One level's LEVL section: its header, vertices (positions, normals, colours), triangles, then the
+// One level's LEVL section: its header, vertices (positions, normals, colours, texture coordinates), triangles, then the
 // representatives it carries (level_representatives: what its triangles state, in the ASCII form's order,
 // then its own vertices' geomorph representatives).
 std::vector<uint8_t> level_section(const MultilevelMesh& m, uint32_t level, std::vector<uint8_t>& stated) {
@@ -45,8 +47,22 @@ std::vector<uint8_t> level_section(const MultilevelMesh& m, uint32_t level, std:
   };
   const size_t d = m.dimension;
   return level_section_bytes(h, part(m.positions, v_begin * d, h.vertices * d), part(m.normals, v_begin * 3, h.vertices * 3),
-                             part(m.colors, v_begin * 4, h.vertices * 4), part(m.triangles, t_begin * 3, h.triangles * 3),
-                             reps);
+                             part(m.colors, v_begin * 4, h.vertices * 4), part(m.texcoords, v_begin * 2, h.vertices * 2),
+                             part(m.triangles, t_begin * 3, h.triangles * 3), reps);
+}
+
+// A grid of the compressed head: 1 to 24 bits over a box of `d` finite axes (those past d stay flat).
+PositionGrid head_grid(const std::string& where, uint32_t bits, const float* min, const float* max, int d,
+                       const char* bits_name, const char* box_name) {
+  if (bits < 1 || bits > 24) fail(where, "compressed head: " + str(bits) + " " + bits_name + " (1 to 24)");
+  PositionGrid grid;
+  grid.bits = bits;
+  for (int k = 0; k < d; ++k) {
+    if (!std::isfinite(min[k]) || !std::isfinite(max[k]) || min[k] > max[k])
+      fail(where, std::string("compressed head: ") + box_name + " is not a box");
+    grid.min[k] = min[k], grid.max[k] = max[k];
+  }
+  return grid;
 }
 
 // Appends `count` elements of `out`'s type from `p` and moves `p` past them.
@@ -64,7 +80,8 @@ void take(std::vector<T>& out, const uint8_t*& p, uint64_t count) {
 HeadSection multilevel_binary::head_section(const MultilevelMesh& m) {
   return {m.level_count(),
           m.dimension,
-          (m.normals.empty() ? 0 : kHasNormals) | (m.colors.empty() ? 0 : kHasColors),
+          (m.normals.empty() ? 0 : kHasNormals) | (m.colors.empty() ? 0 : kHasColors) |
+              (m.texcoords.empty() ? 0 : kHasTexcoords),
           m.vertices(),
           m.faces(),
           uint32_t(m.stored_representatives()),
@@ -73,14 +90,17 @@ HeadSection multilevel_binary::head_section(const MultilevelMesh& m) {
 
 std::vector<uint8_t> multilevel_binary::level_section_bytes(const LevelHeader& h, std::span<const float> positions,
                                                             std::span<const float> normals, std::span<const uint8_t> colors,
+                                                            std::span<const float> texcoords,
                                                             std::span<const uint32_t> triangles,
                                                             std::span<const uint32_t> representatives) {
   std::vector<uint8_t> out;
-  out.reserve(sizeof h + 4 * (positions.size() + normals.size() + triangles.size() + representatives.size()) + colors.size());
+  out.reserve(sizeof h + 4 * (positions.size() + normals.size() + texcoords.size() + triangles.size() +
+                              representatives.size()) + colors.size());
   append_bytes(out, &h, 1);
   append_bytes(out, positions.data(), positions.size());
   append_bytes(out, normals.data(), normals.size());
   append_bytes(out, colors.data(), colors.size());
+  append_bytes(out, texcoords.data(), texcoords.size());
   append_bytes(out, triangles.data(), triangles.size());
   append_bytes(out, representatives.data(), representatives.size());
   return out;
@@ -101,7 +121,7 @@ MultilevelLoader::MultilevelLoader(const std::string& where, std::span<const uin
     : form_(form) {
   if (form == MultilevelForm::compressed) {
     read_compressed_head(where, head);
-    head = head.first(sizeof(HeadSection));
+    head = head.first(std::min(head.size(), sizeof(HeadSection)));
   }
   if (head.size() != sizeof(HeadSection))
     fail(where, "section HEAD: " + str(head.size()) + " bytes (" + str(sizeof(HeadSection)) + " expected)");
@@ -110,10 +130,11 @@ MultilevelLoader::MultilevelLoader(const std::string& where, std::span<const uin
   if (h.level_count == 0 || h.level_count > limits.max_levels)
     fail(where, "section HEAD: " + str(h.level_count) + " levels (1 to " + str(limits.max_levels) + ")");
   if (h.dimension < 2 || h.dimension > 3) fail(where, "section HEAD: dimension " + str(h.dimension));
-  if (h.flags & ~(kHasNormals | kHasColors)) fail(where, "section HEAD: unknown flags");
+  if (h.flags & ~(kHasNormals | kHasColors | kHasTexcoords)) fail(where, "section HEAD: unknown flags");
   if (h.vertex_count > 0x7FFFFFFFu || h.triangle_count > 0x7FFFFFFFu || h.representative_count > h.vertex_count)
     fail(where, "section HEAD: more than 2^31 vertices or triangles, or more representatives than vertices");
-  const uint64_t per_vertex = 4 * (h.dimension + (h.flags & kHasNormals ? 3 : 0)) + (h.flags & kHasColors ? 4 : 0);
+  const uint64_t per_vertex = 4 * (h.dimension + (h.flags & kHasNormals ? 3 : 0) + (h.flags & kHasTexcoords ? 2 : 0)) +
+                              (h.flags & kHasColors ? 4 : 0);
   const uint64_t bytes = per_vertex * h.vertex_count + 12 * uint64_t(h.triangle_count) + 8 * uint64_t(h.representative_count);
   if (bytes > limits.max_file_bytes)
     fail(where, "section HEAD: a mesh of " + str(bytes) + " bytes, over the limit of " + str(limits.max_file_bytes));
@@ -130,20 +151,23 @@ MultilevelLoader::MultilevelLoader(const std::string& where, std::span<const uin
   resolved_.assign(h.vertex_count, 0);
 }
 
-// The grid is checked here; the HEAD it starts with, by the constructor.
+// The grids are checked here; the HEAD the head starts with, by the constructor.
 void MultilevelLoader::read_compressed_head(const std::string& where, std::span<const uint8_t> head) {
-  if (head.size() != sizeof(CompressedHead))
-    fail(where, "compressed head: " + str(head.size()) + " bytes (" + str(sizeof(CompressedHead)) + " expected)");
-  CompressedHead h;
-  std::memcpy(&h, head.data(), sizeof h);
-  if (h.position_bits < 1 || h.position_bits > 24) fail(where, "compressed head: " + str(h.position_bits) + " position bits (1 to 24)");
-  for (int k = 0; k < 3; ++k)
-    if (!std::isfinite(h.min[k]) || !std::isfinite(h.max[k]) || h.min[k] > h.max[k])
-      fail(where, "compressed head: the grid's box is not a box");
-  if (h.reserved != 0) fail(where, "compressed head: reserved word is not 0");
-  grid_.bits = h.position_bits;
-  std::copy_n(h.min, 3, grid_.min);
-  std::copy_n(h.max, 3, grid_.max);
+  CompressedHead h{};
+  if (head.size() >= sizeof h) std::memcpy(&h, head.data(), sizeof h);
+  const bool texcoords = h.head.flags & kHasTexcoords;
+  const size_t expected = sizeof h + (texcoords ? sizeof(TexcoordBox) : 0);
+  if (head.size() != expected)
+    fail(where, "compressed head: " + str(head.size()) + " bytes (" + str(expected) + " expected)");
+  grid_ = head_grid(where, h.position_bits, h.min, h.max, 3, "position bits", "the grid's box");
+  if (!texcoords) {
+    if (h.texcoord_bits != 0) fail(where, "compressed head: texture coordinate bits without texture coordinates");
+    return;
+  }
+  TexcoordBox box;
+  std::memcpy(&box, head.data() + sizeof h, sizeof box);
+  texcoord_grid_ = head_grid(where, h.texcoord_bits, box.min, box.max, 2, "texture coordinate bits",
+                             "the texture coordinates' box");
 }
 
 void MultilevelLoader::add_level(const std::string& where, std::span<const uint8_t> section, uint64_t offset) {
@@ -156,7 +180,9 @@ void MultilevelLoader::add_level(const std::string& where, std::span<const uint8
                                        mesh_.dimension,
                                        (flags_ & kHasNormals) != 0,
                                        (flags_ & kHasColors) != 0,
+                                       (flags_ & kHasTexcoords) != 0,
                                        grid_,
+                                       texcoord_grid_,
                                        &mesh_.representative,
                                        mesh_.vertices(),
                                        total_vertices_ - mesh_.vertices(),
@@ -175,8 +201,8 @@ void MultilevelLoader::add_plain_level(const std::string& where, std::span<const
   LevelHeader h;
   std::memcpy(&h, section.data(), sizeof h);
   if (h.level != level) fail(where, name + ": says it is level " + str(h.level));
-  const bool normals = flags_ & kHasNormals, colors = flags_ & kHasColors;
-  const uint64_t per_vertex = mesh_.dimension + (normals ? 3 : 0) + (colors ? 1 : 0);
+  const bool normals = flags_ & kHasNormals, colors = flags_ & kHasColors, texcoords = flags_ & kHasTexcoords;
+  const uint64_t per_vertex = mesh_.dimension + (normals ? 3 : 0) + (colors ? 1 : 0) + (texcoords ? 2 : 0);
   const uint64_t words = 4 + per_vertex * h.vertices + 3 * uint64_t(h.triangles) + 2 * uint64_t(h.representatives);
   if (words != section.size() / 4)
     fail(where, name + ": " + str(section.size() / 4) + " words but its counts need " + str(words));
@@ -188,6 +214,7 @@ void MultilevelLoader::add_plain_level(const std::string& where, std::span<const
   take(mesh_.positions, p, uint64_t(h.vertices) * mesh_.dimension);
   if (normals) take(mesh_.normals, p, uint64_t(h.vertices) * 3);
   if (colors) take(mesh_.colors, p, uint64_t(h.vertices) * 4);
+  if (texcoords) take(mesh_.texcoords, p, uint64_t(h.vertices) * 2);
   take(mesh_.triangles, p, uint64_t(h.triangles) * 3);
   std::vector<uint32_t> pairs;
   take(pairs, p, uint64_t(h.representatives) * 2);
@@ -195,6 +222,9 @@ void MultilevelLoader::add_plain_level(const std::string& where, std::span<const
     if (!std::isfinite(mesh_.positions[i])) fail(where, "a vertex position of level " + str(level) + " is not finite");
   for (size_t i = size_t(v_begin) * 3; i < mesh_.normals.size(); ++i)
     if (!std::isfinite(mesh_.normals[i])) fail(where, "a vertex normal of level " + str(level) + " is not finite");
+  for (size_t i = size_t(v_begin) * 2; i < mesh_.texcoords.size(); ++i)
+    if (!std::isfinite(mesh_.texcoords[i]))
+      fail(where, "a vertex texture coordinate of level " + str(level) + " is not finite");
   take_representatives(where, pairs);
   const uint32_t n_l = v_begin + h.vertices;
   for (uint32_t l = 0; l <= level; ++l) {

@@ -66,6 +66,7 @@ class MultilevelLoader {
   std::vector<uint8_t> resolved_;  // per vertex: its chain is known to reach a loaded vertex
   MultilevelForm form_;
   PositionGrid grid_;               // the compressed form's
+  PositionGrid texcoord_grid_;      // the compressed form's, when it has texture coordinates (z unused)
   std::vector<uint32_t> quantized_;  // the compressed form's: grid coordinates of the loaded vertices
 };
 

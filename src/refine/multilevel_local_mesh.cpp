@@ -38,6 +38,8 @@ LocalMesh local_mesh(const MultilevelMesh& m, const MultilevelDag& dag, const Mu
     std::copy_n(&m.positions[size_t(v) * d], d, &out.mesh.positions[3 * i]);
     if (!m.normals.empty()) out.mesh.normals.insert(out.mesh.normals.end(), &m.normals[3 * size_t(v)], &m.normals[3 * size_t(v)] + 3);
     if (!m.colors.empty()) out.mesh.colors.insert(out.mesh.colors.end(), &m.colors[4 * size_t(v)], &m.colors[4 * size_t(v)] + 4);
+    if (!m.texcoords.empty())
+      out.mesh.texcoords.insert(out.mesh.texcoords.end(), &m.texcoords[2 * size_t(v)], &m.texcoords[2 * size_t(v)] + 2);
   }
   for (uint32_t l = m.level_count(); l-- > 0;) {
     const uint32_t begin = l + 1 < m.level_count() ? m.triangle_count[l + 1] : 0;

@@ -27,12 +27,16 @@ void check_sizes(const std::string& where, const MultilevelMesh& m) {
   if (m.positions.size() != n * m.dimension) fail(where, "positions do not match " + str(n) + " vertices");
   if (!m.normals.empty() && m.normals.size() != 3 * n) fail(where, "normals do not match " + str(n) + " vertices");
   if (!m.colors.empty() && m.colors.size() != 4 * n) fail(where, "colors do not match " + str(n) + " vertices");
+  if (!m.texcoords.empty() && m.texcoords.size() != 2 * n)
+    fail(where, "texture coordinates do not match " + str(n) + " vertices");
   if (m.representative.size() != n) fail(where, "representatives do not match " + str(n) + " vertices");
   if (m.triangles.size() != 3 * uint64_t(m.faces())) fail(where, "triangles do not match " + str(m.faces()));
   for (float p : m.positions)
     if (!std::isfinite(p)) fail(where, "a vertex position is not finite");
   for (float p : m.normals)
     if (!std::isfinite(p)) fail(where, "a vertex normal is not finite");
+  for (float p : m.texcoords)
+    if (!std::isfinite(p)) fail(where, "a vertex texture coordinate is not finite");
 }
 
 // The level of triangle t: the highest l with t < triangle_count[l] (walked once, in order).
@@ -252,6 +256,7 @@ void MultilevelLod::prepare_morph(uint32_t lo) {
   morph_positions_.assign(m.positions.begin(), m.positions.begin() + size_t(n_lo) * d);
   morph_normals_.assign(m.normals.begin(), m.normals.begin() + (m.normals.empty() ? 0 : size_t(n_lo) * 3));
   morph_colors_.assign(m.colors.begin(), m.colors.begin() + (m.colors.empty() ? 0 : size_t(n_lo) * 4));
+  morph_texcoords_.assign(m.texcoords.begin(), m.texcoords.begin() + (m.texcoords.empty() ? 0 : size_t(n_lo) * 2));
   morph_level_ = lo;
 }
 
@@ -285,6 +290,9 @@ void MultilevelLod::geomorph(uint32_t lo, float t) {
       for (int k = 0; k < 4; ++k)
         morph_colors_[size_t(v) * 4 + k] =
             uint8_t(std::lround(s * m.colors[size_t(from) * 4 + k] + t * m.colors[size_t(v) * 4 + k]));
+    if (!m.texcoords.empty())
+      for (int k = 0; k < 2; ++k)
+        morph_texcoords_[size_t(v) * 2 + k] = s * m.texcoords[size_t(from) * 2 + k] + t * m.texcoords[size_t(v) * 2 + k];
   }
   morphed_ = true;
   level_ = float(lo + 1) - t;
@@ -320,6 +328,12 @@ std::span<const uint8_t> MultilevelLod::colors() const {
   return {mesh_.colors.data(), size_t(vertex_count_) * 4};
 }
 
+std::span<const float> MultilevelLod::texcoords() const {
+  if (mesh_.texcoords.empty()) return {};
+  if (morphed_) return morph_texcoords_;
+  return {mesh_.texcoords.data(), size_t(vertex_count_) * 2};
+}
+
 Mesh lod_mesh(const MultilevelMesh& m, const MultilevelLod& lod) {
   Mesh out;
   const uint32_t n = lod.vertex_count(), d = m.dimension;
@@ -329,6 +343,7 @@ Mesh lod_mesh(const MultilevelMesh& m, const MultilevelLod& lod) {
     for (uint32_t k = 0; k < d; ++k) out.positions[3 * size_t(v) + k] = positions[size_t(v) * d + k];
   out.normals.assign(lod.normals().begin(), lod.normals().end());
   out.colors.assign(lod.colors().begin(), lod.colors().end());
+  out.texcoords.assign(lod.texcoords().begin(), lod.texcoords().end());
   out.indices.assign(lod.indices().begin(), lod.indices().end());
   return out;
 }

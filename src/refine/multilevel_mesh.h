@@ -23,6 +23,7 @@ struct MultilevelMesh {
   std::vector<float> positions;          // dimension per vertex
   std::vector<float> normals;            // 3 per vertex, or empty
   std::vector<uint8_t> colors;           // r g b a per vertex, or empty
+  std::vector<float> texcoords;          // u v per vertex, or empty
   std::vector<uint32_t> triangles;       // 3 per triangle
   RepresentativeArray representative;    // per vertex; kNoRepresentative where none is stored
   std::vector<uint32_t> vertex_count;    // n_l per level: vertices of levels >= l (non-increasing in l)
@@ -92,6 +93,7 @@ class MultilevelLod {
   std::span<const float> positions() const;
   std::span<const float> normals() const;
   std::span<const uint8_t> colors() const;
+  std::span<const float> texcoords() const;
 
  private:
   void connect(uint32_t level);
@@ -107,11 +109,12 @@ class MultilevelLod {
   std::vector<uint32_t> indices_;
   uint32_t morph_level_ = 0xFFFFFFFFu;  // the level whose own vertices morph_source_ covers
   std::vector<uint32_t> morph_source_;  // per vertex of that level: its representative at level + 1
-  std::vector<float> morph_positions_, morph_normals_;
+  std::vector<float> morph_positions_, morph_normals_, morph_texcoords_;
   std::vector<uint8_t> morph_colors_;
 };
 
-// The LOD `lod` holds as a plain indexed mesh (a 2D mesh lies in z = 0), with its normals and colours.
+// The LOD `lod` holds as a plain indexed mesh (a 2D mesh lies in z = 0), with its normals, colours and
+// texture coordinates.
 Mesh lod_mesh(const MultilevelMesh& mesh, const MultilevelLod& lod);
 
 }  // namespace pms

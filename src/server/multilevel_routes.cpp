@@ -56,6 +56,7 @@ nlohmann::json multilevel_entry(const ServedMultilevel& m) {
           {"dimension", m.dimension},
           {"normals", m.normals},
           {"colors", m.colors},
+          {"texcoords", m.texcoords},
           {"vertices", m.vertices},
           {"faces", m.triangles},
           {"lod_vertices", coarsest_first(m.lod_vertices)},

@@ -67,6 +67,7 @@ std::unique_ptr<ServedMultilevel> open_multilevel(const std::string& path) {
   out->dimension = mesh.dimension;
   out->normals = !mesh.normals.empty();
   out->colors = !mesh.colors.empty();
+  out->texcoords = !mesh.texcoords.empty();
   out->vertices = mesh.vertices();
   out->triangles = mesh.faces();
   const std::string prefix = "/models/" + out->name;

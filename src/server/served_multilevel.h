@@ -15,7 +15,7 @@ struct ServedMultilevel {
   std::string name;  // file name without .pml
   std::string path;
   uint32_t dimension = 3;
-  bool normals = false, colors = false;
+  bool normals = false, colors = false, texcoords = false;
   uint32_t vertices = 0, triangles = 0;
   std::shared_ptr<const std::vector<uint8_t>> head;  // the HEAD section
   std::string head_etag;

@@ -188,6 +188,46 @@ TEST(MultilevelCli, ClusteringFileInput) {
   EXPECT_NE(refused.err.find(json + ": not a clustering file"), std::string::npos) << refused.err;
 }
 
+// A textured input (u, v an affine function of x and y): the binary build keeps the texture coordinates,
+// info reports them, level writes them as `s t` in the LOD and in a geomorph (blended with the positions,
+// so still the same function of them); the ASCII build and the .pms build say they left them out.
+TEST(MultilevelCli, TextureCoordinatesReachTheLevelPly) {
+  const auto dir = test::temp_dir();
+  Mesh input = make_torus(30, 12, 2.0f, 0.5f);
+  const auto uv = [](const float* p, int k) { return 0.125f * p[k] + 0.5f; };
+  for (size_t v = 0; v < input.vertex_count(); ++v)
+    for (int k = 0; k < 2; ++k) input.texcoords.push_back(uv(&input.positions[3 * v], k));
+  const std::string ply = (dir / "textured_torus.ply").string(), out = (dir / "textured_torus.pml").string();
+  save_ply(input, ply);
+  const test::CliRun build = test::run_pmstream("multilevel build " + ply + " -o " + out + " --levels 5 --json");
+  ASSERT_EQ(build.exit_code, 0) << build.err;
+  EXPECT_EQ(nlohmann::json::parse(build.out)["attributes_dropped"], false);
+  const test::CliRun info = test::run_pmstream("multilevel info " + out + " --json");
+  ASSERT_EQ(info.exit_code, 0) << info.err;
+  const auto j = nlohmann::json::parse(info.out);
+  EXPECT_EQ(j["texcoords"], true);
+  EXPECT_EQ(j["texcoord_bits"], 16);
+  EXPECT_NE(test::run_pmstream("multilevel info " + out).out.find(", texture coordinates"), std::string::npos);
+  for (const char* level : {"0", "2", "2.5"}) {
+    const std::string lod_path = (dir / (std::string("textured_lod_") + level + ".ply")).string();
+    const test::CliRun lod = test::run_pmstream("multilevel level " + out + " --level " + level + " -o " + lod_path);
+    ASSERT_EQ(lod.exit_code, 0) << lod.err;
+    const Mesh got = load_mesh(lod_path);
+    ASSERT_EQ(got.texcoords.size(), 2 * got.vertex_count()) << level;
+    if (std::string(level) == "0") {
+      EXPECT_EQ(got.vertex_count(), input.vertex_count());
+    }
+    for (size_t v = 0; v < got.vertex_count(); ++v)
+      for (int k = 0; k < 2; ++k) ASSERT_NEAR(got.texcoords[2 * v + k], uv(&got.positions[3 * v], k), 1e-6f) << level;
+  }
+  const test::CliRun ascii = test::run_pmstream("multilevel build " + ply + " -o " + (dir / "textured.txt").string() + " --ascii");
+  ASSERT_EQ(ascii.exit_code, 0) << ascii.err;
+  EXPECT_NE(ascii.out.find("no normals, colours or texture coordinates"), std::string::npos) << ascii.out;
+  const test::CliRun pms = test::run_pmstream("build " + ply + " -o " + (dir / "textured.pms").string() + " --json");
+  ASSERT_EQ(pms.exit_code, 0) << pms.err;
+  EXPECT_EQ(nlohmann::json::parse(pms.out)["texcoords_dropped"], true);
+}
+
 TEST(MultilevelCli, TerrainInputAndMalformedFiles) {
   const auto dir = test::temp_dir();
   const std::string out = (dir / "t.pml").string();

@@ -19,14 +19,16 @@ std::array<float, 3> point(const Mesh& m, uint32_t v) {
   return {m.positions[3 * size_t(v)], m.positions[3 * size_t(v) + 1], m.positions[3 * size_t(v) + 2]};
 }
 
-// Tags every vertex with its index in the colors (r g b = low, mid, high byte) and derives a normal
-// from it, so a cleaned vertex can be traced back to the input vertex it came from.
+// Tags every vertex with its index in the colors (r g b = low, mid, high byte) and derives a normal and
+// texture coordinates from it, so a cleaned vertex can be traced back to the input vertex it came from.
 void tag_vertices(Mesh& m) {
   m.colors.clear();
   m.normals.clear();
+  m.texcoords.clear();
   for (uint32_t v = 0; v < m.vertex_count(); ++v) {
     m.colors.insert(m.colors.end(), {uint8_t(v), uint8_t(v >> 8), uint8_t(v >> 16), 255});
     m.normals.insert(m.normals.end(), {float(v), -float(v), 0.5f});
+    m.texcoords.insert(m.texcoords.end(), {0.5f * float(v), 0.25f});
   }
 }
 
@@ -38,11 +40,13 @@ uint32_t tag_of(const Mesh& m, uint32_t v) {
 void expect_attributes_in_step(const Mesh& input, const Mesh& cleaned) {
   ASSERT_EQ(cleaned.normals.size(), cleaned.positions.size());
   ASSERT_EQ(cleaned.colors.size(), 4 * cleaned.vertex_count());
+  ASSERT_EQ(cleaned.texcoords.size(), 2 * cleaned.vertex_count());
   for (uint32_t v = 0; v < cleaned.vertex_count(); ++v) {
     const uint32_t source = tag_of(cleaned, v);
     ASSERT_LT(source, input.vertex_count());
     EXPECT_EQ(point(cleaned, v), point(input, source)) << "vertex " << v;
     EXPECT_EQ(cleaned.normals[3 * size_t(v)], float(source)) << "vertex " << v;
+    EXPECT_EQ(cleaned.texcoords[2 * size_t(v)], 0.5f * float(source)) << "vertex " << v;
     EXPECT_EQ(cleaned.colors[4 * size_t(v) + 3], 255);
   }
 }
@@ -139,6 +143,7 @@ TEST(Clean, WeldsCoincidentVerticesKeepingTheFirstAttributes) {
   mesh.positions = {0, 0, 0, 1, 0, 0, 1, 1, 0, -0.0f, 0, 0, 1, 1, -0.0f, 0, 1, 0, 5, 5, 5};
   mesh.colors = {1, 0, 0, 255, 2, 0, 0, 255, 3, 0, 0, 255, 9, 9, 9, 255, 9, 9, 9, 255, 6, 0, 0, 255, 7, 7, 7, 255};
   mesh.normals = {0, 0, 1, 0, 0, 1, 0, 0, 1, 0, 1, 0, 0, 1, 0, 0, 0, 1, 1, 0, 0};
+  mesh.texcoords = {0, 0, 1, 0, 1, 1, 0.5f, 0.5f, 0.5f, 0.5f, 0, 1, 9, 9};  // the copies differ: a seam
   mesh.indices = {0, 1, 2, 3, 4, 5};
   const CleanReport report = clean_mesh(mesh);
   EXPECT_EQ(report.welded_vertices, 2u);
@@ -146,6 +151,7 @@ TEST(Clean, WeldsCoincidentVerticesKeepingTheFirstAttributes) {
   EXPECT_EQ(mesh.indices, (std::vector<uint32_t>{0, 1, 2, 0, 2, 3}));
   EXPECT_EQ(mesh.colors, (std::vector<uint8_t>{1, 0, 0, 255, 2, 0, 0, 255, 3, 0, 0, 255, 6, 0, 0, 255}));
   EXPECT_EQ(mesh.normals, (std::vector<float>{0, 0, 1, 0, 0, 1, 0, 0, 1, 0, 0, 1}));
+  EXPECT_EQ(mesh.texcoords, (std::vector<float>{0, 0, 1, 0, 1, 1, 0, 1}));
   EXPECT_TRUE(is_oriented_manifold(mesh));
 }
 

@@ -22,6 +22,7 @@ Mesh awkward_mesh() {
   mesh.normals = {0.0f, 0.0f, 1.0f, 0.577350269f, 0.577350269f, -0.577350269f,
                   1.0f, 0.0f, 0.0f, -0.6f,        0.8f,         0.0f};
   mesh.colors = {0, 1, 2, 3, 255, 128, 64, 32, 10, 20, 30, 40, 250, 251, 252, 253};
+  mesh.texcoords = {0.0f, 1.0f, 1.0f / 3.0f, -0.0f, 2.5f, 1e-7f, -0.25f, 0.999999f};
   mesh.indices = {0, 1, 2, 0, 2, 3, 3, 2, 1};
   return mesh;
 }
@@ -30,6 +31,7 @@ void expect_identical(const Mesh& a, const Mesh& b) {
   EXPECT_EQ(a.positions, b.positions);
   EXPECT_EQ(a.normals, b.normals);
   EXPECT_EQ(a.colors, b.colors);
+  EXPECT_EQ(a.texcoords, b.texcoords);
   EXPECT_EQ(a.indices, b.indices);
   // == treats -0 and 0 alike; the bits must survive too.
   for (size_t i = 0; i < a.positions.size() && i < b.positions.size(); ++i)
@@ -54,11 +56,13 @@ TEST_P(SavePly, RoundTripWithoutNormalsOrColors) {
   Mesh mesh = awkward_mesh();
   mesh.normals.clear();
   mesh.colors.clear();
+  mesh.texcoords.clear();
   const std::string path = (pms::test::temp_dir() / "plain.ply").string();
   pms::save_ply(mesh, path, GetParam());
   const Mesh loaded = pms::load_mesh(path);
   EXPECT_FALSE(loaded.has_normals());
   EXPECT_FALSE(loaded.has_colors());
+  EXPECT_FALSE(loaded.has_texcoords());
   expect_identical(loaded, mesh);
 }
 
@@ -80,17 +84,19 @@ TEST(SavePlyFormat, HeaderDeclaresTheAttributesPresent) {
   const std::string header = text.substr(0, text.find("end_header\n") + 11);
   EXPECT_EQ(header.rfind("ply\nformat binary_little_endian 1.0\n", 0), 0u);
   for (const char* line : {"element vertex 4\n", "property float x\n", "property float nz\n",
-                           "property uchar red\n", "property uchar alpha\n", "element face 3\n",
+                           "property uchar red\n", "property uchar alpha\n", "property float s\n",
+                           "property float t\n", "element face 3\n",
                            "property list uchar int vertex_indices\n"})
     EXPECT_NE(header.find(line), std::string::npos) << line;
-  // 4 vertices of 3+3 floats and 4 bytes, 3 faces of a count byte and 3 ints.
-  EXPECT_EQ(text.size() - header.size(), 4u * 28 + 3u * 13);
+  // 4 vertices of 3+3+2 floats and 4 bytes, 3 faces of a count byte and 3 ints.
+  EXPECT_EQ(text.size() - header.size(), 4u * 36 + 3u * 13);
 }
 
 TEST(SavePlyFormat, AsciiIsOneRecordPerLine) {
   const std::string path = (pms::test::temp_dir() / "ascii.ply").string();
   Mesh mesh = awkward_mesh();
   mesh.normals.clear();
+  mesh.texcoords.clear();
   pms::save_ply(mesh, path, false);
   const std::string text = read_text(path);
   const std::string body = text.substr(text.find("end_header\n") + 11);

@@ -10,6 +10,7 @@
 #include <fstream>
 #include <set>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "common/error.h"
@@ -178,6 +179,45 @@ TEST(ImportPly, FloatColorsAreScaledTo8Bits) {
   EXPECT_EQ(mesh.colors, (std::vector<uint8_t>{255, 128, 0, 255, 0, 0, 0, 0, 255, 0, 64, 128}));
 }
 
+// Each spelling of texture coordinates, as float and as double, ascii and binary; a property other than
+// s/t between them is skipped, and only one of u and v is not enough.
+TEST(ImportPly, TextureCoordinatesUnderEveryName) {
+  for (const auto& [u, v] : {std::pair{"s", "t"}, {"u", "v"}, {"texture_u", "texture_v"}, {"texture_s", "texture_t"}}) {
+    const std::string head = std::string("ply\nformat ascii 1.0\nelement vertex 3\n") +
+                             "property float x\nproperty float y\nproperty float z\nproperty float " + u +
+                             "\nproperty uchar quality\nproperty double " + v +
+                             "\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n";
+    const Mesh mesh = pms::load_mesh(write_file(std::string("uv_") + u + ".ply",
+                                                head + "0 0 0 0.25 7 0.75\n1 0 0 1 7 -0.5\n0 1 0 2.5 7 0.1\n3 0 1 2\n"));
+    ASSERT_TRUE(mesh.has_texcoords()) << u;
+    EXPECT_EQ(mesh.texcoords, (std::vector<float>{0.25f, 0.75f, 1.0f, -0.5f, 2.5f, 0.1f})) << u;
+  }
+  Bytes binary(true);
+  for (int k = 0; k < 3; ++k) binary.put<float>(float(k)).put<float>(0).put<float>(0).put<double>(0.125 * k).put<double>(1 - 0.125 * k);
+  binary.put<uint8_t>(3).put<int32_t>(0).put<int32_t>(1).put<int32_t>(2);
+  const Mesh big = pms::load_mesh(write_file("uv_be.ply", "ply\nformat binary_big_endian 1.0\nelement vertex 3\n"
+                                                          "property float x\nproperty float y\nproperty float z\n"
+                                                          "property double texture_u\nproperty double texture_v\n"
+                                                          "element face 1\nproperty list uchar int vertex_indices\n"
+                                                          "end_header\n" + binary.data));
+  EXPECT_EQ(big.texcoords, (std::vector<float>{0, 1, 0.125f, 0.875f, 0.25f, 0.75f}));
+  const Mesh half = pms::load_mesh(write_file("uv_half.ply", "ply\nformat ascii 1.0\nelement vertex 3\n"
+                                                             "property float x\nproperty float y\nproperty float z\n"
+                                                             "property float u\nelement face 1\n"
+                                                             "property list uchar int vertex_indices\nend_header\n"
+                                                             "0 0 0 1\n1 0 0 1\n0 1 0 1\n3 0 1 2\n"));
+  EXPECT_FALSE(half.has_texcoords());
+}
+
+TEST(ImportPly, NonFiniteTextureCoordinatesFail) {
+  expect_load_error(write_file("uv_nan.ply", "ply\nformat ascii 1.0\nelement vertex 3\n"
+                                             "property float x\nproperty float y\nproperty float z\n"
+                                             "property float s\nproperty float t\nelement face 1\n"
+                                             "property list uchar int vertex_indices\nend_header\n"
+                                             "0 0 0 0 0\n1 0 0 0 0\n0 1 0 nan 0\n3 0 1 2\n"),
+                    "vertex 2 has a NaN or infinite texture coordinate");
+}
+
 // ---- OBJ and OFF -----------------------------------------------------------------------------
 
 TEST(ImportObj, ColorsCornerSyntaxNegativeIndicesAndPolygons) {
@@ -193,6 +233,37 @@ TEST(ImportObj, ColorsCornerSyntaxNegativeIndicesAndPolygons) {
   EXPECT_EQ(mesh.indices, (std::vector<uint32_t>{0, 1, 2, 0, 2, 3, 0, 2, 3}));
   EXPECT_EQ(mesh.colors, (std::vector<uint8_t>{255, 0, 0, 255, 0, 255, 0, 255, 0, 0, 255, 255, 255, 255, 255, 255}));
   EXPECT_FALSE(mesh.has_normals());
+  EXPECT_FALSE(mesh.has_texcoords()) << "the second face names no texture vertex";
+}
+
+// A texture seam: vertex 2 is used with texture vertices 2 and 4, so it is split in two; the copy comes
+// after the input's vertices with the same position and colour. Corners may name the texture vertex
+// counting back (-1) and carry a normal (a/t/n).
+const char* kSeamObj =
+    "v 0 0 0 1 0 0\nv 1 0 0 0 1 0\nv 0 1 0 0 0 1\nv 1 1 0 1 1 1\n"
+    "vt 0 0\nvt 1 0\nvt 0 1\nvt 0.5 0.5\nvn 0 0 1\n"
+    "f 1/1/1 2/2/1 3/3/1\n"
+    "vt 0.9 0.9 0\n"
+    "f 2/4/1 4/-1/1 3/3/1\n"
+    "f 2/2 4/5 3/3\n";
+
+TEST(ImportObj, TextureSeamSplitsTheVertex) {
+  const Mesh mesh = pms::load_mesh(write_file("seam.obj", kSeamObj));
+  ASSERT_EQ(mesh.vertex_count(), 5u);
+  EXPECT_EQ(mesh.indices, (std::vector<uint32_t>{0, 1, 2, 4, 3, 2, 1, 3, 2}));
+  EXPECT_EQ(mesh.texcoords, (std::vector<float>{0, 0, 1, 0, 0, 1, 0.9f, 0.9f, 0.5f, 0.5f}));
+  EXPECT_EQ(std::vector<float>(mesh.positions.begin() + 12, mesh.positions.end()), (std::vector<float>{1, 0, 0}));
+  EXPECT_EQ(std::vector<uint8_t>(mesh.colors.begin() + 16, mesh.colors.end()), (std::vector<uint8_t>{0, 255, 0, 255}));
+}
+
+TEST(ImportObj, TextureVertexIndexOutOfRangeNamesTheLine) {
+  expect_load_error(write_file("bad_vt.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nf 1/1 2/2 3/1\n"),
+                    "line 5: texture vertex index 2 out of range");
+  expect_load_error(write_file("bad_vt_token.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 x\nf 1 2 3\n"),
+                    "line 4: expected a texture coordinate");
+  // A position index out of range is still load_mesh's to report, texture vertices or not.
+  expect_load_error(write_file("bad_v_textured.obj", "v 0 0 0\nv 1 0 0\nvt 0 0\nf 1/1 2/1 3/1\n"),
+                    "face 0 uses vertex 2 but there are only 2 vertices");
 }
 
 TEST(ImportObj, ColorsAreDroppedUnlessEveryVertexHasOne) {
@@ -301,6 +372,33 @@ const char* kGltf = R"({
                  "min": [0, 0, 0], "max": [1, 1, 0]}]
 })";
 
+// One triangle with TEXCOORD_0 (glTF's v runs down the image; assimp hands it over with v up, 1 - v).
+const char* kTexturedGltf = R"({
+  "asset": {"version": "2.0"}, "scene": 0, "scenes": [{"nodes": [0]}], "nodes": [{"mesh": 0}],
+  "meshes": [{"primitives": [{"attributes": {"POSITION": 1, "TEXCOORD_0": 2}, "indices": 0}]}],
+  "buffers": [{"byteLength": 68, "uri": "data:application/octet-stream;base64,)"
+                                   "AAAAAAAAAAAAAAAAAACAPwAAAAAAAAAAAAAAAAAAgD8AAAAAAACAPgAAQD8AAIA/AAAAPwAAAAAAAAAAAAABAAIAAAA="
+                                   R"("}],
+  "bufferViews": [{"buffer": 0, "byteOffset": 0, "byteLength": 36, "target": 34962},
+                  {"buffer": 0, "byteOffset": 36, "byteLength": 24, "target": 34962},
+                  {"buffer": 0, "byteOffset": 60, "byteLength": 6, "target": 34963}],
+  "accessors": [{"bufferView": 2, "componentType": 5123, "count": 3, "type": "SCALAR", "min": [0], "max": [2]},
+                {"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3",
+                 "min": [0, 0, 0], "max": [1, 1, 0]},
+                {"bufferView": 1, "componentType": 5126, "count": 3, "type": "VEC2"}]
+})";
+
+TEST(ImportAssimp, GltfTexcoord0BecomesTheTextureCoordinates) {
+  const Mesh mesh = pms::load_mesh(write_file("textured.gltf", kTexturedGltf));
+  ASSERT_EQ(mesh.vertex_count(), 3u);
+  ASSERT_TRUE(mesh.has_texcoords());
+  // The file's (0.25, 0.75), (1, 0.5), (0, 0), in the order assimp gives the vertices.
+  std::multiset<std::pair<float, float>> uv;
+  for (size_t v = 0; v < 3; ++v) uv.insert({mesh.texcoords[2 * v], mesh.texcoords[2 * v + 1]});
+  EXPECT_EQ(uv, (std::multiset<std::pair<float, float>>{{0.25f, 0.25f}, {1.0f, 0.5f}, {0.0f, 1.0f}}));
+  EXPECT_FALSE(pms::load_mesh(write_file("untextured.gltf", kGltf)).has_texcoords());
+}
+
 TEST(ImportAssimp, GltfMergesInstancesWithNodeTransforms) {
   const Mesh mesh = pms::load_mesh(write_file("instances.gltf", kGltf));
   EXPECT_EQ(mesh.vertex_count(), 6u) << "the point primitive adds no vertices";
@@ -341,6 +439,7 @@ void expect_same_mesh(const Mesh& a, const Mesh& b) {
   EXPECT_EQ(a.positions, b.positions);
   EXPECT_EQ(a.normals, b.normals);
   EXPECT_EQ(a.colors, b.colors);
+  EXPECT_EQ(a.texcoords, b.texcoords);
   EXPECT_EQ(a.indices, b.indices);
 }
 

@@ -13,6 +13,7 @@ inline void expect_same_multilevel(const MultilevelMesh& a, const MultilevelMesh
   EXPECT_EQ(a.positions, b.positions);
   EXPECT_EQ(a.normals, b.normals);
   EXPECT_EQ(a.colors, b.colors);
+  EXPECT_EQ(a.texcoords, b.texcoords);
   EXPECT_EQ(a.triangles, b.triangles);
   EXPECT_EQ(a.representative, b.representative);
 }

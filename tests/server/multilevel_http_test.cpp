@@ -28,7 +28,10 @@ struct MultilevelModel {
 
 const MultilevelModel& sphere_model() {
   static const MultilevelModel model = [] {
-    const Mesh mesh = make_sphere(40, 60);
+    // With texture coordinates (a planar projection), so that both forms carry a per-vertex attribute.
+    Mesh mesh = make_sphere(40, 60);
+    for (size_t v = 0; v < mesh.vertex_count(); ++v)
+      mesh.texcoords.insert(mesh.texcoords.end(), {0.5f + 0.5f * mesh.positions[3 * v], 0.5f + 0.5f * mesh.positions[3 * v + 1]});
     const BuildResult built = build_progressive_mesh(mesh);
     MultilevelModel m;
     m.path = (test::temp_dir() / "ball.pml").string();
@@ -75,6 +78,8 @@ void expect_every_level_arrives(bool compressed) {
   ASSERT_TRUE(client.loader().complete());
   const MultilevelMesh& got = client.mesh();
   EXPECT_EQ(got.positions, want.positions);
+  ASSERT_FALSE(want.texcoords.empty());
+  EXPECT_EQ(got.texcoords, want.texcoords);
   EXPECT_EQ(got.triangles, want.triangles);
   EXPECT_EQ(got.representative, want.representative);
   EXPECT_EQ(got.vertex_count, want.vertex_count);
@@ -161,7 +166,7 @@ TEST(MultilevelHttp, ResourcesAreCacheableAndHostileUrlsGet4xx) {
   // The compressed form: its own resources, as cacheable, smaller, with ETags of their own.
   const test::HttpReply zhead = http.get("/models/ball/compressed/head");
   ASSERT_EQ(zhead.status, 200);
-  EXPECT_EQ(zhead.body.size(), 64u);
+  EXPECT_EQ(zhead.body.size(), 80u);  // 64, and the texture coordinates' grid box
   const test::HttpReply zlevel = http.get("/models/ball/compressed/levels/0");
   ASSERT_EQ(zlevel.status, 200);
   EXPECT_LT(zlevel.body.size(), level.body.size());
@@ -179,6 +184,7 @@ TEST(MultilevelHttp, ResourcesAreCacheableAndHostileUrlsGet4xx) {
   EXPECT_EQ(http.post("/models/ball/head", {1, 2}).status, 405);
   const test::HttpReply catalogue = http.get("/models");
   EXPECT_NE(catalogue.text().find("\"kind\":\"multilevel\""), std::string::npos) << catalogue.text();
+  EXPECT_NE(catalogue.text().find("\"texcoords\":true"), std::string::npos) << catalogue.text();
 
   client::MultilevelClient client(server.url());
   EXPECT_THROW(client.open("nosuch"), Error);
