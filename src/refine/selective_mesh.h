@@ -119,6 +119,7 @@ class SelectiveMesh {
   static uint32_t find_next(const std::vector<Corner>& fan, uint32_t w);  // index of the corner with `next` w
   uint32_t cut_ancestor(VertexId cut, uint32_t slot) const;  // over fan_ (slot)
   void split_fan(uint32_t s, uint32_t l, uint32_t r);         // over fan_ (s)
+  bool split_between(uint32_t s, uint32_t l, uint32_t r);     // over fan_ (s): split_fan's common case
   bool breaks_split_order(uint32_t u) const;                  // over fan_ (t)
   // Over fan_ (t) and fan_u_ (u), whose open ends (kNone: closed) are given.
   bool link_condition(uint32_t t, uint32_t l, uint32_t r, uint32_t t_end, uint32_t u_end);
