@@ -44,6 +44,15 @@ constexpr float kPlaneRounding = 0x1p-18f, kReachRoundUp = 1 + 0x1p-16f, kTinyBo
 SelectiveRefinement::SelectiveRefinement(SelectiveMesh& mesh, float model_scale, const AdaptOptions& options)
     : mesh_(&mesh), scale_(model_scale), synced_(mesh.hierarchy().size()) {
   static_assert(sizeof(Slot) == 64);
+  // The roots' common parent for walk_qrefine's bounds: the mean of their positions (any point would
+  // do; a central one lets a view that holds the whole model skip the roots' planes too).
+  const VertexHierarchy& h = mesh.hierarchy();
+  for (uint32_t r = 0; r < h.root_count(); ++r)
+    for (int k = 0; k < 3; ++k) root_centre_[k] += h.position(h.root_slot(r))[k];
+  for (int k = 0; k < 3; ++k) {
+    root_centre_[k] /= float(std::max(h.root_count(), 1u));
+    coordinate_bound_ = std::max(coordinate_bound_, std::fabs(root_centre_[k]));
+  }
   set_options(options);
 }
 
@@ -78,6 +87,9 @@ void SelectiveRefinement::update_plane_bounds() {
   }
   reach_scale_ = normal * kReachRoundUp;
   plane_error_ = terms * kPlaneRounding + kTinyBound;
+  float lowest = INFINITY;
+  for (const float* plane : view_.planes) lowest = std::min(lowest, criteria_detail::dot3(plane, root_centre_) + plane[3]);
+  root_margin_ = lowest - plane_error_;
 }
 
 // A split arriving for a slot already decoded: children come as a pair after their parent, and the
@@ -107,8 +119,9 @@ void SelectiveRefinement::load(uint32_t v) {
   const float* p = h.position(v);
   slot.criteria = node_criteria(p, dequantize_refine(h.refine(v), scale_));
   slot.first_child = h.first_child(v);
-  if (const uint32_t parent = h.parent(v); parent != kNone) {
-    const float* q = h.position(parent);
+  {
+    const uint32_t parent = h.parent(v);
+    const float* q = parent != kNone ? h.position(parent) : root_centre_;
     const float d[3] = {p[0] - q[0], p[1] - q[1], p[2] - q[2]};
     slot.reach = std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]) * kReachRoundUp + kTinyBound;
   }
@@ -336,7 +349,7 @@ FrameStats SelectiveRefinement::adapt() {
   tops_.clear();
   stack_.clear();
   const VertexHierarchy& h = mesh_->hierarchy();
-  for (uint32_t r = h.root_count(); r-- > 0;) push_eval(h.root_slot(r), -INFINITY);
+  for (uint32_t r = h.root_count(); r-- > 0;) push_eval(h.root_slot(r), root_margin_);
   // Top down: a node is evaluated once its parent is kept (roots at once); a forced entry keeps a node
   // whatever its qrefine. Each node is evaluated at most once and kept at most once.
   while (!stack_.empty()) {

@@ -4,6 +4,7 @@
 // docs/internals.md ("Adaptation loop") explains the target mesh and why the loop reaches it.
 // Shared with the browser build: single-threaded, no std::ranges algorithms, std::format or coroutines.
 #pragma once
+#include <cmath>
 #include <cstdint>
 #include <functional>
 #include <span>
@@ -136,7 +137,7 @@ class SelectiveRefinement {
     uint32_t kept = 0;      // frame in which the node was found wanted or forced
     uint32_t first_child = kNone;
     uint32_t dependency = kNone - 1;  // the node its split needs split (partial order); kNone - 1: not computed
-    float reach = 0;                  // |p − p_parent|, rounded up (0 for a root)
+    float reach = 0;                  // |p − p_parent| (a root: |p − root_centre_|), rounded up
     uint32_t loaded = 0;              // criteria, first_child and reach are set
   };
   BigVector<Slot> slots_;  // on huge pages (common/huge_pages.h): the walk reads them at random
@@ -145,7 +146,9 @@ class SelectiveRefinement {
   // The plane bounds of walk_qrefine: every loaded position's coordinates are within ±coordinate_bound_,
   // a plane value computed in float is within plane_error_ of the exact one, and |n| · reach bounds
   // how far a plane value moves from a parent to a child when multiplied by reach_scale_.
+  // The roots are bounded from root_centre_, whose bound is root_margin_.
   float coordinate_bound_ = 0, plane_error_ = 0, reach_scale_ = 1;
+  float root_centre_[3] = {0, 0, 0}, root_margin_ = -INFINITY;
   std::vector<StackEntry> stack_;
   std::vector<uint32_t> tops_;        // split nodes not wanted, whose subtrees may have to collapse
   std::vector<uint32_t> subtree_, collapse_, retry_;
