@@ -110,7 +110,7 @@ void SelectiveRefinement::grow(uint32_t end) {
   if (end > known) fail(kWhere, "unknown slot");
   if (end <= slots_.size()) return;
   slots_.reserve(slot_capacity(end, slots_.capacity(), known, sizeof(slots_[0])));
-  slots_.resize(std::min(known, std::max<size_t>(end, 2 * slots_.size())));
+  slots_.resize(slot_size(end, slots_.size(), slots_.capacity(), known));
 }
 
 void SelectiveRefinement::load(uint32_t v) {

@@ -185,7 +185,7 @@ void SelectiveMesh::grow_records(uint32_t end) {
   if (end <= vertex_.size()) return;
   const size_t known = hierarchy_->size();
   vertex_.reserve(slot_capacity(end, vertex_.capacity(), known, sizeof(vertex_[0])));
-  vertex_.resize(std::min(known, std::max<size_t>(end, 2 * vertex_.size())));
+  vertex_.resize(slot_size(end, vertex_.size(), vertex_.capacity(), known));
   active_bits_.resize((vertex_.size() + 63) / 64, 0);
 }
 
