@@ -349,20 +349,25 @@ FrameStats SelectiveRefinement::adapt() {
   tops_.clear();
   stack_.clear();
   const VertexHierarchy& h = mesh_->hierarchy();
-  for (uint32_t r = h.root_count(); r-- > 0;) push_eval(h.root_slot(r), root_margin_);
-  // Top down: a node is evaluated once its parent is kept (roots at once); a forced entry keeps a node
-  // whatever its qrefine. Each node is evaluated at most once and kept at most once.
-  while (!stack_.empty()) {
-    const StackEntry entry = stack_.back();
-    stack_.pop_back();
-    uint32_t v = entry.tagged >> 1;
-    float margin = entry.margin;
-    if (entry.tagged & 1) {
-      v = justify(v);
-      margin = -INFINITY;
+  // Top down, a root and all it leads to at a time: a node is evaluated once its parent is kept (roots
+  // at once); a forced entry keeps a node whatever its qrefine. Each node is evaluated at most once and
+  // kept at most once.
+  for (uint32_t r = 0; r < h.root_count(); ++r) {
+    uint32_t v = h.root_slot(r);
+    float margin = root_margin_;
+    for (;;) {
+      while (v != kNone && state(v).kept != frame_)  // v_u of a kept node follows without the stack
+        v = mesh_->is_active(v) ? visit_active(v, margin, stats) : visit_split(v, margin, stats);
+      if (stack_.empty()) break;
+      const StackEntry entry = stack_.back();
+      stack_.pop_back();
+      v = entry.tagged >> 1;
+      margin = entry.margin;
+      if (entry.tagged & 1) {
+        v = justify(v);
+        margin = -INFINITY;
+      }
     }
-    while (v != kNone && state(v).kept != frame_)  // v_u of a kept node follows without the stack
-      v = mesh_->is_active(v) ? visit_active(v, margin, stats) : visit_split(v, margin, stats);
   }
   collapse_unwanted(stats);
   if (morphs_.enabled()) stats.morphing = uint32_t(morphs_.advance(*mesh_));
