@@ -357,7 +357,7 @@ FrameStats SelectiveRefinement::adapt() {
     float margin = root_margin_;
     for (;;) {
       while (v != kNone && state(v).kept != frame_)  // v_u of a kept node follows without the stack
-        v = mesh_->is_active(v) ? visit_active(v, margin, stats) : visit_split(v, margin, stats);
+        v = mesh_->is_active_recorded(v) ? visit_active(v, margin, stats) : visit_split(v, margin, stats);
       if (stack_.empty()) break;
       const StackEntry entry = stack_.back();
       stack_.pop_back();
