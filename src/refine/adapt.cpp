@@ -354,9 +354,10 @@ FrameStats SelectiveRefinement::adapt() {
   // kept at most once.
   for (uint32_t r = 0; r < h.root_count(); ++r) {
     uint32_t v = h.root_slot(r);
+    if (v >= slots_.size()) grow(v + 1);
     float margin = root_margin_;
     for (;;) {
-      while (v != kNone && state(v).kept != frame_)  // v_u of a kept node follows without the stack
+      while (v != kNone && grown_state(v).kept != frame_)  // v_u of a kept node follows without the stack
         v = mesh_->is_active_recorded(v) ? visit_active(v, margin, stats) : visit_split(v, margin, stats);
       if (stack_.empty()) break;
       const StackEntry entry = stack_.back();

@@ -95,6 +95,11 @@ class SelectiveRefinement {
     return first_use(v);
   }
   Slot& first_use(uint32_t v);
+  // state() of a slot below slots_.size() (the walk grows the slots before it reaches them).
+  Slot& grown_state(uint32_t v) {
+    if (slots_[v].loaded) [[likely]] return slots_[v];
+    return first_use(v);
+  }
   void grow(uint32_t end);
   void load(uint32_t v);
   uint32_t dependency(uint32_t slot);
