@@ -247,7 +247,6 @@ void SelectiveRefinement::pin_chain(uint32_t v) {
     morphs_.appear(h, v);
     morphs_.cancel_collapse(h, v);  // its parent is kept: a collapse under way is called off
   }
-  ++stats.evaluated;
   const Slot& slot = slots_[v];  // decoded by the walk
   if (!walk_qrefine(slot, margin)) [[likely]] return kNone;
   if (slot.first_child == kNone) {  // a leaf of what is known
@@ -268,8 +267,7 @@ void SelectiveRefinement::pin_chain(uint32_t v) {
   return kNone;
 }
 
-[[gnu::always_inline]] inline uint32_t SelectiveRefinement::visit_split(uint32_t v, float& margin, FrameStats& stats) {
-  ++stats.evaluated;
+[[gnu::always_inline]] inline uint32_t SelectiveRefinement::visit_split(uint32_t v, float& margin) {
   if (walk_qrefine(slots_[v], margin)) return keep(v, true, margin);  // decoded, not kept: see adapt()
   tops_.push_back(v);  // may still be forced later this frame
   return kNone;
@@ -352,13 +350,14 @@ FrameStats SelectiveRefinement::adapt() {
   // Top down, a root and all it leads to at a time: a node is evaluated once its parent is kept (roots
   // at once); a forced entry keeps a node whatever its qrefine. Each node is evaluated at most once and
   // kept at most once.
+  uint32_t evaluated = 0;  // a local, not stats.evaluated: the loop's calls may write stats
   for (uint32_t r = 0; r < h.root_count(); ++r) {
     uint32_t v = h.root_slot(r);
     if (v >= slots_.size()) grow(v + 1);
     float margin = root_margin_;
     for (;;) {
-      while (v != kNone && grown_state(v).kept != frame_)  // v_u of a kept node follows without the stack
-        v = mesh_->is_active_recorded(v) ? visit_active(v, margin, stats) : visit_split(v, margin, stats);
+      for (; v != kNone && grown_state(v).kept != frame_; ++evaluated)  // v_u of a kept node follows without the stack
+        v = mesh_->is_active_recorded(v) ? visit_active(v, margin, stats) : visit_split(v, margin);
       if (stack_.empty()) break;
       const StackEntry entry = stack_.back();
       stack_.pop_back();
@@ -370,6 +369,7 @@ FrameStats SelectiveRefinement::adapt() {
       }
     }
   }
+  stats.evaluated = evaluated;
   collapse_unwanted(stats);
   if (morphs_.enabled()) stats.morphing = uint32_t(morphs_.advance(*mesh_));
   stats.missing = uint32_t(missing_.size());

@@ -116,7 +116,7 @@ class SelectiveRefinement {
   uint32_t keep(uint32_t v, bool parent_kept, float margin);
   bool walk_qrefine(const Slot& slot, float& margin) const;
   uint32_t visit_active(uint32_t v, float& margin, FrameStats& stats);
-  uint32_t visit_split(uint32_t v, float& margin, FrameStats& stats);
+  uint32_t visit_split(uint32_t v, float& margin);
   void pin_chain(uint32_t v);
   void report_missing(uint32_t v);
   void collapse_unwanted(FrameStats& stats);
