@@ -149,8 +149,8 @@ class SelectiveRefinement {
   uint32_t synced_ = 0;             // hierarchy size whose new children pairs the loaded slots know of
   std::vector<uint32_t> reported_;  // per slot: frame in which it went to missing_ (grown on use)
   // The plane bounds of walk_qrefine: every loaded position's coordinates are within ±coordinate_bound_,
-  // a plane value computed in float is within plane_error_ of the exact one, and |n| · reach bounds
-  // how far a plane value moves from a parent to a child when multiplied by reach_scale_.
+  // so a plane value computed in float is within plane_error_ of the exact one; reach_scale_ is at least
+  // every plane's |n|, so reach · reach_scale_ bounds how far a plane value moves from parent to child.
   // The roots are bounded from root_centre_, whose bound is root_margin_.
   float coordinate_bound_ = 0, plane_error_ = 0, reach_scale_ = 1;
   float root_centre_[3] = {0, 0, 0}, root_margin_ = -INFINITY;
