@@ -32,12 +32,27 @@ namespace {
 
 constexpr const char* kWhere = "selective refinement";
 constexpr uint32_t kUnknown = kNone - 1;  // Slot::dependency not computed yet (slots stay below kNone - 2)
+constexpr uint32_t kMaxSlots = 1u << 31;  // stack entries tag a slot with one bit
+// Rounding bounds for walk_qrefine's plane bounds: a plane value ((a·x + b·y) + c·z) + d in float is
+// within 4 units in the last place (2^-22) of |a·x| + |b·y| + |c·z| + |d| of the exact value; 2^-18 of
+// the largest such sum is a 16x margin that also covers the subtractions that carry a bound down. A
+// float distance is within a few units in the last place of the exact one; 2^-16 rounds it up.
+constexpr float kPlaneRounding = 0x1p-18f, kReachRoundUp = 1 + 0x1p-16f, kTinyBound = 1e-30f;
 
 }  // namespace
 
 SelectiveRefinement::SelectiveRefinement(SelectiveMesh& mesh, float model_scale, const AdaptOptions& options)
     : mesh_(&mesh), scale_(model_scale), synced_(mesh.hierarchy().size()) {
   static_assert(sizeof(Slot) == 64);
+  // The roots' common parent for walk_qrefine's bounds: the mean of their positions (any point would
+  // do; a central one lets a view that holds the whole model skip the roots' planes too).
+  const VertexHierarchy& h = mesh.hierarchy();
+  for (uint32_t r = 0; r < h.root_count(); ++r)
+    for (int k = 0; k < 3; ++k) root_centre_[k] += h.position(h.root_slot(r))[k];
+  for (int k = 0; k < 3; ++k) {
+    root_centre_[k] /= float(std::max(h.root_count(), 1u));
+    coordinate_bound_ = std::max(coordinate_bound_, std::fabs(root_centre_[k]));
+  }
   set_options(options);
 }
 
@@ -60,12 +75,28 @@ void SelectiveRefinement::use_criteria(const ViewCriteria& criteria) {
   static_assert(sizeof(ViewCriteria) == 28 * sizeof(float), "compared as bytes: no padding");
   if (std::memcmp(&criteria, &view_, sizeof view_) != 0) settled_ = false;
   view_ = criteria;
+  update_plane_bounds();
+}
+
+void SelectiveRefinement::update_plane_bounds() {
+  float normal = 0, terms = 0;
+  for (const float* plane : view_.planes) {
+    normal = std::max(normal, std::sqrt(plane[0] * plane[0] + plane[1] * plane[1] + plane[2] * plane[2]));
+    terms = std::max(terms, (std::fabs(plane[0]) + std::fabs(plane[1]) + std::fabs(plane[2])) * coordinate_bound_ +
+                                std::fabs(plane[3]));
+  }
+  reach_scale_ = normal * kReachRoundUp;
+  plane_error_ = terms * kPlaneRounding + kTinyBound;
+  float lowest = INFINITY;
+  for (const float* plane : view_.planes) lowest = std::min(lowest, criteria_detail::dot3(plane, root_centre_) + plane[3]);
+  root_margin_ = lowest - plane_error_;
 }
 
 // A split arriving for a slot already decoded: children come as a pair after their parent, and the
 // first of the pair tells the parent.
 void SelectiveRefinement::sync() {
   const VertexHierarchy& h = mesh_->hierarchy();
+  if (h.size() > kMaxSlots) fail(kWhere, "too many slots");
   if (morphs_.enabled()) morphs_.sync(*mesh_);
   for (uint32_t v = synced_; v < h.size(); ++v) {
     const uint32_t p = h.parent(v);
@@ -79,16 +110,27 @@ void SelectiveRefinement::grow(uint32_t end) {
   if (end > known) fail(kWhere, "unknown slot");
   if (end <= slots_.size()) return;
   slots_.reserve(slot_capacity(end, slots_.capacity(), known, sizeof(slots_[0])));
-  slots_.resize(std::min(known, std::max<size_t>(end, 2 * slots_.size())));
+  slots_.resize(slot_size(end, slots_.size(), slots_.capacity(), known));
 }
 
 void SelectiveRefinement::load(uint32_t v) {
   const VertexHierarchy& h = mesh_->hierarchy();
   Slot& slot = slots_[v];
-  slot.criteria = node_criteria(h.position(v), dequantize_refine(h.refine(v), scale_));
-  slot.parent = h.parent(v);
+  const float* p = h.position(v);
+  slot.criteria = node_criteria(p, dequantize_refine(h.refine(v), scale_));
   slot.first_child = h.first_child(v);
+  {
+    const uint32_t parent = h.parent(v);
+    const float* q = parent != kNone ? h.position(parent) : root_centre_;
+    const float d[3] = {p[0] - q[0], p[1] - q[1], p[2] - q[2]};
+    slot.reach = std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]) * kReachRoundUp + kTinyBound;
+  }
   slot.loaded = 1;
+  const float extent = std::max({std::fabs(p[0]), std::fabs(p[1]), std::fabs(p[2])});
+  if (extent > coordinate_bound_) {
+    coordinate_bound_ = extent;
+    update_plane_bounds();
+  }
 }
 
 SelectiveRefinement::Slot& SelectiveRefinement::first_use(uint32_t v) {
@@ -123,25 +165,52 @@ uint32_t SelectiveRefinement::dependency(uint32_t slot) {
   return dep;
 }
 
-// A split node the target keeps: evaluate its children, and keep its parent and its dependency too.
-void SelectiveRefinement::justify(uint32_t v) {
-  if (!mesh_->is_active(v) && state(v).kept != frame_) keep(v, false);
+// Keeps a split node whose slot is decoded and not kept yet this frame. `parent_kept`: v was
+// reached as the child of a kept node (or is a root), so its parent needs no look. `margin`: v's plane
+// bound, for its children. The stack gets v_t, v_u, then the forced parent and dependency (popped first);
+// with nothing forced v_u would be popped at once, so it is returned instead, for the caller to go on.
+[[gnu::always_inline]] inline uint32_t SelectiveRefinement::keep(uint32_t v, bool parent_kept, float margin) {
+  const uint32_t t = slots_[v].first_child;
+  if (t + 1 >= slots_.size()) grow(t + 2);
+  slots_[v].kept = frame_;
+  __builtin_prefetch(&slots_[t]);
+  uint32_t forced[2], count = 0;
+  if (!parent_kept) {
+    const uint32_t parent = mesh_->hierarchy().parent(v);
+    if (parent != kNone && state(parent).kept != frame_) forced[count++] = parent;
+  }
+  const uint32_t dep = slots_[v].dependency != kUnknown ? slots_[v].dependency : dependency(v);  // once per slot
+  if (dep != kNone && state(dep).kept != frame_) forced[count++] = dep;
+  push_eval(t, margin);
+  if (count == 0) return t + 1;
+  push_eval(t + 1, margin);
+  for (uint32_t i = 0; i < count; ++i) push_forced(forced[i]);
+  return kNone;
 }
 
-// justify() of a split node whose slot is decoded and not kept yet this frame. `parent_kept`: v was
-// reached as the child of a kept node (or is a root), so its parent needs no look.
-void SelectiveRefinement::keep(uint32_t v, bool parent_kept) {
-  const uint32_t t = slots_[v].first_child;
-  if (t + 1 >= slots_.size()) grow(t + 2);  // before taking references: it may move the slots
-  Slot& slot = slots_[v];
-  slot.kept = frame_;
-  __builtin_prefetch(&slots_[t]);
-  __builtin_prefetch(&slots_[t + 1]);
-  push_eval(t);
-  push_eval(t + 1);
-  if (!parent_kept && slot.parent != kNone && state(slot.parent).kept != frame_) push_forced(slot.parent);
-  const uint32_t dep = slot.dependency != kUnknown ? slot.dependency : dependency(v);  // computed once per slot
-  if (dep != kNone && state(dep).kept != frame_) push_forced(dep);
+// A split node the target keeps (a forced entry): evaluate its children, and keep its parent and its
+// dependency too.
+uint32_t SelectiveRefinement::justify(uint32_t v) {
+  if (mesh_->is_active(v) || state(v).kept == frame_) return kNone;
+  return keep(v, false, -INFINITY);  // its planes were not evaluated: the children evaluate theirs
+}
+
+// qrefine of a slot the walk reached, the same answer as qrefine_inline, with the frustum test skipped
+// where a bound shows it passes. On entry `margin` is a lower bound on every exact plane value at the
+// parent's position; a child is at most reach from it, so margin − |n| reach bounds the child's values,
+// and while that bound stays above the rounding of the child's own values no plane can cull it (a value
+// ≥ 0 is never below −(radius + slack)). On return `margin` is the node's own bound, for its children.
+// At a close view the planes cut few nodes: most of the walk's split nodes skip their six planes.
+[[gnu::always_inline]] inline bool SelectiveRefinement::walk_qrefine(const Slot& slot, float& margin) const {
+  const NodeCriteria& node = slot.criteria;
+  if (!criteria_detail::screen_error_exceeds_inline(view_, node)) return false;
+  margin -= slot.reach * reach_scale_ + plane_error_;
+  if (!(margin >= 0)) {
+    float lowest;
+    if (criteria_detail::outside_frustum_inline(view_, node, lowest)) return false;
+    margin = lowest - plane_error_;
+  }
+  return !criteria_detail::back_facing_inline(view_, node);
 }
 
 void SelectiveRefinement::report_missing(uint32_t v) {
@@ -172,39 +241,36 @@ void SelectiveRefinement::pin_chain(uint32_t v) {
   }
 }
 
-void SelectiveRefinement::visit_active(uint32_t v, FrameStats& stats) {
+[[gnu::always_inline]] inline uint32_t SelectiveRefinement::visit_active(uint32_t v, float& margin, FrameStats& stats) {
   const VertexHierarchy& h = mesh_->hierarchy();
   if (morphs_.enabled()) {
     morphs_.appear(h, v);
     morphs_.cancel_collapse(h, v);  // its parent is kept: a collapse under way is called off
   }
-  ++stats.evaluated;
   const Slot& slot = slots_[v];  // decoded by the walk
-  if (!criteria_detail::qrefine_inline(view_, slot.criteria)) return;
+  if (!walk_qrefine(slot, margin)) [[likely]] return kNone;
   if (slot.first_child == kNone) {  // a leaf of what is known
     report_missing(v);
-    return;
+    return kNone;
   }
   if (cap_reached(stats)) {
     stats.capped = true;
     pin_chain(v);
-    return;
+    return kNone;
   }
   const size_t before = mesh_->vertex_count();
   const VSplitResult r = mesh_->vsplit(v);
   stats.vsplits += uint32_t(mesh_->vertex_count() - before);
-  if (r.done) {
-    keep(v, true);
-  } else {
-    report_missing(r.needs);
-    pin_chain(v);
-  }
+  if (r.done) return keep(v, true, margin);
+  report_missing(r.needs);
+  pin_chain(v);
+  return kNone;
 }
 
-void SelectiveRefinement::visit_split(uint32_t v, FrameStats& stats) {
-  ++stats.evaluated;
-  if (criteria_detail::qrefine_inline(view_, slots_[v].criteria)) keep(v, true);  // decoded, not kept: see adapt()
-  else tops_.push_back(v);  // may still be forced later this frame
+[[gnu::always_inline]] inline uint32_t SelectiveRefinement::visit_split(uint32_t v, float& margin) {
+  if (walk_qrefine(slots_[v], margin)) return keep(v, true, margin);  // decoded, not kept: see adapt()
+  tops_.push_back(v);  // may still be forced later this frame
+  return kNone;
 }
 
 // Every split node not kept this frame lies in the subtree of a top that stayed unkept. Collapse them
@@ -216,15 +282,15 @@ void SelectiveRefinement::collapse_unwanted(FrameStats& stats) {
   for (uint32_t top : tops_) {
     if (state(top).kept == frame_) continue;
     const size_t first = collapse_.size();
-    stack_.clear();
-    stack_.push_back(top);
-    while (!stack_.empty()) {  // pre-order; reversed below, so children come before their parent
-      const uint32_t v = uint32_t(stack_.back());
-      stack_.pop_back();
+    subtree_.clear();
+    subtree_.push_back(top);
+    while (!subtree_.empty()) {  // pre-order; reversed below, so children come before their parent
+      const uint32_t v = subtree_.back();
+      subtree_.pop_back();
       if (mesh_->is_active(v)) continue;
       collapse_.push_back(v);
-      stack_.push_back(h.first_child(v));
-      stack_.push_back(h.first_child(v) + 1);
+      subtree_.push_back(h.first_child(v));
+      subtree_.push_back(h.first_child(v) + 1);
     }
     std::reverse(collapse_.begin() + ptrdiff_t(first), collapse_.end());
   }
@@ -281,20 +347,29 @@ FrameStats SelectiveRefinement::adapt() {
   tops_.clear();
   stack_.clear();
   const VertexHierarchy& h = mesh_->hierarchy();
-  for (uint32_t r = h.root_count(); r-- > 0;) push_eval(h.root_slot(r));
-  // Top down: a node is evaluated once its parent is kept (roots at once); a forced entry keeps a node
-  // whatever its qrefine. Each node is evaluated at most once and kept at most once.
-  while (!stack_.empty()) {
-    const uint64_t entry = stack_.back();
-    stack_.pop_back();
-    const uint32_t v = uint32_t(entry >> 1);
-    if (entry & 1) {
-      justify(v);
-    } else if (state(v).kept != frame_) {
-      if (mesh_->is_active(v)) visit_active(v, stats);
-      else visit_split(v, stats);
+  // Top down, a root and all it leads to at a time: a node is evaluated once its parent is kept (roots
+  // at once); a forced entry keeps a node whatever its qrefine. Each node is evaluated at most once and
+  // kept at most once.
+  uint32_t evaluated = 0;  // a local, not stats.evaluated: the loop's calls may write stats
+  for (uint32_t r = 0; r < h.root_count(); ++r) {
+    uint32_t v = h.root_slot(r);
+    if (v >= slots_.size()) grow(v + 1);
+    float margin = root_margin_;
+    for (;;) {
+      for (; v != kNone && grown_state(v).kept != frame_; ++evaluated)  // v_u of a kept node follows without the stack
+        v = mesh_->is_active_recorded(v) ? visit_active(v, margin, stats) : visit_split(v, margin);
+      if (stack_.empty()) break;
+      const StackEntry entry = stack_.back();
+      stack_.pop_back();
+      v = entry.tagged >> 1;
+      margin = entry.margin;
+      if (entry.tagged & 1) {
+        v = justify(v);
+        margin = -INFINITY;
+      }
     }
   }
+  stats.evaluated = evaluated;
   collapse_unwanted(stats);
   if (morphs_.enabled()) stats.morphing = uint32_t(morphs_.advance(*mesh_));
   stats.missing = uint32_t(missing_.size());

@@ -4,6 +4,7 @@
 // docs/internals.md ("Adaptation loop") explains the target mesh and why the loop reaches it.
 // Shared with the browser build: single-threaded, no std::ranges algorithms, std::format or coroutines.
 #pragma once
+#include <cmath>
 #include <cstdint>
 #include <functional>
 #include <span>
@@ -86,6 +87,7 @@ class SelectiveRefinement {
   void sync();
   bool unchanged_since_settled() const;
   void use_criteria(const ViewCriteria& criteria);
+  void update_plane_bounds();
   struct Slot;
   // v's slot, grown and decoded on first use (out of line: the walk's fast path stays small).
   Slot& state(uint32_t v) {
@@ -93,15 +95,28 @@ class SelectiveRefinement {
     return first_use(v);
   }
   Slot& first_use(uint32_t v);
+  // state() of a slot below slots_.size() (the walk grows the slots before it reaches them).
+  Slot& grown_state(uint32_t v) {
+    if (slots_[v].loaded) [[likely]] return slots_[v];
+    return first_use(v);
+  }
   void grow(uint32_t end);
   void load(uint32_t v);
   uint32_t dependency(uint32_t slot);
-  void push_eval(uint32_t v) { stack_.push_back(uint64_t(v) << 1); }
-  void push_forced(uint32_t v) { stack_.push_back(uint64_t(v) << 1 | 1); }
-  void justify(uint32_t v);
-  void keep(uint32_t v, bool parent_kept);
-  void visit_active(uint32_t v, FrameStats& stats);
-  void visit_split(uint32_t v, FrameStats& stats);
+  // A node to evaluate, with its parent's plane bound (`margin`, see walk_qrefine), or one to keep.
+  struct StackEntry {
+    uint32_t tagged;  // slot << 1 | forced
+    float margin;
+  };
+  void push_eval(uint32_t v, float margin) { stack_.push_back({v << 1, margin}); }
+  void push_forced(uint32_t v) { stack_.push_back({v << 1 | 1, 0}); }
+  // The walk's steps return the node to evaluate next when it is the one the stack would give next
+  // (kNone otherwise), so the common case skips a push and a pop.
+  uint32_t justify(uint32_t v);
+  uint32_t keep(uint32_t v, bool parent_kept, float margin);
+  bool walk_qrefine(const Slot& slot, float& margin) const;
+  uint32_t visit_active(uint32_t v, float& margin, FrameStats& stats);
+  uint32_t visit_split(uint32_t v, float& margin);
   void pin_chain(uint32_t v);
   void report_missing(uint32_t v);
   void collapse_unwanted(FrameStats& stats);
@@ -126,16 +141,22 @@ class SelectiveRefinement {
     NodeCriteria criteria;  // decoded once
     uint32_t kept = 0;      // frame in which the node was found wanted or forced
     uint32_t first_child = kNone;
-    uint32_t parent = kNone;
     uint32_t dependency = kNone - 1;  // the node its split needs split (partial order); kNone - 1: not computed
-    uint32_t loaded = 0;              // criteria, first_child and parent are set
+    float reach = 0;                  // |p − p_parent| (a root: |p − root_centre_|), rounded up
+    uint32_t loaded = 0;              // criteria, first_child and reach are set
   };
   BigVector<Slot> slots_;  // on huge pages (common/huge_pages.h): the walk reads them at random
   uint32_t synced_ = 0;             // hierarchy size whose new children pairs the loaded slots know of
   std::vector<uint32_t> reported_;  // per slot: frame in which it went to missing_ (grown on use)
-  std::vector<uint64_t> stack_;       // slot << 1 | forced
+  // The plane bounds of walk_qrefine: every loaded position's coordinates are within ±coordinate_bound_,
+  // so a plane value computed in float is within plane_error_ of the exact one; reach_scale_ is at least
+  // every plane's |n|, so reach · reach_scale_ bounds how far a plane value moves from parent to child.
+  // The roots are bounded from root_centre_, whose bound is root_margin_.
+  float coordinate_bound_ = 0, plane_error_ = 0, reach_scale_ = 1;
+  float root_centre_[3] = {0, 0, 0}, root_margin_ = -INFINITY;
+  std::vector<StackEntry> stack_;
   std::vector<uint32_t> tops_;        // split nodes not wanted, whose subtrees may have to collapse
-  std::vector<uint32_t> collapse_, retry_;
+  std::vector<uint32_t> subtree_, collapse_, retry_;
   std::vector<uint32_t> missing_;
   Geomorphs morphs_;
 };

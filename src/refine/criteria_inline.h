@@ -15,13 +15,24 @@ constexpr float kCullSlack = 1e-5f;
 
 inline float dot3(const float a[3], const float b[3]) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
 
-[[gnu::always_inline]] inline bool outside_frustum_inline(const ViewCriteria& view, const NodeCriteria& node) {
+// The frustum test, and when it passes `lowest` = the smallest of the six plane values it computed (the
+// adaptation walk bounds the children's values with it: SelectiveRefinement::walk_qrefine).
+[[gnu::always_inline]] inline bool outside_frustum_inline(const ViewCriteria& view, const NodeCriteria& node, float& lowest) {
   float d[3];
   for (int k = 0; k < 3; ++k) d[k] = node.p[k] - view.eye[k];
   const float slack = node.radius + kCullSlack * std::sqrt(dot3(d, d));
-  for (const float* plane : view.planes)
-    if (dot3(plane, node.p) + plane[3] < -slack) return true;
+  lowest = INFINITY;
+  for (const float* plane : view.planes) {
+    const float value = dot3(plane, node.p) + plane[3];
+    if (value < -slack) return true;
+    lowest = std::min(lowest, value);
+  }
   return false;
+}
+
+[[gnu::always_inline]] inline bool outside_frustum_inline(const ViewCriteria& view, const NodeCriteria& node) {
+  float lowest;
+  return outside_frustum_inline(view, node, lowest);
 }
 
 // With d = p − e, θ = angle(a, d) and α the cone half-angle, min over the cone of n·d is

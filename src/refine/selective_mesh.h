@@ -68,9 +68,10 @@ class SelectiveMesh {
   void prefetch_vsplit(uint32_t slot, int stage) const;
   void prefetch_ecol(uint32_t parent_slot, int stage) const;
 
-  bool is_active(uint32_t slot) const {
-    return slot < vertex_.size() && (active_bits_[slot >> 6] >> (slot & 63) & 1) != 0;
-  }
+  bool is_active(uint32_t slot) const { return slot < vertex_.size() && is_active_recorded(slot); }
+  // is_active() of a slot known to have a record: a root, or a child of a node that was ever split (the
+  // adaptation walk asks it of every node it reaches, and reaches no others).
+  bool is_active_recorded(uint32_t slot) const { return (active_bits_[slot >> 6] >> (slot & 63) & 1) != 0; }
   std::span<const uint32_t> active_vertices() const { return active_; }
   size_t vertex_count() const { return active_.size(); }
   size_t face_count() const { return face_count_; }
@@ -119,6 +120,7 @@ class SelectiveMesh {
   static uint32_t find_next(const std::vector<Corner>& fan, uint32_t w);  // index of the corner with `next` w
   uint32_t cut_ancestor(VertexId cut, uint32_t slot) const;  // over fan_ (slot)
   void split_fan(uint32_t s, uint32_t l, uint32_t r);         // over fan_ (s)
+  bool split_between(uint32_t s, uint32_t l, uint32_t r);     // over fan_ (s): split_fan's common case
   bool breaks_split_order(uint32_t u) const;                  // over fan_ (t)
   // Over fan_ (t) and fan_u_ (u), whose open ends (kNone: closed) are given.
   bool link_condition(uint32_t t, uint32_t l, uint32_t r, uint32_t t_end, uint32_t u_end);

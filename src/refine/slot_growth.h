@@ -22,4 +22,12 @@ inline size_t slot_capacity(size_t end, size_t capacity, size_t known, size_t by
   return std::max(known, 2 * capacity);
 }
 
+// The size to initialise for slots [0, end), once slot_capacity's capacity is reserved. While the
+// array doubles, a few slots ahead save calls; once the whole known range is reserved nothing moves
+// any more, and every slot initialised past `end` only writes (and faults in) memory no slot uses yet.
+inline size_t slot_size(size_t end, size_t size, size_t capacity, size_t known) {
+  if (capacity >= known) return std::max(end, size);
+  return std::min(known, std::max(end, 2 * size));
+}
+
 }  // namespace pms
