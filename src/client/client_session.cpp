@@ -47,13 +47,8 @@ void ClientSession::on_codec(const protocol::Codec& codec) {
   codec_tables_ = codec.tables;
   context_.records = codec.codec;
   // What held_split_context reads is what the server's stored records are coded against (docs/protocol.md,
-  // "Split records"); the hierarchy lives on the heap, so the pointer outlives moves of this session.
-  context_.held = [h = hierarchy_.get(), grid = context_.grid](VertexId id, SplitContext& out) {
-    const uint32_t slot = h->find(id);
-    if (slot == kNone) return false;
-    out = protocol::held_split_context(*h, slot, grid);
-    return true;
-  };
+  // "Split records"); the hierarchy lives on the heap, so the reference outlives moves of this session.
+  context_.held = protocol::held_in(*hierarchy_, context_.grid);
 }
 
 void ClientSession::on_vsplits(const protocol::VSplits& batch) {

@@ -43,12 +43,7 @@ void LoadClient::open(bool resume) {
   if (!protocol::carries_split_records(open.mode, base)) return;
   context_.records = server_->next_codec(context_).codec;
   if (open.resume.empty() || !hierarchy_) start_hierarchy(base);  // a resumed session keeps the one held
-  context_.held = [h = hierarchy_.get(), grid = context_.grid](VertexId id, SplitContext& out) {
-    const uint32_t slot = h->find(id);
-    if (slot == kNone) return false;
-    out = protocol::held_split_context(*h, slot, grid);
-    return true;
-  };
+  context_.held = protocol::held_in(*hierarchy_, context_.grid);
 }
 
 void LoadClient::start_hierarchy(const protocol::Base& base) {
