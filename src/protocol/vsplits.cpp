@@ -12,7 +12,8 @@
 #include <algorithm>
 #include <bit>
 #include <cmath>
-#include <map>
+#include <functional>
+#include <unordered_map>
 #include <utility>
 
 #include "pm/refine_info.h"
@@ -86,9 +87,9 @@ VertexId read_vs(Reader& r, const StreamContext& c) {
 // split anyway, and a hostile batch cannot repeat one cheap packet.
 class BatchContexts {
  public:
-  explicit BatchContexts(const StreamContext& c) : c_(c) {}
+  BatchContexts(const StreamContext& c, size_t packets) : c_(c) { made_.reserve(2 * std::min<size_t>(packets, 4096)); }
 
-  // The context of v_s, or an empty string's opposite: why there is none.
+  // Empty when v_s has a context (then in `out`); else why it has none.
   std::string find(VertexId vs, SplitContext& out) const {
     const Key key{vs.tree, vs.node};
     if (const auto it = made_.find(key); it != made_.end()) {
@@ -102,7 +103,7 @@ class BatchContexts {
 
   // v_s is split: its children are held from now on (v_u keeps v_s's position: half-edge collapse).
   void split(const SplitContext& s, const SplitPayload& p) {
-    made_[Key{s.vs.tree, s.vs.node}] = {s, true};
+    made_[Key{s.vs.tree, s.vs.node}].split = true;  // its context is not needed again
     SplitContext t, u;
     t.vs = s.vs.child(0);
     u.vs = s.vs.child(1);
@@ -120,12 +121,15 @@ class BatchContexts {
 
  private:
   using Key = std::pair<uint32_t, uint64_t>;
+  struct KeyHash {
+    size_t operator()(const Key& k) const { return std::hash<uint64_t>()(k.second * 0x9E3779B97F4A7C15ull ^ k.first); }
+  };
   struct Made {
     SplitContext context;
     bool split = false;
   };
   const StreamContext& c_;
-  std::map<Key, Made> made_;
+  std::unordered_map<Key, Made, KeyHash> made_;
 };
 
 // v_s's id, then its record (docs/protocol.md, "VSPLITS"): every check of SplitCodec::decode applies.
@@ -266,7 +270,7 @@ std::vector<uint8_t> encode(const VSplits& m, const StreamContext& c) {
   w.reserve_payload(9 + m.splits.size() * min_packet_bits(c) / 8);
   write_vsplits_header(w, m.frame, m.final, m.splits.size());
   if (c.records) {
-    BatchContexts batch(c);
+    BatchContexts batch(c, m.splits.size());
     for (const SplitRecord& s : m.splits) write_record_packet(w, s, c, batch);
   } else {
     for (const SplitRecord& s : m.splits) write_packet(w, s, c);
@@ -284,7 +288,7 @@ std::vector<SplitRecord> read_packets(Reader& r, const StreamContext& c) {
   if (c.records) {
     // A record has no smallest size: the vector grows with the packets that decode, not with the count.
     splits.reserve(std::min<uint32_t>(count, 4096));
-    BatchContexts batch(c);
+    BatchContexts batch(c, count);
     for (uint32_t i = 0; i < count; ++i) {
       r.set_item("packet", i);
       read_record_packet(r, c, batch, splits.emplace_back());
