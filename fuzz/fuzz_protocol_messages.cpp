@@ -1,14 +1,21 @@
 // libFuzzer target for every protocol message decoder (docs/architecture.md, "Correctness properties", 5): the
 // first byte picks the decoder, VSPLITS and DAG_OPS take its stream context from the next 8 bytes, the rest is the
-// payload. Any bytes must decode or throw ProtocolError — never crash, hang, over-allocate or throw anything
+// payload. VSPLITS with split records (which = 12) and CODEC (13) take u16 T | T bytes of code tables first
+// (hostile tables too) and a context made to fit them, whose client holds the roots. Any bytes must decode or throw ProtocolError — never crash, hang, over-allocate or throw anything
 // else — and what decodes must re-encode and decode to the same message (byte for byte where no quantization
 // is involved).
+#include <algorithm>
+#include <bit>
 #include <cstddef>
+#include <memory>
 #include <cstdint>
 #include <cstring>
 #include <span>
 #include <vector>
 
+#include "common/bit_stream.h"
+#include "common/error.h"
+#include "pm/split_codec.h"
 #include "pm/split_record.h"
 #include "protocol/client_messages.h"
 #include "protocol/message_types.h"
@@ -55,8 +62,44 @@ bool same_split(const pms::SplitRecord& a, const pms::SplitRecord& b) {
          a.has_normal == b.has_normal && a.has_color == b.has_color && std::memcmp(a.color_t, b.color_t, 4) == 0;
 }
 
-void fuzz_one(uint8_t which, std::span<const uint8_t> payload, const StreamContext& context) {
-  switch (which % 12) {
+// A sender-driven context for the tables at the front of `payload` (the rest is the message), or false.
+bool records_context(std::span<const uint8_t>& payload, StreamContext& c, std::vector<uint8_t>& tables) {
+  if (payload.size() < 2) return false;
+  const size_t size = size_t(payload[0]) | size_t(payload[1]) << 8;
+  if (size > payload.size() - 2) return false;
+  tables.assign(payload.begin() + 2, payload.begin() + 2 + ptrdiff_t(size));
+  payload = payload.subspan(2 + size);
+  try {
+    pms::BitReader r(tables, "tables");
+    c.records = std::make_shared<const pms::SplitCodec>(pms::SplitCodec::deserialize(r));
+  } catch (const pms::Error&) {
+    return false;
+  }
+  c.root_count = c.records->root_count();
+  c.tree_id_bits = std::max<uint32_t>(1, uint32_t(std::bit_width(c.root_count - 1)));
+  c.node_id_bits = c.records->max_depth();
+  c.grid.bits = c.records->position_bits();
+  if (!pms::valid_position_bits(c.grid.bits)) return false;
+  c.has_normals = c.has_colors = false;
+  c.has_refinement = true;
+  // The client holds the roots, at positions and with an info spread over the grid and the codes.
+  c.held = [bits = c.grid.bits](pms::VertexId id, pms::SplitContext& out) {
+    if (!id.is_root()) return false;
+    out = {};
+    out.vs = id;
+    const uint32_t top = bits >= 32 ? 0x3F800000u : (1u << bits) - 1;  // raw floats: 1.0f
+    for (int i = 0; i < 3; ++i) out.position_s[i] = bits >= 32 ? top : (id.tree * 2654435761u >> i) & top;
+    if (id.tree % 3) out.info_s = {0x2C00, 0x2400, 0x2000, 12, uint16_t(int16_t(-40)), 300};
+    return true;
+  };
+  return true;
+}
+
+void fuzz_one(uint8_t which, std::span<const uint8_t> payload, const StreamContext& given) {
+  StreamContext context = given;
+  std::vector<uint8_t> tables;
+  if (which % 14 >= 12 && !records_context(payload, context, tables)) return;
+  switch (which % 14) {
     case 0: check(same(payload_of(encode(decode_hello(payload))), payload)); break;
     case 1: check(same(payload_of(encode(decode_list(payload))), payload)); break;
     case 2: check(same(payload_of(encode(decode_open(payload, 1u << 16))), payload)); break;
@@ -82,6 +125,26 @@ void fuzz_one(uint8_t which, std::span<const uint8_t> payload, const StreamConte
     }
     case 9: check(same(payload_of(encode(decode_error(payload))), payload)); break;
     case 10: check(same(payload_of(encode(decode_dag_view(payload))), payload)); break;
+    case 12: {
+      const VSplits batch = decode_vsplits(payload, context);
+      std::vector<uint8_t> again;
+      try {
+        again = encode(batch, context);
+      } catch (const ProtocolError&) {
+        __builtin_trap();
+      } catch (const pms::Error&) {
+        break;  // hostile tables may lack the code words the encoder's own choice needs
+      }
+      const VSplits back = decode_vsplits(payload_of(again), context);
+      check(back.frame == batch.frame && back.final == batch.final && back.splits.size() == batch.splits.size());
+      for (size_t i = 0; i < batch.splits.size(); ++i) check(same_split(back.splits[i], batch.splits[i]));
+      break;
+    }
+    case 13: {
+      const Codec codec = decode_codec(payload, context);
+      check(same(payload_of(encode(codec)), payload));
+      break;
+    }
     case 11: {
       const DagOps ops = decode_dag_ops(payload, context);
       const DagOps back = decode_dag_ops(payload_of(encode(ops, context)), context);

@@ -16,6 +16,7 @@
 
 #include "common/error.h"
 #include "pm/hierarchy.h"
+#include "pm/split_codec.h"
 #include "pm/split_record.h"
 #include "pm/vertex_id.h"
 #include "protocol/client_messages.h"
@@ -129,6 +130,10 @@ class SimulatedClient {
   }
   protocol::StreamMode mode() const { return front_mode_; }  // of the session the leaves came from
   std::optional<protocol::ErrorCode> error() const { return s_.error; }
+  // After BASE, whether the CODEC the session owes has come.
+  bool codec_pending() const {
+    return s_.context && !s_.context->records && protocol::carries_split_records(s_.mode, last_base_);
+  }
   const std::string& error_text() const { return s_.error_text; }
 
   // The session went quiet after every frame was read: each request has had its answer, and the server's
@@ -138,6 +143,7 @@ class SimulatedClient {
     check(s_.catalogues == s_.lists, "a LIST got no CATALOGUE");
     if (!s_.front) return;
     check(s_.context.has_value(), "an accepted OPEN got no BASE");
+    check(!codec_pending(), "a BASE of a session with split records got no CODEC");
     if (!s_.views.empty() && s_.frames_distinct)
       check(s_.last_answered, "the last VIEW's answer did not end with a final VSPLITS");
     check(session.splits_sent() == s_.splits, "splits_sent() is not what the client received");
@@ -219,6 +225,21 @@ class SimulatedClient {
            std::to_string(limits_.batch_splits));
     for (const SplitRecord& split : m.splits) apply(split);
     if (m.final && m.frame == s_.views.back()) s_.last_answered = true;
+  }
+  // A session whose packets are split records gets the tables right after BASE; the packets then decode
+  // against what this client holds, which for a held node of the model is the model's own context.
+  void on(const protocol::Codec& m) {
+    trace([] { return "<- CODEC"; });
+    check(s_.context.has_value() && !s_.context->records, "a CODEC that follows no BASE, or a second one");
+    check(protocol::carries_split_records(s_.mode, last_base_), "a CODEC in a session without split records");
+    if (positions_.empty()) positions_ = grid_positions(model_, s_.context->grid.bits);
+    s_.context->records = m.codec;
+    s_.context->held = [this](VertexId id, SplitContext& out) {
+      const uint32_t node = model_.find(id);
+      if (node == kNone || !held_[node] || model_.is_leaf(node)) return false;
+      out = split_context(model_, positions_, node);
+      return true;
+    };
   }
   // A DAG answer's operations go to the mirror as the client applies them (ClientSession::apply_dag_ops: each
   // batch's collapses, then its splits); each must be legal there, and the answer within its DAG_VIEW's limits.
@@ -370,6 +391,7 @@ class SimulatedClient {
   const server::ServerLimits& limits_;
   std::vector<uint8_t> held_;  // per node: a leaf of the client's partial hierarchy
   std::optional<DagCut> cut_;  // the DAG mode: the client's mesh, once a DAG session's BASE came
+  std::vector<uint32_t> positions_;  // the model's on the wire grid, for split record contexts
   bool has_front_ = false;     // a BASE arrived in this or an earlier session
   protocol::StreamMode front_mode_ = protocol::StreamMode::sender_driven;
   PerSession s_;

@@ -38,6 +38,19 @@ void ClientSession::on_base(const protocol::Base& base) {
   refinement_ = std::make_unique<SelectiveRefinement>(*mesh_, base.scale, adapt_options);
 }
 
+void ClientSession::on_codec(const protocol::Codec& codec) {
+  if (!has_model()) fail("CODEC", "received before BASE");
+  if (context_.records) {
+    if (codec.tables != codec_tables_) fail("CODEC", "the server's split record tables are not the ones this client holds");
+    return;
+  }
+  codec_tables_ = codec.tables;
+  context_.records = codec.codec;
+  // What held_split_context reads is what the server's stored records are coded against (docs/protocol.md,
+  // "Split records"); the hierarchy lives on the heap, so the reference outlives moves of this session.
+  context_.held = protocol::held_in(*hierarchy_, context_.grid);
+}
+
 void ClientSession::on_vsplits(const protocol::VSplits& batch) {
   if (!has_model()) fail("VSPLITS", "received before BASE");
   for (const SplitRecord& split : batch.splits) hierarchy_->add_split(split);

@@ -25,6 +25,9 @@ class ClientSession {
   // Builds the base mesh, hierarchy and refinement loop from a BASE. With `keep` (a resumed session whose
   // hierarchy is already here) the BASE only has to match the model held.
   void on_base(const protocol::Base& base);
+  // The split record tables of a session whose packets are split records (protocol::carries_split_records),
+  // after BASE: from now on VSPLITS decode against this hierarchy. A resumed session's must be the ones held.
+  void on_codec(const protocol::Codec& codec);
   // Attaches a batch's packets as leaves of the partial hierarchy (UpdateVHierarchy). Applying them to
   // the mesh is the mode's business (client_mode.h).
   void on_vsplits(const protocol::VSplits& batch);
@@ -58,6 +61,7 @@ class ClientSession {
  private:
   protocol::Base base_;
   protocol::StreamContext context_;
+  std::vector<uint8_t> codec_tables_;  // the CODEC held, to check a resumed session's against
   std::unique_ptr<VertexHierarchy> hierarchy_;
   std::unique_ptr<SelectiveMesh> mesh_;
   std::unique_ptr<SelectiveRefinement> refinement_;

@@ -13,6 +13,7 @@
 #include "protocol/message_types.h"
 #include "protocol/model_messages.h"
 #include "protocol/server_messages.h"
+#include "protocol/split_bands.h"
 
 namespace pms::client {
 
@@ -37,7 +38,18 @@ void LoadClient::open(bool resume) {
   } else if (options_.model) {
     hold_roots();
   }
-  context_ = protocol::stream_context(server_->open(open));
+  const protocol::Base base = server_->open(open);
+  context_ = protocol::stream_context(base);
+  if (!protocol::carries_split_records(open.mode, base)) return;
+  context_.records = server_->next_codec(context_).codec;
+  if (open.resume.empty() || !hierarchy_) start_hierarchy(base);  // a resumed session keeps the one held
+  context_.held = protocol::held_in(*hierarchy_, context_.grid);
+}
+
+void LoadClient::start_hierarchy(const protocol::Base& base) {
+  hierarchy_ = std::make_unique<VertexHierarchy>(false, false);
+  for (uint32_t r = 0; r < base.root_count(); ++r)
+    hierarchy_->add_root(VertexId{r, 1}, &base.positions[3 * size_t(r)], base.refine[r], nullptr, nullptr);
 }
 
 double LoadClient::view(const Camera& camera, float tolerance) {
@@ -47,6 +59,8 @@ double LoadClient::view(const Camera& camera, float tolerance) {
   for (;;) {
     const protocol::VSplits batch = server_->next_batch(context_);
     splits_received_ += batch.splits.size();
+    if (context_.records)
+      for (const SplitRecord& split : batch.splits) hierarchy_->add_split(split);
     if (options_.model)
       for (const SplitRecord& split : batch.splits) hold(split);
     if (batch.final && batch.frame == frame) break;

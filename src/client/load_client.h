@@ -17,6 +17,7 @@
 #include "protocol/message_types.h"
 #include "protocol/stream_context.h"
 #include "refine/camera.h"
+#include "refine/vertex_hierarchy.h"
 
 namespace pms::client {
 
@@ -49,6 +50,7 @@ class LoadClient {
 
  private:
   void hold(const SplitRecord& split);
+  void start_hierarchy(const protocol::Base& base);
   void hold_roots();
   std::vector<VertexId> held_leaves() const;
 
@@ -61,6 +63,9 @@ class LoadClient {
   uint64_t splits_received_ = 0;       // over every session
   uint64_t held_splits_ = 0;           // in the hierarchy held now
   std::vector<uint64_t> leaf_bits_;    // per model node: a leaf of the partial hierarchy held
+  // A session whose packets are split records decodes them against the hierarchy they make (what
+  // ClientSession holds): ids, positions, refinement info and cut vertices, nothing of a mesh.
+  std::unique_ptr<VertexHierarchy> hierarchy_;
 };
 
 }  // namespace pms::client

@@ -46,6 +46,10 @@ protocol::DagOps ServerConnection::next_dag_ops(const protocol::StreamContext& c
   return protocol::decode_dag_ops(expect(protocol::MessageType::dag_ops).payload, context);
 }
 
+protocol::Codec ServerConnection::next_codec(const protocol::StreamContext& context) {
+  return protocol::decode_codec(expect(protocol::MessageType::codec).payload, context);
+}
+
 protocol::VSplits ServerConnection::next_batch(const protocol::StreamContext& context) {
   return protocol::decode_vsplits(expect(protocol::MessageType::vsplits).payload, context);
 }

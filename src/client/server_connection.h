@@ -25,6 +25,8 @@ class ServerConnection {
 
   protocol::Catalogue list();
   protocol::Base open(const protocol::Open& open);
+  // The CODEC after BASE in a session whose packets are split records.
+  protocol::Codec next_codec(const protocol::StreamContext& context);
   void send_view(const Camera& camera, float tolerance, uint32_t frame);
   // The next VSPLITS batch (of this VIEW's answer or an earlier one's).
   protocol::VSplits next_batch(const protocol::StreamContext& context);

@@ -11,6 +11,7 @@
 #include "protocol/client_messages.h"
 #include "protocol/framing.h"
 #include "protocol/message_types.h"
+#include "protocol/model_messages.h"
 #include "protocol/server_messages.h"
 
 namespace pms::client {
@@ -74,6 +75,8 @@ void StreamingClient::open(const std::string& model) {
   protocol::Open message{model, {}, mode_->wire_mode()};
   if (session_.has_model()) message.resume = mode_->resume_front(session_);
   session_.on_base(server_->open(message));
+  if (protocol::carries_split_records(message.mode, session_.base()))
+    session_.on_codec(server_->next_codec(session_.context()));
 }
 
 void StreamingClient::resume(const std::string& host, uint16_t port) {

@@ -54,6 +54,10 @@ StreamContext stream_context(const Base& base) {
   return c;
 }
 
+bool carries_split_records(StreamMode mode, const Base& base) {
+  return mode == StreamMode::sender_driven && !base.has_normals && !base.has_colors;
+}
+
 std::vector<uint8_t> encode(const Base& m) {
   check_sizes(m);
   const StreamContext c = stream_context(m);

@@ -40,6 +40,9 @@ ServerMessage decode_server_message(const Frame& frame, const StreamContext* con
     case MessageType::dag_ops:
       if (!context) throw ProtocolError(ErrorCode::out_of_order, "DAG_OPS: before any BASE");
       return decode_dag_ops(frame.payload, *context);
+    case MessageType::codec:
+      if (!context) throw ProtocolError(ErrorCode::out_of_order, "CODEC: before any BASE");
+      return decode_codec(frame.payload, *context);
     case MessageType::error: return decode_error(frame.payload);
     default: unexpected(frame.type, "server");
   }

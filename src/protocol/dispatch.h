@@ -12,9 +12,9 @@
 namespace pms::protocol {
 
 using ClientMessage = std::variant<Hello, List, Open, View, Close, DagView>;
-using ServerMessage = std::variant<HelloOk, Catalogue, Base, VSplits, ErrorMessage, DagOps>;
+using ServerMessage = std::variant<HelloOk, Catalogue, Base, VSplits, ErrorMessage, DagOps, Codec>;
 // Dispatch on the frame's type; a server type (or unknown byte) from a client is bad_message and vice
-// versa. VSPLITS and DAG_OPS need the context of the BASE before it: without one (nullptr) it is out_of_order.
+// versa. VSPLITS, DAG_OPS and CODEC need the context of the BASE before it: without one (nullptr) it is out_of_order.
 ClientMessage decode_client_message(const Frame& frame, uint64_t max_resume_leaves = kDefaultMaxResumeLeaves);
 ServerMessage decode_server_message(const Frame& frame, const StreamContext* context);
 

@@ -25,6 +25,7 @@ std::string to_string(MessageType type) {
     case MessageType::close: return "CLOSE";
     case MessageType::dag_view: return "DAG_VIEW";
     case MessageType::dag_ops: return "DAG_OPS";
+    case MessageType::codec: return "CODEC";
     case MessageType::hello_ok: return "HELLO_OK";
     case MessageType::catalogue: return "CATALOGUE";
     case MessageType::base: return "BASE";

@@ -11,9 +11,10 @@
 
 namespace pms::protocol {
 
-// 3: a node with mu = delta = 0 sends its refinement info as one flag bit (2 sent 43 or 65 bits for
+// 4: a sender-driven session of a model without normals and colors gets CODEC after BASE, and its VSPLITS
+// packets are v_s's id and the compact split record (issue 19). 3: a node with mu = delta = 0 sends its refinement info as one flag bit (2 sent 43 or 65 bits for
 // every node, 1 sent 6 x u16).
-constexpr uint16_t kProtocolVersion = 3;
+constexpr uint16_t kProtocolVersion = 4;
 constexpr char kMagic[4] = {'P', 'M', 'S', 'T'};
 constexpr size_t kFrameHeaderBytes = 5;                 // u32 payload length + u8 type
 constexpr uint32_t kDefaultMaxMessage = 16u << 20;      // payload bytes a reader accepts by default
@@ -35,6 +36,7 @@ enum class MessageType : uint8_t {
   vsplits = 0x84,
   error = 0x85,
   dag_ops = 0x86,
+  codec = 0x87,
 };
 std::string to_string(MessageType type);  // "VSPLITS", or "type 0x42" for an unknown byte
 

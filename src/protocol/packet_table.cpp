@@ -1,7 +1,9 @@
 // PacketTable: a model's vsplit packets encoded once (protocol.h), for the server's hot path.
+#include <algorithm>
 #include <exception>
 #include <mutex>
 
+#include "common/bit_stream.h"
 #include "common/parallel.h"
 #include "pm/hierarchy.h"
 #include "pm/refine_info.h"
@@ -27,6 +29,24 @@ struct Block {
 
 PacketTable::PacketTable(const ModelData& model, const StreamContext& context) {
   if (const std::string why = check_context(context); !why.empty()) fail("VSPLITS", "stream context: " + why);
+  build(model, [&](Writer& w, uint32_t node) { write_packet(w, split_record(model, node), context); });
+}
+
+PacketTable::PacketTable(const ModelData& model, const StreamContext& context, const StoredRecords& records) {
+  if (const std::string why = check_context(context); !why.empty()) fail("VSPLITS", "stream context: " + why);
+  if (!context.records) fail("VSPLITS", "stream context: no split records");
+  if (records.offsets.size() != model.node_count() + 1) fail("VSPLITS", "split records: not one offset per node plus one");
+  build(model, [&](Writer& w, uint32_t node) {
+    write_id(w, model.id(node), context, "v_s");
+    BitReader record(records.bits, records.offsets[node], records.offsets[node + 1], "stored record");
+    for (uint64_t left = record.bits_left(); left > 0; left = record.bits_left()) {
+      const unsigned n = unsigned(std::min<uint64_t>(left, 64));
+      w.bits(record.bits(n, "record"), n);
+    }
+  });
+}
+
+void PacketTable::build(const ModelData& model, const std::function<void(Writer& w, uint32_t node)>& write) {
   const size_t n = model.node_count();
   std::vector<Block> blocks((n + kBlockNodes - 1) / kBlockNodes);
   std::exception_ptr failure;
@@ -42,7 +62,7 @@ PacketTable::PacketTable(const ModelData& model, const StreamContext& context) {
             continue;
           }
           const uint64_t at = w.payload_bits();
-          write_packet(w, split_record(model, uint32_t(v)), context);
+          write(w, uint32_t(v));
           const uint64_t length = w.payload_bits() - at;
           if (length >= (uint64_t(1) << kLengthBits)) fail("VSPLITS", "a packet of " + std::to_string(length) + " bits");
           block.where.push_back(at << kLengthBits | length);

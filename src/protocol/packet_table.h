@@ -2,14 +2,18 @@
 #pragma once
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <span>
 #include <vector>
 
 #include "pm/hierarchy.h"
 #include "pm/refine_info.h"
+#include "protocol/split_bands.h"
 #include "protocol/stream_context.h"
 
 namespace pms::protocol {
+
+class Writer;  // wire_internal.h
 
 // Every vsplit packet of a model as a sender-driven session sends it, encoded once and shared by all
 // sessions: a VSPLITS batch is then its packets' bits copied back to back, with none of the per-packet
@@ -20,6 +24,9 @@ class PacketTable {
   PacketTable() = default;
   // Throws pms::Error for a model the context cannot carry (as encode(VSplits) would).
   PacketTable(const ModelData& model, const StreamContext& context);
+  // The packets of a context with split records (StreamContext::records): v_s's id and the record the
+  // model stores (coded against what the client holds about v_s, which a session's client does), copied.
+  PacketTable(const ModelData& model, const StreamContext& context, const StoredRecords& records);
   bool empty() const { return where_.empty(); }
   size_t memory_bytes() const { return (bits_.capacity() + where_.capacity()) * sizeof(uint64_t); }
 
@@ -28,6 +35,8 @@ class PacketTable {
   std::vector<uint8_t> encode(uint32_t frame, bool final, std::span<const uint32_t> nodes) const;
 
  private:
+  // Every internal node's packet, as `write` puts it into a batch's bit stream.
+  void build(const ModelData& model, const std::function<void(Writer& w, uint32_t node)>& write);
   static constexpr unsigned kLengthBits = 10;  // a packet is < 1024 bits (3 ids of <= 101 bits, info, attributes)
   std::vector<uint64_t> bits_;   // the packets back to back
   std::vector<uint64_t> where_;  // per node: bit offset << kLengthBits | bit count; 0 for a leaf

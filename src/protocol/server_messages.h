@@ -2,12 +2,14 @@
 // Shared with the browser build: single-threaded, no std::ranges algorithms, std::format or coroutines.
 #pragma once
 #include <cstdint>
+#include <memory>
 #include <span>
 #include <string>
 #include <vector>
 
 #include "pm/hierarchy.h"
 #include "pm/refine_info.h"
+#include "pm/split_codec.h"
 #include "pm/split_record.h"
 #include "protocol/message_types.h"
 #include "protocol/stream_context.h"
@@ -56,6 +58,13 @@ struct Base {
   uint32_t root_count() const { return uint32_t(refine.size()); }
 };
 
+// A model's split record tables (SplitCodec::serialize, padded to a byte; the bytes of GET
+// /models/{m}/codec), once after BASE in a session whose packets are split records (carries_split_records).
+struct Codec {
+  std::vector<uint8_t> tables;
+  std::shared_ptr<const SplitCodec> codec;  // what decode_codec read from `tables`; the encoder ignores it
+};
+
 // One VIEW's answer may take several batches; the last has `final` set.
 struct VSplits {
   uint32_t frame = 0;
@@ -84,6 +93,9 @@ struct ErrorMessage {
 std::vector<uint8_t> encode(const HelloOk& m);
 std::vector<uint8_t> encode(const Catalogue& m);
 std::vector<uint8_t> encode(const Base& m);
+std::vector<uint8_t> encode(const Codec& m);
+// With context.records, each packet is v_s's id and its split record coded against context.held (or the
+// batch's own earlier splits); pms::Error for a v_s neither holds.
 std::vector<uint8_t> encode(const VSplits& m, const StreamContext& context);
 std::vector<uint8_t> encode(const ErrorMessage& m);
 std::vector<uint8_t> encode(const DagOps& m, const StreamContext& context);
@@ -92,6 +104,10 @@ std::vector<uint8_t> encode(const DagOps& m, const StreamContext& context);
 HelloOk decode_hello_ok(std::span<const uint8_t> payload);
 Catalogue decode_catalogue(std::span<const uint8_t> payload);
 Base decode_base(std::span<const uint8_t> payload);
+// The tables must fit the model of `context` (root count, max depth, position bits).
+Codec decode_codec(std::span<const uint8_t> payload, const StreamContext& context);
+// With context.records: bad_id for a v_s that context.held and the batch's earlier splits do not hold, or
+// one split twice in the batch; bad_message for a record SplitCodec::decode refuses.
 VSplits decode_vsplits(std::span<const uint8_t> payload, const StreamContext& context);
 ErrorMessage decode_error(std::span<const uint8_t> payload);
 DagOps decode_dag_ops(std::span<const uint8_t> payload, const StreamContext& context);  // codes this build does not know pass through

@@ -70,6 +70,15 @@ SplitContext held_split_context(const VertexHierarchy& h, uint32_t slot, const P
   return c;
 }
 
+std::function<bool(VertexId, SplitContext&)> held_in(const VertexHierarchy& h, const PositionGrid& grid) {
+  return [&h, grid](VertexId id, SplitContext& out) {
+    const uint32_t slot = h.find(id);
+    if (slot == kNone) return false;
+    out = held_split_context(h, slot, grid);
+    return true;
+  };
+}
+
 uint32_t read_split_bands(std::span<const uint8_t> body, const SplitRequest& request, const SplitCodec& codec,
                           const PositionGrid& grid, VertexHierarchy& h, uint32_t max_splits) {
   BitReader r(body, "split records");

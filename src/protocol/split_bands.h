@@ -6,6 +6,7 @@
 // Shared with the browser build: single-threaded, no std::ranges algorithms, std::format or coroutines.
 #pragma once
 #include <cstdint>
+#include <functional>
 #include <span>
 #include <vector>
 
@@ -32,6 +33,10 @@ uint32_t write_split_band(const ModelData& model, const StoredRecords& records, 
 // What a client holds about the split of `slot` (pm/split_codec.h, SplitContext), from its own hierarchy:
 // the position re-quantized (the grid gives the sent integers back), the info as sent, the ancestors' cuts.
 SplitContext held_split_context(const VertexHierarchy& h, uint32_t slot, const PositionGrid& grid);
+
+// StreamContext::held for a client whose hierarchy is `h` (which must outlive the context): the context of
+// every vertex it holds, by held_split_context.
+std::function<bool(VertexId, SplitContext&)> held_in(const VertexHierarchy& h, const PositionGrid& grid);
 
 // The split a decoded record describes, for VertexHierarchy::add_split.
 SplitRecord split_record_of(VertexId vs, const SplitPayload& payload, const PositionGrid& grid);

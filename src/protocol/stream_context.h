@@ -1,8 +1,12 @@
 // What decoding a session's vsplit packets needs to know about its model, derived by both ends from BASE.
 #pragma once
 #include <cstdint>
+#include <functional>
+#include <memory>
 
 #include "pm/hierarchy.h"
+#include "pm/split_codec.h"
+#include "pm/vertex_id.h"
 #include "protocol/position_grid.h"
 
 namespace pms::protocol {
@@ -19,6 +23,13 @@ struct StreamContext {
   // Packets carry info_t and info_u. Not in a view-independent session (kim-lee-kobbelt §8, Fig. 9): its
   // client applies splits in PM order and never evaluates qrefine. Both ends set it from the OPEN's mode.
   bool has_refinement = true;
+  // Packets are v_s's id and its compact split record (docs/protocol.md, "VSPLITS", "CODEC"): set by both
+  // ends of a sender-driven session of a model without normals and colors, from the CODEC after BASE
+  // (carries_split_records). `held` gives what the receiver holds about a vertex (SplitContext, as
+  // protocol/split_bands.h's held_split_context reads it), false for one it does not hold; vertices a
+  // batch makes are known from the batch itself.
+  std::shared_ptr<const SplitCodec> records;
+  std::function<bool(VertexId, SplitContext&)> held;
 };
 
 }  // namespace pms::protocol

@@ -7,8 +7,14 @@
 // has refinement info: not in a view-independent session). The whole batch is one bit stream padded once at the end: packets are not
 // byte-aligned (docs/protocol.md has the measurements that chose this). DAG_OPS (StreamMode::dag) is the same
 // packets after a list of collapse ids in the same id code.
+// In a session with split records (StreamContext::records, issue 19) a packet is v_s's id and then the
+// compact split record (pm/split_codec.h) coded against what the receiver holds about v_s.
+#include <algorithm>
 #include <bit>
 #include <cmath>
+#include <functional>
+#include <unordered_map>
+#include <utility>
 
 #include "pm/refine_info.h"
 #include "pm/split_record.h"
@@ -17,6 +23,7 @@
 #include "protocol/packet_bits.h"
 #include "protocol/position_grid.h"
 #include "protocol/server_messages.h"
+#include "protocol/split_bands.h"
 #include "protocol/stream_context.h"
 #include "protocol/wire_internal.h"
 
@@ -35,9 +42,12 @@ uint32_t refinement_bits(const SplitRecord& s, const StreamContext& c) {
 // Smallest packet: depth-0 ids, one cut vertex. Bounds a batch's count by its bytes before allocating.
 uint64_t min_packet_bits(const StreamContext& c) {
   const uint64_t id = c.tree_id_bits + depth_field_bits(c.node_id_bits);
+  if (c.records) return id;  // a record can be 0 bits under degenerate tables
   return 2 * id + kCutFlagBits + 3 * uint64_t(c.grid.bits) + (c.has_refinement ? 2 * kMinRefineBits : 0) +
          attribute_bits(c);
 }
+
+}  // namespace
 
 void write_id(Writer& w, VertexId v, const StreamContext& c, const char* field) {
   if (!is_vertex(v) || v.tree >= c.root_count || uint32_t(v.depth()) > c.node_id_bits)
@@ -47,6 +57,8 @@ void write_id(Writer& w, VertexId v, const StreamContext& c, const char* field) 
   w.bits(uint64_t(depth), depth_field_bits(c.node_id_bits));
   w.bits(v.node, unsigned(depth));  // the low `depth` bits: the leading 1 is implied
 }
+
+namespace {
 
 VertexId read_id(Reader& r, const StreamContext& c, const char* field) {
   VertexId v;
@@ -62,10 +74,108 @@ VertexId read_id(Reader& r, const StreamContext& c, const char* field) {
   return v;
 }
 
-void read_packet(Reader& r, const StreamContext& c, SplitRecord& s) {
-  s.vs = read_id(r, c, "v_s");
+VertexId read_vs(Reader& r, const StreamContext& c) {
+  const VertexId vs = read_id(r, c, "v_s");
+  if (uint32_t(vs.depth()) >= c.node_id_bits)
+    r.fail(ErrorCode::bad_id, "v_s", to_string(vs) + " is at the deepest level: it has no children to split into");
+  return vs;
+}
+
+// What the receiver holds about each v_s of a batch of record-coded packets: StreamContext::held for what
+// it held before the batch, the batch's own splits for their children (a node's split comes before its
+// children's). A node split twice in one batch is refused here: the receiver would refuse the second
+// split anyway, and a hostile batch cannot repeat one cheap packet.
+class BatchContexts {
+ public:
+  BatchContexts(const StreamContext& c, size_t packets) : c_(c) { made_.reserve(2 * std::min<size_t>(packets, 4096)); }
+
+  // Empty when v_s has a context (then in `out`); else why it has none.
+  std::string find(VertexId vs, SplitContext& out) const {
+    const Key key{vs.tree, vs.node};
+    if (const auto it = made_.find(key); it != made_.end()) {
+      if (it->second.split) return to_string(vs) + " is split a second time in this batch";
+      out = it->second.context;
+      return "";
+    }
+    if (c_.held && c_.held(vs, out) && out.vs == vs) return "";
+    return to_string(vs) + " is not a vertex the receiver holds";
+  }
+
+  // v_s is split: its children are held from now on (v_u keeps v_s's position: half-edge collapse).
+  void split(const SplitContext& s, const SplitPayload& p) {
+    made_[Key{s.vs.tree, s.vs.node}].split = true;  // its context is not needed again
+    SplitContext t, u;
+    t.vs = s.vs.child(0);
+    u.vs = s.vs.child(1);
+    std::copy_n(p.position_t, 3, t.position_s);
+    std::copy_n(s.position_s, 3, u.position_s);
+    t.info_s = p.info_t;
+    u.info_s = p.info_u;
+    t.ancestor_cuts[0] = u.ancestor_cuts[0] = p.cut_l;
+    t.ancestor_cuts[1] = u.ancestor_cuts[1] = p.cut_r;
+    std::copy_n(s.ancestor_cuts.begin(), s.ancestor_cuts.size() - 2, t.ancestor_cuts.begin() + 2);
+    std::copy_n(s.ancestor_cuts.begin(), s.ancestor_cuts.size() - 2, u.ancestor_cuts.begin() + 2);
+    made_[Key{t.vs.tree, t.vs.node}] = {t, false};
+    made_[Key{u.vs.tree, u.vs.node}] = {u, false};
+  }
+
+ private:
+  using Key = std::pair<uint32_t, uint64_t>;
+  struct KeyHash {
+    size_t operator()(const Key& k) const { return std::hash<uint64_t>()(k.second * 0x9E3779B97F4A7C15ull ^ k.first); }
+  };
+  struct Made {
+    SplitContext context;
+    bool split = false;
+  };
+  const StreamContext& c_;
+  std::unordered_map<Key, Made, KeyHash> made_;
+};
+
+// v_s's id, then its record (docs/protocol.md, "VSPLITS"): every check of SplitCodec::decode applies.
+void read_record_packet(Reader& r, const StreamContext& c, BatchContexts& batch, SplitRecord& s) {
+  s.vs = read_vs(r, c);
+  SplitContext context;
+  if (const std::string why = batch.find(s.vs, context); !why.empty()) r.fail(ErrorCode::bad_id, "v_s", why);
+  BitReader bits(r.payload(), r.position(), 8 * uint64_t(r.payload().size()), "record");
+  SplitPayload payload;
+  try {
+    payload = c.records->decode(context, bits);
+  } catch (const ProtocolError&) {
+    throw;
+  } catch (const Error& e) {
+    r.fail(ErrorCode::bad_message, "record", e.what());
+  }
+  r.seek(bits.position());
+  s = split_record_of(s.vs, payload, c.grid);
+  for (float v : s.position_t)
+    if (!std::isfinite(v)) r.fail(ErrorCode::bad_message, "position", "is not finite");
+  batch.split(context, payload);
+}
+
+void write_record_packet(Writer& w, const SplitRecord& s, const StreamContext& c, BatchContexts& batch) {
+  if (s.has_normal || s.has_color)
+    fail("VSPLITS", "split of " + to_string(s.vs) + ": split records carry no normal or color");
   if (uint32_t(s.vs.depth()) >= c.node_id_bits)
-    r.fail(ErrorCode::bad_id, "v_s", to_string(s.vs) + " is at the deepest level: it has no children to split into");
+    fail("VSPLITS", "split of " + to_string(s.vs) + ": its children would be deeper than node_id_bits");
+  SplitContext context;
+  if (const std::string why = batch.find(s.vs, context); !why.empty()) fail("VSPLITS", "split of " + why);
+  SplitPayload payload;
+  payload.cut_l = s.cut_l;
+  payload.cut_r = s.cut_r;
+  quantize_position(c.grid, s.position_t, payload.position_t);
+  payload.info_t = as_sent(s.info_t);
+  payload.info_u = as_sent(s.info_u);
+  BitWriter record;
+  c.records->encode(context, payload, record);
+  write_id(w, s.vs, c, "v_s");
+  const std::vector<uint8_t>& bytes = record.bytes();
+  for (uint64_t i = 0; i < record.size(); i += 8) w.bits(bytes[i / 8], unsigned(std::min<uint64_t>(8, record.size() - i)));
+  batch.split(context, payload);
+}
+
+void read_packet(Reader& r, const StreamContext& c, SplitRecord& s) {
+  s.vs = read_vs(r, c);
   const unsigned cuts = unsigned(r.bits(kCutFlagBits, "cut flags"));
   if (cuts == 0) r.fail(ErrorCode::bad_message, "cut flags", "neither v_l nor v_r is present");
   if (cuts & kCutLeft) s.cut_l = read_id(r, c, "v_l");
@@ -99,6 +209,7 @@ void read_packet(Reader& r, const StreamContext& c, SplitRecord& s) {
 }  // namespace
 
 void write_packet(Writer& w, const SplitRecord& s, const StreamContext& c) {
+  if (c.records) fail("VSPLITS", "split records are coded per batch (encode(VSplits))");
   if (s.has_normal != c.has_normals || s.has_color != c.has_colors)
     fail("VSPLITS", "split of " + to_string(s.vs) + ": normal/color presence differs from the model's");
   if (uint32_t(s.vs.depth()) >= c.node_id_bits)
@@ -158,7 +269,12 @@ std::vector<uint8_t> encode(const VSplits& m, const StreamContext& c) {
   Writer w(MessageType::vsplits);
   w.reserve_payload(9 + m.splits.size() * min_packet_bits(c) / 8);
   write_vsplits_header(w, m.frame, m.final, m.splits.size());
-  for (const SplitRecord& s : m.splits) write_packet(w, s, c);
+  if (c.records) {
+    BatchContexts batch(c, m.splits.size());
+    for (const SplitRecord& s : m.splits) write_record_packet(w, s, c, batch);
+  } else {
+    for (const SplitRecord& s : m.splits) write_packet(w, s, c);
+  }
   return w.finish();
 }
 
@@ -168,10 +284,21 @@ namespace {
 std::vector<SplitRecord> read_packets(Reader& r, const StreamContext& c) {
   const uint32_t count = r.u32("packet count");
   r.check_count(count, min_packet_bits(c), "packet count");
-  std::vector<SplitRecord> splits(count);
-  for (uint32_t i = 0; i < count; ++i) {
-    r.set_item("packet", i);
-    read_packet(r, c, splits[i]);
+  std::vector<SplitRecord> splits;
+  if (c.records) {
+    // A record has no smallest size: the vector grows with the packets that decode, not with the count.
+    splits.reserve(std::min<uint32_t>(count, 4096));
+    BatchContexts batch(c, count);
+    for (uint32_t i = 0; i < count; ++i) {
+      r.set_item("packet", i);
+      read_record_packet(r, c, batch, splits.emplace_back());
+    }
+  } else {
+    splits.resize(count);
+    for (uint32_t i = 0; i < count; ++i) {
+      r.set_item("packet", i);
+      read_packet(r, c, splits[i]);
+    }
   }
   r.clear_item();
   return splits;
@@ -199,6 +326,7 @@ VSplits decode_vsplits(std::span<const uint8_t> payload, const StreamContext& c)
 
 std::vector<uint8_t> encode(const DagOps& m, const StreamContext& c) {
   if (const std::string why = check_context(c); !why.empty()) fail("DAG_OPS", "stream context: " + why);
+  if (c.records) fail("DAG_OPS", "stream context: DAG_OPS packets are not split records");
   if (m.collapses.size() > UINT32_MAX || m.splits.size() > UINT32_MAX) fail("DAG_OPS", "too many operations");
   Writer w(MessageType::dag_ops);
   w.reserve_payload(13 + m.splits.size() * min_packet_bits(c) / 8 + m.collapses.size() * 4);
@@ -214,6 +342,7 @@ std::vector<uint8_t> encode(const DagOps& m, const StreamContext& c) {
 DagOps decode_dag_ops(std::span<const uint8_t> payload, const StreamContext& c) {
   Reader r(payload, MessageType::dag_ops);
   if (const std::string why = check_context(c); !why.empty()) r.fail(ErrorCode::internal, "stream context", why);
+  if (c.records) r.fail(ErrorCode::internal, "stream context", "DAG_OPS packets are not split records");
   DagOps m;
   m.frame = r.u32("frame");
   m.final = read_final_flag(r);

@@ -180,6 +180,16 @@ std::string check_context(const StreamContext& c) {
   for (int i = 0; i < 3; ++i)
     if (!std::isfinite(c.grid.min[i]) || !std::isfinite(c.grid.max[i]) || !(c.grid.min[i] <= c.grid.max[i]))
       return "bounding box is not finite or min > max";
+  if (c.records) {
+    if (!c.has_refinement || c.has_normals || c.has_colors)
+      return "split records carry refinement info and neither normals nor colors";
+    if (c.records->root_count() != c.root_count || c.records->max_depth() != c.node_id_bits ||
+        c.records->position_bits() != c.grid.bits)
+      return "the split record tables are for " + std::to_string(c.records->root_count()) + " roots, depth " +
+             std::to_string(c.records->max_depth()) + ", " + std::to_string(c.records->position_bits()) +
+             " position bits; the model has " + std::to_string(c.root_count) + ", " + std::to_string(c.node_id_bits) +
+             ", " + std::to_string(c.grid.bits);
+  }
   return "";
 }
 

@@ -3,6 +3,7 @@
 // little-endian bytes, so byte-aligned fields (lengths, floats, strings) and packed fields (ids,
 // quantized coordinates) use the same two classes and the docs can describe both as "u32", "6 bits".
 #pragma once
+#include <algorithm>
 #include <cstdint>
 #include <span>
 #include <string>
@@ -76,6 +77,9 @@ class Reader {
   std::string string(size_t max, const char* field);
   uint64_t bits_left() const { return 8 * uint64_t(data_.size()) - pos_; }
   uint64_t position() const { return pos_; }  // in bits
+  std::span<const uint8_t> payload() const { return data_; }
+  // Moves on to bit `pos`, which another reader over payload() reached (at most the payload's end).
+  void seek(uint64_t pos) { pos_ = std::min<uint64_t>(pos, 8 * uint64_t(data_.size())); }
   // `count` items of at least `min_bits` each must fit in what is left: checked before any allocation.
   void check_count(uint64_t count, uint64_t min_bits, const char* field);
   // Padding bits up to the byte boundary must be zero and nothing may follow: one encoding per message.
@@ -108,8 +112,11 @@ RefineInfo read_refine(Reader& r, const char* field);
 // VSPLITS: frame, flags, count, then the packets (docs/protocol.md).
 constexpr uint8_t kFlagFinal = 1;
 void write_vsplits_header(Writer& w, uint32_t frame, bool final, size_t count);
-// One vsplit packet; throws pms::Error for values the context cannot carry.
+// One vsplit packet; throws pms::Error for values the context cannot carry. Not for a context with split
+// records (those need the batch's contexts: encode(VSplits)).
 void write_packet(Writer& w, const SplitRecord& s, const StreamContext& c);
+// A node's id as packets write it (tree-id, depth, path).
+void write_id(Writer& w, VertexId v, const StreamContext& c, const char* field);
 
 // Unit normals as octahedral 2 x 16-bit snorm (Meyer et al. 2010): 32 bits instead of 96, ~1e-4 rad.
 void encode_normal(const float n[3], uint16_t q[2]);

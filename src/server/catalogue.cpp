@@ -84,6 +84,9 @@ void attach_records(ServedModel& model, const protocol::Base& base) {
     model.codec_tables = std::make_shared<const std::vector<uint8_t>>(w.bytes());
   }
   model.records_format = 2;
+  BitReader tables(*model.codec_tables, "split tables");
+  model.codec = std::make_shared<const SplitCodec>(SplitCodec::deserialize(tables));
+  model.codec_frame = std::make_shared<const std::vector<uint8_t>>(protocol::encode(protocol::Codec{*model.codec_tables, {}}));
 }
 
 std::unique_ptr<ServedModel> open_model(const std::string& path, uint32_t position_bits) {
@@ -101,10 +104,17 @@ std::unique_ptr<ServedModel> open_model(const std::string& path, uint32_t positi
   for (uint32_t i = 0; i < data.split_order.size(); ++i) model->split_rank[data.split_order[i]] = i;
   model->dependencies = DependencyFilter(data);
   model->dag = std::make_unique<const Dag>(data, snapped_positions(data, model->context.grid));
+  attach_records(*model, base);
+  // The sender-driven packets: v_s's id and its stored record when the model has records (format 2),
+  // today's packets otherwise (docs/protocol.md, "VSPLITS").
   protocol::StreamContext sender = model->context;
   sender.has_refinement = true;
-  model->packets = protocol::PacketTable(data, sender);
-  attach_records(*model, base);
+  if (model->codec) {
+    sender.records = model->codec;
+    model->packets = protocol::PacketTable(data, sender, model->records);
+  } else {
+    model->packets = protocol::PacketTable(data, sender);
+  }
   return model;
 }
 

@@ -33,7 +33,9 @@ struct ServedModel {
   std::vector<NodeCriteria> criteria;  // per node
   std::vector<uint32_t> split_rank;    // per node: its index in split_order (view-independent mode); leaves kNone
   DependencyFilter dependencies;
-  protocol::PacketTable packets;  // sender-driven packets (with refinement info)
+  // Sender-driven packets (with refinement info): v_s's id and its split record for a model in records
+  // format 2, whose sessions get `codec_frame` after BASE; today's full packets otherwise (format 1).
+  protocol::PacketTable packets;
   std::unique_ptr<const Dag> dag;  // the DAG mode's operations, on the wire grid's positions
   // The receiver-driven answers' body format (server/split_records_body.h): 2, the compact records, which
   // carry no normals or colors; 1, VSPLITS packets, for a model that has either.
@@ -41,6 +43,8 @@ struct ServedModel {
   protocol::StoredRecords records;     // format 2: the file's own at the served grid, or `own_records`
   EncodedRecords own_records;          // coded at load when the file's records are at another grid
   std::shared_ptr<const std::vector<uint8_t>> codec_tables;  // format 2: serialized (GET /models/{m}/codec)
+  std::shared_ptr<const SplitCodec> codec;                   // format 2: the tables
+  std::shared_ptr<const std::vector<uint8_t>> codec_frame;   // format 2: CODEC, the tables for a sender-driven session
   const ModelData& model() const { return file->model(); }
 };
 

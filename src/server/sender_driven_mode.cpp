@@ -42,7 +42,7 @@ SenderDrivenMode::SenderDrivenMode(const protocol::OpenHeader& open, protocol::F
   const uint32_t roots = context_.served.model().root_count;
   if (!open.resume) {
     tags_ = ActiveTags(roots);
-    context_.outbox.push_back(context_.served.base_frame);
+    queue_base();
     return;
   }
   if (open.resume_trees != roots)
@@ -96,7 +96,14 @@ void SenderDrivenMode::pump_resume(uint64_t& work) {
   }
   tags_ = std::move(r.tags);
   resume_.reset();
+  queue_base();
+}
+
+// BASE, and CODEC when the session's packets are split records (protocol::carries_split_records): the
+// sender-driven mode of a model in records format 2, not its plain option.
+void SenderDrivenMode::queue_base() {
   context_.outbox.push_back(context_.served.base_frame);
+  if (!plain_ && context_.served.codec_frame) context_.outbox.push_back(context_.served.codec_frame);
 }
 
 // A VIEW's answer: splits accumulate across slices into batches of batch_splits. Splits of an earlier

@@ -37,6 +37,7 @@ class SenderDrivenMode : public SessionMode {
 
  private:
   struct Resume;  // an OPEN's resume front, checked and applied a slice at a time
+  void queue_base();
   void pump_resume(uint64_t& work);
   void pump_answer(uint64_t& work);
   void emit_batch(size_t count, bool final);

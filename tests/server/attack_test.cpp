@@ -83,8 +83,10 @@ std::unique_ptr<Peer> opened_peer(uint16_t port, int receive_buffer = 0, bool re
   if (read_answers) {
     const auto hello_ok = peer->receive(after(milliseconds(3000)));
     const auto base = peer->receive(after(milliseconds(3000)));
+    const auto codec = peer->receive(after(milliseconds(3000)));  // the terrain's packets are split records
     EXPECT_TRUE(hello_ok && hello_ok->type == protocol::MessageType::hello_ok);
     EXPECT_TRUE(base && base->type == protocol::MessageType::base);
+    EXPECT_TRUE(codec && codec->type == protocol::MessageType::codec);
   }
   return peer;
 }
@@ -420,6 +422,8 @@ void flood_views(uint16_t port, int index) {
   uint32_t last_batch = 0, last_final = 0, finals = 0;
   auto on_frame = [&](const protocol::Frame& frame) {
     if (frame.type == protocol::MessageType::base) session.on_base(protocol::decode_base(frame.payload));
+    if (frame.type == protocol::MessageType::codec)
+      session.on_codec(protocol::decode_codec(frame.payload, session.context()));
     if (frame.type != protocol::MessageType::vsplits) return;
     const protocol::VSplits batch = protocol::decode_vsplits(frame.payload, session.context());
     EXPECT_GE(batch.frame, last_batch) << "a batch for a VIEW older than one already answered";

@@ -6,6 +6,7 @@
 #include <set>
 
 #include "builder/build.h"
+#include "client/client_session.h"
 #include "io/shapes.h"
 #include "pm/hierarchy.h"
 #include "pm/pms_file.h"
@@ -66,6 +67,7 @@ Camera close_camera(const Hierarchy& h) {
 // What a client reads: every frame of the outbox, decoded, with the splits of each VSPLITS.
 struct Reader {
   std::optional<protocol::StreamContext> context;
+  client::ClientSession client;
   std::vector<protocol::ErrorCode> errors;
   std::vector<protocol::VSplits> batches;
   bool base = false;
@@ -79,8 +81,14 @@ struct Reader {
       if (const auto* b = std::get_if<protocol::Base>(&m)) {
         context = protocol::stream_context(*b);
         context->has_refinement = !view_independent;
+        client.refinement_info = !view_independent;
+        client.on_base(*b);
         base = true;
+      } else if (const auto* c = std::get_if<protocol::Codec>(&m)) {
+        client.on_codec(*c);  // split records decode against the hierarchy they make
+        context = client.context();
       } else if (const auto* v = std::get_if<protocol::VSplits>(&m)) {
+        if (context->records) client.on_vsplits(*v);
         batches.push_back(*v);
       } else if (const auto* e = std::get_if<protocol::ErrorMessage>(&m)) {
         errors.push_back(e->code);

@@ -311,7 +311,7 @@ std::vector<VertexId> raw_answer(uint16_t port, const Camera& camera, float tole
                         protocol::encode(protocol::View{camera, tolerance, 1})})
     asio::write(socket, asio::buffer(m));
   protocol::FrameReader reader;
-  std::optional<protocol::StreamContext> context;
+  client::ClientSession session;  // decodes split records against the hierarchy they make
   std::vector<VertexId> ids;
   std::vector<uint8_t> buffer(chunk);
   for (;;) {
@@ -320,9 +320,12 @@ std::vector<VertexId> raw_answer(uint16_t port, const Camera& camera, float tole
     reader.feed(buffer.data(), n);
     protocol::Frame frame;
     while (reader.next(frame)) {
-      if (frame.type == protocol::MessageType::base) context = protocol::stream_context(protocol::decode_base(frame.payload));
+      if (frame.type == protocol::MessageType::base) session.on_base(protocol::decode_base(frame.payload));
+      if (frame.type == protocol::MessageType::codec)
+        session.on_codec(protocol::decode_codec(frame.payload, session.context()));
       if (frame.type != protocol::MessageType::vsplits) continue;
-      const protocol::VSplits batch = protocol::decode_vsplits(frame.payload, *context);
+      const protocol::VSplits batch = protocol::decode_vsplits(frame.payload, session.context());
+      session.on_vsplits(batch);
       for (const SplitRecord& split : batch.splits) ids.push_back(split.vs);
       if (batch.final) return ids;
     }

@@ -22,7 +22,9 @@
 #include "apps/resource_usage.h"
 #include "client/streaming_client.h"
 #include "common/error.h"
+#include "common/bit_stream.h"
 #include "pm/hierarchy.h"
+#include "pm/split_codec.h"
 #include "pm/split_record.h"
 #include "protocol/client_messages.h"
 #include "protocol/packet_bits.h"
@@ -63,12 +65,26 @@ E2 packet_bits_of(const BenchModel& m) {
   const ModelData& model = m.served->model();
   E2 e;
   uint64_t n = 0;
+  // A model in records format 2 streams v_s's id and its split record (docs/protocol.md, "VSPLITS"):
+  // topology = the id and the record's cut vertices, position = its geometry.
+  const SplitCodec* codec = m.served->codec.get();
+  const std::vector<uint32_t> q = codec ? grid_positions(model, m.served->context.grid.bits) : std::vector<uint32_t>{};
   for (uint32_t node : model.split_order) {
-    const protocol::PacketBits b = protocol::packet_bits(split_record(model, node), m.served->context);
-    e.topology += b.topology;
-    e.position += b.position;
-    e.refinement += b.refinement;
-    e.total += b.total();
+    if (codec) {
+      BitWriter w;
+      RecordBits b;
+      codec->encode(split_context(model, q, node), split_payload(model, q, node), w, &b);
+      e.topology += protocol::id_bits(model.id(node), m.served->context) + b.topology;
+      e.position += b.geometry;
+      e.refinement += b.refinement;
+      e.total += protocol::id_bits(model.id(node), m.served->context) + b.total();
+    } else {
+      const protocol::PacketBits b = protocol::packet_bits(split_record(model, node), m.served->context);
+      e.topology += b.topology;
+      e.position += b.position;
+      e.refinement += b.refinement;
+      e.total += b.total();
+    }
     ++n;
   }
   if (n) {
@@ -377,7 +393,10 @@ std::string e2_to_e5_sections(const Table& e2, const Table& e34, const Table& e5
   print("\nE3/E4: two laps of an orbit at τ = 1 px (Fig 6: tags ≈ 10 % of a stored front; Fig 7: lap 2 = 0)\n" + e34.markdown());
   print("\nE5: bytes to satisfy τ = 1 px from a close view (Fig 9)\n" + e5.markdown());
   std::string section = "### E2: bits per vsplit packet\n\n" + e2.markdown() +
-                        "\nTopology = ids of v_s, v̂_l, v̂_r and the cut flags, written with the model's tree/node id widths.\n\n";
+                        "\nTopology = v_s's id and the record's v̂_l, v̂_r (split records, docs/protocol.md \"VSPLITS\"; a model "
+                        "with normals or colors: ids of v_s, v̂_l, v̂_r and the cut flags, written with the model's tree/node id "
+                        "widths). Position = the record's geometry (there: 3 × 16 bits). Whole split order; the wire column "
+                        "is E3's first lap, frame headers included.\n\n";
   section += "### E3/E4: two laps of one orbit path, τ = 1 px\n\n" + e34.markdown() +
              "\nA stored front costs " + fixed(kFrontEntryBytes, 0) + " bytes per active node (one 64-bit id). The tags cost "
              "a bit per node of the window, which spans from the coarsest active node to the finest, so tags / front "
