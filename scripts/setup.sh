@@ -46,10 +46,10 @@ configure_and_build() {  # dir, extra cmake args...
   cmake --build "$dir" -j "$jobs"
 }
 
-# Every libFuzzer target in $1 for PMSTREAM_FUZZ_SECONDS (20) each, $jobs at a time (each is single-threaded);
+# Every libFuzzer target in $1 for PMSTREAM_FUZZ_SECONDS (10) each, $jobs at a time (each is single-threaded);
 # fails if one finds a crash, and prints each one's final stats.
 run_fuzzers() {
-  local seconds=${PMSTREAM_FUZZ_SECONDS:-20} logs failed=0
+  local seconds=${PMSTREAM_FUZZ_SECONDS:-10} logs failed=0
   logs=$(mktemp -d)
   for target in "$1"/fuzz_*; do
     if [[ -f "$target" && -x "$target" && "$target" != *.* ]]; then echo "$target"; fi

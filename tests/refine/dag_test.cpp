@@ -222,15 +222,17 @@ void expect_random_operations_legal(const BuiltModel& model, int steps, uint32_t
   std::mt19937 rng(seed);
   for (int step = 0; step < steps; ++step) {
     const bool split = std::uniform_int_distribution<int>(0, 99)(rng) < (step < steps / 2 ? 75 : 35);
-    std::vector<uint32_t> front;
-    if (split) {
-      for (uint32_t n = cut.next_candidate(0); n != kNone; n = cut.next_candidate(n + 1))
-        if (cut.in_fs(n)) front.push_back(n);
-    } else {
-      for (uint32_t n = cut.next_fc(0); n != kNone; n = cut.next_fc(n + 1)) front.push_back(n);
-    }
-    if (front.empty()) continue;
-    const uint32_t n = front[std::uniform_int_distribution<size_t>(0, front.size() - 1)(rng)];
+    // The first front node at or after a random node (wrapping): not uniform over the front, but any front
+    // node can come, and it costs a scan to the next one rather than a list of the whole front per step.
+    const auto in_front = [&](uint32_t n) { return split ? cut.in_fs(n) : cut.in_fc(n); };
+    const auto next = [&](uint32_t from) { return split ? cut.next_candidate(from) : cut.next_fc(from); };
+    const uint32_t start = std::uniform_int_distribution<uint32_t>(0, dag.size() - 1)(rng);
+    uint32_t n = kNone;
+    for (uint32_t m = next(start); m != kNone && n == kNone; m = next(m + 1))
+      if (in_front(m)) n = m;
+    for (uint32_t m = next(0); m != kNone && m < start && n == kNone; m = next(m + 1))
+      if (in_front(m)) n = m;
+    if (n == kNone) continue;
     if (split) cut.split(n);
     else cut.collapse(n);
     mirror.apply({n, split});
