@@ -11,6 +11,7 @@
 #include "apps/commands.h"
 #include "apps/resource_usage.h"
 #include "common/error.h"
+#include "protocol/message_types.h"
 #include "server/catalogue.h"
 #include "server/http_server.h"
 #include "server/limits.h"
@@ -234,7 +235,7 @@ void add_serve_command(CliCommand& app) {
   cmd.option("--send-queue-bytes", limits.send_queue_bytes,
              "Answer bytes queued per session before it waits for the peer to read")
       .show_default();
-  cmd.option("--batch", limits.batch_splits, "vsplit packets per VSPLITS message").range(1u, 1u << 16).show_default();
+  cmd.option("--batch", limits.batch_splits, "vsplit packets per VSPLITS message").range(1u, protocol::kMaxPacketsPerMessage).show_default();
   add_limit(cmd, "--position-bits", limits.position_bits, "Bits per coordinate on the wire (1-24, or 32)");
   cmd.on_run([args, http_port] {
     args->http_port_given = http_port.given();

@@ -20,6 +20,9 @@ constexpr size_t kFrameHeaderBytes = 5;                 // u32 payload length + 
 constexpr uint32_t kDefaultMaxMessage = 16u << 20;      // payload bytes a reader accepts by default
 constexpr size_t kMaxNameBytes = 1024;                  // model, client and server names
 constexpr uint64_t kDefaultMaxResumeLeaves = 1u << 22;  // OPEN: leaves a resume front may list
+// VSPLITS and DAG_OPS: packets in one message (a server batches at most `serve --batch`, <= this). What bounds a
+// client's memory per message when split records can be as short as their ids (docs/protocol.md, "Limits").
+constexpr uint32_t kMaxPacketsPerMessage = 1u << 16;
 using pms::kDefaultPositionBits;
 
 // Client -> server types have the high bit clear, server -> client set.

@@ -265,7 +265,7 @@ PacketBits packet_bits(const SplitRecord& s, const StreamContext& c) {
 
 std::vector<uint8_t> encode(const VSplits& m, const StreamContext& c) {
   if (const std::string why = check_context(c); !why.empty()) fail("VSPLITS", "stream context: " + why);
-  if (m.splits.size() > UINT32_MAX) fail("VSPLITS", "too many packets in one batch");
+  if (m.splits.size() > kMaxPacketsPerMessage) fail("VSPLITS", "too many packets in one batch");
   Writer w(MessageType::vsplits);
   w.reserve_payload(9 + m.splits.size() * min_packet_bits(c) / 8);
   write_vsplits_header(w, m.frame, m.final, m.splits.size());
@@ -284,6 +284,8 @@ namespace {
 std::vector<SplitRecord> read_packets(Reader& r, const StreamContext& c) {
   const uint32_t count = r.u32("packet count");
   r.check_count(count, min_packet_bits(c), "packet count");
+  if (count > kMaxPacketsPerMessage)
+    r.fail(ErrorCode::too_large, "packet count", std::to_string(count) + " > " + std::to_string(kMaxPacketsPerMessage));
   std::vector<SplitRecord> splits;
   if (c.records) {
     // A record has no smallest size: the vector grows with the packets that decode, not with the count.
@@ -327,7 +329,7 @@ VSplits decode_vsplits(std::span<const uint8_t> payload, const StreamContext& c)
 std::vector<uint8_t> encode(const DagOps& m, const StreamContext& c) {
   if (const std::string why = check_context(c); !why.empty()) fail("DAG_OPS", "stream context: " + why);
   if (c.records) fail("DAG_OPS", "stream context: DAG_OPS packets are not split records");
-  if (m.collapses.size() > UINT32_MAX || m.splits.size() > UINT32_MAX) fail("DAG_OPS", "too many operations");
+  if (m.collapses.size() > UINT32_MAX || m.splits.size() > kMaxPacketsPerMessage) fail("DAG_OPS", "too many operations");
   Writer w(MessageType::dag_ops);
   w.reserve_payload(13 + m.splits.size() * min_packet_bits(c) / 8 + m.collapses.size() * 4);
   w.u32(m.frame);

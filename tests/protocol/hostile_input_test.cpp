@@ -344,6 +344,13 @@ TEST(HostileInput, VSplitsIds) {
   p.count = 0x7FFFFFFF;
   expect_rejected([&] { decode_vsplits(vsplits_payload(p, c), c); }, ErrorCode::bad_message,
                   "packet count: count 2147483647 does not fit");
+  // More packets than a server may batch, with the bytes to hold them: refused before any is decoded (split
+  // records can be as short as their ids, so the count, not the payload, bounds a client's memory).
+  p = {};
+  p.count = kMaxPacketsPerMessage + 1;
+  p.trailing_zero_bytes = (kMaxPacketsPerMessage + 1) * 16;
+  expect_rejected([&] { decode_vsplits(vsplits_payload(p, c), c); }, ErrorCode::too_large,
+                  "packet count: 65537 > 65536");
   StreamContext raw = c;
   raw.grid.bits = 32;
   expect_rejected([&] { decode_vsplits(vsplits_payload({}, raw), raw); }, ErrorCode::bad_message,
