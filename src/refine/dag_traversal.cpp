@@ -33,7 +33,8 @@ DagTraverser::Scratch& DagTraverser::scratch() {
 
 size_t DagTraverser::thread_scratch_bytes() {
   const Scratch& s = scratch();
-  return (s.collapse_heap.capacity() + s.split_heap.capacity()) * sizeof(Ranked) + s.stack.capacity() * sizeof(uint64_t) +
+  return (s.collapse_heap.capacity() + s.split_heap.capacity() + s.due.capacity()) * sizeof(Ranked) +
+         s.stack.capacity() * sizeof(uint64_t) +
          s.hot.capacity() * sizeof(uint32_t);
 }
 
