@@ -61,6 +61,17 @@ inline float dot3(const float a[3], const float b[3]) { return a[0] * b[0] + a[1
   return node.delta2 * (d2 - along * along) > bound * d2;
 }
 
+// The screen error over the threshold, squared (>= 1 where screen_error_exceeds_inline holds, up to rounding):
+// how near a node is to needing a split. Grows as the square of 1 / the eye distance.
+[[gnu::always_inline]] inline float screen_ratio2_inline(const ViewCriteria& view, const NodeCriteria& node) {
+  float d[3];
+  for (int k = 0; k < 3; ++k) d[k] = node.p[k] - view.eye[k];
+  const float d2 = std::max(dot3(d, d), 1e-30f);
+  const float along = dot3(d, node.axis);
+  const float bound = std::max(view.kappa2 * d2, 1e-30f);
+  return std::max(node.mu2, node.delta2 * (d2 - along * along) / d2) / bound;
+}
+
 [[gnu::always_inline]] inline bool qrefine_inline(const ViewCriteria& view, const NodeCriteria& node) {
   return screen_error_exceeds_inline(view, node) && !outside_frustum_inline(view, node) &&
          !back_facing_inline(view, node);

@@ -162,6 +162,16 @@ Dag::Dag(const ModelData& model, std::span<const float> positions) {
       if (--pending[c] == 0) ready.push_back(c);
   }
   if (ordered != n_nodes) fail(kWhere, "the split dependencies form a cycle");
+  if (!criteria_.empty()) {
+    float low[3], high[3];
+    for (int k = 0; k < 3; ++k) low[k] = high[k] = criteria_[0].p[k];
+    for (const NodeCriteria& c : criteria_)
+      for (int k = 0; k < 3; ++k) {
+        low[k] = std::min(low[k], c.p[k]);
+        high[k] = std::max(high[k], c.p[k]);
+      }
+    for (int k = 0; k < 3; ++k) centre_[k] = 0.5f * (low[k] + high[k]);
+  }
   stats_.nodes = n_nodes;
   stats_.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }

@@ -57,6 +57,9 @@ class Dag {
   uint64_t base_faces() const { return base_faces_; }
   std::span<const uint32_t> roots() const { return roots_; }  // nodes without a hierarchy parent
   const DagStats& stats() const { return stats_; }
+  // The centre of the nodes' bounding box: constant-time's reference point for how the eye's distance to
+  // the model changes between frames (DagCut::watch()).
+  const float* centre() const { return centre_; }
   size_t memory_bytes() const;
   // A number no other Dag built in this process has: a per-thread cache keyed by it and the address never
   // takes a Dag built where a freed one was for the old one (refine/dag_compact.h).
@@ -70,6 +73,7 @@ class Dag {
   std::vector<NodeCriteria> criteria_;
   uint64_t base_faces_ = 0;
   uint64_t serial_ = 0;
+  float centre_[3] = {0, 0, 0};
   DagStats stats_;
 };
 

@@ -2,6 +2,7 @@
 // dense cuts a turn decodes it into.
 #include "refine/dag_compact.h"
 
+#include <algorithm>
 #include <utility>
 
 #include "common/error.h"
@@ -58,6 +59,22 @@ CompactDagCut::CompactDagCut(const DagCut& cut, std::vector<uint32_t>* split) {
   split_count_ = cut.split_count();
   collapse_cursor_ = cut.collapse_cursor();
   split_cursor_ = cut.split_cursor();
+  size_t live = 0;
+  for (const DagCut::Watch& w : cut.watch()) live += cut.is_candidate(w.node());
+  watch_.reserve(live);
+  for (const DagCut::Watch& w : cut.watch())
+    if (cut.is_candidate(w.node())) watch_.push_back(w);
+}
+
+// The watch list into a loaded cut: one entry per node, each a split candidate of it.
+static void load_watch(DagCut& cut, const std::vector<DagCut::Watch>& watch) {
+  std::vector<DagCut::Watch>& into = cut.watch();
+  into.clear();
+  for (const DagCut::Watch& w : watch)
+    if (w.node() < cut.dag().size() && cut.is_candidate(w.node()) && !cut.watched(w.node())) {
+      cut.set_watched(w.node(), true);
+      into.push_back(w);
+    }
 }
 
 void CompactDagCut::split_nodes(const Dag& dag, std::vector<uint32_t>& out) const {
@@ -78,6 +95,7 @@ DagCut CompactDagCut::dense(const Dag& dag) const {
   DagCut cut(dag, split);
   cut.rewind_collapse(collapse_cursor_);
   cut.rewind_split(split_cursor_);
+  load_watch(cut, watch_);
   return cut;
 }
 
@@ -140,6 +158,7 @@ LoadedDagCut::LoadedDagCut(const Dag& dag, const CompactDagCut& compact) {
   }
   slot_->cut->rewind_collapse(compact.collapse_cursor_);
   slot_->cut->rewind_split(compact.split_cursor_);
+  load_watch(*slot_->cut, compact.watch_);
 }
 
 LoadedDagCut::LoadedDagCut(const Dag& dag, std::span<const uint32_t> split) {

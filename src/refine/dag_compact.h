@@ -34,7 +34,8 @@ class CompactDagCut {
   uint32_t split_count() const { return split_count_; }
   uint64_t triangles() const { return triangles_; }
   uint64_t code_bits() const { return bits_; }
-  size_t memory_bytes() const { return words_.capacity() * sizeof(uint64_t); }
+  const std::vector<DagCut::Watch>& watch() const { return watch_; }
+  size_t memory_bytes() const { return words_.capacity() * sizeof(uint64_t) + watch_.capacity() * sizeof(DagCut::Watch); }
 
  private:
   friend class LoadedDagCut;
@@ -43,6 +44,7 @@ class CompactDagCut {
   uint64_t triangles_ = 0;
   uint32_t split_count_ = 0;
   uint32_t collapse_cursor_ = 0, split_cursor_ = 0;
+  std::vector<DagCut::Watch> watch_;  // constant-time's watch list, DagCut::watch()
 };
 
 // This thread's dense cut of a DAG, loaned for one turn: loaded with a compact cut (or a split set, as a

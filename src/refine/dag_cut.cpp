@@ -148,6 +148,7 @@ void DagCut::reset() {
   candidate_count_ = 0;
   for (uint32_t r : dag_->roots()) set_candidate(r, true);
   marked_.clear();
+  watch_.clear();
   triangles_ = dag_->base_faces();
   split_count_ = fc_size_ = 0;
   fs_size_ = base_fs_;
@@ -270,7 +271,7 @@ bool DagCut::check(std::string* why) const {
 
 size_t DagCut::memory_bytes() const {
   return state_.capacity() + (fc_bits_.capacity() + candidate_bits_.capacity()) * 8 + wide_nodes_.capacity() * 4 +
-         wide_counters_.capacity() * 2 + 4 * marked_.capacity();
+         wide_counters_.capacity() * 2 + 4 * marked_.capacity() + watch_.capacity() * sizeof(Watch);
 }
 
 std::vector<VertexId> cut_front(const ModelData& model, const DagCut& cut) {

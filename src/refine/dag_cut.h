@@ -67,6 +67,23 @@ class DagCut {
   uint32_t collapse_cursor() const { return collapse_cursor_; }
   uint32_t split_cursor() const { return split_cursor_; }
 
+  // Constant-time's watch list (docs/internals.md, "The DAG of operations"; DagTraverser::consider_watch):
+  // split candidates an evaluation found not needing a split yet, each with a key saying when the view is
+  // predicted to make it need one, in no order. Kept between frames with the cursors (CompactDagCut), at
+  // most one entry per 160 DAG nodes; watched(n) says whether n has an entry (one at most). Only the
+  // constant-time traversal changes it; entries of nodes that are no candidates any more are dropped when
+  // the cut is stored.
+  struct Watch {
+    uint32_t code;  // node | kind << 29
+    float key;
+    uint32_t node() const { return code & 0x1FFFFFFF; }
+    uint32_t kind() const { return code >> 29; }
+  };
+  std::vector<Watch>& watch() { return watch_; }
+  const std::vector<Watch>& watch() const { return watch_; }
+  bool watched(uint32_t n) const { return (state_[n] & kWatched) != 0; }
+  void set_watched(uint32_t n, bool on) { state_[n] = uint8_t(on ? state_[n] | kWatched : state_[n] & ~kWatched); }
+
   // One bit per node for a traversal's marks (the priority traversal's justification); clear_marks
   // clears the marked ones.
   bool marked(uint32_t n) const { return (state_[n] & kMark) != 0; }
@@ -87,7 +104,7 @@ class DagCut {
 
  private:
   // The state byte: split, marked, 4-bit counter (kWide: the counter is in the side table).
-  static constexpr uint8_t kSplit = 0x80, kMark = 0x10, kCounter = 0x0F;
+  static constexpr uint8_t kSplit = 0x80, kWatched = 0x40, kMark = 0x10, kCounter = 0x0F;
   static constexpr uint8_t kWide = 0x0F;
   static_assert(kInlineLimit < kWide && Dag::kMaxChildren <= UINT16_MAX);
   static uint32_t next_bit(const std::vector<uint64_t>& bits, uint32_t from);
@@ -108,6 +125,7 @@ class DagCut {
   std::vector<uint32_t> wide_nodes_;     // ascending: the nodes whose counters are in the side table
   std::vector<uint16_t> wide_counters_;  // theirs
   std::vector<uint32_t> marked_;
+  std::vector<Watch> watch_;
   uint64_t triangles_ = 0;
   uint32_t split_count_ = 0, fc_size_ = 0, fs_size_ = 0, candidate_count_ = 0;
   uint32_t base_fs_ = 0;  // Fs of the base mesh: the nodes without a DAG parent (the roots)

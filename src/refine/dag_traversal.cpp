@@ -11,12 +11,20 @@
 #include "refine/dag_traversal.h"
 
 #include <algorithm>
+#include <cmath>
 #include <cstddef>
 
 #include "common/error.h"
 #include "refine/criteria_inline.h"
 
 namespace pms {
+namespace {
+// Constant-time's watch list: a candidate is worth watching from this closeness on (its screen error half
+// τ, or outside a plane by half the eye distance); the entries predicted to need a split take at most this
+// share of a phase's evaluations (the sweep keeps the rest); a cut watches at most one node in this many.
+constexpr float kWatchNear = 0.5f, kWatchShare = 0.5f;
+constexpr uint32_t kNodesPerWatch = 160;
+}  // namespace
 
 DagTraverser::Scratch& DagTraverser::scratch() {
   static thread_local Scratch s;
@@ -25,13 +33,128 @@ DagTraverser::Scratch& DagTraverser::scratch() {
 
 size_t DagTraverser::thread_scratch_bytes() {
   const Scratch& s = scratch();
-  return (s.collapse_heap.capacity() + s.split_heap.capacity()) * sizeof(Ranked) + s.stack.capacity() * sizeof(uint64_t) +
+  return (s.collapse_heap.capacity() + s.split_heap.capacity() + s.due.capacity()) * sizeof(Ranked) +
+         s.stack.capacity() * sizeof(uint64_t) +
          s.hot.capacity() * sizeof(uint32_t);
 }
 
 bool DagTraverser::qrefine(uint32_t n, DagFrameStats& stats) {
   ++stats.evaluated;
   return criteria_detail::qrefine_inline(view_, cut_->dag().criteria(n));
+}
+
+// Constant-time's watch list (DagCut::watch()). A candidate an evaluation found not needing a split is
+// watched when it is in view below the threshold (kind 0, key: the eye distance to the DAG's centre at
+// which its screen error is predicted to reach τ, the error growing as 1 / the distance), or above the
+// threshold but outside a frustum plane (kind 1 + the plane, key: the plane's value at the node's sphere
+// less its value at the DAG's centre; the planes move with the view, and the node is predicted inside that
+// plane once the plane's value at the centre reaches -key). Closeness: 1 when predicted to need its split
+// now, less the farther it is from that (in eye distances).
+float DagTraverser::closeness(const DagCut::Watch& w) const {
+  return w.key * inverse_distance_ + closeness_offset_[w.kind()];  // kind 0: 0; a plane's: 1 + its value at the centre
+}
+
+void DagTraverser::consider_watch(uint32_t n) {
+  DagCut& cut = *cut_;
+  if (cut.watched(n) || watch_limit_ == 0 || n >> 29) return;
+  const NodeCriteria& c = cut.dag().criteria(n);
+  if (criteria_detail::back_facing_inline(view_, c)) return;
+  const bool exceeds = criteria_detail::screen_error_exceeds_inline(view_, c);
+  float outside = 0;
+  int plane = -1;
+  for (int k = 0; k < 6; ++k) {
+    const float* pl = view_.planes[k];
+    const float value = criteria_detail::dot3(pl, c.p) + pl[3] + c.radius;
+    if (value < outside) outside = value, plane = k;
+  }
+  DagCut::Watch w;
+  if (plane < 0) {
+    if (exceeds) return;  // culled by the float slack alone
+    w = {n, std::sqrt(std::min(criteria_detail::screen_ratio2_inline(view_, c), 1.0f)) * eye_distance_};
+  } else {
+    if (!exceeds) return;
+    w = {n | uint32_t(plane + 1) << 29, outside - plane_at_centre_[plane]};
+  }
+  if (closeness(w) < watch_floor_) return;
+  cut.watch().push_back(w);
+  cut.set_watched(n, true);
+}
+
+// qrefine for constant-time's split phase (one ERROR-EVALUATE), watching the candidate when it does not.
+bool DagTraverser::qrefine_watch(uint32_t n, DagFrameStats& stats) {
+  ++stats.evaluated;
+  if (criteria_detail::qrefine_inline(view_, cut_->dag().criteria(n))) return true;
+  consider_watch(n);
+  return false;
+}
+
+// The entries predicted to need their split now, at most `share`, the closest popped first; and the floor
+// below which an entry is not worth its place (the closest three quarters of the limit stay above it).
+void DagTraverser::prepare_watch(uint32_t share) {
+  constexpr int kBuckets = 32;
+  uint32_t histogram[kBuckets] = {};
+  std::vector<Ranked>& due = scratch().due;
+  due.clear();
+  const std::vector<DagCut::Watch>& watch = cut_->watch();
+  const float scale = kBuckets / (1 - kWatchNear);
+  for (uint32_t i = 0; i < watch.size(); ++i) {
+    const float c = closeness(watch[i]);
+    if (c >= 1) due.push_back({c, i});
+    else ++histogram[std::clamp(int((c - kWatchNear) * scale), 0, kBuckets - 1)];
+  }
+  if (due.size() > share) {
+    std::nth_element(due.begin(), due.begin() + share, due.end(), [](const Ranked& a, const Ranked& b) { return a.key > b.key; });
+    due.resize(share);
+  }
+  std::sort(due.begin(), due.end(), [](const Ranked& a, const Ranked& b) { return a.key < b.key; });
+  const Dag& dag = cut_->dag();
+  for (const Ranked& r : due) __builtin_prefetch(&dag.criteria(watch[r.node].node()));  // scattered: fetch them together
+  watch_floor_ = kWatchNear;
+  uint32_t above = 0;
+  for (int b = kBuckets; b-- > 0;) {
+    above += histogram[b];
+    if (above > watch_limit_ * 3 / 4) {
+      watch_floor_ = kWatchNear + float(b + 1) / scale;
+      break;
+    }
+  }
+}
+
+uint32_t DagTraverser::pop_watch() {
+  std::vector<Ranked>& due = scratch().due;
+  std::vector<DagCut::Watch>& watch = cut_->watch();
+  while (!due.empty()) {
+    DagCut::Watch& w = watch[due.back().node];
+    due.pop_back();
+    const uint32_t n = w.node();
+    w.code = UINT32_MAX;  // taken: dropped by trim_watch
+    ++watch_taken_;
+    cut_->set_watched(n, false);
+    if (cut_->is_candidate(n)) return n;
+  }
+  return kNone;
+}
+
+// Drops the taken entries, those whose node is no candidate any more and, over the limit, those below the
+// floor; then, if still over it, the farthest. The order of the rest stays, so a stored and loaded list
+// (CompactDagCut) is the same list.
+void DagTraverser::trim_watch() {
+  DagCut& cut = *cut_;
+  std::vector<DagCut::Watch>& watch = cut.watch();
+  const bool over = watch.size() - watch_taken_ > watch_limit_;
+  size_t kept = 0;
+  for (const DagCut::Watch& w : watch) {
+    if (w.code == UINT32_MAX) continue;
+    if (!cut.is_candidate(w.node()) || (over && closeness(w) < watch_floor_)) cut.set_watched(w.node(), false);
+    else watch[kept++] = w;
+  }
+  watch.resize(kept);
+  watch_taken_ = 0;
+  if (watch.size() <= watch_limit_) return;
+  std::nth_element(watch.begin(), watch.begin() + watch_limit_, watch.end(),
+                   [&](const DagCut::Watch& a, const DagCut::Watch& b) { return closeness(a) > closeness(b); });
+  for (size_t i = watch_limit_; i < watch.size(); ++i) cut.set_watched(watch[i].node(), false);
+  watch.resize(watch_limit_);
 }
 
 float DagTraverser::priority(uint32_t n, DagFrameStats& stats) {
@@ -63,7 +186,10 @@ void DagTraverser::justify(DagFrameStats& stats) {
       cut.mark(v);
     } else {
       const float key = priority(v, stats);
-      if (key <= 0) continue;
+      if (key <= 0) {
+        if (seed_watch_) consider_watch(v);
+        continue;
+      }
       push_split(key, v);
     }
     if (cut.is_split(v))
@@ -172,9 +298,9 @@ void DagTraverser::priority_split(Limits& limits, DagFrameStats& stats, std::vec
 // With `hot` (constant-time), the front nodes the phase's own operations made are evaluated first, last made
 // first: where the view wanted a change, the next level of the same region most likely wants one too, and
 // behind a front of tens of thousands of nodes at N a call the sweep would reach it only frames later.
-template <class Live, class Pop, class Rewind, class TryApply>
+template <class Live, class Predicted, class Pop, class Rewind, class TryApply>
 void DagTraverser::fifo_phase(const uint32_t& applied, const Limits& limits, DagFrameStats& stats,
-                              std::vector<uint32_t>* hot, Live live, Pop pop, Rewind rewind, TryApply try_apply) {
+                              std::vector<uint32_t>* hot, Live live, Predicted predicted, Pop pop, Rewind rewind, TryApply try_apply) {
   DagCut& cut = *cut_;
   const uint32_t evaluated_before = stats.evaluated;
   if (hot) hot->clear();  // a phase's own: the nodes left are in their front
@@ -186,7 +312,8 @@ void DagTraverser::fifo_phase(const uint32_t& applied, const Limits& limits, Dag
       hot->pop_back();
       if (!live(n)) n = kNone;
     }
-    const bool from_hot = n != kNone;
+    if (n == kNone) n = predicted();
+    const bool from_hot = n != kNone;  // or from the watch list: not the sweep's
     if (!from_hot) {
       n = pop();
       if (n == kNone) break;
@@ -206,7 +333,7 @@ void DagTraverser::fifo_collapse(const Limits& limits, DagFrameStats& stats, std
                                  std::vector<uint32_t>* hot) {
   DagCut& cut = *cut_;
   fifo_phase(
-      stats.collapses, limits, stats, hot, [&](uint32_t n) { return cut.in_fc(n); }, [&] { return cut.pop_collapse(); },
+      stats.collapses, limits, stats, hot, [&](uint32_t n) { return cut.in_fc(n); }, [] { return kNone; }, [&] { return cut.pop_collapse(); },
       [&](uint32_t n) { cut.rewind_collapse(n); },
       [&](uint32_t n) {
         if (qrefine(n, stats)) return Outcome::not_needed;
@@ -221,11 +348,13 @@ void DagTraverser::fifo_collapse(const Limits& limits, DagFrameStats& stats, std
 void DagTraverser::fifo_split(Limits& limits, DagFrameStats& stats, std::vector<DagOp>& ops, std::vector<uint32_t>* hot) {
   DagCut& cut = *cut_;
   const Dag& dag = cut.dag();
+  if (hot) prepare_watch(uint32_t(kWatchShare * float(limits.max_evaluated)));
   fifo_phase(
-      stats.splits, limits, stats, hot, [&](uint32_t n) { return cut.is_candidate(n); }, [&] { return cut.pop_split(); },
+      stats.splits, limits, stats, hot, [&](uint32_t n) { return cut.is_candidate(n); },
+      [&] { return hot ? pop_watch() : kNone; }, [&] { return cut.pop_split(); },
       [&](uint32_t n) { cut.rewind_split(n); },
       [&](uint32_t n) {
-        if (!qrefine(n, stats)) return Outcome::not_needed;
+        if (!(hot ? qrefine_watch(n, stats) : qrefine(n, stats))) return Outcome::not_needed;
         const size_t first = ops.size();
         const bool done = split_with_needs(n, limits, stats, ops);
         if (hot)
@@ -236,11 +365,28 @@ void DagTraverser::fifo_split(Limits& limits, DagFrameStats& stats, std::vector<
         if (cut.is_candidate(n)) cut.rewind_split(n);  // a limit stopped it, maybe halfway: first next time
         return Outcome::stopped;
       });
+  if (hot) trim_watch();
 }
 
 // Fig. 2. In BUDGET mode the splits' triangles are limited to what keeps the cut within the budget.
 DagFrameStats DagTraverser::manage(const DagManageOptions& options, std::vector<DagOp>& ops) {
   if (!has_view_) fail("dag traversal", "no view set");
+  {
+    const float* c = cut_->dag().centre();
+    float d2 = 0;
+    for (int k = 0; k < 3; ++k) d2 += (view_.eye[k] - c[k]) * (view_.eye[k] - c[k]);
+    eye_distance_ = std::max(std::sqrt(d2), 1e-30f);
+    inverse_distance_ = 1 / eye_distance_;
+    closeness_offset_[0] = 0;
+    watch_taken_ = 0;
+    watch_limit_ = cut_->dag().size() / kNodesPerWatch;
+    watch_floor_ = kWatchNear;
+    for (int k = 0; k < 6; ++k) {
+      const float* pl = view_.planes[k];
+      plane_at_centre_[k] = pl[0] * c[0] + pl[1] * c[1] + pl[2] * c[2] + pl[3];
+      closeness_offset_[k + 1] = 1 + plane_at_centre_[k] * inverse_distance_;
+    }
+  }
   DagFrameStats stats;
   Limits limits;
   const bool constant_time = options.traversal == DagTraversal::constant_time;
@@ -264,6 +410,7 @@ DagFrameStats DagTraverser::manage(const DagManageOptions& options, std::vector<
 DagFrameStats DagTraverser::converge(const DagManageOptions& options, std::vector<DagOp>& ops, uint32_t max_ops) {
   DagManageOptions unlimited = options;
   unlimited.traversal = DagTraversal::priority;
+  seed_watch_ = options.traversal == DagTraversal::constant_time;
   const size_t start = ops.size();
   DagFrameStats total;
   // Each round but the last changes the cut; the bound only guards against a cycle no test has found.
@@ -279,6 +426,8 @@ DagFrameStats DagTraverser::converge(const DagManageOptions& options, std::vecto
     total.stopped_by_budget |= stats.stopped_by_budget;
     if (ops.size() == before) break;
   }
+  if (seed_watch_) trim_watch();
+  seed_watch_ = false;
   return total;
 }
 

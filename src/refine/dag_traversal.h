@@ -83,9 +83,15 @@ class DagTraverser {
   void push_split(float key, uint32_t n);
   void push_split_candidate(uint32_t n, DagFrameStats& stats);
   enum class Outcome { not_needed, applied, stopped };
-  template <class Live, class Pop, class Rewind, class TryApply>
+  template <class Live, class Predicted, class Pop, class Rewind, class TryApply>
   void fifo_phase(const uint32_t& applied, const Limits& limits, DagFrameStats& stats, std::vector<uint32_t>* hot,
-                  Live live, Pop pop, Rewind rewind, TryApply try_apply);
+                  Live live, Predicted predicted, Pop pop, Rewind rewind, TryApply try_apply);
+  bool qrefine_watch(uint32_t n, DagFrameStats& stats);
+  float closeness(const DagCut::Watch& w) const;
+  void consider_watch(uint32_t n);
+  void prepare_watch(uint32_t share);
+  uint32_t pop_watch();
+  void trim_watch();
   void fifo_collapse(const Limits& limits, DagFrameStats& stats, std::vector<DagOp>& ops, std::vector<uint32_t>* hot);
   void fifo_split(Limits& limits, DagFrameStats& stats, std::vector<DagOp>& ops, std::vector<uint32_t>* hot);
 
@@ -93,10 +99,18 @@ class DagTraverser {
   ViewCriteria view_;
   bool has_view_ = false;
   bool justified_ = false;  // priority: marks say which split nodes the view's target mesh keeps
+  float eye_distance_ = 1, inverse_distance_ = 1;  // to the DAG's centre
+  float watch_floor_ = 0;
+  uint32_t watch_limit_ = 0;
+  float plane_at_centre_[6] = {};
+  float closeness_offset_[8] = {};
+  uint32_t watch_taken_ = 0;
+  bool seed_watch_ = false;
   struct Scratch {
     std::vector<Ranked> collapse_heap, split_heap;
     std::vector<uint64_t> stack;  // node << 1 | forced
     std::vector<uint32_t> hot;    // constant-time: the front nodes the phase's own operations made
+    std::vector<Ranked> due;      // constant-time: the watch entries predicted to need a split now
   };
   static Scratch& scratch();
 };
