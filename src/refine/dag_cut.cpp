@@ -153,6 +153,7 @@ void DagCut::reset() {
   split_count_ = fc_size_ = 0;
   fs_size_ = base_fs_;
   collapse_cursor_ = split_cursor_ = 0;
+  collapse_lead_ = split_lead_ = kNone;
 }
 
 void DagCut::split(uint32_t n) {
@@ -214,10 +215,21 @@ uint32_t DagCut::next_bit(const std::vector<uint64_t>& bits, uint32_t from) {
   return uint32_t(w * 64 + size_t(std::countr_zero(word)));
 }
 
-uint32_t DagCut::pop(const std::vector<uint64_t>& bits, uint32_t& cursor) {
+uint32_t DagCut::pop(const std::vector<uint64_t>& bits, uint32_t& cursor, uint32_t& lead) {
   uint32_t n = next_bit(bits, cursor);
   if (n == kNone) n = next_bit(bits, 0);
-  if (n != kNone) cursor = n + 1;
+  if (n == kNone) return n;
+  cursor = n + 1;
+  // A front is sparse in node order (a few % of the nodes), so each node the sweep reaches is a cache miss
+  // in the criteria its evaluation reads: keep the next kSweepLead on their way (a wrap or a rewind only
+  // makes the lead start again from here).
+  int steps = 1;
+  if (lead == kNone || lead <= n) lead = n, steps = kSweepLead;
+  for (; steps > 0; --steps) {
+    lead = next_bit(bits, lead + 1);
+    if (lead == kNone) break;
+    __builtin_prefetch(&dag_->criteria(lead));
+  }
   return n;
 }
 

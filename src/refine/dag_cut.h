@@ -60,8 +60,8 @@ class DagCut {
   // The sweeps: the next node of the front from its cursor on, wrapping at the end (kNone when the front is
   // empty); the cursor moves past it. rewind puts the cursor back on a node, so that the next pop starts
   // there.
-  uint32_t pop_collapse() { return pop(fc_bits_, collapse_cursor_); }
-  uint32_t pop_split() { return pop(candidate_bits_, split_cursor_); }
+  uint32_t pop_collapse() { return pop(fc_bits_, collapse_cursor_, collapse_lead_); }
+  uint32_t pop_split() { return pop(candidate_bits_, split_cursor_, split_lead_); }
   void rewind_collapse(uint32_t n) { collapse_cursor_ = n; }
   void rewind_split(uint32_t n) { split_cursor_ = n; }
   uint32_t collapse_cursor() const { return collapse_cursor_; }
@@ -108,7 +108,8 @@ class DagCut {
   static constexpr uint8_t kWide = 0x0F;
   static_assert(kInlineLimit < kWide && Dag::kMaxChildren <= UINT16_MAX);
   static uint32_t next_bit(const std::vector<uint64_t>& bits, uint32_t from);
-  uint32_t pop(const std::vector<uint64_t>& bits, uint32_t& cursor);
+  static constexpr int kSweepLead = 8;
+  uint32_t pop(const std::vector<uint64_t>& bits, uint32_t& cursor, uint32_t& lead);
   void init_wide(uint32_t inline_limit);
   uint32_t wide_counter(uint32_t n) const;
   uint16_t& wide_slot(uint32_t n);
@@ -130,6 +131,7 @@ class DagCut {
   uint32_t split_count_ = 0, fc_size_ = 0, fs_size_ = 0, candidate_count_ = 0;
   uint32_t base_fs_ = 0;  // Fs of the base mesh: the nodes without a DAG parent (the roots)
   uint32_t collapse_cursor_ = 0, split_cursor_ = 0;
+  uint32_t collapse_lead_ = kNone, split_lead_ = kNone;  // the last node each sweep prefetched
 };
 
 // A cut as the mesh a DAG client holds (its resume front, docs/internals.md "The DAG mode"): the vertices of

@@ -24,6 +24,9 @@ namespace {
 // share of a phase's evaluations (the sweep keeps the rest); a cut watches at most one node in this many.
 constexpr float kWatchNear = 0.5f, kWatchShare = 0.5f;
 constexpr uint32_t kNodesPerWatch = 160;
+// and at most this many per evaluation a phase allows (N), so that the list's pass each frame stays O(N)
+// however large the model.
+constexpr uint32_t kWatchPerEvaluation = 16;
 }  // namespace
 
 DagTraverser::Scratch& DagTraverser::scratch() {
@@ -58,8 +61,15 @@ void DagTraverser::consider_watch(uint32_t n) {
   DagCut& cut = *cut_;
   if (cut.watched(n) || watch_limit_ == 0 || n >> 29) return;
   const NodeCriteria& c = cut.dag().criteria(n);
-  if (criteria_detail::back_facing_inline(view_, c)) return;
   const bool exceeds = criteria_detail::screen_error_exceeds_inline(view_, c);
+  // Below the threshold, the closeness is the screen ratio: most candidates the sweep meets are far below
+  // the floor, and this leaves them before the culling tests (with a margin for the key's rounding).
+  float ratio2 = 0;
+  if (!exceeds) {
+    ratio2 = criteria_detail::screen_ratio2_inline(view_, c);
+    if (ratio2 < 0.99f * watch_floor_ * watch_floor_) return;
+  }
+  if (criteria_detail::back_facing_inline(view_, c)) return;
   float outside = 0;
   int plane = -1;
   for (int k = 0; k < 6; ++k) {
@@ -70,7 +80,7 @@ void DagTraverser::consider_watch(uint32_t n) {
   DagCut::Watch w;
   if (plane < 0) {
     if (exceeds) return;  // culled by the float slack alone
-    w = {n, std::sqrt(std::min(criteria_detail::screen_ratio2_inline(view_, c), 1.0f)) * eye_distance_};
+    w = {n, std::sqrt(std::min(ratio2, 1.0f)) * eye_distance_};
   } else {
     if (!exceeds) return;
     w = {n | uint32_t(plane + 1) << 29, outside - plane_at_centre_[plane]};
@@ -88,8 +98,10 @@ bool DagTraverser::qrefine_watch(uint32_t n, DagFrameStats& stats) {
   return false;
 }
 
-// The entries predicted to need their split now, at most `share`, the closest popped first; and the floor
-// below which an entry is not worth its place (the closest three quarters of the limit stay above it).
+// The entries predicted to need their split now, at most `share` (the closest, when more are due), taken in
+// the list's order: a phase nearly always reaches all of them within its N, so ranking them bought a sort;
+// and the floor below which an entry is not worth its place (the closest three quarters of the limit stay
+// above it).
 void DagTraverser::prepare_watch(uint32_t share) {
   constexpr int kBuckets = 32;
   uint32_t histogram[kBuckets] = {};
@@ -97,22 +109,22 @@ void DagTraverser::prepare_watch(uint32_t share) {
   due.clear();
   const std::vector<DagCut::Watch>& watch = cut_->watch();
   const float scale = kBuckets / (1 - kWatchNear);
-  for (uint32_t i = 0; i < watch.size(); ++i) {
-    const float c = closeness(watch[i]);
-    if (c >= 1) due.push_back({c, i});
-    else ++histogram[std::clamp(int((c - kWatchNear) * scale), 0, kBuckets - 1)];
-  }
+  const uint32_t size = uint32_t(watch.size());
+  for (uint32_t i = 0; i < size; ++i)
+    if (const float c = closeness(watch[i]); c >= 1) due.push_back({c, i});
+  // The floor from every 4th entry (the list is in no order that a stride could bias).
+  for (uint32_t i = 0; i < size; i += 4)
+    if (const float c = closeness(watch[i]); c < 1) ++histogram[std::clamp(int((c - kWatchNear) * scale), 0, kBuckets - 1)];
   if (due.size() > share) {
     std::nth_element(due.begin(), due.begin() + share, due.end(), [](const Ranked& a, const Ranked& b) { return a.key > b.key; });
     due.resize(share);
   }
-  std::sort(due.begin(), due.end(), [](const Ranked& a, const Ranked& b) { return a.key < b.key; });
   const Dag& dag = cut_->dag();
   for (const Ranked& r : due) __builtin_prefetch(&dag.criteria(watch[r.node].node()));  // scattered: fetch them together
   watch_floor_ = kWatchNear;
   uint32_t above = 0;
   for (int b = kBuckets; b-- > 0;) {
-    above += histogram[b];
+    above += 4 * histogram[b];
     if (above > watch_limit_ * 3 / 4) {
       watch_floor_ = kWatchNear + float(b + 1) / scale;
       break;
@@ -380,6 +392,7 @@ DagFrameStats DagTraverser::manage(const DagManageOptions& options, std::vector<
     closeness_offset_[0] = 0;
     watch_taken_ = 0;
     watch_limit_ = cut_->dag().size() / kNodesPerWatch;
+    if (options.max_ops) watch_limit_ = uint32_t(std::min<uint64_t>(watch_limit_, uint64_t(kWatchPerEvaluation) * options.max_ops));
     watch_floor_ = kWatchNear;
     for (int k = 0; k < 6; ++k) {
       const float* pl = view_.planes[k];
