@@ -228,7 +228,7 @@ uint32_t DagCut::pop(const std::vector<uint64_t>& bits, uint32_t& cursor, uint32
   for (; steps > 0; --steps) {
     lead = next_bit(bits, lead + 1);
     if (lead == kNone) break;
-    __builtin_prefetch(&dag_->criteria(lead));
+    prefetch(lead);
   }
   return n;
 }

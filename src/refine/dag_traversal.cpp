@@ -27,6 +27,8 @@ constexpr uint32_t kNodesPerWatch = 160;
 // and at most this many per evaluation a phase allows (N), so that the list's pass each frame stays O(N)
 // however large the model.
 constexpr uint32_t kWatchPerEvaluation = 16;
+// Due entries whose node's criteria and state are fetched ahead of their evaluation.
+constexpr size_t kDueLead = 8;
 }  // namespace
 
 DagTraverser::Scratch& DagTraverser::scratch() {
@@ -119,8 +121,7 @@ void DagTraverser::prepare_watch(uint32_t share) {
     std::nth_element(due.begin(), due.begin() + share, due.end(), [](const Ranked& a, const Ranked& b) { return a.key > b.key; });
     due.resize(share);
   }
-  const Dag& dag = cut_->dag();
-  for (const Ranked& r : due) __builtin_prefetch(&dag.criteria(watch[r.node].node()));  // scattered: fetch them together
+  for (size_t k = 1; k <= kDueLead && k <= due.size(); ++k) cut_->prefetch(watch[due[due.size() - k].node].node());
   watch_floor_ = kWatchNear;
   uint32_t above = 0;
   for (int b = kBuckets; b-- > 0;) {
@@ -138,6 +139,7 @@ uint32_t DagTraverser::pop_watch() {
   while (!due.empty()) {
     DagCut::Watch& w = watch[due.back().node];
     due.pop_back();
+    if (due.size() >= kDueLead) cut_->prefetch(watch[due[due.size() - kDueLead].node].node());  // scattered
     const uint32_t n = w.node();
     w.code = UINT32_MAX;  // taken: dropped by trim_watch
     ++watch_taken_;
