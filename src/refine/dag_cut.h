@@ -70,7 +70,7 @@ class DagCut {
   // Constant-time's watch list (docs/internals.md, "The DAG of operations"; DagTraverser::consider_watch):
   // split candidates an evaluation found not needing a split yet, each with a key saying when the view is
   // predicted to make it need one, in no order. Kept between frames with the cursors (CompactDagCut), at
-  // most one entry per 160 DAG nodes; watched(n) says whether n has an entry (one at most). Only the
+  // most DagTraverser::watch_limit entries; watched(n) says whether n has an entry (one at most). Only the
   // constant-time traversal changes it; entries of nodes that are no candidates any more are dropped when
   // the cut is stored.
   struct Watch {

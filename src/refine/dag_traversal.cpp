@@ -23,13 +23,18 @@ namespace {
 // τ, or outside a plane by half the eye distance); the entries predicted to need a split take at most this
 // share of a phase's evaluations (the sweep keeps the rest); a cut watches at most one node in this many.
 constexpr float kWatchNear = 0.5f, kWatchShare = 0.5f;
-constexpr uint32_t kNodesPerWatch = 160;
+constexpr uint32_t kNodesPerWatch = 320;
 // and at most this many per evaluation a phase allows (N), so that the list's pass each frame stays O(N)
 // however large the model.
 constexpr uint32_t kWatchPerEvaluation = 16;
 // Due entries whose node's criteria and state are fetched ahead of their evaluation.
 constexpr size_t kDueLead = 8;
 }  // namespace
+
+uint32_t DagTraverser::watch_limit(uint32_t nodes, uint32_t max_ops) {
+  const uint32_t limit = nodes / kNodesPerWatch;
+  return max_ops ? uint32_t(std::min<uint64_t>(limit, uint64_t(kWatchPerEvaluation) * max_ops)) : limit;
+}
 
 DagTraverser::Scratch& DagTraverser::scratch() {
   static thread_local Scratch s;
@@ -393,8 +398,7 @@ DagFrameStats DagTraverser::manage(const DagManageOptions& options, std::vector<
     inverse_distance_ = 1 / eye_distance_;
     closeness_offset_[0] = 0;
     watch_taken_ = 0;
-    watch_limit_ = cut_->dag().size() / kNodesPerWatch;
-    if (options.max_ops) watch_limit_ = uint32_t(std::min<uint64_t>(watch_limit_, uint64_t(kWatchPerEvaluation) * options.max_ops));
+    watch_limit_ = watch_limit(cut_->dag().size(), options.max_ops);
     watch_floor_ = kWatchNear;
     for (int k = 0; k < 6; ++k) {
       const float* pl = view_.planes[k];

@@ -62,6 +62,8 @@ class DagTraverser {
   // shared by every traverser manage() runs on it (the priority traversal's heaps and justification stack,
   // constant-time's hot nodes): a server has a few I/O threads and many sessions.
   static size_t thread_scratch_bytes();
+  // Constant-time's watch list holds at most this many entries (DagCut::watch()) for a DAG of `nodes` and N.
+  static uint32_t watch_limit(uint32_t nodes, uint32_t max_ops);
 
  private:
   struct Limits {

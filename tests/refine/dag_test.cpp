@@ -505,7 +505,7 @@ TEST(DagTraversal, ConstantTimeFollowsItsOwnChangesFirst) {
 }
 
 // Constant-time watches the candidates it found not needing a split yet (the whole front of its converged
-// first view, then what it evaluates), at most one per 160 DAG nodes, each a candidate, kept through the
+// first view, then what it evaluates), at most DagTraverser::watch_limit, each a candidate, kept through the
 // compact cut; as the eye moves closer, the ones predicted to need a split now are evaluated before the
 // sweep: with the same cut, cursors, view and N, the watching traverser splits more than one whose list
 // was emptied, and each evaluates at most N nodes a phase.
@@ -521,7 +521,7 @@ TEST(DagTraversal, ConstantTimeWatchesWhatTheViewWillNeed) {
   std::vector<DagOp> ops;
   traverser.converge(options, ops);
   ASSERT_FALSE(cut.watch().empty());
-  ASSERT_LE(cut.watch().size(), dag.size() / 160);
+  ASSERT_LE(cut.watch().size(), DagTraverser::watch_limit(dag.size(), options.max_ops));
   for (const DagCut::Watch& w : cut.watch()) {
     ASSERT_TRUE(cut.is_candidate(w.node()));
     ASSERT_TRUE(cut.watched(w.node()));
@@ -553,7 +553,7 @@ TEST(DagTraversal, ConstantTimeWatchesWhatTheViewWillNeed) {
     stats = blind_traverser.manage(options, ops);
     ASSERT_LE(stats.evaluated, 2 * options.max_ops);
     blind_splits += stats.splits;
-    ASSERT_LE(cut.watch().size(), dag.size() / 160);
+    ASSERT_LE(cut.watch().size(), DagTraverser::watch_limit(dag.size(), options.max_ops));
   }
   EXPECT_EQ(audit(cut), "ok");
   EXPECT_GT(watching_splits, blind_splits + blind_splits / 4) << watching_splits << " against " << blind_splits;
