@@ -64,11 +64,11 @@ float DagTraverser::closeness(const DagCut::Watch& w) const {
   return w.key * inverse_distance_ + closeness_offset_[w.kind()];  // kind 0: 0; a plane's: 1 + its value at the centre
 }
 
-void DagTraverser::consider_watch(uint32_t n) {
+// `exceeds`: the node's screen error is over the threshold (its evaluation computed it already).
+void DagTraverser::consider_watch(uint32_t n, bool exceeds) {
   DagCut& cut = *cut_;
   if (cut.watched(n) || watch_limit_ == 0 || n >> 29) return;
   const NodeCriteria& c = cut.dag().criteria(n);
-  const bool exceeds = criteria_detail::screen_error_exceeds_inline(view_, c);
   // Below the threshold, the closeness is the screen ratio: most candidates the sweep meets are far below
   // the floor, and this leaves them before the culling tests (with a margin for the key's rounding).
   float ratio2 = 0;
@@ -100,8 +100,11 @@ void DagTraverser::consider_watch(uint32_t n) {
 // qrefine for constant-time's split phase (one ERROR-EVALUATE), watching the candidate when it does not.
 bool DagTraverser::qrefine_watch(uint32_t n, DagFrameStats& stats) {
   ++stats.evaluated;
-  if (criteria_detail::qrefine_inline(view_, cut_->dag().criteria(n))) return true;
-  consider_watch(n);
+  const NodeCriteria& c = cut_->dag().criteria(n);
+  const bool exceeds = criteria_detail::screen_error_exceeds_inline(view_, c);
+  if (exceeds && !criteria_detail::outside_frustum_inline(view_, c) && !criteria_detail::back_facing_inline(view_, c))
+    return true;  // qrefine_inline's tests, in its order
+  consider_watch(n, exceeds);
   return false;
 }
 
@@ -206,7 +209,7 @@ void DagTraverser::justify(DagFrameStats& stats) {
     } else {
       const float key = priority(v, stats);
       if (key <= 0) {
-        if (seed_watch_) consider_watch(v);
+        if (seed_watch_) consider_watch(v, criteria_detail::screen_error_exceeds_inline(view_, dag.criteria(v)));
         continue;
       }
       push_split(key, v);

@@ -90,7 +90,7 @@ class DagTraverser {
                   Live live, Predicted predicted, Pop pop, Rewind rewind, TryApply try_apply);
   bool qrefine_watch(uint32_t n, DagFrameStats& stats);
   float closeness(const DagCut::Watch& w) const;
-  void consider_watch(uint32_t n);
+  void consider_watch(uint32_t n, bool exceeds);
   void prepare_watch(uint32_t share);
   uint32_t pop_watch();
   void trim_watch();
