@@ -1,9 +1,12 @@
 #include "test_support.h"
 
 #include <atomic>
+#include <cstdio>
 #include <cstdlib>
 #include <fstream>
 #include <iterator>
+#include <mutex>
+#include <vector>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -26,6 +29,42 @@ std::filesystem::path shared_model(const std::string& file) {
   return std::filesystem::exists(path) ? path : std::filesystem::path{};
 }
 
+namespace {
+
+// The directories temp_dir() made in this process: removed when every test passed, kept (and named) when
+// one failed or PMSTREAM_KEEP_TEST_DIRS is set, so that a failure can be looked into.
+class TempDirs : public ::testing::EmptyTestEventListener {
+ public:
+  static TempDirs& instance() {
+    static TempDirs* dirs = [] {
+      auto* listener = new TempDirs;  // owned by gtest's listener list from here on
+      ::testing::UnitTest::GetInstance()->listeners().Append(listener);
+      return listener;
+    }();
+    return *dirs;
+  }
+  void add(const std::filesystem::path& dir) {
+    std::lock_guard lock(mutex_);
+    dirs_.push_back(dir);
+  }
+  void OnTestProgramEnd(const ::testing::UnitTest& unit) override {
+    std::lock_guard lock(mutex_);
+    if (unit.Passed() && !std::getenv("PMSTREAM_KEEP_TEST_DIRS")) {
+      std::error_code ignored;
+      for (const auto& dir : dirs_) std::filesystem::remove_all(dir, ignored);
+    } else if (!dirs_.empty()) {
+      std::fprintf(stderr, "test directories kept (%zu), e.g. %s\n", dirs_.size(), dirs_.front().c_str());
+    }
+    dirs_.clear();
+  }
+
+ private:
+  std::mutex mutex_;
+  std::vector<std::filesystem::path> dirs_;
+};
+
+}  // namespace
+
 std::filesystem::path temp_dir() {
   static std::atomic<int> counter{0};
   const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
@@ -33,6 +72,7 @@ std::filesystem::path temp_dir() {
   auto dir = std::filesystem::temp_directory_path() /
              ("pmstream-test-" + std::to_string(getpid()) + "-" + std::to_string(counter++) + "-" + name);
   std::filesystem::create_directories(dir);
+  TempDirs::instance().add(dir);
   return dir;
 }
 

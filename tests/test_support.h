@@ -21,7 +21,8 @@ std::filesystem::path shared_models_dir();
 // Path of a model in ../shared/models (e.g. "bunny.ply.xz"); empty when absent.
 std::filesystem::path shared_model(const std::string& file);
 
-// A fresh directory under the system temp dir, unique per test.
+// A fresh directory under the system temp dir, unique per test; removed at the end of the test program
+// when every test passed (kept when one failed, or with PMSTREAM_KEEP_TEST_DIRS set).
 std::filesystem::path temp_dir();
 
 // Runs the pmstream binary (PMSTREAM_BINARY) with `args` (shell words) and captures both streams.

@@ -15,12 +15,28 @@ constexpr float kCullSlack = 1e-5f;
 
 inline float dot3(const float a[3], const float b[3]) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
 
+// What the tests share for one node: d = p − e, ‖d‖² and a·d (a the cone axis, along which delta is
+// measured). Each test takes it ready, so a caller running several computes it once; the values are the
+// ones each test computed alone (a·d and d·a are the same products, summed in the same order).
+struct EyeOffset {
+  float d[3];
+  float d2;
+  float along;
+};
+
+[[gnu::always_inline]] inline EyeOffset eye_offset(const ViewCriteria& view, const NodeCriteria& node) {
+  EyeOffset o;
+  for (int k = 0; k < 3; ++k) o.d[k] = node.p[k] - view.eye[k];
+  o.d2 = dot3(o.d, o.d);
+  o.along = dot3(o.d, node.axis);
+  return o;
+}
+
 // The frustum test, and when it passes `lowest` = the smallest of the six plane values it computed (the
 // adaptation walk bounds the children's values with it: SelectiveRefinement::walk_qrefine).
-[[gnu::always_inline]] inline bool outside_frustum_inline(const ViewCriteria& view, const NodeCriteria& node, float& lowest) {
-  float d[3];
-  for (int k = 0; k < 3; ++k) d[k] = node.p[k] - view.eye[k];
-  const float slack = node.radius + kCullSlack * std::sqrt(dot3(d, d));
+[[gnu::always_inline]] inline bool outside_frustum_inline(const ViewCriteria& view, const NodeCriteria& node,
+                                                          const EyeOffset& o, float& lowest) {
+  const float slack = node.radius + kCullSlack * std::sqrt(o.d2);
   lowest = INFINITY;
   for (const float* plane : view.planes) {
     const float value = dot3(plane, node.p) + plane[3];
@@ -28,6 +44,10 @@ inline float dot3(const float a[3], const float b[3]) { return a[0] * b[0] + a[1
     lowest = std::min(lowest, value);
   }
   return false;
+}
+
+[[gnu::always_inline]] inline bool outside_frustum_inline(const ViewCriteria& view, const NodeCriteria& node, float& lowest) {
+  return outside_frustum_inline(view, node, eye_offset(view, node), lowest);
 }
 
 [[gnu::always_inline]] inline bool outside_frustum_inline(const ViewCriteria& view, const NodeCriteria& node) {
@@ -38,52 +58,56 @@ inline float dot3(const float a[3], const float b[3]) { return a[0] * b[0] + a[1
 // With d = p − e, θ = angle(a, d) and α the cone half-angle, min over the cone of n·d is
 // ‖d‖ cos(θ + α) = (a·d) cos α − ‖a × d‖ sin α, and min over the sphere of n·(q − e) is n·d − r.
 // Hoppe's test (a·d > 0 ∧ (a·d)² > ‖d‖² sin²α) is this with r = 0.
-[[gnu::always_inline]] inline bool back_facing_inline(const ViewCriteria& view, const NodeCriteria& node) {
+[[gnu::always_inline]] inline bool back_facing_inline(const NodeCriteria& node, const EyeOffset& o) {
   if (node.cos_a <= 0) return false;
-  float d[3];
-  for (int k = 0; k < 3; ++k) d[k] = node.p[k] - view.eye[k];
-  const float along = dot3(node.axis, d);
-  if (along <= node.radius) return false;  // cos α <= 1: the bound below cannot exceed r
+  if (o.along <= node.radius) return false;  // cos α <= 1: the bound below cannot exceed r
   const float* a = node.axis;
+  const float* d = o.d;
   const float c[3] = {a[1] * d[2] - a[2] * d[1], a[2] * d[0] - a[0] * d[2], a[0] * d[1] - a[1] * d[0]};
   const float across = std::sqrt(dot3(c, c));  // ‖a × d‖: accurate where sqrt(‖d‖² − (a·d)²) cancels
-  const float distance = std::sqrt(dot3(d, d));
-  return along * node.cos_a - across * node.sin_a > node.radius + kCullSlack * distance;
+  const float distance = std::sqrt(o.d2);
+  return o.along * node.cos_a - across * node.sin_a > node.radius + kCullSlack * distance;
+}
+
+[[gnu::always_inline]] inline bool back_facing_inline(const ViewCriteria& view, const NodeCriteria& node) {
+  return back_facing_inline(node, eye_offset(view, node));
+}
+
+[[gnu::always_inline]] inline bool screen_error_exceeds_inline(const ViewCriteria& view, const NodeCriteria& node,
+                                                               const EyeOffset& o) {
+  const float bound = view.kappa2 * o.d2;  // kappa² ‖d‖²
+  if (node.mu2 > bound) return true;
+  return node.delta2 * (o.d2 - o.along * o.along) > bound * o.d2;
 }
 
 [[gnu::always_inline]] inline bool screen_error_exceeds_inline(const ViewCriteria& view, const NodeCriteria& node) {
-  float d[3];
-  for (int k = 0; k < 3; ++k) d[k] = node.p[k] - view.eye[k];
-  const float d2 = dot3(d, d);
-  const float bound = view.kappa2 * d2;  // kappa² ‖d‖²
-  if (node.mu2 > bound) return true;
-  const float along = dot3(d, node.axis);
-  return node.delta2 * (d2 - along * along) > bound * d2;
+  return screen_error_exceeds_inline(view, node, eye_offset(view, node));
 }
 
 // The screen error over the threshold, squared (>= 1 where screen_error_exceeds_inline holds, up to rounding):
 // how near a node is to needing a split. Grows as the square of 1 / the eye distance.
-[[gnu::always_inline]] inline float screen_ratio2_inline(const ViewCriteria& view, const NodeCriteria& node) {
-  float d[3];
-  for (int k = 0; k < 3; ++k) d[k] = node.p[k] - view.eye[k];
-  const float d2 = std::max(dot3(d, d), 1e-30f);
-  const float along = dot3(d, node.axis);
+[[gnu::always_inline]] inline float screen_ratio2_inline(const ViewCriteria& view, const NodeCriteria& node,
+                                                         const EyeOffset& o) {
+  const float d2 = std::max(o.d2, 1e-30f);
   const float bound = std::max(view.kappa2 * d2, 1e-30f);
-  return std::max(node.mu2, node.delta2 * (d2 - along * along) / d2) / bound;
+  return std::max(node.mu2, node.delta2 * (d2 - o.along * o.along) / d2) / bound;
+}
+
+[[gnu::always_inline]] inline bool qrefine_inline(const ViewCriteria& view, const NodeCriteria& node, const EyeOffset& o) {
+  float lowest;
+  return screen_error_exceeds_inline(view, node, o) && !outside_frustum_inline(view, node, o, lowest) &&
+         !back_facing_inline(node, o);
 }
 
 [[gnu::always_inline]] inline bool qrefine_inline(const ViewCriteria& view, const NodeCriteria& node) {
-  return screen_error_exceeds_inline(view, node) && !outside_frustum_inline(view, node) &&
-         !back_facing_inline(view, node);
+  return qrefine_inline(view, node, eye_offset(view, node));
 }
 
 [[gnu::always_inline]] inline float priority_inline(const ViewCriteria& view, const NodeCriteria& node) {
-  if (!qrefine_inline(view, node)) return 0;
-  float d[3];
-  for (int k = 0; k < 3; ++k) d[k] = node.p[k] - view.eye[k];
-  const float d2 = std::max(dot3(d, d), 1e-30f);
-  const float along = dot3(d, node.axis);
-  const float error = std::max(node.mu2 * d2, node.delta2 * (d2 - along * along)) / (d2 * d2);
+  const EyeOffset o = eye_offset(view, node);
+  if (!qrefine_inline(view, node, o)) return 0;
+  const float d2 = std::max(o.d2, 1e-30f);
+  const float error = std::max(node.mu2 * d2, node.delta2 * (d2 - o.along * o.along)) / (d2 * d2);
   return std::max(error, 1e-30f);  // qrefine held: stay > 0 even when it underflows
 }
 

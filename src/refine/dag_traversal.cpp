@@ -43,7 +43,7 @@ DagTraverser::Scratch& DagTraverser::scratch() {
 
 size_t DagTraverser::thread_scratch_bytes() {
   const Scratch& s = scratch();
-  return (s.collapse_heap.capacity() + s.split_heap.capacity() + s.due.capacity()) * sizeof(Ranked) +
+  return (s.collapse_heap.capacity() + s.split_heap.capacity()) * sizeof(Ranked) + s.due.capacity() * sizeof(Due) +
          s.stack.capacity() * sizeof(uint64_t) +
          s.hot.capacity() * sizeof(uint32_t);
 }
@@ -64,8 +64,9 @@ float DagTraverser::closeness(const DagCut::Watch& w) const {
   return w.key * inverse_distance_ + closeness_offset_[w.kind()];  // kind 0: 0; a plane's: 1 + its value at the centre
 }
 
-// `exceeds`: the node's screen error is over the threshold (its evaluation computed it already).
-void DagTraverser::consider_watch(uint32_t n, bool exceeds) {
+// `o` and `exceeds`: the node's eye offset and whether its screen error is over the threshold (its
+// evaluation computed both already).
+void DagTraverser::consider_watch(uint32_t n, const criteria_detail::EyeOffset& o, bool exceeds) {
   DagCut& cut = *cut_;
   if (cut.watched(n) || watch_limit_ == 0 || n >> 29) return;
   const NodeCriteria& c = cut.dag().criteria(n);
@@ -73,10 +74,10 @@ void DagTraverser::consider_watch(uint32_t n, bool exceeds) {
   // the floor, and this leaves them before the culling tests (with a margin for the key's rounding).
   float ratio2 = 0;
   if (!exceeds) {
-    ratio2 = criteria_detail::screen_ratio2_inline(view_, c);
+    ratio2 = criteria_detail::screen_ratio2_inline(view_, c, o);
     if (ratio2 < 0.99f * watch_floor_ * watch_floor_) return;
   }
-  if (criteria_detail::back_facing_inline(view_, c)) return;
+  if (criteria_detail::back_facing_inline(c, o)) return;
   float outside = 0;
   int plane = -1;
   for (int k = 0; k < 6; ++k) {
@@ -101,35 +102,50 @@ void DagTraverser::consider_watch(uint32_t n, bool exceeds) {
 bool DagTraverser::qrefine_watch(uint32_t n, DagFrameStats& stats) {
   ++stats.evaluated;
   const NodeCriteria& c = cut_->dag().criteria(n);
-  const bool exceeds = criteria_detail::screen_error_exceeds_inline(view_, c);
-  if (exceeds && !criteria_detail::outside_frustum_inline(view_, c) && !criteria_detail::back_facing_inline(view_, c))
+  const criteria_detail::EyeOffset o = criteria_detail::eye_offset(view_, c);
+  const bool exceeds = criteria_detail::screen_error_exceeds_inline(view_, c, o);
+  float lowest;
+  if (exceeds && !criteria_detail::outside_frustum_inline(view_, c, o, lowest) && !criteria_detail::back_facing_inline(c, o))
     return true;  // qrefine_inline's tests, in its order
-  consider_watch(n, exceeds);
+  consider_watch(n, o, exceeds);
   return false;
 }
 
-// The entries predicted to need their split now, at most `share` (the closest, when more are due), taken in
-// the list's order: a phase nearly always reaches all of them within its N, so ranking them bought a sort;
-// and the floor below which an entry is not worth its place (the closest three quarters of the limit stay
-// above it).
+// One pass over the list at the start of a split phase: the entries whose node is no candidate any more
+// leave it, and so do the entries predicted to need their split now (at most `share`, the closest when
+// more are due; the rest go back), taken in the list's order: a phase nearly always reaches all of them
+// within its N, so ranking them bought a sort. The same pass sets the floor below which an entry is not
+// worth its place (the closest three quarters of the limit stay above it), from every 4th entry kept.
 void DagTraverser::prepare_watch(uint32_t share) {
   constexpr int kBuckets = 32;
   uint32_t histogram[kBuckets] = {};
-  std::vector<Ranked>& due = scratch().due;
+  DagCut& cut = *cut_;
+  std::vector<Due>& due = scratch().due;
   due.clear();
-  const std::vector<DagCut::Watch>& watch = cut_->watch();
+  std::vector<DagCut::Watch>& watch = cut.watch();
   const float scale = kBuckets / (1 - kWatchNear);
-  const uint32_t size = uint32_t(watch.size());
-  for (uint32_t i = 0; i < size; ++i)
-    if (const float c = closeness(watch[i]); c >= 1) due.push_back({c, i});
-  // The floor from every 4th entry (the list is in no order that a stride could bias).
-  for (uint32_t i = 0; i < size; i += 4)
-    if (const float c = closeness(watch[i]); c < 1) ++histogram[std::clamp(int((c - kWatchNear) * scale), 0, kBuckets - 1)];
+  size_t kept = 0;
+  for (const DagCut::Watch w : watch) {
+    const uint32_t n = w.node();
+    if (!cut.is_candidate(n)) {
+      cut.set_watched(n, false);
+      continue;
+    }
+    const float c = closeness(w);
+    if (c >= 1) {
+      due.push_back({c, w});
+      continue;
+    }
+    if (kept % 4 == 0) ++histogram[std::clamp(int((c - kWatchNear) * scale), 0, kBuckets - 1)];
+    watch[kept++] = w;
+  }
+  watch.resize(kept);
   if (due.size() > share) {
-    std::nth_element(due.begin(), due.begin() + share, due.end(), [](const Ranked& a, const Ranked& b) { return a.key > b.key; });
+    std::nth_element(due.begin(), due.begin() + share, due.end(), [](const Due& a, const Due& b) { return a.closeness > b.closeness; });
+    for (size_t i = share; i < due.size(); ++i) watch.push_back(due[i].entry);
     due.resize(share);
   }
-  for (size_t k = 1; k <= kDueLead && k <= due.size(); ++k) cut_->prefetch(watch[due[due.size() - k].node].node());
+  for (size_t k = 1; k <= kDueLead && k <= due.size(); ++k) cut.prefetch(due[due.size() - k].entry.node());
   watch_floor_ = kWatchNear;
   uint32_t above = 0;
   for (int b = kBuckets; b-- > 0;) {
@@ -142,36 +158,32 @@ void DagTraverser::prepare_watch(uint32_t share) {
 }
 
 uint32_t DagTraverser::pop_watch() {
-  std::vector<Ranked>& due = scratch().due;
-  std::vector<DagCut::Watch>& watch = cut_->watch();
+  std::vector<Due>& due = scratch().due;
   while (!due.empty()) {
-    DagCut::Watch& w = watch[due.back().node];
+    const uint32_t n = due.back().entry.node();
     due.pop_back();
-    if (due.size() >= kDueLead) cut_->prefetch(watch[due[due.size() - kDueLead].node].node());  // scattered
-    const uint32_t n = w.node();
-    w.code = UINT32_MAX;  // taken: dropped by trim_watch
-    ++watch_taken_;
+    if (due.size() >= kDueLead) cut_->prefetch(due[due.size() - kDueLead].entry.node());  // scattered
     cut_->set_watched(n, false);
     if (cut_->is_candidate(n)) return n;
   }
   return kNone;
 }
 
-// Drops the taken entries, those whose node is no candidate any more and, over the limit, those below the
-// floor; then, if still over it, the farthest. The order of the rest stays, so a stored and loaded list
-// (CompactDagCut) is the same list.
+// The due entries the phase did not reach go back; then, over the limit, the entries below the floor
+// leave, and if still over it, the farthest. The order of the rest stays, so a stored and loaded list
+// (CompactDagCut, which keeps only the candidates' entries) is the same list.
 void DagTraverser::trim_watch() {
   DagCut& cut = *cut_;
   std::vector<DagCut::Watch>& watch = cut.watch();
-  const bool over = watch.size() - watch_taken_ > watch_limit_;
+  for (const Due& d : scratch().due) watch.push_back(d.entry);
+  scratch().due.clear();
+  if (watch.size() <= watch_limit_) return;
   size_t kept = 0;
   for (const DagCut::Watch& w : watch) {
-    if (w.code == UINT32_MAX) continue;
-    if (!cut.is_candidate(w.node()) || (over && closeness(w) < watch_floor_)) cut.set_watched(w.node(), false);
+    if (closeness(w) < watch_floor_) cut.set_watched(w.node(), false);
     else watch[kept++] = w;
   }
   watch.resize(kept);
-  watch_taken_ = 0;
   if (watch.size() <= watch_limit_) return;
   std::nth_element(watch.begin(), watch.begin() + watch_limit_, watch.end(),
                    [&](const DagCut::Watch& a, const DagCut::Watch& b) { return closeness(a) > closeness(b); });
@@ -209,7 +221,10 @@ void DagTraverser::justify(DagFrameStats& stats) {
     } else {
       const float key = priority(v, stats);
       if (key <= 0) {
-        if (seed_watch_) consider_watch(v, criteria_detail::screen_error_exceeds_inline(view_, dag.criteria(v)));
+        if (seed_watch_) {
+          const criteria_detail::EyeOffset o = criteria_detail::eye_offset(view_, dag.criteria(v));
+          consider_watch(v, o, criteria_detail::screen_error_exceeds_inline(view_, dag.criteria(v), o));
+        }
         continue;
       }
       push_split(key, v);
@@ -362,7 +377,10 @@ void DagTraverser::fifo_collapse(const Limits& limits, DagFrameStats& stats, std
         collapse(n, stats, ops);
         if (hot)
           for (uint32_t p : cut.dag().parents(n))
-            if (cut.in_fc(p)) hot->push_back(p);
+            if (cut.in_fc(p)) {
+              hot->push_back(p);
+              cut.prefetch(p);
+            }
         return Outcome::applied;
       });
 }
@@ -382,7 +400,10 @@ void DagTraverser::fifo_split(Limits& limits, DagFrameStats& stats, std::vector<
         if (hot)
           for (size_t i = first; i < ops.size(); ++i)
             for (int k = 0; k < 2; ++k)
-              if (const uint32_t c = dag.hierarchy_child(ops[i].node, k); c != kNone && cut.is_candidate(c)) hot->push_back(c);
+              if (const uint32_t c = dag.hierarchy_child(ops[i].node, k); c != kNone && cut.is_candidate(c)) {
+                hot->push_back(c);
+                cut.prefetch(c);
+              }
         if (done) return Outcome::applied;
         if (cut.is_candidate(n)) cut.rewind_split(n);  // a limit stopped it, maybe halfway: first next time
         return Outcome::stopped;
@@ -400,7 +421,6 @@ DagFrameStats DagTraverser::manage(const DagManageOptions& options, std::vector<
     eye_distance_ = std::max(std::sqrt(d2), 1e-30f);
     inverse_distance_ = 1 / eye_distance_;
     closeness_offset_[0] = 0;
-    watch_taken_ = 0;
     watch_limit_ = watch_limit(cut_->dag().size(), options.max_ops);
     watch_floor_ = kWatchNear;
     for (int k = 0; k < 6; ++k) {

@@ -14,6 +14,9 @@
 #include "refine/dag_cut.h"
 
 namespace pms {
+namespace criteria_detail {
+struct EyeOffset;
+}
 
 enum class DagTraversal : uint8_t { priority, linear, constant_time };
 enum class DagMode : uint8_t { free, budget };
@@ -74,6 +77,10 @@ class DagTraverser {
     float key;
     uint32_t node;
   };
+  struct Due {
+    float closeness;
+    DagCut::Watch entry;
+  };
   bool qrefine(uint32_t n, DagFrameStats& stats);
   float priority(uint32_t n, DagFrameStats& stats);
   void justify(DagFrameStats& stats);
@@ -90,7 +97,7 @@ class DagTraverser {
                   Live live, Predicted predicted, Pop pop, Rewind rewind, TryApply try_apply);
   bool qrefine_watch(uint32_t n, DagFrameStats& stats);
   float closeness(const DagCut::Watch& w) const;
-  void consider_watch(uint32_t n, bool exceeds);
+  void consider_watch(uint32_t n, const criteria_detail::EyeOffset& o, bool exceeds);
   void prepare_watch(uint32_t share);
   uint32_t pop_watch();
   void trim_watch();
@@ -106,13 +113,12 @@ class DagTraverser {
   uint32_t watch_limit_ = 0;
   float plane_at_centre_[6] = {};
   float closeness_offset_[8] = {};
-  uint32_t watch_taken_ = 0;
   bool seed_watch_ = false;
   struct Scratch {
     std::vector<Ranked> collapse_heap, split_heap;
     std::vector<uint64_t> stack;  // node << 1 | forced
     std::vector<uint32_t> hot;    // constant-time: the front nodes the phase's own operations made
-    std::vector<Ranked> due;      // constant-time: the watch entries predicted to need a split now
+    std::vector<Due> due;         // constant-time: the watch entries predicted to need a split now
   };
   static Scratch& scratch();
 };
