@@ -54,6 +54,19 @@ class Dag {
   // Triangles n's split adds (f_l and/or f_r) and its collapse removes.
   uint32_t faces(uint32_t n) const { return faces_[n]; }
   const NodeCriteria& criteria(uint32_t n) const { return criteria_[n]; }
+  // On their way to the cache: what parents(), children(), the hierarchy and faces() read of n first, and
+  // then (once those are in) its edge lists. Loading a cut walks thousands of scattered nodes.
+  void prefetch_links(uint32_t n) const {
+    __builtin_prefetch(&in_begin_[n]);
+    __builtin_prefetch(&out_begin_[n]);
+    __builtin_prefetch(&hierarchy_parent_[n]);
+    __builtin_prefetch(&hierarchy_child_[2 * size_t(n)]);
+    __builtin_prefetch(&faces_[n]);
+  }
+  void prefetch_edges(uint32_t n) const {
+    __builtin_prefetch(&in_edges_[in_begin_[n]]);
+    __builtin_prefetch(&out_edges_[out_begin_[n]]);
+  }
   uint64_t base_faces() const { return base_faces_; }
   std::span<const uint32_t> roots() const { return roots_; }  // nodes without a hierarchy parent
   const DagStats& stats() const { return stats_; }

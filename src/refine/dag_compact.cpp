@@ -36,9 +36,12 @@ void walk_split_nodes(const Dag& dag, std::vector<uint32_t>& out, IsSplit is_spl
   const size_t first = out.size();
   for (uint32_t r : dag.roots())
     if (is_split(r)) out.push_back(r);
-  for (size_t i = first; i < out.size(); ++i)
+  constexpr size_t kLead = 8;  // the queue's nodes are scattered over the Dag's arrays
+  for (size_t i = first; i < out.size(); ++i) {
+    if (i + kLead < out.size()) dag.prefetch_links(out[i + kLead]);
     for (int k = 0; k < 2; ++k)
       if (const uint32_t c = dag.hierarchy_child(out[i], k); c != kNone && is_split(c)) out.push_back(c);
+  }
 }
 
 }  // namespace
