@@ -114,6 +114,7 @@ class SelectiveRefinement {
   // (kNone otherwise), so the common case skips a push and a pop.
   uint32_t justify(uint32_t v);
   uint32_t keep(uint32_t v, bool parent_kept, float margin);
+  bool settled_child(uint32_t c);
   bool walk_qrefine(const Slot& slot, float& margin) const;
   uint32_t visit_active(uint32_t v, float& margin, FrameStats& stats);
   uint32_t visit_split(uint32_t v, float& margin);
@@ -129,6 +130,7 @@ class SelectiveRefinement {
   ViewCriteria view_;
   bool has_view_ = false;
   uint32_t frame_ = 0;
+  uint32_t counted_ = 0;  // evaluations keep() counted for the visits it saved (this frame)
   // The last frame changed nothing (no operation, cap or movement); valid while view, options,
   // hierarchy size and mesh changes() stay as they were then.
   bool settled_ = false;

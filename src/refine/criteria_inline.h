@@ -43,7 +43,10 @@ inline float dot3(const float a[3], const float b[3]) { return a[0] * b[0] + a[1
   float d[3];
   for (int k = 0; k < 3; ++k) d[k] = node.p[k] - view.eye[k];
   const float along = dot3(node.axis, d);
-  if (along <= node.radius) return false;  // cos α <= 1: the bound below cannot exceed r
+  // The bound below is at most (a·d) cos α, rounding included (it subtracts a term >= 0 and compares
+  // with r plus a term >= 0, and rounding is monotone), so this skips the square roots with the same
+  // answer; cos α <= 1 makes it hold whenever a·d <= r.
+  if (along * node.cos_a <= node.radius) return false;
   const float* a = node.axis;
   const float c[3] = {a[1] * d[2] - a[2] * d[1], a[2] * d[0] - a[0] * d[2], a[0] * d[1] - a[1] * d[0]};
   const float across = std::sqrt(dot3(c, c));  // ‖a × d‖: accurate where sqrt(‖d‖² − (a·d)²) cancels
@@ -57,6 +60,9 @@ inline float dot3(const float a[3], const float b[3]) { return a[0] * b[0] + a[1
   const float d2 = dot3(d, d);
   const float bound = view.kappa2 * d2;  // kappa² ‖d‖²
   if (node.mu2 > bound) return true;
+  // δ² ≤ κ²‖d‖² settles the second test without a·d: ‖d‖² − (d·a)² ≤ ‖d‖², so δ²(‖d‖² − (d·a)²) ≤
+  // κ²‖d‖⁴ (products of values >= 0, and rounding is monotone), the same answer.
+  if (node.delta2 <= bound) return false;
   const float along = dot3(d, node.axis);
   return node.delta2 * (d2 - along * along) > bound * d2;
 }
