@@ -111,6 +111,7 @@ void SelectiveRefinement::grow(uint32_t end) {
   if (end <= slots_.size()) return;
   slots_.reserve(slot_capacity(end, slots_.capacity(), known, sizeof(slots_[0])));
   slots_.resize(slot_size(end, slots_.size(), slots_.capacity(), known));
+  slot_count_ = uint32_t(slots_.size());
 }
 
 void SelectiveRefinement::load(uint32_t v) {
@@ -176,7 +177,7 @@ uint32_t SelectiveRefinement::dependency(uint32_t slot) {
 // pairs cost no stack entry. Not with geomorphs, which see every visit.
 [[gnu::always_inline]] inline uint32_t SelectiveRefinement::keep(uint32_t v, bool parent_kept, float margin) {
   const uint32_t t = slots_[v].first_child;
-  if (t + 1 >= slots_.size()) grow(t + 2);
+  if (t + 1 >= slot_count_) grow(t + 2);
   slots_[v].kept = frame_;
   __builtin_prefetch(&slots_[t]);
   uint32_t forced[2], count = 0;
