@@ -111,6 +111,7 @@ void SelectiveRefinement::grow(uint32_t end) {
   if (end <= slots_.size()) return;
   slots_.reserve(slot_capacity(end, slots_.capacity(), known, sizeof(slots_[0])));
   slots_.resize(slot_size(end, slots_.size(), slots_.capacity(), known));
+  slot_count_ = uint32_t(slots_.size());
 }
 
 void SelectiveRefinement::load(uint32_t v) {
@@ -160,6 +161,7 @@ uint32_t SelectiveRefinement::dependency(uint32_t slot) {
     const uint64_t pa = a.node >> (da - d), pb = b.node >> (db - d);
     dep = h.find({a.tree, pa >> std::bit_width(pa ^ pb)});
     if (dep == kNone) return kNone;  // not known (only while the node is not split): ask again later
+    state(dep);  // decoded now, so keep() reads its slot without the checks
   }
   slots_[slot].dependency = dep;
   return dep;
@@ -169,9 +171,13 @@ uint32_t SelectiveRefinement::dependency(uint32_t slot) {
 // reached as the child of a kept node (or is a root), so its parent needs no look. `margin`: v's plane
 // bound, for its children. The stack gets v_t, v_u, then the forced parent and dependency (popped first);
 // with nothing forced v_u would be popped at once, so it is returned instead, for the caller to go on.
+// Then too, an active child under τ needs nothing but its evaluation counted (it is never kept and its
+// visit changes nothing); v_u's visit would come at once and v_t's right after, so such a child is
+// counted here instead of visited, and v_t goes without the stack when v_u needs nothing: the front's
+// pairs cost no stack entry. Not with geomorphs, which see every visit.
 [[gnu::always_inline]] inline uint32_t SelectiveRefinement::keep(uint32_t v, bool parent_kept, float margin) {
   const uint32_t t = slots_[v].first_child;
-  if (t + 1 >= slots_.size()) grow(t + 2);
+  if (t + 1 >= slot_count_) grow(t + 2);
   slots_[v].kept = frame_;
   __builtin_prefetch(&slots_[t]);
   uint32_t forced[2], count = 0;
@@ -180,12 +186,27 @@ uint32_t SelectiveRefinement::dependency(uint32_t slot) {
     if (parent != kNone && state(parent).kept != frame_) forced[count++] = parent;
   }
   const uint32_t dep = slots_[v].dependency != kUnknown ? slots_[v].dependency : dependency(v);  // once per slot
-  if (dep != kNone && state(dep).kept != frame_) forced[count++] = dep;
+  if (dep != kNone && slots_[dep].kept != frame_) forced[count++] = dep;
+  if (count == 0) {
+    if (!morphs_.enabled() && settled_child(t + 1)) {
+      ++counted_;
+      if (!settled_child(t)) return t;
+      ++counted_;
+      return kNone;
+    }
+    push_eval(t, margin);
+    return t + 1;
+  }
   push_eval(t, margin);
-  if (count == 0) return t + 1;
   push_eval(t + 1, margin);
   for (uint32_t i = 0; i < count; ++i) push_forced(forced[i]);
   return kNone;
+}
+
+// An active child of a kept node that does not want a split (the screen test is the one that fails
+// most): its visit would change nothing.
+[[gnu::always_inline]] inline bool SelectiveRefinement::settled_child(uint32_t c) {
+  return mesh_->is_active_recorded(c) && !criteria_detail::screen_error_exceeds_inline(view_, grown_state(c).criteria);
 }
 
 // A split node the target keeps (a forced entry): evaluate its children, and keep its parent and its
@@ -351,6 +372,7 @@ FrameStats SelectiveRefinement::adapt() {
   // at once); a forced entry keeps a node whatever its qrefine. Each node is evaluated at most once and
   // kept at most once.
   uint32_t evaluated = 0;  // a local, not stats.evaluated: the loop's calls may write stats
+  counted_ = 0;
   for (uint32_t r = 0; r < h.root_count(); ++r) {
     uint32_t v = h.root_slot(r);
     if (v >= slots_.size()) grow(v + 1);
@@ -369,7 +391,7 @@ FrameStats SelectiveRefinement::adapt() {
       }
     }
   }
-  stats.evaluated = evaluated;
+  stats.evaluated = evaluated + counted_;
   collapse_unwanted(stats);
   if (morphs_.enabled()) stats.morphing = uint32_t(morphs_.advance(*mesh_));
   stats.missing = uint32_t(missing_.size());

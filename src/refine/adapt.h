@@ -114,6 +114,7 @@ class SelectiveRefinement {
   // (kNone otherwise), so the common case skips a push and a pop.
   uint32_t justify(uint32_t v);
   uint32_t keep(uint32_t v, bool parent_kept, float margin);
+  bool settled_child(uint32_t c);
   bool walk_qrefine(const Slot& slot, float& margin) const;
   uint32_t visit_active(uint32_t v, float& margin, FrameStats& stats);
   uint32_t visit_split(uint32_t v, float& margin);
@@ -129,6 +130,7 @@ class SelectiveRefinement {
   ViewCriteria view_;
   bool has_view_ = false;
   uint32_t frame_ = 0;
+  uint32_t counted_ = 0;  // evaluations keep() counted for the visits it saved (this frame)
   // The last frame changed nothing (no operation, cap or movement); valid while view, options,
   // hierarchy size and mesh changes() stay as they were then.
   bool settled_ = false;
@@ -146,6 +148,7 @@ class SelectiveRefinement {
     uint32_t loaded = 0;              // criteria, first_child and reach are set
   };
   BigVector<Slot> slots_;  // on huge pages (common/huge_pages.h): the walk reads them at random
+  uint32_t slot_count_ = 0;  // slots_.size(), one compare for the walk
   uint32_t synced_ = 0;             // hierarchy size whose new children pairs the loaded slots know of
   std::vector<uint32_t> reported_;  // per slot: frame in which it went to missing_ (grown on use)
   // The plane bounds of walk_qrefine: every loaded position's coordinates are within ±coordinate_bound_,

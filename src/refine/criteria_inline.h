@@ -15,20 +15,18 @@ constexpr float kCullSlack = 1e-5f;
 
 inline float dot3(const float a[3], const float b[3]) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
 
-// What the tests share for one node: d = p − e, ‖d‖² and a·d (a the cone axis, along which delta is
-// measured). Each test takes it ready, so a caller running several computes it once; the values are the
-// ones each test computed alone (a·d and d·a are the same products, summed in the same order).
+// What the tests share for one node: d = p − e and ‖d‖². Each test takes it ready, so a caller running
+// several computes it once, with the values each test computed alone. a·d (a the cone axis, along which
+// delta is measured) stays in the tests that need it: both settle most nodes before it.
 struct EyeOffset {
   float d[3];
   float d2;
-  float along;
 };
 
 [[gnu::always_inline]] inline EyeOffset eye_offset(const ViewCriteria& view, const NodeCriteria& node) {
   EyeOffset o;
   for (int k = 0; k < 3; ++k) o.d[k] = node.p[k] - view.eye[k];
   o.d2 = dot3(o.d, o.d);
-  o.along = dot3(o.d, node.axis);
   return o;
 }
 
@@ -60,13 +58,17 @@ struct EyeOffset {
 // Hoppe's test (a·d > 0 ∧ (a·d)² > ‖d‖² sin²α) is this with r = 0.
 [[gnu::always_inline]] inline bool back_facing_inline(const NodeCriteria& node, const EyeOffset& o) {
   if (node.cos_a <= 0) return false;
-  if (o.along <= node.radius) return false;  // cos α <= 1: the bound below cannot exceed r
+  const float along = dot3(node.axis, o.d);
+  // The bound below is at most (a·d) cos α, rounding included (it subtracts a term >= 0 and compares
+  // with r plus a term >= 0, and rounding is monotone), so this skips the square roots with the same
+  // answer; cos α <= 1 makes it hold whenever a·d <= r.
+  if (along * node.cos_a <= node.radius) return false;
   const float* a = node.axis;
   const float* d = o.d;
   const float c[3] = {a[1] * d[2] - a[2] * d[1], a[2] * d[0] - a[0] * d[2], a[0] * d[1] - a[1] * d[0]};
   const float across = std::sqrt(dot3(c, c));  // ‖a × d‖: accurate where sqrt(‖d‖² − (a·d)²) cancels
   const float distance = std::sqrt(o.d2);
-  return o.along * node.cos_a - across * node.sin_a > node.radius + kCullSlack * distance;
+  return along * node.cos_a - across * node.sin_a > node.radius + kCullSlack * distance;
 }
 
 [[gnu::always_inline]] inline bool back_facing_inline(const ViewCriteria& view, const NodeCriteria& node) {
@@ -77,7 +79,11 @@ struct EyeOffset {
                                                                const EyeOffset& o) {
   const float bound = view.kappa2 * o.d2;  // kappa² ‖d‖²
   if (node.mu2 > bound) return true;
-  return node.delta2 * (o.d2 - o.along * o.along) > bound * o.d2;
+  // δ² ≤ κ²‖d‖² settles the second test without a·d: ‖d‖² − (d·a)² ≤ ‖d‖², so δ²(‖d‖² − (d·a)²) ≤
+  // κ²‖d‖⁴ (products of values >= 0, and rounding is monotone), the same answer.
+  if (node.delta2 <= bound) return false;
+  const float along = dot3(o.d, node.axis);
+  return node.delta2 * (o.d2 - along * along) > bound * o.d2;
 }
 
 [[gnu::always_inline]] inline bool screen_error_exceeds_inline(const ViewCriteria& view, const NodeCriteria& node) {
@@ -89,8 +95,9 @@ struct EyeOffset {
 [[gnu::always_inline]] inline float screen_ratio2_inline(const ViewCriteria& view, const NodeCriteria& node,
                                                          const EyeOffset& o) {
   const float d2 = std::max(o.d2, 1e-30f);
+  const float along = dot3(o.d, node.axis);
   const float bound = std::max(view.kappa2 * d2, 1e-30f);
-  return std::max(node.mu2, node.delta2 * (d2 - o.along * o.along) / d2) / bound;
+  return std::max(node.mu2, node.delta2 * (d2 - along * along) / d2) / bound;
 }
 
 [[gnu::always_inline]] inline bool qrefine_inline(const ViewCriteria& view, const NodeCriteria& node, const EyeOffset& o) {
@@ -107,7 +114,8 @@ struct EyeOffset {
   const EyeOffset o = eye_offset(view, node);
   if (!qrefine_inline(view, node, o)) return 0;
   const float d2 = std::max(o.d2, 1e-30f);
-  const float error = std::max(node.mu2 * d2, node.delta2 * (d2 - o.along * o.along)) / (d2 * d2);
+  const float along = dot3(o.d, node.axis);
+  const float error = std::max(node.mu2 * d2, node.delta2 * (d2 - along * along)) / (d2 * d2);
   return std::max(error, 1e-30f);  // qrefine held: stay > 0 even when it underflows
 }
 
