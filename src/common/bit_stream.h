@@ -3,6 +3,8 @@
 // (pm/split_codec.h); every read is bounds-checked and fails with pms::Error, never reads past the data.
 #pragma once
 #include <algorithm>
+#include <bit>
+#include <cstring>
 #include <cstdint>
 #include <span>
 #include <string>
@@ -16,29 +18,43 @@ namespace pms {
 class BitWriter {
  public:
   void bits(uint64_t value, unsigned n) {  // n <= 64; bits of value above n are ignored
-    // A byte (or what is left of the last one) at a time: servers copy records with it.
-    while (n) {
-      const unsigned used = unsigned(size_ & 7), take = std::min(n, 8 - used);
-      if (used == 0) bytes_.push_back(0);
-      bytes_.back() |= uint8_t((value & ((1u << take) - 1)) << used);
-      value >>= take;
-      n -= take;
-      size_ += take;
-    }
+    // Whole bytes at a time: servers copy records with it (append).
+    if (n == 0) return;
+    if (n < 64) value &= (uint64_t(1) << n) - 1;
+    const unsigned used = unsigned(size_ & 7);
+    size_t byte = size_t(size_ >> 3);
+    size_ += n;
+    bytes_.resize(size_t((size_ + 7) >> 3));  // the new bytes are zero
+    bytes_[byte] |= uint8_t(value << used);
+    for (value >>= 8 - used; ++byte < bytes_.size(); value >>= 8) bytes_[byte] = uint8_t(value);
   }
   void bit(unsigned b) {
     if ((size_ & 7) == 0) bytes_.push_back(0);
     bytes_.back() |= uint8_t((b & 1) << (size_ & 7));
     ++size_;
   }
-  void append(const BitWriter& other) {
-    uint64_t i = 0;
-    for (; i + 8 <= other.size_; i += 8) bits(other.bytes_[i >> 3], 8);
-    if (i < other.size_) bits(other.bytes_[i >> 3], unsigned(other.size_ - i));
+  // Bits [begin, end) of `data`, as a BitReader over it would read them.
+  void append(std::span<const uint8_t> data, uint64_t begin, uint64_t end) {
+    if (end > 8 * uint64_t(data.size()) || begin > end) fail("bit stream", "appending bits outside the data");
+    bytes_.reserve(size_t((size_ + (end - begin) + 7) >> 3));
+    for (unsigned n; begin < end; begin += n) {
+      n = unsigned(std::min<uint64_t>(56, end - begin));  // 56 bits from any offset fit in 8 bytes
+      const size_t first = size_t(begin >> 3), count = std::min<size_t>(8, data.size() - first);
+      uint64_t word = 0;
+      if (count == 8 && std::endian::native == std::endian::little) {
+        std::memcpy(&word, data.data() + first, 8);  // one load where the data has 8 bytes left
+      } else {
+        for (size_t i = 0; i < count; ++i) word |= uint64_t(data[first + i]) << (8 * i);
+      }
+      bits(word >> (begin & 7), n);
+    }
   }
+  void append(const BitWriter& other) { append(other.bytes_, 0, other.size_); }
+  void reserve(uint64_t bits) { bytes_.reserve(size_t((bits + 7) >> 3)); }
   uint64_t size() const { return size_; }  // in bits
   // The bytes written; the last one is padded with zero bits.
   const std::vector<uint8_t>& bytes() const { return bytes_; }
+  std::vector<uint8_t> take() && { return std::move(bytes_); }
 
  private:
   std::vector<uint8_t> bytes_;

@@ -14,9 +14,8 @@ struct BandEntry {
   uint32_t level;  // below the band's root
 };
 
-void copy_bits(BitReader& from, uint64_t count, BitWriter& to) {
-  for (; count >= 64; count -= 64) to.bits(from.bits(64, "record"), 64);
-  if (count) to.bits(from.bits(unsigned(count), "record"), unsigned(count));
+void copy_record(const StoredRecords& records, uint32_t node, BitWriter& w) {
+  w.append(records.bits, records.offsets[node], records.offsets[node + 1]);
 }
 
 // A child whose info can refine has a split of its own (every leaf's info never refines); for one whose
@@ -28,11 +27,14 @@ bool child_has_split(const RefineInfo& info, BitReader& r) { return !never_refin
 uint32_t write_split_band(const ModelData& model, const StoredRecords& records, uint32_t root, uint32_t depth,
                           BitWriter& w) {
   if (model.is_leaf(root)) fail("split band", "node " + std::to_string(root) + " is a leaf");
+  if (depth == 0) {  // most requests: no queue to allocate
+    copy_record(records, root, w);
+    return 1;
+  }
   std::vector<BandEntry> queue{{root, 0}};
   for (size_t next = 0; next < queue.size(); ++next) {
     const auto [node, level] = queue[next];
-    BitReader record(records.bits, records.offsets[node], records.offsets[node + 1], "stored record");
-    copy_bits(record, record.bits_left(), w);
+    copy_record(records, node, w);
     if (level == depth) continue;
     for (uint32_t child = model.first_child[node]; child < model.first_child[node] + 2; ++child) {
       const bool split = !model.is_leaf(child);

@@ -162,6 +162,7 @@ SplitRequest decode_split_request(std::span<const uint8_t> code, const SplitRequ
     r.fail(ErrorCode::bad_message, "depth", std::to_string(depth) + " levels, over the limit of " +
                                                 std::to_string(limits.max_depth));
   request.depth = uint32_t(depth);
+  request.ids.reserve(std::min<size_t>(limits.max_ids, 4 * code.size()));  // an id takes 2 bits or more
   const uint64_t trees = r.golomb("tree count") + 1;
   if (trees > limits.max_ids) r.fail(ErrorCode::too_large, "tree count", std::to_string(trees) + " trees");
   uint64_t tree = 0;

@@ -34,24 +34,27 @@ HttpAnswer answer_request(const Catalogue& catalogue, const HttpLimits& limits,
   return route(catalogue, limits, r);
 }
 
-HttpResponse make_response(const HttpAnswer& answer, bool head, bool keep_alive, unsigned version) {
-  HttpResponse response{http::int_to_status(unsigned(answer.status)), version};
-  response.set(http::field::server, "pmstream");
-  response.set(http::field::content_type, answer.content_type);
-  if (!answer.etag.empty()) response.set(http::field::etag, answer.etag);
-  response.set(http::field::cache_control, answer.cacheable ? "public, max-age=31536000, immutable" : "no-store");
-  if (!answer.allow.empty()) response.set(http::field::allow, answer.allow);
-  if (answer.status == 503) response.set(http::field::retry_after, "1");
-  response.keep_alive(keep_alive);
-  const std::span<const uint8_t> body = answer.body();
-  if (answer.status == 304) return response;  // no body and no length (RFC 9110 §15.4.5)
-  if (head) {
-    response.content_length(body.size());
-  } else {
-    response.body() = {body.data(), body.size()};
-    response.prepare_payload();
+void write_response_head(const HttpAnswer& answer, bool keep_alive, unsigned version, std::string& out) {
+  const auto header = [&out](std::string_view name, std::string_view value) {
+    out.append(name).append(": ").append(value).append("\r\n");
+  };
+  const auto status = http::int_to_status(unsigned(answer.status));
+  out.assign(version == 10 ? "HTTP/1.0 " : "HTTP/1.1 ");
+  out.append(std::to_string(answer.status)).append(" ").append(view_of(http::obsolete_reason(status))).append("\r\n");
+  if (answer.status != 304) {  // a 304 has neither (RFC 9110 §15.4.5): the cache keeps the 200's
+    header("Content-Type", answer.content_type);
+    header("Content-Length", std::to_string(answer.body().size()));
   }
-  return response;
+  if (!answer.etag.empty()) header("ETag", answer.etag);
+  // No "public": the server takes no Authorization, and max-age alone lets a shared cache store the
+  // answer (RFC 9111 §3).
+  header("Cache-Control", answer.cacheable ? "max-age=31536000, immutable" : "no-store");
+  if (!answer.allow.empty()) header("Allow", answer.allow);
+  if (answer.status == 503) header("Retry-After", "1");
+  // HTTP/1.1 keeps the connection and HTTP/1.0 closes it unless the header says otherwise (RFC 9112 §9.3).
+  if (version >= 11 && !keep_alive) header("Connection", "close");
+  if (version < 11 && keep_alive) header("Connection", "keep-alive");
+  out.append("\r\n");
 }
 
 }  // namespace pms::server

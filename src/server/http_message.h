@@ -1,11 +1,12 @@
-// Between Beast's HTTP messages and the routes (http_routes.h): the parser's bounds, the answer to a
-// request Beast could not parse, and an answer as a response. Beast is slow to compile: only this file's
-// .cpp, http_server.cpp and the fuzz target include this header (docs/architecture.md, "Stack").
+// Between Beast's HTTP parser and the routes (http_routes.h): the parser's bounds, the answer to a
+// request Beast could not parse, and an answer's status line and headers. Beast is slow to compile: only
+// this file's .cpp, http_server.cpp and the fuzz target include this header (docs/architecture.md, "Stack").
 #pragma once
 #include <utility>  // before asio with C++20 (docs/architecture.md, "Stack")
 #include <boost/beast/core.hpp>
 #include <boost/beast/http.hpp>
 #include <cstdint>
+#include <string>
 #include <string_view>
 #include <vector>
 
@@ -17,8 +18,6 @@ namespace pms::server {
 
 namespace http = boost::beast::http;
 using HttpParser = http::request_parser<http::vector_body<uint8_t>>;
-// A span into the answer's bytes: the answer must outlive the response.
-using HttpResponse = http::response<http::span_body<const uint8_t>>;
 
 // A parser bounded by the limits (request line and headers, body).
 void bound_parser(HttpParser& parser, const HttpLimits& limits);
@@ -31,8 +30,9 @@ HttpAnswer parse_error_answer(const boost::beast::error_code& ec, std::string_vi
 HttpAnswer answer_request(const Catalogue& catalogue, const HttpLimits& limits,
                           const http::request<http::vector_body<uint8_t>>& request);
 
-// `answer` as a response; a HEAD request gets the headers only. Headers depend only on the answer and
-// keep_alive, never on the client or the time.
-HttpResponse make_response(const HttpAnswer& answer, bool head, bool keep_alive, unsigned version);
+// The status line and headers of `answer` (the same for GET and HEAD), replacing `out`'s text: only what
+// a cache needs (docs/protocol.md, "Receiver-driven over HTTP"), so they depend only on the answer and
+// keep_alive, never on the client or the time. `version` is the request's (10 or 11).
+void write_response_head(const HttpAnswer& answer, bool keep_alive, unsigned version, std::string& out);
 
 }  // namespace pms::server

@@ -3,6 +3,7 @@
 // "Receiver-driven over HTTP"); a multilevel model's go to multilevel_routes.h. Each URL has one answer for a given model file: strong ETags, immutable.
 #define XXH_INLINE_ALL
 #include <xxhash.h>
+#include <array>
 #include <charconv>
 #include <cstdio>
 #include <nlohmann/json.hpp>
@@ -24,12 +25,20 @@ namespace {
 using protocol::ErrorCode;
 using protocol::ProtocolError;
 
-std::vector<std::string_view> segments_of(std::string_view path) {
-  std::vector<std::string_view> segments;
-  while (!path.empty() && segments.size() <= 8) {
+// At most kMaxSegments + 1 segments, so that a URL with too many ends in no route.
+constexpr size_t kMaxSegments = 8;
+struct Segments {
+  std::array<std::string_view, kMaxSegments + 1> at;
+  size_t count = 0;
+  std::span<const std::string_view> all() const { return {at.data(), count}; }
+};
+
+Segments segments_of(std::string_view path) {
+  Segments segments;
+  while (!path.empty() && segments.count <= kMaxSegments) {
     path.remove_prefix(1);  // the '/'
     const size_t end = std::min(path.find('/'), path.size());
-    segments.push_back(path.substr(0, end));
+    segments.at[segments.count++] = path.substr(0, end);
     path.remove_prefix(end);
   }
   return segments;
@@ -42,20 +51,23 @@ std::string hex64(uint64_t v) {
 }
 
 // A strong ETag from what the bytes depend on: the model file's content, the wire's quantization, the
-// record format and the canonical URL of the resource.
-std::string etag_of(const ServedModel& model, const std::string& resource) {
+// record format and the canonical URL of the resource, "/models/NAME" then `resource`'s pieces, hashed as
+// they are, without building the URL.
+std::string etag_of(const ServedModel& model, std::initializer_list<std::string_view> resource) {
   XXH64_state_t state;
   XXH64_reset(&state, 0);
   const uint64_t content = model.file->content_checksum();
   const uint32_t format[2] = {model.context.grid.bits, model.records_format};
   XXH64_update(&state, &content, sizeof content);
   XXH64_update(&state, format, sizeof format);
-  XXH64_update(&state, resource.data(), resource.size());
-  return '"' + hex64(XXH64_digest(&state)) + '"';
+  for (std::string_view piece : {std::string_view("/models/"), std::string_view(model.name)})
+    XXH64_update(&state, piece.data(), piece.size());
+  for (std::string_view piece : resource) XXH64_update(&state, piece.data(), piece.size());
+  return etag_text(XXH64_digest(&state));
 }
 
 // If-None-Match uses the weak comparison (RFC 9110 §13.1.2): W/ prefixes are ignored.
-bool matches(std::string_view if_none_match, const std::string& etag) {
+bool matches(std::string_view if_none_match, std::string_view etag) {
   while (!if_none_match.empty()) {
     const size_t comma = std::min(if_none_match.find(','), if_none_match.size());
     std::string_view tag = if_none_match.substr(0, comma);
@@ -94,13 +106,13 @@ HttpAnswer catalogue_answer(const Catalogue& catalogue, const HttpRequest& reque
   }
   for (const auto& model : catalogue.multilevel_models()) models.push_back(multilevel_entry(*model));
   const std::string text = nlohmann::json{{"models", models}}.dump() + "\n";
-  HttpAnswer answer = fresh(request, '"' + hex64(XXH64(text.data(), text.size(), 0)) + '"', "application/json");
+  HttpAnswer answer = fresh(request, etag_text(XXH64(text.data(), text.size(), 0)), "application/json");
   if (answer.status == 200) answer.owned.assign(text.begin(), text.end());
   return answer;
 }
 
 HttpAnswer base_answer(const ServedModel& model, const HttpRequest& request) {
-  HttpAnswer answer = fresh(request, etag_of(model, "/models/" + model.name + "/base"), "application/octet-stream");
+  HttpAnswer answer = fresh(request, etag_of(model, {"/base"}), "application/octet-stream");
   if (answer.status == 200) {
     answer.shared = model.base_frame;
     answer.shared_offset = protocol::kFrameHeaderBytes;
@@ -108,11 +120,11 @@ HttpAnswer base_answer(const ServedModel& model, const HttpRequest& request) {
   return answer;
 }
 
-// The records of a decoded request; `resource` is its canonical URL (the GET form, also for a POST).
+// The records of a decoded request; `etag` is its canonical URL's (the GET form's, also for a POST).
 HttpAnswer splits_answer(const ServedModel& model, const HttpLimits& limits, const HttpRequest& request,
-                         const protocol::SplitRequest& split_request, const std::string& resource) {
+                         const protocol::SplitRequest& split_request, const std::string& etag) {
   const std::vector<uint32_t> nodes = requested_nodes(model.model(), split_request, limits.max_response_splits);
-  HttpAnswer answer = fresh(request, etag_of(model, resource), "application/octet-stream");
+  HttpAnswer answer = fresh(request, etag, "application/octet-stream");
   answer.split_resource = true;
   if (answer.status == 200) {
     answer.owned = split_records_body(model, split_request, nodes);
@@ -125,7 +137,7 @@ HttpAnswer splits_answer(const ServedModel& model, const HttpLimits& limits, con
 HttpAnswer codec_answer(const ServedModel& model, const HttpRequest& request) {
   if (model.records_format != 2)
     return error_answer(404, "model '" + model.name + "' is served in records format 1, which has no code tables");
-  HttpAnswer answer = fresh(request, etag_of(model, "/models/" + model.name + "/codec"), "application/octet-stream");
+  HttpAnswer answer = fresh(request, etag_of(model, {"/codec"}), "application/octet-stream");
   if (answer.status == 200) answer.shared = model.codec_tables;
   return answer;
 }
@@ -138,10 +150,6 @@ protocol::SplitRequest decode_code(const ServedModel& model, const HttpLimits& l
   bounds.max_depth = limits.max_request_depth;
   bounds.max_bytes = limits.max_body_bytes;
   return protocol::decode_split_request(code, bounds);
-}
-
-std::string splits_resource(const ServedModel& model, std::span<const uint8_t> code) {
-  return "/models/" + model.name + "/splits/" + protocol::base64url_encode(code);
 }
 
 HttpAnswer block_answer(const ServedModel& model, const HttpLimits& limits, const HttpRequest& request,
@@ -160,9 +168,8 @@ HttpAnswer block_answer(const ServedModel& model, const HttpLimits& limits, cons
     return error_answer(400, "a block of depth " + std::to_string(depth) + " starts at a node whose depth is a "
                              "multiple of " + std::to_string(depth + 1) + "; " + to_string(id) + " is at depth " +
                              std::to_string(id.depth()));
-  const std::string resource = "/models/" + model.name + "/blocks/" + std::string(at[0]) + "/" +
-                               std::string(at[1]) + "/" + std::string(at[2]);
-  return splits_answer(model, limits, request, {uint32_t(depth), {id}}, resource);
+  return splits_answer(model, limits, request, {uint32_t(depth), {id}},
+                       etag_of(model, {"/blocks/", at[0], "/", at[1], "/", at[2]}));
 }
 
 HttpAnswer model_route(const Catalogue& catalogue, const HttpLimits& limits, const HttpRequest& request,
@@ -183,13 +190,15 @@ HttpAnswer model_route(const Catalogue& catalogue, const HttpLimits& limits, con
   if (s[2] == "base") return base_answer(*model, request);
   if (s[2] == "codec") return codec_answer(*model, request);
   if (s[2] == "blocks") return block_answer(*model, limits, request, s.subspan(3));
-  if (post_route) return splits_answer(*model, limits, request, decode_code(*model, limits, request.body),
-                                       splits_resource(*model, request.body));
+  if (post_route)
+    return splits_answer(*model, limits, request, decode_code(*model, limits, request.body),
+                         etag_of(*model, {"/splits/", protocol::base64url_encode(request.body)}));
   if (s[3].size() > (uint64_t(limits.max_body_bytes) * 4 + 2) / 3)
     return error_answer(414, "a request code of over " + std::to_string(limits.max_body_bytes) + " bytes");
   const auto code = protocol::base64url_decode(s[3]);
   if (!code) return error_answer(400, "the request code is not canonical base64url (RFC 4648 §5, no padding)");
-  return splits_answer(*model, limits, request, decode_code(*model, limits, *code), splits_resource(*model, *code));
+  // Strict base64url has one text per code: the segment is the canonical URL's.
+  return splits_answer(*model, limits, request, decode_code(*model, limits, *code), etag_of(*model, {"/splits/", s[3]}));
 }
 
 }  // namespace
@@ -198,6 +207,12 @@ bool parse_decimal(std::string_view text, uint64_t& value) {
   if (text.empty() || (text.size() > 1 && text[0] == '0')) return false;
   const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), value);
   return ec == std::errc() && end == text.data() + text.size();
+}
+
+std::string etag_text(uint64_t hash) {
+  uint8_t bytes[8];
+  for (int i = 0; i < 8; ++i) bytes[i] = uint8_t(hash >> (56 - 8 * i));
+  return '"' + protocol::base64url_encode(bytes) + '"';
 }
 
 HttpAnswer fresh(const HttpRequest& request, const std::string& etag, const char* content_type) {
@@ -228,7 +243,8 @@ HttpAnswer route(const Catalogue& catalogue, const HttpLimits& limits, const Htt
     return error_answer(414, "the URL is over " + std::to_string(limits.max_target_bytes) + " bytes; POST large requests");
   if (request.target.empty() || request.target[0] != '/' || request.target.find('?') != std::string_view::npos)
     return error_answer(400, "the URL must be a path without a query string");
-  const std::vector<std::string_view> s = segments_of(request.target);
+  const Segments segments = segments_of(request.target);
+  const std::span<const std::string_view> s = segments.all();
   try {
     if (s.size() == 1 && s[0] == "models") {
       if (request.method != "GET" && request.method != "HEAD") return method_not_allowed("GET, HEAD");

@@ -23,7 +23,7 @@ struct HttpRequest {
 
 struct HttpAnswer {
   int status = 200;
-  std::string content_type = "text/plain; charset=utf-8";
+  std::string_view content_type = "text/plain; charset=utf-8";  // a literal
   std::string etag;        // strong, quoted; empty for errors
   bool cacheable = false;  // immutable for a year; errors are not stored
   std::string allow;       // the methods a 405's resource takes

@@ -21,10 +21,11 @@ void listen_on(boost::asio::ip::tcp::acceptor& acceptor, const std::string& host
   if (ec) fail(host + ":" + std::to_string(port), (what.empty() ? "" : what + ": ") + "cannot listen: " + ec.message());
 }
 
+unsigned io_thread_count(unsigned count) { return count ? count : std::max(1u, std::thread::hardware_concurrency()); }
+
 void start_io_threads(boost::asio::io_context& io, unsigned count, std::vector<std::thread>& threads,
                       const std::function<void(const std::string&)>& log) {
-  const unsigned n = count ? count : std::max(1u, std::thread::hardware_concurrency());
-  for (unsigned i = 0; i < n; ++i)
+  for (unsigned i = 0; i < io_thread_count(count); ++i)
     threads.emplace_back([&io, log] {
       for (;;) {
         try {

@@ -17,6 +17,9 @@ namespace pms::server {
 void listen_on(boost::asio::ip::tcp::acceptor& acceptor, const std::string& host, uint16_t port,
                const std::string& what);
 
+// The threads `count` asks for: itself, or one per core for 0.
+unsigned io_thread_count(unsigned count);
+
 // Starts `count` threads (0 = one per core) that run `io` until it stops. A handler that throws is
 // logged through `log` and the thread runs on: one connection's fault never stops the loop.
 void start_io_threads(boost::asio::io_context& io, unsigned count, std::vector<std::thread>& threads,

@@ -3,13 +3,13 @@
 #include <xxhash.h>
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
 #include <filesystem>
 
 #include "refine/multilevel_codec.h"
 #include "refine/multilevel_file.h"
 #include "refine/multilevel_loader.h"
 #include "refine/multilevel_mesh.h"
+#include "server/http_answers.h"
 #include "server/served_multilevel.h"
 
 namespace pms::server {
@@ -18,9 +18,7 @@ namespace {
 // Strong: the bytes' own hash with the canonical URL, so one URL has one ETag whatever process serves it.
 std::string etag_of(const std::vector<uint8_t>& bytes, const std::string& resource) {
   const uint64_t hashes[2] = {XXH64(bytes.data(), bytes.size(), 0), XXH64(resource.data(), resource.size(), 0)};
-  char text[20];
-  std::snprintf(text, sizeof text, "\"%016llx\"", (unsigned long long)XXH64(hashes, sizeof hashes, 0));
-  return text;
+  return etag_text(XXH64(hashes, sizeof hashes, 0));
 }
 
 using Bytes = std::shared_ptr<const std::vector<uint8_t>>;

@@ -13,6 +13,7 @@ using protocol::ProtocolError;
 std::vector<uint32_t> requested_nodes(const ModelData& model, const protocol::SplitRequest& request,
                                       uint32_t max_splits) {
   std::vector<uint32_t> nodes;
+  nodes.reserve(request.ids.size());
   const auto add = [&](uint32_t n) {
     if (nodes.size() >= max_splits)
       throw ProtocolError(ErrorCode::too_large, "the answer would carry more than " + std::to_string(max_splits) +

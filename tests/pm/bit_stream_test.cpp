@@ -47,6 +47,28 @@ TEST(BitStream, FieldsOfEveryWidthRoundTripAtEveryOffset) {
   EXPECT_EQ(again.bits_left(), 0u);
 }
 
+// Servers copy stored records with append: any window of any data, at any offset of the writer, near the
+// data's end too (where fewer than 8 bytes are left to load).
+TEST(BitStream, AppendCopiesAnyWindowBitForBit) {
+  std::mt19937_64 rng(11);
+  std::vector<uint8_t> data(37);
+  for (uint8_t& b : data) b = uint8_t(rng());
+  for (int trial = 0; trial < 2000; ++trial) {
+    const uint64_t end = rng() % (8 * data.size() + 1), begin = end ? rng() % (end + 1) : 0;
+    const unsigned lead = unsigned(rng() % 20);
+    BitWriter w;
+    w.bits(rng(), lead);
+    w.append(data, begin, end);
+    ASSERT_EQ(w.size(), lead + end - begin);
+    BitReader copied(w.bytes(), lead, w.size(), "copy");
+    for (uint64_t k = begin; k < end; ++k) ASSERT_EQ(copied.bit("bit"), (data[k >> 3] >> (k & 7)) & 1u) << begin << " " << end;
+    for (uint64_t k = w.size(); k < 8 * w.bytes().size(); ++k) ASSERT_EQ((w.bytes()[k >> 3] >> (k & 7)) & 1, 0);
+  }
+  BitWriter w;
+  EXPECT_THROW(w.append(data, 0, 8 * data.size() + 1), Error);
+  EXPECT_THROW(w.append(data, 9, 8), Error);
+}
+
 TEST(BitStream, ReadsStayInsideTheirWindow) {
   BitWriter w;
   w.bits(0xABCDEF, 24);

@@ -33,14 +33,9 @@ HttpTestClient::~HttpTestClient() = default;
 
 namespace {
 
-HttpReply send_request(tcp::socket& socket, beast::flat_buffer& buffer, http::request<http::vector_body<uint8_t>>& request) {
-  request.set(http::field::host, "127.0.0.1");
-  request.prepare_payload();
-  http::write(socket, request);
-  http::response_parser<http::vector_body<uint8_t>> parser;
-  parser.body_limit(64u << 20);
-  parser.skip(request.method() == http::verb::head);
-  http::read(socket, buffer, parser);
+using ResponseParser = http::response_parser<http::vector_body<uint8_t>>;
+
+HttpReply reply_of(ResponseParser& parser) {
   HttpReply reply;
   reply.status = int(parser.get().result_int());
   for (const auto& field : parser.get()) {
@@ -50,6 +45,17 @@ HttpReply send_request(tcp::socket& socket, beast::flat_buffer& buffer, http::re
   }
   reply.body = std::move(parser.get().body());
   return reply;
+}
+
+HttpReply send_request(tcp::socket& socket, beast::flat_buffer& buffer, http::request<http::vector_body<uint8_t>>& request) {
+  request.set(http::field::host, "127.0.0.1");
+  request.prepare_payload();
+  http::write(socket, request);
+  ResponseParser parser;
+  parser.body_limit(64u << 20);
+  parser.skip(request.method() == http::verb::head);
+  http::read(socket, buffer, parser);
+  return reply_of(parser);
 }
 
 }  // namespace
@@ -74,12 +80,9 @@ HttpReply HttpTestClient::post(const std::string& target, const std::vector<uint
 void HttpTestClient::send(const std::string& bytes) { asio::write(impl_->socket, asio::buffer(bytes)); }
 
 HttpReply HttpTestClient::read() {
-  http::response_parser<http::vector_body<uint8_t>> parser;
+  ResponseParser parser;
   http::read(impl_->socket, impl_->buffer, parser);
-  HttpReply reply;
-  reply.status = int(parser.get().result_int());
-  reply.body = std::move(parser.get().body());
-  return reply;
+  return reply_of(parser);
 }
 
 HttpReply HttpTestClient::raw(const std::string& bytes) {

@@ -151,7 +151,7 @@ TEST(MultilevelHttp, ResourcesAreCacheableAndHostileUrlsGet4xx) {
   EXPECT_EQ(head.body.size(), 32u);
   const test::HttpReply level = http.get("/models/ball/levels/0");
   ASSERT_EQ(level.status, 200);
-  EXPECT_EQ(level.header("cache-control"), "public, max-age=31536000, immutable");
+  EXPECT_EQ(level.header("cache-control"), "max-age=31536000, immutable");
   const std::string etag = level.header("etag");
   ASSERT_FALSE(etag.empty());
   EXPECT_EQ(http.get("/models/ball/levels/0").body, level.body) << "the same bytes for the same URL";
@@ -170,7 +170,7 @@ TEST(MultilevelHttp, ResourcesAreCacheableAndHostileUrlsGet4xx) {
   const test::HttpReply zlevel = http.get("/models/ball/compressed/levels/0");
   ASSERT_EQ(zlevel.status, 200);
   EXPECT_LT(zlevel.body.size(), level.body.size());
-  EXPECT_EQ(zlevel.header("cache-control"), "public, max-age=31536000, immutable");
+  EXPECT_EQ(zlevel.header("cache-control"), "max-age=31536000, immutable");
   const std::string zetag = zlevel.header("etag");
   EXPECT_FALSE(zetag.empty());
   EXPECT_NE(zetag, etag);
