@@ -64,8 +64,8 @@ class Dag {
     __builtin_prefetch(&faces_[n]);
   }
   void prefetch_edges(uint32_t n) const {
-    __builtin_prefetch(&in_edges_[in_begin_[n]]);
-    __builtin_prefetch(&out_edges_[out_begin_[n]]);
+    __builtin_prefetch(in_edges_.data() + in_begin_[n]);  // may be the end: a prefetch does not fault
+    __builtin_prefetch(out_edges_.data() + out_begin_[n]);
   }
   uint64_t base_faces() const { return base_faces_; }
   std::span<const uint32_t> roots() const { return roots_; }  // nodes without a hierarchy parent
