@@ -1,5 +1,6 @@
 #include "test_support.h"
 
+#include <algorithm>
 #include <atomic>
 #include <cstdio>
 #include <cstdlib>
@@ -69,6 +70,7 @@ std::filesystem::path temp_dir() {
   static std::atomic<int> counter{0};
   const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
   std::string name = info ? std::string(info->test_suite_name()) + "." + info->name() : "pmstream";
+  std::replace(name.begin(), name.end(), '/', '_');  // parameterized tests: one directory, not a tree
   auto dir = std::filesystem::temp_directory_path() /
              ("pmstream-test-" + std::to_string(getpid()) + "-" + std::to_string(counter++) + "-" + name);
   std::filesystem::create_directories(dir);
