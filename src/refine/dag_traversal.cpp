@@ -105,8 +105,8 @@ bool DagTraverser::qrefine_watch(uint32_t n, DagFrameStats& stats) {
   const criteria_detail::EyeOffset o = criteria_detail::eye_offset(view_, c);
   const bool exceeds = criteria_detail::screen_error_exceeds_inline(view_, c, o);
   float lowest;
-  if (exceeds && !criteria_detail::outside_frustum_inline(view_, c, o, lowest) && !criteria_detail::back_facing_inline(c, o))
-    return true;  // qrefine_inline's tests, in its order
+  if (exceeds && !criteria_detail::outside_frustum_inline(view_, c, o, lowest))  // qrefine_inline's tests, in its order
+    return !criteria_detail::back_facing_inline(c, o);  // back-facing: never watched, so nothing more to do
   consider_watch(n, o, exceeds);
   return false;
 }
