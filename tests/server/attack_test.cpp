@@ -6,6 +6,12 @@
 // within 3 s of the attack's end the server is back under 10 % of a core with every session slot free; SIGTERM
 // ends it within 1 s with its totals. The deadlines are cut to a second (the idle timeout to three) so each
 // attack meets them within the test.
+//
+// The p99 of 200 answers is their second slowest, and the virtual machines these tests run on stall a process
+// for 20-35 ms a few times a minute: one stall in either flight moves the ratio by 5x, with no attack at all
+// (a quiet flight's p99 ranged 4.6-35 ms over eight runs of one test). So a pair that misses the bound is
+// flown twice more, quiet then attacked, and the bound holds when the median of the pairs' ratios is within
+// it: an attack that really slows the server misses it in every pair.
 #include <gtest/gtest.h>
 #include <algorithm>
 #include <atomic>
@@ -14,6 +20,7 @@
 #include <memory>
 #include <random>
 #include <set>
+#include <string>
 #include <thread>
 #include <utility>
 
@@ -46,6 +53,7 @@ const milliseconds kIdleTimeout(3000);
 // a second per attacker, but not also a contest for the two cores between the attackers' own threads, the
 // good client and the server.
 const milliseconds kPace(5);
+constexpr double kMaxP99Ratio = 3;  // attacked / quiet
 
 const Fixture& terrain() {
   static const Fixture f = make_fixture(make_terrain(200000, 7), "terrain");
@@ -106,6 +114,10 @@ class Attack : public ::testing::Test {
     // Only the p99 bound reads the quiet flight, and a sanitizer build does not assert it: the attacked
     // flight's mesh and the sessions after it are checked in both builds.
     if (test::kSanitized) return;
+    fly_quiet();
+  }
+
+  void fly_quiet() {
     const double cpu_before = server_->cpu_seconds();
     quiet_ = fly(port(), "terrain", good_path(), kTolerance);
     quiet_cpu_ = server_->cpu_seconds() - cpu_before;
@@ -121,6 +133,9 @@ class Attack : public ::testing::Test {
   // time to build up says ready() when it has, `wait_for_ready` times, before the flight starts (5 s at most).
   // An attacker keeps on until landed() (and finishes what it must then), every wait under a deadline.
   void fly_during(int attackers, const std::function<void(int)>& attacker, int wait_for_ready = 0) {
+    attack_ = {attackers, attacker, wait_for_ready};
+    landed_ = false;
+    ready_ = 0;
     std::vector<std::thread> threads;
     for (int i = 0; i < attackers; ++i) threads.emplace_back(attacker, i);
     for (const Clock::time_point until = after(milliseconds(5000)); ready_ < wait_for_ready && Clock::now() < until;)
@@ -140,17 +155,37 @@ class Attack : public ::testing::Test {
   // What every attack must leave behind (issue 14's targets).
   void expect_unhurt(const char* attack) {
     const Clock::time_point deadline = attack_end_ + milliseconds(3000);
-    const double quiet_p99 = percentile(quiet_.latency_ms, 99), attacked_p99 = percentile(attacked_.latency_ms, 99);
     EXPECT_EQ(attacked_.mesh, good_mesh()) << "the attacked flight does not end with local refinement's mesh";
-    if (!test::kSanitized) {
-      EXPECT_LE(attacked_p99, 3 * quiet_p99) << "p99 over " << attacked_.latency_ms.size() << " answers";
-    }
     const double cpu = server_->wait_for_idle(0.10, remaining(deadline));
     EXPECT_LT(cpu, 0.10) << "server CPU (share of one core over a second) within 3 s of the attack's end";
     const uint64_t sessions = server_->wait_for_sessions(0, remaining(deadline));
     EXPECT_EQ(sessions, 0u) << "session slots still taken 3 s after the attack";
+    auto p99_ratio = [&] { return percentile(attacked_.latency_ms, 99) / percentile(quiet_.latency_ms, 99); };
+    std::vector<double> ratios;
+    std::string pairs;  // the pairs before the last, which the line below reports
+    if (!test::kSanitized) ratios.push_back(p99_ratio());
+    if (!ratios.empty() && ratios[0] > kMaxP99Ratio) {
+      for (int again = 0; again < 2; ++again) {
+        const AttackRun run = attack_;
+        const struct { std::vector<double> quiet, attacked; } previous{quiet_.latency_ms, attacked_.latency_ms};
+        fly_quiet();
+        fly_during(run.attackers, run.attacker, run.wait_for_ready);
+        EXPECT_EQ(attacked_.mesh, good_mesh()) << "a flight flown again under attack differs from local refinement";
+        pairs += "; before, p99 quiet " + format_ms(percentile(previous.quiet, 99)) + ", attacked " +
+                 format_ms(percentile(previous.attacked, 99));
+        ratios.push_back(p99_ratio());
+        EXPECT_LT(server_->wait_for_idle(0.10, milliseconds(3000)), 0.10) << "server CPU after a flight flown again";
+        EXPECT_EQ(server_->wait_for_sessions(0, milliseconds(3000)), 0u) << "sessions after a flight flown again";
+      }
+    }
+    if (!ratios.empty()) {
+      std::sort(ratios.begin(), ratios.end());
+      EXPECT_LE(ratios[ratios.size() / 2], kMaxP99Ratio)
+          << "median of the attacked / quiet p99 ratios over " << ratios.size() << " pairs of flights" << pairs;
+    }
     const nlohmann::json stats = server_->stats();
     EXPECT_EQ(stats.at("sessions_failed").get<uint64_t>(), 0u) << "an attack caused an internal fault";
+    const double quiet_p99 = percentile(quiet_.latency_ms, 99), attacked_p99 = percentile(attacked_.latency_ms, 99);
     const ServerProcess::Exit exit = server_->terminate(milliseconds(5000));
     EXPECT_TRUE(exit.exited) << "SIGTERM did not end the server in 5 s";
     EXPECT_LE(exit.seconds, 1.0) << "SIGTERM to exit";
@@ -158,7 +193,7 @@ class Attack : public ::testing::Test {
     EXPECT_TRUE(exit.stopped.has_value()) << "no \"stopped\" line with the totals";
     std::printf("[ attack   ] %s: p99 quiet %.1f ms (p50 %.1f, %zu answers, %.1f s, server CPU %.2f s), attacked %.1f ms "
                 "(p50 %.1f, %zu, %.1f s, server CPU %.2f s); CPU after %.1f %%; sessions after %llu; SIGTERM %.3f s; "
-                "timed out %llu, protocol errors %llu, refused %llu, longest turn %llu us%s\n",
+                "timed out %llu, protocol errors %llu, refused %llu, longest turn %llu us%s%s\n",
                 attack, quiet_p99, percentile(quiet_.latency_ms, 50), quiet_.latency_ms.size(), quiet_.seconds, quiet_cpu_,
                 attacked_p99, percentile(attacked_.latency_ms, 50), attacked_.latency_ms.size(), attacked_.seconds,
                 attacked_cpu_, 100 * cpu,
@@ -167,14 +202,28 @@ class Attack : public ::testing::Test {
                 (unsigned long long)stats.at("protocol_errors").get<uint64_t>(),
                 (unsigned long long)stats.at("sessions_refused").get<uint64_t>(),
                 (unsigned long long)stats.value("longest_turn_us", uint64_t(0)),
-                test::kSanitized ? " (sanitizer build: no quiet flight, the p99 bound is the release run's)" : "");
+                test::kSanitized ? " (sanitizer build: no quiet flight, the p99 bound is the release run's)" : "",
+                pairs.c_str());
   }
 
   static milliseconds remaining(Clock::time_point deadline) {
     return std::max(milliseconds(100), std::chrono::duration_cast<milliseconds>(deadline - Clock::now()));
   }
 
+  static std::string format_ms(double ms) {
+    char text[32];
+    std::snprintf(text, sizeof text, "%.1f ms", ms);
+    return text;
+  }
+
+  struct AttackRun {
+    int attackers = 0;
+    std::function<void(int)> attacker;
+    int wait_for_ready = 0;
+  };
+
   std::unique_ptr<ServerProcess> server_;
+  AttackRun attack_;  // what fly_during ran, to fly it again
   Flight quiet_, attacked_;
   double quiet_cpu_ = 0, attacked_cpu_ = 0;  // the server's CPU seconds during each flight
   std::atomic<bool> landed_{false};
