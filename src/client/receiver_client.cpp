@@ -387,9 +387,9 @@ ReceiverFrame ReceiverClient::run(const Camera& camera, bool settling) {
   bool wants = rerank(camera);
   out.rounds = wants;
   uint32_t answers = 0;
-  size_t attached = 0;  // this round
-  // A round's answers let adapt() go one level deeper into the front; a model's depth bounds the rounds.
-  for (uint32_t round = 0; wants && round < 4096;) {
+  // Each answer is ranked with the rest of the front at once (not after the round), so the children of a
+  // large error compete with what is still queued: the most visible error goes first, as in the PM order.
+  while (wants) {
     fill_pipe();
     if (may_prefetch && !prefetched && queue_.empty()) {
       prefetch();
@@ -397,12 +397,8 @@ ReceiverFrame ReceiverClient::run(const Camera& camera, bool settling) {
     }
     if (answers > 0 && over_budget(answers, start)) break;
     if (wire_.empty()) break;
-    attached += receive_one(out);
     ++answers;
-    if (round_open()) continue;
-    if (attached == 0) break;  // a round that brought nothing: the server has no more for this view
-    attached = 0;
-    ++round;
+    if (receive_one(out) == 0) break;  // every id asked for has a split: the server has no more for this view
     wants = rerank(camera);
     out.rounds += wants;
   }
