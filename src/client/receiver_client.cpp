@@ -116,8 +116,11 @@ void ReceiverClient::open(const std::string& model) {
   }
 }
 
-// `slots` (leaves the client holds) as ids: the visible ones by the pixels of their faces as `view` sees
-// the mesh, then the rest (forced chains' leaves can be out of sight) in the order given.
+// `slots` (leaves the client holds) as ids: the visible ones by the squared image error their splits may
+// remove, then the rest (forced chains' leaves can be out of sight) in the order given. That error is the
+// pixels of a vertex's faces as `view` sees the mesh (cheng-ooi §4.2) times its squared screen-space error
+// (refinement_priority, what qrefine compares with τ): by pixels alone a large area a fraction of a pixel
+// off would go before a smaller one many pixels off, which the PM order fixes first.
 std::vector<VertexId> ReceiverClient::ranked(std::span<const uint32_t> slots, const ViewParams& view) {
   std::vector<uint32_t> sorted(slots.begin(), slots.end());
   std::sort(sorted.begin(), sorted.end());
@@ -125,12 +128,21 @@ std::vector<VertexId> ReceiverClient::ranked(std::span<const uint32_t> slots, co
   const auto wanted = [&sorted](uint32_t slot) { return std::binary_search(sorted.begin(), sorted.end(), slot); };
   const std::vector<VertexArea>& by_area = importance_.rank(session_.mesh(), view, wanted);
   VertexHierarchy& hierarchy = session_.hierarchy();
+  const ViewCriteria criteria = make_criteria(view, options_.tolerance);
+  const float scale = session_.base().scale;
+  std::vector<std::pair<double, uint32_t>> by_error;  // (squared pixel error, slot)
+  by_error.reserve(by_area.size());
+  for (const VertexArea& area : by_area) {
+    const NodeCriteria node = node_criteria(hierarchy.position(area.slot), dequantize_refine(hierarchy.refine(area.slot), scale));
+    by_error.emplace_back(double(area.pixels) * double(refinement_priority(criteria, node)), area.slot);
+  }
+  std::stable_sort(by_error.begin(), by_error.end(), [](const auto& a, const auto& b) { return a.first > b.first; });
   std::vector<uint8_t> taken(sorted.size(), 0);
   std::vector<VertexId> ids;
   ids.reserve(sorted.size());
-  for (const VertexArea& area : by_area) {
-    taken[size_t(std::lower_bound(sorted.begin(), sorted.end(), area.slot) - sorted.begin())] = 1;
-    ids.push_back(hierarchy.id(area.slot));
+  for (const auto& [error, slot] : by_error) {
+    taken[size_t(std::lower_bound(sorted.begin(), sorted.end(), slot) - sorted.begin())] = 1;
+    ids.push_back(hierarchy.id(slot));
   }
   for (const uint32_t slot : slots) {
     const size_t at = size_t(std::lower_bound(sorted.begin(), sorted.end(), slot) - sorted.begin());
@@ -227,6 +239,12 @@ bool ReceiverClient::rerank(const Camera& camera) {
   return round_open();
 }
 
+size_t ReceiverClient::queued_ids() const {
+  size_t ids = 0;
+  for (const Request& r : queue_) ids += r.request.ids.size();
+  return ids;
+}
+
 // The view wants something not in yet: queued, or on the wire.
 bool ReceiverClient::round_open() const {
   return !queue_.empty() ||
@@ -245,9 +263,12 @@ void ReceiverClient::send(Request&& request) {
   wire_.push_back(std::move(request));
 }
 
-// The queue's head onto the wire while the pipe has room.
+// The queue's head onto the wire while the pipe has room. A list shorter than a full GET waits while an
+// answer is due: that answer's splits are ranked with it, and fill it, instead of paying a header of their own.
 void ReceiverClient::fill_pipe() {
   while (!queue_.empty() && http_.room() > 0) {
+    const bool short_list = options_.fetch == FetchPolicy::lists && queue_.front().request.ids.size() < options_.ids_per_request;
+    if (short_list && !wire_.empty()) break;
     send(std::move(queue_.front()));
     queue_.pop_front();
   }
@@ -387,8 +408,11 @@ ReceiverFrame ReceiverClient::run(const Camera& camera, bool settling) {
   bool wants = rerank(camera);
   out.rounds = wants;
   uint32_t answers = 0;
-  // Each answer is ranked with the rest of the front at once (not after the round), so the children of a
-  // large error compete with what is still queued: the most visible error goes first, as in the PM order.
+  size_t attached = 0;  // since the last ranking
+  // The answers are ranked with the rest of the front as they come, not once a round's are all in: the
+  // children of a large error compete with what is still queued, so the largest errors go first at every
+  // level, as in the PM order. A ranking renders the mesh and walks the front, so it waits until the
+  // splits attached since the last are a sixteenth of the ids queued (at once for a short queue).
   while (wants) {
     fill_pipe();
     if (may_prefetch && !prefetched && queue_.empty()) {
@@ -398,10 +422,15 @@ ReceiverFrame ReceiverClient::run(const Camera& camera, bool settling) {
     if (answers > 0 && over_budget(answers, start)) break;
     if (wire_.empty()) break;
     ++answers;
-    if (receive_one(out) == 0) break;  // every id asked for has a split: the server has no more for this view
+    const size_t got = receive_one(out);
+    if (got == 0) break;  // every id asked for has a split: the server has no more for this view
+    attached += got;
+    if (attached * kRerankShare < queued_ids()) continue;
+    attached = 0;
     wants = rerank(camera);
     out.rounds += wants;
   }
+
   if (may_prefetch && !prefetched && !wants) prefetch();
   out.satisfied = !wants;
   out.prefetch_used = count_prefetch_used();
@@ -417,7 +446,7 @@ ReceiverFrame ReceiverClient::run(const Camera& camera, bool settling) {
   out.cancelled = uint32_t(totals_.cancelled - totals_before.cancelled);
   out.stale_arrivals = uint32_t(totals_.stale_arrivals - totals_before.stale_arrivals);
   out.prefetched = uint32_t(totals_.prefetched - totals_before.prefetched);
-  for (const Request& r : queue_) out.queued += uint32_t(r.request.ids.size());
+  out.queued = uint32_t(queued_ids());
   out.in_flight = uint32_t(wire_.size());
   out.report.faces = session_.mesh().face_count();
   return out;

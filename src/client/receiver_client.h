@@ -117,6 +117,7 @@ class ReceiverClient {
   std::vector<Request> block_requests(const std::vector<VertexId>& ids) const;
   bool rerank(const Camera& camera);
   bool round_open() const;
+  size_t queued_ids() const;
   bool over_budget(uint32_t answers, std::chrono::steady_clock::time_point start) const;
   void fill_pipe();
   void send(Request&& request);
@@ -125,6 +126,8 @@ class ReceiverClient {
   void prefetch();
   uint32_t count_prefetch_used();
 
+  // A frame re-ranks once the splits attached since its last ranking reach 1/kRerankShare of the ids queued.
+  static constexpr size_t kRerankShare = 16;
   ReceiverOptions options_;
   HttpConnection http_;
   ClientSession session_;
