@@ -39,6 +39,9 @@ struct ReceiverOptions {
   FetchPolicy fetch = FetchPolicy::lists;
   uint32_t ids_per_request = 64;   // lists: split ids in one GET /splits/{code}
   uint32_t block_depth = 2;        // blocks: levels below a block's root; GET /models suggests the same
+  // lists: at most this many levels below a visible leaf whose screen error is many times τ come with it
+  // (receiver_client.cpp, descendant_depth()); 0: the ids alone, exactly the splits the views want.
+  uint32_t descendant_depth = 2;
   HttpOptions http;                // deadlines, requests in flight, answer limits
   // The frame budget (docs/protocol.md, "Frame budget, cancel and prefetch"): with either set, a frame also ends once it has
   // read frame_answers answers or spent frame_budget_ms (checked between answers, so a frame overruns by at
@@ -109,12 +112,19 @@ class ReceiverClient {
   };
   nlohmann::json catalogue();
   ReceiverFrame run(const Camera& camera, bool settling);
-  std::vector<VertexId> ranked(std::span<const uint32_t> slots, const ViewParams& view);
+  // A leaf to ask for and the descendant depth to ask for it with (lists).
+  struct Wanted {
+    VertexId id;
+    uint32_t depth = 0;
+  };
+  std::vector<Wanted> ranked(std::span<const uint32_t> slots, const ViewParams& view);
+  uint32_t descendant_depth(float priority, float pixel_angle2) const;
   VertexId key(VertexId id) const;
   std::vector<VertexId> keys_on_wire() const;
-  std::vector<Request> requests_for(const std::vector<VertexId>& ids) const;
-  std::vector<Request> list_requests(const std::vector<VertexId>& ids) const;
-  std::vector<Request> block_requests(const std::vector<VertexId>& ids) const;
+  std::vector<Request> requests_for(const std::vector<Wanted>& ids) const;
+  std::vector<Request> list_requests(const std::vector<Wanted>& ids) const;
+  size_t list_size(uint32_t depth) const;
+  std::vector<Request> block_requests(const std::vector<Wanted>& ids) const;
   bool rerank(const Camera& camera);
   bool round_open() const;
   size_t queued_ids() const;
