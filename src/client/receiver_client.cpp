@@ -1,6 +1,6 @@
 // The receiver-driven client (receiver_client.h): the sender-driven client's frame loop, with the client
-// choosing the splits itself — the leaves qrefine wants split, most screen area first — and fetching them
-// by id with the cacheable GET form. With a frame budget it keeps, between frames, the ranked ids not yet
+// choosing the splits itself — the leaves qrefine wants split, largest screen area × squared screen error
+// first — and fetching them by id with the cacheable GET form. With a frame budget it keeps, between frames, the ranked ids not yet
 // sent and the GETs on the wire; each view ranks the queue anew (cheng-ooi §4.2) and drops what it no
 // longer wants, and spare room in the pipe goes to the extrapolated next view's splits (prefetch).
 #include "client/receiver_client.h"

@@ -63,7 +63,7 @@ struct ReceiverFrame {
   uint64_t payload_down = 0;   // the answers' bodies alone
   uint32_t split_requests = 0; // GETs of split ids this frame
   uint32_t cache_hits = 0;     // of those, answers a cache in between served (X-Cache-Status: HIT)
-  uint32_t rounds = 0;         // adapt -> request -> attach cycles
+  uint32_t rounds = 0;         // rankings of the front that wanted something (adapt -> rank; answers come between)
   uint32_t cancelled = 0;      // queued ids (blocks: block roots) dropped unsent: this view no longer wants them
   uint32_t stale_arrivals = 0; // ids whose answers came after the view stopped wanting them (attached all the same)
   uint32_t prefetched = 0;     // ids asked for along the predicted path
@@ -86,9 +86,9 @@ class ReceiverClient {
   std::vector<std::string> list();   // GET /models: the names
   void open(const std::string& model);  // GET /models/{m}/base
 
-  // One frame: adapt; while qrefine wants splits the client lacks, rank them by screen area, GET them
-  // in that order with several requests in flight, attach what arrives, adapt again; within the frame
-  // budget, if any.
+  // One frame: adapt; while qrefine wants splits the client lacks, rank them by screen area × squared
+  // screen error, GET them in that order with several requests in flight, attach what arrives, adapt and
+  // rank again as answers come; within the frame budget, if any.
   ReceiverFrame frame(const Camera& camera);
   // Holds the last camera for frames (within the budget, without prefetch) until its view is satisfied,
   // then reads what is still in flight and converges. settle_frames(): how many it took (1 unbudgeted).
