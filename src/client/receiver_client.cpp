@@ -454,7 +454,8 @@ ReceiverFrame ReceiverClient::run(const Camera& camera, bool settling) {
   // The answers are ranked with the rest of the front as they come, not once a round's are all in: the
   // children of a large error compete with what is still queued, so the largest errors go first at every
   // level, as in the PM order. A ranking renders the mesh and walks the front, so it waits until the
-  // splits attached since the last are a sixteenth of the ids queued (at once for a short queue).
+  // splits attached since the last are a sixteenth of the ids queued and a list's worth (ids_per_request:
+  // blocks' small answers add up first), or the queue is empty.
   while (wants) {
     fill_pipe();
     if (may_prefetch && !prefetched && queue_.empty()) {
@@ -467,7 +468,8 @@ ReceiverFrame ReceiverClient::run(const Camera& camera, bool settling) {
     const size_t got = receive_one(out);
     if (got == 0) break;  // every id asked for has a split: the server has no more for this view
     attached += got;
-    if (attached * kRerankShare < queued_ids()) continue;
+    const size_t queued = queued_ids();
+    if (queued > 0 && (attached * kRerankShare < queued || attached < options_.ids_per_request)) continue;
     attached = 0;
     wants = rerank(camera);
     out.rounds += wants;

@@ -136,7 +136,8 @@ class ReceiverClient {
   void prefetch();
   uint32_t count_prefetch_used();
 
-  // A frame re-ranks once the splits attached since its last ranking reach 1/kRerankShare of the ids queued.
+  // A frame re-ranks once the splits attached since its last ranking reach 1/kRerankShare of the ids queued
+  // (and ids_per_request), or nothing is queued.
   static constexpr size_t kRerankShare = 16;
   ReceiverOptions options_;
   HttpConnection http_;
