@@ -1,8 +1,9 @@
 // The receiver-driven client (receiver_client.h): the sender-driven client's frame loop, with the client
 // choosing the splits itself — the leaves qrefine wants split, largest screen area × squared screen error
-// first — and fetching them by id with the cacheable GET form. With a frame budget it keeps, between frames, the ranked ids not yet
-// sent and the GETs on the wire; each view ranks the queue anew (cheng-ooi §4.2) and drops what it no
-// longer wants, and spare room in the pipe goes to the extrapolated next view's splits (prefetch).
+// first — and fetching them by id with the cacheable GET form. With a frame budget it keeps, between
+// frames, the ranked ids not yet sent and the GETs on the wire; each view ranks the queue anew (cheng-ooi
+// §4.2) and drops what it no longer wants, and spare room in the pipe goes to the extrapolated next view's
+// splits (prefetch).
 #include "client/receiver_client.h"
 
 #include <algorithm>
@@ -466,7 +467,7 @@ ReceiverFrame ReceiverClient::run(const Camera& camera, bool settling) {
     if (wire_.empty()) break;
     ++answers;
     const size_t got = receive_one(out);
-    if (got == 0) break;  // every id asked for has a split: the server has no more for this view
+    if (got == 0) break;  // a valid server answers every id with its split: one that has no more ends it
     attached += got;
     const size_t queued = queued_ids();
     if (queued > 0 && (attached * kRerankShare < queued || attached < options_.ids_per_request)) continue;
