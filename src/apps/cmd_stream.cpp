@@ -1,6 +1,7 @@
 // pmstream stream --server HOST:PORT --model NAME --path PATH.json --mode MODE --tolerance PX
 //                 (--mode receiver: --server http://HOST:PORT[/prefix] [--in-flight N] [--fetch lists|blocks]
-//                  [--ids-per-request N] [--block-depth K] [--frame-budget-ms MS] [--frame-answers N] [--prefetch])
+//                  [--ids-per-request N] [--descendant-depth K] [--block-depth K] [--frame-budget-ms MS]
+//                  [--frame-answers N] [--prefetch])
 //                 (--mode multilevel: --server http://HOST:PORT[/prefix] [--budget TRIANGLES | --tolerance PX])
 //                 [--laps K] [--reconnect N] [--timeout-ms N] [--connect-timeout-ms N] [--save-mesh OUT.ply]
 //                 [--snapshots DIR] [--json]
@@ -36,6 +37,7 @@ struct StreamArgs {
   uint32_t laps = 1, morph_frames = 0, max_ops = 0, reconnect = 0;
   uint32_t timeout_ms = 30000, connect_timeout_ms = 5000;
   uint32_t in_flight = 4, ids_per_request = 64, block_depth = client::ReceiverOptions{}.block_depth;  // receiver
+  uint32_t descendant_depth = client::ReceiverOptions{}.descendant_depth;
   std::string fetch = client::fetch_policy_name(client::ReceiverOptions{}.fetch);
   uint32_t frame_budget_ms = 0, frame_answers = 0;
   bool prefetch = false;
@@ -164,6 +166,7 @@ void run_receiver(const StreamArgs& args) {
   options.fetch = client::fetch_policy_named(args.fetch);
   options.ids_per_request = args.ids_per_request;
   options.block_depth = args.block_depth;
+  options.descendant_depth = args.descendant_depth;
   options.frame_budget_ms = args.frame_budget_ms;
   options.frame_answers = args.frame_answers;
   options.prefetch = args.prefetch;
@@ -370,6 +373,11 @@ void add_stream_command(CliCommand& app) {
       .show_default();
   cmd.option("--ids-per-request", args->ids_per_request, "receiver, lists: split ids in one GET")
       .range(1u, 1024u)
+      .show_default();
+  cmd.option("--descendant-depth", args->descendant_depth,
+             "receiver, lists: at most this many levels below a leaf many times τ off come in its GET "
+             "(0: the ids alone)")
+      .range(0u, 8u)
       .show_default();
   cmd.option("--block-depth", args->block_depth, "receiver, blocks: levels below a block's root")
       .range(0u, 8u)

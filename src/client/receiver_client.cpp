@@ -1,8 +1,9 @@
 // The receiver-driven client (receiver_client.h): the sender-driven client's frame loop, with the client
-// choosing the splits itself — the leaves qrefine wants split, most screen area first — and fetching them
-// by id with the cacheable GET form. With a frame budget it keeps, between frames, the ranked ids not yet
-// sent and the GETs on the wire; each view ranks the queue anew (cheng-ooi §4.2) and drops what it no
-// longer wants, and spare room in the pipe goes to the extrapolated next view's splits (prefetch).
+// choosing the splits itself — the leaves qrefine wants split, largest screen area × squared screen error
+// first — and fetching them by id with the cacheable GET form. With a frame budget it keeps, between
+// frames, the ranked ids not yet sent and the GETs on the wire; each view ranks the queue anew (cheng-ooi
+// §4.2) and drops what it no longer wants, and spare room in the pipe goes to the extrapolated next view's
+// splits (prefetch).
 #include "client/receiver_client.h"
 
 #include <algorithm>
@@ -69,6 +70,8 @@ ReceiverClient::ReceiverClient(const HttpUrl& server, const ReceiverOptions& opt
     : options_(options), http_(server, options.http), importance_(RenderOptions{1}) {
   if (options.ids_per_request == 0) fail("receiver", "ids_per_request must be at least 1");
   if (options.block_depth > 8) fail("receiver", "block_depth must be at most 8 (the server's request depth limit)");
+  if (options.descendant_depth > 8)
+    fail("receiver", "descendant_depth must be at most 8 (the server's request depth limit)");
   session_.adapt_options.tolerance = options.tolerance;
   session_.adapt_options.morph_frames = options.morph_frames;
   session_.adapt_options.max_ops = options.max_ops;
@@ -116,29 +119,64 @@ void ReceiverClient::open(const std::string& model) {
   }
 }
 
-// `slots` (leaves the client holds) as ids: the visible ones by the pixels of their faces as `view` sees
-// the mesh, then the rest (forced chains' leaves can be out of sight) in the order given.
-std::vector<VertexId> ReceiverClient::ranked(std::span<const uint32_t> slots, const ViewParams& view) {
+// `slots` (leaves the client holds) as ids: the visible ones by the squared image error their splits may
+// remove, then the rest (forced chains' leaves can be out of sight) in the order given. That error is the
+// pixels of a vertex's faces as `view` sees the mesh (cheng-ooi §4.2) times its squared screen-space error
+// (refinement_priority, what qrefine compares with τ): by pixels alone a large area a fraction of a pixel
+// off would go before a smaller one many pixels off, which the PM order fixes first. Each visible one comes
+// with the descendant depth to ask for it with (descendant_depth()).
+std::vector<ReceiverClient::Wanted> ReceiverClient::ranked(std::span<const uint32_t> slots, const ViewParams& view) {
   std::vector<uint32_t> sorted(slots.begin(), slots.end());
   std::sort(sorted.begin(), sorted.end());
   sorted.erase(std::unique(sorted.begin(), sorted.end()), sorted.end());
   const auto wanted = [&sorted](uint32_t slot) { return std::binary_search(sorted.begin(), sorted.end(), slot); };
   const std::vector<VertexArea>& by_area = importance_.rank(session_.mesh(), view, wanted);
   VertexHierarchy& hierarchy = session_.hierarchy();
-  std::vector<uint8_t> taken(sorted.size(), 0);
-  std::vector<VertexId> ids;
-  ids.reserve(sorted.size());
+  const ViewCriteria criteria = make_criteria(view, options_.tolerance);
+  const float pixel_angle2 = make_criteria(view, 1).kappa2;
+  const float scale = session_.base().scale;
+  struct ByError {
+    double error;  // pixels times the squared screen-space error
+    uint32_t slot;
+    uint32_t depth;
+  };
+  std::vector<ByError> by_error;
+  by_error.reserve(by_area.size());
   for (const VertexArea& area : by_area) {
-    taken[size_t(std::lower_bound(sorted.begin(), sorted.end(), area.slot) - sorted.begin())] = 1;
-    ids.push_back(hierarchy.id(area.slot));
+    const NodeCriteria node =
+        node_criteria(hierarchy.position(area.slot), dequantize_refine(hierarchy.refine(area.slot), scale));
+    const float priority = refinement_priority(criteria, node);
+    by_error.push_back({double(area.pixels) * double(priority), area.slot, descendant_depth(priority, pixel_angle2)});
+  }
+  std::stable_sort(by_error.begin(), by_error.end(),
+                   [](const ByError& a, const ByError& b) { return a.error > b.error; });
+  std::vector<uint8_t> taken(sorted.size(), 0);
+  std::vector<Wanted> ids;
+  ids.reserve(sorted.size());
+  for (const ByError& e : by_error) {
+    taken[size_t(std::lower_bound(sorted.begin(), sorted.end(), e.slot) - sorted.begin())] = 1;
+    ids.push_back({hierarchy.id(e.slot), e.depth});
   }
   for (const uint32_t slot : slots) {
     const size_t at = size_t(std::lower_bound(sorted.begin(), sorted.end(), slot) - sorted.begin());
     if (taken[at]) continue;
     taken[at] = 1;
-    ids.push_back(hierarchy.id(slot));
+    ids.push_back({hierarchy.id(slot), 0});
   }
   return ids;
+}
+
+// cheng-ooi §4.3's descendant depth for a visible leaf whose screen-space error is many times τ (at least
+// 4·max(τ, 1) px): its children will most likely be wanted too, so its GET brings them with it, one level
+// more per doubling of the error beyond that, at most options.descendant_depth. A level down the front
+// then costs no wait for an answer (with several GETs in flight, a pipe-full of other splits' bytes). The
+// 1 px floor keeps it to errors whose children are large enough to show. A descendant the view turns out
+// not to want is held like a prefetched split: adapt() makes it only when a view wants it.
+uint32_t ReceiverClient::descendant_depth(float priority, float pixel_angle2) const {
+  if (options_.descendant_depth == 0 || !(priority > 0) || !(pixel_angle2 > 0)) return 0;
+  const float floor_px = std::max(options_.tolerance, 1.0f);
+  const double doublings = 0.5 * std::log2(double(priority) / (double(pixel_angle2) * floor_px * floor_px));
+  return uint32_t(std::clamp(std::floor(doublings) - 1, 0.0, double(options_.descendant_depth)));
 }
 
 // What a GET names for `id`: the id itself (lists) or the root of the block holding it (blocks).
@@ -156,22 +194,38 @@ std::vector<VertexId> ReceiverClient::keys_on_wire() const {
   return keys;
 }
 
-std::vector<ReceiverClient::Request> ReceiverClient::requests_for(const std::vector<VertexId>& ids) const {
+std::vector<ReceiverClient::Request> ReceiverClient::requests_for(const std::vector<Wanted>& ids) const {
   return options_.fetch == FetchPolicy::blocks ? block_requests(ids) : list_requests(ids);
 }
 
-// ids_per_request ids to a URL, in rank order: each URL is the code of its id set.
-std::vector<ReceiverClient::Request> ReceiverClient::list_requests(const std::vector<VertexId>& ids) const {
+// Lists of ids with one descendant depth each, in the rank order of their first ids: ids_per_request >> depth
+// ids to a URL (an answer holds about as many splits at each depth); each URL is the code of its id set.
+std::vector<ReceiverClient::Request> ReceiverClient::list_requests(const std::vector<Wanted>& ids) const {
+  std::vector<std::pair<size_t, Request>> lists;  // (rank of the first id, request)
+  std::vector<size_t> open(options_.descendant_depth + 1, SIZE_MAX);  // per depth: the list being filled
+  for (size_t rank = 0; rank < ids.size(); ++rank) {
+    const uint32_t depth = ids[rank].depth;
+    if (open[depth] == SIZE_MAX) {
+      open[depth] = lists.size();
+      lists.emplace_back(rank, Request{}).second.request.depth = depth;
+    }
+    std::vector<VertexId>& list = lists[open[depth]].second.request.ids;
+    list.push_back(ids[rank].id);
+    if (list.size() >= list_size(depth)) open[depth] = SIZE_MAX;
+  }
   std::vector<Request> out;
-  for (size_t begin = 0; begin < ids.size(); begin += options_.ids_per_request) {
-    const size_t end = std::min(ids.size(), begin + options_.ids_per_request);
-    Request& r = out.emplace_back();
-    r.request = {0, std::vector<VertexId>(ids.begin() + begin, ids.begin() + end)};
+  out.reserve(lists.size());
+  for (auto& [rank, r] : lists) {
     // The answer comes in code order, which format 2's bands are read in.
     std::sort(r.request.ids.begin(), r.request.ids.end(), protocol::code_order);
     r.target = protocol::model_path(model_) + "/splits/" + protocol::base64url_encode(protocol::encode_split_request(r.request));
+    out.push_back(std::move(r));
   }
   return out;
+}
+
+size_t ReceiverClient::list_size(uint32_t depth) const {
+  return std::max<size_t>(1, options_.ids_per_request >> depth);
 }
 
 // The block of each id (its ancestor at the top of its band of block_depth + 1 levels), in the rank order
@@ -179,11 +233,11 @@ std::vector<ReceiverClient::Request> ReceiverClient::list_requests(const std::ve
 // above it would have come with its own block, so the id is that block's root, a vertex the client has,
 // and no block is fetched twice (it would have brought the id): no record arrives twice. A block's answer is that of the request
 // "its root, block_depth levels down", which is how format 2's bands are read.
-std::vector<ReceiverClient::Request> ReceiverClient::block_requests(const std::vector<VertexId>& ids) const {
+std::vector<ReceiverClient::Request> ReceiverClient::block_requests(const std::vector<Wanted>& ids) const {
   std::set<std::pair<uint32_t, uint64_t>> asked;
   std::vector<Request> out;
-  for (const VertexId id : ids) {
-    const VertexId root = key(id);
+  for (const Wanted& wanted : ids) {
+    const VertexId root = key(wanted.id);
     if (!asked.emplace(root.tree, root.node).second) continue;
     Request& r = out.emplace_back();
     r.target = block_target(model_, root, options_.block_depth);
@@ -200,10 +254,10 @@ std::vector<ReceiverClient::Request> ReceiverClient::block_requests(const std::v
 bool ReceiverClient::rerank(const Camera& camera) {
   SelectiveRefinement& refinement = session_.refinement();
   adapt_for_view(refinement);
-  std::vector<VertexId> ids = ranked(refinement.missing(), session_.view_params(camera));
+  std::vector<Wanted> ids = ranked(refinement.missing(), session_.view_params(camera));
   std::vector<VertexId> wanted;
   wanted.reserve(ids.size());
-  for (const VertexId id : ids) wanted.push_back(key(id));
+  for (const Wanted& w : ids) wanted.push_back(key(w.id));
   std::sort(wanted.begin(), wanted.end(), protocol::code_order);
   const auto in = [](const std::vector<VertexId>& set, VertexId id) {
     return std::binary_search(set.begin(), set.end(), id, protocol::code_order);
@@ -215,7 +269,7 @@ bool ReceiverClient::rerank(const Camera& camera) {
     if (!sent.prefetch) sent.stale = unwanted;
   }
   const std::vector<VertexId> on_wire = keys_on_wire();
-  std::erase_if(ids, [&](VertexId id) { return in(on_wire, key(id)); });
+  std::erase_if(ids, [&](const Wanted& w) { return in(on_wire, key(w.id)); });
   std::vector<Request> queue = requests_for(ids);
   std::vector<VertexId> queued;
   for (const Request& r : queue) queued.insert(queued.end(), r.request.ids.begin(), r.request.ids.end());
@@ -225,6 +279,12 @@ bool ReceiverClient::rerank(const Camera& camera) {
                                                 [&](VertexId id) { return !in(queued, id); }));
   queue_.assign(std::make_move_iterator(queue.begin()), std::make_move_iterator(queue.end()));
   return round_open();
+}
+
+size_t ReceiverClient::queued_ids() const {
+  size_t ids = 0;
+  for (const Request& r : queue_) ids += r.request.ids.size();
+  return ids;
 }
 
 // The view wants something not in yet: queued, or on the wire.
@@ -245,9 +305,13 @@ void ReceiverClient::send(Request&& request) {
   wire_.push_back(std::move(request));
 }
 
-// The queue's head onto the wire while the pipe has room.
+// The queue's head onto the wire while the pipe has room. A list shorter than a full GET waits while an
+// answer is due: that answer's splits are ranked with it, and fill it, instead of paying a header of their own.
 void ReceiverClient::fill_pipe() {
   while (!queue_.empty() && http_.room() > 0) {
+    const protocol::SplitRequest& head = queue_.front().request;
+    const bool short_list = options_.fetch == FetchPolicy::lists && head.ids.size() < list_size(head.depth);
+    if (short_list && !wire_.empty()) break;
     send(std::move(queue_.front()));
     queue_.pop_front();
   }
@@ -334,10 +398,10 @@ void ReceiverClient::prefetch() {
   const std::optional<Camera> next = extrapolate(cameras_[0], cameras_[1]);
   if (!next) return;
   const ViewParams view = session_.view_params(*next);
-  std::vector<VertexId> ids = ranked(leaves_wanted(view), view);
+  std::vector<Wanted> ids = ranked(leaves_wanted(view), view);
   const std::vector<VertexId> on_wire = keys_on_wire();
-  std::erase_if(ids, [&](VertexId id) {
-    return std::binary_search(on_wire.begin(), on_wire.end(), key(id), protocol::code_order);
+  std::erase_if(ids, [&](const Wanted& w) {
+    return std::binary_search(on_wire.begin(), on_wire.end(), key(w.id), protocol::code_order);
   });
   std::vector<Request> requests = requests_for(ids);
   for (size_t i = 0; i < requests.size() && http_.room() > 0; ++i) {
@@ -387,9 +451,13 @@ ReceiverFrame ReceiverClient::run(const Camera& camera, bool settling) {
   bool wants = rerank(camera);
   out.rounds = wants;
   uint32_t answers = 0;
-  size_t attached = 0;  // this round
-  // A round's answers let adapt() go one level deeper into the front; a model's depth bounds the rounds.
-  for (uint32_t round = 0; wants && round < 4096;) {
+  size_t attached = 0;  // since the last ranking
+  // The answers are ranked with the rest of the front as they come, not once a round's are all in: the
+  // children of a large error compete with what is still queued, so the largest errors go first at every
+  // level, as in the PM order. A ranking renders the mesh and walks the front, so it waits until the
+  // splits attached since the last are a sixteenth of the ids queued and a list's worth (ids_per_request:
+  // blocks' small answers add up first), or the queue is empty.
+  while (wants) {
     fill_pipe();
     if (may_prefetch && !prefetched && queue_.empty()) {
       prefetch();
@@ -397,15 +465,17 @@ ReceiverFrame ReceiverClient::run(const Camera& camera, bool settling) {
     }
     if (answers > 0 && over_budget(answers, start)) break;
     if (wire_.empty()) break;
-    attached += receive_one(out);
     ++answers;
-    if (round_open()) continue;
-    if (attached == 0) break;  // a round that brought nothing: the server has no more for this view
+    const size_t got = receive_one(out);
+    if (got == 0) break;  // a valid server answers every id with its split: one that has no more ends it
+    attached += got;
+    const size_t queued = queued_ids();
+    if (queued > 0 && (attached * kRerankShare < queued || attached < options_.ids_per_request)) continue;
     attached = 0;
-    ++round;
     wants = rerank(camera);
     out.rounds += wants;
   }
+
   if (may_prefetch && !prefetched && !wants) prefetch();
   out.satisfied = !wants;
   out.prefetch_used = count_prefetch_used();
@@ -421,7 +491,7 @@ ReceiverFrame ReceiverClient::run(const Camera& camera, bool settling) {
   out.cancelled = uint32_t(totals_.cancelled - totals_before.cancelled);
   out.stale_arrivals = uint32_t(totals_.stale_arrivals - totals_before.stale_arrivals);
   out.prefetched = uint32_t(totals_.prefetched - totals_before.prefetched);
-  for (const Request& r : queue_) out.queued += uint32_t(r.request.ids.size());
+  out.queued = uint32_t(queued_ids());
   out.in_flight = uint32_t(wire_.size());
   out.report.faces = session_.mesh().face_count();
   return out;

@@ -39,6 +39,9 @@ struct ReceiverOptions {
   FetchPolicy fetch = FetchPolicy::lists;
   uint32_t ids_per_request = 64;   // lists: split ids in one GET /splits/{code}
   uint32_t block_depth = 2;        // blocks: levels below a block's root; GET /models suggests the same
+  // lists: at most this many levels below a visible leaf whose screen error is many times τ come with it
+  // (receiver_client.cpp, descendant_depth()); 0: the ids alone, exactly the splits the views want.
+  uint32_t descendant_depth = 2;
   HttpOptions http;                // deadlines, requests in flight, answer limits
   // The frame budget (docs/protocol.md, "Frame budget, cancel and prefetch"): with either set, a frame also ends once it has
   // read frame_answers answers or spent frame_budget_ms (checked between answers, so a frame overruns by at
@@ -60,7 +63,7 @@ struct ReceiverFrame {
   uint64_t payload_down = 0;   // the answers' bodies alone
   uint32_t split_requests = 0; // GETs of split ids this frame
   uint32_t cache_hits = 0;     // of those, answers a cache in between served (X-Cache-Status: HIT)
-  uint32_t rounds = 0;         // adapt -> request -> attach cycles
+  uint32_t rounds = 0;         // rankings of the front that wanted something (adapt -> rank; answers come between)
   uint32_t cancelled = 0;      // queued ids (blocks: block roots) dropped unsent: this view no longer wants them
   uint32_t stale_arrivals = 0; // ids whose answers came after the view stopped wanting them (attached all the same)
   uint32_t prefetched = 0;     // ids asked for along the predicted path
@@ -83,9 +86,9 @@ class ReceiverClient {
   std::vector<std::string> list();   // GET /models: the names
   void open(const std::string& model);  // GET /models/{m}/base
 
-  // One frame: adapt; while qrefine wants splits the client lacks, rank them by screen area, GET them
-  // in that order with several requests in flight, attach what arrives, adapt again; within the frame
-  // budget, if any.
+  // One frame: adapt; while qrefine wants splits the client lacks, rank them by screen area × squared
+  // screen error, GET them in that order with several requests in flight, attach what arrives, adapt and
+  // rank again as answers come; within the frame budget, if any.
   ReceiverFrame frame(const Camera& camera);
   // Holds the last camera for frames (within the budget, without prefetch) until its view is satisfied,
   // then reads what is still in flight and converges. settle_frames(): how many it took (1 unbudgeted).
@@ -109,14 +112,22 @@ class ReceiverClient {
   };
   nlohmann::json catalogue();
   ReceiverFrame run(const Camera& camera, bool settling);
-  std::vector<VertexId> ranked(std::span<const uint32_t> slots, const ViewParams& view);
+  // A leaf to ask for and the descendant depth to ask for it with (lists).
+  struct Wanted {
+    VertexId id;
+    uint32_t depth = 0;
+  };
+  std::vector<Wanted> ranked(std::span<const uint32_t> slots, const ViewParams& view);
+  uint32_t descendant_depth(float priority, float pixel_angle2) const;
   VertexId key(VertexId id) const;
   std::vector<VertexId> keys_on_wire() const;
-  std::vector<Request> requests_for(const std::vector<VertexId>& ids) const;
-  std::vector<Request> list_requests(const std::vector<VertexId>& ids) const;
-  std::vector<Request> block_requests(const std::vector<VertexId>& ids) const;
+  std::vector<Request> requests_for(const std::vector<Wanted>& ids) const;
+  std::vector<Request> list_requests(const std::vector<Wanted>& ids) const;
+  size_t list_size(uint32_t depth) const;
+  std::vector<Request> block_requests(const std::vector<Wanted>& ids) const;
   bool rerank(const Camera& camera);
   bool round_open() const;
+  size_t queued_ids() const;
   bool over_budget(uint32_t answers, std::chrono::steady_clock::time_point start) const;
   void fill_pipe();
   void send(Request&& request);
@@ -125,6 +136,9 @@ class ReceiverClient {
   void prefetch();
   uint32_t count_prefetch_used();
 
+  // A frame re-ranks once the splits attached since its last ranking reach 1/kRerankShare of the ids queued
+  // (and ids_per_request), or nothing is queued.
+  static constexpr size_t kRerankShare = 16;
   ReceiverOptions options_;
   HttpConnection http_;
   ClientSession session_;

@@ -139,11 +139,14 @@ TEST(QualityCurve, ReceiverDrivenOnBunnyEndsAtLocalRefinement) {
   EXPECT_EQ(plain.session().splits_received(), c.splits);
   EXPECT_EQ(psnr_of(plain.session(), target, renderer), c.samples.back().psnr);
 
-  // E8: only the visible splits, and the mesh local refinement makes for the same view and τ (its positions
-  // are the model's own, not the wire's 16-bit grid, so only the faces are compared).
+  // E8: the mesh local refinement makes for the same view and τ (its positions are the model's own, not the
+  // wire's 16-bit grid, so only the faces are compared), from its splits and the few more that descendant
+  // depth brings (the receiver client's descendant_depth(): under 1 %).
   const MeshArrays local = refine_for_view(model, b.camera, 0).mesh;
   EXPECT_EQ(c.samples.back().faces, local.indices.size() / 3);
-  EXPECT_EQ(c.splits, local.positions.size() / 3 - model.root_count);
+  const size_t needed = local.positions.size() / 3 - model.root_count;
+  EXPECT_GE(c.splits, needed);
+  EXPECT_LE(c.splits, needed + needed / 100);
   EXPECT_LT(c.splits, model.split_order.size());
   server.stop();
 }

@@ -218,22 +218,32 @@ std::vector<VertexId> sorted_leaves(const client::ClientSession& session) {
   return leaves;
 }
 
-// The client chooses exactly what the sender-driven server would send it: the same splits on the same path.
+// Without descendant depth the client chooses exactly what the sender-driven server would send it: the same
+// splits on the same path. With it (the default), a GET for a leaf far above τ brings some levels below it
+// too: a few more splits held, the same mesh.
 TEST(Receiver, ReceivesTheSplitsTheSenderDrivenModeSendsOnTheSamePath) {
   const Fixture& f = terrain();
   Server http(f.catalogue);
   server::TcpServer tcp(f.catalogue, server::ServerLimits{}, "127.0.0.1", 0);
   tcp.start();
-  client::ReceiverClient receiver(http.url());
+  client::ReceiverOptions exact;
+  exact.descendant_depth = 0;
+  client::ReceiverClient receiver(http.url(), exact);
   receiver.open("terrain");
+  client::ReceiverClient deep(http.url());
+  deep.open("terrain");
   client::StreamingClient sender("127.0.0.1", tcp.port(), client::ClientOptions{1.0f});
   sender.open("terrain");
   for (const Camera& camera : orbit_path(f.hierarchy, 8, 0.7f)) {
     receiver.frame(camera);
+    deep.frame(camera);
     sender.frame(camera);
     EXPECT_EQ(receiver.session().splits_received(), sender.session().splits_received());
     EXPECT_EQ(sorted_leaves(receiver.session()), sorted_leaves(sender.session()));
+    EXPECT_GE(deep.session().splits_received(), sender.session().splits_received());
+    EXPECT_EQ(faces_by_id(deep.session().mesh()), faces_by_id(sender.session().mesh()));
   }
+  EXPECT_GT(deep.session().splits_received(), sender.session().splits_received()) << "some depth was asked for";
 }
 
 // The compact records carry no colors or normals: such a model travels as records format 1 (VSPLITS
