@@ -11,6 +11,7 @@
 // operation reads those lists into small scratch arrays (one cache line per fan, not a chain of
 // dependent twin lookups), works there, and writes back.
 #include <algorithm>
+#include <array>
 #include <bit>
 #include <iterator>
 
@@ -73,8 +74,7 @@ SelectiveMesh::SelectiveMesh(const VertexHierarchy& hierarchy, std::span<const u
   for (uint32_t r = 0; r < hierarchy.root_count(); ++r) {
     const uint32_t slot = hierarchy.root_slot(r);
     activate(slot, hierarchy.id(slot));
-    load_corners(slot, fan_);
-    order_fan(fan_, ordered_, successor_);
+    put_in_fan_order(slot);
     if (ordered_.size() != fan_.size())
       fail("base mesh", "root " + to_string(hierarchy.id(slot)) + " is non-manifold (its faces form several fans)");
   }
@@ -235,13 +235,29 @@ void SelectiveMesh::append_face(uint32_t v, uint32_t f) {
   faces_of(record)[record.size++] = f;
 }
 
+void SelectiveMesh::insert_face(uint32_t v, uint32_t f, uint32_t anchor, bool after) {
+  VertexRecord& record = vertex_[v];
+  if (record.size == record.capacity) append_face(v, f);  // moves the list to a larger block; f is overwritten
+  else ++record.size;
+  uint32_t* list = faces_of(record);
+  uint32_t i = record.size - 1;
+  for (; i > 0 && list[i - 1] != anchor; --i) list[i] = list[i - 1];  // shifts what follows the anchor
+  if (i == 0) fail(kWhere, "face list of " + to_string(hierarchy_->id(v)) + " lacks face " + std::to_string(anchor));
+  if (!after) {
+    list[i] = anchor;
+    --i;
+  }
+  list[i] = f;
+}
+
 void SelectiveMesh::remove_face(uint32_t v, uint32_t f) {
   VertexRecord& record = vertex_[v];
   uint32_t* list = faces_of(record);
   uint32_t i = 0;
   while (i < record.size && list[i] != f) ++i;
   if (i == record.size) fail(kWhere, "face list of " + to_string(hierarchy_->id(v)) + " lacks face " + std::to_string(f));
-  list[i] = list[--record.size];
+  std::copy(list + i + 1, list + record.size, list + i);
+  --record.size;
 }
 
 void SelectiveMesh::activate(uint32_t v, VertexId id) {
@@ -347,6 +363,30 @@ bool SelectiveMesh::order_fan(std::vector<Corner>& fan, std::vector<Corner>& ord
   return ends == 0;
 }
 
+// Reads v's corners, orders them and writes the order back: for lists the fast paths of vsplit and ecol
+// do not keep in order (a side on the border, long fans), and the base mesh. Leaves the order in
+// ordered_ (shorter than fan_ when the faces form several fans; the list is then left as it was).
+void SelectiveMesh::put_in_fan_order(uint32_t v) {
+  load_corners(v, fan_);
+  order_fan(fan_, ordered_, successor_);
+  if (ordered_.size() != fan_.size()) return;
+  uint32_t* list = faces_of(vertex_[v]);
+  for (const Corner& c : ordered_) *list++ = c.face;
+}
+
+// Turns v's list, in cyclic fan order, so that an open fan starts after its gap.
+void SelectiveMesh::start_after_gap(uint32_t v) {
+  load_corners(v, fan_);
+  const uint32_t n = uint32_t(fan_.size());
+  for (uint32_t i = 0; i < n; ++i) {
+    const uint32_t next = i + 1 == n ? 0 : i + 1;
+    if (fan_[i].prev == fan_[next].next) continue;
+    uint32_t* list = faces_of(vertex_[v]);
+    std::rotate(list, list + next, list + n);
+    return;
+  }
+}
+
 uint32_t SelectiveMesh::open_end(std::vector<Corner>& fan) {
   prepare_lookup(fan);
   // One fan is closed exactly when its `next` and `prev` corners are the same set; an open one has one
@@ -422,7 +462,6 @@ void SelectiveMesh::split_fan(uint32_t s, uint32_t l, uint32_t r) {  // fan_: s'
   // v_t's faces: the cyclic range [first, last] of the ordered fan (empty when neither side is found).
   const bool any = ia != kNone || ib != kNone;
   const uint32_t first = ia != kNone ? ia : 0, last = ib != kNone ? ib : n - 1;
-  const auto goes_to_t = [&](uint32_t i) { return any && (first <= last ? first <= i && i <= last : i >= first || i <= last); };
   const uint32_t t_count = !any ? 0 : first <= last ? last - first + 1 : n - first + last + 1;
   const uint32_t fl = l != kNone ? new_face(t, u, l) : kNone;
   const uint32_t fr = r != kNone ? new_face(u, t, r) : kNone;
@@ -433,62 +472,82 @@ void SelectiveMesh::split_fan(uint32_t s, uint32_t l, uint32_t r) {  // fan_: s'
   const uint32_t added = (fl != kNone) + (fr != kNone);
   const VertexId id = id_of(s);
   deactivate(s);
+  // Each child's faces in cyclic fan order, its new faces after its range (v_t: f_r, f_l; v_u: f_l,
+  // f_r), with gaps where faces are missing; start_after_gap then turns each list to its gap.
   for (uint32_t child : {t, u}) {
-    uint32_t* list = assign_faces(child, (child == t ? t_count : n - t_count) + added);
-    for (uint32_t i = 0; i < n; ++i) {
-      if (goes_to_t(i) != (child == t)) continue;
+    const uint32_t count = child == t ? t_count : n - t_count, begin = child == t ? first : (first + t_count) % n;
+    uint32_t* list = assign_faces(child, count + added);
+    for (uint32_t j = 0, i = begin; j < count; ++j, i = i + 1 == n ? 0 : i + 1) {
       corner_[3 * size_t(ordered_[i].face) + ordered_[i].k] = child;
       *list++ = ordered_[i].face;
     }
-    if (fl != kNone) *list++ = fl;
-    if (fr != kNone) *list++ = fr;
+    for (uint32_t f : child == t ? std::array{fr, fl} : std::array{fl, fr})
+      if (f != kNone) *list++ = f;
   }
-  if (fl != kNone) append_face(l, fl);
-  if (fr != kNone) append_face(r, fr);
+  // Around v_l, f_l = (l, t, u) comes after (l, ·, t) = (s, l, ·), else before (l, u, ·) = (s, ·, l);
+  // around v_r, f_r = (r, u, t) before (r, t, ·) = (s, ·, r), else after (r, ·, u) = (s, r, ·).
+  const auto face_where = [&](bool use_next, uint32_t w) {
+    for (const Corner& c : ordered_)
+      if ((use_next ? c.next : c.prev) == w) return c.face;
+    return kNone;
+  };
+  if (fl != kNone) {
+    if (ia != kNone) insert_face(l, fl, ordered_[ia].face, true);
+    else insert_face(l, fl, face_where(false, l), false);
+  }
+  if (fr != kNone) {
+    if (ib != kNone) insert_face(r, fr, ordered_[ib].face, false);
+    else insert_face(r, fr, face_where(true, r), true);
+  }
   activate(t, id.child(0));
   activate(u, id.child(1));
+  start_after_gap(t);
+  start_after_gap(u);
 }
 
-// split_fan when both sides exist and v_t's faces, (v_s, v_l, ·) CCW up to (v_s, ·, v_r), are reached by
-// following the fan from the first: only those are ordered (a lookup each), not the whole fan, and the
-// rest go to v_u. Most splits are such. Returns false, having changed nothing, when the walk does not
-// get there (a side on the border, the fan's gap on the way, a fan too long for the mask): split_fan's
-// general path then orders the whole fan, checks it and splits (or rejects) as before. The faces and
-// their corners come out the same either way; only the order of the children's face lists differs.
+// split_fan when both sides are found. s's list is in fan order (an open fan from the face after its
+// gap), so v_t's faces, (v_s, v_l, ·) CCW up to (v_s, ·, v_r), are one cyclic range [ia, ib] of it and
+// v_u's the rest; f_r and f_l go where the ranges end, which keeps both children's lists in fan order:
+// the range that wraps round the list's end holds the gap of an open fan, and stays split there.
+// Returns false, having changed nothing, when a side is on the border: split_fan's general path
+// handles (or rejects) that.
 bool SelectiveMesh::split_between(uint32_t s, uint32_t l, uint32_t r) {
   const uint32_t n = uint32_t(fan_.size());
-  if (n > 64) return false;
-  prepare_lookup(fan_);
-  uint32_t i = find_next(fan_, l);
-  if (i == kNone) return false;
-  uint64_t to_t = 0;
-  uint32_t t_count = 1;
-  for (; fan_[i].prev != r; ++t_count) {
-    to_t |= uint64_t(1) << i;
-    if (t_count == n) return false;
-    i = find_next(fan_, fan_[i].prev);
-    if (i == kNone) return false;
+  uint32_t ia = kNone, ib = kNone;
+  for (uint32_t i = 0; i < n; ++i) {
+    if (fan_[i].next == l) ia = i;
+    if (fan_[i].prev == r) ib = i;
   }
-  to_t |= uint64_t(1) << i;
+  if (ia == kNone || ib == kNone) return false;
   const uint32_t t = hierarchy_->first_child(s), u = t + 1;
   const uint32_t fl = new_face(t, u, l), fr = new_face(u, t, r);
   partner_[fl] = fr;
   partner_[fr] = fl;
+  const uint32_t face_a = fan_[ia].face, face_b = fan_[ib].face;
   const VertexId id = id_of(s);
   deactivate(s);
-  for (uint32_t child : {t, u}) {
-    const uint64_t mine = child == t ? to_t : ~to_t;
-    uint32_t* list = assign_faces(child, (child == t ? t_count : n - t_count) + 2);  // may move pool_: one child at a time
-    for (uint32_t j = 0; j < n; ++j) {
-      if ((mine >> j & 1) == 0) continue;
+  const auto take = [&](uint32_t*& list, uint32_t child, uint32_t begin, uint32_t end) {
+    for (uint32_t j = begin; j < end; ++j) {
       corner_[3 * size_t(fan_[j].face) + fan_[j].k] = child;
       *list++ = fan_[j].face;
     }
-    *list++ = fl;
-    *list++ = fr;
-  }
-  append_face(l, fl);
-  append_face(r, fr);
+  };
+  const bool wraps = ia > ib;  // v_t's range runs over the list's end
+  const uint32_t t_count = wraps ? n - ia + ib + 1 : ib - ia + 1;
+  uint32_t* list = assign_faces(t, t_count + 2);  // may move pool_: one child at a time
+  take(list, t, wraps ? 0 : ia, ib + 1);
+  *list++ = fr;
+  *list++ = fl;
+  if (wraps) take(list, t, ia, n);
+  list = assign_faces(u, n - t_count + 2);
+  take(list, u, wraps ? ib + 1 : 0, ia);
+  *list++ = fl;
+  *list++ = fr;
+  if (!wraps) take(list, u, ib + 1, n);
+  // Around v_l, f_l = (l, t, u) follows (l, ·, t), which was v_s's face (s, l, ·); around v_r, f_r =
+  // (r, u, t) comes before (r, t, ·), which was (s, ·, r).
+  insert_face(l, fl, face_a, true);
+  insert_face(r, fr, face_b, false);
   activate(t, id.child(0));
   activate(u, id.child(1));
   return true;
@@ -587,18 +646,51 @@ bool SelectiveMesh::ecol(uint32_t p) {
   if (fr != kNone) remove_face(r, fr);
   deactivate(t);
   deactivate(u);
-  uint32_t* list = assign_faces(p, count);
-  for (const std::vector<Corner>* fan : {&fan_, &fan_u_}) {
-    for (const Corner& c : *fan) {
-      if (c.face == fl || c.face == fr) continue;
-      corner_[3 * size_t(c.face) + c.k] = p;
-      *list++ = c.face;
-    }
-  }
+  join_fans(p, fl, fr, t_end != kNone, u_end != kNone);
   if (fl != kNone) free_face(fl);
   if (fr != kNone) free_face(fr);
   activate(p, id);
   return true;
+}
+
+// p's list from t's (fan_) and u's (fan_u_) in fan order, f_l and f_r left out: around t, f_r = (t, r,
+// u) is followed by f_l = (t, u, l); around u, f_l = (u, l, t) by f_r = (u, t, r); p's fan is t's faces
+// after f_l up to f_r, then u's after f_r up to f_l. At most one of t and u is on the border (ecol
+// refuses the rest), and p's list starts after that one's gap. A border edge t-u (one new face) or a
+// long fan (lookups sort it) takes put_in_fan_order.
+void SelectiveMesh::join_fans(uint32_t p, uint32_t fl, uint32_t fr, bool t_open, bool u_open) {
+  const uint32_t n = uint32_t(fan_.size()), m = uint32_t(fan_u_.size());
+  uint32_t* list = assign_faces(p, n + m - 2 * ((fl != kNone) + (fr != kNone)));  // each is in both fans
+  const auto take = [&](const std::vector<Corner>& fan, uint32_t begin, uint32_t count) {
+    for (uint32_t i = 0, j = begin; i < count; ++i, j = j + 1 == fan.size() ? 0 : j + 1) {
+      corner_[3 * size_t(fan[j].face) + fan[j].k] = p;
+      *list++ = fan[j].face;
+    }
+  };
+  uint32_t a = 0, b = 0;  // f_r's place in t's list, f_l's in u's
+  while (a < n && fan_[a].face != fr) ++a;
+  while (b < m && fan_u_[b].face != fl) ++b;
+  // An open list cannot have the pair across its end (that is its gap).
+  const bool in_order = fl != kNone && fr != kNone && n <= kScannedFan && m <= kScannedFan && a < n && b < m &&
+                        fan_[(a + 1) % n].face == fl && fan_u_[(b + 1) % m].face == fr &&
+                        !(t_open && a + 1 == n) && !(u_open && b + 1 == m);
+  if (!in_order) {
+    for (const std::vector<Corner>* fan : {&fan_, &fan_u_})
+      for (uint32_t i = 0; i < fan->size(); ++i)
+        if ((*fan)[i].face != fl && (*fan)[i].face != fr) take(*fan, i, 1);
+    put_in_fan_order(p);
+  } else if (t_open) {  // f_r, f_l lie inside t's list: its gap stays at the end
+    take(fan_, 0, a);
+    take(fan_u_, (b + 2) % m, m - 2);
+    take(fan_, a + 2, n - a - 2);
+  } else if (u_open) {
+    take(fan_u_, 0, b);
+    take(fan_, (a + 2) % n, n - 2);
+    take(fan_u_, b + 2, m - b - 2);
+  } else {
+    take(fan_, (a + 2) % n, n - 2);
+    take(fan_u_, (b + 2) % m, m - 2);
+  }
 }
 
 }  // namespace pms
