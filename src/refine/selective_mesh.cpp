@@ -209,7 +209,7 @@ void SelectiveMesh::free_block(uint32_t begin, uint32_t capacity) {
   free_block_[size_class] = begin;
 }
 
-uint32_t* SelectiveMesh::assign_faces(uint32_t v, uint32_t count) {
+[[gnu::always_inline]] inline uint32_t* SelectiveMesh::assign_faces(uint32_t v, uint32_t count) {
   if (count > kMaxFanCapacity) fail(kWhere, "vertex " + to_string(hierarchy_->id(v)) + " has too many faces");
   VertexRecord& record = vertex_[v];
   record.size = count;
@@ -260,7 +260,7 @@ void SelectiveMesh::remove_face(uint32_t v, uint32_t f) {
   --record.size;
 }
 
-void SelectiveMesh::activate(uint32_t v, VertexId id) {
+[[gnu::always_inline]] inline void SelectiveMesh::activate(uint32_t v, VertexId id) {
   VertexRecord& record = vertex_[v];
   record.tree = id.tree;
   record.node = id.node;
@@ -270,7 +270,7 @@ void SelectiveMesh::activate(uint32_t v, VertexId id) {
   ++changes_;
 }
 
-void SelectiveMesh::deactivate(uint32_t v) {
+[[gnu::always_inline]] inline void SelectiveMesh::deactivate(uint32_t v) {
   VertexRecord& record = vertex_[v];
   active_[record.active_pos] = active_.back();
   vertex_[active_.back()].active_pos = record.active_pos;
@@ -282,7 +282,7 @@ void SelectiveMesh::deactivate(uint32_t v) {
   ++changes_;
 }
 
-uint32_t SelectiveMesh::new_face(uint32_t a, uint32_t b, uint32_t c) {
+[[gnu::always_inline]] inline uint32_t SelectiveMesh::new_face(uint32_t a, uint32_t b, uint32_t c) {
   uint32_t f = free_face_;
   if (f != kNone) {
     free_face_ = corner_[3 * size_t(f) + 1];
@@ -311,12 +311,16 @@ void SelectiveMesh::free_face(uint32_t f) {
 
 void SelectiveMesh::load_corners(uint32_t v, std::vector<Corner>& corners) const {
   const VertexRecord& record = vertex_[v];
-  corners.resize(record.size);
+  const uint32_t n = record.size;  // locals: the stores below could alias the record
+  corners.resize(n);
   const uint32_t* list = faces_of(record);
-  for (uint32_t i = 0; i < record.size; ++i) {
-    const uint32_t* c = &corner_[3 * size_t(list[i])];
+  const uint32_t* corner = corner_.data();
+  Corner* out = corners.data();
+  for (uint32_t i = 0; i < n; ++i) {
+    const uint32_t face = list[i];
+    const uint32_t* c = corner + 3 * size_t(face);
     const uint32_t k = uint32_t(c[1] == v) + 2 * uint32_t(c[2] == v);  // branch-free: c was a cache miss
-    corners[i] = {list[i], k, c[kNextCorner[k]], c[kPrevCorner[k]]};
+    out[i] = {face, k, c[kNextCorner[k]], c[kPrevCorner[k]]};
   }
 }
 
@@ -415,21 +419,41 @@ uint32_t SelectiveMesh::active_ancestor(VertexId v) const {
   }
 }
 
-// ActiveAncestor of a cut vertex of `slot`, whose corners fan_ holds. When the packets agree with the
-// mesh the answer is a neighbour of v_s (it becomes an apex of f_l or f_r), and an active vertex whose id
-// is a prefix of the cut's is its only active ancestor; so one id per neighbour replaces the walk down
-// from the root (one dependent load per level). The walk remains for the rest: the forced chain
-// (v_l == v_r need not be adjacent to v_s) and the error.
-uint32_t SelectiveMesh::cut_ancestor(VertexId cut, uint32_t slot) const {
-  if (!is_vertex(cut)) return kNone;
-  for (const Corner& c : fan_)
-    if (is_ancestor_or_self(id_of(c.next), cut)) return c.next;
-  for (const Corner& c : fan_)  // the far end of an open fan is no corner's `next`
-    if (is_ancestor_or_self(id_of(c.prev), cut)) return c.prev;
-  const uint32_t a = active_ancestor(cut);
-  if (a == kNone)
-    fail(kWhere, "vertex " + to_string(hierarchy_->id(slot)) + ": no active ancestor for cut vertex " + to_string(cut));
-  return a;
+// ActiveAncestor of the two cut vertices of `slot` (kNone for a missing side), whose corners fan_
+// holds. When the packets agree with the mesh each answer is a neighbour of v_s (it becomes an apex of
+// f_l or f_r), and an active vertex whose id is a prefix of the cut's is its only active ancestor; so
+// one id per neighbour, read once for both cuts, replaces the walk down from the root (one dependent load
+// per level). The walk remains for the rest: the forced chain (v_l == v_r need not be adjacent to v_s)
+// and the error.
+std::pair<uint32_t, uint32_t> SelectiveMesh::cut_ancestors(VertexId cut_l, VertexId cut_r, uint32_t slot) const {
+  const VertexId cuts[2] = {cut_l, cut_r};
+  uint32_t found[2] = {kNone, kNone};
+  int depth[2] = {0, 0};
+  uint32_t wanted = 0;  // bit i: cut i still looked for
+  for (int i = 0; i < 2; ++i) {
+    if (!is_vertex(cuts[i])) continue;
+    wanted |= 1u << i;
+    depth[i] = cuts[i].depth();
+  }
+  const auto look = [&](uint32_t v) {
+    const VertexRecord& record = vertex_[v];
+    const int d = 63 - __builtin_clzll(record.node);  // an active id is never 0
+    for (int i = 0; i < 2; ++i) {
+      if ((wanted >> i & 1) && record.tree == cuts[i].tree && d <= depth[i] && (cuts[i].node >> (depth[i] - d)) == record.node) {
+        found[i] = v;
+        wanted &= ~(1u << i);
+      }
+    }
+  };
+  for (uint32_t i = 0; wanted != 0 && i < fan_.size(); ++i) look(fan_[i].next);
+  for (uint32_t i = 0; wanted != 0 && i < fan_.size(); ++i) look(fan_[i].prev);  // an open fan's far end
+  for (int i = 0; i < 2; ++i) {
+    if ((wanted >> i & 1) == 0) continue;
+    found[i] = active_ancestor(cuts[i]);
+    if (found[i] == kNone)
+      fail(kWhere, "vertex " + to_string(hierarchy_->id(slot)) + ": no active ancestor for cut vertex " + to_string(cuts[i]));
+  }
+  return {found[0], found[1]};
 }
 
 // The fan split of docs/internals.md: v_s's faces from (v_s, v_l, ·) CCW to (v_s, ·, v_r) go to v_t,
@@ -569,8 +593,7 @@ VSplitResult SelectiveMesh::vsplit(uint32_t slot) {
     if (t == kNone) return {false, s};
     grow_records(t + 2);
     load_corners(s, fan_);
-    const uint32_t l = cut_ancestor(hierarchy_->cut_of_child(t), s);
-    const uint32_t r = cut_ancestor(hierarchy_->cut_of_child(t + 1), s);
+    const auto [l, r] = cut_ancestors(hierarchy_->cut_of_child(t), hierarchy_->cut_of_child(t + 1), s);
     if (l != kNone && l == r) {
       if (chain_.size() > active_.size()) fail(kWhere, "cyclic split order at " + to_string(hierarchy_->id(s)));
       chain_.push_back(l);

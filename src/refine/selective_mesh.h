@@ -119,7 +119,7 @@ class SelectiveMesh {
   static uint32_t open_end(std::vector<Corner>& fan);  // an open fan's far end (no corner's next), else kNone
   static void prepare_lookup(std::vector<Corner>& fan);
   static uint32_t find_next(const std::vector<Corner>& fan, uint32_t w);  // index of the corner with `next` w
-  uint32_t cut_ancestor(VertexId cut, uint32_t slot) const;  // over fan_ (slot)
+  std::pair<uint32_t, uint32_t> cut_ancestors(VertexId cut_l, VertexId cut_r, uint32_t slot) const;  // over fan_ (slot)
   void split_fan(uint32_t s, uint32_t l, uint32_t r);         // over fan_ (s)
   bool split_between(uint32_t s, uint32_t l, uint32_t r);     // over fan_ (s): split_fan's common case
   void join_fans(uint32_t p, uint32_t fl, uint32_t fr, bool t_open, bool u_open);  // over fan_ (t), fan_u_ (u)
