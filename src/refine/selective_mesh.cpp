@@ -28,6 +28,7 @@ constexpr const char* kWhere = "selective mesh";
 constexpr uint32_t kMinPoolCapacity = 16;
 constexpr uint32_t kMaxFanCapacity = 1u << 30;
 constexpr uint32_t kScannedFan = 16;  // find_next: longer fans are sorted and bisected
+constexpr uint32_t kSplitFan = 64;    // split_between's fans (on the stack); longer ones take split_fan
 constexpr uint32_t kNextCorner[3] = {1, 2, 0}, kPrevCorner[3] = {2, 0, 1};
 
 }  // namespace
@@ -463,7 +464,6 @@ std::pair<uint32_t, uint32_t> SelectiveMesh::cut_ancestors(VertexId cut_l, Verte
 // only side is a border) v_t keeps only the new faces. Everything is checked before the first write,
 // so inconsistent packets leave the mesh as it was.
 void SelectiveMesh::split_fan(uint32_t s, uint32_t l, uint32_t r) {  // fan_: s's corners
-  if (l != kNone && r != kNone && split_between(s, l, r)) return;
   const uint32_t t = hierarchy_->first_child(s), u = t + 1;
   const auto reject = [&](const std::string& why) { fail(kWhere, "vsplit " + to_string(hierarchy_->id(s)) + ": " + why); };
   const bool closed = order_fan(fan_, ordered_, successor_);
@@ -529,31 +529,47 @@ void SelectiveMesh::split_fan(uint32_t s, uint32_t l, uint32_t r) {  // fan_: s'
   start_after_gap(u);
 }
 
-// split_fan when both sides are found. s's list is in fan order (an open fan from the face after its
-// gap), so v_t's faces, (v_s, v_l, ·) CCW up to (v_s, ·, v_r), are one cyclic range [ia, ib] of it and
-// v_u's the rest; f_r and f_l go where the ranges end, which keeps both children's lists in fan order:
-// the range that wraps round the list's end holds the gap of an open fan, and stays split there.
-// Returns false, having changed nothing, when a side is on the border: split_fan's general path
-// handles (or rejects) that.
-bool SelectiveMesh::split_between(uint32_t s, uint32_t l, uint32_t r) {
-  const uint32_t n = uint32_t(fan_.size());
-  uint32_t ia = kNone, ib = kNone;
+// vsplit's common case in one pass over v_s's fan: both cut vertices have their active ancestors v_l
+// and v_r among v_s's neighbours, as the `next` corners of faces (s, l, ·) at ia and (s, r, ·) at jr
+// (an active vertex whose id is a prefix of the cut's is its only active ancestor). s's list is in fan
+// order, an open fan from the face after its gap, so (s, ·, r) is the face before jr, and v_t's faces,
+// (s, l, ·) CCW up to (s, ·, r), are one cyclic range [ia, ib] of the list and v_u's the rest; f_r and
+// f_l go where the ranges end, which keeps both children's lists in fan order (the range that wraps
+// round the list's end holds the gap of an open fan, and stays split there). Returns false, having
+// changed nothing, for the rest: a side missing or on the border, v_l == v_r (the forced chain), a
+// long fan; split_fan's general path reads the fan again for those.
+bool SelectiveMesh::split_between(uint32_t s, VertexId cut_l, VertexId cut_r) {
+  const VertexRecord& record = vertex_[s];
+  const uint32_t n = record.size;
+  if (n > kSplitFan || n == 0 || !is_vertex(cut_l) || !is_vertex(cut_r)) return false;
+  const uint32_t* listed = faces_of(record);
+  uint32_t face[kSplitFan], k[kSplitFan];
+  uint32_t ia = kNone, jr = kNone, l = kNone, r = kNone, last_prev = kNone;
+  const int dl = cut_l.depth(), dr = cut_r.depth();
   for (uint32_t i = 0; i < n; ++i) {
-    if (fan_[i].next == l) ia = i;
-    if (fan_[i].prev == r) ib = i;
+    face[i] = listed[i];
+    const uint32_t* c = &corner_[3 * size_t(face[i])];
+    k[i] = uint32_t(c[1] == s) + 2 * uint32_t(c[2] == s);
+    const uint32_t next = c[kNextCorner[k[i]]];
+    last_prev = c[kPrevCorner[k[i]]];
+    const VertexRecord& w = vertex_[next];
+    const int d = 63 - __builtin_clzll(w.node);  // an active id is never 0
+    if (w.tree == cut_l.tree && d <= dl && (cut_l.node >> (dl - d)) == w.node) ia = i, l = next;
+    if (w.tree == cut_r.tree && d <= dr && (cut_r.node >> (dr - d)) == w.node) jr = i, r = next;
   }
-  if (ia == kNone || ib == kNone) return false;
+  if (ia == kNone || jr == kNone || ia == jr) return false;
+  const uint32_t ib = jr > 0 ? jr - 1 : n - 1;
+  if (jr == 0 && last_prev != r) return false;  // no face (s, ·, r): the border
   const uint32_t t = hierarchy_->first_child(s), u = t + 1;
   const uint32_t fl = new_face(t, u, l), fr = new_face(u, t, r);
   partner_[fl] = fr;
   partner_[fr] = fl;
-  const uint32_t face_a = fan_[ia].face, face_b = fan_[ib].face;
   const VertexId id = id_of(s);
   deactivate(s);
   const auto take = [&](uint32_t*& list, uint32_t child, uint32_t begin, uint32_t end) {
     for (uint32_t j = begin; j < end; ++j) {
-      corner_[3 * size_t(fan_[j].face) + fan_[j].k] = child;
-      *list++ = fan_[j].face;
+      corner_[3 * size_t(face[j]) + k[j]] = child;
+      *list++ = face[j];
     }
   };
   const bool wraps = ia > ib;  // v_t's range runs over the list's end
@@ -568,10 +584,10 @@ bool SelectiveMesh::split_between(uint32_t s, uint32_t l, uint32_t r) {
   *list++ = fl;
   *list++ = fr;
   if (!wraps) take(list, u, ib + 1, n);
-  // Around v_l, f_l = (l, t, u) follows (l, ·, t), which was v_s's face (s, l, ·); around v_r, f_r =
-  // (r, u, t) comes before (r, t, ·), which was (s, ·, r).
-  insert_face(l, fl, face_a, true);
-  insert_face(r, fr, face_b, false);
+  // Around v_l, f_l = (l, t, u) follows (l, ·, t), which was (s, l, ·); around v_r, f_r = (r, u, t)
+  // comes before (r, t, ·), which was (s, ·, r).
+  insert_face(l, fl, face[ia], true);
+  insert_face(r, fr, face[ib], false);
   activate(t, id.child(0));
   activate(u, id.child(1));
   return true;
@@ -592,8 +608,13 @@ VSplitResult SelectiveMesh::vsplit(uint32_t slot) {
     const uint32_t t = hierarchy_->first_child(s);
     if (t == kNone) return {false, s};
     grow_records(t + 2);
+    const VertexId cut_l = hierarchy_->cut_of_child(t), cut_r = hierarchy_->cut_of_child(t + 1);
+    if (split_between(s, cut_l, cut_r)) {
+      chain_.pop_back();
+      continue;
+    }
     load_corners(s, fan_);
-    const auto [l, r] = cut_ancestors(hierarchy_->cut_of_child(t), hierarchy_->cut_of_child(t + 1), s);
+    const auto [l, r] = cut_ancestors(cut_l, cut_r, s);
     if (l != kNone && l == r) {
       if (chain_.size() > active_.size()) fail(kWhere, "cyclic split order at " + to_string(hierarchy_->id(s)));
       chain_.push_back(l);

@@ -121,7 +121,7 @@ class SelectiveMesh {
   static uint32_t find_next(const std::vector<Corner>& fan, uint32_t w);  // index of the corner with `next` w
   std::pair<uint32_t, uint32_t> cut_ancestors(VertexId cut_l, VertexId cut_r, uint32_t slot) const;  // over fan_ (slot)
   void split_fan(uint32_t s, uint32_t l, uint32_t r);         // over fan_ (s)
-  bool split_between(uint32_t s, uint32_t l, uint32_t r);     // over fan_ (s): split_fan's common case
+  bool split_between(uint32_t s, VertexId cut_l, VertexId cut_r);  // vsplit's common case, before fan_ is read
   void join_fans(uint32_t p, uint32_t fl, uint32_t fr, bool t_open, bool u_open);  // over fan_ (t), fan_u_ (u)
   void put_in_fan_order(uint32_t v);                           // the lists' order, restored the slow way
   void start_after_gap(uint32_t v);
