@@ -236,7 +236,7 @@ void SelectiveMesh::append_face(uint32_t v, uint32_t f) {
   faces_of(record)[record.size++] = f;
 }
 
-void SelectiveMesh::insert_face(uint32_t v, uint32_t f, uint32_t anchor, bool after) {
+[[gnu::always_inline]] inline void SelectiveMesh::insert_face(uint32_t v, uint32_t f, uint32_t anchor, bool after) {
   VertexRecord& record = vertex_[v];
   if (record.size == record.capacity) append_face(v, f);  // moves the list to a larger block; f is overwritten
   else ++record.size;
@@ -544,22 +544,25 @@ bool SelectiveMesh::split_between(uint32_t s, VertexId cut_l, VertexId cut_r) {
   if (n > kSplitFan || n == 0 || !is_vertex(cut_l) || !is_vertex(cut_r)) return false;
   const uint32_t* listed = faces_of(record);
   uint32_t face[kSplitFan], k[kSplitFan];
-  uint32_t ia = kNone, jr = kNone, l = kNone, r = kNone, last_prev = kNone;
+  uint32_t ia = kNone, jr = kNone, l = kNone, r = kNone;
   const int dl = cut_l.depth(), dr = cut_r.depth();
+  // v is an ancestor of (or is) the cut when the cut's id shifted to v's depth is v's.
+  const auto below = [](const VertexRecord& v, int d, VertexId cut, int cut_depth) {
+    return v.tree == cut.tree && d <= cut_depth && (cut.node >> (cut_depth - d)) == v.node;
+  };
   for (uint32_t i = 0; i < n; ++i) {
     face[i] = listed[i];
     const uint32_t* c = &corner_[3 * size_t(face[i])];
     k[i] = uint32_t(c[1] == s) + 2 * uint32_t(c[2] == s);
     const uint32_t next = c[kNextCorner[k[i]]];
-    last_prev = c[kPrevCorner[k[i]]];
     const VertexRecord& w = vertex_[next];
     const int d = 63 - __builtin_clzll(w.node);  // an active id is never 0
-    if (w.tree == cut_l.tree && d <= dl && (cut_l.node >> (dl - d)) == w.node) ia = i, l = next;
-    if (w.tree == cut_r.tree && d <= dr && (cut_r.node >> (dr - d)) == w.node) jr = i, r = next;
+    if (below(w, d, cut_l, dl)) ia = i, l = next;
+    if (below(w, d, cut_r, dr)) jr = i, r = next;
   }
   if (ia == kNone || jr == kNone || ia == jr) return false;
   const uint32_t ib = jr > 0 ? jr - 1 : n - 1;
-  if (jr == 0 && last_prev != r) return false;  // no face (s, ·, r): the border
+  if (jr == 0 && corner_[3 * size_t(face[ib]) + kPrevCorner[k[ib]]] != r) return false;  // no (s, ·, r): the border
   const uint32_t t = hierarchy_->first_child(s), u = t + 1;
   const uint32_t fl = new_face(t, u, l), fr = new_face(u, t, r);
   partner_[fl] = fr;
