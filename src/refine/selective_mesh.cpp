@@ -170,9 +170,8 @@ void SelectiveMesh::prefetch_ecol(uint32_t p, int stage) const {
 // Each known split adds at most two faces: room for all of them, so no split reallocates the face
 // arrays (growing geometrically, as the hierarchy grows a packet at a time). Only reserved: memory is
 // touched as faces are made.
-void SelectiveMesh::reserve_faces() {
+void SelectiveMesh::reserve_new_faces() {
   const VertexHierarchy& h = *hierarchy_;
-  if (reserved_for_ == h.size()) return;
   reserved_for_ = h.size();
   const size_t face_bound = base_face_count_ + (h.size() - h.root_count());
   if (3 * face_bound > corner_.capacity()) {
@@ -182,8 +181,7 @@ void SelectiveMesh::reserve_faces() {
   }
 }
 
-void SelectiveMesh::grow_records(uint32_t end) {
-  if (end <= vertex_.size()) return;
+void SelectiveMesh::add_records(uint32_t end) {
   const size_t known = hierarchy_->size();
   vertex_.reserve(slot_capacity(end, vertex_.capacity(), known, sizeof(vertex_[0])));
   vertex_.resize(slot_size(end, vertex_.size(), vertex_.capacity(), known));
@@ -600,6 +598,10 @@ VSplitResult SelectiveMesh::vsplit(uint32_t slot) {
   reserve_faces();
   if (!is_active(slot))
     fail(kWhere, "vsplit of inactive vertex " + (slot < hierarchy_->size() ? to_string(hierarchy_->id(slot)) : "?"));
+  if (const uint32_t t = hierarchy_->first_child(slot); t != kNone) {  // the common case: no chain
+    grow_records(t + 2);
+    if (split_between(slot, hierarchy_->cut_of_child(t), hierarchy_->cut_of_child(t + 1))) return {true, kNone};
+  }
   // SelStreamVSplit (kim-lee-kobbelt §5.3) without recursion: v_l == v_r must be split first, and that
   // split may in turn wait for another. Every stacked vertex is active and distinct unless the packets
   // are cyclic, which the size bound catches.

@@ -109,8 +109,14 @@ class SelectiveMesh {
   };
   static_assert(sizeof(VertexRecord) == 64);
 
-  void reserve_faces();
-  void grow_records(uint32_t end);  // records for slots [0, end) at least
+  void reserve_faces() {
+    if (reserved_for_ != hierarchy_->size()) reserve_new_faces();
+  }
+  void reserve_new_faces();
+  void grow_records(uint32_t end) {  // records for slots [0, end) at least
+    if (end > vertex_.size()) add_records(end);
+  }
+  void add_records(uint32_t end);
   void prefetch_record(uint32_t v) const;
   enum class FanStage { corners, split_neighbours, collapse_reads };
   void prefetch_fan(uint32_t v, FanStage stage) const;
