@@ -11,6 +11,7 @@
 // operation reads those lists into small scratch arrays (one cache line per fan, not a chain of
 // dependent twin lookups), works there, and writes back.
 #include <algorithm>
+#include <array>
 #include <bit>
 #include <iterator>
 
@@ -27,6 +28,7 @@ constexpr const char* kWhere = "selective mesh";
 constexpr uint32_t kMinPoolCapacity = 16;
 constexpr uint32_t kMaxFanCapacity = 1u << 30;
 constexpr uint32_t kScannedFan = 16;  // find_next: longer fans are sorted and bisected
+constexpr uint32_t kSplitFan = 64;    // split_between's fans (on the stack); longer ones take split_fan
 constexpr uint32_t kNextCorner[3] = {1, 2, 0}, kPrevCorner[3] = {2, 0, 1};
 
 }  // namespace
@@ -73,8 +75,7 @@ SelectiveMesh::SelectiveMesh(const VertexHierarchy& hierarchy, std::span<const u
   for (uint32_t r = 0; r < hierarchy.root_count(); ++r) {
     const uint32_t slot = hierarchy.root_slot(r);
     activate(slot, hierarchy.id(slot));
-    load_corners(slot, fan_);
-    order_fan(fan_, ordered_, successor_);
+    put_in_fan_order(slot);
     if (ordered_.size() != fan_.size())
       fail("base mesh", "root " + to_string(hierarchy.id(slot)) + " is non-manifold (its faces form several fans)");
   }
@@ -169,9 +170,8 @@ void SelectiveMesh::prefetch_ecol(uint32_t p, int stage) const {
 // Each known split adds at most two faces: room for all of them, so no split reallocates the face
 // arrays (growing geometrically, as the hierarchy grows a packet at a time). Only reserved: memory is
 // touched as faces are made.
-void SelectiveMesh::reserve_faces() {
+void SelectiveMesh::reserve_new_faces() {
   const VertexHierarchy& h = *hierarchy_;
-  if (reserved_for_ == h.size()) return;
   reserved_for_ = h.size();
   const size_t face_bound = base_face_count_ + (h.size() - h.root_count());
   if (3 * face_bound > corner_.capacity()) {
@@ -181,8 +181,7 @@ void SelectiveMesh::reserve_faces() {
   }
 }
 
-void SelectiveMesh::grow_records(uint32_t end) {
-  if (end <= vertex_.size()) return;
+void SelectiveMesh::add_records(uint32_t end) {
   const size_t known = hierarchy_->size();
   vertex_.reserve(slot_capacity(end, vertex_.capacity(), known, sizeof(vertex_[0])));
   vertex_.resize(slot_size(end, vertex_.size(), vertex_.capacity(), known));
@@ -209,7 +208,7 @@ void SelectiveMesh::free_block(uint32_t begin, uint32_t capacity) {
   free_block_[size_class] = begin;
 }
 
-uint32_t* SelectiveMesh::assign_faces(uint32_t v, uint32_t count) {
+[[gnu::always_inline]] inline uint32_t* SelectiveMesh::assign_faces(uint32_t v, uint32_t count) {
   if (count > kMaxFanCapacity) fail(kWhere, "vertex " + to_string(hierarchy_->id(v)) + " has too many faces");
   VertexRecord& record = vertex_[v];
   record.size = count;
@@ -235,16 +234,32 @@ void SelectiveMesh::append_face(uint32_t v, uint32_t f) {
   faces_of(record)[record.size++] = f;
 }
 
+[[gnu::always_inline]] inline void SelectiveMesh::insert_face(uint32_t v, uint32_t f, uint32_t anchor, bool after) {
+  VertexRecord& record = vertex_[v];
+  if (record.size == record.capacity) append_face(v, f);  // moves the list to a larger block; f is overwritten
+  else ++record.size;
+  uint32_t* list = faces_of(record);
+  uint32_t i = record.size - 1;
+  for (; i > 0 && list[i - 1] != anchor; --i) list[i] = list[i - 1];  // shifts what follows the anchor
+  if (i == 0) fail(kWhere, "face list of " + to_string(hierarchy_->id(v)) + " lacks face " + std::to_string(anchor));
+  if (!after) {
+    list[i] = anchor;
+    --i;
+  }
+  list[i] = f;
+}
+
 void SelectiveMesh::remove_face(uint32_t v, uint32_t f) {
   VertexRecord& record = vertex_[v];
   uint32_t* list = faces_of(record);
   uint32_t i = 0;
   while (i < record.size && list[i] != f) ++i;
   if (i == record.size) fail(kWhere, "face list of " + to_string(hierarchy_->id(v)) + " lacks face " + std::to_string(f));
-  list[i] = list[--record.size];
+  std::copy(list + i + 1, list + record.size, list + i);
+  --record.size;
 }
 
-void SelectiveMesh::activate(uint32_t v, VertexId id) {
+[[gnu::always_inline]] inline void SelectiveMesh::activate(uint32_t v, VertexId id) {
   VertexRecord& record = vertex_[v];
   record.tree = id.tree;
   record.node = id.node;
@@ -254,7 +269,7 @@ void SelectiveMesh::activate(uint32_t v, VertexId id) {
   ++changes_;
 }
 
-void SelectiveMesh::deactivate(uint32_t v) {
+[[gnu::always_inline]] inline void SelectiveMesh::deactivate(uint32_t v) {
   VertexRecord& record = vertex_[v];
   active_[record.active_pos] = active_.back();
   vertex_[active_.back()].active_pos = record.active_pos;
@@ -266,7 +281,7 @@ void SelectiveMesh::deactivate(uint32_t v) {
   ++changes_;
 }
 
-uint32_t SelectiveMesh::new_face(uint32_t a, uint32_t b, uint32_t c) {
+[[gnu::always_inline]] inline uint32_t SelectiveMesh::new_face(uint32_t a, uint32_t b, uint32_t c) {
   uint32_t f = free_face_;
   if (f != kNone) {
     free_face_ = corner_[3 * size_t(f) + 1];
@@ -295,12 +310,16 @@ void SelectiveMesh::free_face(uint32_t f) {
 
 void SelectiveMesh::load_corners(uint32_t v, std::vector<Corner>& corners) const {
   const VertexRecord& record = vertex_[v];
-  corners.resize(record.size);
+  const uint32_t n = record.size;  // locals: the stores below could alias the record
+  corners.resize(n);
   const uint32_t* list = faces_of(record);
-  for (uint32_t i = 0; i < record.size; ++i) {
-    const uint32_t* c = &corner_[3 * size_t(list[i])];
+  const uint32_t* corner = corner_.data();
+  Corner* out = corners.data();
+  for (uint32_t i = 0; i < n; ++i) {
+    const uint32_t face = list[i];
+    const uint32_t* c = corner + 3 * size_t(face);
     const uint32_t k = uint32_t(c[1] == v) + 2 * uint32_t(c[2] == v);  // branch-free: c was a cache miss
-    corners[i] = {list[i], k, c[kNextCorner[k]], c[kPrevCorner[k]]};
+    out[i] = {face, k, c[kNextCorner[k]], c[kPrevCorner[k]]};
   }
 }
 
@@ -347,6 +366,30 @@ bool SelectiveMesh::order_fan(std::vector<Corner>& fan, std::vector<Corner>& ord
   return ends == 0;
 }
 
+// Reads v's corners, orders them and writes the order back: for lists the fast paths of vsplit and ecol
+// do not keep in order (a side on the border, long fans), and the base mesh. Leaves the order in
+// ordered_ (shorter than fan_ when the faces form several fans; the list is then left as it was).
+void SelectiveMesh::put_in_fan_order(uint32_t v) {
+  load_corners(v, fan_);
+  order_fan(fan_, ordered_, successor_);
+  if (ordered_.size() != fan_.size()) return;
+  uint32_t* list = faces_of(vertex_[v]);
+  for (const Corner& c : ordered_) *list++ = c.face;
+}
+
+// Turns v's list, in cyclic fan order, so that an open fan starts after its gap.
+void SelectiveMesh::start_after_gap(uint32_t v) {
+  load_corners(v, fan_);
+  const uint32_t n = uint32_t(fan_.size());
+  for (uint32_t i = 0; i < n; ++i) {
+    const uint32_t next = i + 1 == n ? 0 : i + 1;
+    if (fan_[i].prev == fan_[next].next) continue;
+    uint32_t* list = faces_of(vertex_[v]);
+    std::rotate(list, list + next, list + n);
+    return;
+  }
+}
+
 uint32_t SelectiveMesh::open_end(std::vector<Corner>& fan) {
   prepare_lookup(fan);
   // One fan is closed exactly when its `next` and `prev` corners are the same set; an open one has one
@@ -375,21 +418,41 @@ uint32_t SelectiveMesh::active_ancestor(VertexId v) const {
   }
 }
 
-// ActiveAncestor of a cut vertex of `slot`, whose corners fan_ holds. When the packets agree with the
-// mesh the answer is a neighbour of v_s (it becomes an apex of f_l or f_r), and an active vertex whose id
-// is a prefix of the cut's is its only active ancestor; so one id per neighbour replaces the walk down
-// from the root (one dependent load per level). The walk remains for the rest: the forced chain
-// (v_l == v_r need not be adjacent to v_s) and the error.
-uint32_t SelectiveMesh::cut_ancestor(VertexId cut, uint32_t slot) const {
-  if (!is_vertex(cut)) return kNone;
-  for (const Corner& c : fan_)
-    if (is_ancestor_or_self(id_of(c.next), cut)) return c.next;
-  for (const Corner& c : fan_)  // the far end of an open fan is no corner's `next`
-    if (is_ancestor_or_self(id_of(c.prev), cut)) return c.prev;
-  const uint32_t a = active_ancestor(cut);
-  if (a == kNone)
-    fail(kWhere, "vertex " + to_string(hierarchy_->id(slot)) + ": no active ancestor for cut vertex " + to_string(cut));
-  return a;
+// ActiveAncestor of the two cut vertices of `slot` (kNone for a missing side), whose corners fan_
+// holds. When the packets agree with the mesh each answer is a neighbour of v_s (it becomes an apex of
+// f_l or f_r), and an active vertex whose id is a prefix of the cut's is its only active ancestor; so
+// one id per neighbour, read once for both cuts, replaces the walk down from the root (one dependent load
+// per level). The walk remains for the rest: the forced chain (v_l == v_r need not be adjacent to v_s)
+// and the error.
+std::pair<uint32_t, uint32_t> SelectiveMesh::cut_ancestors(VertexId cut_l, VertexId cut_r, uint32_t slot) const {
+  const VertexId cuts[2] = {cut_l, cut_r};
+  uint32_t found[2] = {kNone, kNone};
+  int depth[2] = {0, 0};
+  uint32_t wanted = 0;  // bit i: cut i still looked for
+  for (int i = 0; i < 2; ++i) {
+    if (!is_vertex(cuts[i])) continue;
+    wanted |= 1u << i;
+    depth[i] = cuts[i].depth();
+  }
+  const auto look = [&](uint32_t v) {
+    const VertexRecord& record = vertex_[v];
+    const int d = 63 - __builtin_clzll(record.node);  // an active id is never 0
+    for (int i = 0; i < 2; ++i) {
+      if ((wanted >> i & 1) && record.tree == cuts[i].tree && d <= depth[i] && (cuts[i].node >> (depth[i] - d)) == record.node) {
+        found[i] = v;
+        wanted &= ~(1u << i);
+      }
+    }
+  };
+  for (uint32_t i = 0; wanted != 0 && i < fan_.size(); ++i) look(fan_[i].next);
+  for (uint32_t i = 0; wanted != 0 && i < fan_.size(); ++i) look(fan_[i].prev);  // an open fan's far end
+  for (int i = 0; i < 2; ++i) {
+    if ((wanted >> i & 1) == 0) continue;
+    found[i] = active_ancestor(cuts[i]);
+    if (found[i] == kNone)
+      fail(kWhere, "vertex " + to_string(hierarchy_->id(slot)) + ": no active ancestor for cut vertex " + to_string(cuts[i]));
+  }
+  return {found[0], found[1]};
 }
 
 // The fan split of docs/internals.md: v_s's faces from (v_s, v_l, ·) CCW to (v_s, ·, v_r) go to v_t,
@@ -399,7 +462,6 @@ uint32_t SelectiveMesh::cut_ancestor(VertexId cut, uint32_t slot) const {
 // only side is a border) v_t keeps only the new faces. Everything is checked before the first write,
 // so inconsistent packets leave the mesh as it was.
 void SelectiveMesh::split_fan(uint32_t s, uint32_t l, uint32_t r) {  // fan_: s's corners
-  if (l != kNone && r != kNone && split_between(s, l, r)) return;
   const uint32_t t = hierarchy_->first_child(s), u = t + 1;
   const auto reject = [&](const std::string& why) { fail(kWhere, "vsplit " + to_string(hierarchy_->id(s)) + ": " + why); };
   const bool closed = order_fan(fan_, ordered_, successor_);
@@ -422,7 +484,6 @@ void SelectiveMesh::split_fan(uint32_t s, uint32_t l, uint32_t r) {  // fan_: s'
   // v_t's faces: the cyclic range [first, last] of the ordered fan (empty when neither side is found).
   const bool any = ia != kNone || ib != kNone;
   const uint32_t first = ia != kNone ? ia : 0, last = ib != kNone ? ib : n - 1;
-  const auto goes_to_t = [&](uint32_t i) { return any && (first <= last ? first <= i && i <= last : i >= first || i <= last); };
   const uint32_t t_count = !any ? 0 : first <= last ? last - first + 1 : n - first + last + 1;
   const uint32_t fl = l != kNone ? new_face(t, u, l) : kNone;
   const uint32_t fr = r != kNone ? new_face(u, t, r) : kNone;
@@ -433,62 +494,101 @@ void SelectiveMesh::split_fan(uint32_t s, uint32_t l, uint32_t r) {  // fan_: s'
   const uint32_t added = (fl != kNone) + (fr != kNone);
   const VertexId id = id_of(s);
   deactivate(s);
+  // Each child's faces in cyclic fan order, its new faces after its range (v_t: f_r, f_l; v_u: f_l,
+  // f_r), with gaps where faces are missing; start_after_gap then turns each list to its gap.
   for (uint32_t child : {t, u}) {
-    uint32_t* list = assign_faces(child, (child == t ? t_count : n - t_count) + added);
-    for (uint32_t i = 0; i < n; ++i) {
-      if (goes_to_t(i) != (child == t)) continue;
+    const uint32_t count = child == t ? t_count : n - t_count, begin = child == t ? first : (first + t_count) % n;
+    uint32_t* list = assign_faces(child, count + added);
+    for (uint32_t j = 0, i = begin; j < count; ++j, i = i + 1 == n ? 0 : i + 1) {
       corner_[3 * size_t(ordered_[i].face) + ordered_[i].k] = child;
       *list++ = ordered_[i].face;
     }
-    if (fl != kNone) *list++ = fl;
-    if (fr != kNone) *list++ = fr;
+    for (uint32_t f : child == t ? std::array{fr, fl} : std::array{fl, fr})
+      if (f != kNone) *list++ = f;
   }
-  if (fl != kNone) append_face(l, fl);
-  if (fr != kNone) append_face(r, fr);
+  // Around v_l, f_l = (l, t, u) comes after (l, ·, t) = (s, l, ·), else before (l, u, ·) = (s, ·, l);
+  // around v_r, f_r = (r, u, t) before (r, t, ·) = (s, ·, r), else after (r, ·, u) = (s, r, ·).
+  const auto face_where = [&](bool use_next, uint32_t w) {
+    for (const Corner& c : ordered_)
+      if ((use_next ? c.next : c.prev) == w) return c.face;
+    return kNone;
+  };
+  if (fl != kNone) {
+    if (ia != kNone) insert_face(l, fl, ordered_[ia].face, true);
+    else insert_face(l, fl, face_where(false, l), false);
+  }
+  if (fr != kNone) {
+    if (ib != kNone) insert_face(r, fr, ordered_[ib].face, false);
+    else insert_face(r, fr, face_where(true, r), true);
+  }
   activate(t, id.child(0));
   activate(u, id.child(1));
+  start_after_gap(t);
+  start_after_gap(u);
 }
 
-// split_fan when both sides exist and v_t's faces, (v_s, v_l, ·) CCW up to (v_s, ·, v_r), are reached by
-// following the fan from the first: only those are ordered (a lookup each), not the whole fan, and the
-// rest go to v_u. Most splits are such. Returns false, having changed nothing, when the walk does not
-// get there (a side on the border, the fan's gap on the way, a fan too long for the mask): split_fan's
-// general path then orders the whole fan, checks it and splits (or rejects) as before. The faces and
-// their corners come out the same either way; only the order of the children's face lists differs.
-bool SelectiveMesh::split_between(uint32_t s, uint32_t l, uint32_t r) {
-  const uint32_t n = uint32_t(fan_.size());
-  if (n > 64) return false;
-  prepare_lookup(fan_);
-  uint32_t i = find_next(fan_, l);
-  if (i == kNone) return false;
-  uint64_t to_t = 0;
-  uint32_t t_count = 1;
-  for (; fan_[i].prev != r; ++t_count) {
-    to_t |= uint64_t(1) << i;
-    if (t_count == n) return false;
-    i = find_next(fan_, fan_[i].prev);
-    if (i == kNone) return false;
+// vsplit's common case in one pass over v_s's fan: both cut vertices have their active ancestors v_l
+// and v_r among v_s's neighbours, as the `next` corners of faces (s, l, ·) at ia and (s, r, ·) at jr
+// (an active vertex whose id is a prefix of the cut's is its only active ancestor). s's list is in fan
+// order, an open fan from the face after its gap, so (s, ·, r) is the face before jr, and v_t's faces,
+// (s, l, ·) CCW up to (s, ·, r), are one cyclic range [ia, ib] of the list and v_u's the rest; f_r and
+// f_l go where the ranges end, which keeps both children's lists in fan order (the range that wraps
+// round the list's end holds the gap of an open fan, and stays split there). Returns false, having
+// changed nothing, for the rest: a side missing or on the border, v_l == v_r (the forced chain), a
+// long fan; split_fan's general path reads the fan again for those.
+bool SelectiveMesh::split_between(uint32_t s, VertexId cut_l, VertexId cut_r) {
+  const VertexRecord& record = vertex_[s];
+  const uint32_t n = record.size;
+  if (n > kSplitFan || n == 0 || !is_vertex(cut_l) || !is_vertex(cut_r)) return false;
+  const uint32_t* listed = faces_of(record);
+  uint32_t face[kSplitFan], k[kSplitFan];
+  uint32_t ia = kNone, jr = kNone, l = kNone, r = kNone;
+  const int dl = cut_l.depth(), dr = cut_r.depth();
+  // v is an ancestor of (or is) the cut when the cut's id shifted to v's depth is v's.
+  const auto below = [](const VertexRecord& v, int d, VertexId cut, int cut_depth) {
+    return v.tree == cut.tree && d <= cut_depth && (cut.node >> (cut_depth - d)) == v.node;
+  };
+  for (uint32_t i = 0; i < n; ++i) {
+    face[i] = listed[i];
+    const uint32_t* c = &corner_[3 * size_t(face[i])];
+    k[i] = uint32_t(c[1] == s) + 2 * uint32_t(c[2] == s);
+    const uint32_t next = c[kNextCorner[k[i]]];
+    const VertexRecord& w = vertex_[next];
+    const int d = 63 - __builtin_clzll(w.node);  // an active id is never 0
+    if (below(w, d, cut_l, dl)) ia = i, l = next;
+    if (below(w, d, cut_r, dr)) jr = i, r = next;
   }
-  to_t |= uint64_t(1) << i;
+  if (ia == kNone || jr == kNone || ia == jr) return false;
+  const uint32_t ib = jr > 0 ? jr - 1 : n - 1;
+  if (jr == 0 && corner_[3 * size_t(face[ib]) + kPrevCorner[k[ib]]] != r) return false;  // no (s, ·, r): the border
   const uint32_t t = hierarchy_->first_child(s), u = t + 1;
   const uint32_t fl = new_face(t, u, l), fr = new_face(u, t, r);
   partner_[fl] = fr;
   partner_[fr] = fl;
   const VertexId id = id_of(s);
   deactivate(s);
-  for (uint32_t child : {t, u}) {
-    const uint64_t mine = child == t ? to_t : ~to_t;
-    uint32_t* list = assign_faces(child, (child == t ? t_count : n - t_count) + 2);  // may move pool_: one child at a time
-    for (uint32_t j = 0; j < n; ++j) {
-      if ((mine >> j & 1) == 0) continue;
-      corner_[3 * size_t(fan_[j].face) + fan_[j].k] = child;
-      *list++ = fan_[j].face;
+  const auto take = [&](uint32_t*& list, uint32_t child, uint32_t begin, uint32_t end) {
+    for (uint32_t j = begin; j < end; ++j) {
+      corner_[3 * size_t(face[j]) + k[j]] = child;
+      *list++ = face[j];
     }
-    *list++ = fl;
-    *list++ = fr;
-  }
-  append_face(l, fl);
-  append_face(r, fr);
+  };
+  const bool wraps = ia > ib;  // v_t's range runs over the list's end
+  const uint32_t t_count = wraps ? n - ia + ib + 1 : ib - ia + 1;
+  uint32_t* list = assign_faces(t, t_count + 2);  // may move pool_: one child at a time
+  take(list, t, wraps ? 0 : ia, ib + 1);
+  *list++ = fr;
+  *list++ = fl;
+  if (wraps) take(list, t, ia, n);
+  list = assign_faces(u, n - t_count + 2);
+  take(list, u, wraps ? ib + 1 : 0, ia);
+  *list++ = fl;
+  *list++ = fr;
+  if (!wraps) take(list, u, ib + 1, n);
+  // Around v_l, f_l = (l, t, u) follows (l, ·, t), which was (s, l, ·); around v_r, f_r = (r, u, t)
+  // comes before (r, t, ·), which was (s, ·, r).
+  insert_face(l, fl, face[ia], true);
+  insert_face(r, fr, face[ib], false);
   activate(t, id.child(0));
   activate(u, id.child(1));
   return true;
@@ -498,6 +598,10 @@ VSplitResult SelectiveMesh::vsplit(uint32_t slot) {
   reserve_faces();
   if (!is_active(slot))
     fail(kWhere, "vsplit of inactive vertex " + (slot < hierarchy_->size() ? to_string(hierarchy_->id(slot)) : "?"));
+  if (const uint32_t t = hierarchy_->first_child(slot); t != kNone) {  // the common case: no chain
+    grow_records(t + 2);
+    if (split_between(slot, hierarchy_->cut_of_child(t), hierarchy_->cut_of_child(t + 1))) return {true, kNone};
+  }
   // SelStreamVSplit (kim-lee-kobbelt §5.3) without recursion: v_l == v_r must be split first, and that
   // split may in turn wait for another. Every stacked vertex is active and distinct unless the packets
   // are cyclic, which the size bound catches.
@@ -509,9 +613,13 @@ VSplitResult SelectiveMesh::vsplit(uint32_t slot) {
     const uint32_t t = hierarchy_->first_child(s);
     if (t == kNone) return {false, s};
     grow_records(t + 2);
+    const VertexId cut_l = hierarchy_->cut_of_child(t), cut_r = hierarchy_->cut_of_child(t + 1);
+    if (split_between(s, cut_l, cut_r)) {
+      chain_.pop_back();
+      continue;
+    }
     load_corners(s, fan_);
-    const uint32_t l = cut_ancestor(hierarchy_->cut_of_child(t), s);
-    const uint32_t r = cut_ancestor(hierarchy_->cut_of_child(t + 1), s);
+    const auto [l, r] = cut_ancestors(cut_l, cut_r, s);
     if (l != kNone && l == r) {
       if (chain_.size() > active_.size()) fail(kWhere, "cyclic split order at " + to_string(hierarchy_->id(s)));
       chain_.push_back(l);
@@ -587,18 +695,51 @@ bool SelectiveMesh::ecol(uint32_t p) {
   if (fr != kNone) remove_face(r, fr);
   deactivate(t);
   deactivate(u);
-  uint32_t* list = assign_faces(p, count);
-  for (const std::vector<Corner>* fan : {&fan_, &fan_u_}) {
-    for (const Corner& c : *fan) {
-      if (c.face == fl || c.face == fr) continue;
-      corner_[3 * size_t(c.face) + c.k] = p;
-      *list++ = c.face;
-    }
-  }
+  join_fans(p, fl, fr, t_end != kNone, u_end != kNone);
   if (fl != kNone) free_face(fl);
   if (fr != kNone) free_face(fr);
   activate(p, id);
   return true;
+}
+
+// p's list from t's (fan_) and u's (fan_u_) in fan order, f_l and f_r left out: around t, f_r = (t, r,
+// u) is followed by f_l = (t, u, l); around u, f_l = (u, l, t) by f_r = (u, t, r); p's fan is t's faces
+// after f_l up to f_r, then u's after f_r up to f_l. At most one of t and u is on the border (ecol
+// refuses the rest), and p's list starts after that one's gap. A border edge t-u (one new face) or a
+// long fan (lookups sort it) takes put_in_fan_order.
+void SelectiveMesh::join_fans(uint32_t p, uint32_t fl, uint32_t fr, bool t_open, bool u_open) {
+  const uint32_t n = uint32_t(fan_.size()), m = uint32_t(fan_u_.size());
+  uint32_t* list = assign_faces(p, n + m - 2 * ((fl != kNone) + (fr != kNone)));  // each is in both fans
+  const auto take = [&](const std::vector<Corner>& fan, uint32_t begin, uint32_t count) {
+    for (uint32_t i = 0, j = begin; i < count; ++i, j = j + 1 == fan.size() ? 0 : j + 1) {
+      corner_[3 * size_t(fan[j].face) + fan[j].k] = p;
+      *list++ = fan[j].face;
+    }
+  };
+  uint32_t a = 0, b = 0;  // f_r's place in t's list, f_l's in u's
+  while (a < n && fan_[a].face != fr) ++a;
+  while (b < m && fan_u_[b].face != fl) ++b;
+  // An open list cannot have the pair across its end (that is its gap).
+  const bool in_order = fl != kNone && fr != kNone && n <= kScannedFan && m <= kScannedFan && a < n && b < m &&
+                        fan_[(a + 1) % n].face == fl && fan_u_[(b + 1) % m].face == fr &&
+                        !(t_open && a + 1 == n) && !(u_open && b + 1 == m);
+  if (!in_order) {
+    for (const std::vector<Corner>* fan : {&fan_, &fan_u_})
+      for (uint32_t i = 0; i < fan->size(); ++i)
+        if ((*fan)[i].face != fl && (*fan)[i].face != fr) take(*fan, i, 1);
+    put_in_fan_order(p);
+  } else if (t_open) {  // f_r, f_l lie inside t's list: its gap stays at the end
+    take(fan_, 0, a);
+    take(fan_u_, (b + 2) % m, m - 2);
+    take(fan_, a + 2, n - a - 2);
+  } else if (u_open) {
+    take(fan_u_, 0, b);
+    take(fan_, (a + 2) % n, n - 2);
+    take(fan_u_, b + 2, m - b - 2);
+  } else {
+    take(fan_, (a + 2) % n, n - 2);
+    take(fan_u_, (b + 2) % m, m - 2);
+  }
 }
 
 }  // namespace pms

@@ -30,10 +30,10 @@ struct MeshArrays {
 
 // The selectively refined mesh over the active slots of a VertexHierarchy (SelVSplit / SelECol,
 // kim-lee-kobbelt §5.3; Kim & Lee 2001). Triangles are flat corner triples with a free list; every
-// active vertex lists its incident faces in its own cache-line record (a pool block for long fans), so
-// an operation reads a fan as one short array instead of a chain of dependent twin lookups. A face keeps
-// its index while its corners move up and down the hierarchy; the faces one split created know each
-// other (partner_).
+// active vertex lists its incident faces in fan order in its own cache-line record (a pool block for
+// long fans), so an operation reads a fan as one short array instead of a chain of dependent twin
+// lookups, and a split cuts it into two ranges without ordering it. A face keeps its index while its
+// corners move up and down the hierarchy; the faces one split created know each other (partner_).
 class SelectiveMesh {
  public:
   // `base_faces`: 3 tree-ids (= root indices) per face, CCW. Every root of `hierarchy` must be used and
@@ -98,7 +98,8 @@ class SelectiveMesh {
   };
   // Per slot, one cache line: a copy of the node's id (a neighbour's id costs no extra miss) and its
   // incident faces, inline up to kInlineFaces, else in a pool_ block of `capacity` (a power of two)
-  // entries whose start inline_faces[0] holds. capacity == 0: inactive.
+  // entries whose start inline_faces[0] holds. capacity == 0: inactive. The faces are in CCW fan order,
+  // an open fan's from the face after its gap (docs/internals.md, "Engine layout").
   static constexpr uint32_t kInlineFaces = 10;
   struct alignas(64) VertexRecord {
     uint64_t node = 0;
@@ -108,8 +109,14 @@ class SelectiveMesh {
   };
   static_assert(sizeof(VertexRecord) == 64);
 
-  void reserve_faces();
-  void grow_records(uint32_t end);  // records for slots [0, end) at least
+  void reserve_faces() {
+    if (reserved_for_ != hierarchy_->size()) reserve_new_faces();
+  }
+  void reserve_new_faces();
+  void grow_records(uint32_t end) {  // records for slots [0, end) at least
+    if (end > vertex_.size()) add_records(end);
+  }
+  void add_records(uint32_t end);
   void prefetch_record(uint32_t v) const;
   enum class FanStage { corners, split_neighbours, collapse_reads };
   void prefetch_fan(uint32_t v, FanStage stage) const;
@@ -118,9 +125,12 @@ class SelectiveMesh {
   static uint32_t open_end(std::vector<Corner>& fan);  // an open fan's far end (no corner's next), else kNone
   static void prepare_lookup(std::vector<Corner>& fan);
   static uint32_t find_next(const std::vector<Corner>& fan, uint32_t w);  // index of the corner with `next` w
-  uint32_t cut_ancestor(VertexId cut, uint32_t slot) const;  // over fan_ (slot)
+  std::pair<uint32_t, uint32_t> cut_ancestors(VertexId cut_l, VertexId cut_r, uint32_t slot) const;  // over fan_ (slot)
   void split_fan(uint32_t s, uint32_t l, uint32_t r);         // over fan_ (s)
-  bool split_between(uint32_t s, uint32_t l, uint32_t r);     // over fan_ (s): split_fan's common case
+  bool split_between(uint32_t s, VertexId cut_l, VertexId cut_r);  // vsplit's common case, before fan_ is read
+  void join_fans(uint32_t p, uint32_t fl, uint32_t fr, bool t_open, bool u_open);  // over fan_ (t), fan_u_ (u)
+  void put_in_fan_order(uint32_t v);                           // the lists' order, restored the slow way
+  void start_after_gap(uint32_t v);
   bool breaks_split_order(uint32_t u) const;                  // over fan_ (t)
   // Over fan_ (t) and fan_u_ (u), whose open ends (kNone: closed) are given.
   bool link_condition(uint32_t t, uint32_t l, uint32_t r, uint32_t t_end, uint32_t u_end);
@@ -135,10 +145,13 @@ class SelectiveMesh {
   VertexId id_of(uint32_t v) const { return {vertex_[v].tree, vertex_[v].node}; }
   uint32_t* assign_faces(uint32_t v, uint32_t count);  // a fresh list of `count` entries for v
   void append_face(uint32_t v, uint32_t f);
-  void remove_face(uint32_t v, uint32_t f);
+  // f into v's list right after (or before) the face `anchor`, which the list holds.
+  void insert_face(uint32_t v, uint32_t f, uint32_t anchor, bool after);
+  void remove_face(uint32_t v, uint32_t f);  // keeps the others' order
   void activate(uint32_t v, VertexId id);
   void deactivate(uint32_t v);
   bool pool_blocks_disjoint(std::vector<std::pair<uint32_t, uint32_t>>& blocks) const;  // audit
+  static bool in_fan_order(const uint32_t* list, const std::vector<Corner>& ordered, bool closed);  // audit
 
   const VertexHierarchy* hierarchy_;
   // The big arrays are on huge pages (common/huge_pages.h): operations read them at random.

@@ -39,6 +39,18 @@ bool fail_with(std::string* why, const std::string& what) {
 
 }  // namespace
 
+// `list` is `ordered` (a fan's faces in fan order) shifted round when the fan is closed, as it is when it
+// is open: an open fan's list starts after its gap.
+bool SelectiveMesh::in_fan_order(const uint32_t* list, const std::vector<Corner>& ordered, bool closed) {
+  const size_t n = ordered.size();
+  if (n == 0) return true;
+  const size_t shift = size_t(std::find(list, list + n, ordered[0].face) - list);
+  if (shift == n || (!closed && shift != 0)) return false;
+  for (size_t i = 0; i < n; ++i)
+    if (list[(shift + i) % n] != ordered[i].face) return false;
+  return true;
+}
+
 // The blocks in use (`blocks`) and the free ones, walked per size class, tile part of the pool without
 // overlapping: a list written past its block would corrupt its neighbour's.
 bool SelectiveMesh::pool_blocks_disjoint(std::vector<std::pair<uint32_t, uint32_t>>& blocks) const {
@@ -123,8 +135,10 @@ bool SelectiveMesh::check_invariants(std::string* why) const {
         return fail_with(why, "vertex " + name(v) + " lists face " + std::to_string(f) + " it is no corner of");
     }
     load_corners(v, fan);
-    order_fan(fan, ordered, successor);
+    const bool closed = order_fan(fan, ordered, successor);
     if (ordered.size() != fan.size()) return fail_with(why, "vertex " + name(v) + " is non-manifold (several fans)");
+    if (!in_fan_order(faces_of(record), ordered, closed))
+      return fail_with(why, "vertex " + name(v) + " does not list its faces in fan order");
     if (record.active_pos >= active_.size() || active_[record.active_pos] != v)
       return fail_with(why, "vertex " + name(v) + " is missing from the active list");
     for (uint32_t a = h.parent(v); a != kNone; a = h.parent(a))
