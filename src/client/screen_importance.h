@@ -26,14 +26,15 @@ using CanSplit = std::function<bool(uint32_t slot)>;
 // Keeps its renderer and buffers between frames, so ranking along a path allocates nothing once warm.
 class ScreenImportance {
  public:
-  explicit ScreenImportance(const RenderOptions& options = {}) : options_(options) {}
+  // The frames are drawn without shading (face ids and depth only).
+  explicit ScreenImportance(const RenderOptions& options = {}) : options_(options) { options_.shade = false; }
 
   // Renders `mesh` as `view` sees it and returns its active vertices that are leaves of the partial
   // hierarchy (and pass `can_split`, when given) with a non-zero area, most pixels first (ties: lower
   // slot first, so the order is deterministic).
   const std::vector<VertexArea>& rank(const SelectiveMesh& mesh, const ViewParams& view, const CanSplit& can_split = {});
 
-  // Of the last rank(): the frame drawn (its face ids index the faces of mesh_arrays()), and the pixels
+  // Of the last rank(): the frame drawn (its face ids index the faces of mesh_arrays(); no rgb), and the pixels
   // some face covers.
   const Image& image() const { return image_; }
   const MeshArrays& mesh_arrays() const { return arrays_; }

@@ -152,6 +152,9 @@ struct VertexData {
 // in face order: any split of the vertex range gives the same bits. `normals` must hold 3 per vertex.
 // Throws pms::Error for an index out of range (the first such face, whatever the range).
 void accumulate_normals(const RenderMesh& mesh, size_t begin, size_t end, std::vector<float>& normals);
+// The same check without the normals, for a frame that is not shaded.
+void check_indices(const RenderMesh& mesh);
+// Shades the vertices only when options.shade (data.normals is then read, else data.color is left as is).
 void transform_vertices(const RenderMesh& mesh, const ViewParams& view, const Frame& frame,
                         const RenderOptions& options, size_t begin, size_t end, VertexData& data);
 
@@ -176,7 +179,7 @@ void bin_triangles(const std::vector<Tri>& tris, const std::vector<uint32_t>& tr
 
 // raster_tile.cpp
 struct Target {
-  uint8_t* rgb;
+  uint8_t* rgb;  // nullptr: depth and face ids only
   float* depth;
   uint32_t* face_id;
   uint8_t background[3];

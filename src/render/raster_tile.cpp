@@ -4,6 +4,7 @@
 //
 // Every value written to a pixel depends only on the triangle and the pixel's coordinates, never on where
 // the tile or the bounding box starts, so the image is the same for any tile schedule.
+#include <algorithm>
 #include <cmath>
 
 #include "pm/vertex_id.h"
@@ -27,6 +28,7 @@ uint8_t to_byte(float value) {
   return uint8_t(v > 0 ? v : 0);
 }
 
+template <bool kShade>
 void draw(const Tri& t, const TileRect& rect, const Frame& frame, const Target& target) {
   PixelBox box = pixel_box(t.x[0], t.x[1], t.x[2], t.y[0], t.y[1], t.y[2], frame);
   box.x0 = std::max(box.x0, rect.x0);
@@ -40,9 +42,10 @@ void draw(const Tri& t, const TileRect& rect, const Frame& frame, const Target& 
       (int64_t(t.x[1]) - t.x[0]) * (int64_t(t.y[2]) - t.y[0]) - (int64_t(t.y[1]) - t.y[0]) * (int64_t(t.x[2]) - t.x[0]);
   const float inv_area = 1.0f / float(area);
   const float dz1 = t.z[1] - t.z[0], dz2 = t.z[2] - t.z[0];
-  float rgb[3][3];  // [corner][channel]
-  for (int i = 0; i < 3; ++i)
-    for (int k = 0; k < 3; ++k) rgb[i][k] = float((t.color[i] >> (8 * k)) & 255);
+  float rgb[3][3] = {};  // [corner][channel]
+  if constexpr (kShade)
+    for (int i = 0; i < 3; ++i)
+      for (int k = 0; k < 3; ++k) rgb[i][k] = float((t.color[i] >> (8 * k)) & 255);
   const int64_t step[3] = {e.a[0] * kSubpixel, e.a[1] * kSubpixel, e.a[2] * kSubpixel};
   const int64_t x_start = pixel_center(box.x0);
 
@@ -61,6 +64,7 @@ void draw(const Tri& t, const TileRect& rect, const Frame& frame, const Target& 
       if (!(z < target.depth[pixel])) continue;
       target.depth[pixel] = z;
       target.face_id[pixel] = t.face;
+      if constexpr (!kShade) continue;
       const float q0 = l0 * t.inv_w[0], q1 = l1 * t.inv_w[1], q2 = l2 * t.inv_w[2];
       const float norm = 1.0f / (q0 + q1 + q2);
       uint8_t* out = target.rgb + 3 * pixel;
@@ -69,30 +73,39 @@ void draw(const Tri& t, const TileRect& rect, const Frame& frame, const Target& 
   }
 }
 
-}  // namespace
-
-void clear_tile(const Frame& frame, uint32_t tile, const Target& target) {
-  const TileRect rect = tile_rect(frame, tile);
-  for (int32_t py = rect.y0; py <= rect.y1; ++py) {
-    const size_t row = size_t(py) * frame.width;
-    for (int32_t px = rect.x0; px <= rect.x1; ++px) {
-      const size_t pixel = row + size_t(px);
-      target.depth[pixel] = 1.0f;
-      target.face_id[pixel] = kNone;
-      for (int k = 0; k < 3; ++k) target.rgb[3 * pixel + k] = target.background[k];
-    }
-  }
-}
-
-void raster_tile(const Frame& frame, uint32_t tile, const Tri* tris, const uint32_t* entries, size_t begin, size_t end,
-                 const Target& target) {
+template <bool kShade>
+void draw_all(const Frame& frame, uint32_t tile, const Tri* tris, const uint32_t* entries, size_t begin, size_t end,
+              const Target& target) {
   const TileRect rect = tile_rect(frame, tile);
   // A tile's triangles are scattered through its chunk's array: fetch a few ahead, or the loads of the
   // records, not the pixels, dominate on dense meshes.
   constexpr size_t kPrefetch = 8;
   for (size_t i = begin; i < end; ++i) {
     if (i + kPrefetch < end) __builtin_prefetch(&tris[entries[i + kPrefetch]]);
-    draw(tris[entries[i]], rect, frame, target);
+    draw<kShade>(tris[entries[i]], rect, frame, target);
+  }
+}
+
+}  // namespace
+
+void raster_tile(const Frame& frame, uint32_t tile, const Tri* tris, const uint32_t* entries, size_t begin, size_t end,
+                 const Target& target) {
+  if (target.rgb)
+    draw_all<true>(frame, tile, tris, entries, begin, end, target);
+  else
+    draw_all<false>(frame, tile, tris, entries, begin, end, target);
+}
+
+void clear_tile(const Frame& frame, uint32_t tile, const Target& target) {
+  const TileRect rect = tile_rect(frame, tile);
+  const size_t width = size_t(rect.x1 - rect.x0 + 1);
+  for (int32_t py = rect.y0; py <= rect.y1; ++py) {
+    const size_t first = size_t(py) * frame.width + size_t(rect.x0);
+    std::fill_n(target.depth + first, width, 1.0f);
+    std::fill_n(target.face_id + first, width, kNone);
+    if (!target.rgb) continue;
+    for (size_t pixel = first; pixel < first + width; ++pixel)
+      for (int k = 0; k < 3; ++k) target.rgb[3 * pixel + k] = target.background[k];
   }
 }
 

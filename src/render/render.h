@@ -26,11 +26,14 @@ struct RenderOptions {
   float ambient = 0.15f;                 // intensity = ambient + (1 - ambient) * |n . view direction|
   uint8_t surface[3] = {200, 200, 200};  // when the mesh has no colors
   uint8_t background[3] = {40, 44, 52};
+  // false: depth and face ids only, `rgb` left empty (no normals, lighting or colour writes) -- what a
+  // visibility or importance pass needs, at about half the cost; the ids are those of a shaded frame.
+  bool shade = true;
 };
 
 struct Image {
   uint32_t width = 0, height = 0;
-  std::vector<uint8_t> rgb;       // 3 per pixel, row 0 at the top, linear (gamma-free) 8-bit
+  std::vector<uint8_t> rgb;       // 3 per pixel, row 0 at the top, linear (gamma-free) 8-bit; empty unless shaded
   std::vector<float> depth;       // NDC z in [-1, 1) of the visible surface; 1 where nothing was drawn
   std::vector<uint32_t> face_id;  // the face seen at the pixel (index into indices / 3), or kNone
 };

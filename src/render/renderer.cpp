@@ -91,11 +91,15 @@ void Renderer::render(const RenderMesh& mesh, const ViewParams& view, Image& out
   // Each thread owns a vertex range and scans every face: a vertex's normal is summed in face order
   // whatever the ranges are (floating-point addition is not associative).
   VertexData& v = s.vertices;
-  v.normals.resize(3 * vertex_count);
-  const size_t normal_ranges = std::min<size_t>(threads, std::max<size_t>(1, vertex_count / kVertexBlock));
-  parallel_for(threads, normal_ranges, [&](size_t r) {
-    accumulate_normals(mesh, vertex_count * r / normal_ranges, vertex_count * (r + 1) / normal_ranges, v.normals);
-  });
+  if (options.shade) {
+    v.normals.resize(3 * vertex_count);
+    const size_t normal_ranges = std::min<size_t>(threads, std::max<size_t>(1, vertex_count / kVertexBlock));
+    parallel_for(threads, normal_ranges, [&](size_t r) {
+      accumulate_normals(mesh, vertex_count * r / normal_ranges, vertex_count * (r + 1) / normal_ranges, v.normals);
+    });
+  } else {
+    check_indices(mesh);
+  }
   v.clip.resize(4 * vertex_count);
   v.screen.resize(vertex_count);
   v.color.resize(vertex_count);
@@ -136,10 +140,13 @@ void Renderer::render(const RenderMesh& mesh, const ViewParams& view, Image& out
   out.width = frame.width;
   out.height = frame.height;
   const size_t pixels = size_t(frame.width) * frame.height;
-  out.rgb.resize(3 * pixels);
+  if (options.shade)
+    out.rgb.resize(3 * pixels);
+  else
+    out.rgb.clear();
   out.depth.resize(pixels);
   out.face_id.resize(pixels);
-  Target target{out.rgb.data(), out.depth.data(), out.face_id.data(), {}};
+  Target target{options.shade ? out.rgb.data() : nullptr, out.depth.data(), out.face_id.data(), {}};
   for (int k = 0; k < 3; ++k) target.background[k] = options.background[k];
   parallel_for(threads, tiles, [&](size_t t) {
     clear_tile(frame, uint32_t(t), target);

@@ -24,6 +24,21 @@ Frame make_frame(const ViewParams& view) {
   return frame;
 }
 
+namespace {
+
+[[noreturn]] void index_out_of_range(size_t face, size_t vertex_count) {
+  fail("render", "face " + std::to_string(face) + " uses a vertex index out of range (" +
+                     std::to_string(vertex_count) + " vertices)");
+}
+
+}  // namespace
+
+void check_indices(const RenderMesh& mesh) {
+  const size_t vertex_count = mesh.positions.size() / 3;
+  for (size_t i = 0; i < mesh.indices.size(); ++i)
+    if (mesh.indices[i] >= vertex_count) index_out_of_range(i / 3, vertex_count);
+}
+
 void accumulate_normals(const RenderMesh& mesh, size_t begin, size_t end, std::vector<float>& normals) {
   const size_t vertex_count = mesh.positions.size() / 3, face_count = mesh.indices.size() / 3;
   std::fill(normals.begin() + 3 * begin, normals.begin() + 3 * end, 0.0f);
@@ -31,9 +46,7 @@ void accumulate_normals(const RenderMesh& mesh, size_t begin, size_t end, std::v
   const uint32_t* index = mesh.indices.data();
   for (size_t f = 0; f < face_count; ++f) {
     const uint32_t i0 = index[3 * f], i1 = index[3 * f + 1], i2 = index[3 * f + 2];
-    if (i0 >= vertex_count || i1 >= vertex_count || i2 >= vertex_count)
-      fail("render", "face " + std::to_string(f) + " uses a vertex index out of range (" +
-                         std::to_string(vertex_count) + " vertices)");
+    if (i0 >= vertex_count || i1 >= vertex_count || i2 >= vertex_count) index_out_of_range(f, vertex_count);
     const bool mine0 = i0 >= begin && i0 < end, mine1 = i1 >= begin && i1 < end, mine2 = i2 >= begin && i2 < end;
     if (!(mine0 || mine1 || mine2)) continue;
     const float* a = p + 3 * size_t(i0);
@@ -64,6 +77,7 @@ void transform_vertices(const RenderMesh& mesh, const ViewParams& view, const Fr
     const uint8_t code = outcode(clip, frame);
     data.outcode[v] = code;
     data.screen[v] = code & (kClipMask | kOutInvalid) ? ScreenVertex{0, 0, 0, 0} : project(clip, frame);
+    if (!options.shade) continue;
 
     // Headlight: the light shines along the view direction. |cos| lights back faces like front faces,
     // since open meshes show their inside through holes.

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstring>
 
+#include "common/error.h"
 #include "io/shapes.h"
 #include "pm/vertex_id.h"
 #include "render/render.h"
@@ -146,7 +147,30 @@ TEST(Render, SameBitsForAnyThreadCount) {
       renderer.render(mesh, view, image, options);
       expect_identical(reference, image, ("threads " + std::to_string(threads)).c_str());
     }
+    // Without shading: the same ids and depths, and no colour (the renderer's buffers were shaded before).
+    for (const unsigned threads : {1u, 3u}) {
+      RenderOptions options;
+      options.threads = threads;
+      options.shade = false;
+      Image ids;
+      renderer.render(mesh, view, ids, options);
+      EXPECT_TRUE(ids.rgb.empty());
+      Image shaded_ids = reference;
+      shaded_ids.rgb.clear();
+      expect_identical(shaded_ids, ids, ("unshaded, threads " + std::to_string(threads)).c_str());
+    }
   }
+}
+
+TEST(Render, UnshadedFramesStillRejectIndicesOutOfRange) {
+  const std::vector<float> positions = {0, 0, 0, 1, 0, 0, 0, 1, 0};
+  const std::vector<uint32_t> indices = {0, 1, 3};
+  RenderOptions options;
+  options.shade = false;
+  Camera camera;
+  camera.width = camera.height = 8;
+  const float lo[3] = {0, 0, 0}, hi[3] = {1, 1, 1};
+  EXPECT_THROW(render(RenderMesh{positions, indices, {}}, make_view(camera, lo, hi), options), Error);
 }
 
 TEST(Render, VisibleFacesAreTheDistinctIds) {
