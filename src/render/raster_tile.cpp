@@ -28,6 +28,24 @@ uint8_t to_byte(float value) {
   return uint8_t(v > 0 ? v : 0);
 }
 
+// Pixel offsets k in [first, last] of a row where every edge value w + k * step seen so far is >= 0.
+struct Span {
+  int64_t first, last;
+  void clip(int64_t w, int64_t step) {
+    if (step > 0) {
+      if (w < 0) first = std::max(first, (-w + step - 1) / step);
+    } else if (step < 0) {
+      if (w < 0)
+        last = -1;
+      else
+        last = std::min(last, w / -step);
+    } else if (w < 0) {
+      last = -1;
+    }
+  }
+};
+constexpr int32_t kSpanMinWidth = 8;
+
 template <bool kShade>
 void draw(const Tri& t, const TileRect& rect, const Frame& frame, const Target& target) {
   PixelBox box = pixel_box(t.x[0], t.x[1], t.x[2], t.y[0], t.y[1], t.y[2], frame);
@@ -49,13 +67,29 @@ void draw(const Tri& t, const TileRect& rect, const Frame& frame, const Target& 
   const int64_t step[3] = {e.a[0] * kSubpixel, e.a[1] * kSubpixel, e.a[2] * kSubpixel};
   const int64_t x_start = pixel_center(box.x0);
 
+  // Wide boxes scan only the span of each row inside all three edges; narrow ones test every pixel, which
+  // costs less than the span's divisions. Both visit exactly the pixels with w0, w1, w2 >= 0.
+  const bool spans = box.x1 - box.x0 >= kSpanMinWidth;
   for (int32_t py = box.y0; py <= box.y1; ++py) {
     const int64_t y = pixel_center(py);
     int64_t w0 = e.a[0] * x_start + e.b[0] * y + e.c[0] - e.bias[0];
     int64_t w1 = e.a[1] * x_start + e.b[1] * y + e.c[1] - e.bias[1];
     int64_t w2 = e.a[2] * x_start + e.b[2] * y + e.c[2] - e.bias[2];
+    int32_t first = box.x0, last = box.x1;
+    if (spans) {
+      Span span{0, box.x1 - box.x0};
+      span.clip(w0, step[0]);
+      span.clip(w1, step[1]);
+      span.clip(w2, step[2]);
+      if (span.first > span.last) continue;
+      first = box.x0 + span.first;
+      last = box.x0 + span.last;
+      w0 += span.first * step[0];
+      w1 += span.first * step[1];
+      w2 += span.first * step[2];
+    }
     const size_t row = size_t(py) * frame.width;
-    for (int32_t px = box.x0; px <= box.x1; ++px, w0 += step[0], w1 += step[1], w2 += step[2]) {
+    for (int32_t px = first; px <= last; ++px, w0 += step[0], w1 += step[1], w2 += step[2]) {
       if ((w0 | w1 | w2) < 0) continue;
       // Unbiased edge values are the barycentric weights times the doubled area.
       const float l0 = float(w0 + e.bias[0]), l1 = float(w1 + e.bias[1]), l2 = float(w2 + e.bias[2]);
