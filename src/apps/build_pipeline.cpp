@@ -33,6 +33,11 @@ std::string describe(const CleanReport& r) {
   add(r.nonmanifold_edges, "non-manifold edges cut");
   add(r.nonmanifold_vertices, "non-manifold vertices split");
   add(r.flipped_faces, "faces reoriented");
+  if (r.inside_out_components > 0)
+    add(r.inside_out_components,
+        (std::string(r.inside_out_components == 1 ? "closed component" : "closed components") +
+         " turned outward (" + std::to_string(r.inside_out_faces) + " faces)")
+            .c_str());
   return s.empty() ? "nothing to repair" : s;
 }
 

@@ -7,6 +7,7 @@
 //     (preferring an oppositely oriented pair), orient each glued component breadth-first (the majority
 //     orientation wins; a glue that makes a component non-orientable is cut), then give every fan of
 //     glued faces around a vertex its own copy of the vertex.
+//  5. Turn closed components wound inside out outward (io/orient_outward.h).
 // Every step is linear or sorts only small buckets, and every choice is made in index order, so the same
 // input gives the same output bit for bit. Normals, colors and texture coordinates move with their
 // positions throughout; welding looks at positions only, so two coincident vertices that differ in any of
@@ -20,6 +21,7 @@
 #include "common/error.h"
 #include "io/manifold_check.h"
 #include "io/mesh.h"
+#include "io/orient_outward.h"
 
 namespace pms {
 namespace {
@@ -402,10 +404,14 @@ CleanReport clean_mesh(Mesh& mesh) {
   drop_unreferenced(mesh, report);
   if (mesh.face_count() == 0) fail("", "mesh: no faces left after dropping degenerate faces");
   // Most scans are oriented manifolds already, and checking is cheaper than repairing.
-  if (is_oriented_manifold(mesh)) return report;
-  repair_manifold(mesh, report);
-  std::string why;
-  if (!is_oriented_manifold(mesh, &why)) fail("", "mesh: internal error, cleaning left " + why);
+  if (!is_oriented_manifold(mesh)) {
+    repair_manifold(mesh, report);
+    std::string why;
+    if (!is_oriented_manifold(mesh, &why)) fail("", "mesh: internal error, cleaning left " + why);
+  }
+  const OutwardReport outward = orient_closed_components_outward(mesh);
+  report.inside_out_components = outward.components;
+  report.inside_out_faces = outward.faces;
   return report;
 }
 

@@ -34,6 +34,8 @@ struct CleanReport {
   size_t nonmanifold_vertices = 0;   // vertices whose faces form several fans, split into copies
   size_t split_vertex_copies = 0;    // new vertices created by the two repairs above
   size_t flipped_faces = 0;          // faces reoriented to agree with their neighbours
+  size_t inside_out_components = 0;  // closed components whose winding (and normals) were reversed
+  size_t inside_out_faces = 0;       // their faces
 };
 
 // Loads PLY (ascii/binary), OBJ, OFF, STL, glTF/GLB and anything else assimp reads; a trailing
@@ -48,7 +50,8 @@ Mesh load_mesh_from_memory(const std::string& name, const std::vector<uint8_t>& 
 void save_ply(const Mesh& mesh, const std::string& path, bool binary = true);
 
 // Welds exactly coincident vertices, drops unreferenced vertices, degenerate and duplicate faces,
-// and cuts non-manifold edges/vertices so the result is an oriented 2-manifold (boundaries allowed).
+// and cuts non-manifold edges/vertices so the result is an oriented 2-manifold (boundaries allowed) whose
+// closed components face outward.
 CleanReport clean_mesh(Mesh& mesh);
 
 }  // namespace pms
