@@ -147,7 +147,7 @@ class SelectiveRefinement {
     float reach = 0;                  // |p − p_parent| (a root: |p − root_centre_|), rounded up
     uint32_t loaded = 0;              // criteria, first_child and reach are set
   };
-  BigVector<Slot> slots_;  // on huge pages (common/huge_pages.h): the walk reads them at random
+  RecycledVector<Slot> slots_;  // on (recycled) huge pages, common/huge_pages.h: the walk reads them at random
   uint32_t slot_count_ = 0;  // slots_.size(), one compare for the walk
   uint32_t synced_ = 0;             // hierarchy size whose new children pairs the loaded slots know of
   std::vector<uint32_t> reported_;  // per slot: frame in which it went to missing_ (grown on use)
