@@ -32,10 +32,17 @@ inline void* allocate_on_huge_pages(size_t bytes) {
   return p;
 }
 
-// A freed block of `bytes` (>= kHugePage, as allocate_on_huge_pages rounded it) that the next request
-// for the same size takes back with its pages still mapped (recycled_blocks.cpp); nullptr when none.
-void* take_recycled_block(size_t bytes);
-void recycle_block(void* block, size_t bytes);
+// A freed block of `bytes` (a multiple of kHugePage) that the next request for the same size and kind
+// takes back with its pages still mapped (recycled_blocks.cpp); nullptr when none. Kind 0: blocks of
+// allocate_on_huge_pages (RecycledVector). Other kinds: blocks of map_zeroed, for arrays that are never
+// initialised as a whole (refine/slot_array.h), so the next array may read what the last one left and a
+// block goes back only to its own kind.
+void* take_recycled_block(size_t bytes, int kind = 0);
+void recycle_block(void* block, size_t bytes, int kind = 0);
+// `bytes` (a multiple of kHugePage) of zeros, 2 MiB aligned, asked for huge pages; a page is touched
+// when first written. nullptr when out of memory; unmap_zeroed releases it.
+void* map_zeroed(size_t bytes);
+void unmap_zeroed(void* block, size_t bytes);
 
 // kRecycle: a freed block goes back to recycle_block, for arrays that the next object of the same
 // kind asks for again at the same size (a fresh mesh over the same hierarchy).
@@ -54,7 +61,7 @@ struct HugePageAllocator {
   T* allocate(size_t n) {
     const size_t bytes = n * sizeof(T);
     if (bytes < kHugePage) return std::allocator<T>().allocate(n);
-    void* p = kRecycle ? take_recycled_block(huge_block_bytes(bytes)) : nullptr;
+    void* p = kRecycle ? take_recycled_block(huge_block_bytes(bytes), 0) : nullptr;
     if (!p) p = allocate_on_huge_pages(bytes);
     if (!p) throw std::bad_alloc();
     return static_cast<T*>(p);
@@ -62,7 +69,7 @@ struct HugePageAllocator {
   void deallocate(T* p, size_t n) {
     const size_t bytes = n * sizeof(T);
     if (bytes < kHugePage) return std::allocator<T>().deallocate(p, n);
-    if (kRecycle) return recycle_block(p, huge_block_bytes(bytes));
+    if (kRecycle) return recycle_block(p, huge_block_bytes(bytes), 0);
     std::free(p);
   }
   template <class U>

@@ -10,6 +10,7 @@
 
 #include "common/huge_pages.h"
 #include "pm/vertex_id.h"
+#include "refine/slot_array.h"
 #include "refine/vertex_hierarchy.h"
 
 namespace pms {
@@ -108,6 +109,7 @@ class SelectiveMesh {
     uint32_t inline_faces[kInlineFaces] = {};
   };
   static_assert(sizeof(VertexRecord) == 64);
+  static constexpr int kRecordArrayKind = 1;  // SlotArray's kind: blocks go back to the next mesh's records
 
   void reserve_faces() {
     if (reserved_for_ != hierarchy_->size()) reserve_new_faces();
@@ -162,9 +164,10 @@ class SelectiveMesh {
   uint64_t changes_ = 0;
   size_t face_count_ = 0;
   size_t base_face_count_ = 0;
-  // Per slot up to the highest slot activated so far (grown geometrically, never past the hierarchy):
-  // a fresh mesh pays for what it refines, not for the model. A record's id is set when it activates.
-  RecycledVector<VertexRecord> vertex_;
+  // Per slot, never initialised as a whole (refine/slot_array.h): a record is written when its vertex
+  // activates and read only while it is active, so a fresh mesh pays for what it refines, not for the
+  // model.
+  SlotArray<VertexRecord, kRecordArrayKind> vertex_;
   std::vector<uint64_t> active_bits_;  // per slot, 1 = active: the adaptation walk asks for every node
   uint32_t reserved_for_ = 0;          // hierarchy size the face arrays were reserved for
   RecycledVector<uint32_t> pool_;    // incident-face blocks; a free block holds the next free one
