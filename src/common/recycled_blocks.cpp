@@ -13,7 +13,7 @@
 namespace pms {
 namespace {
 
-constexpr size_t kKeptBytes = size_t(64) << 20;
+constexpr size_t kKeptBytes = size_t(128) << 20;
 constexpr int kKeptBlocks = 8;
 
 struct Kept {
