@@ -126,7 +126,7 @@ void SelectiveRefinement::load(uint32_t v) {
   const VertexHierarchy& h = mesh_->hierarchy();
   Slot& slot = slots_[v];
   const float* p = h.position(v);
-  slot.criteria = node_criteria(p, dequantize_refine(h.refine(v), scale_));
+  slot.criteria = criteria_detail::node_criteria_inline(p, h.refine(v), scale_);
   slot.first_child = h.first_child(v);
   {
     const uint32_t parent = h.parent(v);
