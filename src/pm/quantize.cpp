@@ -9,24 +9,19 @@
 #include <cmath>
 #include <numbers>
 
+#include "pm/dequantize_inline.h"
 #include "pm/refine_info.h"
 
 namespace pms {
+using namespace dequantize_detail;
 namespace {
 
 constexpr uint16_t kHalfInfinity = 0x7C00;
 constexpr float kHalfMax = 65504.0f;
-constexpr double kConeUnit = std::numbers::pi / 2 / (kConeSteps + 1);  // one step of RefineInfo::cone_angle
 constexpr double kHalfPi = std::numbers::pi / 2;
 // Consumers test normals against the decoded float axis, which is unit length only to ~1e-7:
 // widen every cone by a micro-radian so that float slack never leaves a normal outside.
 constexpr double kConeSlack = 1e-6;
-
-// A zero or broken scale (a model that is a single point) would turn every bound into NaN; such
-// models keep their bounds unscaled instead. Encoder and decoder agree on this.
-float effective_scale(float scale) { return scale > 0 && std::isfinite(scale) ? scale : 1.0f; }
-
-float decode_length(uint16_t half, float scale) { return float_from_half(half) * effective_scale(scale); }
 
 constexpr uint16_t kDroppedMask = (1u << kLengthDroppedBits) - 1;
 
@@ -42,21 +37,6 @@ uint16_t encode_length(float value, float scale) {
   uint16_t half = round_up_to_kept_bits(half_from_float_up(value / effective_scale(scale)));
   while (half < kHalfInfinity && decode_length(half, scale) < value) half = round_up_to_kept_bits(half + 1u);
   return half;
-}
-
-float snorm_to_float(uint16_t bits) { return std::max(float(int16_t(bits)) / float(kAxisSteps), -1.0f); }
-
-// Octahedral decode into a unit float vector; this exact vector is what dequantize_refine returns.
-void decode_axis(uint16_t qx, uint16_t qy, float axis[3]) {
-  float x = snorm_to_float(qx), y = snorm_to_float(qy);
-  const float z = 1.0f - std::abs(x) - std::abs(y);
-  const float fold = std::max(-z, 0.0f);  // lower hemisphere is folded over the diagonals
-  x += x >= 0 ? -fold : fold;
-  y += y >= 0 ? -fold : fold;
-  const float inv = 1.0f / std::sqrt(x * x + y * y + z * z);
-  axis[0] = x * inv;
-  axis[1] = y * inv;
-  axis[2] = z * inv;
 }
 
 // Angle between unit `a` and the (nearly unit) float vector `b`; atan2 stays accurate for tiny
@@ -108,10 +88,6 @@ EncodedAxis encode_axis(const double axis[3]) {
   return best;
 }
 
-float decode_cone_angle(uint16_t units) {
-  return units == kNoCone ? std::numbers::pi_v<float> : float(units * kConeUnit);
-}
-
 // Smallest step count whose decoded angle covers `angle`, or kNoCone once the cone reaches pi/2
 // (a half-space of normals: the back-face test can never cull it).
 uint16_t encode_cone_angle(double angle) {
@@ -142,17 +118,7 @@ uint16_t half_from_float_up(float value) {
   return uint16_t(m + ((significand & ((1u << shift) - 1)) != 0));  // m == 1024 is the smallest normal
 }
 
-float float_from_half(uint16_t half) {
-  const uint32_t sign = uint32_t(half & 0x8000) << 16;
-  const uint32_t exponent = (half >> 10) & 0x1F;
-  const uint32_t mantissa = half & 0x3FF;
-  if (exponent == 0) {  // zero or subnormal: exact in float
-    const float magnitude = float(mantissa) * 0x1p-24f;
-    return sign ? -magnitude : magnitude;
-  }
-  if (exponent == 31) return std::bit_cast<float>(sign | 0x7F800000 | mantissa << 13);  // inf / NaN
-  return std::bit_cast<float>(sign | (exponent + 112) << 23 | mantissa << 13);
-}
+float float_from_half(uint16_t half) { return dequantize_detail::float_from_half(half); }
 
 RefineInfo quantize_refine(const RefineBounds& bounds, float scale) {
   RefineInfo info{};
@@ -192,14 +158,6 @@ RefineInfo as_sent(const RefineInfo& info) {
   return zero;
 }
 
-RefineBounds dequantize_refine(const RefineInfo& info, float scale) {
-  RefineBounds b;
-  b.radius = decode_length(info.radius, scale);
-  b.mu = decode_length(info.mu, scale);
-  b.delta = decode_length(info.delta, scale);
-  decode_axis(info.cone_x, info.cone_y, b.axis);
-  b.cone_angle = decode_cone_angle(info.cone_angle);
-  return b;
-}
+RefineBounds dequantize_refine(const RefineInfo& info, float scale) { return dequantize_refine_inline(info, scale); }
 
 }  // namespace pms

@@ -13,6 +13,7 @@
 #include "refine/adapt.h"
 
 #include <algorithm>
+#include <atomic>
 #include <bit>
 #include <cmath>
 #include <cstring>
@@ -39,10 +40,19 @@ constexpr uint32_t kMaxSlots = 1u << 31;  // stack entries tag a slot with one b
 // float distance is within a few units in the last place of the exact one; 2^-16 rounds it up.
 constexpr float kPlaneRounding = 0x1p-18f, kReachRoundUp = 1 + 0x1p-16f, kTinyBound = 1e-30f;
 
+// A stamp no earlier refinement in the process had (0 marks slots no one loaded). After 2^32 - 1
+// refinements stamps repeat; a slot array would then have to reach one that old.
+uint32_t new_stamp() {
+  static std::atomic<uint32_t> last{0};
+  uint32_t stamp = last.fetch_add(1, std::memory_order_relaxed) + 1;
+  while (stamp == 0) stamp = last.fetch_add(1, std::memory_order_relaxed) + 1;
+  return stamp;
+}
+
 }  // namespace
 
 SelectiveRefinement::SelectiveRefinement(SelectiveMesh& mesh, float model_scale, const AdaptOptions& options)
-    : mesh_(&mesh), scale_(model_scale), synced_(mesh.hierarchy().size()) {
+    : mesh_(&mesh), scale_(model_scale), stamp_(new_stamp()), synced_(mesh.hierarchy().size()) {
   static_assert(sizeof(Slot) == 64);
   // The roots' common parent for walk_qrefine's bounds: the mean of their positions (any point would
   // do; a central one lets a view that holds the whole model skip the roots' planes too).
@@ -100,7 +110,7 @@ void SelectiveRefinement::sync() {
   if (morphs_.enabled()) morphs_.sync(*mesh_);
   for (uint32_t v = synced_; v < h.size(); ++v) {
     const uint32_t p = h.parent(v);
-    if (p != kNone && p < slots_.size() && slots_[p].loaded && h.first_child(p) == v) slots_[p].first_child = v;
+    if (p != kNone && p < slot_count_ && slots_[p].stamp == stamp_ && h.first_child(p) == v) slots_[p].first_child = v;
   }
   synced_ = h.size();
 }
@@ -108,17 +118,15 @@ void SelectiveRefinement::sync() {
 void SelectiveRefinement::grow(uint32_t end) {
   const size_t known = mesh_->hierarchy().size();
   if (end > known) fail(kWhere, "unknown slot");
-  if (end <= slots_.size()) return;
-  slots_.reserve(slot_capacity(end, slots_.capacity(), known, sizeof(slots_[0])));
-  slots_.resize(slot_size(end, slots_.size(), slots_.capacity(), known));
-  slot_count_ = uint32_t(slots_.size());
+  slots_.grow(end, known);
+  slot_count_ = uint32_t(std::min<size_t>(slots_.size(), kMaxSlots));
 }
 
 void SelectiveRefinement::load(uint32_t v) {
   const VertexHierarchy& h = mesh_->hierarchy();
   Slot& slot = slots_[v];
   const float* p = h.position(v);
-  slot.criteria = node_criteria(p, dequantize_refine(h.refine(v), scale_));
+  slot.criteria = criteria_detail::node_criteria_inline(p, h.refine(v), scale_);
   slot.first_child = h.first_child(v);
   {
     const uint32_t parent = h.parent(v);
@@ -126,7 +134,9 @@ void SelectiveRefinement::load(uint32_t v) {
     const float d[3] = {p[0] - q[0], p[1] - q[1], p[2] - q[2]};
     slot.reach = std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]) * kReachRoundUp + kTinyBound;
   }
-  slot.loaded = 1;
+  slot.kept = 0;
+  slot.dependency = kUnknown;
+  slot.stamp = stamp_;
   const float extent = std::max({std::fabs(p[0]), std::fabs(p[1]), std::fabs(p[2])});
   if (extent > coordinate_bound_) {
     coordinate_bound_ = extent;
@@ -135,8 +145,8 @@ void SelectiveRefinement::load(uint32_t v) {
 }
 
 SelectiveRefinement::Slot& SelectiveRefinement::first_use(uint32_t v) {
-  if (v >= slots_.size()) grow(v + 1);
-  if (!slots_[v].loaded) load(v);
+  if (v >= slot_count_) grow(v + 1);
+  if (slots_[v].stamp != stamp_) load(v);
   return slots_[v];
 }
 
@@ -359,7 +369,8 @@ FrameStats SelectiveRefinement::adapt() {
   }
   sync();
   if (++frame_ == 0) {  // stamps wrapped: clear them so old frames cannot match
-    for (Slot& slot : slots_) slot.kept = 0;
+    for (uint32_t v = 0; v < slot_count_; ++v)
+      if (slots_[v].stamp == stamp_) slots_[v].kept = 0;
     std::fill(reported_.begin(), reported_.end(), 0);
     frame_ = 1;
   }
@@ -375,7 +386,7 @@ FrameStats SelectiveRefinement::adapt() {
   counted_ = 0;
   for (uint32_t r = 0; r < h.root_count(); ++r) {
     uint32_t v = h.root_slot(r);
-    if (v >= slots_.size()) grow(v + 1);
+    if (v >= slot_count_) grow(v + 1);
     float margin = root_margin_;
     for (;;) {
       for (; v != kNone && grown_state(v).kept != frame_; ++evaluated)  // v_u of a kept node follows without the stack

@@ -17,6 +17,7 @@
 #include "refine/criteria.h"
 #include "refine/geomorph.h"
 #include "refine/selective_mesh.h"
+#include "refine/slot_array.h"
 #include "refine/vertex_hierarchy.h"
 
 namespace pms {
@@ -91,13 +92,13 @@ class SelectiveRefinement {
   struct Slot;
   // v's slot, grown and decoded on first use (out of line: the walk's fast path stays small).
   Slot& state(uint32_t v) {
-    if (v < slots_.size() && slots_[v].loaded) [[likely]] return slots_[v];
+    if (v < slot_count_ && slots_[v].stamp == stamp_) [[likely]] return slots_[v];
     return first_use(v);
   }
   Slot& first_use(uint32_t v);
-  // state() of a slot below slots_.size() (the walk grows the slots before it reaches them).
+  // state() of a slot below slot_count_ (the walk grows the slots before it reaches them).
   Slot& grown_state(uint32_t v) {
-    if (slots_[v].loaded) [[likely]] return slots_[v];
+    if (slots_[v].stamp == stamp_) [[likely]] return slots_[v];
     return first_use(v);
   }
   void grow(uint32_t end);
@@ -137,7 +138,7 @@ class SelectiveRefinement {
   uint64_t settled_changes_ = 0;
   uint32_t settled_size_ = 0;
   // Everything the walk reads of a slot, in one cache line: the walk is bound by memory latency. Slots
-  // exist up to the highest one reached (grown geometrically) and are decoded when first reached, so a
+  // are never initialised as a whole (refine/slot_array.h) and are decoded when first reached, so a
   // fresh refinement pays for the nodes it evaluates, not for the model.
   struct alignas(64) Slot {
     NodeCriteria criteria;  // decoded once
@@ -145,10 +146,14 @@ class SelectiveRefinement {
     uint32_t first_child = kNone;
     uint32_t dependency = kNone - 1;  // the node its split needs split (partial order); kNone - 1: not computed
     float reach = 0;                  // |p − p_parent| (a root: |p − root_centre_|), rounded up
-    uint32_t loaded = 0;              // criteria, first_child and reach are set
+    uint32_t stamp = 0;               // stamp_ once load() has set every field (else stale or zero bytes)
   };
-  BigVector<Slot> slots_;  // on huge pages (common/huge_pages.h): the walk reads them at random
+  static constexpr int kSlotArrayKind = 2;  // SlotArray's kind: blocks go back to the next refinement's slots
+  SlotArray<Slot, kSlotArrayKind> slots_;  // on huge pages: the walk reads them at random
   uint32_t slot_count_ = 0;  // slots_.size(), one compare for the walk
+  // This refinement's mark on the slots it loaded, unique in the process: a slot array's blocks pass
+  // from one refinement to the next with the old slots in them.
+  uint32_t stamp_;
   uint32_t synced_ = 0;             // hierarchy size whose new children pairs the loaded slots know of
   std::vector<uint32_t> reported_;  // per slot: frame in which it went to missing_ (grown on use)
   // The plane bounds of walk_qrefine: every loaded position's coordinates are within ±coordinate_bound_,

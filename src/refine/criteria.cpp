@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <vector>
 
 #include "common/error.h"
 #include "pm/refine_info.h"
@@ -26,14 +27,7 @@ ViewCriteria make_criteria(const ViewParams& view, float tolerance_px) {
 }
 
 NodeCriteria node_criteria(const float position[3], const RefineBounds& bounds) {
-  NodeCriteria n;
-  for (int k = 0; k < 3; ++k) {
-    n.p[k] = position[k];
-    n.axis[k] = bounds.axis[k];
-  }
-  n.radius = bounds.radius;
-  n.mu2 = bounds.mu * bounds.mu;
-  n.delta2 = bounds.delta * bounds.delta;
+  NodeCriteria n = node_criteria_without_cone(position, bounds);
   // A cone of half-angle >= pi/2 holds opposite normals: some face below may always face the eye.
   if (bounds.cone_angle < std::numbers::pi_v<float> / 2) {
     n.cos_a = std::cos(bounds.cone_angle);
@@ -41,6 +35,25 @@ NodeCriteria node_criteria(const float position[3], const RefineBounds& bounds) 
   }
   return n;
 }
+
+namespace criteria_detail {
+
+const ConeTrig& cone_trig(uint16_t units) {
+  static const std::vector<ConeTrig> table = [] {
+    std::vector<ConeTrig> trig(kConeSteps + 1);
+    const float origin[3] = {0, 0, 0};
+    RefineInfo info{};
+    for (uint32_t u = 0; u <= kConeSteps; ++u) {
+      info.cone_angle = uint16_t(u);
+      const NodeCriteria n = node_criteria(origin, dequantize_refine(info, 1));
+      trig[u] = {n.cos_a, n.sin_a};
+    }
+    return trig;
+  }();
+  return table[units];
+}
+
+}  // namespace criteria_detail
 
 bool outside_frustum(const ViewCriteria& view, const NodeCriteria& node) { return outside_frustum_inline(view, node); }
 bool back_facing(const ViewCriteria& view, const NodeCriteria& node) { return back_facing_inline(view, node); }

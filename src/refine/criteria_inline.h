@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "pm/dequantize_inline.h"
 #include "refine/criteria.h"
 
 namespace pms::criteria_detail {
@@ -14,6 +15,38 @@ namespace pms::criteria_detail {
 constexpr float kCullSlack = 1e-5f;
 
 inline float dot3(const float a[3], const float b[3]) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
+
+// node_criteria but the cone's cosine and sine (left as for a cone that never culls).
+inline NodeCriteria node_criteria_without_cone(const float position[3], const RefineBounds& bounds) {
+  NodeCriteria n;
+  for (int k = 0; k < 3; ++k) {
+    n.p[k] = position[k];
+    n.axis[k] = bounds.axis[k];
+  }
+  n.radius = bounds.radius;
+  n.mu2 = bounds.mu * bounds.mu;
+  n.delta2 = bounds.delta * bounds.delta;
+  return n;
+}
+
+// The cosine and sine node_criteria gives a cone of `units` (<= kConeSteps) steps, worked out by
+// node_criteria itself the first time any is asked for (criteria.cpp), so a lookup gives the same bits.
+struct ConeTrig {
+  float cos_a, sin_a;
+};
+const ConeTrig& cone_trig(uint16_t units);
+
+// node_criteria(position, dequantize_refine(info, scale)), for the adaptation loop, which decodes a
+// node when its walk first reaches it: inline, and with the cone's cosine and sine looked up.
+inline NodeCriteria node_criteria_inline(const float position[3], const RefineInfo& info, float scale) {
+  const RefineBounds bounds = dequantize_detail::dequantize_refine_inline(info, scale);
+  if (info.cone_angle > kConeSteps) return node_criteria(position, bounds);  // no cone, or not canonical
+  NodeCriteria n = node_criteria_without_cone(position, bounds);
+  const ConeTrig& trig = cone_trig(info.cone_angle);
+  n.cos_a = trig.cos_a;
+  n.sin_a = trig.sin_a;
+  return n;
+}
 
 // What the tests share for one node: d = p − e and ‖d‖². Each test takes it ready, so a caller running
 // several computes it once, with the values each test computed alone. a·d (a the cone axis, along which

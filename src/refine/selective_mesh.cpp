@@ -93,9 +93,9 @@ SelectiveMesh::SelectiveMesh(const VertexHierarchy& hierarchy, std::span<const u
 // a collapse into v's sibling u reads (the apexes of the faces on edge v-u, and the partners of faces
 // with apex v, for breaks_split_order).
 [[gnu::always_inline]] inline void SelectiveMesh::prefetch_fan(uint32_t v, FanStage stage) const {
-  if (v >= vertex_.size()) return;
+  if (!is_active(v)) return;  // an inactive record holds stale bytes
   const VertexRecord& record = vertex_[v];
-  if (record.capacity == 0 || record.capacity > kInlineFaces) return;
+  if (record.capacity > kInlineFaces) return;
   for (uint32_t i = 0; i < record.size; ++i) {
     const uint32_t face = record.inline_faces[i];
     const uint32_t* corner = &corner_[3 * size_t(face)];
@@ -183,8 +183,7 @@ void SelectiveMesh::reserve_new_faces() {
 
 void SelectiveMesh::add_records(uint32_t end) {
   const size_t known = hierarchy_->size();
-  vertex_.reserve(slot_capacity(end, vertex_.capacity(), known, sizeof(vertex_[0])));
-  vertex_.resize(slot_size(end, vertex_.size(), vertex_.capacity(), known));
+  vertex_.grow(end, known);
   active_bits_.resize((vertex_.size() + 63) / 64, 0);
 }
 

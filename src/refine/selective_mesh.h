@@ -10,6 +10,7 @@
 
 #include "common/huge_pages.h"
 #include "pm/vertex_id.h"
+#include "refine/slot_array.h"
 #include "refine/vertex_hierarchy.h"
 
 namespace pms {
@@ -108,6 +109,7 @@ class SelectiveMesh {
     uint32_t inline_faces[kInlineFaces] = {};
   };
   static_assert(sizeof(VertexRecord) == 64);
+  static constexpr int kRecordArrayKind = 1;  // SlotArray's kind: blocks go back to the next mesh's records
 
   void reserve_faces() {
     if (reserved_for_ != hierarchy_->size()) reserve_new_faces();
@@ -154,21 +156,23 @@ class SelectiveMesh {
   static bool in_fan_order(const uint32_t* list, const std::vector<Corner>& ordered, bool closed);  // audit
 
   const VertexHierarchy* hierarchy_;
-  // The big arrays are on huge pages (common/huge_pages.h): operations read them at random.
-  BigVector<uint32_t> corner_;   // 3 slots per face; a dead face holds kNone, next free face
-  BigVector<uint32_t> partner_;  // per face: the other face of the split that made it (f_l <-> f_r)
+  // The big arrays are on huge pages (common/huge_pages.h): operations read them at random. Recycled:
+  // the next mesh gets their pages back, mapped.
+  RecycledVector<uint32_t> corner_;   // 3 slots per face; a dead face holds kNone, next free face
+  RecycledVector<uint32_t> partner_;  // per face: the other face of the split that made it (f_l <-> f_r)
   uint32_t free_face_ = kNone;
   uint64_t changes_ = 0;
   size_t face_count_ = 0;
   size_t base_face_count_ = 0;
-  // Per slot up to the highest slot activated so far (grown geometrically, never past the hierarchy):
-  // a fresh mesh pays for what it refines, not for the model. A record's id is set when it activates.
-  BigVector<VertexRecord> vertex_;
+  // Per slot, never initialised as a whole (refine/slot_array.h): a record is written when its vertex
+  // activates and read only while it is active, so a fresh mesh pays for what it refines, not for the
+  // model.
+  SlotArray<VertexRecord, kRecordArrayKind> vertex_;
   std::vector<uint64_t> active_bits_;  // per slot, 1 = active: the adaptation walk asks for every node
   uint32_t reserved_for_ = 0;          // hierarchy size the face arrays were reserved for
-  BigVector<uint32_t> pool_;    // incident-face blocks; a free block holds the next free one
+  RecycledVector<uint32_t> pool_;    // incident-face blocks; a free block holds the next free one
   uint32_t free_block_[32];      // per log2(capacity): first free block
-  BigVector<uint32_t> active_;  // active slots
+  RecycledVector<uint32_t> active_;  // active slots
   std::vector<Corner> fan_, fan_u_, ordered_;  // scratch, kept to avoid allocating per operation
   std::vector<uint32_t> chain_;    // vsplit's forced chain
   std::vector<uint32_t> successor_;  // order_fan's

@@ -72,8 +72,7 @@ bool SelectiveMesh::pool_blocks_disjoint(std::vector<std::pair<uint32_t, uint32_
 
 bool SelectiveMesh::check_invariants(std::string* why) const {
   const VertexHierarchy& h = *hierarchy_;
-  const uint32_t slots = uint32_t(vertex_.size());
-  if (slots > h.size()) return fail_with(why, "more vertex slots than hierarchy nodes");
+  const uint32_t slots = uint32_t(std::min<size_t>(vertex_.size(), h.size()));  // records may run past it
   const auto name = [&](uint32_t v) { return to_string(h.id(v)); };
 
   // Faces: three distinct active corners; the free list holds exactly the dead ones.
@@ -108,9 +107,14 @@ bool SelectiveMesh::check_invariants(std::string* why) const {
 
   // Vertices: an active vertex lists exactly the faces it is a corner of, once each, and they form one
   // fan; the active set is a front (no active vertex has an active ancestor) listed once in active_.
-  std::vector<uint32_t> corners(slots, 0);
+  std::vector<uint32_t> corners(vertex_.size(), 0);
   for (uint32_t c = 0; c < corner_.size(); ++c)
-    if (face_alive(c / 3)) ++corners[corner_[c]];
+    if (face_alive(c / 3)) {
+      if (corner_[c] >= slots) return fail_with(why, "face " + std::to_string(c / 3) + " has a corner past the hierarchy");
+      ++corners[corner_[c]];
+    }
+  for (uint32_t v = slots; v < vertex_.size(); ++v)
+    if (is_active(v)) return fail_with(why, "an active vertex past the hierarchy");
   size_t active_count = 0;
   std::vector<uint32_t> listed, successor;
   std::vector<std::pair<uint32_t, uint32_t>> blocks;  // pool blocks in use: (begin, capacity)

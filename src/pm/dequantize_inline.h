@@ -1,0 +1,65 @@
+// The decoding half of pm/quantize.cpp, inline: the adaptation loop decodes a node's RefineInfo when
+// its walk first reaches it, thousands of times in a fresh mesh's first frame, and as calls the
+// decoders cost more than the arithmetic. quantize.cpp's dequantize_refine and float_from_half are
+// these functions, so every mode decodes the same bits.
+#pragma once
+#include <algorithm>
+#include <bit>
+#include <cmath>
+#include <cstdint>
+#include <numbers>
+
+#include "pm/refine_info.h"
+
+namespace pms::dequantize_detail {
+
+constexpr double kConeUnit = std::numbers::pi / 2 / (kConeSteps + 1);  // one step of RefineInfo::cone_angle
+
+// A zero or broken scale (a model that is a single point) would turn every bound into NaN; such
+// models keep their bounds unscaled instead. Encoder and decoder agree on this.
+inline float effective_scale(float scale) { return scale > 0 && std::isfinite(scale) ? scale : 1.0f; }
+
+inline float float_from_half(uint16_t half) {
+  const uint32_t sign = uint32_t(half & 0x8000) << 16;
+  const uint32_t exponent = (half >> 10) & 0x1F;
+  const uint32_t mantissa = half & 0x3FF;
+  if (exponent == 0) {  // zero or subnormal: exact in float
+    const float magnitude = float(mantissa) * 0x1p-24f;
+    return sign ? -magnitude : magnitude;
+  }
+  if (exponent == 31) return std::bit_cast<float>(sign | 0x7F800000 | mantissa << 13);  // inf / NaN
+  return std::bit_cast<float>(sign | (exponent + 112) << 23 | mantissa << 13);
+}
+
+inline float decode_length(uint16_t half, float scale) { return float_from_half(half) * effective_scale(scale); }
+
+inline float snorm_to_float(uint16_t bits) { return std::max(float(int16_t(bits)) / float(kAxisSteps), -1.0f); }
+
+// Octahedral decode into a unit float vector; this exact vector is what dequantize_refine returns.
+inline void decode_axis(uint16_t qx, uint16_t qy, float axis[3]) {
+  float x = snorm_to_float(qx), y = snorm_to_float(qy);
+  const float z = 1.0f - std::abs(x) - std::abs(y);
+  const float fold = std::max(-z, 0.0f);  // lower hemisphere is folded over the diagonals
+  x += x >= 0 ? -fold : fold;
+  y += y >= 0 ? -fold : fold;
+  const float inv = 1.0f / std::sqrt(x * x + y * y + z * z);
+  axis[0] = x * inv;
+  axis[1] = y * inv;
+  axis[2] = z * inv;
+}
+
+inline float decode_cone_angle(uint16_t units) {
+  return units == kNoCone ? std::numbers::pi_v<float> : float(units * kConeUnit);
+}
+
+inline RefineBounds dequantize_refine_inline(const RefineInfo& info, float scale) {
+  RefineBounds b;
+  b.radius = decode_length(info.radius, scale);
+  b.mu = decode_length(info.mu, scale);
+  b.delta = decode_length(info.delta, scale);
+  decode_axis(info.cone_x, info.cone_y, b.axis);
+  b.cone_angle = decode_cone_angle(info.cone_angle);
+  return b;
+}
+
+}  // namespace pms::dequantize_detail
