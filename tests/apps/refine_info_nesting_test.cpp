@@ -16,6 +16,7 @@
 #include <cstdio>
 #include <map>
 #include <numbers>
+#include <string>
 #include <vector>
 
 #include "apps/bench/bench_refine.h"
@@ -275,24 +276,35 @@ class InfoBits {
 // Faces at tau = 1 px at issue 18's camera at distance d.
 size_t faces(const ModelData& model, float d) { return refine_for_view(model, srmesh_camera(model, d, 0), 1).mesh.indices.size() / 3; }
 
+// The model's info as stored, coded by SplitCodec: E5's close view and the whole model; bunny's faces at
+// issue 18's cameras too.
+void report_stored(const std::string& name, const ModelData& model) {
+  const std::vector<uint32_t> q = grid_positions(model, kBits);
+  const std::vector<uint32_t> close = splits_for_view(model, close_view(model), 1.0f);
+  const SplitCodec codec = SplitCodec::build(model, q, kBits);
+  const RecordBitsReport view = record_bits(model, codec, q, close), whole = record_bits(model, codec, q, model.split_order);
+  std::printf("%s as stored: close view %zu splits, info %.2f bits per split, topology + geometry %.2f; whole model info "
+              "%.2f, topology + geometry %.2f\n",
+              name.c_str(), close.size(), view.per_split(view.bits.refinement), view.per_split(view.bits.topology + view.bits.geometry),
+              whole.per_split(whole.bits.refinement), whole.per_split(whole.bits.topology + whole.bits.geometry));
+  if (name.starts_with("bunny"))
+    for (float d : {1.5f, 3.f, 10.f, 50.f}) std::printf("  d %.1f: %zu faces\n", d, faces(model, d));
+}
+
+// Each variant nested over the model's own (unnested) info.
 void measure(const char* name, const ModelData& model) {
   const std::vector<uint32_t> q = grid_positions(model, kBits);
   const Camera camera = close_view(model);
   const bool bunny = std::string(name) == "bunny";
   const std::vector<uint32_t> before = splits_for_view(model, camera, 1.0f);
-  {
-    const SplitCodec codec = SplitCodec::build(model, q, kBits);
-    const RecordBitsReport view = record_bits(model, codec, q, before), whole = record_bits(model, codec, q, model.split_order);
-    std::printf("%s as stored: close view %zu splits, info %.2f bits per split, topology + geometry %.2f; whole model info "
-                "%.2f, topology + geometry %.2f\n",
-                name, before.size(), view.per_split(view.bits.refinement), view.per_split(view.bits.topology + view.bits.geometry),
-                whole.per_split(whole.bits.refinement), whole.per_split(whole.bits.topology + whole.bits.geometry));
-    if (bunny)
-      for (float d : {1.5f, 3.f, 10.f, 50.f}) std::printf("  d %.1f: %zu faces\n", d, faces(model, d));
-  }
+  report_stored(std::string(name) + " (own bounds: this codec sends them exact)", model);
   const Variant variants[] = {
       {"r 2, mu 2, delta 2, angle 2, own axes", {2, 2, 2, 2}, -1, true, 0},
       {"r 2, mu 2, delta 2, angle 2, inherit at 1 step", {2, 2, 2, 2}, 1, true, 0},
+      {"r 2, mu 64, delta 64, angle 64, own axes", {2, 64, 64, 64}, -1, true, 0},
+      {"r 64, mu 2, delta 64, angle 64, own axes", {64, 2, 64, 64}, -1, true, 0},
+      {"r 64, mu 64, delta 2, angle 64, own axes", {64, 64, 2, 64}, -1, true, 0},
+      {"r 64, mu 64, delta 64, angle 2, own axes", {64, 64, 64, 2}, -1, true, 0},
       {"r 64, mu 64, delta 64, angle 64, own axes", {64, 64, 64, 64}, -1, true, 0},
       {"r 2, mu 16, delta 16, angle 8, own axes", {2, 16, 16, 8}, -1, true, 0},
       {"r 2, mu 64, delta 16, angle 8, own axes / 4", {2, 64, 16, 8}, -1, true, 2},
@@ -340,7 +352,16 @@ void measure(const char* name, const ModelData& model) {
   }
 }
 
-TEST(RefineInfoNesting, CloseViewSplitsAgainstRefinementBits) { PMS_MEASURE_RECORD_BITS_MODEL(measure); }
+// The variants start from each node's own bounds: bunny built without nesting (a file given in the
+// environment should be one built with info=unnested, or a version 4 file).
+TEST(RefineInfoNesting, CloseViewSplitsAgainstRefinementBits) {
+  BuildOptions unnested;
+  unnested.nested_info = false;
+  PMS_MEASURE_RECORD_BITS_MODEL_BUILT(measure, unnested);
+}
+
+// What the builder stores (builder/nested_refine_info.h), coded by the real codec.
+TEST(RefineInfoNesting, AsTheBuilderNestsIt) { PMS_MEASURE_RECORD_BITS_MODEL(report_stored); }
 
 }  // namespace
 }  // namespace pms::app
