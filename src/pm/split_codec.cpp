@@ -324,6 +324,18 @@ uint16_t read_angle(uint32_t sym, BitReader& r, uint16_t parent, const char* fie
 // Own axes lie on the coarse grid (kAxisSnapBits) and are coded in its steps from v_s's, rounded down.
 constexpr int64_t kAxisSnap = int64_t(1) << kAxisSnapBits;
 int64_t coarse_axis(uint16_t q) { return int64_t(int16_t(q)) >= 0 ? int16_t(q) / kAxisSnap : -((kAxisSnap - 1 - int16_t(q)) / kAxisSnap); }
+// Where a child's axis coordinate is coded from, in coarse steps. v_t's: v_s's. v_u's: beyond v_s's from
+// v_t's, since the merged cone's axis lies between the children's, α_s − α_t from v_t's and α_s − α_u
+// from v_u's (refinement_info.cpp, merge_cones): v_s's coordinate plus (α_s − α_u) / (α_s − α_t) of v_t's
+// offset from it, in integers (the octahedral map is nearly linear over a cone's width).
+int64_t axis_origin(const RefineInfo& s, const RefineInfo* t, const RefineInfo& v, uint16_t RefineInfo::*q) {
+  const int64_t from = int16_t(s.*q);
+  if (!t || s.cone_angle == kNoCone || t->cone_angle == kNoCone || never_refines(*t)) return coarse_axis(uint16_t(from));
+  const int64_t num = int64_t(s.cone_angle) - v.cone_angle, den = int64_t(s.cone_angle) - t->cone_angle;
+  if (den <= 0 || num < 0) return coarse_axis(uint16_t(from));
+  const int64_t predicted = std::clamp<int64_t>(from + (from - int16_t(t->*q)) * num / den, -kAxisSteps, kAxisSteps);
+  return coarse_axis(uint16_t(int16_t(predicted)));
+}
 bool on_coarse_grid(const RefineInfo& v) { return int16_t(v.cone_x) % kAxisSnap == 0 && int16_t(v.cone_y) % kAxisSnap == 0; }
 
 }  // namespace
@@ -420,8 +432,9 @@ template <class Out> void SplitCodec::emit(const SplitContext& c, const SplitPay
       for (uint16_t q : {v.cone_x, v.cone_y}) out.raw(uint64_t(int64_t(int16_t(q)) + kAxisSteps), kAxisBits, refinement);
       continue;
     }
-    put_int(out, axis_slot, coarse_axis(v.cone_x) - coarse_axis(s.cone_x), refinement);
-    put_int(out, axis_slot, coarse_axis(v.cone_y) - coarse_axis(s.cone_y), refinement);
+    const RefineInfo* t = k == 1 ? child[0] : nullptr;
+    put_int(out, axis_slot, coarse_axis(v.cone_x) - axis_origin(s, t, v, &RefineInfo::cone_x), refinement);
+    put_int(out, axis_slot, coarse_axis(v.cone_y) - axis_origin(s, t, v, &RefineInfo::cone_y), refinement);
   }
 }
 
@@ -519,7 +532,7 @@ SplitPayload SplitCodec::decode(const SplitContext& c, BitReader& r) const {
         for (uint16_t RefineInfo::*q : {&RefineInfo::cone_x, &RefineInfo::cone_y}) {
           const uint32_t axis_sym = q == &RefineInfo::cone_x ? x_sym : axis_code.read(r, field);
           if (axis_sym == kFineAxisSymbol) r.fail_field(field, "a fine axis coordinate after a coarse one");
-          const int64_t value = (coarse_axis(s.*q) + get_int(axis_sym, r, field)) * kAxisSnap;
+          const int64_t value = (axis_origin(s, k == 1 ? &p.info_t : nullptr, v, q) + get_int(axis_sym, r, field)) * kAxisSnap;
           if (value < -kAxisSteps || value > kAxisSteps) r.fail_field(field, "cone axis out of range");
           v.*q = uint16_t(int16_t(value));
         }
