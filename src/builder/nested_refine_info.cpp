@@ -57,6 +57,7 @@ RefineInfo snap_axis(const RefineInfo& own) {
     const double error = angle_between(dequantize_refine(candidate, 1).axis, b.axis);
     if (error < best_error) best_error = error, best = candidate;
   }
+  if (best.cone_x == own.cone_x && best.cone_y == own.cone_y) return own;  // on the grid already
   const double angle = double(b.cone_angle) + best_error + 1e-6;  // 1e-6: float slack, as quantize_refine
   auto units = uint32_t(std::ceil(angle / kConeUnit));
   while (units <= kConeSteps && double(dequantize_refine(RefineInfo{0, 0, 0, 0, 0, uint16_t(units)}, 1).cone_angle) < angle)
