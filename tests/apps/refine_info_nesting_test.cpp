@@ -353,7 +353,7 @@ void measure(const char* name, const ModelData& model) {
 }
 
 // The variants start from each node's own bounds: bunny built without nesting (a file given in the
-// environment should be one built with info=unnested, or a version 4 file).
+// environment should be one built with `pmstream build --unnested-info`).
 TEST(RefineInfoNesting, CloseViewSplitsAgainstRefinementBits) {
   BuildOptions unnested;
   unnested.nested_info = false;
