@@ -310,6 +310,7 @@ void measure(const char* name, const ModelData& model) {
       {"r 2, mu 64, delta 16, angle 8, own axes / 4", {2, 64, 16, 8}, -1, true, 2},
       {"r 2, mu 32, delta 16, angle 8, own axes / 4", {2, 32, 16, 8}, -1, true, 2},
       {"r 2, mu 64, delta 16, angle 8, own axes / 8", {2, 64, 16, 8}, -1, true, 3},
+      {"r 2, mu 64, delta 16, angle 8, own axes / 8, v_t's radius below r(v_s)", {2, 64, 16, 8}, -1, false, 3},
       {"r 2, mu 64, delta 8, angle 4, own axes / 8", {2, 64, 8, 4}, -1, true, 3},
       {"r 2, mu 16, delta 16, angle 8, own axes / 8", {2, 16, 16, 8}, -1, true, 3},
       {"r 2, mu 16, delta 16, angle 8, inherit at 1 step, own axes / 8", {2, 16, 16, 8}, 1, true, 3},
