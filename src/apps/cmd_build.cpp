@@ -1,4 +1,4 @@
-// pmstream build IN -o OUT.pms [--greedy] [--base-vertices N] [--deviation estimate|bound] [--json]
+// pmstream build IN -o OUT.pms [--greedy] [--base-vertices N] [--deviation estimate|bound] [--unnested-info] [--json]
 #include <cstdio>
 
 #include "apps/build_pipeline.h"
@@ -12,7 +12,7 @@ namespace {
 
 struct BuildArgs {
   std::string input, output;
-  bool greedy = false, json = false;
+  bool greedy = false, json = false, unnested_info = false;
   uint64_t base_vertices = BuildOptions{}.base_vertices;
   std::string deviation = "estimate";
 };
@@ -24,6 +24,7 @@ void run_build(const BuildArgs& args) {
   options.greedy = args.greedy;
   options.base_vertices = args.base_vertices;
   options.deviation = args.deviation == "bound" ? Deviation::bound : Deviation::estimate;
+  options.nested_info = !args.unnested_info;
   options.progress = bar.callback();
   const BuildRun run = build_file(args.input, args.output, options);
   bar.finish();
@@ -64,6 +65,9 @@ void add_build_command(CliCommand& app) {
              "same tolerance, which the view then keeps within it")
       .one_of({"bound", "estimate"})
       .show_default();
+  cmd.flag("--unnested-info", args->unnested_info,
+           "Keep each node's own refinement info instead of nesting it under its parent's (measurements: the split "
+           "records then carry most values exact)");
   cmd.flag("--json", args->json, "Print one JSON object with the statistics");
   cmd.on_run([args] { run_build(*args); });
 }

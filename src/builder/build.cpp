@@ -6,6 +6,7 @@
 #include <chrono>
 
 #include "builder/bounds.h"
+#include "builder/nested_refine_info.h"
 #include "builder/simplify.h"
 #include "common/error.h"
 #include "pm/hierarchy.h"
@@ -98,6 +99,7 @@ std::string options_text(const BuildOptions& options) {
   std::string text = options.greedy ? "greedy" : "balanced";
   text += " base_vertices=" + std::to_string(options.base_vertices);
   text += options.deviation == Deviation::bound ? " deviation=bound" : " deviation=estimate";
+  if (!options.nested_info) text += " info=unnested";
   return text;
 }
 
@@ -107,6 +109,7 @@ BuildResult build_progressive_mesh(const Mesh& mesh, const BuildOptions& options
   CollapseForest forest = options.greedy ? simplify_greedy(mesh, options) : simplify_balanced(mesh, options);
   report(options.progress, "pack", 0);
   BuildResult result;
+  if (options.nested_info) nest_refine_info(forest);
   result.hierarchy = pack(mesh, forest, bounds_of(mesh.positions).diagonal());
   report(options.progress, "pack", 1);
 

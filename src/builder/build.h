@@ -27,6 +27,9 @@ struct BuildOptions {
   // few rounds below it add a level to the hierarchy each while removing only a handful of vertices.
   uint64_t base_vertices = 64;
   Deviation deviation = Deviation::estimate;
+  // Each node's refinement info rounded up onto the lattice below its parent's (builder/nested_refine_info.h),
+  // what split records code in a few bits; false keeps every node's own bounds (measurements).
+  bool nested_info = true;
   ProgressFn progress;
 };
 

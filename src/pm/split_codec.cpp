@@ -10,8 +10,9 @@
 //   reference escape to tree-id, depth and path.
 // - Position: v_t − v_s per axis on the grid, as a magnitude class (prefix coded, with a table per class
 //   of v_s's radius: the radius bounds |p_t − p_s|) and the class's low bits raw.
-// - Refinement info: each child's as the difference of its 11-bit length codes, cone angle and axis from
-//   v_s's (a child's bounds nest in its parent's, so the differences are small and mostly of one sign).
+// - Refinement info: each child's radius, mu, delta and cone angle as the entry of the lattice below v_s's
+//   that the builder rounded it up to (pm/nested_info.h), its own cone axis in coarse steps from v_s's.
+//   Values no entry holds travel exact, so any canonical info can be coded.
 #include "pm/split_codec.h"
 
 #include <algorithm>
@@ -20,6 +21,7 @@
 #include <string>
 
 #include "common/error.h"
+#include "pm/nested_info.h"
 #include "pm/position_grid.h"
 
 namespace pms {
@@ -29,7 +31,16 @@ namespace {
 // k = 1 .. kMaxClass; the k - 1 bits below the leading one follow raw.
 constexpr uint32_t kMaxClass = 40;
 constexpr uint32_t kIntSymbols = 1 + 2 * kMaxClass;
-constexpr uint32_t kNoConeSymbol = kIntSymbols;  // after the integers, in the angle codes
+// Nested values (pm/nested_info.h): 0, the exact value (kExactLengthBits or kConeAngleBits raw), or lattice
+// entry k: k itself below kDirectEntries, else its magnitude class with the bits below the leading one raw.
+constexpr uint32_t kZeroSymbol = 0, kExactSymbol = 1, kDirectEntries = 16;
+constexpr uint32_t kFirstClassSymbol = 2 + kDirectEntries;
+constexpr uint32_t kFirstClass = 5, kLastClass = 10;  // bit_width of kDirectEntries and of the deepest entry
+constexpr uint32_t kEntrySymbols = kFirstClassSymbol + kLastClass - kFirstClass + 1;
+static_assert(kLatticeOctaves * 64 / kMuCodesPerStep < (1u << kLastClass), "the finest lattice's entries have a class");
+constexpr uint32_t kNoConeSymbol = kEntrySymbols;  // after the entries, in the angle codes
+constexpr uint32_t kFineAxisSymbol = kIntSymbols;  // after the integers, in the axis codes: both coordinates raw
+constexpr unsigned kExactLengthBits = 15 - kLengthDroppedBits;  // a length code up to infinity's
 
 constexpr uint32_t kMaxDepthSymbols = 64;
 constexpr uint32_t kEqualSymbol = kMaxDepthSymbols;  // "the reference itself", in the parting codes
@@ -69,7 +80,9 @@ uint32_t alphabet(uint32_t slot) {
   if (slot < kSlotCutRest) return kMaxDepthSymbols + 1;
   if (slot == kSlotCutDepth) return kMaxDepthSymbols;
   if (slot >= kSlotInfoFlags && slot < kSlotRadius) return 4;
-  if (slot >= kSlotAngle && slot < kSlotAxis) return kIntSymbols + 1;
+  if (slot >= kSlotRadius && slot < kSlotAngle) return kEntrySymbols;
+  if (slot >= kSlotAngle && slot < kSlotAxis) return kEntrySymbols + 1;
+  if (slot >= kSlotAxis) return kIntSymbols + 1;
   return kIntSymbols;
 }
 
@@ -85,8 +98,6 @@ uint32_t int_symbol(int64_t v) {
   return 2 * k - 1 + (v < 0);
 }
 
-// v's length codes: the half float without its sign and dropped bits, monotone in the value.
-int64_t length_code(uint16_t half) { return half >> kLengthDroppedBits; }
 
 struct Reference {
   VertexId id = kNoVertex;
@@ -176,21 +187,6 @@ void references(const SplitContext& c, int side, VertexId cut_l, Reference out[k
 uint32_t half_octave(uint16_t half) { return (half >> 9) & (kRadiusClasses - 1); }
 uint32_t position_class(const SplitContext& c) { return half_octave(c.info_s.radius); }
 
-// v_s's sphere holds v_t's moved by the offset (refinement_info.cpp), and is that sphere whenever v_t's
-// reaches further than v_u's: r(v_s) - |p_t - p_s| bounds r(v_t) and is close to it. `grid_step` is the
-// largest axis's grid step over the model's scale (0: no grid, no prediction).
-int64_t radius_reference(const RefineInfo& s, uint32_t child, const int64_t d[3], const std::array<uint16_t, 3>& steps,
-                         float grid_step) {
-  if (child != 0 || !(grid_step > 0)) return length_code(s.radius);
-  double offset = 0;
-  for (int i = 0; i < 3; ++i) {
-    const double x = double(d[i]) * (double(steps[i]) / 65535) * double(grid_step);
-    offset += x * x;
-  }
-  const double room = double(float_from_half(s.radius)) - std::sqrt(offset);
-  return length_code(half_from_float_up(float(std::max(room, 0.0))));
-}
-
 // v_t - v_s is an edge of the surface under v_s, so it lies near the plane normal to v_s's cone axis:
 // the axis where that normal is largest is predicted from the other two, the others coded first. The
 // normal is the octahedral axis decoded in integers (L1 norm kAxisSteps), scaled by each axis's grid step.
@@ -272,6 +268,75 @@ uint32_t axis_context(const RefineInfo& s, const RefineInfo& v) {
 }
 
 constexpr uint16_t RefineInfo::*kLengths[3] = {&RefineInfo::radius, &RefineInfo::mu, &RefineInfo::delta};
+constexpr uint32_t kCodesPerStep[3] = {kRadiusCodesPerStep, kMuCodesPerStep, kDeltaCodesPerStep};
+
+// A nested value as coded (kZeroSymbol above): its symbol and the raw bits after it.
+struct EntryCode {
+  uint32_t symbol = kZeroSymbol;
+  uint64_t raw = 0;
+  unsigned raw_bits = 0;
+};
+EntryCode entry_code(uint32_t k, uint32_t exact, unsigned exact_bits) {
+  if (k == kNoEntry) return {kExactSymbol, exact, exact_bits};
+  if (k < kDirectEntries) return {2 + k};
+  const auto width = unsigned(std::bit_width(k));
+  return {kFirstClassSymbol + width - kFirstClass, k & ((1u << (width - 1)) - 1), width - 1};
+}
+// The child's length against v_s's: the lattice entry it is, or exact.
+EntryCode length_code_of(uint16_t parent, uint16_t child, uint32_t codes_per_step) {
+  if (child == 0) return {};
+  uint32_t k = length_entry(parent, child, codes_per_step);
+  if (k != kNoEntry && length_at_entry(parent, k, codes_per_step) != child) k = kNoEntry;
+  return entry_code(k, child >> kLengthDroppedBits, kExactLengthBits);
+}
+// The child's cone angle (not kNoCone) against v_s's (which may be).
+EntryCode angle_code_of(uint16_t parent, uint16_t child) {
+  if (child == 0) return {};
+  uint32_t k = parent == kNoCone ? kNoEntry : angle_entry(parent, child);
+  if (k != kNoEntry && angle_at_entry(parent, k) != child) k = kNoEntry;
+  return entry_code(k, child, kConeAngleBits);
+}
+template <class Out> void put_entry(Out& out, uint32_t slot, const EntryCode& e) {
+  out.symbol(slot, e.symbol, refinement);
+  if (e.raw_bits > 0) out.raw(e.raw, e.raw_bits, refinement);
+}
+// The entry number after a symbol that is neither zero nor exact.
+uint32_t read_entry(uint32_t sym, BitReader& r, const char* field) {
+  if (sym < kFirstClassSymbol) return sym - 2;
+  if (sym >= kEntrySymbols) r.fail_field(field, "not a lattice entry");
+  const uint32_t width = sym - kFirstClassSymbol + kFirstClass;
+  return (1u << (width - 1)) | uint32_t(r.bits(width - 1, field));
+}
+uint16_t read_length(uint32_t sym, BitReader& r, uint16_t parent, uint32_t codes_per_step, const char* field) {
+  if (sym == kZeroSymbol) return 0;
+  const uint32_t value = sym == kExactSymbol ? uint32_t(r.bits(kExactLengthBits, field)) << kLengthDroppedBits
+                                             : length_at_entry(parent, read_entry(sym, r, field), codes_per_step);
+  if (value > 0x7C00) r.fail_field(field, "length outside the lattice or the half-float range");
+  return uint16_t(value);
+}
+uint16_t read_angle(uint32_t sym, BitReader& r, uint16_t parent, const char* field) {
+  if (sym == kZeroSymbol) return 0;
+  if (sym != kExactSymbol && parent == kNoCone) r.fail_field(field, "a lattice entry below no cone");
+  const uint32_t value = sym == kExactSymbol ? uint32_t(r.bits(kConeAngleBits, field)) : angle_at_entry(parent, read_entry(sym, r, field));
+  if (value > kConeSteps) r.fail_field(field, "cone angle out of range");
+  return uint16_t(value);
+}
+// Own axes lie on the coarse grid (kAxisSnapBits) and are coded in its steps from v_s's, rounded down.
+constexpr int64_t kAxisSnap = int64_t(1) << kAxisSnapBits;
+int64_t coarse_axis(uint16_t q) { return int64_t(int16_t(q)) >= 0 ? int16_t(q) / kAxisSnap : -((kAxisSnap - 1 - int16_t(q)) / kAxisSnap); }
+// Where a child's axis coordinate is coded from, in coarse steps. v_t's: v_s's. v_u's: beyond v_s's from
+// v_t's, since the merged cone's axis lies between the children's, α_s − α_t from v_t's and α_s − α_u
+// from v_u's (refinement_info.cpp, merge_cones): v_s's coordinate plus (α_s − α_u) / (α_s − α_t) of v_t's
+// offset from it, in integers (the octahedral map is nearly linear over a cone's width).
+int64_t axis_origin(const RefineInfo& s, const RefineInfo* t, const RefineInfo& v, uint16_t RefineInfo::*q) {
+  const int64_t from = int16_t(s.*q);
+  if (!t || s.cone_angle == kNoCone || t->cone_angle == kNoCone || never_refines(*t)) return coarse_axis(uint16_t(from));
+  const int64_t num = int64_t(s.cone_angle) - v.cone_angle, den = int64_t(s.cone_angle) - t->cone_angle;
+  if (den <= 0 || num < 0) return coarse_axis(uint16_t(from));
+  const int64_t predicted = std::clamp<int64_t>(from + (from - int16_t(t->*q)) * num / den, -kAxisSteps, kAxisSteps);
+  return coarse_axis(uint16_t(int16_t(predicted)));
+}
+bool on_coarse_grid(const RefineInfo& v) { return int16_t(v.cone_x) % kAxisSnap == 0 && int16_t(v.cone_y) % kAxisSnap == 0; }
 
 }  // namespace
 
@@ -350,21 +415,26 @@ template <class Out> void SplitCodec::emit(const SplitContext& c, const SplitPay
     if (never_refines(v)) continue;
     uint32_t slot = radius_slot(c, max_depth_, k, t_radius);
     for (uint32_t f = 0; f < 3; ++f) {
-      const int64_t reference = f == 0 ? radius_reference(s, k, d, steps_, grid_step_) : length_code(s.*kLengths[f]);
-      const uint32_t sym = put_int(out, slot, reference - length_code(v.*kLengths[f]), refinement);
-      if (f == 0 && k == 0) t_radius = sym;
-      slot = (f == 0 ? kSlotMu : kSlotDelta) + k * kChainContexts + chain_context(sym);
+      const EntryCode e = length_code_of(s.*kLengths[f], v.*kLengths[f], kCodesPerStep[f]);
+      put_entry(out, slot, e);
+      if (f == 0 && k == 0) t_radius = e.symbol;
+      slot = (f == 0 ? kSlotMu : kSlotDelta) + k * kChainContexts + chain_context(e.symbol);
     }
-    const bool parent_cone = s.cone_angle != kNoCone;
-    const uint32_t angle_slot = kSlotAngle + 2 * k + (parent_cone ? 1 : 0);
+    const uint32_t angle_slot = kSlotAngle + 2 * k + (s.cone_angle != kNoCone ? 1 : 0);
     if (v.cone_angle == kNoCone) {
       out.symbol(angle_slot, kNoConeSymbol, refinement);
       continue;
     }
-    put_int(out, angle_slot, parent_cone ? int64_t(s.cone_angle) - v.cone_angle : int64_t(v.cone_angle), refinement);
+    put_entry(out, angle_slot, angle_code_of(s.cone_angle, v.cone_angle));
     const uint32_t axis_slot = kSlotAxis + k * kAxisContexts + axis_context(s, v);
-    put_int(out, axis_slot, int64_t(int16_t(v.cone_x)) - int16_t(s.cone_x), refinement);
-    put_int(out, axis_slot, int64_t(int16_t(v.cone_y)) - int16_t(s.cone_y), refinement);
+    if (!on_coarse_grid(v)) {  // not an axis the builder snapped: both coordinates as stored
+      out.symbol(axis_slot, kFineAxisSymbol, refinement);
+      for (uint16_t q : {v.cone_x, v.cone_y}) out.raw(uint64_t(int64_t(int16_t(q)) + kAxisSteps), kAxisBits, refinement);
+      continue;
+    }
+    const RefineInfo* t = k == 1 ? child[0] : nullptr;
+    put_int(out, axis_slot, coarse_axis(v.cone_x) - axis_origin(s, t, v, &RefineInfo::cone_x), refinement);
+    put_int(out, axis_slot, coarse_axis(v.cone_y) - axis_origin(s, t, v, &RefineInfo::cone_y), refinement);
   }
 }
 
@@ -443,28 +513,29 @@ SplitPayload SplitCodec::decode(const SplitContext& c, BitReader& r) const {
     uint32_t slot = radius_slot(c, max_depth_, k, t_radius);
     for (uint32_t f = 0; f < 3; ++f) {
       const uint32_t sym = codes_[slot].read(r, field);
-      const int64_t reference = f == 0 ? radius_reference(s, k, d, steps_, grid_step_) : length_code(s.*kLengths[f]);
-      const int64_t value = reference - get_int(sym, r, field);
-      if (value < 0 || value > (0x7C00 >> kLengthDroppedBits)) r.fail_field(field, "length outside the half-float range");
-      v.*kLengths[f] = uint16_t(value << kLengthDroppedBits);
+      v.*kLengths[f] = read_length(sym, r, s.*kLengths[f], kCodesPerStep[f], field);
       if (f == 0 && k == 0) t_radius = sym;
       slot = (f == 0 ? kSlotMu : kSlotDelta) + k * kChainContexts + chain_context(sym);
     }
-    const bool parent_cone = s.cone_angle != kNoCone;
-    const uint32_t sym = codes_[kSlotAngle + 2 * k + (parent_cone ? 1 : 0)].read(r, field);
+    const uint32_t sym = codes_[kSlotAngle + 2 * k + (s.cone_angle != kNoCone ? 1 : 0)].read(r, field);
     if (sym == kNoConeSymbol) {
       v.cone_angle = kNoCone;
       v.cone_x = v.cone_y = 0;
     } else {
-      const int64_t delta = get_int(sym, r, field);
-      const int64_t angle = parent_cone ? int64_t(s.cone_angle) - delta : delta;
-      if (angle < 0 || angle > kConeSteps) r.fail_field(field, "cone angle out of range");
-      v.cone_angle = uint16_t(angle);
+      v.cone_angle = read_angle(sym, r, s.cone_angle, field);
       const PrefixCode& axis_code = codes_[kSlotAxis + k * kAxisContexts + axis_context(s, v)];
-      for (uint16_t RefineInfo::*q : {&RefineInfo::cone_x, &RefineInfo::cone_y}) {
-        const int64_t value = int64_t(int16_t(s.*q)) + get_int(axis_code.read(r, field), r, field);
-        if (value < -kAxisSteps || value > kAxisSteps) r.fail_field(field, "cone axis out of range");
-        v.*q = uint16_t(int16_t(value));
+      const uint32_t x_sym = axis_code.read(r, field);
+      if (x_sym == kFineAxisSymbol) {
+        for (uint16_t RefineInfo::*q : {&RefineInfo::cone_x, &RefineInfo::cone_y})
+          v.*q = uint16_t(int16_t(int64_t(r.bits(kAxisBits, field)) - kAxisSteps));
+      } else {
+        for (uint16_t RefineInfo::*q : {&RefineInfo::cone_x, &RefineInfo::cone_y}) {
+          const uint32_t axis_sym = q == &RefineInfo::cone_x ? x_sym : axis_code.read(r, field);
+          if (axis_sym == kFineAxisSymbol) r.fail_field(field, "a fine axis coordinate after a coarse one");
+          const int64_t value = (axis_origin(s, k == 1 ? &p.info_t : nullptr, v, q) + get_int(axis_sym, r, field)) * kAxisSnap;
+          if (value < -kAxisSteps || value > kAxisSteps) r.fail_field(field, "cone axis out of range");
+          v.*q = uint16_t(int16_t(value));
+        }
       }
     }
     if (!is_canonical(v) || never_refines(v)) r.fail_field(field, "not a value the quantizer produces");

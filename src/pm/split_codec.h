@@ -86,7 +86,8 @@ class SplitCodec {
 
   uint32_t root_count_ = 0, max_depth_ = 0, position_bits_ = 0;
   std::array<uint16_t, 3> steps_{};  // each axis's grid step over the largest, in 1/65535
-  float grid_step_ = 0;              // the largest grid step over the model's scale; 0 without a grid
+  float grid_step_ = 0;              // the largest grid step over the model's scale; 0 without a grid (serialized,
+                                     // read by no field since nested info: docs/protocol.md)
   std::vector<PrefixCode> codes_;  // one per slot (split_codec.cpp)
 };
 

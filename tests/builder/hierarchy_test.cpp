@@ -78,12 +78,22 @@ void expect_valid_hierarchy(const Mesh& mesh, const BuildResult& built) {
       EXPECT_FALSE(is_ancestor_or_self(h.id(i), h.id(cut)));
     }
   }
-  // Every node's decoded sphere and cone contain its children's (hence all descendants').
+  // Every node's decoded sphere and cone contain its children's (hence all descendants') as the builder
+  // computes them. Nested info (the default) then rounds each child up under its parent's values
+  // (builder/nested_refine_info.h): a child's sphere may reach outside its parent's, but no child's radius
+  // is above its parent's (NestedRefineInfo.* checks that each node still holds its own bounds).
+  const bool nested = built.stats.options.find("info=unnested") == std::string::npos;
   for (uint32_t i = 0; i < n; ++i) {
     if (h.is_leaf(i)) continue;
     const RefineBounds parent = dequantize_refine(h.refine[i], h.scale);
     for (uint32_t c : {h.first_child[i], h.first_child[i] + 1}) {
       const RefineBounds child = dequantize_refine(h.refine[c], h.scale);
+      if (nested) {
+        if (!never_refines(h.refine[c])) {
+          EXPECT_GE(parent.radius, child.radius) << "sphere of node " << i;
+        }
+        continue;
+      }
       const double shift = distance(&h.position[3 * size_t(c)], &h.position[3 * size_t(i)]);
       EXPECT_GE(parent.radius * (1 + 1e-6), child.radius + shift) << "sphere of node " << i;
       if (parent.cone_angle < 1.5707) {
@@ -136,13 +146,22 @@ TEST(Hierarchy, SphereBalanced) {
   EXPECT_LE(built.stats.base_vertices, 8u) << "a closed sphere simplifies to a handful of vertices";
 }
 
+TEST(Hierarchy, SphereBalancedUnnestedSpheresAndConesNest) {
+  const Mesh mesh = make_sphere(24, 32);
+  BuildOptions options;
+  options.base_vertices = 0;
+  options.nested_info = false;
+  expect_valid_hierarchy(mesh, build_progressive_mesh(mesh, options));
+}
+
 // The estimate drops only the chain's growth: the same hierarchy (the same ids; the packing within a level
 // follows the deviation, so indices differ), spheres and cones, and a deviation space inside the bound's at
 // every node (the chain's sum is at least the estimate's maximum, by induction).
 TEST(Hierarchy, EstimatedDeviationIsInsideTheBound) {
   const Mesh mesh = make_terrain(8000);
   BuildOptions options;
-  const BuildResult estimate = build_progressive_mesh(mesh, options);  // the default
+  options.nested_info = false;  // nesting rounds each under its own parents: compare the measures themselves
+  const BuildResult estimate = build_progressive_mesh(mesh, options);  // the default deviation
   options.deviation = Deviation::bound;
   const BuildResult bound = build_progressive_mesh(mesh, options);
   expect_valid_hierarchy(mesh, estimate);

@@ -179,13 +179,13 @@ TEST(PmsCorrupt, WrongMagicAndNewerVersion) {
   f.bytes[0] = 'X';
   expect_error(f, "header: ", "not a .pms file");
   f = small();
-  store<uint32_t>(f.bytes, kVersionAt, 5);
+  store<uint32_t>(f.bytes, kVersionAt, 6);
   f.fix_checksums();
-  EXPECT_EQ(f.error(), "header: unsupported version 5 (this build reads 4)");
+  EXPECT_EQ(f.error(), "header: unsupported version 6 (this build reads 5)");
   f = small();
-  store<uint32_t>(f.bytes, kVersionAt, 3);
+  store<uint32_t>(f.bytes, kVersionAt, 4);
   f.fix_checksums();
-  EXPECT_EQ(f.error(), "header: unsupported version 3 (this build reads 4; rebuild the file with this pmstream)");
+  EXPECT_EQ(f.error(), "header: unsupported version 4 (this build reads 5; rebuild the file with this pmstream)");
 }
 
 TEST(PmsCorrupt, AbsurdNodeCountInHead) {

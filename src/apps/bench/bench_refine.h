@@ -5,6 +5,7 @@
 
 #include "apps/bench/bench.h"
 #include "pm/hierarchy.h"
+#include "refine/camera.h"
 #include "refine/vertex_hierarchy.h"
 
 namespace pms::app {
@@ -14,6 +15,10 @@ void print_now(const std::string& text);
 
 // Every split known: the loop's cost alone, with nothing to fetch.
 VertexHierarchy complete_hierarchy(const ModelData& model);
+
+// Issue 18's cameras: eye = c + d·r·(sin a, 0, cos a), c the box centre and r half its diagonal, looking at
+// c, up +y, 1920 x 1080, 60° vertical field of view.
+Camera srmesh_camera(const ModelData& model, float distance, float angle_deg);
 
 // Issue 18's table: bunny at four camera distances beside Hoppe's SrMesh (constants measured with his
 // code), and the same timings on dragon. Appends to `out` under "srmesh".

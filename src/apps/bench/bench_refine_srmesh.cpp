@@ -35,26 +35,6 @@ constexpr float kOrbitStepDeg = 0.25f;
 constexpr uint32_t kOrbitSteps = 20;  // 0° → 5°, then back
 constexpr uint32_t kSteadyBatch = 20;  // adapts per steady sample: one is too short for the clock
 
-// eye = c + d·r·(sin a, 0, cos a), c the box centre and r half its diagonal, looking at c, up +y.
-Camera camera_at(const ModelData& model, float distance, float angle_deg) {
-  float centre[3], diagonal2 = 0;
-  for (int k = 0; k < 3; ++k) {
-    centre[k] = 0.5f * (model.bbox_min[k] + model.bbox_max[k]);
-    const float extent = model.bbox_max[k] - model.bbox_min[k];
-    diagonal2 += extent * extent;
-  }
-  const float reach = distance * 0.5f * std::sqrt(diagonal2), angle = angle_deg * float(M_PI) / 180;
-  Camera camera;
-  for (int k = 0; k < 3; ++k) camera.target[k] = centre[k];
-  camera.eye[0] = centre[0] + reach * std::sin(angle);
-  camera.eye[1] = centre[1];
-  camera.eye[2] = centre[2] + reach * std::cos(angle);
-  camera.fovy_deg = 60;
-  camera.width = 1920;
-  camera.height = 1080;
-  return camera;
-}
-
 struct DistanceRun {
   float distance = 0;
   uint64_t faces = 0;
@@ -103,7 +83,7 @@ void refine_fully(SelectiveMesh& mesh, const ModelData& model, const VertexHiera
 DistanceRun run_distance(const ModelData& model, const VertexHierarchy& h, float distance, uint32_t repeats) {
   DistanceRun run;
   run.distance = distance;
-  const ViewParams view = make_view(camera_at(model, distance, 0), model.bbox_min, model.bbox_max);
+  const ViewParams view = make_view(srmesh_camera(model, distance, 0), model.bbox_min, model.bbox_max);
   SelectiveMesh mesh(h, model.base_faces);
   SelectiveRefinement refinement(mesh, model.scale, tolerance(kTolerance));
   refinement.set_view(view);
@@ -131,7 +111,7 @@ DistanceRun run_distance(const ModelData& model, const VertexHierarchy& h, float
     double seconds = 0;
     for (uint32_t step = 1; step <= 2 * kOrbitSteps; ++step) {
       const uint32_t at = step <= kOrbitSteps ? step : 2 * kOrbitSteps - step;
-      const ViewParams turned = make_view(camera_at(model, distance, float(at) * kOrbitStepDeg), model.bbox_min, model.bbox_max);
+      const ViewParams turned = make_view(srmesh_camera(model, distance, float(at) * kOrbitStepDeg), model.bbox_min, model.bbox_max);
       Stopwatch clock;
       refinement.set_view(turned);
       const FrameStats stats = refinement.adapt();
@@ -188,6 +168,26 @@ Table counts_table(const std::vector<DistanceRun>& runs) {
 }
 
 }  // namespace
+
+// eye = c + d·r·(sin a, 0, cos a), c the box centre and r half its diagonal, looking at c, up +y.
+Camera srmesh_camera(const ModelData& model, float distance, float angle_deg) {
+  float centre[3], diagonal2 = 0;
+  for (int k = 0; k < 3; ++k) {
+    centre[k] = 0.5f * (model.bbox_min[k] + model.bbox_max[k]);
+    const float extent = model.bbox_max[k] - model.bbox_min[k];
+    diagonal2 += extent * extent;
+  }
+  const float reach = distance * 0.5f * std::sqrt(diagonal2), angle = angle_deg * float(M_PI) / 180;
+  Camera camera;
+  for (int k = 0; k < 3; ++k) camera.target[k] = centre[k];
+  camera.eye[0] = centre[0] + reach * std::sin(angle);
+  camera.eye[1] = centre[1];
+  camera.eye[2] = centre[2] + reach * std::cos(angle);
+  camera.fovy_deg = 60;
+  camera.width = 1920;
+  camera.height = 1080;
+  return camera;
+}
 
 std::string srmesh_comparison_section(const BenchContext& context, json& out) {
   const uint32_t repeats = context.options.quick ? 3 : 9;
