@@ -316,7 +316,6 @@ void measure(const char* name, const ModelData& model) {
       {"r 2, mu 16, delta 16, angle 8, inherit at 1 step, own axes / 8", {2, 16, 16, 8}, 1, true, 3},
   };
 
-
   for (const Variant& v : variants) {
     const Nested nested = nest(model, q, v);
     ModelData nested_model = model;
