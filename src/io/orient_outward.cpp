@@ -163,7 +163,9 @@ OutwardReport orient_closed_components_outward(Mesh& mesh) {
   OutwardReport report;
   const Components components = find_components(mesh);
   const std::vector<double> volume = signed_volumes(mesh, components);
-  if (std::none_of(volume.begin(), volume.end(), [](double v) { return v < 0; })) return report;  // the usual case
+  bool inside_out = false;  // some closed component with a negative volume; usually none
+  for (uint32_t k = 0; k < components.count; ++k) inside_out |= components.closed[k] && volume[k] < 0;
+  if (!inside_out) return report;
   const std::vector<size_t> enclosing = enclosures(mesh, components);
   std::vector<uint8_t> turn(components.count, 0);
   for (uint32_t k = 0; k < components.count; ++k) {
