@@ -543,9 +543,11 @@ bool SelectiveMesh::split_between(uint32_t s, VertexId cut_l, VertexId cut_r) {
   uint32_t face[kSplitFan], k[kSplitFan];
   uint32_t ia = kNone, jr = kNone, l = kNone, r = kNone;
   const int dl = cut_l.depth(), dr = cut_r.depth();
-  // v is an ancestor of (or is) the cut when the cut's id shifted to v's depth is v's.
+  // v is an ancestor of (or is) the cut when the cut's id shifted to v's depth is v's. Branch-free:
+  // which neighbour matches depends on the view, so a branch here mispredicts.
   const auto below = [](const VertexRecord& v, int d, VertexId cut, int cut_depth) {
-    return v.tree == cut.tree && d <= cut_depth && (cut.node >> (cut_depth - d)) == v.node;
+    const uint32_t up = uint32_t(cut_depth - d);  // ≥ 64 when v lies deeper than the cut
+    return uint32_t(v.tree == cut.tree) & uint32_t(up < 64) & uint32_t((cut.node >> (up & 63)) == v.node);
   };
   for (uint32_t i = 0; i < n; ++i) {
     face[i] = listed[i];
@@ -554,8 +556,11 @@ bool SelectiveMesh::split_between(uint32_t s, VertexId cut_l, VertexId cut_r) {
     const uint32_t next = c[kNextCorner[k[i]]];
     const VertexRecord& w = vertex_[next];
     const int d = 63 - __builtin_clzll(w.node);  // an active id is never 0
-    if (below(w, d, cut_l, dl)) ia = i, l = next;
-    if (below(w, d, cut_r, dr)) jr = i, r = next;
+    const uint32_t is_l = 0 - below(w, d, cut_l, dl), is_r = 0 - below(w, d, cut_r, dr);  // all ones or zero
+    ia ^= (ia ^ i) & is_l;
+    l ^= (l ^ next) & is_l;
+    jr ^= (jr ^ i) & is_r;
+    r ^= (r ^ next) & is_r;
   }
   if (ia == kNone || jr == kNone || ia == jr) return false;
   const uint32_t ib = jr > 0 ? jr - 1 : n - 1;
