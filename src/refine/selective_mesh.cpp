@@ -47,16 +47,8 @@ SelectiveMesh::SelectiveMesh(const VertexHierarchy& hierarchy, std::span<const u
       fail("base mesh", "face " + std::to_string(c / 3) + " uses unknown root " + std::to_string(base_faces[c]));
     corner_[c] = hierarchy.root_slot(base_faces[c]);
   }
-  // A repeated directed edge means a non-manifold edge or flipped neighbours.
-  std::vector<uint64_t> edges(corners);
-  for (uint32_t c = 0; c < corners; ++c) {
-    const uint32_t head = corner_[c - c % 3 + kNextCorner[c % 3]];
-    if (corner_[c] == head) fail("base mesh", "face " + std::to_string(c / 3) + " is degenerate");
-    edges[c] = uint64_t(corner_[c]) << 32 | head;
-  }
-  std::sort(edges.begin(), edges.end());
-  if (std::adjacent_find(edges.begin(), edges.end()) != edges.end())
-    fail("base mesh", "edge used twice in the same direction (non-manifold or inconsistent orientation)");
+  for (uint32_t c = 0; c < corners; ++c)
+    if (corner_[c] == corner_[c - c % 3 + kNextCorner[c % 3]]) fail("base mesh", "face " + std::to_string(c / 3) + " is degenerate");
   reserve_faces();
   uint32_t root_end = 0;
   for (uint32_t r = 0; r < hierarchy.root_count(); ++r) root_end = std::max(root_end, hierarchy.root_slot(r) + 1);
@@ -74,11 +66,15 @@ SelectiveMesh::SelectiveMesh(const VertexHierarchy& hierarchy, std::span<const u
   }
   for (uint32_t r = 0; r < hierarchy.root_count(); ++r) {
     const uint32_t slot = hierarchy.root_slot(r);
-    activate(slot, hierarchy.id(slot));
+    if (repeats_directed_edge(slot))
+      fail("base mesh", "root " + to_string(hierarchy.id(slot)) +
+                            ": edge used twice in the same direction (non-manifold or inconsistent orientation)");
     put_in_fan_order(slot);
     if (ordered_.size() != fan_.size())
       fail("base mesh", "root " + to_string(hierarchy.id(slot)) + " is non-manifold (its faces form several fans)");
   }
+  active_.reserve(hierarchy.root_count());
+  for (uint32_t r = 0; r < hierarchy.root_count(); ++r) activate(hierarchy.root_slot(r), hierarchy.id(hierarchy.root_slot(r)));
 }
 
 // The prefetch helpers are always inlined: GCC deems a function that only prefetches free of side
@@ -363,6 +359,24 @@ bool SelectiveMesh::order_fan(std::vector<Corner>& fan, std::vector<Corner>& ord
   if (ends > 1 || first >= n) return false;
   for (uint32_t i = uint32_t(first); i != kNone && ordered.size() < n; i = successor[i]) ordered.push_back(fan[i]);
   return ends == 0;
+}
+
+// A directed edge v -> w of two faces shows as two of v's corners with the same `next`. Checked per
+// fan, where a fan's few corners are compared pairwise (a long one sorted), instead of sorting every
+// edge of the base mesh: a fresh mesh pays this on each construction.
+bool SelectiveMesh::repeats_directed_edge(uint32_t v) {
+  load_corners(v, fan_);
+  prepare_lookup(fan_);
+  const size_t n = fan_.size();
+  if (n > kScannedFan) {
+    for (size_t i = 1; i < n; ++i)
+      if (fan_[i - 1].next == fan_[i].next) return true;
+    return false;
+  }
+  for (size_t i = 0; i < n; ++i)
+    for (size_t j = i + 1; j < n; ++j)
+      if (fan_[i].next == fan_[j].next) return true;
+  return false;
 }
 
 // Reads v's corners, orders them and writes the order back: for lists the fast paths of vsplit and ecol

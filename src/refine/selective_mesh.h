@@ -132,6 +132,7 @@ class SelectiveMesh {
   bool split_between(uint32_t s, VertexId cut_l, VertexId cut_r);  // vsplit's common case, before fan_ is read
   void join_fans(uint32_t p, uint32_t fl, uint32_t fr, bool t_open, bool u_open);  // over fan_ (t), fan_u_ (u)
   void put_in_fan_order(uint32_t v);                           // the lists' order, restored the slow way
+  bool repeats_directed_edge(uint32_t v);                      // over fan_ (v): a bad base mesh
   void start_after_gap(uint32_t v);
   bool breaks_split_order(uint32_t u) const;                  // over fan_ (t)
   // Over fan_ (t) and fan_u_ (u), whose open ends (kNone: closed) are given.

@@ -11,9 +11,11 @@
 #include "pm/refine_info.h"
 #include "pm/split_record.h"
 #include "pm/vertex_id.h"
+#include "error_of.h"
 #include "reference_pm.h"
 #include "refine/selective_mesh.h"
 #include "refine/vertex_hierarchy.h"
+#include "error_of.h"
 #include "test_support.h"
 
 namespace pms {
@@ -335,6 +337,23 @@ TEST(SelectiveMesh, RejectsBadBaseMeshes) {
   EXPECT_EQ(invariants(fan), "ok");
   EXPECT_EQ(fan.vertex_count(), 5u);
   EXPECT_EQ(fan.face_count(), 3u);
+}
+
+// A repeated directed edge is found at a short fan (compared pairwise) and at a long one (sorted), and
+// named by its root.
+TEST(SelectiveMesh, RejectsARepeatedDirectedEdgeAtAnyFanLength) {
+  for (const uint32_t spokes : {4u, 40u}) {
+    VertexHierarchy h;
+    const float p[3] = {0, 0, 0};
+    for (uint32_t r = 0; r <= spokes + 1; ++r) h.add_root({r, 1}, p, RefineInfo{});
+    std::vector<uint32_t> faces;
+    for (uint32_t i = 1; i <= spokes; ++i) faces.insert(faces.end(), {0, i, i + 1});
+    SelectiveMesh open_fan(h, faces);
+    EXPECT_EQ(open_fan.face_count(), spokes) << spokes;
+    faces.insert(faces.end(), {0, spokes / 2, spokes + 1});  // 0 -> spokes/2 again
+    const std::string message = test::error_of([&] { SelectiveMesh mesh(h, faces); });
+    EXPECT_NE(message.find("root <0,1>: edge used twice in the same direction"), std::string::npos) << spokes << ": " << message;
+  }
 }
 
 // Packets that contradict the mesh are reported, and the mesh is left as it was.
