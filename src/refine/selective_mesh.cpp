@@ -585,24 +585,29 @@ bool SelectiveMesh::split_between(uint32_t s, VertexId cut_l, VertexId cut_r) {
   partner_[fr] = fl;
   const VertexId id = id_of(s);
   deactivate(s);
-  const auto take = [&](uint32_t*& list, uint32_t child, uint32_t begin, uint32_t end) {
-    for (uint32_t j = begin; j < end; ++j) {
-      corner_[3 * size_t(face[j]) + k[j]] = child;
-      *list++ = face[j];
-    }
-  };
+  // v_t takes faces ia … ib (cyclically), v_u the rest; each list keeps the fan's order with the two new
+  // faces where the fan was cut: t: [ia … ib] fr fl, u: [ib+1 … ia−1] fl fr, each rotated as the old
+  // list was (an open fan starts after its gap).
   const bool wraps = ia > ib;  // v_t's range runs over the list's end
   const uint32_t t_count = wraps ? n - ia + ib + 1 : ib - ia + 1;
-  uint32_t* list = assign_faces(t, t_count + 2);  // may move pool_: one child at a time
-  take(list, t, wraps ? 0 : ia, ib + 1);
-  *list++ = fr;
-  *list++ = fl;
-  if (wraps) take(list, t, ia, n);
-  list = assign_faces(u, n - t_count + 2);
-  take(list, u, wraps ? ib + 1 : 0, ia);
-  *list++ = fl;
-  *list++ = fr;
-  if (!wraps) take(list, u, ib + 1, n);
+  assign_faces(t, t_count + 2);  // may move pool_: the lists are read once both are assigned
+  assign_faces(u, n - t_count + 2);
+  uint32_t* const lists[2] = {faces_of(vertex_[u]), faces_of(vertex_[t])};
+  // Face i goes to i − shift in its child's list, one shift before the new faces' place and one after
+  // (unsigned: a shift may be "negative"). One loop without branches: separate loops over the ranges,
+  // whose lengths are the view's, each mispredicted its exit.
+  const uint32_t gap[2] = {wraps ? n : ia, wraps ? ib + 1 : n};
+  const uint32_t shift[2][2] = {{t_count - 2, wraps ? ib + 1 : 0}, {ia - ib - 3, wraps ? 0 : ia}};
+  const uint32_t child[2] = {u, t}, lo = wraps ? ib + 1 : ia, hi = wraps ? ia : ib + 1;
+  for (uint32_t i = 0; i < n; ++i) {
+    const uint32_t to_t = uint32_t((i >= lo) & (i < hi)) ^ uint32_t(wraps);
+    lists[to_t][i - shift[to_t][i < gap[to_t]]] = face[i];
+    corner_[3 * size_t(face[i]) + k[i]] = child[to_t];
+  }
+  lists[1][wraps ? ib + 1 : t_count] = fr;
+  lists[1][wraps ? ib + 2 : t_count + 1] = fl;
+  lists[0][wraps ? n - t_count : ia] = fl;
+  lists[0][wraps ? n - t_count + 1 : ia + 1] = fr;
   // Around v_l, f_l = (l, t, u) follows (l, ·, t), which was (s, l, ·); around v_r, f_r = (r, u, t)
   // comes before (r, t, ·), which was (s, ·, r).
   insert_face(l, fl, face[ia], true);
