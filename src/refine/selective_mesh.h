@@ -150,6 +150,7 @@ class SelectiveMesh {
   void append_face(uint32_t v, uint32_t f);
   // f into v's list right after (or before) the face `anchor`, which the list holds.
   void insert_face(uint32_t v, uint32_t f, uint32_t anchor, bool after);
+  static bool insert_inline_face(VertexRecord& record, uint32_t f, uint32_t anchor, bool after);
   void remove_face(uint32_t v, uint32_t f);  // keeps the others' order
   void activate(uint32_t v, VertexId id);
   void deactivate(uint32_t v);
