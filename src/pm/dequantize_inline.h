@@ -52,14 +52,20 @@ inline float decode_cone_angle(uint16_t units) {
   return units == kNoCone ? std::numbers::pi_v<float> : float(units * kConeUnit);
 }
 
-inline RefineBounds dequantize_refine_inline(const RefineInfo& info, float scale) {
+// With `effective` = effective_scale(scale), worked out once by a caller that decodes many nodes of one
+// model (the adaptation loop): the same bits as dequantize_refine_inline.
+inline RefineBounds dequantize_refine_scaled(const RefineInfo& info, float effective) {
   RefineBounds b;
-  b.radius = decode_length(info.radius, scale);
-  b.mu = decode_length(info.mu, scale);
-  b.delta = decode_length(info.delta, scale);
+  b.radius = float_from_half(info.radius) * effective;
+  b.mu = float_from_half(info.mu) * effective;
+  b.delta = float_from_half(info.delta) * effective;
   decode_axis(info.cone_x, info.cone_y, b.axis);
   b.cone_angle = decode_cone_angle(info.cone_angle);
   return b;
+}
+
+inline RefineBounds dequantize_refine_inline(const RefineInfo& info, float scale) {
+  return dequantize_refine_scaled(info, effective_scale(scale));
 }
 
 }  // namespace pms::dequantize_detail

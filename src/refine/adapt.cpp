@@ -52,7 +52,7 @@ uint32_t new_stamp() {
 }  // namespace
 
 SelectiveRefinement::SelectiveRefinement(SelectiveMesh& mesh, float model_scale, const AdaptOptions& options)
-    : mesh_(&mesh), scale_(model_scale), stamp_(new_stamp()), synced_(mesh.hierarchy().size()) {
+    : mesh_(&mesh), scale_(dequantize_detail::effective_scale(model_scale)), stamp_(new_stamp()), synced_(mesh.hierarchy().size()) {
   static_assert(sizeof(Slot) == 64);
   // The roots' common parent for walk_qrefine's bounds: the mean of their positions (any point would
   // do; a central one lets a view that holds the whole model skip the roots' planes too).

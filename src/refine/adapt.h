@@ -125,7 +125,7 @@ class SelectiveRefinement {
   bool cap_reached(const FrameStats& stats) const { return options_.max_ops && stats.ops() >= options_.max_ops; }
 
   SelectiveMesh* mesh_;
-  float scale_;
+  float scale_;  // the model's, as the decoder applies it (dequantize_detail::effective_scale)
   AdaptOptions options_;
   ViewParams view_params_;
   ViewCriteria view_;

@@ -38,19 +38,16 @@ NodeCriteria node_criteria(const float position[3], const RefineBounds& bounds) 
 
 namespace criteria_detail {
 
-const ConeTrig& cone_trig(uint16_t units) {
-  static const std::vector<ConeTrig> table = [] {
-    std::vector<ConeTrig> trig(kConeSteps + 1);
-    const float origin[3] = {0, 0, 0};
-    RefineInfo info{};
-    for (uint32_t u = 0; u <= kConeSteps; ++u) {
-      info.cone_angle = uint16_t(u);
-      const NodeCriteria n = node_criteria(origin, dequantize_refine(info, 1));
-      trig[u] = {n.cos_a, n.sin_a};
-    }
-    return trig;
-  }();
-  return table[units];
+std::vector<ConeTrig> cone_trig_table() {
+  std::vector<ConeTrig> trig(kConeSteps + 1);
+  const float origin[3] = {0, 0, 0};
+  RefineInfo info{};
+  for (uint32_t u = 0; u <= kConeSteps; ++u) {
+    info.cone_angle = uint16_t(u);
+    const NodeCriteria n = node_criteria(origin, dequantize_refine(info, 1));
+    trig[u] = {n.cos_a, n.sin_a};
+  }
+  return trig;
 }
 
 }  // namespace criteria_detail

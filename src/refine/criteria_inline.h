@@ -5,6 +5,7 @@
 #pragma once
 #include <algorithm>
 #include <cmath>
+#include <vector>
 
 #include "pm/dequantize_inline.h"
 #include "refine/criteria.h"
@@ -34,12 +35,17 @@ inline NodeCriteria node_criteria_without_cone(const float position[3], const Re
 struct ConeTrig {
   float cos_a, sin_a;
 };
-const ConeTrig& cone_trig(uint16_t units);
+std::vector<ConeTrig> cone_trig_table();  // kConeSteps + 1 entries
+inline const ConeTrig& cone_trig(uint16_t units) {
+  static const std::vector<ConeTrig> table = cone_trig_table();
+  return table[units];
+}
 
 // node_criteria(position, dequantize_refine(info, scale)), for the adaptation loop, which decodes a
-// node when its walk first reaches it: inline, and with the cone's cosine and sine looked up.
-inline NodeCriteria node_criteria_inline(const float position[3], const RefineInfo& info, float scale) {
-  const RefineBounds bounds = dequantize_detail::dequantize_refine_inline(info, scale);
+// node when its walk first reaches it: inline, with the cone's cosine and sine looked up, and given
+// `effective` = dequantize_detail::effective_scale(scale), which the loop works out once.
+inline NodeCriteria node_criteria_inline(const float position[3], const RefineInfo& info, float effective) {
+  const RefineBounds bounds = dequantize_detail::dequantize_refine_scaled(info, effective);
   if (info.cone_angle > kConeSteps) return node_criteria(position, bounds);  // no cone, or not canonical
   NodeCriteria n = node_criteria_without_cone(position, bounds);
   const ConeTrig& trig = cone_trig(info.cone_angle);
