@@ -18,10 +18,12 @@
 #include <algorithm>
 #include <bit>
 #include <cmath>
+#include <cstdlib>
 #include <string>
 
 #include "common/error.h"
 #include "pm/nested_info.h"
+#include "pm/octahedral_normal.h"
 #include "pm/position_grid.h"
 
 namespace pms {
@@ -72,8 +74,19 @@ constexpr uint32_t kSlotMu = kSlotRadius + 2 * kFlagContexts + kChainContexts;  
 constexpr uint32_t kSlotDelta = kSlotMu + 2 * kChainContexts;       // [child][mu symbol]
 constexpr uint32_t kSlotAngle = kSlotDelta + 2 * kChainContexts;    // [child][parent has a cone]
 constexpr uint32_t kSlotAxis = kSlotAngle + 4;                      // [child][axis context]
-constexpr uint32_t kSlotCount = kSlotAxis + 2 * kAxisContexts;
-static_assert(kSlotCount == 374, "docs/protocol.md, \"Split records\", gives the count");
+constexpr uint32_t kCoreSlots = kSlotAxis + 2 * kAxisContexts;      // serialized for every model
+static_assert(kCoreSlots == 374, "docs/protocol.md, \"Split records\", gives the count");
+// Attributes of v_t against v_s's; each coordinate's or channel's table after the first by the class of
+// the one before it.
+constexpr uint32_t kAttributeContexts = 64;  // ATTRIBUTE CONTEXT EXPERIMENT
+constexpr uint32_t kNormalClasses = 18;      // bit_width of an octahedral difference up to 2 kOctahedralMax
+constexpr uint32_t kColorClasses = 9;        // bit_width of a channel difference in -128 .. 127
+constexpr uint32_t kSlotNormal = kCoreSlots;                                    // [first: attribute context]
+constexpr uint32_t kSlotNormalSecond = kSlotNormal + kAttributeContexts;        // [class of the first]
+constexpr uint32_t kSlotColor = kSlotNormalSecond + kNormalClasses;             // [red: attribute context]
+constexpr uint32_t kSlotColorNext = kSlotColor + kAttributeContexts;            // [channel 1..3][class of the one before]
+constexpr uint32_t kSlotCount = kSlotColorNext + 3 * kColorClasses;
+constexpr uint8_t kHasNormals = 1, kHasColors = 2;
 
 uint32_t alphabet(uint32_t slot) {
   if (slot < kSlotCutUp) return kRefSymbols;
@@ -82,11 +95,11 @@ uint32_t alphabet(uint32_t slot) {
   if (slot >= kSlotInfoFlags && slot < kSlotRadius) return 4;
   if (slot >= kSlotRadius && slot < kSlotAngle) return kEntrySymbols;
   if (slot >= kSlotAngle && slot < kSlotAxis) return kEntrySymbols + 1;
-  if (slot >= kSlotAxis) return kIntSymbols + 1;
+  if (slot >= kSlotAxis && slot < kCoreSlots) return kIntSymbols + 1;
   return kIntSymbols;
 }
 
-enum Part { topology, geometry, refinement };
+enum Part { topology, geometry, refinement, attributes };
 
 uint32_t tree_bits(uint32_t root_count) { return root_count <= 1 ? 1 : uint32_t(std::bit_width(root_count - 1)); }
 
@@ -154,7 +167,7 @@ struct Writing {
     add(part, n);
   }
   void add(Part part, uint64_t n) {
-    (part == topology ? bits.topology : part == geometry ? bits.geometry : bits.refinement) += n;
+    (part == topology ? bits.topology : part == geometry ? bits.geometry : part == refinement ? bits.refinement : bits.attributes) += n;
   }
 };
 
@@ -338,6 +351,51 @@ int64_t axis_origin(const RefineInfo& s, const RefineInfo* t, const RefineInfo& 
 }
 bool on_coarse_grid(const RefineInfo& v) { return int16_t(v.cone_x) % kAxisSnap == 0 && int16_t(v.cone_y) % kAxisSnap == 0; }
 
+// v_t's attributes move from v_s's by more the longer the edge between them and the coarser the split.
+uint32_t attribute_context(const SplitContext& c, uint32_t max_depth, const int64_t d[3]) {
+  static const int kind = std::getenv("PMS_ATTR_CTX") ? std::atoi(std::getenv("PMS_ATTR_CTX")) : 0;  // EXPERIMENT
+  if (kind == 1) return std::min<uint32_t>(uint32_t(std::max(0, int(max_depth) - c.vs.depth())), kCutHeights - 1);
+  if (kind == 2) return position_class(c);
+  if (kind == 3) return 0;
+  const uint64_t largest = uint64_t(std::max({std::abs(d[0]), std::abs(d[1]), std::abs(d[2])}));
+  return std::min<uint32_t>(uint32_t(std::bit_width(largest)), kSizeClasses - 1);
+}
+uint32_t size_class(uint32_t int_sym, uint32_t classes) { return std::min((int_sym + 1) / 2, classes - 1); }
+
+// The octahedral square (pm/octahedral_normal.h) tiles the plane mirrored: beyond the edge x = M lies
+// (M + e, y) = (M - e, -y), and likewise past the other three edges. A step from v_s's normal to v_t's that
+// crosses an edge is short to v_t's copy beyond it, and the decoder folds a point outside the square back.
+constexpr int64_t kOctMax = kOctahedralMax;
+int64_t octahedral(uint16_t q) { return int16_t(q); }
+uint32_t step_bits(int64_t dx, int64_t dy) {
+  return uint32_t(std::bit_width(uint64_t(std::abs(dx)))) + uint32_t(std::bit_width(uint64_t(std::abs(dy))));
+}
+void normal_step(const uint16_t s[2], const uint16_t t[2], int64_t d[2]) {
+  static const bool fold = !std::getenv("PMS_NO_FOLD");  // EXPERIMENT
+  const int64_t xs = octahedral(s[0]), ys = octahedral(s[1]), xt = octahedral(t[0]), yt = octahedral(t[1]);
+  // v_t itself, then its copies beyond the right, left, top and bottom edges; a copy counts only strictly
+  // outside the square (on an edge it would be v_t's mirror image, another normal).
+  const int64_t copies[5][2] = {{xt, yt}, {2 * kOctMax - xt, -yt}, {-2 * kOctMax - xt, -yt}, {-xt, 2 * kOctMax - yt}, {-xt, -2 * kOctMax - yt}};
+  const bool outside[5] = {true, xt < kOctMax, xt > -kOctMax, yt < kOctMax, yt > -kOctMax};
+  d[0] = xt - xs, d[1] = yt - ys;
+  for (int i = 1; i < 5 && fold; ++i)
+    if (outside[i] && step_bits(copies[i][0] - xs, copies[i][1] - ys) < step_bits(d[0], d[1]))
+      d[0] = copies[i][0] - xs, d[1] = copies[i][1] - ys;
+}
+// v_t's normal from v_s's and the step; false when the step leads outside the square and its copies.
+bool unfold_normal(const uint16_t s[2], const int64_t d[2], uint16_t t[2]) {
+  int64_t x = octahedral(s[0]) + d[0], y = octahedral(s[1]) + d[1];
+  if (x > kOctMax) x = 2 * kOctMax - x, y = -y;
+  else if (x < -kOctMax) x = -2 * kOctMax - x, y = -y;
+  else if (y > kOctMax) y = 2 * kOctMax - y, x = -x;
+  else if (y < -kOctMax) y = -2 * kOctMax - y, x = -x;
+  if (std::abs(x) > kOctMax || std::abs(y) > kOctMax) return false;
+  t[0] = uint16_t(int16_t(x)), t[1] = uint16_t(int16_t(y));
+  return true;
+}
+// A channel's difference modulo 256, centred.
+int64_t color_step(uint8_t s, uint8_t t) { return int8_t(uint8_t(t - s)); }
+
 }  // namespace
 
 template <class Out> void SplitCodec::emit(const SplitContext& c, const SplitPayload& p, Out& out) const {
@@ -402,6 +460,7 @@ template <class Out> void SplitCodec::emit(const SplitContext& c, const SplitPay
     const uint32_t sym = put_int(out, position_slot(c, frame, index, classes, d), d[axis] - predicted, geometry);
     classes[index] = (sym + 1) / 2;
   }
+  const uint32_t scale_class = attribute_context(c, max_depth_, d);
   // Refinement info of v_t and v_u against v_s's.
   const RefineInfo* child[2] = {&p.info_t, &p.info_u};
   for (const RefineInfo* info : child)
@@ -435,6 +494,49 @@ template <class Out> void SplitCodec::emit(const SplitContext& c, const SplitPay
     const RefineInfo* t = k == 1 ? child[0] : nullptr;
     put_int(out, axis_slot, coarse_axis(v.cone_x) - axis_origin(s, t, v, &RefineInfo::cone_x), refinement);
     put_int(out, axis_slot, coarse_axis(v.cone_y) - axis_origin(s, t, v, &RefineInfo::cone_y), refinement);
+  }
+  emit_attributes(c, p, scale_class, out);
+}
+
+template <class Out>
+void SplitCodec::emit_attributes(const SplitContext& c, const SplitPayload& p, uint32_t scale_class, Out& out) const {
+  const auto refuse = [&](const char* what) { fail("split record", "split of " + to_string(c.vs) + ": " + what); };
+  if (has_normals_) {
+    if (!is_canonical_normal(c.normal_s) || !is_canonical_normal(p.normal_t)) refuse("a normal encode_normal does not produce");
+    int64_t d[2];
+    normal_step(c.normal_s, p.normal_t, d);
+    const uint32_t sym = put_int(out, kSlotNormal + scale_class, d[0], attributes);
+    put_int(out, kSlotNormalSecond + size_class(sym, kNormalClasses), d[1], attributes);
+  } else if (p.normal_t[0] || p.normal_t[1]) {
+    refuse("a normal in a model without normals");
+  }
+  if (has_colors_) {
+    uint32_t slot = kSlotColor + scale_class;
+    for (uint32_t channel = 0; channel < 4; ++channel) {
+      const uint32_t sym = put_int(out, slot, color_step(c.color_s[channel], p.color_t[channel]), attributes);
+      slot = kSlotColorNext + channel * kColorClasses + size_class(sym, kColorClasses);
+    }
+  } else if (p.color_t[0] || p.color_t[1] || p.color_t[2] || p.color_t[3]) {
+    refuse("a color in a model without colors");
+  }
+}
+
+void SplitCodec::decode_attributes(const SplitContext& c, uint32_t scale_class, BitReader& r, SplitPayload& p) const {
+  if (has_normals_) {
+    const uint32_t first = codes_[kSlotNormal + scale_class].read(r, "normal");
+    const int64_t d[2] = {get_int(first, r, "normal"), get_int(codes_[kSlotNormalSecond + size_class(first, kNormalClasses)].read(r, "normal"), r, "normal")};
+    if (!unfold_normal(c.normal_s, d, p.normal_t)) r.fail_field("normal", "off the octahedral square");
+    if (!is_canonical_normal(p.normal_t)) r.fail_field("normal", "the mirror image of the canonical point on an edge");
+  }
+  if (has_colors_) {
+    uint32_t slot = kSlotColor + scale_class;
+    for (uint32_t channel = 0; channel < 4; ++channel) {
+      const uint32_t sym = codes_[slot].read(r, "color");
+      const int64_t step = get_int(sym, r, "color");
+      if (step < -128 || step > 127) r.fail_field("color", "a step outside -128 .. 127");
+      p.color_t[channel] = uint8_t(c.color_s[channel] + step);
+      slot = kSlotColorNext + channel * kColorClasses + size_class(sym, kColorClasses);
+    }
   }
 }
 
@@ -499,6 +601,7 @@ SplitPayload SplitCodec::decode(const SplitContext& c, BitReader& r) const {
     if (v < 0 || v > top) r.fail_field("position", "outside the grid");
     p.position_t[axis] = uint32_t(v);
   }
+  const uint32_t scale_class = attribute_context(c, max_depth_, d);
   const RefineInfo& s = c.info_s;
   const uint32_t flags = codes_[kSlotInfoFlags + height_context(c, max_depth_)].read(r, "info flags");
   uint32_t t_radius = kNoRadiusSymbol;
@@ -540,6 +643,7 @@ SplitPayload SplitCodec::decode(const SplitContext& c, BitReader& r) const {
     }
     if (!is_canonical(v) || never_refines(v)) r.fail_field(field, "not a value the quantizer produces");
   }
+  decode_attributes(c, scale_class, r, p);
   return p;
 }
 
@@ -552,6 +656,8 @@ SplitCodec SplitCodec::build(const ModelData& model, std::span<const uint32_t> p
   codec.position_bits_ = position_bits;
   codec.steps_ = grid_step_ratios(model);
   codec.grid_step_ = largest_grid_step(model, position_bits);
+  codec.has_normals_ = !model.normals.empty();
+  codec.has_colors_ = !model.colors.empty();
   for (size_t n = 0; n < model.node_count(); ++n) codec.max_depth_ = std::max<uint32_t>(codec.max_depth_, uint32_t(model.id(uint32_t(n)).depth()));
   // Two fits: the first chooses references by their rest alone, the second by the first fit's costs.
   for (int pass = 0; pass < 2; ++pass) {
@@ -569,6 +675,11 @@ SplitCodec SplitCodec::build(const ModelData& model, std::span<const uint32_t> p
   return codec;
 }
 
+bool SplitCodec::carried(uint32_t slot) const {
+  if (slot < kCoreSlots) return true;
+  return slot < kSlotColor ? has_normals_ : has_colors_;
+}
+
 void SplitCodec::serialize(BitWriter& w) const {
   if (codes_.size() != kSlotCount) fail("split record", "the codec has no tables");
   w.bits(root_count_, 32);
@@ -576,7 +687,9 @@ void SplitCodec::serialize(BitWriter& w) const {
   w.bits(position_bits_, 8);
   for (uint16_t step : steps_) w.bits(step, 16);
   w.bits(std::bit_cast<uint32_t>(grid_step_), 32);
-  for (const PrefixCode& code : codes_) code.serialize(w);
+  w.bits((has_normals_ ? kHasNormals : 0) | (has_colors_ ? kHasColors : 0), 8);
+  for (uint32_t slot = 0; slot < kSlotCount; ++slot)
+    if (carried(slot)) codes_[slot].serialize(w);
 }
 
 SplitCodec SplitCodec::deserialize(BitReader& r) {
@@ -590,15 +703,32 @@ SplitCodec SplitCodec::deserialize(BitReader& r) {
   if (codec.root_count_ == 0) r.fail_field("root count", "0");
   if (codec.max_depth_ > 63) r.fail_field("max depth", "above 63");
   if (codec.position_bits_ < 1 || codec.position_bits_ > 32) r.fail_field("position bits", "outside 1..32");
-  for (uint32_t s = 0; s < kSlotCount; ++s) codec.codes_.push_back(PrefixCode::deserialize(r, alphabet(s), "code table"));
+  const auto attributes = uint32_t(r.bits(8, "attributes"));
+  if (attributes & ~uint32_t(kHasNormals | kHasColors)) r.fail_field("attributes", "unknown bits set");
+  codec.has_normals_ = attributes & kHasNormals;
+  codec.has_colors_ = attributes & kHasColors;
+  codec.codes_.resize(kSlotCount);
+  for (uint32_t s = 0; s < kSlotCount; ++s)
+    if (codec.carried(s)) codec.codes_[s] = PrefixCode::deserialize(r, alphabet(s), "code table");
   return codec;
 }
+
+namespace {
+
+// A node's normal as the wire quantizes it and its color; zeros for what the model lacks.
+void copy_attributes(const ModelData& model, uint32_t node, uint16_t normal[2], uint8_t color[4]) {
+  if (!model.normals.empty()) encode_normal(&model.normals[3 * size_t(node)], normal);
+  if (!model.colors.empty()) std::copy_n(&model.colors[4 * size_t(node)], 4, color);
+}
+
+}  // namespace
 
 SplitContext split_context(const ModelData& model, std::span<const uint32_t> positions, uint32_t node) {
   SplitContext c;
   c.vs = model.id(node);
   std::copy_n(&positions[3 * size_t(node)], 3, c.position_s);
   c.info_s = as_sent(model.refine[node]);
+  copy_attributes(model, node, c.normal_s, c.color_s);
   uint32_t n = node;
   for (int i = 0; i < kCutAncestors; ++i) {
     n = model.parent[n];
@@ -620,6 +750,7 @@ SplitPayload split_payload(const ModelData& model, std::span<const uint32_t> pos
   std::copy_n(&positions[3 * size_t(t)], 3, p.position_t);
   p.info_t = as_sent(model.refine[t]);
   p.info_u = as_sent(model.refine[t + 1]);
+  copy_attributes(model, t, p.normal_t, p.color_t);
   return p;
 }
 
@@ -681,6 +812,8 @@ SplitCodec check_records(const std::string& where, const ModelData& model, std::
   for (uint64_t id : model.node_id) depth = std::max(depth, uint32_t(63 - std::countl_zero(id)));
   if (codec.root_count() != model.root_count || codec.max_depth() != depth || !valid_position_bits(codec.position_bits()))
     fail(where, "split tables: root count, depth or position bits do not match the model");
+  if (codec.has_normals() != !model.normals.empty() || codec.has_colors() != !model.colors.empty())
+    fail(where, "split tables: the normals and colors they carry are not the model's");
   const size_t n = model.node_count();
   if (offsets.size() != n + 1) fail(where, "split record offsets: not one per node plus one");
   const uint64_t bits = 8 * uint64_t(records.size());

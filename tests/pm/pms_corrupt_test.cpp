@@ -179,13 +179,13 @@ TEST(PmsCorrupt, WrongMagicAndNewerVersion) {
   f.bytes[0] = 'X';
   expect_error(f, "header: ", "not a .pms file");
   f = small();
-  store<uint32_t>(f.bytes, kVersionAt, 6);
+  store<uint32_t>(f.bytes, kVersionAt, 7);
   f.fix_checksums();
-  EXPECT_EQ(f.error(), "header: unsupported version 6 (this build reads 5)");
+  EXPECT_EQ(f.error(), "header: unsupported version 7 (this build reads 6)");
   f = small();
-  store<uint32_t>(f.bytes, kVersionAt, 4);
+  store<uint32_t>(f.bytes, kVersionAt, 5);
   f.fix_checksums();
-  EXPECT_EQ(f.error(), "header: unsupported version 4 (this build reads 5; rebuild the file with this pmstream)");
+  EXPECT_EQ(f.error(), "header: unsupported version 5 (this build reads 6; rebuild the file with this pmstream)");
 }
 
 TEST(PmsCorrupt, AbsurdNodeCountInHead) {

@@ -78,11 +78,13 @@ void fly_and_compare(const Fixture& f, const std::vector<Camera>& path) {
   PricingTransport& priced = *pricing;
   client::StreamingClient client(std::move(pricing), client::ClientOptions{1.0f});
   client.open(f.name);
-  ASSERT_TRUE(client.session().context().records) << "a model without normals and colors streams split records";
+  ASSERT_TRUE(client.session().context().records) << "every model streams split records";
   for (const Camera& camera : path) {
     const client::FrameReport r = client.frame(camera);
     ASSERT_EQ(test::faces_by_id(client.session().mesh()), test::local_faces(f.snapped, camera, 1.0f))
         << "frame " << r.frame << " differs from local refinement";
+    ASSERT_EQ(test::vertices_by_id(client.session().mesh()), test::local_vertices(f.snapped, camera, 1.0f))
+        << "frame " << r.frame << ": positions, normals or colors differ from local refinement's";
   }
   ASSERT_GT(priced.splits, 0u);
   EXPECT_LT(priced.vsplits_bytes + priced.codec_bytes, priced.v3_bytes);
@@ -108,6 +110,20 @@ TEST(SenderDrivenRecords, BunnyFlightGivesLocalRefinementsMeshesForFewerBytes) {
   clean_mesh(mesh);
   const Fixture f = test::make_fixture(mesh, "bunny");
   fly_and_compare(f, test::orbit_path(f.hierarchy, 8, 0.0f));
+}
+
+TEST(SenderDrivenRecords, AModelWithNormalsAndColorsGivesLocalRefinementsValues) {
+  const Fixture& f = test::attributed_terrain();
+  fly_and_compare(f, test::orbit_path(f.hierarchy, 8, 0.1f));
+}
+
+TEST(SenderDrivenRecords, HorseFlightCarriesItsNormals) {
+  PMS_REQUIRE_SHARED_MODEL(file, "horse.ply.xz");
+  Mesh mesh = load_mesh(file.string());
+  clean_mesh(mesh);
+  ASSERT_TRUE(mesh.has_normals());
+  const Fixture f = test::make_fixture(mesh, "horse");
+  fly_and_compare(f, test::orbit_path(f.hierarchy, 6, 0.0f));
 }
 
 // A server that says what it was given to say: HELLO_OK, BASE, CODEC, then the VSPLITS answers.
