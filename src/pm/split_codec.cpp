@@ -18,7 +18,6 @@
 #include <algorithm>
 #include <bit>
 #include <cmath>
-#include <cstdlib>
 #include <string>
 
 #include "common/error.h"
@@ -76,15 +75,15 @@ constexpr uint32_t kSlotAngle = kSlotDelta + 2 * kChainContexts;    // [child][p
 constexpr uint32_t kSlotAxis = kSlotAngle + 4;                      // [child][axis context]
 constexpr uint32_t kCoreSlots = kSlotAxis + 2 * kAxisContexts;      // serialized for every model
 static_assert(kCoreSlots == 374, "docs/protocol.md, \"Split records\", gives the count");
-// Attributes of v_t against v_s's; each coordinate's or channel's table after the first by the class of
-// the one before it.
-constexpr uint32_t kAttributeContexts = 64;  // ATTRIBUTE CONTEXT EXPERIMENT
-constexpr uint32_t kNormalClasses = 18;      // bit_width of an octahedral difference up to 2 kOctahedralMax
-constexpr uint32_t kColorClasses = 9;        // bit_width of a channel difference in -128 .. 127
-constexpr uint32_t kSlotNormal = kCoreSlots;                                    // [first: attribute context]
-constexpr uint32_t kSlotNormalSecond = kSlotNormal + kAttributeContexts;        // [class of the first]
-constexpr uint32_t kSlotColor = kSlotNormalSecond + kNormalClasses;             // [red: attribute context]
-constexpr uint32_t kSlotColorNext = kSlotColor + kAttributeContexts;            // [channel 1..3][class of the one before]
+// Attributes of v_t against an origin the client holds; the first value's table by the size of the step
+// (the edge's magnitude class, or v_t's cone angle class), each later one's by the class of the one before.
+constexpr uint32_t kConeClasses = 11;    // bit_width of a cone angle, 0 .. 1022
+constexpr uint32_t kNormalClasses = 18;  // bit_width of an octahedral difference up to 2 kOctahedralMax
+constexpr uint32_t kColorClasses = 9;    // bit_width of a channel difference in -128 .. 127
+constexpr uint32_t kSlotNormal = kCoreSlots;                                       // [edge class; cone class]
+constexpr uint32_t kSlotNormalSecond = kSlotNormal + kSizeClasses + kConeClasses;  // [class of the first]
+constexpr uint32_t kSlotColor = kSlotNormalSecond + kNormalClasses;                // [red: edge class]
+constexpr uint32_t kSlotColorNext = kSlotColor + kSizeClasses;                     // [channel 1..3][class of the one before]
 constexpr uint32_t kSlotCount = kSlotColorNext + 3 * kColorClasses;
 constexpr uint8_t kHasNormals = 1, kHasColors = 2;
 
@@ -351,12 +350,8 @@ int64_t axis_origin(const RefineInfo& s, const RefineInfo* t, const RefineInfo& 
 }
 bool on_coarse_grid(const RefineInfo& v) { return int16_t(v.cone_x) % kAxisSnap == 0 && int16_t(v.cone_y) % kAxisSnap == 0; }
 
-// v_t's attributes move from v_s's by more the longer the edge between them and the coarser the split.
-uint32_t attribute_context(const SplitContext& c, uint32_t max_depth, const int64_t d[3]) {
-  static const int kind = std::getenv("PMS_ATTR_CTX") ? std::atoi(std::getenv("PMS_ATTR_CTX")) : 0;  // EXPERIMENT
-  if (kind == 1) return std::min<uint32_t>(uint32_t(std::max(0, int(max_depth) - c.vs.depth())), kCutHeights - 1);
-  if (kind == 2) return position_class(c);
-  if (kind == 3) return 0;
+// v_t's attributes move from v_s's by more the longer the edge between them (v_t - v_s on the grid).
+uint32_t edge_class(const int64_t d[3]) {
   const uint64_t largest = uint64_t(std::max({std::abs(d[0]), std::abs(d[1]), std::abs(d[2])}));
   return std::min<uint32_t>(uint32_t(std::bit_width(largest)), kSizeClasses - 1);
 }
@@ -371,14 +366,13 @@ uint32_t step_bits(int64_t dx, int64_t dy) {
   return uint32_t(std::bit_width(uint64_t(std::abs(dx)))) + uint32_t(std::bit_width(uint64_t(std::abs(dy))));
 }
 void normal_step(const uint16_t s[2], const uint16_t t[2], int64_t d[2]) {
-  static const bool fold = !std::getenv("PMS_NO_FOLD");  // EXPERIMENT
   const int64_t xs = octahedral(s[0]), ys = octahedral(s[1]), xt = octahedral(t[0]), yt = octahedral(t[1]);
   // v_t itself, then its copies beyond the right, left, top and bottom edges; a copy counts only strictly
   // outside the square (on an edge it would be v_t's mirror image, another normal).
   const int64_t copies[5][2] = {{xt, yt}, {2 * kOctMax - xt, -yt}, {-2 * kOctMax - xt, -yt}, {-xt, 2 * kOctMax - yt}, {-xt, -2 * kOctMax - yt}};
   const bool outside[5] = {true, xt < kOctMax, xt > -kOctMax, yt < kOctMax, yt > -kOctMax};
   d[0] = xt - xs, d[1] = yt - ys;
-  for (int i = 1; i < 5 && fold; ++i)
+  for (int i = 1; i < 5; ++i)
     if (outside[i] && step_bits(copies[i][0] - xs, copies[i][1] - ys) < step_bits(d[0], d[1]))
       d[0] = copies[i][0] - xs, d[1] = copies[i][1] - ys;
 }
@@ -392,6 +386,22 @@ bool unfold_normal(const uint16_t s[2], const int64_t d[2], uint16_t t[2]) {
   if (std::abs(x) > kOctMax || std::abs(y) > kOctMax) return false;
   t[0] = uint16_t(int16_t(x)), t[1] = uint16_t(int16_t(y));
   return true;
+}
+// Where v_t's normal is coded from, and the table's context. v_t's cone axis when it has one: the cone
+// holds the normals of v_t's faces, which its vertex normal averages, and its angle bounds how far off it
+// lies; else v_s's normal, a neighbour's, off by more the longer the edge. The axis is on the same
+// octahedral square in kAxisSteps, scaled (rounded half away from 0).
+uint32_t normal_origin(const SplitContext& c, const SplitPayload& p, uint32_t edge, uint16_t origin[2]) {
+  const RefineInfo& t = p.info_t;
+  if (never_refines(t) || t.cone_angle == kNoCone) {
+    std::copy_n(c.normal_s, 2, origin);
+    return edge;
+  }
+  for (int i = 0; i < 2; ++i) {
+    const int64_t a = int16_t(i == 0 ? t.cone_x : t.cone_y);
+    origin[i] = uint16_t(int16_t((2 * a * kOctMax + (a >= 0 ? kAxisSteps : -kAxisSteps)) / (2 * kAxisSteps)));
+  }
+  return kSizeClasses + std::min<uint32_t>(uint32_t(std::bit_width(uint32_t(t.cone_angle))), kConeClasses - 1);
 }
 // A channel's difference modulo 256, centred.
 int64_t color_step(uint8_t s, uint8_t t) { return int8_t(uint8_t(t - s)); }
@@ -460,7 +470,7 @@ template <class Out> void SplitCodec::emit(const SplitContext& c, const SplitPay
     const uint32_t sym = put_int(out, position_slot(c, frame, index, classes, d), d[axis] - predicted, geometry);
     classes[index] = (sym + 1) / 2;
   }
-  const uint32_t scale_class = attribute_context(c, max_depth_, d);
+  const uint32_t edge = edge_class(d);
   // Refinement info of v_t and v_u against v_s's.
   const RefineInfo* child[2] = {&p.info_t, &p.info_u};
   for (const RefineInfo* info : child)
@@ -495,23 +505,25 @@ template <class Out> void SplitCodec::emit(const SplitContext& c, const SplitPay
     put_int(out, axis_slot, coarse_axis(v.cone_x) - axis_origin(s, t, v, &RefineInfo::cone_x), refinement);
     put_int(out, axis_slot, coarse_axis(v.cone_y) - axis_origin(s, t, v, &RefineInfo::cone_y), refinement);
   }
-  emit_attributes(c, p, scale_class, out);
+  emit_attributes(c, p, edge, out);
 }
 
 template <class Out>
-void SplitCodec::emit_attributes(const SplitContext& c, const SplitPayload& p, uint32_t scale_class, Out& out) const {
+void SplitCodec::emit_attributes(const SplitContext& c, const SplitPayload& p, uint32_t edge, Out& out) const {
   const auto refuse = [&](const char* what) { fail("split record", "split of " + to_string(c.vs) + ": " + what); };
   if (has_normals_) {
     if (!is_canonical_normal(c.normal_s) || !is_canonical_normal(p.normal_t)) refuse("a normal encode_normal does not produce");
     int64_t d[2];
-    normal_step(c.normal_s, p.normal_t, d);
-    const uint32_t sym = put_int(out, kSlotNormal + scale_class, d[0], attributes);
+    uint16_t origin[2];
+    const uint32_t normal_class = normal_origin(c, p, edge, origin);
+    normal_step(origin, p.normal_t, d);
+    const uint32_t sym = put_int(out, kSlotNormal + normal_class, d[0], attributes);
     put_int(out, kSlotNormalSecond + size_class(sym, kNormalClasses), d[1], attributes);
   } else if (p.normal_t[0] || p.normal_t[1]) {
     refuse("a normal in a model without normals");
   }
   if (has_colors_) {
-    uint32_t slot = kSlotColor + scale_class;
+    uint32_t slot = kSlotColor + edge;
     for (uint32_t channel = 0; channel < 4; ++channel) {
       const uint32_t sym = put_int(out, slot, color_step(c.color_s[channel], p.color_t[channel]), attributes);
       slot = kSlotColorNext + channel * kColorClasses + size_class(sym, kColorClasses);
@@ -521,15 +533,17 @@ void SplitCodec::emit_attributes(const SplitContext& c, const SplitPayload& p, u
   }
 }
 
-void SplitCodec::decode_attributes(const SplitContext& c, uint32_t scale_class, BitReader& r, SplitPayload& p) const {
+void SplitCodec::decode_attributes(const SplitContext& c, uint32_t edge, BitReader& r, SplitPayload& p) const {
   if (has_normals_) {
-    const uint32_t first = codes_[kSlotNormal + scale_class].read(r, "normal");
+    uint16_t origin[2];
+    const uint32_t normal_class = normal_origin(c, p, edge, origin);
+    const uint32_t first = codes_[kSlotNormal + normal_class].read(r, "normal");
     const int64_t d[2] = {get_int(first, r, "normal"), get_int(codes_[kSlotNormalSecond + size_class(first, kNormalClasses)].read(r, "normal"), r, "normal")};
-    if (!unfold_normal(c.normal_s, d, p.normal_t)) r.fail_field("normal", "off the octahedral square");
+    if (!unfold_normal(origin, d, p.normal_t)) r.fail_field("normal", "off the octahedral square");
     if (!is_canonical_normal(p.normal_t)) r.fail_field("normal", "the mirror image of the canonical point on an edge");
   }
   if (has_colors_) {
-    uint32_t slot = kSlotColor + scale_class;
+    uint32_t slot = kSlotColor + edge;
     for (uint32_t channel = 0; channel < 4; ++channel) {
       const uint32_t sym = codes_[slot].read(r, "color");
       const int64_t step = get_int(sym, r, "color");
@@ -601,7 +615,7 @@ SplitPayload SplitCodec::decode(const SplitContext& c, BitReader& r) const {
     if (v < 0 || v > top) r.fail_field("position", "outside the grid");
     p.position_t[axis] = uint32_t(v);
   }
-  const uint32_t scale_class = attribute_context(c, max_depth_, d);
+  const uint32_t edge = edge_class(d);
   const RefineInfo& s = c.info_s;
   const uint32_t flags = codes_[kSlotInfoFlags + height_context(c, max_depth_)].read(r, "info flags");
   uint32_t t_radius = kNoRadiusSymbol;
@@ -643,7 +657,7 @@ SplitPayload SplitCodec::decode(const SplitContext& c, BitReader& r) const {
     }
     if (!is_canonical(v) || never_refines(v)) r.fail_field(field, "not a value the quantizer produces");
   }
-  decode_attributes(c, scale_class, r, p);
+  decode_attributes(c, edge, r, p);
   return p;
 }
 

@@ -96,9 +96,9 @@ class SplitCodec {
 
   // Whether the tables of `slot` are serialized: every core slot, an attribute's only when the model has it.
   bool carried(uint32_t slot) const;
-  template <class Out> void emit_attributes(const SplitContext& context, const SplitPayload& payload, uint32_t scale_class,
+  template <class Out> void emit_attributes(const SplitContext& context, const SplitPayload& payload, uint32_t edge,
                                            Out& out) const;
-  void decode_attributes(const SplitContext& context, uint32_t scale_class, BitReader& r, SplitPayload& payload) const;
+  void decode_attributes(const SplitContext& context, uint32_t edge, BitReader& r, SplitPayload& payload) const;
 
   uint32_t root_count_ = 0, max_depth_ = 0, position_bits_ = 0;
   bool has_normals_ = false, has_colors_ = false;
