@@ -18,4 +18,12 @@ void decode_normal(const uint16_t q[2], float n[3]);
 void canonical_normal(uint16_t q[2]);
 bool is_canonical_normal(const uint16_t q[2]);
 
+// The octahedral square tiles the plane mirrored: beyond the edge x = max lies (max + e, y) = (max - e, -y),
+// and likewise past the other three edges. A step between two nearby normals across an edge is short to
+// the copy beyond it. `octahedral_step` gives the step from `from` to `to` (both canonical) with the fewest
+// magnitude bits, to `to` or to a copy strictly outside the square; `octahedral_unstep` folds the end of a
+// step back onto the square, false when it lies off the square and its four copies.
+void octahedral_step(const uint16_t from[2], const uint16_t to[2], int64_t d[2]);
+bool octahedral_unstep(const uint16_t from[2], const int64_t d[2], uint16_t to[2]);
+
 }  // namespace pms

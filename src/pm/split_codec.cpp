@@ -357,36 +357,6 @@ uint32_t edge_class(const int64_t d[3]) {
 }
 uint32_t size_class(uint32_t int_sym, uint32_t classes) { return std::min((int_sym + 1) / 2, classes - 1); }
 
-// The octahedral square (pm/octahedral_normal.h) tiles the plane mirrored: beyond the edge x = M lies
-// (M + e, y) = (M - e, -y), and likewise past the other three edges. A step from v_s's normal to v_t's that
-// crosses an edge is short to v_t's copy beyond it, and the decoder folds a point outside the square back.
-constexpr int64_t kOctMax = kOctahedralMax;
-int64_t octahedral(uint16_t q) { return int16_t(q); }
-uint32_t step_bits(int64_t dx, int64_t dy) {
-  return uint32_t(std::bit_width(uint64_t(std::abs(dx)))) + uint32_t(std::bit_width(uint64_t(std::abs(dy))));
-}
-void normal_step(const uint16_t s[2], const uint16_t t[2], int64_t d[2]) {
-  const int64_t xs = octahedral(s[0]), ys = octahedral(s[1]), xt = octahedral(t[0]), yt = octahedral(t[1]);
-  // v_t itself, then its copies beyond the right, left, top and bottom edges; a copy counts only strictly
-  // outside the square (on an edge it would be v_t's mirror image, another normal).
-  const int64_t copies[5][2] = {{xt, yt}, {2 * kOctMax - xt, -yt}, {-2 * kOctMax - xt, -yt}, {-xt, 2 * kOctMax - yt}, {-xt, -2 * kOctMax - yt}};
-  const bool outside[5] = {true, xt < kOctMax, xt > -kOctMax, yt < kOctMax, yt > -kOctMax};
-  d[0] = xt - xs, d[1] = yt - ys;
-  for (int i = 1; i < 5; ++i)
-    if (outside[i] && step_bits(copies[i][0] - xs, copies[i][1] - ys) < step_bits(d[0], d[1]))
-      d[0] = copies[i][0] - xs, d[1] = copies[i][1] - ys;
-}
-// v_t's normal from v_s's and the step; false when the step leads outside the square and its copies.
-bool unfold_normal(const uint16_t s[2], const int64_t d[2], uint16_t t[2]) {
-  int64_t x = octahedral(s[0]) + d[0], y = octahedral(s[1]) + d[1];
-  if (x > kOctMax) x = 2 * kOctMax - x, y = -y;
-  else if (x < -kOctMax) x = -2 * kOctMax - x, y = -y;
-  else if (y > kOctMax) y = 2 * kOctMax - y, x = -x;
-  else if (y < -kOctMax) y = -2 * kOctMax - y, x = -x;
-  if (std::abs(x) > kOctMax || std::abs(y) > kOctMax) return false;
-  t[0] = uint16_t(int16_t(x)), t[1] = uint16_t(int16_t(y));
-  return true;
-}
 // Where v_t's normal is coded from, and the table's context. v_t's cone axis when it has one: the cone
 // holds the normals of v_t's faces, which its vertex normal averages, and its angle bounds how far off it
 // lies; else v_s's normal, a neighbour's, off by more the longer the edge. The axis is on the same
@@ -399,7 +369,7 @@ uint32_t normal_origin(const SplitContext& c, const SplitPayload& p, uint32_t ed
   }
   for (int i = 0; i < 2; ++i) {
     const int64_t a = int16_t(i == 0 ? t.cone_x : t.cone_y);
-    origin[i] = uint16_t(int16_t((2 * a * kOctMax + (a >= 0 ? kAxisSteps : -kAxisSteps)) / (2 * kAxisSteps)));
+    origin[i] = uint16_t(int16_t((2 * a * kOctahedralMax + (a >= 0 ? kAxisSteps : -kAxisSteps)) / (2 * kAxisSteps)));
   }
   return kSizeClasses + std::min<uint32_t>(uint32_t(std::bit_width(uint32_t(t.cone_angle))), kConeClasses - 1);
 }
@@ -516,7 +486,7 @@ void SplitCodec::emit_attributes(const SplitContext& c, const SplitPayload& p, u
     int64_t d[2];
     uint16_t origin[2];
     const uint32_t normal_class = normal_origin(c, p, edge, origin);
-    normal_step(origin, p.normal_t, d);
+    octahedral_step(origin, p.normal_t, d);
     const uint32_t sym = put_int(out, kSlotNormal + normal_class, d[0], attributes);
     put_int(out, kSlotNormalSecond + size_class(sym, kNormalClasses), d[1], attributes);
   } else if (p.normal_t[0] || p.normal_t[1]) {
@@ -539,7 +509,7 @@ void SplitCodec::decode_attributes(const SplitContext& c, uint32_t edge, BitRead
     const uint32_t normal_class = normal_origin(c, p, edge, origin);
     const uint32_t first = codes_[kSlotNormal + normal_class].read(r, "normal");
     const int64_t d[2] = {get_int(first, r, "normal"), get_int(codes_[kSlotNormalSecond + size_class(first, kNormalClasses)].read(r, "normal"), r, "normal")};
-    if (!unfold_normal(origin, d, p.normal_t)) r.fail_field("normal", "off the octahedral square");
+    if (!octahedral_unstep(origin, d, p.normal_t)) r.fail_field("normal", "off the octahedral square");
     if (!is_canonical_normal(p.normal_t)) r.fail_field("normal", "the mirror image of the canonical point on an edge");
   }
   if (has_colors_) {

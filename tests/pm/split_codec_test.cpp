@@ -33,15 +33,15 @@ Hierarchy test_forest() {
   return h;
 }
 
-// The forest, its grid positions and its codec, made once.
+// A forest, its grid positions and its codec.
 struct Forest {
-  Hierarchy h = test_forest();
+  Hierarchy h;
   ModelData model = model_of(h);
   std::vector<uint32_t> q = grid_positions(model, 16);
   SplitCodec codec = SplitCodec::build(model, q, 16);
 };
 const Forest& forest() {
-  static const Forest f;
+  static const Forest f{test_forest()};
   return f;
 }
 
@@ -183,28 +183,22 @@ TEST(SplitCodec, RefusesWhatItCannotCarry) {
 
 // The forest with a normal and a color per node: normals all over the sphere (both hemispheres, so steps
 // cross the octahedral square's edges), smooth colors with an alpha that jumps.
-struct AttributedForest {
-  Hierarchy h = [] {
-    Hierarchy f = test_forest();
-    const size_t n = f.node_count();
-    f.normals.resize(3 * n);
-    f.colors.resize(4 * n);
-    for (size_t v = 0; v < n; ++v) {
-      const float* p = &f.position[3 * v];
-      const float normal[3] = {std::sin(7 * p[0] + 1), std::cos(5 * p[1]), std::sin(3 * p[2] - p[0])};
-      const float length = std::sqrt(normal[0] * normal[0] + normal[1] * normal[1] + normal[2] * normal[2]);
-      for (int k = 0; k < 3; ++k) f.normals[3 * v + size_t(k)] = normal[k] / length;
-      for (int k = 0; k < 3; ++k) f.colors[4 * v + size_t(k)] = uint8_t(128 + 127 * std::sin(float(k + 2) * p[k]));
-      f.colors[4 * v + 3] = uint8_t(v % 5 ? 255 : 0);
-    }
-    return f;
-  }();
-  ModelData model = model_of(h);
-  std::vector<uint32_t> q = grid_positions(model, 16);
-  SplitCodec codec = SplitCodec::build(model, q, 16);
-};
-const AttributedForest& attributed_forest() {
-  static const AttributedForest f;
+Hierarchy with_attributes(Hierarchy f) {
+  const size_t n = f.node_count();
+  f.normals.resize(3 * n);
+  f.colors.resize(4 * n);
+  for (size_t v = 0; v < n; ++v) {
+    const float* p = &f.position[3 * v];
+    const float normal[3] = {std::sin(7 * p[0] + 1), std::cos(5 * p[1]), std::sin(3 * p[2] - p[0])};
+    const float length = std::sqrt(normal[0] * normal[0] + normal[1] * normal[1] + normal[2] * normal[2]);
+    for (int k = 0; k < 3; ++k) f.normals[3 * v + size_t(k)] = normal[k] / length;
+    for (int k = 0; k < 3; ++k) f.colors[4 * v + size_t(k)] = uint8_t(128 + 127 * std::sin(float(k + 2) * p[k]));
+    f.colors[4 * v + 3] = uint8_t(v % 5 ? 255 : 0);
+  }
+  return f;
+}
+const Forest& attributed_forest() {
+  static const Forest f{with_attributes(test_forest())};
   return f;
 }
 
