@@ -76,12 +76,13 @@ constexpr uint32_t kSlotAxis = kSlotAngle + 4;                      // [child][a
 constexpr uint32_t kCoreSlots = kSlotAxis + 2 * kAxisContexts;      // serialized for every model
 static_assert(kCoreSlots == 374, "docs/protocol.md, \"Split records\", gives the count");
 // Attributes of v_t against an origin the client holds; the first value's table by the size of the step
-// (the edge's magnitude class, or v_t's cone angle class), each later one's by the class of the one before.
+// (the edge's magnitude class, or the cone angle class of the origin), each later one's by the class of the
+// one before.
 constexpr uint32_t kConeClasses = 11;    // bit_width of a cone angle, 0 .. 1022
 constexpr uint32_t kNormalClasses = 18;  // bit_width of an octahedral difference up to 2 kOctahedralMax
 constexpr uint32_t kColorClasses = 9;    // bit_width of a channel difference in -128 .. 127
-constexpr uint32_t kSlotNormal = kCoreSlots;                                       // [edge class; cone class]
-constexpr uint32_t kSlotNormalSecond = kSlotNormal + kSizeClasses + kConeClasses;  // [class of the first]
+constexpr uint32_t kSlotNormal = kCoreSlots;  // [edge class; v_t's cone angle class; v_s's cone angle class]
+constexpr uint32_t kSlotNormalSecond = kSlotNormal + kSizeClasses + 2 * kConeClasses;  // [class of the first]
 constexpr uint32_t kSlotColor = kSlotNormalSecond + kNormalClasses;                // [red: edge class]
 constexpr uint32_t kSlotColorNext = kSlotColor + kSizeClasses;                     // [channel 1..3][class of the one before]
 constexpr uint32_t kSlotCount = kSlotColorNext + 3 * kColorClasses;
@@ -98,7 +99,7 @@ uint32_t alphabet(uint32_t slot) {
   return kIntSymbols;
 }
 
-enum Part { topology, geometry, refinement, attributes };
+enum Part { topology, geometry, refinement, normal, color };
 
 uint32_t tree_bits(uint32_t root_count) { return root_count <= 1 ? 1 : uint32_t(std::bit_width(root_count - 1)); }
 
@@ -166,7 +167,8 @@ struct Writing {
     add(part, n);
   }
   void add(Part part, uint64_t n) {
-    (part == topology ? bits.topology : part == geometry ? bits.geometry : part == refinement ? bits.refinement : bits.attributes) += n;
+    uint64_t* parts[] = {&bits.topology, &bits.geometry, &bits.refinement, &bits.normal, &bits.color};
+    *parts[part] += n;
   }
 };
 
@@ -357,21 +359,27 @@ uint32_t edge_class(const int64_t d[3]) {
 }
 uint32_t size_class(uint32_t int_sym, uint32_t classes) { return std::min((int_sym + 1) / 2, classes - 1); }
 
-// Where v_t's normal is coded from, and the table's context. v_t's cone axis when it has one: the cone
-// holds the normals of v_t's faces, which its vertex normal averages, and its angle bounds how far off it
-// lies; else v_s's normal, a neighbour's, off by more the longer the edge. The axis is on the same
-// octahedral square in kAxisSteps, scaled (rounded half away from 0).
+// Where v_t's normal is coded from, and the table's context. A cone axis where there is one, as its angle
+// bounds how far off the normal lies: the cone holds the normals of the faces below the node, which a
+// vertex normal averages. v_t's own when it refines, else v_s's (v_t's faces are among v_s's), else v_s's
+// normal (a neighbour's, off by more the longer the edge). The axis is on the same octahedral square in
+// kAxisSteps, scaled (rounded half away from 0).
+uint16_t axis_on_normal_square(uint16_t axis) {
+  const int64_t a = int16_t(axis);
+  return uint16_t(int16_t((2 * a * kOctahedralMax + (a >= 0 ? kAxisSteps : -kAxisSteps)) / (2 * kAxisSteps)));
+}
+bool has_cone(const RefineInfo& info) { return !never_refines(info) && info.cone_angle != kNoCone; }
 uint32_t normal_origin(const SplitContext& c, const SplitPayload& p, uint32_t edge, uint16_t origin[2]) {
-  const RefineInfo& t = p.info_t;
-  if (never_refines(t) || t.cone_angle == kNoCone) {
+  const bool own = has_cone(p.info_t);
+  const RefineInfo& cone = own ? p.info_t : c.info_s;
+  if (!own && !has_cone(cone)) {
     std::copy_n(c.normal_s, 2, origin);
     return edge;
   }
-  for (int i = 0; i < 2; ++i) {
-    const int64_t a = int16_t(i == 0 ? t.cone_x : t.cone_y);
-    origin[i] = uint16_t(int16_t((2 * a * kOctahedralMax + (a >= 0 ? kAxisSteps : -kAxisSteps)) / (2 * kAxisSteps)));
-  }
-  return kSizeClasses + std::min<uint32_t>(uint32_t(std::bit_width(uint32_t(t.cone_angle))), kConeClasses - 1);
+  origin[0] = axis_on_normal_square(cone.cone_x);
+  origin[1] = axis_on_normal_square(cone.cone_y);
+  const uint32_t angle = std::min<uint32_t>(uint32_t(std::bit_width(uint32_t(cone.cone_angle))), kConeClasses - 1);
+  return kSizeClasses + (own ? 0 : kConeClasses) + angle;
 }
 // A channel's difference modulo 256, centred.
 int64_t color_step(uint8_t s, uint8_t t) { return int8_t(uint8_t(t - s)); }
@@ -487,15 +495,15 @@ void SplitCodec::emit_attributes(const SplitContext& c, const SplitPayload& p, u
     uint16_t origin[2];
     const uint32_t normal_class = normal_origin(c, p, edge, origin);
     octahedral_step(origin, p.normal_t, d);
-    const uint32_t sym = put_int(out, kSlotNormal + normal_class, d[0], attributes);
-    put_int(out, kSlotNormalSecond + size_class(sym, kNormalClasses), d[1], attributes);
+    const uint32_t sym = put_int(out, kSlotNormal + normal_class, d[0], normal);
+    put_int(out, kSlotNormalSecond + size_class(sym, kNormalClasses), d[1], normal);
   } else if (p.normal_t[0] || p.normal_t[1]) {
     refuse("a normal in a model without normals");
   }
   if (has_colors_) {
     uint32_t slot = kSlotColor + edge;
     for (uint32_t channel = 0; channel < 4; ++channel) {
-      const uint32_t sym = put_int(out, slot, color_step(c.color_s[channel], p.color_t[channel]), attributes);
+      const uint32_t sym = put_int(out, slot, color_step(c.color_s[channel], p.color_t[channel]), color);
       slot = kSlotColorNext + channel * kColorClasses + size_class(sym, kColorClasses);
     }
   } else if (p.color_t[0] || p.color_t[1] || p.color_t[2] || p.color_t[3]) {

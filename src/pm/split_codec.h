@@ -55,10 +55,11 @@ struct SplitPayload {
 
 // Bits of one record by part (bench: bits per split by part).
 struct RecordBits {
-  uint64_t topology = 0, geometry = 0, refinement = 0, attributes = 0;
-  uint64_t total() const { return topology + geometry + refinement + attributes; }
+  uint64_t topology = 0, geometry = 0, refinement = 0, normal = 0, color = 0;  // normal, color: v_t's
+  uint64_t attributes() const { return normal + color; }
+  uint64_t total() const { return topology + geometry + refinement + attributes(); }
   RecordBits& operator+=(const RecordBits& o) {
-    topology += o.topology, geometry += o.geometry, refinement += o.refinement, attributes += o.attributes;
+    topology += o.topology, geometry += o.geometry, refinement += o.refinement, normal += o.normal, color += o.color;
     return *this;
   }
 };

@@ -75,7 +75,7 @@ E2 packet_bits_of(const BenchModel& m) {
     e.topology += protocol::id_bits(model.id(node), m.served->context) + b.topology;
     e.position += b.geometry;
     e.refinement += b.refinement;
-    e.attributes += b.attributes;
+    e.attributes += double(b.attributes());
     e.total += protocol::id_bits(model.id(node), m.served->context) + b.total();
     ++n;
   }
