@@ -86,6 +86,7 @@ constexpr uint32_t kSlotNormalSecond = kSlotNormal + kSizeClasses + 2 * kConeCla
 constexpr uint32_t kSlotColor = kSlotNormalSecond + kNormalClasses;                // [red: edge class]
 constexpr uint32_t kSlotColorNext = kSlotColor + kSizeClasses;                     // [channel 1..3][class of the one before]
 constexpr uint32_t kSlotCount = kSlotColorNext + 3 * kColorClasses;
+static_assert(kSlotCount - kSlotNormal == 66 + 53, "docs/protocol.md, \"Split records\", gives the counts");
 constexpr uint8_t kHasNormals = 1, kHasColors = 2;
 
 uint32_t alphabet(uint32_t slot) {
