@@ -13,6 +13,9 @@
 // - Refinement info: each child's radius, mu, delta and cone angle as the entry of the lattice below v_s's
 //   that the builder rounded it up to (pm/nested_info.h), its own cone axis in coarse steps from v_s's.
 //   Values no entry holds travel exact, so any canonical info can be coded.
+// - Normal and color of v_t (v_u keeps v_s's): the normal as the wire's octahedral integers, in steps from
+//   a cone axis the client holds (v_t's, else v_s's) or v_s's normal, folding over the square's edges
+//   (pm/octahedral_normal.h); each color channel as its difference from v_s's, modulo 256.
 #include "pm/split_codec.h"
 
 #include <algorithm>

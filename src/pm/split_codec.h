@@ -129,9 +129,10 @@ struct EncodedRecords {
 };
 EncodedRecords encode_records(const ModelData& model, uint32_t position_bits);
 
-// The codec of stored records, after checking them against the model: the tables parse and fit its ids,
-// the offsets are ordered and end with the stream, they carry the attributes the model has, leaves have none and every internal node's record
-// decodes on its own to that node's split. Throws pms::Error naming `where` and the node.
+// The codec of stored records, after checking them against the model: the tables parse, fit its ids and
+// carry the attributes it has, the offsets are ordered and end with the stream, leaves have none and every
+// internal node's record decodes on its own to that node's split. Throws pms::Error naming `where` and
+// the node.
 SplitCodec check_records(const std::string& where, const ModelData& model, std::span<const uint8_t> tables,
                          std::span<const uint64_t> offsets, std::span<const uint8_t> records);
 
