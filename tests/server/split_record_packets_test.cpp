@@ -238,6 +238,15 @@ TEST(SenderDrivenRecords, ACodecThatDoesNotFitTheBaseIsRefused) {
   EXPECT_THROW(protocol::decode_codec(trailing, session.context()), protocol::ProtocolError);
   std::vector<uint8_t> cut(codec.payload.begin(), codec.payload.end() - 1);
   EXPECT_THROW(protocol::decode_codec(cut, session.context()), protocol::ProtocolError);
+  // A BASE with normals and colors and tables without them (or the other way round) do not fit either.
+  protocol::StreamContext attributed = session.context();
+  attributed.has_normals = attributed.has_colors = true;
+  EXPECT_THROW(protocol::decode_codec(codec.payload, attributed), protocol::ProtocolError);
+  const server::ServedModel& with = *test::attributed_terrain().catalogue->find("attributed");
+  client::ClientSession attributed_session;
+  attributed_session.on_base(protocol::decode_base(frame_of(*with.base_frame).payload));
+  EXPECT_NO_THROW(protocol::decode_codec(frame_of(*with.codec_frame).payload, attributed_session.context()));
+  EXPECT_THROW(protocol::decode_codec(frame_of(*with.codec_frame).payload, session.context()), protocol::ProtocolError);
 }
 
 }  // namespace
