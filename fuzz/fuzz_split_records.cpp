@@ -1,12 +1,15 @@
 // libFuzzer target for the split-record decoders (pm/split_codec.h, pm/prefix_code.h): the input is
 // u16 table bytes T | T bytes of code tables | a record. Hostile tables and records either decode or throw
-// pms::Error; a record that decodes re-encodes (where the tables allow) to one that decodes the same.
+// pms::Error; a record that decodes re-encodes (where the tables allow) to one that decodes the same. The
+// tables' attribute flags come from the input, so v_t's normal and color fields are decoded too, against a
+// v_s whose normal lies near the octahedral square's edge (where steps fold over it).
 #include <cstddef>
 #include <cstdint>
 #include <span>
 
 #include "common/bit_stream.h"
 #include "common/error.h"
+#include "pm/octahedral_normal.h"
 #include "pm/refine_info.h"
 #include "pm/split_codec.h"
 #include "pm/vertex_id.h"
@@ -21,6 +24,8 @@ pms::SplitContext fixed_context() {
   c.ancestor_cuts[0] = {3, 0b11011};
   c.ancestor_cuts[1] = {4, 0b10010};
   c.ancestor_cuts[3] = {3, 0b100111};
+  c.normal_s[0] = uint16_t(int16_t(32700)), c.normal_s[1] = uint16_t(int16_t(-5000));
+  c.color_s[0] = 200, c.color_s[1] = 13, c.color_s[2] = 255, c.color_s[3] = 128;
   return c;
 }
 
@@ -37,6 +42,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     const pms::SplitContext context = fixed_context();
     pms::BitReader r(record, "record");
     const pms::SplitPayload payload = codec.decode(context, r);
+    if (codec.has_normals() && !pms::is_canonical_normal(payload.normal_t)) __builtin_trap();
     pms::BitWriter w;
     try {
       codec.encode(context, payload, w);

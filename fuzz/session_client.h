@@ -132,7 +132,7 @@ class SimulatedClient {
   std::optional<protocol::ErrorCode> error() const { return s_.error; }
   // After BASE, whether the CODEC the session owes has come.
   bool codec_pending() const {
-    return s_.context && !s_.context->records && protocol::carries_split_records(s_.mode, last_base_);
+    return s_.context && !s_.context->records && protocol::carries_split_records(s_.mode);
   }
   const std::string& error_text() const { return s_.error_text; }
 
@@ -231,7 +231,7 @@ class SimulatedClient {
   void on(const protocol::Codec& m) {
     trace([] { return "<- CODEC"; });
     check(s_.context.has_value() && !s_.context->records, "a CODEC that follows no BASE, or a second one");
-    check(protocol::carries_split_records(s_.mode, last_base_), "a CODEC in a session without split records");
+    check(protocol::carries_split_records(s_.mode), "a CODEC in a session without split records");
     if (positions_.empty()) positions_ = grid_positions(model_, s_.context->grid.bits);
     s_.context->records = m.codec;
     s_.context->held = [this](VertexId id, SplitContext& out) {

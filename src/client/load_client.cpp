@@ -40,16 +40,19 @@ void LoadClient::open(bool resume) {
   }
   const protocol::Base base = server_->open(open);
   context_ = protocol::stream_context(base);
-  if (!protocol::carries_split_records(open.mode, base)) return;
+  if (!protocol::carries_split_records(open.mode)) return;
   context_.records = server_->next_codec(context_).codec;
   if (open.resume.empty() || !hierarchy_) start_hierarchy(base);  // a resumed session keeps the one held
   context_.held = protocol::held_in(*hierarchy_, context_.grid);
 }
 
 void LoadClient::start_hierarchy(const protocol::Base& base) {
-  hierarchy_ = std::make_unique<VertexHierarchy>(false, false);
+  // The records are coded against v_s's normal and color too: the hierarchy keeps what the model has.
+  hierarchy_ = std::make_unique<VertexHierarchy>(base.has_normals, base.has_colors);
   for (uint32_t r = 0; r < base.root_count(); ++r)
-    hierarchy_->add_root(VertexId{r, 1}, &base.positions[3 * size_t(r)], base.refine[r], nullptr, nullptr);
+    hierarchy_->add_root(VertexId{r, 1}, &base.positions[3 * size_t(r)], base.refine[r],
+                         base.has_normals ? &base.normals[3 * size_t(r)] : nullptr,
+                         base.has_colors ? &base.colors[4 * size_t(r)] : nullptr);
 }
 
 double LoadClient::view(const Camera& camera, float tolerance) {

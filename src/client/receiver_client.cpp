@@ -104,19 +104,23 @@ void ReceiverClient::open(const std::string& model) {
   if (answer.status != 200) refused(target, answer);
   session_.on_base(protocol::decode_base(answer.body));
   model_ = model;
+  // The body format of the answers (docs/protocol.md, "Receiver-driven over HTTP"): compact split records.
+  constexpr uint32_t kRecordsFormat = 2;
+  uint32_t records_format = 0;
   for (const nlohmann::json& entry : catalogue())
-    if (entry.is_object() && entry.value("name", "") == model) records_format_ = entry.value("records_format", 1u);
-  if (records_format_ == 2) {
-    const std::string tables = protocol::model_path(model) + "/codec";
-    const HttpAnswer codec = http_.get(tables);
-    if (codec.status != 200) refused(tables, codec);
-    BitReader r(codec.body, "GET " + tables);
-    codec_ = SplitCodec::deserialize(r);
-    if (codec_.root_count() != session_.base().root_count() || codec_.position_bits() != session_.context().grid.bits)
-      fail("GET " + tables, "code tables of another model or grid than its BASE");
-  } else if (records_format_ != 1) {
-    fail("GET /models", "records format " + std::to_string(records_format_) + " is not one this client reads");
-  }
+    if (entry.is_object() && entry.value("name", "") == model) records_format = entry.value("records_format", 0u);
+  if (records_format != kRecordsFormat)
+    fail("GET /models", "records format " + std::to_string(records_format) + " is not one this client reads (" +
+                            std::to_string(kRecordsFormat) + ")");
+  const std::string tables = protocol::model_path(model) + "/codec";
+  const HttpAnswer codec = http_.get(tables);
+  if (codec.status != 200) refused(tables, codec);
+  BitReader r(codec.body, "GET " + tables);
+  codec_ = SplitCodec::deserialize(r);
+  const protocol::Base& base = session_.base();
+  if (codec_.root_count() != base.root_count() || codec_.position_bits() != session_.context().grid.bits ||
+      codec_.has_normals() != base.has_normals || codec_.has_colors() != base.has_colors)
+    fail("GET " + tables, "code tables of another model, grid or attributes than its BASE");
 }
 
 // `slots` (leaves the client holds) as ids: the visible ones by the squared image error their splits may
@@ -325,14 +329,7 @@ size_t ReceiverClient::receive_one(ReceiverFrame& out) {
   if (answer.status != 200) refused(sent.target, answer);
   totals_.cache_hits += answer.cache_status == "HIT";
   totals_.stale_arrivals += sent.stale;
-  size_t attached = 0;
-  if (records_format_ == 2) {
-    attached = session_.on_split_bands(answer.body, sent.request, codec_);
-  } else {
-    const protocol::VSplits batch = protocol::decode_vsplits(answer.body, session_.context());
-    session_.on_vsplits(batch);
-    attached = batch.splits.size();
-  }
+  const size_t attached = session_.on_split_bands(answer.body, sent.request, codec_);
   out.report.vsplits += attached;
   if (options_.on_attached) options_.on_attached();
   return attached;

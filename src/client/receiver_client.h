@@ -144,8 +144,7 @@ class ReceiverClient {
   ClientSession session_;
   ScreenImportance importance_;
   std::string model_;
-  uint32_t records_format_ = 1;  // the catalogue's word for the model: 2 = compact records, coded by codec_
-  SplitCodec codec_;
+  SplitCodec codec_;  // the model's split record tables (GET /models/{m}/codec)
   uint32_t frame_ = 0;
   uint32_t settle_frames_ = 0;
   ReceiverTotals totals_;

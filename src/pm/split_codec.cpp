@@ -13,6 +13,9 @@
 // - Refinement info: each child's radius, mu, delta and cone angle as the entry of the lattice below v_s's
 //   that the builder rounded it up to (pm/nested_info.h), its own cone axis in coarse steps from v_s's.
 //   Values no entry holds travel exact, so any canonical info can be coded.
+// - Normal and color of v_t (v_u keeps v_s's): the normal as the wire's octahedral integers, in steps from
+//   a cone axis the client holds (v_t's, else v_s's) or v_s's normal, folding over the square's edges
+//   (pm/octahedral_normal.h); each color channel as its difference from v_s's, modulo 256.
 #include "pm/split_codec.h"
 
 #include <algorithm>
@@ -22,6 +25,7 @@
 
 #include "common/error.h"
 #include "pm/nested_info.h"
+#include "pm/octahedral_normal.h"
 #include "pm/position_grid.h"
 
 namespace pms {
@@ -72,8 +76,21 @@ constexpr uint32_t kSlotMu = kSlotRadius + 2 * kFlagContexts + kChainContexts;  
 constexpr uint32_t kSlotDelta = kSlotMu + 2 * kChainContexts;       // [child][mu symbol]
 constexpr uint32_t kSlotAngle = kSlotDelta + 2 * kChainContexts;    // [child][parent has a cone]
 constexpr uint32_t kSlotAxis = kSlotAngle + 4;                      // [child][axis context]
-constexpr uint32_t kSlotCount = kSlotAxis + 2 * kAxisContexts;
-static_assert(kSlotCount == 374, "docs/protocol.md, \"Split records\", gives the count");
+constexpr uint32_t kCoreSlots = kSlotAxis + 2 * kAxisContexts;      // serialized for every model
+static_assert(kCoreSlots == 374, "docs/protocol.md, \"Split records\", gives the count");
+// Attributes of v_t against an origin the client holds; the first value's table by the size of the step
+// (the edge's magnitude class, or the cone angle class of the origin), each later one's by the class of the
+// one before.
+constexpr uint32_t kConeClasses = 11;    // bit_width of a cone angle, 0 .. 1022
+constexpr uint32_t kNormalClasses = 18;  // bit_width of an octahedral difference up to 2 kOctahedralMax
+constexpr uint32_t kColorClasses = 9;    // bit_width of a channel difference in -128 .. 127
+constexpr uint32_t kSlotNormal = kCoreSlots;  // [edge class; v_t's cone angle class; v_s's cone angle class]
+constexpr uint32_t kSlotNormalSecond = kSlotNormal + kSizeClasses + 2 * kConeClasses;  // [class of the first]
+constexpr uint32_t kSlotColor = kSlotNormalSecond + kNormalClasses;                // [red: edge class]
+constexpr uint32_t kSlotColorNext = kSlotColor + kSizeClasses;                     // [channel 1..3][class of the one before]
+constexpr uint32_t kSlotCount = kSlotColorNext + 3 * kColorClasses;
+static_assert(kSlotCount - kSlotNormal == 66 + 53, "docs/protocol.md, \"Split records\", gives the counts");
+constexpr uint8_t kHasNormals = 1, kHasColors = 2;
 
 uint32_t alphabet(uint32_t slot) {
   if (slot < kSlotCutUp) return kRefSymbols;
@@ -82,11 +99,11 @@ uint32_t alphabet(uint32_t slot) {
   if (slot >= kSlotInfoFlags && slot < kSlotRadius) return 4;
   if (slot >= kSlotRadius && slot < kSlotAngle) return kEntrySymbols;
   if (slot >= kSlotAngle && slot < kSlotAxis) return kEntrySymbols + 1;
-  if (slot >= kSlotAxis) return kIntSymbols + 1;
+  if (slot >= kSlotAxis && slot < kCoreSlots) return kIntSymbols + 1;
   return kIntSymbols;
 }
 
-enum Part { topology, geometry, refinement };
+enum Part { topology, geometry, refinement, normal, color };
 
 uint32_t tree_bits(uint32_t root_count) { return root_count <= 1 ? 1 : uint32_t(std::bit_width(root_count - 1)); }
 
@@ -154,7 +171,8 @@ struct Writing {
     add(part, n);
   }
   void add(Part part, uint64_t n) {
-    (part == topology ? bits.topology : part == geometry ? bits.geometry : bits.refinement) += n;
+    uint64_t* parts[] = {&bits.topology, &bits.geometry, &bits.refinement, &bits.normal, &bits.color};
+    *parts[part] += n;
   }
 };
 
@@ -338,6 +356,38 @@ int64_t axis_origin(const RefineInfo& s, const RefineInfo* t, const RefineInfo& 
 }
 bool on_coarse_grid(const RefineInfo& v) { return int16_t(v.cone_x) % kAxisSnap == 0 && int16_t(v.cone_y) % kAxisSnap == 0; }
 
+// v_t's attributes move from v_s's by more the longer the edge between them (v_t - v_s on the grid).
+uint32_t edge_class(const int64_t d[3]) {
+  const uint64_t largest = uint64_t(std::max({std::abs(d[0]), std::abs(d[1]), std::abs(d[2])}));
+  return std::min<uint32_t>(uint32_t(std::bit_width(largest)), kSizeClasses - 1);
+}
+uint32_t size_class(uint32_t int_sym, uint32_t classes) { return std::min((int_sym + 1) / 2, classes - 1); }
+
+// Where v_t's normal is coded from, and the table's context. A cone axis where there is one, as its angle
+// bounds how far off the normal lies: the cone holds the normals of the faces below the node, which a
+// vertex normal averages. v_t's own when it refines, else v_s's (v_t's faces are among v_s's), else v_s's
+// normal (a neighbour's, off by more the longer the edge). The axis is on the same octahedral square in
+// kAxisSteps, scaled (rounded half away from 0).
+uint16_t axis_on_normal_square(uint16_t axis) {
+  const int64_t a = int16_t(axis);
+  return uint16_t(int16_t((2 * a * kOctahedralMax + (a >= 0 ? kAxisSteps : -kAxisSteps)) / (2 * kAxisSteps)));
+}
+bool has_cone(const RefineInfo& info) { return !never_refines(info) && info.cone_angle != kNoCone; }
+uint32_t normal_origin(const SplitContext& c, const SplitPayload& p, uint32_t edge, uint16_t origin[2]) {
+  const bool own = has_cone(p.info_t);
+  const RefineInfo& cone = own ? p.info_t : c.info_s;
+  if (!own && !has_cone(cone)) {
+    std::copy_n(c.normal_s, 2, origin);
+    return edge;
+  }
+  origin[0] = axis_on_normal_square(cone.cone_x);
+  origin[1] = axis_on_normal_square(cone.cone_y);
+  const uint32_t angle = std::min<uint32_t>(uint32_t(std::bit_width(uint32_t(cone.cone_angle))), kConeClasses - 1);
+  return kSizeClasses + (own ? 0 : kConeClasses) + angle;
+}
+// A channel's difference modulo 256, centred.
+int64_t color_step(uint8_t s, uint8_t t) { return int8_t(uint8_t(t - s)); }
+
 }  // namespace
 
 template <class Out> void SplitCodec::emit(const SplitContext& c, const SplitPayload& p, Out& out) const {
@@ -402,6 +452,7 @@ template <class Out> void SplitCodec::emit(const SplitContext& c, const SplitPay
     const uint32_t sym = put_int(out, position_slot(c, frame, index, classes, d), d[axis] - predicted, geometry);
     classes[index] = (sym + 1) / 2;
   }
+  const uint32_t edge = edge_class(d);
   // Refinement info of v_t and v_u against v_s's.
   const RefineInfo* child[2] = {&p.info_t, &p.info_u};
   for (const RefineInfo* info : child)
@@ -435,6 +486,53 @@ template <class Out> void SplitCodec::emit(const SplitContext& c, const SplitPay
     const RefineInfo* t = k == 1 ? child[0] : nullptr;
     put_int(out, axis_slot, coarse_axis(v.cone_x) - axis_origin(s, t, v, &RefineInfo::cone_x), refinement);
     put_int(out, axis_slot, coarse_axis(v.cone_y) - axis_origin(s, t, v, &RefineInfo::cone_y), refinement);
+  }
+  emit_attributes(c, p, edge, out);
+}
+
+template <class Out>
+void SplitCodec::emit_attributes(const SplitContext& c, const SplitPayload& p, uint32_t edge, Out& out) const {
+  const auto refuse = [&](const char* what) { fail("split record", "split of " + to_string(c.vs) + ": " + what); };
+  if (has_normals_) {
+    if (!is_canonical_normal(c.normal_s) || !is_canonical_normal(p.normal_t)) refuse("a normal encode_normal does not produce");
+    int64_t d[2];
+    uint16_t origin[2];
+    const uint32_t normal_class = normal_origin(c, p, edge, origin);
+    octahedral_step(origin, p.normal_t, d);
+    const uint32_t sym = put_int(out, kSlotNormal + normal_class, d[0], normal);
+    put_int(out, kSlotNormalSecond + size_class(sym, kNormalClasses), d[1], normal);
+  } else if (p.normal_t[0] || p.normal_t[1]) {
+    refuse("a normal in a model without normals");
+  }
+  if (has_colors_) {
+    uint32_t slot = kSlotColor + edge;
+    for (uint32_t channel = 0; channel < 4; ++channel) {
+      const uint32_t sym = put_int(out, slot, color_step(c.color_s[channel], p.color_t[channel]), color);
+      slot = kSlotColorNext + channel * kColorClasses + size_class(sym, kColorClasses);
+    }
+  } else if (p.color_t[0] || p.color_t[1] || p.color_t[2] || p.color_t[3]) {
+    refuse("a color in a model without colors");
+  }
+}
+
+void SplitCodec::decode_attributes(const SplitContext& c, uint32_t edge, BitReader& r, SplitPayload& p) const {
+  if (has_normals_) {
+    uint16_t origin[2];
+    const uint32_t normal_class = normal_origin(c, p, edge, origin);
+    const uint32_t first = codes_[kSlotNormal + normal_class].read(r, "normal");
+    const int64_t d[2] = {get_int(first, r, "normal"), get_int(codes_[kSlotNormalSecond + size_class(first, kNormalClasses)].read(r, "normal"), r, "normal")};
+    if (!octahedral_unstep(origin, d, p.normal_t)) r.fail_field("normal", "off the octahedral square");
+    if (!is_canonical_normal(p.normal_t)) r.fail_field("normal", "the mirror image of the canonical point on an edge");
+  }
+  if (has_colors_) {
+    uint32_t slot = kSlotColor + edge;
+    for (uint32_t channel = 0; channel < 4; ++channel) {
+      const uint32_t sym = codes_[slot].read(r, "color");
+      const int64_t step = get_int(sym, r, "color");
+      if (step < -128 || step > 127) r.fail_field("color", "a step outside -128 .. 127");
+      p.color_t[channel] = uint8_t(c.color_s[channel] + step);
+      slot = kSlotColorNext + channel * kColorClasses + size_class(sym, kColorClasses);
+    }
   }
 }
 
@@ -499,6 +597,7 @@ SplitPayload SplitCodec::decode(const SplitContext& c, BitReader& r) const {
     if (v < 0 || v > top) r.fail_field("position", "outside the grid");
     p.position_t[axis] = uint32_t(v);
   }
+  const uint32_t edge = edge_class(d);
   const RefineInfo& s = c.info_s;
   const uint32_t flags = codes_[kSlotInfoFlags + height_context(c, max_depth_)].read(r, "info flags");
   uint32_t t_radius = kNoRadiusSymbol;
@@ -540,6 +639,7 @@ SplitPayload SplitCodec::decode(const SplitContext& c, BitReader& r) const {
     }
     if (!is_canonical(v) || never_refines(v)) r.fail_field(field, "not a value the quantizer produces");
   }
+  decode_attributes(c, edge, r, p);
   return p;
 }
 
@@ -552,6 +652,8 @@ SplitCodec SplitCodec::build(const ModelData& model, std::span<const uint32_t> p
   codec.position_bits_ = position_bits;
   codec.steps_ = grid_step_ratios(model);
   codec.grid_step_ = largest_grid_step(model, position_bits);
+  codec.has_normals_ = !model.normals.empty();
+  codec.has_colors_ = !model.colors.empty();
   for (size_t n = 0; n < model.node_count(); ++n) codec.max_depth_ = std::max<uint32_t>(codec.max_depth_, uint32_t(model.id(uint32_t(n)).depth()));
   // Two fits: the first chooses references by their rest alone, the second by the first fit's costs.
   for (int pass = 0; pass < 2; ++pass) {
@@ -569,6 +671,11 @@ SplitCodec SplitCodec::build(const ModelData& model, std::span<const uint32_t> p
   return codec;
 }
 
+bool SplitCodec::carried(uint32_t slot) const {
+  if (slot < kCoreSlots) return true;
+  return slot < kSlotColor ? has_normals_ : has_colors_;
+}
+
 void SplitCodec::serialize(BitWriter& w) const {
   if (codes_.size() != kSlotCount) fail("split record", "the codec has no tables");
   w.bits(root_count_, 32);
@@ -576,7 +683,9 @@ void SplitCodec::serialize(BitWriter& w) const {
   w.bits(position_bits_, 8);
   for (uint16_t step : steps_) w.bits(step, 16);
   w.bits(std::bit_cast<uint32_t>(grid_step_), 32);
-  for (const PrefixCode& code : codes_) code.serialize(w);
+  w.bits((has_normals_ ? kHasNormals : 0) | (has_colors_ ? kHasColors : 0), 8);
+  for (uint32_t slot = 0; slot < kSlotCount; ++slot)
+    if (carried(slot)) codes_[slot].serialize(w);
 }
 
 SplitCodec SplitCodec::deserialize(BitReader& r) {
@@ -590,15 +699,32 @@ SplitCodec SplitCodec::deserialize(BitReader& r) {
   if (codec.root_count_ == 0) r.fail_field("root count", "0");
   if (codec.max_depth_ > 63) r.fail_field("max depth", "above 63");
   if (codec.position_bits_ < 1 || codec.position_bits_ > 32) r.fail_field("position bits", "outside 1..32");
-  for (uint32_t s = 0; s < kSlotCount; ++s) codec.codes_.push_back(PrefixCode::deserialize(r, alphabet(s), "code table"));
+  const auto attributes = uint32_t(r.bits(8, "attributes"));
+  if (attributes & ~uint32_t(kHasNormals | kHasColors)) r.fail_field("attributes", "unknown bits set");
+  codec.has_normals_ = attributes & kHasNormals;
+  codec.has_colors_ = attributes & kHasColors;
+  codec.codes_.resize(kSlotCount);
+  for (uint32_t s = 0; s < kSlotCount; ++s)
+    if (codec.carried(s)) codec.codes_[s] = PrefixCode::deserialize(r, alphabet(s), "code table");
   return codec;
 }
+
+namespace {
+
+// A node's normal as the wire quantizes it and its color; zeros for what the model lacks.
+void copy_attributes(const ModelData& model, uint32_t node, uint16_t normal[2], uint8_t color[4]) {
+  if (!model.normals.empty()) encode_normal(&model.normals[3 * size_t(node)], normal);
+  if (!model.colors.empty()) std::copy_n(&model.colors[4 * size_t(node)], 4, color);
+}
+
+}  // namespace
 
 SplitContext split_context(const ModelData& model, std::span<const uint32_t> positions, uint32_t node) {
   SplitContext c;
   c.vs = model.id(node);
   std::copy_n(&positions[3 * size_t(node)], 3, c.position_s);
   c.info_s = as_sent(model.refine[node]);
+  copy_attributes(model, node, c.normal_s, c.color_s);
   uint32_t n = node;
   for (int i = 0; i < kCutAncestors; ++i) {
     n = model.parent[n];
@@ -620,6 +746,7 @@ SplitPayload split_payload(const ModelData& model, std::span<const uint32_t> pos
   std::copy_n(&positions[3 * size_t(t)], 3, p.position_t);
   p.info_t = as_sent(model.refine[t]);
   p.info_u = as_sent(model.refine[t + 1]);
+  copy_attributes(model, t, p.normal_t, p.color_t);
   return p;
 }
 
@@ -681,6 +808,8 @@ SplitCodec check_records(const std::string& where, const ModelData& model, std::
   for (uint64_t id : model.node_id) depth = std::max(depth, uint32_t(63 - std::countl_zero(id)));
   if (codec.root_count() != model.root_count || codec.max_depth() != depth || !valid_position_bits(codec.position_bits()))
     fail(where, "split tables: root count, depth or position bits do not match the model");
+  if (codec.has_normals() != !model.normals.empty() || codec.has_colors() != !model.colors.empty())
+    fail(where, "split tables: the normals and colors they carry are not the model's");
   const size_t n = model.node_count();
   if (offsets.size() != n + 1) fail(where, "split record offsets: not one per node plus one");
   const uint64_t bits = 8 * uint64_t(records.size());

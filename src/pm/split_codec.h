@@ -29,30 +29,37 @@ template <size_t N> constexpr std::array<VertexId, N> no_vertices() {
 }
 
 // What a client holds about v_s once v_s is in its hierarchy: its id, its quantized position, its
-// refinement info as sent (`as_sent`), and the cut vertices of the splits that made it and its ancestors.
+// refinement info as sent (`as_sent`), its normal and color as sent (zeros for a model without them),
+// and the cut vertices of the splits that made it and its ancestors.
 struct SplitContext {
   VertexId vs;
   uint32_t position_s[3] = {0, 0, 0};
   RefineInfo info_s{};
+  uint16_t normal_s[2] = {0, 0};  // octahedral (pm/octahedral_normal.h)
+  uint8_t color_s[4] = {0, 0, 0, 0};
   // v̂_l, v̂_r of v_s's parent, then of its grandparent, ...; kNoVertex above the root or for a missing side.
   std::array<VertexId, 2 * kCutAncestors> ancestor_cuts = no_vertices<2 * kCutAncestors>();
 };
 
-// What a record carries: the split's fundamental cut vertices, v_t's quantized position (v_u keeps v_s's)
-// and the children's refinement info as sent.
+// What a record carries: the split's fundamental cut vertices, v_t's quantized position, normal and color
+// (v_u keeps v_s's: half-edge collapse; zeros for attributes the model lacks) and the children's
+// refinement info as sent.
 struct SplitPayload {
   VertexId cut_l = kNoVertex, cut_r = kNoVertex;
   uint32_t position_t[3] = {0, 0, 0};
   RefineInfo info_t{}, info_u{};
+  uint16_t normal_t[2] = {0, 0};
+  uint8_t color_t[4] = {0, 0, 0, 0};
   friend bool operator==(const SplitPayload&, const SplitPayload&) = default;
 };
 
 // Bits of one record by part (bench: bits per split by part).
 struct RecordBits {
-  uint64_t topology = 0, geometry = 0, refinement = 0;
-  uint64_t total() const { return topology + geometry + refinement; }
+  uint64_t topology = 0, geometry = 0, refinement = 0, normal = 0, color = 0;  // normal, color: v_t's
+  uint64_t attributes() const { return normal + color; }
+  uint64_t total() const { return topology + geometry + refinement + attributes(); }
   RecordBits& operator+=(const RecordBits& o) {
-    topology += o.topology, geometry += o.geometry, refinement += o.refinement;
+    topology += o.topology, geometry += o.geometry, refinement += o.refinement, normal += o.normal, color += o.color;
     return *this;
   }
 };
@@ -72,19 +79,30 @@ class SplitCodec {
   SplitPayload decode(const SplitContext& context, BitReader& r) const;
 
   // u32 root count, u8 max depth, u8 position bits, u16 grid step ratios x, y, z, f32 largest grid step
-  // over the model's scale, then every table (PrefixCode::serialize).
+  // over the model's scale, u8 attributes (bit 0 normals, bit 1 colors), then every table
+  // (PrefixCode::serialize): the attribute tables only for the attributes the model has.
   void serialize(BitWriter& w) const;
   static SplitCodec deserialize(BitReader& r);
 
   uint32_t root_count() const { return root_count_; }
   uint32_t max_depth() const { return max_depth_; }
   uint32_t position_bits() const { return position_bits_; }
+  // Whether records carry v_t's normal / color: the model has them.
+  bool has_normals() const { return has_normals_; }
+  bool has_colors() const { return has_colors_; }
 
  private:
   struct Counts;
   template <class Out> void emit(const SplitContext& context, const SplitPayload& payload, Out& out) const;
 
+  // Whether the tables of `slot` are serialized: every core slot, an attribute's only when the model has it.
+  bool carried(uint32_t slot) const;
+  template <class Out> void emit_attributes(const SplitContext& context, const SplitPayload& payload, uint32_t edge,
+                                           Out& out) const;
+  void decode_attributes(const SplitContext& context, uint32_t edge, BitReader& r, SplitPayload& payload) const;
+
   uint32_t root_count_ = 0, max_depth_ = 0, position_bits_ = 0;
+  bool has_normals_ = false, has_colors_ = false;
   std::array<uint16_t, 3> steps_{};  // each axis's grid step over the largest, in 1/65535
   float grid_step_ = 0;              // the largest grid step over the model's scale; 0 without a grid (serialized,
                                      // read by no field since nested info: docs/protocol.md)
@@ -111,9 +129,10 @@ struct EncodedRecords {
 };
 EncodedRecords encode_records(const ModelData& model, uint32_t position_bits);
 
-// The codec of stored records, after checking them against the model: the tables parse and fit its ids,
-// the offsets are ordered and end with the stream, leaves have none and every internal node's record
-// decodes on its own to that node's split. Throws pms::Error naming `where` and the node.
+// The codec of stored records, after checking them against the model: the tables parse, fit its ids and
+// carry the attributes it has, the offsets are ordered and end with the stream, leaves have none and every
+// internal node's record decodes on its own to that node's split. Throws pms::Error naming `where` and
+// the node.
 SplitCodec check_records(const std::string& where, const ModelData& model, std::span<const uint8_t> tables,
                          std::span<const uint64_t> offsets, std::span<const uint8_t> records);
 

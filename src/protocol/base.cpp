@@ -54,8 +54,8 @@ StreamContext stream_context(const Base& base) {
   return c;
 }
 
-bool carries_split_records(StreamMode mode, const Base& base) {
-  return mode == StreamMode::sender_driven && !base.has_normals && !base.has_colors;
+bool carries_split_records(StreamMode mode) {
+  return mode == StreamMode::sender_driven;
 }
 
 std::vector<uint8_t> encode(const Base& m) {

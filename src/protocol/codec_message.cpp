@@ -39,6 +39,8 @@ Codec decode_codec(std::span<const uint8_t> payload, const StreamContext& c) {
                " and " + std::to_string(m.codec->position_bits()) + " position bits; BASE says " +
                std::to_string(c.root_count) + ", " + std::to_string(c.node_id_bits) + " and " +
                std::to_string(c.grid.bits));
+  if (m.codec->has_normals() != c.has_normals || m.codec->has_colors() != c.has_colors)
+    r.fail(ErrorCode::bad_message, "tables", "the records would carry other attributes than BASE's normals and colors");
   m.tables.assign(payload.begin(), payload.end());
   return m;
 }

@@ -15,10 +15,9 @@ namespace pms::protocol {
 
 StreamContext stream_context(const Base& base);  // throws pms::Error for widths a decoder would reject
 Base make_base(const ModelData& model, const std::string& name, uint32_t position_bits = kDefaultPositionBits);
-// Whether a session of `mode` on this BASE's model sends CODEC after BASE and split records in its VSPLITS
-// packets: the sender-driven mode (not its plain option), and a model without normals and colors, which
-// records do not carry (the receiver-driven answers' format 2 follows the same rule).
-bool carries_split_records(StreamMode mode, const Base& base);
+// Whether a session of `mode` sends CODEC after BASE and split records in its VSPLITS packets: the
+// sender-driven mode, not its plain option (whose packets are kim-lee-kobbelt §6.3's).
+bool carries_split_records(StreamMode mode);
 ModelInfo model_info(const ModelData& model, const std::string& name);  // counts from the hierarchy itself
 
 }  // namespace pms::protocol

@@ -7,7 +7,6 @@
 #include "common/parallel.h"
 #include "pm/hierarchy.h"
 #include "pm/refine_info.h"
-#include "pm/split_record.h"
 #include "protocol/message_types.h"
 #include "protocol/packet_table.h"
 #include "protocol/stream_context.h"
@@ -26,11 +25,6 @@ struct Block {
 };
 
 }  // namespace
-
-PacketTable::PacketTable(const ModelData& model, const StreamContext& context) {
-  if (const std::string why = check_context(context); !why.empty()) fail("VSPLITS", "stream context: " + why);
-  build(model, [&](Writer& w, uint32_t node) { write_packet(w, split_record(model, node), context); });
-}
 
 PacketTable::PacketTable(const ModelData& model, const StreamContext& context, const StoredRecords& records) {
   if (const std::string why = check_context(context); !why.empty()) fail("VSPLITS", "stream context: " + why);

@@ -22,10 +22,9 @@ class Writer;  // wire_internal.h
 class PacketTable {
  public:
   PacketTable() = default;
-  // Throws pms::Error for a model the context cannot carry (as encode(VSplits) would).
-  PacketTable(const ModelData& model, const StreamContext& context);
   // The packets of a context with split records (StreamContext::records): v_s's id and the record the
   // model stores (coded against what the client holds about v_s, which a session's client does), copied.
+  // Throws pms::Error for a model the context cannot carry (as encode(VSplits) would).
   PacketTable(const ModelData& model, const StreamContext& context, const StoredRecords& records);
   bool empty() const { return where_.empty(); }
   size_t memory_bytes() const { return (bits_.capacity() + where_.capacity()) * sizeof(uint64_t); }

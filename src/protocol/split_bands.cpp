@@ -1,8 +1,10 @@
 #include "protocol/split_bands.h"
 
+#include <algorithm>
 #include <string>
 
 #include "common/error.h"
+#include "pm/octahedral_normal.h"
 #include "pm/refine_info.h"
 #include "pm/split_record.h"
 
@@ -46,7 +48,7 @@ uint32_t write_split_band(const ModelData& model, const StoredRecords& records, 
   return uint32_t(queue.size());
 }
 
-SplitRecord split_record_of(VertexId vs, const SplitPayload& payload, const PositionGrid& grid) {
+SplitRecord split_record_of(VertexId vs, const SplitPayload& payload, const PositionGrid& grid, const SplitCodec& codec) {
   SplitRecord split;
   split.vs = vs;
   split.cut_l = payload.cut_l;
@@ -54,6 +56,10 @@ SplitRecord split_record_of(VertexId vs, const SplitPayload& payload, const Posi
   dequantize_position(grid, payload.position_t, split.position_t);
   split.info_t = payload.info_t;
   split.info_u = payload.info_u;
+  split.has_normal = codec.has_normals();
+  if (split.has_normal) decode_normal(payload.normal_t, split.normal_t);
+  split.has_color = codec.has_colors();
+  if (split.has_color) std::copy_n(payload.color_t, 4, split.color_t);
   return split;
 }
 
@@ -62,6 +68,9 @@ SplitContext held_split_context(const VertexHierarchy& h, uint32_t slot, const P
   c.vs = h.id(slot);
   quantize_position(grid, h.position(slot), c.position_s);
   c.info_s = h.refine(slot);
+  // A normal decoded from the wire encodes back to the integers sent (pm/octahedral_normal.h).
+  if (h.has_normals()) encode_normal(h.normal(slot), c.normal_s);
+  if (h.has_colors()) std::copy_n(h.color(slot), 4, c.color_s);
   uint32_t s = slot;
   for (int i = 0; i < kCutAncestors; ++i) {
     s = h.parent(s);
@@ -95,7 +104,7 @@ uint32_t read_split_bands(std::span<const uint8_t> body, const SplitRequest& req
       if (++records > max_splits) fail("split records", "more than " + std::to_string(max_splits) + " records");
       const SplitPayload p = codec.decode(held_split_context(h, slot, grid), r);
       if (h.is_leaf(slot)) {
-        h.add_split(split_record_of(h.id(slot), p, grid));
+        h.add_split(split_record_of(h.id(slot), p, grid, codec));
         ++added;
       }
       if (level == request.depth) continue;

@@ -31,15 +31,17 @@ uint32_t write_split_band(const ModelData& model, const StoredRecords& records, 
                           BitWriter& w);
 
 // What a client holds about the split of `slot` (pm/split_codec.h, SplitContext), from its own hierarchy:
-// the position re-quantized (the grid gives the sent integers back), the info as sent, the ancestors' cuts.
+// the position re-quantized (the grid gives the sent integers back), the info as sent, the normal
+// re-quantized and the color, the ancestors' cuts.
 SplitContext held_split_context(const VertexHierarchy& h, uint32_t slot, const PositionGrid& grid);
 
 // StreamContext::held for a client whose hierarchy is `h` (which must outlive the context): the context of
 // every vertex it holds, by held_split_context.
 std::function<bool(VertexId, SplitContext&)> held_in(const VertexHierarchy& h, const PositionGrid& grid);
 
-// The split a decoded record describes, for VertexHierarchy::add_split.
-SplitRecord split_record_of(VertexId vs, const SplitPayload& payload, const PositionGrid& grid);
+// The split a decoded record describes, for VertexHierarchy::add_split: v_t's normal and color when the
+// codec's records carry them.
+SplitRecord split_record_of(VertexId vs, const SplitPayload& payload, const PositionGrid& grid, const SplitCodec& codec);
 
 // Reads an answer to `request` and adds every split it carries that `h` lacks (one it already holds is
 // decoded and checked for its children, then skipped). Returns the splits added. Throws pms::Error for a

@@ -24,10 +24,10 @@ struct StreamContext {
   // client applies splits in PM order and never evaluates qrefine. Both ends set it from the OPEN's mode.
   bool has_refinement = true;
   // Packets are v_s's id and its compact split record (docs/protocol.md, "VSPLITS", "CODEC"): set by both
-  // ends of a sender-driven session of a model without normals and colors, from the CODEC after BASE
-  // (carries_split_records). `held` gives what the receiver holds about a vertex (SplitContext, as
-  // protocol/split_bands.h's held_split_context reads it), false for one it does not hold; vertices a
-  // batch makes are known from the batch itself.
+  // ends of a sender-driven session that is not plain, from the CODEC after BASE (carries_split_records).
+  // `held` gives what the receiver holds about a vertex (SplitContext, as protocol/split_bands.h's
+  // held_split_context reads it), false for one it does not hold; vertices a batch makes are known from
+  // the batch itself.
   std::shared_ptr<const SplitCodec> records;
   std::function<bool(VertexId, SplitContext&)> held;
 };

@@ -101,7 +101,8 @@ class BatchContexts {
     return to_string(vs) + " is not a vertex the receiver holds";
   }
 
-  // v_s is split: its children are held from now on (v_u keeps v_s's position: half-edge collapse).
+  // v_s is split: its children are held from now on (v_u keeps v_s's position and attributes: half-edge
+  // collapse).
   void split(const SplitContext& s, const SplitPayload& p) {
     made_[Key{s.vs.tree, s.vs.node}].split = true;  // its context is not needed again
     SplitContext t, u;
@@ -109,6 +110,10 @@ class BatchContexts {
     u.vs = s.vs.child(1);
     std::copy_n(p.position_t, 3, t.position_s);
     std::copy_n(s.position_s, 3, u.position_s);
+    std::copy_n(p.normal_t, 2, t.normal_s);
+    std::copy_n(s.normal_s, 2, u.normal_s);
+    std::copy_n(p.color_t, 4, t.color_s);
+    std::copy_n(s.color_s, 4, u.color_s);
     t.info_s = p.info_t;
     u.info_s = p.info_u;
     t.ancestor_cuts[0] = u.ancestor_cuts[0] = p.cut_l;
@@ -147,15 +152,15 @@ void read_record_packet(Reader& r, const StreamContext& c, BatchContexts& batch,
     r.fail(ErrorCode::bad_message, "record", e.what());
   }
   r.seek(bits.position());
-  s = split_record_of(s.vs, payload, c.grid);
+  s = split_record_of(s.vs, payload, c.grid, *c.records);
   for (float v : s.position_t)
     if (!std::isfinite(v)) r.fail(ErrorCode::bad_message, "position", "is not finite");
   batch.split(context, payload);
 }
 
 void write_record_packet(Writer& w, const SplitRecord& s, const StreamContext& c, BatchContexts& batch) {
-  if (s.has_normal || s.has_color)
-    fail("VSPLITS", "split of " + to_string(s.vs) + ": split records carry no normal or color");
+  if (s.has_normal != c.has_normals || s.has_color != c.has_colors)
+    fail("VSPLITS", "split of " + to_string(s.vs) + ": normal/color presence differs from the model's");
   if (uint32_t(s.vs.depth()) >= c.node_id_bits)
     fail("VSPLITS", "split of " + to_string(s.vs) + ": its children would be deeper than node_id_bits");
   SplitContext context;
@@ -166,6 +171,8 @@ void write_record_packet(Writer& w, const SplitRecord& s, const StreamContext& c
   quantize_position(c.grid, s.position_t, payload.position_t);
   payload.info_t = as_sent(s.info_t);
   payload.info_u = as_sent(s.info_u);
+  if (s.has_normal) encode_normal(s.normal_t, payload.normal_t);
+  if (s.has_color) std::copy_n(s.color_t, 4, payload.color_t);
   BitWriter record;
   c.records->encode(context, payload, record);
   write_id(w, s.vs, c, "v_s");

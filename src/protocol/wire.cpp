@@ -181,8 +181,9 @@ std::string check_context(const StreamContext& c) {
     if (!std::isfinite(c.grid.min[i]) || !std::isfinite(c.grid.max[i]) || !(c.grid.min[i] <= c.grid.max[i]))
       return "bounding box is not finite or min > max";
   if (c.records) {
-    if (!c.has_refinement || c.has_normals || c.has_colors)
-      return "split records carry refinement info and neither normals nor colors";
+    if (!c.has_refinement) return "split records carry refinement info";
+    if (c.records->has_normals() != c.has_normals || c.records->has_colors() != c.has_colors)
+      return "the split record tables carry other attributes than the model's normals and colors";
     if (c.records->root_count() != c.root_count || c.records->max_depth() != c.node_id_bits ||
         c.records->position_bits() != c.grid.bits)
       return "the split record tables are for " + std::to_string(c.records->root_count()) + " roots, depth " +

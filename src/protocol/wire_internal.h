@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "pm/octahedral_normal.h"
 #include "pm/refine_info.h"
 #include "pm/split_record.h"
 #include "protocol/message_types.h"
@@ -118,9 +119,8 @@ void write_packet(Writer& w, const SplitRecord& s, const StreamContext& c);
 // A node's id as packets write it (tree-id, depth, path).
 void write_id(Writer& w, VertexId v, const StreamContext& c, const char* field);
 
-// Unit normals as octahedral 2 x 16-bit snorm (Meyer et al. 2010): 32 bits instead of 96, ~1e-4 rad.
-void encode_normal(const float n[3], uint16_t q[2]);
-void decode_normal(const uint16_t q[2], float n[3]);
+using pms::decode_normal;
+using pms::encode_normal;
 
 // PositionGrid / id widths a decoder accepts; "" when fine, else what is wrong.
 std::string check_context(const StreamContext& context);

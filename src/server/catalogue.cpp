@@ -63,10 +63,9 @@ std::vector<float> snapped_positions(const ModelData& model, const protocol::Pos
   return positions;
 }
 
-// Format 2 for a model without normals and colors. The .pms holds records at the grid it was built for;
-// a server started with other position bits codes its own once.
-void attach_records(ServedModel& model, const protocol::Base& base) {
-  if (base.has_normals || base.has_colors) return;
+// The .pms holds records at the grid it was built for; a server started with other position bits codes
+// its own once.
+void attach_records(ServedModel& model) {
   const PmsFile& file = *model.file;
   const uint32_t bits = model.context.grid.bits;
   const SplitCodec* codec = &file.split_codec();
@@ -83,7 +82,6 @@ void attach_records(ServedModel& model, const protocol::Base& base) {
     codec->serialize(w);
     model.codec_tables = std::make_shared<const std::vector<uint8_t>>(w.bytes());
   }
-  model.records_format = 2;
   BitReader tables(*model.codec_tables, "split tables");
   model.codec = std::make_shared<const SplitCodec>(SplitCodec::deserialize(tables));
   model.codec_frame = std::make_shared<const std::vector<uint8_t>>(protocol::encode(protocol::Codec{*model.codec_tables, {}}));
@@ -104,17 +102,12 @@ std::unique_ptr<ServedModel> open_model(const std::string& path, uint32_t positi
   for (uint32_t i = 0; i < data.split_order.size(); ++i) model->split_rank[data.split_order[i]] = i;
   model->dependencies = DependencyFilter(data);
   model->dag = std::make_unique<const Dag>(data, snapped_positions(data, model->context.grid));
-  attach_records(*model, base);
-  // The sender-driven packets: v_s's id and its stored record when the model has records (format 2),
-  // today's packets otherwise (docs/protocol.md, "VSPLITS").
+  attach_records(*model);
+  // The sender-driven packets: v_s's id and its stored record (docs/protocol.md, "VSPLITS").
   protocol::StreamContext sender = model->context;
   sender.has_refinement = true;
-  if (model->codec) {
-    sender.records = model->codec;
-    model->packets = protocol::PacketTable(data, sender, model->records);
-  } else {
-    model->packets = protocol::PacketTable(data, sender);
-  }
+  sender.records = model->codec;
+  model->packets = protocol::PacketTable(data, sender, model->records);
   return model;
 }
 

@@ -33,18 +33,18 @@ struct ServedModel {
   std::vector<NodeCriteria> criteria;  // per node
   std::vector<uint32_t> split_rank;    // per node: its index in split_order (view-independent mode); leaves kNone
   DependencyFilter dependencies;
-  // Sender-driven packets (with refinement info): v_s's id and its split record for a model in records
-  // format 2, whose sessions get `codec_frame` after BASE; today's full packets otherwise (format 1).
+  // Sender-driven packets (with refinement info): v_s's id and its split record; the sessions get
+  // `codec_frame` after BASE.
   protocol::PacketTable packets;
   std::unique_ptr<const Dag> dag;  // the DAG mode's operations, on the wire grid's positions
-  // The receiver-driven answers' body format (server/split_records_body.h): 2, the compact records, which
-  // carry no normals or colors; 1, VSPLITS packets, for a model that has either.
-  uint32_t records_format = 1;
-  protocol::StoredRecords records;     // format 2: the file's own at the served grid, or `own_records`
+  // The receiver-driven answers' body format (server/split_records_body.h), part of every ETag: 2, the
+  // compact records (1, VSPLITS packets, was for models with normals or colors before records carried them).
+  static constexpr uint32_t records_format = 2;
+  protocol::StoredRecords records;     // the file's own at the served grid, or `own_records`
   EncodedRecords own_records;          // coded at load when the file's records are at another grid
-  std::shared_ptr<const std::vector<uint8_t>> codec_tables;  // format 2: serialized (GET /models/{m}/codec)
-  std::shared_ptr<const SplitCodec> codec;                   // format 2: the tables
-  std::shared_ptr<const std::vector<uint8_t>> codec_frame;   // format 2: CODEC, the tables for a sender-driven session
+  std::shared_ptr<const std::vector<uint8_t>> codec_tables;  // serialized (GET /models/{m}/codec)
+  std::shared_ptr<const SplitCodec> codec;                   // the tables
+  std::shared_ptr<const std::vector<uint8_t>> codec_frame;   // CODEC, the tables for a sender-driven session
   const ModelData& model() const { return file->model(); }
 };
 

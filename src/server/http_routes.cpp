@@ -133,10 +133,8 @@ HttpAnswer splits_answer(const ServedModel& model, const HttpLimits& limits, con
   return answer;
 }
 
-// Format 2's code tables, which every record of the model is coded with.
+// The code tables every record of the model is coded with.
 HttpAnswer codec_answer(const ServedModel& model, const HttpRequest& request) {
-  if (model.records_format != 2)
-    return error_answer(404, "model '" + model.name + "' is served in records format 1, which has no code tables");
   HttpAnswer answer = fresh(request, etag_of(model, {"/codec"}), "application/octet-stream");
   if (answer.status == 200) answer.shared = model.codec_tables;
   return answer;

@@ -99,11 +99,11 @@ void SenderDrivenMode::pump_resume(uint64_t& work) {
   queue_base();
 }
 
-// BASE, and CODEC when the session's packets are split records (protocol::carries_split_records): the
-// sender-driven mode of a model in records format 2, not its plain option.
+// BASE, and CODEC when the session's packets are split records (protocol::carries_split_records): not
+// the plain option.
 void SenderDrivenMode::queue_base() {
   context_.outbox.push_back(context_.served.base_frame);
-  if (!plain_ && context_.served.codec_frame) context_.outbox.push_back(context_.served.codec_frame);
+  if (!plain_) context_.outbox.push_back(context_.served.codec_frame);
 }
 
 // A VIEW's answer: splits accumulate across slices into batches of batch_splits. Splits of an earlier

@@ -1,24 +1,18 @@
 #include "server/split_records_body.h"
 
 #include "common/bit_stream.h"
-#include "protocol/message_types.h"
 #include "protocol/split_bands.h"
 
 namespace pms::server {
 
 std::vector<uint8_t> split_records_body(const ServedModel& model, const protocol::SplitRequest& request,
                                         std::span<const uint32_t> nodes) {
-  if (model.records_format == 2) {
-    BitWriter w;
-    uint64_t bits = 0;  // the records and at most two presence bits each
-    for (uint32_t node : nodes) bits += model.records.offsets[node + 1] - model.records.offsets[node] + 2;
-    w.reserve(bits);
-    for (VertexId id : request.ids) protocol::write_split_band(model.model(), model.records, model.model().find(id), request.depth, w);
-    return std::move(w).take();
-  }
-  std::vector<uint8_t> frame = model.packets.encode(0, true, nodes);
-  frame.erase(frame.begin(), frame.begin() + protocol::kFrameHeaderBytes);
-  return frame;
+  BitWriter w;
+  uint64_t bits = 0;  // the records and at most two presence bits each
+  for (uint32_t node : nodes) bits += model.records.offsets[node + 1] - model.records.offsets[node] + 2;
+  w.reserve(bits);
+  for (VertexId id : request.ids) protocol::write_split_band(model.model(), model.records, model.model().find(id), request.depth, w);
+  return std::move(w).take();
 }
 
 }  // namespace pms::server

@@ -179,13 +179,13 @@ TEST(PmsCorrupt, WrongMagicAndNewerVersion) {
   f.bytes[0] = 'X';
   expect_error(f, "header: ", "not a .pms file");
   f = small();
-  store<uint32_t>(f.bytes, kVersionAt, 6);
+  store<uint32_t>(f.bytes, kVersionAt, 7);
   f.fix_checksums();
-  EXPECT_EQ(f.error(), "header: unsupported version 6 (this build reads 5)");
+  EXPECT_EQ(f.error(), "header: unsupported version 7 (this build reads 6)");
   f = small();
-  store<uint32_t>(f.bytes, kVersionAt, 4);
+  store<uint32_t>(f.bytes, kVersionAt, 5);
   f.fix_checksums();
-  EXPECT_EQ(f.error(), "header: unsupported version 4 (this build reads 5; rebuild the file with this pmstream)");
+  EXPECT_EQ(f.error(), "header: unsupported version 5 (this build reads 6; rebuild the file with this pmstream)");
 }
 
 TEST(PmsCorrupt, AbsurdNodeCountInHead) {
@@ -404,6 +404,15 @@ TEST(PmsCorrupt, SplitRecordsMustBeTheModels) {
   tables.set<uint32_t>("SRTB", 0, 7);  // the root count the tables were fitted to
   tables.fix_checksums();
   EXPECT_NE(tables.error().find("split tables"), std::string::npos) << tables.error();
+  // The model has normals and colors: tables that say the records carry neither (or another attribute) are refused.
+  constexpr size_t kAttributesByte = (32 + 8 + 8 + 3 * 16 + 32) / 8;
+  ASSERT_EQ(f.get<uint8_t>("SRTB", kAttributesByte), 3u);
+  for (const uint8_t attributes : {0, 1, 2, 7}) {
+    PmsBytes other = f;
+    other.set<uint8_t>("SRTB", kAttributesByte, attributes);
+    other.fix_checksums();
+    EXPECT_NE(other.error().find("split tables"), std::string::npos) << int(attributes) << ": " << other.error();
+  }
 }
 
 TEST(PmsFile, StoredSplitRecordsDecodeToTheModel) {

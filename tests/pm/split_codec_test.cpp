@@ -3,16 +3,19 @@
 // The real models' round trips and bits per part are in tests/protocol/split_records_test.cpp.
 #include <gtest/gtest.h>
 
+#include <array>
 #include <bit>
 #include <cmath>
 #include <cstdint>
 #include <limits>
 #include <random>
+#include <string>
 #include <vector>
 
 #include "common/bit_stream.h"
 #include "common/error.h"
 #include "pm/hierarchy.h"
+#include "pm/octahedral_normal.h"
 #include "pm/split_codec.h"
 #include "pm_fixtures.h"
 
@@ -30,15 +33,15 @@ Hierarchy test_forest() {
   return h;
 }
 
-// The forest, its grid positions and its codec, made once.
+// A forest, its grid positions and its codec.
 struct Forest {
-  Hierarchy h = test_forest();
+  Hierarchy h;
   ModelData model = model_of(h);
   std::vector<uint32_t> q = grid_positions(model, 16);
   SplitCodec codec = SplitCodec::build(model, q, 16);
 };
 const Forest& forest() {
-  static const Forest f;
+  static const Forest f{test_forest()};
   return f;
 }
 
@@ -176,6 +179,114 @@ TEST(SplitCodec, RefusesWhatItCannotCarry) {
   not_sent.info_t.radius = 0x3C00;  // never refines, but with a radius: not what as_sent delivers
   EXPECT_THROW(codec.encode(context, not_sent, w), Error);
   EXPECT_THROW(SplitCodec().encode(context, p, w), Error);
+}
+
+// The forest with a normal and a color per node: normals all over the sphere (both hemispheres, so steps
+// cross the octahedral square's edges), smooth colors with an alpha that jumps.
+Hierarchy with_attributes(Hierarchy f) {
+  const size_t n = f.node_count();
+  f.normals.resize(3 * n);
+  f.colors.resize(4 * n);
+  for (size_t v = 0; v < n; ++v) {
+    const float* p = &f.position[3 * v];
+    const float normal[3] = {std::sin(7 * p[0] + 1), std::cos(5 * p[1]), std::sin(3 * p[2] - p[0])};
+    const float length = std::sqrt(normal[0] * normal[0] + normal[1] * normal[1] + normal[2] * normal[2]);
+    for (int k = 0; k < 3; ++k) f.normals[3 * v + size_t(k)] = normal[k] / length;
+    for (int k = 0; k < 3; ++k) f.colors[4 * v + size_t(k)] = uint8_t(128 + 127 * std::sin(float(k + 2) * p[k]));
+    f.colors[4 * v + 3] = uint8_t(v % 5 ? 255 : 0);
+  }
+  return f;
+}
+const Forest& attributed_forest() {
+  static const Forest f{with_attributes(test_forest())};
+  return f;
+}
+
+TEST(SplitCodec, NormalsAndColorsRoundTripThroughRecordsAndTables) {
+  const auto& [h, model, q, codec] = attributed_forest();
+  ASSERT_TRUE(codec.has_normals() && codec.has_colors());
+  BitWriter w;
+  codec.serialize(w);
+  BitReader r(w.bytes(), 0, w.size(), "tables");
+  const SplitCodec back = SplitCodec::deserialize(r);
+  ASSERT_TRUE(back.has_normals() && back.has_colors());
+  const Encoded e = encode_all(back, model, q);
+  EXPECT_EQ(e.bits.bytes(), encode_all(codec, model, q).bits.bytes());
+  uint64_t normal_bits = 0, color_bits = 0;
+  for (size_t i = 0; i < model.split_order.size(); ++i) {
+    const uint32_t node = model.split_order[i];
+    const SplitPayload want = split_payload(model, q, node);
+    BitReader record(e.bits.bytes(), e.start[i], e.start[i + 1], "record");
+    EXPECT_EQ(back.decode(split_context(model, q, node), record), want) << "node " << node;
+    uint16_t normal[2];
+    encode_normal(&model.normals[3 * size_t(model.first_child[node])], normal);
+    EXPECT_EQ(want.normal_t[0], normal[0]);
+    EXPECT_EQ(want.normal_t[1], normal[1]);
+    BitWriter alone;
+    RecordBits parts;
+    codec.encode(split_context(model, q, node), want, alone, &parts);
+    normal_bits += parts.normal;
+    color_bits += parts.color;
+  }
+  EXPECT_GT(normal_bits, 0u);
+  EXPECT_GT(color_bits, 0u);
+  // The forest without attributes has no attribute tables.
+  EXPECT_FALSE(forest().codec.has_normals() || forest().codec.has_colors());
+}
+
+TEST(SplitCodec, RefusesAttributesItCannotCarry) {
+  const uint32_t node = forest().model.split_order[0];
+  const SplitContext plain_context = split_context(forest().model, forest().q, node);
+  BitWriter w;
+  SplitPayload with_normal = split_payload(forest().model, forest().q, node);
+  with_normal.normal_t[0] = 5;
+  EXPECT_THROW(forest().codec.encode(plain_context, with_normal, w), Error) << "a normal in a model without normals";
+  SplitPayload with_color = split_payload(forest().model, forest().q, node);
+  with_color.color_t[3] = 255;
+  EXPECT_THROW(forest().codec.encode(plain_context, with_color, w), Error) << "a color in a model without colors";
+
+  const auto& [h, model, q, codec] = attributed_forest();
+  const SplitContext context = split_context(model, q, node);
+  // -32768 (decodes as -32767), and edge points whose mirror image is the canonical one.
+  for (const std::array<int16_t, 2> bad : {std::array<int16_t, 2>{-32768, 0}, {32767, -9}, {-4, -32767}}) {
+    SplitPayload mirror = split_payload(model, q, node);
+    mirror.normal_t[0] = uint16_t(bad[0]), mirror.normal_t[1] = uint16_t(bad[1]);
+    EXPECT_THROW(codec.encode(context, mirror, w), Error) << bad[0] << ", " << bad[1] << " is not canonical";
+  }
+}
+
+// Hostile tables may say anything about attributes; hostile records may step off the octahedral square, to
+// an edge point's mirror image, or past a color channel's range: refused, and nothing else decodes.
+TEST(SplitCodec, HostileAttributeFieldsAreRefused) {
+  const auto& [h, model, q, codec] = attributed_forest();
+  BitWriter w;
+  codec.serialize(w);
+  constexpr size_t kAttributesAt = 32 + 8 + 8 + 3 * 16 + 32;  // after the grid step
+  std::vector<uint8_t> bytes = w.bytes();
+  bytes[kAttributesAt / 8] |= 4;  // an attribute this version does not know
+  BitReader unknown(bytes, "tables");
+  EXPECT_THROW(SplitCodec::deserialize(unknown), Error);
+
+  std::mt19937_64 rng(11);
+  size_t decoded = 0, refused_normal = 0, refused_color = 0;
+  for (int trial = 0; trial < 20000; ++trial) {
+    std::vector<uint8_t> record(4 + rng() % 24);
+    for (uint8_t& b : record) b = uint8_t(rng());
+    const SplitContext context = split_context(model, q, model.split_order[rng() % model.split_order.size()]);
+    BitReader r(record, "random");
+    try {
+      const SplitPayload p = codec.decode(context, r);
+      ++decoded;
+      EXPECT_TRUE(is_canonical_normal(p.normal_t));
+    } catch (const Error& e) {
+      const std::string what = e.what();
+      refused_normal += what.find("normal") != std::string::npos;
+      refused_color += what.find("color") != std::string::npos;
+    }
+  }
+  EXPECT_GT(decoded, 0u);
+  EXPECT_GT(refused_normal, 0u) << "random records reach the normal's checks";
+  EXPECT_GT(refused_color, 0u) << "random records reach the colors' checks";
 }
 
 }  // namespace

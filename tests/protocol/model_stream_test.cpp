@@ -6,9 +6,12 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <memory>
 
+#include "common/bit_stream.h"
 #include "io/shapes.h"
 #include "pm/hierarchy.h"
+#include "pm/split_codec.h"
 #include "pm/split_record.h"
 #include "pm/vertex_id.h"
 #include "protocol/client_messages.h"
@@ -20,6 +23,7 @@
 #include "protocol/packet_table.h"
 #include "protocol/position_grid.h"
 #include "protocol/server_messages.h"
+#include "protocol/split_bands.h"
 #include "protocol/stream_context.h"
 #include "protocol_fixtures.h"
 #include "refine/selective_mesh.h"
@@ -191,12 +195,21 @@ TEST(ModelStream, Bunny) {
   check_model(*bunny);
 }
 
-// The server's encoded-once packets make the very frames the encoder makes, in any order and batch size.
+// The server's encoded-once packets (v_s's id and its stored record) make the very frames the encoder
+// makes, in any order and batch size.
 void check_packet_table(const test::BuiltModel& built, uint32_t position_bits) {
   const ModelData model = built.model();
   StreamContext c = stream_context(make_base(model, built.name, position_bits));
   c.has_refinement = true;
-  const PacketTable table(model, c);
+  const EncodedRecords stored = encode_records(model, position_bits);
+  BitReader tables(stored.tables, "tables");
+  c.records = std::make_shared<const SplitCodec>(SplitCodec::deserialize(tables));
+  const std::vector<uint32_t> q = grid_positions(model, position_bits);
+  c.held = [&](VertexId id, SplitContext& out) {
+    out = split_context(model, q, model.find(id));
+    return true;
+  };
+  const PacketTable table(model, c, StoredRecords{stored.records, stored.offsets});
   test::Rng rng(position_bits);
   for (int round = 0; round < 40; ++round) {
     VSplits m;
@@ -204,8 +217,11 @@ void check_packet_table(const test::BuiltModel& built, uint32_t position_bits) {
     m.final = rng() & 1;
     std::vector<uint32_t> nodes;
     const size_t count = round == 0 ? 0 : rng() % 300;
+    std::vector<bool> taken(model.node_count());  // a batch splits a node once
     while (nodes.size() < count) {
       const uint32_t node = model.split_order[rng() % model.split_order.size()];
+      if (taken[node]) continue;
+      taken[node] = true;
       nodes.push_back(node);
       m.splits.push_back(split_record(model, node));
     }

@@ -51,14 +51,25 @@ const BuiltModel& terrain_model() {
   return model;
 }
 
+namespace {
+
+std::unique_ptr<BuiltModel> build_shared(const std::string& name) {
+  const auto path = shared_model(name + ".ply.xz");
+  if (path.empty()) return nullptr;
+  Mesh mesh = load_mesh(path.string());
+  clean_mesh(mesh);
+  return std::make_unique<BuiltModel>(build(name, mesh));
+}
+
+}  // namespace
+
 const BuiltModel* bunny_model() {
-  static const std::unique_ptr<BuiltModel> model = []() -> std::unique_ptr<BuiltModel> {
-    const auto path = shared_model("bunny.ply.xz");
-    if (path.empty()) return nullptr;
-    Mesh mesh = load_mesh(path.string());
-    clean_mesh(mesh);
-    return std::make_unique<BuiltModel>(build("bunny", mesh));
-  }();
+  static const std::unique_ptr<BuiltModel> model = build_shared("bunny");
+  return model.get();
+}
+
+const BuiltModel* horse_model() {
+  static const std::unique_ptr<BuiltModel> model = build_shared("horse");
   return model.get();
 }
 

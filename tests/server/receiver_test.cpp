@@ -246,20 +246,20 @@ TEST(Receiver, ReceivesTheSplitsTheSenderDrivenModeSendsOnTheSamePath) {
   EXPECT_GT(deep.session().splits_received(), sender.session().splits_received()) << "some depth was asked for";
 }
 
-// The compact records carry no colors or normals: such a model travels as records format 1 (VSPLITS
-// packets) and the client still ends on local refinement's mesh.
-TEST(Receiver, AModelWithColorsTravelsInRecordsFormatOne) {
-  Mesh mesh = make_terrain(8000, 9);
-  mesh.colors.resize(4 * mesh.vertex_count());
-  for (size_t i = 0; i < mesh.colors.size(); ++i) mesh.colors[i] = uint8_t(i * 37);
-  const Fixture f = make_fixture(mesh, "colored");
-  ASSERT_EQ(f.catalogue->find("colored")->records_format, 1u);
+// The compact records carry v_t's normal and color: the client ends on local refinement's mesh with the
+// same positions, normals and colors.
+TEST(Receiver, AModelWithNormalsAndColorsEndsOnLocalRefinementsValues) {
+  const Fixture& f = test::attributed_terrain();
+  ASSERT_FALSE(f.hierarchy.normals.empty());
+  ASSERT_FALSE(f.hierarchy.colors.empty());
+  ASSERT_TRUE(f.catalogue->find(f.name)->codec->has_normals());
   Server server(f.catalogue);
   client::ReceiverClient client(server.url());
-  client.open("colored");
+  client.open(f.name);
   for (const Camera& camera : orbit_path(f.hierarchy, 6, 0.2f)) {
     client.frame(camera);
     EXPECT_EQ(faces_by_id(client.session().mesh()), local_faces(f.snapped, camera, 1.0f));
+    EXPECT_EQ(test::vertices_by_id(client.session().mesh()), test::local_vertices(f.snapped, camera, 1.0f));
   }
   EXPECT_GT(client.session().splits_received(), 0u);
 }

@@ -3,9 +3,12 @@
 // bytes than the same splits as version 3 packets; hostile records fail the client with a clear error.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <deque>
+#include <functional>
 #include <memory>
 #include <optional>
 #include <string>
@@ -78,11 +81,13 @@ void fly_and_compare(const Fixture& f, const std::vector<Camera>& path) {
   PricingTransport& priced = *pricing;
   client::StreamingClient client(std::move(pricing), client::ClientOptions{1.0f});
   client.open(f.name);
-  ASSERT_TRUE(client.session().context().records) << "a model without normals and colors streams split records";
+  ASSERT_TRUE(client.session().context().records) << "every model streams split records";
   for (const Camera& camera : path) {
     const client::FrameReport r = client.frame(camera);
     ASSERT_EQ(test::faces_by_id(client.session().mesh()), test::local_faces(f.snapped, camera, 1.0f))
         << "frame " << r.frame << " differs from local refinement";
+    ASSERT_EQ(test::vertices_by_id(client.session().mesh()), test::local_vertices(f.snapped, camera, 1.0f))
+        << "frame " << r.frame << ": positions, normals or colors differ from local refinement's";
   }
   ASSERT_GT(priced.splits, 0u);
   EXPECT_LT(priced.vsplits_bytes + priced.codec_bytes, priced.v3_bytes);
@@ -108,6 +113,20 @@ TEST(SenderDrivenRecords, BunnyFlightGivesLocalRefinementsMeshesForFewerBytes) {
   clean_mesh(mesh);
   const Fixture f = test::make_fixture(mesh, "bunny");
   fly_and_compare(f, test::orbit_path(f.hierarchy, 8, 0.0f));
+}
+
+TEST(SenderDrivenRecords, AModelWithNormalsAndColorsGivesLocalRefinementsValues) {
+  const Fixture& f = test::attributed_terrain();
+  fly_and_compare(f, test::orbit_path(f.hierarchy, 8, 0.1f));
+}
+
+TEST(SenderDrivenRecords, HorseFlightCarriesItsNormals) {
+  PMS_REQUIRE_SHARED_MODEL(file, "horse.ply.xz");
+  Mesh mesh = load_mesh(file.string());
+  clean_mesh(mesh);
+  ASSERT_TRUE(mesh.has_normals());
+  const Fixture f = test::make_fixture(mesh, "horse");
+  fly_and_compare(f, test::orbit_path(f.hierarchy, 6, 0.0f));
 }
 
 // A server that says what it was given to say: HELLO_OK, BASE, CODEC, then the VSPLITS answers.
@@ -157,6 +176,39 @@ std::string client_error(const protocol::Frame& vsplits) {
   return "no error";
 }
 
+// Every single bit of `good` flipped after the header (frame, flags, count: 9 bytes), decoded by a client
+// of `model`: the decoder refuses it with a ProtocolError (its text kept), or what it decodes is a batch of
+// splits, which `check` looks at; never anything else.
+struct Flips {
+  std::vector<std::string> errors;
+  size_t decoded = 0;
+};
+Flips flip_every_bit(const server::ServedModel& model, const protocol::Frame& good,
+                     const std::function<void(const protocol::VSplits&)>& check) {
+  client::ClientSession session;
+  session.on_base(protocol::decode_base(frame_of(*model.base_frame).payload));
+  session.on_codec(protocol::decode_codec(frame_of(*model.codec_frame).payload, session.context()));
+  Flips flips;
+  for (size_t bit = 8 * 9; bit < 8 * good.payload.size(); ++bit) {
+    std::vector<uint8_t> flipped = good.payload;
+    flipped[bit / 8] ^= uint8_t(1u << (bit % 8));
+    try {
+      check(protocol::decode_vsplits(flipped, session.context()));
+      ++flips.decoded;
+    } catch (const protocol::ProtocolError& e) {
+      flips.errors.push_back(e.what());
+    }
+  }
+  // The whole batch, unharmed, is accepted by the same client.
+  check(protocol::decode_vsplits(good.payload, session.context()));
+  return flips;
+}
+
+size_t errors_naming(const Flips& flips, const std::string& needle) {
+  return size_t(std::count_if(flips.errors.begin(), flips.errors.end(),
+                              [&](const std::string& e) { return e.find(needle) != std::string::npos; }));
+}
+
 TEST(SenderDrivenRecords, HostileRecordsFailTheClientWithAClearError) {
   const server::ServedModel& model = *terrain().catalogue->find("terrain");
   const std::vector<uint32_t> roots = root_splits(model, 4);
@@ -177,29 +229,28 @@ TEST(SenderDrivenRecords, HostileRecordsFailTheClientWithAClearError) {
   const std::string twice = client_error(frame_of(model.packets.encode(1, true, std::vector<uint32_t>{roots[0], roots[0]})));
   EXPECT_NE(twice.find("split a second time"), std::string::npos) << twice;
 
-  // Every single bit flipped after the header (frame, flags, count: 9 bytes): the decoder refuses it with a
-  // ProtocolError, or what it decodes is still a batch of splits; never anything else. Code words the
-  // tables lack and values off the grid are among the refusals.
-  client::ClientSession session;
-  session.on_base(protocol::decode_base(frame_of(*model.base_frame).payload));
-  session.on_codec(protocol::decode_codec(frame_of(*model.codec_frame).payload, session.context()));
-  size_t record_errors = 0, decoded = 0;
-  for (size_t bit = 8 * 9; bit < 8 * good.payload.size(); ++bit) {
-    std::vector<uint8_t> flipped = good.payload;
-    flipped[bit / 8] ^= uint8_t(1u << (bit % 8));
-    try {
-      protocol::decode_vsplits(flipped, session.context());
-      ++decoded;
-    } catch (const protocol::ProtocolError& e) {
-      record_errors += std::string(e.what()).find(": record: ") != std::string::npos;
-    }
-  }
+  // Code words the tables lack and values off the grid are among the refusals of single flipped bits.
+  const Flips flips = flip_every_bit(model, good, [](const protocol::VSplits& batch) { EXPECT_GT(batch.splits.size(), 0u); });
+  const size_t record_errors = errors_naming(flips, ": record: ");
   EXPECT_GT(record_errors, 0u) << "no flipped bit made a record SplitCodec::decode refuses";
   std::printf("[ records  ] %zu bit flips: %zu refused by the record decoder, %zu still decode\n",
-              8 * good.payload.size() - 72, record_errors, decoded);
+              8 * good.payload.size() - 72, record_errors, flips.decoded);
+}
 
-  // The whole batch, unharmed, is accepted by the same client.
-  EXPECT_EQ(protocol::decode_vsplits(good.payload, session.context()).splits.size(), 4u);
+// The same with v_t's normal and color in the records: a flip there is refused (a normal off the octahedral
+// square or an edge point's mirror image, a code word the tables lack) or decodes to a unit normal.
+TEST(SenderDrivenRecords, HostileAttributesFailTheClientWithAClearError) {
+  const server::ServedModel& model = *test::attributed_terrain().catalogue->find("attributed");
+  const protocol::Frame good = frame_of(model.packets.encode(1, true, root_splits(model, 4)));
+  const Flips flips = flip_every_bit(model, good, [](const protocol::VSplits& batch) {
+    for (const SplitRecord& s : batch.splits) {
+      ASSERT_TRUE(s.has_normal && s.has_color);
+      EXPECT_NEAR(std::sqrt(s.normal_t[0] * s.normal_t[0] + s.normal_t[1] * s.normal_t[1] + s.normal_t[2] * s.normal_t[2]), 1.0, 1e-5);
+    }
+  });
+  EXPECT_GT(errors_naming(flips, ": record: normal") + errors_naming(flips, ": record: color"), 0u)
+      << "no flipped bit reached the attributes' checks";
+  EXPECT_GT(flips.decoded, 0u);
 }
 
 TEST(SenderDrivenRecords, ACodecThatDoesNotFitTheBaseIsRefused) {
@@ -222,6 +273,15 @@ TEST(SenderDrivenRecords, ACodecThatDoesNotFitTheBaseIsRefused) {
   EXPECT_THROW(protocol::decode_codec(trailing, session.context()), protocol::ProtocolError);
   std::vector<uint8_t> cut(codec.payload.begin(), codec.payload.end() - 1);
   EXPECT_THROW(protocol::decode_codec(cut, session.context()), protocol::ProtocolError);
+  // A BASE with normals and colors and tables without them (or the other way round) do not fit either.
+  protocol::StreamContext attributed = session.context();
+  attributed.has_normals = attributed.has_colors = true;
+  EXPECT_THROW(protocol::decode_codec(codec.payload, attributed), protocol::ProtocolError);
+  const server::ServedModel& with = *test::attributed_terrain().catalogue->find("attributed");
+  client::ClientSession attributed_session;
+  attributed_session.on_base(protocol::decode_base(frame_of(*with.base_frame).payload));
+  EXPECT_NO_THROW(protocol::decode_codec(frame_of(*with.codec_frame).payload, attributed_session.context()));
+  EXPECT_THROW(protocol::decode_codec(frame_of(*with.codec_frame).payload, session.context()), protocol::ProtocolError);
 }
 
 }  // namespace

@@ -10,7 +10,9 @@
 #include <utility>
 
 #include "builder/build.h"
+#include "io/shapes.h"
 #include "pm/hierarchy.h"
+#include "pm/octahedral_normal.h"
 #include "pm/pms_file.h"
 #include "pm/vertex_id.h"
 #include "protocol/framing.h"
@@ -38,6 +40,32 @@ Fixture make_fixture(const Mesh& mesh, const std::string& name) {
   const protocol::PositionGrid grid = f.catalogue->find(name)->context.grid;
   for (size_t n = 0; n < f.snapped.node_count(); ++n)
     protocol::snap_position(grid, &f.hierarchy.position[3 * n], &f.snapped.position[3 * n]);
+  for (size_t n = 0; n < f.snapped.normals.size() / 3; ++n) {
+    uint16_t q[2];
+    encode_normal(&f.hierarchy.normals[3 * n], q);
+    decode_normal(q, &f.snapped.normals[3 * n]);
+  }
+  return f;
+}
+
+const Fixture& attributed_terrain() {
+  static const Fixture f = [] {
+    Mesh mesh = make_terrain(8000, 9);
+    const size_t n = mesh.vertex_count();
+    mesh.normals.resize(3 * n);
+    mesh.colors.resize(4 * n);
+    for (size_t v = 0; v < n; ++v) {
+      const float* p = &mesh.positions[3 * v];
+      float normal[3] = {std::sin(3 * p[0]), 2.0f, std::cos(2 * p[2])}, length = 0;
+      for (float c : normal) length += c * c;
+      for (int k = 0; k < 3; ++k) {
+        mesh.normals[3 * v + size_t(k)] = normal[k] / std::sqrt(length);
+        mesh.colors[4 * v + size_t(k)] = uint8_t(127.5f + 127.5f * std::sin(float(k + 1) * p[k]));
+      }
+      mesh.colors[4 * v + 3] = uint8_t(v % 7 == 0 ? 128 : 255);
+    }
+    return make_fixture(mesh, "attributed");
+  }();
   return f;
 }
 
@@ -84,14 +112,43 @@ Faces faces_by_id(SelectiveMesh& mesh) {
   return faces;
 }
 
-Faces local_faces(const Hierarchy& snapped, const Camera& camera, float tolerance) {
+Vertices vertices_by_id(SelectiveMesh& mesh) {
+  Vertices vertices;
+  const VertexHierarchy& h = mesh.hierarchy();
+  for (uint32_t slot : mesh.active_vertices()) {
+    VertexValues& v = vertices.emplace_back();
+    v.id = h.id(slot);
+    std::copy_n(h.position(slot), 3, v.position);
+    if (h.has_normals()) std::copy_n(h.normal(slot), 3, v.normal);
+    if (h.has_colors()) std::copy_n(h.color(slot), 4, v.color);
+  }
+  std::sort(vertices.begin(), vertices.end(), [](const VertexValues& a, const VertexValues& b) {
+    return a.id.tree < b.id.tree || (a.id.tree == b.id.tree && a.id.node < b.id.node);
+  });
+  return vertices;
+}
+
+namespace {
+
+// `read` of the mesh local refinement of the same model makes for one view.
+template <class Read> auto refine_locally(const Hierarchy& snapped, const Camera& camera, float tolerance, Read read) {
   const ModelData model = model_of(snapped);
   VertexHierarchy hierarchy = VertexHierarchy::from_model(model);
   SelectiveMesh mesh(hierarchy, model.base_faces);
   SelectiveRefinement refinement(mesh, model.scale, AdaptOptions{tolerance, 0, 0});
   refinement.set_view(make_view(camera, model.bbox_min, model.bbox_max));
   refinement.converge([&](std::span<const uint32_t> leaves) { return add_model_splits(hierarchy, model, leaves); });
-  return faces_by_id(mesh);
+  return read(mesh);
+}
+
+}  // namespace
+
+Faces local_faces(const Hierarchy& snapped, const Camera& camera, float tolerance) {
+  return refine_locally(snapped, camera, tolerance, [](SelectiveMesh& mesh) { return faces_by_id(mesh); });
+}
+
+Vertices local_vertices(const Hierarchy& snapped, const Camera& camera, float tolerance) {
+  return refine_locally(snapped, camera, tolerance, [](SelectiveMesh& mesh) { return vertices_by_id(mesh); });
 }
 
 InProcess in_process(const Fixture& f, const client::ClientOptions& options, const server::ServerLimits& limits) {

@@ -25,7 +25,7 @@ using Faces = std::vector<std::array<VertexId, 3>>;
 
 struct Fixture {
   Hierarchy hierarchy;  // as built
-  Hierarchy snapped;    // positions as clients receive them
+  Hierarchy snapped;    // positions and normals as clients receive them
   std::string path;     // the .pms file served
   std::shared_ptr<const server::Catalogue> catalogue;
   std::string name;
@@ -34,6 +34,9 @@ struct Fixture {
 // Builds `mesh` and writes it to NAME.pms in a fresh temp_dir().
 Fixture make_fixture(const Mesh& mesh, const std::string& name);
 
+// A terrain with smooth per-vertex normals and colors, so both travel in the split records; made once.
+const Fixture& attributed_terrain();
+
 // Frames circling the model and closing in on it, so later frames need detail earlier ones did not.
 std::vector<Camera> orbit_path(const Hierarchy& h, int frames, float phase);
 
@@ -41,8 +44,21 @@ std::vector<Camera> orbit_path(const Hierarchy& h, int frames, float phase);
 // front and the same faces with the same orientation.
 Faces faces_by_id(SelectiveMesh& mesh);
 
-// Local refinement of the same model (positions as the wire carries them) for one view.
+// The mesh's active vertices by id, with the values a client renders: position, normal, color (zeros
+// for what the model lacks).
+struct VertexValues {
+  VertexId id;
+  float position[3] = {0, 0, 0};
+  float normal[3] = {0, 0, 0};
+  uint8_t color[4] = {0, 0, 0, 0};
+  friend bool operator==(const VertexValues&, const VertexValues&) = default;
+};
+using Vertices = std::vector<VertexValues>;
+Vertices vertices_by_id(SelectiveMesh& mesh);
+
+// Local refinement of the same model (positions and normals as the wire carries them) for one view.
 Faces local_faces(const Hierarchy& snapped, const Camera& camera, float tolerance);
+Vertices local_vertices(const Hierarchy& snapped, const Camera& camera, float tolerance);
 
 // A client bound to a server Session in this process (LocalTransport), so a test reads the session frame
 // by frame; the model is open. `limits` must outlive it.

@@ -33,8 +33,6 @@ constexpr float kTolerance = 1;
 constexpr uint32_t kPathFrames = 120, kQuickPathFrames = 30;
 // Draco at a coarser grid too, as issue 19 quotes it (17.8 bpv on dragon at 14 bits).
 constexpr uint32_t kCoarseDracoBits = 14;
-// Nodes per split_records_body call when the whole model's wire payload is summed: bounds the memory.
-constexpr size_t kBodyChunk = 4096;
 // A band deeper than any model's trees.
 constexpr uint32_t kWholeTree = 64;
 
@@ -50,8 +48,7 @@ double per(uint64_t bits, uint64_t count) { return count ? double(bits) / double
 struct WholeModel {
   uint64_t vertices = 0, splits = 0;
   uint64_t base_bytes = 0, table_bytes = 0, record_bits = 0;  // the compact records (.pms SRTB / SREC)
-  uint32_t records_format = 0;
-  uint64_t wire_body_bytes = 0;  // the HTTP bodies of every split, in the model's records format
+  uint64_t wire_body_bytes = 0;  // the HTTP bodies of every split
   SingleRateSizes single;
   uint64_t draco_coarse = 0;
   std::string draco_coarse_error;
@@ -59,26 +56,12 @@ struct WholeModel {
   uint64_t records_stream_bits() const { return 8 * (base_bytes + table_bytes) + record_bits; }
 };
 
-// Every split as the receiver-driven routes send it: each tree's root with all its descendants, a band
-// (format 2), or the packets in split order (format 1), in bodies of kBodyChunk splits.
+// Every split as the receiver-driven routes send it: each tree's root with all its descendants, a band.
 uint64_t wire_body_bytes(const server::ServedModel& served) {
   const ModelData& model = served.model();
   uint64_t bytes = 0;
-  if (served.records_format == 2) {
-    for (uint32_t tree = 0; tree < model.root_count; ++tree)
-      if (!model.is_leaf(tree))
-        bytes += server::split_records_body(served, {kWholeTree, {model.id(tree)}}, {}).size();
-    return bytes;
-  }
-  std::vector<uint32_t> nodes;
-  for (uint32_t n : model.split_order) {
-    nodes.push_back(n);
-    if (nodes.size() == kBodyChunk) {
-      bytes += server::split_records_body(served, {}, nodes).size();
-      nodes.clear();
-    }
-  }
-  if (!nodes.empty()) bytes += server::split_records_body(served, {}, nodes).size();
+  for (uint32_t tree = 0; tree < model.root_count; ++tree)
+    if (!model.is_leaf(tree)) bytes += server::split_records_body(served, {kWholeTree, {model.id(tree)}}, {}).size();
   return bytes;
 }
 
@@ -92,7 +75,6 @@ WholeModel measure_whole_model(const BenchModel& m) {
   served.file->split_codec().serialize(tables);
   w.table_bytes = tables.bytes().size();
   w.record_bits = served.file->split_offsets().empty() ? 0 : served.file->split_offsets().back();
-  w.records_format = served.records_format;
   w.wire_body_bytes = wire_body_bytes(served);
   const Mesh finest = refine_first_splits(model, std::numeric_limits<uint64_t>::max());
   w.vertices = finest.vertex_count();
@@ -272,8 +254,7 @@ void run_receiver_group(BenchContext& context) {
              "/models/{m}/base` sends it), the model's code tables and every compact split record (docs/protocol.md, "
              "\"Split records\"; stored in the .pms), with no HTTP framing; \"bits / split\" is the same total per split, "
              "issue 19's ≤ 40 target. \"HTTP bodies\" = BASE plus the bodies the receiver-driven routes send for "
-             "every split (each tree as one band: format 2, the records with their presence bits; or the VSPLITS "
-             "packets of format 1, for a model with normals or colors). meshoptimizer 0.18: vertex cache then vertex fetch order, its index codec and its vertex codec on "
+             "every split (each tree as one band: the records with their presence bits). meshoptimizer 0.18: vertex cache then vertex fetch order, its index codec and its vertex codec on "
              "x, y, z, 0 as 16-bit lanes; gzip -9 and zstd -19 of those two streams; Draco 1.5 edgebreaker at speed 0 "
              "(`-cl 10`) with its own position quantization at 16 and at 14 bits. Every stream is decoded again and "
              "checked. The single-rate codecs have no levels of detail, no random access and no refinement info.\n\n";

@@ -25,7 +25,6 @@
 #include "common/bit_stream.h"
 #include "pm/hierarchy.h"
 #include "pm/split_codec.h"
-#include "pm/split_record.h"
 #include "protocol/client_messages.h"
 #include "protocol/packet_bits.h"
 
@@ -58,40 +57,30 @@ void print(const std::string& text) {
 // ---- E2 ------------------------------------------------------------------------------------------------
 
 struct E2 {
-  double topology = 0, position = 0, refinement = 0, total = 0;  // mean bits per packet
+  double topology = 0, position = 0, refinement = 0, attributes = 0, total = 0;  // mean bits per packet
 };
 
 E2 packet_bits_of(const BenchModel& m) {
   const ModelData& model = m.served->model();
   E2 e;
   uint64_t n = 0;
-  // A model in records format 2 streams v_s's id and its split record (docs/protocol.md, "VSPLITS"):
-  // topology = the id and the record's cut vertices, position = its geometry.
-  const SplitCodec* codec = m.served->codec.get();
-  const std::vector<uint32_t> q = codec ? grid_positions(model, m.served->context.grid.bits) : std::vector<uint32_t>{};
+  // A packet is v_s's id and its split record (docs/protocol.md, "VSPLITS"): topology = the id and the
+  // record's cut vertices, position = its geometry, attributes = v_t's normal and color.
+  const SplitCodec& codec = *m.served->codec;
+  const std::vector<uint32_t> q = grid_positions(model, m.served->context.grid.bits);
   for (uint32_t node : model.split_order) {
-    if (codec) {
-      BitWriter w;
-      RecordBits b;
-      codec->encode(split_context(model, q, node), split_payload(model, q, node), w, &b);
-      e.topology += protocol::id_bits(model.id(node), m.served->context) + b.topology;
-      e.position += b.geometry;
-      e.refinement += b.refinement;
-      e.total += protocol::id_bits(model.id(node), m.served->context) + b.total();
-    } else {
-      const protocol::PacketBits b = protocol::packet_bits(split_record(model, node), m.served->context);
-      e.topology += b.topology;
-      e.position += b.position;
-      e.refinement += b.refinement;
-      e.total += b.total();
-    }
+    BitWriter w;
+    RecordBits b;
+    codec.encode(split_context(model, q, node), split_payload(model, q, node), w, &b);
+    e.topology += protocol::id_bits(model.id(node), m.served->context) + b.topology;
+    e.position += b.geometry;
+    e.refinement += b.refinement;
+    e.attributes += double(b.attributes());
+    e.total += protocol::id_bits(model.id(node), m.served->context) + b.total();
     ++n;
   }
   if (n) {
-    e.topology /= double(n);
-    e.position /= double(n);
-    e.refinement /= double(n);
-    e.total /= double(n);
+    for (double* v : {&e.topology, &e.position, &e.refinement, &e.attributes, &e.total}) *v /= double(n);
   }
   return e;
 }
@@ -337,7 +326,7 @@ std::string e11_section(BenchContext& context, const BenchModel& big, bool quick
 
 Table e2_table() {
   return Table({{"model", false}, {"topology bits", true}, {"paper (Table 2)", true}, {"position bits", true},
-                {"refinement bits", true}, {"bytes/packet (wire)", true}});
+                {"refinement bits", true}, {"normal + color bits", true}, {"bytes/packet (wire)", true}});
 }
 
 Table e34_table() {
@@ -357,14 +346,15 @@ void run_e2_to_e4(const BenchModel& m, bool quick, Table& e2, Table& e34, json& 
   const std::vector<Camera> path = path_of(m, PathKind::orbit, quick ? kQuickPathFrames : kPathFrames);
   const Laps laps = run_laps(m, path);
   const double wire = laps.splits ? double(laps.payload_down) / double(laps.splits) : 0;
-  e2.add_row({m.name, fixed(bits.topology, 1), "96", fixed(bits.position, 1), fixed(bits.refinement, 1), fixed(wire, 1)});
+  e2.add_row({m.name, fixed(bits.topology, 1), "96", fixed(bits.position, 1), fixed(bits.refinement, 1),
+              fixed(bits.attributes, 1), fixed(wire, 1)});
   e34.add_row({m.name, std::to_string(2 * path.size()), thousands(laps.lap_down[0]), thousands(laps.lap_up[0]),
                thousands(laps.lap_down[1]), thousands(laps.lap_up[1]), fixed(100 * laps.mean_ratio, 1) + " %",
                fixed(100 * laps.max_ratio, 1) + " %", thousands(laps.max_tag_bytes), thousands(laps.max_front_bytes),
                percent_of(laps.max_front_nodes, m.served->model().node_count()),
                percent_of(laps.max_window_nodes, m.served->model().node_count())});
   record["e2"] = {{"topology_bits", bits.topology}, {"position_bits", bits.position},
-                  {"refinement_bits", bits.refinement}, {"wire_bytes_per_packet", wire}};
+                  {"refinement_bits", bits.refinement}, {"attribute_bits", bits.attributes}, {"wire_bytes_per_packet", wire}};
   record["e3_e4"] = {{"lap_down", {laps.lap_down[0], laps.lap_down[1]}}, {"lap_up", {laps.lap_up[0], laps.lap_up[1]}},
                      {"tags_over_front_mean", laps.mean_ratio}, {"tags_over_front_max", laps.max_ratio},
                      {"frames", laps.frames}};
@@ -393,10 +383,9 @@ std::string e2_to_e5_sections(const Table& e2, const Table& e34, const Table& e5
   print("\nE3/E4: two laps of an orbit at τ = 1 px (Fig 6: tags ≈ 10 % of a stored front; Fig 7: lap 2 = 0)\n" + e34.markdown());
   print("\nE5: bytes to satisfy τ = 1 px from a close view (Fig 9)\n" + e5.markdown());
   std::string section = "### E2: bits per vsplit packet\n\n" + e2.markdown() +
-                        "\nTopology = v_s's id and the record's v̂_l, v̂_r (split records, docs/protocol.md \"VSPLITS\"; a model "
-                        "with normals or colors: ids of v_s, v̂_l, v̂_r and the cut flags, written with the model's tree/node id "
-                        "widths). Position = the record's geometry (there: 3 × 16 bits). Whole split order; the wire column "
-                        "is E3's first lap, frame headers included.\n\n";
+                        "\nTopology = v_s's id and the record's v̂_l, v̂_r (split records, docs/protocol.md \"VSPLITS\"). "
+                        "Position = the record's geometry; normal + color = v_t's, for a model that has them. Whole split "
+                        "order; the wire column is E3's first lap, frame headers included.\n\n";
   section += "### E3/E4: two laps of one orbit path, τ = 1 px\n\n" + e34.markdown() +
              "\nA stored front costs " + fixed(kFrontEntryBytes, 0) + " bytes per active node (one 64-bit id). The tags cost "
              "a bit per node of the window, which spans from the coarsest active node to the finest, so tags / front "
