@@ -31,7 +31,7 @@ class ClientSession {
   // Attaches a batch's packets as leaves of the partial hierarchy (UpdateVHierarchy). Applying them to
   // the mesh is the mode's business (client_mode.h).
   void on_vsplits(const protocol::VSplits& batch);
-  // The same for a receiver-driven answer in records format 2 (protocol/split_bands.h): the bands of
+  // The same for a receiver-driven answer in records format 3 (protocol/split_bands.h): the bands of
   // `request`'s ids, coded with `codec`. Returns the splits attached.
   uint32_t on_split_bands(std::span<const uint8_t> body, const protocol::SplitRequest& request, const SplitCodec& codec);
   // Makes every split of an attached batch on the mesh, in order: for the modes whose client applies

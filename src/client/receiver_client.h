@@ -105,7 +105,7 @@ class ReceiverClient {
   // One GET: its URL and the ids it names (lists: the ids; blocks: the block's root).
   struct Request {
     std::string target;
-    protocol::SplitRequest request;  // format 2's answers are read by it
+    protocol::SplitRequest request;  // format 3's answers are read by it
     bool prefetch = false;           // asked for along the predicted path
     bool wanted = true;              // the last ranking wants one of its ids
     uint32_t stale = 0;              // of its ids, those the last ranking no longer wants (not prefetched ones)

@@ -1,4 +1,4 @@
-// The body of a receiver-driven answer in records format 2 (docs/protocol.md, "Receiver-driven over HTTP"):
+// The body of a receiver-driven answer in records format 3 (docs/protocol.md, "Receiver-driven over HTTP"):
 // for each requested id, the compact split records (pm/split_codec.h) of its band — the id's split and its
 // descendants' down to the request's depth — in one bit stream. Both ends walk the band the same way, so
 // the stream needs no ids: a record's children are known from its id, and whether a child has a split of

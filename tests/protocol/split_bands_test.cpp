@@ -1,4 +1,4 @@
-// Records format 2 (protocol/split_bands.h): bands written from a model's stored records and read by a
+// Records format 3 (protocol/split_bands.h): bands written from a model's stored records and read by a
 // client that holds only the base mesh end with every node of the model at the values every mode
 // evaluates; what the client already holds is skipped; a body that is not one is an error, never a guess.
 #include <gtest/gtest.h>
