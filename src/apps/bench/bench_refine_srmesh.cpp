@@ -2,6 +2,7 @@
 // τ = 1 px and the cost of a steady frame, an orbit step and the refinement from the base mesh (on a mesh
 // whose memory was used before, and on a fresh one), beside the figures Hoppe's own code gave on this
 // machine type; the same timings on dragon. docs/architecture.md ("Bench figures") says what each means.
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <memory>
@@ -135,6 +136,21 @@ std::string ms_text(double ms) {
   return text;
 }
 
+// The samples' range, fastest–slowest: this shared VM slows in phases, so a median of few samples moves
+// between runs of the same binary and the fastest is the steadiest figure to compare.
+std::string spread_text(const std::vector<double>& samples) {
+  const auto [fastest, slowest] = std::minmax_element(samples.begin(), samples.end());
+  return samples.empty() ? "n/a" : ms_text(*fastest) + "–" + ms_text(*slowest);
+}
+
+Table spread_table(const std::vector<DistanceRun>& runs) {
+  Table table({{"d", true}, {"steady ms", true}, {"orbit ms", true}, {"from base ms", true}, {"fresh ms", true}});
+  for (const DistanceRun& run : runs)
+    table.add_row({fixed(run.distance, 1), spread_text(run.steady_ms), spread_text(run.orbit_ms), spread_text(run.base_ms),
+                   spread_text(run.fresh_ms)});
+  return table;
+}
+
 std::string base_cell(const DistanceRun& run) {
   return ms_text(median(run.base_ms)) + " (" + ms_text(median(run.fresh_ms)) + " fresh)";
 }
@@ -203,13 +219,16 @@ std::string srmesh_comparison_section(const BenchContext& context, json& out) {
                    ms_text(hoppe.from_base_ms), base_cell(run)});
   }
   const Table bunny_counts = counts_table(bunny_runs);
+  const Table bunny_spread = spread_table(bunny_runs);
   json& o = out["srmesh"];
   for (const DistanceRun& run : bunny_runs) o["bunny"].push_back(run_json(run));
   std::string section = "### Against Hoppe's SrMesh, bunny, τ = 1 px, 1920×1080, 60° (median of " + std::to_string(repeats) +
                         " runs; Hoppe's columns measured with his code on this machine type)\n\n" + table.markdown() +
+                        "\nThe spread of those runs (fastest–slowest; each distance's first from-base run is also the "
+                        "refinement's first decode of its slots):\n\n" + bunny_spread.markdown() +
                         "\nThe work behind it:\n\n" + bunny_counts.markdown() + "\n";
   print_now("\nAgainst Hoppe's SrMesh, bunny (targets: faces, steady, orbit, from base ≤ Hoppe's; fresh ≤ 1.5× Hoppe's from base)\n" +
-            table.markdown() + bunny_counts.markdown());
+            table.markdown() + bunny_spread.markdown() + bunny_counts.markdown());
 
   if (context.options.quick) return section;
   const BenchModel dragon = prepare_model(context, "dragon");
