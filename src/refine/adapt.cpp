@@ -169,7 +169,16 @@ uint32_t SelectiveRefinement::dependency(uint32_t slot) {
   if (is_vertex(a) && is_vertex(b) && a.tree == b.tree) {
     const int da = a.depth(), db = b.depth(), d = std::min(da, db);
     const uint64_t pa = a.node >> (da - d), pb = b.node >> (db - d);
-    dep = h.find({a.tree, pa >> std::bit_width(pa ^ pb)});
+    const uint64_t common = pa >> std::bit_width(pa ^ pb);
+    // An ancestor of the slot is kept before it (the walk reaches a node through kept parents, and a
+    // forced node forces its parent chain): keep() need not look at it, and that look mispredicted.
+    const VertexId own = h.id(slot);
+    const int below = own.depth() - (std::bit_width(common) - 1);
+    if (own.tree == a.tree && below > 0 && (own.node >> below) == common) {
+      slots_[slot].dependency = kNone;
+      return kNone;
+    }
+    dep = h.find({a.tree, common});
     if (dep == kNone) return kNone;  // not known (only while the node is not split): ask again later
     state(dep);  // decoded now, so keep() reads its slot without the checks
   }
