@@ -33,20 +33,22 @@ inline float float_from_half(uint16_t half) {
 
 inline float decode_length(uint16_t half, float scale) { return float_from_half(half) * effective_scale(scale); }
 
-inline float snorm_to_float(uint16_t bits) { return std::max(float(int16_t(bits)) / float(kAxisSteps), -1.0f); }
-
-// Octahedral decode into a unit float vector; this exact vector is what dequantize_refine returns.
-inline void decode_axis(uint16_t qx, uint16_t qy, float axis[3]) {
-  float x = snorm_to_float(qx), y = snorm_to_float(qy);
+// Octahedral decode (Meyer et al. 2010) of two int16 coordinates on a square of half width `steps` into
+// a unit float vector: the cone axes (kAxisSteps) and the wire's normals (pm/octahedral_normal.h).
+inline void decode_octahedral(uint16_t qx, uint16_t qy, float steps, float out[3]) {
+  float x = std::max(float(int16_t(qx)) / steps, -1.0f), y = std::max(float(int16_t(qy)) / steps, -1.0f);
   const float z = 1.0f - std::abs(x) - std::abs(y);
   const float fold = std::max(-z, 0.0f);  // lower hemisphere is folded over the diagonals
   x += x >= 0 ? -fold : fold;
   y += y >= 0 ? -fold : fold;
-  const float inv = 1.0f / std::sqrt(x * x + y * y + z * z);
-  axis[0] = x * inv;
-  axis[1] = y * inv;
-  axis[2] = z * inv;
+  const float inv = 1.0f / std::sqrt(x * x + y * y + z * z);  // never 0: |x| + |y| + |z| >= 1 after folding
+  out[0] = x * inv;
+  out[1] = y * inv;
+  out[2] = z * inv;
 }
+
+// The cone axis as dequantize_refine returns it.
+inline void decode_axis(uint16_t qx, uint16_t qy, float axis[3]) { decode_octahedral(qx, qy, float(kAxisSteps), axis); }
 
 inline float decode_cone_angle(uint16_t units) {
   return units == kNoCone ? std::numbers::pi_v<float> : float(units * kConeUnit);

@@ -6,11 +6,12 @@
 #include <bit>
 #include <cmath>
 
+#include "pm/dequantize_inline.h"
+
 namespace pms {
 namespace {
 
 uint16_t snorm16(float v) { return uint16_t(int16_t(std::lround(std::clamp(v, -1.0f, 1.0f) * float(kOctahedralMax)))); }
-float from_snorm16(uint16_t bits) { return std::max(float(int16_t(bits)) / float(kOctahedralMax), -1.0f); }
 
 }  // namespace
 
@@ -88,15 +89,7 @@ bool is_canonical_normal(const uint16_t q[2]) {
 }
 
 void decode_normal(const uint16_t q[2], float n[3]) {
-  float x = from_snorm16(q[0]), y = from_snorm16(q[1]);
-  const float z = 1.0f - std::abs(x) - std::abs(y);
-  const float fold = std::max(-z, 0.0f);
-  x += x >= 0 ? -fold : fold;
-  y += y >= 0 ? -fold : fold;
-  const float inv = 1.0f / std::sqrt(x * x + y * y + z * z);  // never 0: |x| + |y| + |z| >= 1 after folding
-  n[0] = x * inv;
-  n[1] = y * inv;
-  n[2] = z * inv;
+  dequantize_detail::decode_octahedral(q[0], q[1], float(kOctahedralMax), n);
 }
 
 }  // namespace pms
