@@ -594,30 +594,36 @@ bool SelectiveMesh::split_between(uint32_t s, VertexId cut_l, VertexId cut_r) {
   const VertexRecord& record = vertex_[s];
   const uint32_t n = record.size;
   if (n > kSplitFan || n == 0 || !is_vertex(cut_l) || !is_vertex(cut_r)) return false;
-  const uint32_t* listed = faces_of(record);
-  uint32_t face[kSplitFan], k[kSplitFan];
-  uint32_t ia = kNone, jr = kNone, l = kNone, r = kNone;
-  const int dl = cut_l.depth(), dr = cut_r.depth();
-  // v is an ancestor of (or is) the cut when the cut's id shifted to v's depth is v's. Branch-free:
-  // which neighbour matches depends on the view, so a branch here mispredicts.
-  const auto below = [](const VertexRecord& v, int d, VertexId cut, int cut_depth) {
-    const uint32_t up = uint32_t(cut_depth - d);  // ≥ 64 when v lies deeper than the cut
-    return uint32_t(v.tree == cut.tree) & uint32_t(up < 64) & uint32_t((cut.node >> (up & 63)) == v.node);
+  const uint32_t* face = faces_of(record);
+  uint32_t copied[kSplitFan], k[kSplitFan], next[kSplitFan];
+  if (record.capacity > kInlineFaces) {  // deactivate() frees the pool block, and the children may take it
+    std::copy_n(face, n, copied);
+    face = copied;
+  }
+  static_assert(kSplitFan <= 64);
+  // v is an ancestor of (or is) the cut when the cut's id shifted to v's depth is v's; depths as leading
+  // zeros, so `up` wraps past 63 when v lies deeper than the cut. Branch-free, with one bit per neighbour
+  // for each cut: which neighbour matches depends on the view, so a branch here mispredicts, and two
+  // bit masks leave the loop few enough live values to stay in registers.
+  const int zeros_l = __builtin_clzll(cut_l.node), zeros_r = __builtin_clzll(cut_r.node);
+  const auto below = [](const VertexRecord& v, int zeros, VertexId cut, int cut_zeros) {
+    const uint32_t up = uint32_t(zeros - cut_zeros);
+    return uint64_t((((cut.node >> (up & 63)) ^ v.node) | (cut.tree ^ v.tree) | (up >> 6)) == 0);
   };
+  uint64_t match_l = 0, match_r = 0;  // bit i: neighbour i is v_l's (v_r's) active ancestor
   for (uint32_t i = 0; i < n; ++i) {
-    face[i] = listed[i];
     const uint32_t* c = &corner_[3 * size_t(face[i])];
     k[i] = uint32_t(c[1] == s) + 2 * uint32_t(c[2] == s);
-    const uint32_t next = c[kNextCorner[k[i]]];
-    const VertexRecord& w = vertex_[next];
-    const int d = 63 - __builtin_clzll(w.node);  // an active id is never 0
-    const uint32_t is_l = 0 - below(w, d, cut_l, dl), is_r = 0 - below(w, d, cut_r, dr);  // all ones or zero
-    ia ^= (ia ^ i) & is_l;
-    l ^= (l ^ next) & is_l;
-    jr ^= (jr ^ i) & is_r;
-    r ^= (r ^ next) & is_r;
+    next[i] = c[kNextCorner[k[i]]];
+    const VertexRecord& w = vertex_[next[i]];
+    const int zeros = __builtin_clzll(w.node);  // an active id is never 0
+    match_l |= below(w, zeros, cut_l, zeros_l) << i;
+    match_r |= below(w, zeros, cut_r, zeros_r) << i;
   }
-  if (ia == kNone || jr == kNone || ia == jr) return false;
+  if (match_l == 0 || match_r == 0) return false;
+  const uint32_t ia = uint32_t(std::countr_zero(match_l)), jr = uint32_t(std::countr_zero(match_r));
+  if (ia == jr) return false;
+  const uint32_t l = next[ia], r = next[jr];
   const uint32_t ib = jr > 0 ? jr - 1 : n - 1;
   if (jr == 0 && corner_[3 * size_t(face[ib]) + kPrevCorner[k[ib]]] != r) return false;  // no (s, ·, r): the border
   const uint32_t t = hierarchy_->first_child(s), u = t + 1;
@@ -629,26 +635,30 @@ bool SelectiveMesh::split_between(uint32_t s, VertexId cut_l, VertexId cut_r) {
   // v_t takes faces ia … ib (cyclically), v_u the rest; each list keeps the fan's order with the two new
   // faces where the fan was cut: t: [ia … ib] fr fl, u: [ib+1 … ia−1] fl fr, each rotated as the old
   // list was (an open fan starts after its gap).
-  const bool wraps = ia > ib;  // v_t's range runs over the list's end
-  const uint32_t t_count = wraps ? n - ia + ib + 1 : ib - ia + 1;
+  // Whether v_t's range runs over the list's end varies with the view: the choices below are masks, as
+  // branches they mispredicted.
+  const bool wraps = ia > ib;
+  const uint32_t wrap_mask = 0 - uint32_t(wraps);
+  const auto pick = [wrap_mask](uint32_t if_wraps, uint32_t otherwise) { return otherwise ^ ((if_wraps ^ otherwise) & wrap_mask); };
+  const uint32_t t_count = ib - ia + 1 + (n & wrap_mask);
   assign_faces(t, t_count + 2);  // may move pool_: the lists are read once both are assigned
   assign_faces(u, n - t_count + 2);
   uint32_t* const lists[2] = {faces_of(vertex_[u]), faces_of(vertex_[t])};
   // Face i goes to i − shift in its child's list, one shift before the new faces' place and one after
   // (unsigned: a shift may be "negative"). One loop without branches: separate loops over the ranges,
   // whose lengths are the view's, each mispredicted its exit.
-  const uint32_t gap[2] = {wraps ? n : ia, wraps ? ib + 1 : n};
-  const uint32_t shift[2][2] = {{t_count - 2, wraps ? ib + 1 : 0}, {ia - ib - 3, wraps ? 0 : ia}};
-  const uint32_t child[2] = {u, t}, lo = wraps ? ib + 1 : ia, hi = wraps ? ia : ib + 1;
+  const uint32_t gap[2] = {pick(n, ia), pick(ib + 1, n)};
+  const uint32_t shift[2][2] = {{t_count - 2, pick(ib + 1, 0)}, {ia - ib - 3, pick(0, ia)}};
+  const uint32_t child[2] = {u, t}, lo = pick(ib + 1, ia), hi = pick(ia, ib + 1);
   for (uint32_t i = 0; i < n; ++i) {
     const uint32_t to_t = uint32_t((i >= lo) & (i < hi)) ^ uint32_t(wraps);
     lists[to_t][i - shift[to_t][i < gap[to_t]]] = face[i];
     corner_[3 * size_t(face[i]) + k[i]] = child[to_t];
   }
-  lists[1][wraps ? ib + 1 : t_count] = fr;
-  lists[1][wraps ? ib + 2 : t_count + 1] = fl;
-  lists[0][wraps ? n - t_count : ia] = fl;
-  lists[0][wraps ? n - t_count + 1 : ia + 1] = fr;
+  lists[1][pick(ib + 1, t_count)] = fr;
+  lists[1][pick(ib + 2, t_count + 1)] = fl;
+  lists[0][pick(n - t_count, ia)] = fl;
+  lists[0][pick(n - t_count + 1, ia + 1)] = fr;
   // Around v_l, f_l = (l, t, u) follows (l, ·, t), which was (s, l, ·); around v_r, f_r = (r, u, t)
   // comes before (r, t, ·), which was (s, ·, r).
   insert_face(l, fl, face[ia], true);
