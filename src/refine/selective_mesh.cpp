@@ -672,9 +672,11 @@ VSplitResult SelectiveMesh::vsplit(uint32_t slot) {
   reserve_faces();
   if (!is_active(slot))
     fail(kWhere, "vsplit of inactive vertex " + (slot < hierarchy_->size() ? to_string(hierarchy_->id(slot)) : "?"));
+  uint32_t tried = kNone;  // split_between found no common case for it, and the mesh has not changed since
   if (const uint32_t t = hierarchy_->first_child(slot); t != kNone) {  // the common case: no chain
     grow_records(t + 2);
     if (split_between(slot, hierarchy_->cut_of_child(t), hierarchy_->cut_of_child(t + 1))) return {true, kNone};
+    tried = slot;
   }
   // SelStreamVSplit (kim-lee-kobbelt §5.3) without recursion: v_l == v_r must be split first, and that
   // split may in turn wait for another. Every stacked vertex is active and distinct unless the packets
@@ -688,7 +690,9 @@ VSplitResult SelectiveMesh::vsplit(uint32_t slot) {
     if (t == kNone) return {false, s};
     grow_records(t + 2);
     const VertexId cut_l = hierarchy_->cut_of_child(t), cut_r = hierarchy_->cut_of_child(t + 1);
-    if (split_between(s, cut_l, cut_r)) {
+    const bool untried = s != tried;
+    tried = kNone;
+    if (untried && split_between(s, cut_l, cut_r)) {
       chain_.pop_back();
       continue;
     }
