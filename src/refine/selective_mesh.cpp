@@ -318,15 +318,9 @@ void SelectiveMesh::remove_face(uint32_t v, uint32_t f) {
 }
 
 [[gnu::always_inline]] inline uint32_t SelectiveMesh::new_face(uint32_t a, uint32_t b, uint32_t c) {
-  uint32_t f = free_face_;
-  if (f != kNone) {
-    free_face_ = corner_[3 * size_t(f) + 1];
-  } else {
-    if (corner_.size() + 3 >= kNone) fail(kWhere, "too many faces");
-    f = face_capacity();
-    corner_.resize(corner_.size() + 3);
-    partner_.push_back(kNone);
-  }
+  if (free_face_ == kNone) [[unlikely]] add_free_faces();
+  const uint32_t f = free_face_;
+  free_face_ = corner_[3 * size_t(f) + 1];
   uint32_t* corner = &corner_[3 * size_t(f)];
   corner[0] = a;
   corner[1] = b;
@@ -334,6 +328,22 @@ void SelectiveMesh::remove_face(uint32_t v, uint32_t f) {
   partner_[f] = kNone;
   ++face_count_;
   return f;
+}
+
+// Appends a batch of dead faces to the free list, first at its head, so faces are taken in index order
+// as if appended one by one; new_face stays one path, small enough to inline where it is called.
+void SelectiveMesh::add_free_faces() {
+  constexpr uint32_t kBatch = 64;
+  const uint32_t first = face_capacity();
+  const uint32_t count = std::min<uint64_t>(kBatch, (uint64_t(kNone) - 1 - corner_.size()) / 3);
+  if (count == 0) fail(kWhere, "too many faces");
+  corner_.resize(corner_.size() + 3 * size_t(count));
+  partner_.resize(partner_.size() + count, kNone);
+  for (uint32_t i = 0; i < count; ++i) {
+    corner_[3 * size_t(first + i)] = kNone;
+    corner_[3 * size_t(first + i) + 1] = i + 1 < count ? first + i + 1 : kNone;
+  }
+  free_face_ = first;
 }
 
 void SelectiveMesh::free_face(uint32_t f) {
@@ -587,13 +597,17 @@ void SelectiveMesh::split_fan(uint32_t s, uint32_t l, uint32_t r) {  // fan_: s'
 // order, an open fan from the face after its gap, so (s, ·, r) is the face before jr, and v_t's faces,
 // (s, l, ·) CCW up to (s, ·, r), are one cyclic range [ia, ib] of the list and v_u's the rest; f_r and
 // f_l go where the ranges end, which keeps both children's lists in fan order (the range that wraps
-// round the list's end holds the gap of an open fan, and stays split there). Returns false, having
-// changed nothing, for the rest: a side missing or on the border, v_l == v_r (the forced chain), a
-// long fan; split_fan's general path reads the fan again for those.
+// round the list's end holds the gap of an open fan, and stays split there). A one-sided split goes on
+// to split_one_side. Returns false, having changed nothing, for the rest: a side on the border,
+// v_l == v_r (the forced chain), a long fan; split_fan's general path reads the fan again for those.
 bool SelectiveMesh::split_between(uint32_t s, VertexId cut_l, VertexId cut_r) {
   const VertexRecord& record = vertex_[s];
   const uint32_t n = record.size;
-  if (n > kSplitFan || n == 0 || !is_vertex(cut_l) || !is_vertex(cut_r)) return false;
+  const bool has_l = is_vertex(cut_l), has_r = is_vertex(cut_r);
+  if (n > kSplitFan || n == 0 || !(has_l || has_r)) return false;
+  constexpr VertexId kNoMatch{kNone, 1};  // no active vertex's id: the missing side of a one-sided split
+  if (!has_l) cut_l = kNoMatch;
+  if (!has_r) cut_r = kNoMatch;
   const uint32_t* face = faces_of(record);
   uint32_t copied[kSplitFan], k[kSplitFan], next[kSplitFan];
   if (record.capacity > kInlineFaces) {  // deactivate() frees the pool block, and the children may take it
@@ -620,6 +634,7 @@ bool SelectiveMesh::split_between(uint32_t s, VertexId cut_l, VertexId cut_r) {
     match_l |= below(w, zeros, cut_l, zeros_l) << i;
     match_r |= below(w, zeros, cut_r, zeros_r) << i;
   }
+  if (!(has_l && has_r)) return split_one_side(s, {face, k, next, n}, has_l ? match_l : match_r, has_l);
   if (match_l == 0 || match_r == 0) return false;
   const uint32_t ia = uint32_t(std::countr_zero(match_l)), jr = uint32_t(std::countr_zero(match_r));
   if (ia == jr) return false;
@@ -663,6 +678,46 @@ bool SelectiveMesh::split_between(uint32_t s, VertexId cut_l, VertexId cut_r) {
   // comes before (r, t, ·), which was (s, ·, r).
   insert_face(l, fl, face[ia], true);
   insert_face(r, fr, face[ib], false);
+  activate(t, id.child(0));
+  activate(u, id.child(1));
+  return true;
+}
+
+// split_between's one-sided split (v_s on the border, one cut missing), on an open fan listed from the
+// face after its gap: split_fan's result without ordering the fan. With v_l present, v_t takes the faces
+// from (s, l, ·) at p to the fan's end and v_u those before, f_l = (t, u, l) between them; with v_r
+// present, v_t takes those up to (s, ·, r) at p − 1 and v_u the rest, f_r = (u, t, r) between them.
+// Returns false, having changed nothing, for the side's neighbour at the fan's start and a closed fan.
+// Not inlined: split_between's common case stays the size it was, and keeps its own inlining.
+[[gnu::noinline]] bool SelectiveMesh::split_one_side(uint32_t s, const FanReading& fan, uint64_t match, bool left) {
+  const uint32_t n = fan.size;
+  if (match == 0) return false;
+  const uint32_t p = uint32_t(std::countr_zero(match));
+  if (p == 0 || corner_[3 * size_t(fan.face[n - 1]) + kPrevCorner[fan.k[n - 1]]] == fan.next[0]) return false;
+  const uint32_t t = hierarchy_->first_child(s), u = t + 1, side = fan.next[p];
+  const uint32_t f = left ? new_face(t, u, side) : new_face(u, t, side);
+  const VertexId id = id_of(s);
+  deactivate(s);
+  // Faces before p go to child a, at their places; f ends a's list and starts b's, which has the rest.
+  const uint32_t a = left ? u : t, b = left ? t : u;
+  assign_faces(a, p + 1);  // may move pool_: the lists are read once both are assigned
+  assign_faces(b, n - p + 1);
+  uint32_t* const list_a = faces_of(vertex_[a]);
+  uint32_t* const list_b = faces_of(vertex_[b]);
+  for (uint32_t i = 0; i < p; ++i) {
+    list_a[i] = fan.face[i];
+    corner_[3 * size_t(fan.face[i]) + fan.k[i]] = a;
+  }
+  list_a[p] = f;
+  list_b[0] = f;
+  for (uint32_t i = p; i < n; ++i) {
+    list_b[i - p + 1] = fan.face[i];
+    corner_[3 * size_t(fan.face[i]) + fan.k[i]] = b;
+  }
+  // As in split_between: f_l follows (l, ·, t), which was (s, l, ·); f_r comes before (r, t, ·), which
+  // was (s, ·, r).
+  if (left) insert_face(side, f, fan.face[p], true);
+  else insert_face(side, f, fan.face[p - 1], false);
   activate(t, id.child(0));
   activate(u, id.child(1));
   return true;

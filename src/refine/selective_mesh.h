@@ -130,6 +130,12 @@ class SelectiveMesh {
   std::pair<uint32_t, uint32_t> cut_ancestors(VertexId cut_l, VertexId cut_r, uint32_t slot) const;  // over fan_ (slot)
   void split_fan(uint32_t s, uint32_t l, uint32_t r);         // over fan_ (s)
   bool split_between(uint32_t s, VertexId cut_l, VertexId cut_r);  // vsplit's common case, before fan_ is read
+  // What split_between read of v_s's fan: per listed face, v_s's corner and the one after it.
+  struct FanReading {
+    const uint32_t *face, *k, *next;
+    uint32_t size;
+  };
+  bool split_one_side(uint32_t s, const FanReading& fan, uint64_t match, bool left);
   void join_fans(uint32_t p, uint32_t fl, uint32_t fr, bool t_open, bool u_open);  // over fan_ (t), fan_u_ (u)
   void put_in_fan_order(uint32_t v);                           // the lists' order, restored the slow way
   bool repeats_directed_edge(uint32_t v);                      // over fan_ (v): a bad base mesh
@@ -138,6 +144,7 @@ class SelectiveMesh {
   // Over fan_ (t) and fan_u_ (u), whose open ends (kNone: closed) are given.
   bool link_condition(uint32_t t, uint32_t l, uint32_t r, uint32_t t_end, uint32_t u_end);
   uint32_t new_face(uint32_t a, uint32_t b, uint32_t c);
+  void add_free_faces();
   void free_face(uint32_t f);
   uint32_t alloc_block(uint32_t capacity);
   void free_block(uint32_t begin, uint32_t capacity);
