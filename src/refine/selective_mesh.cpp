@@ -688,7 +688,7 @@ bool SelectiveMesh::split_between(uint32_t s, VertexId cut_l, VertexId cut_r) {
 // from (s, l, ·) at p to the fan's end and v_u those before, f_l = (t, u, l) between them; with v_r
 // present, v_t takes those up to (s, ·, r) at p − 1 and v_u the rest, f_r = (u, t, r) between them.
 // Returns false, having changed nothing, for the side's neighbour at the fan's start and a closed fan.
-// Not inlined: split_between's common case stays the size it was, and keeps its own inlining.
+// Out of line: it is rare, and split_between's common case is what must stay small.
 [[gnu::noinline]] bool SelectiveMesh::split_one_side(uint32_t s, const FanReading& fan, uint64_t match, bool left) {
   const uint32_t n = fan.size;
   if (match == 0) return false;
