@@ -114,7 +114,7 @@ class SelectiveRefinement {
   // The walk's steps return the node to evaluate next when it is the one the stack would give next
   // (kNone otherwise), so the common case skips a push and a pop.
   uint32_t justify(uint32_t v);
-  uint32_t keep(uint32_t v, bool parent_kept, float margin);
+  uint32_t keep(uint32_t v, bool parent_kept, float margin, bool just_split);
   bool settled_child(uint32_t c);
   bool walk_qrefine(const Slot& slot, float& margin) const;
   uint32_t visit_active(uint32_t v, float& margin, FrameStats& stats);
