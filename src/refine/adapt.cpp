@@ -194,9 +194,9 @@ uint32_t SelectiveRefinement::dependency(uint32_t slot) {
 // visit changes nothing); v_u's visit would come at once and v_t's right after, so such a child is
 // counted here instead of visited, and v_t goes without the stack when v_u needs nothing: the front's
 // pairs cost no stack entry. A v_t that goes on the stack behind a v_u that needs a visit is looked at
-// too, unless v was split this frame: below a node split earlier most such v_t are settled (steady and
-// orbit frames: −3 to −11 %), while a fresh pair's v_t mostly wants its split, and would pay the screen
-// test twice (from base: +2–3 %). Not with geomorphs, which see every visit.
+// too, unless v was split this frame: below a node split earlier most such v_t are settled, and the
+// visit's branch on them mispredicted, while a fresh pair's v_t mostly wants its split, and would pay
+// the screen test twice. Not with geomorphs, which see every visit.
 [[gnu::always_inline]] inline uint32_t SelectiveRefinement::keep(uint32_t v, bool parent_kept, float margin, bool just_split) {
   const uint32_t t = slots_[v].first_child;
   if (t + 1 >= slot_count_) grow(t + 2);
