@@ -3,15 +3,22 @@
 #pragma once
 #include <algorithm>
 #include <cstddef>
+#include <exception>
 #include <thread>
 #include <vector>
 
 namespace pms {
 
+// How many ranges for_each_range and map_ranges cut `count` items into.
+inline size_t range_count(size_t count, size_t min_parallel) {
+  if (count < min_parallel) return 1;
+  return std::clamp<size_t>(std::thread::hardware_concurrency(), 1, 8);
+}
+
 template <class Fn>  // fn(begin, end)
 void for_each_range(size_t count, size_t min_parallel, Fn&& fn) {
-  const size_t threads = std::clamp<size_t>(std::thread::hardware_concurrency(), 1, 8);
-  if (count < min_parallel || threads == 1) {
+  const size_t threads = range_count(count, min_parallel);
+  if (threads == 1) {
     fn(size_t(0), count);
     return;
   }
@@ -19,6 +26,30 @@ void for_each_range(size_t count, size_t min_parallel, Fn&& fn) {
   for (size_t i = 1; i < threads; ++i) workers.emplace_back(fn, count * i / threads, count * (i + 1) / threads);
   fn(size_t(0), count / threads);
   for (std::thread& w : workers) w.join();
+}
+
+// for_each_range with a result per range: fn(begin, end) of every range, in range order. A range that
+// throws does not stop the others; afterwards the first range's exception (in range order) is rethrown,
+// which is the one a sequential loop over [0, count) would have met first.
+template <class Fn>
+auto map_ranges(size_t count, size_t min_parallel, Fn&& fn) -> std::vector<decltype(fn(size_t(0), size_t(0)))> {
+  const size_t threads = range_count(count, min_parallel);
+  std::vector<decltype(fn(size_t(0), size_t(0)))> results(threads);
+  std::vector<std::exception_ptr> errors(threads);
+  const auto run = [&](size_t i) {
+    try {
+      results[i] = fn(count * i / threads, count * (i + 1) / threads);
+    } catch (...) {
+      errors[i] = std::current_exception();
+    }
+  };
+  std::vector<std::thread> workers;
+  for (size_t i = 1; i < threads; ++i) workers.emplace_back(run, i);
+  run(0);
+  for (std::thread& w : workers) w.join();
+  for (const std::exception_ptr& error : errors)
+    if (error) std::rethrow_exception(error);
+  return results;
 }
 
 }  // namespace pms

@@ -24,6 +24,7 @@
 #include <string>
 
 #include "common/error.h"
+#include "common/parallel.h"
 #include "pm/nested_info.h"
 #include "pm/octahedral_normal.h"
 #include "pm/position_grid.h"
@@ -54,6 +55,7 @@ constexpr uint32_t kEscapeSymbol = 0;
 constexpr uint32_t kAbsentSymbol = kReferences + 1;
 constexpr uint32_t kRefSymbols = kReferences + 2;
 constexpr uint32_t kRadiusClasses = 64;   // v_s's radius by half octaves (half-float exponent and top mantissa bit)
+constexpr size_t kParallelNodes = size_t(1) << 14;  // whole-model passes (fit, encode, check) below this run inline
 constexpr uint32_t kGridBits = 24;          // finer than this, positions are float bits (position_grid.h)
 constexpr uint32_t kSizeClasses = 26;      // magnitude classes of a coordinate difference, clamped
 // First axis: radius class; second: class of the first; third: the larger class of the other two, or,
@@ -153,6 +155,10 @@ struct SplitCodec::Counts {
   }
   void symbol(uint32_t slot, uint32_t sym, Part) { ++counts[slot][sym]; }
   void raw(uint64_t, unsigned, Part) {}
+  void add(const Counts& other) {
+    for (uint32_t s = 0; s < kSlotCount; ++s)
+      for (size_t sym = 0; sym < counts[s].size(); ++sym) counts[s][sym] += other.counts[s][sym];
+  }
 };
 
 namespace {
@@ -657,9 +663,14 @@ SplitCodec SplitCodec::build(const ModelData& model, std::span<const uint32_t> p
   for (size_t n = 0; n < model.node_count(); ++n) codec.max_depth_ = std::max<uint32_t>(codec.max_depth_, uint32_t(model.id(uint32_t(n)).depth()));
   // Two fits: the first chooses references by their rest alone, the second by the first fit's costs.
   for (int pass = 0; pass < 2; ++pass) {
-    Counts counts;
-    for (uint32_t node = 0; node < model.node_count(); ++node)
-      if (!model.is_leaf(node)) codec.emit(split_context(model, positions, node), split_payload(model, positions, node), counts);
+    std::vector<Counts> parts = map_ranges(model.node_count(), kParallelNodes, [&](size_t begin, size_t end) {
+      Counts counts;
+      for (uint32_t node = uint32_t(begin); node < end; ++node)
+        if (!model.is_leaf(node)) codec.emit(split_context(model, positions, node), split_payload(model, positions, node), counts);
+      return counts;
+    });
+    Counts& counts = parts[0];
+    for (size_t i = 1; i < parts.size(); ++i) counts.add(parts[i]);
     // The escape, the missing side and every escaped depth keep a code word in every table they may be
     // needed in: a reference the final tables price differently can move v̂_r to another table.
     for (uint32_t slot = kSlotCutRef; slot < kSlotCutUp; ++slot) ++counts.counts[slot][kEscapeSymbol], ++counts.counts[slot][kAbsentSymbol];
@@ -788,14 +799,29 @@ EncodedRecords encode_records(const ModelData& model, uint32_t position_bits) {
   BitWriter tables;
   codec.serialize(tables);
   out.tables = tables.bytes();
+  struct Range {
+    BitWriter records;
+    std::vector<uint64_t> offsets;  // from the range's start
+  };
+  std::vector<Range> parts = map_ranges(model.node_count(), kParallelNodes, [&](size_t begin, size_t end) {
+    Range part;
+    part.offsets.reserve(end - begin);
+    for (uint32_t node = uint32_t(begin); node < end; ++node) {
+      part.offsets.push_back(part.records.size());
+      if (!model.is_leaf(node)) codec.encode(split_context(model, q, node), split_payload(model, q, node), part.records);
+    }
+    return part;
+  });
   BitWriter records;
   out.offsets.reserve(model.node_count() + 1);
-  for (uint32_t node = 0; node < model.node_count(); ++node) {
-    out.offsets.push_back(records.size());
-    if (!model.is_leaf(node)) codec.encode(split_context(model, q, node), split_payload(model, q, node), records);
+  for (Range& part : parts) {
+    const uint64_t start = records.size();
+    for (uint64_t offset : part.offsets) out.offsets.push_back(start + offset);
+    if (start == 0) records = std::move(part.records);
+    else records.append(part.records);
   }
   out.offsets.push_back(records.size());
-  out.records = records.bytes();
+  out.records = std::move(records).take();
   return out;
 }
 
@@ -816,16 +842,19 @@ SplitCodec check_records(const std::string& where, const ModelData& model, std::
   if (offsets[0] != 0 || offsets[n] > bits || bits - offsets[n] >= 8)
     fail(where, "split record offsets: do not span the records");
   const std::vector<uint32_t> q = grid_positions(model, codec.position_bits());
-  for (uint32_t node = 0; node < n; ++node) {
-    if (offsets[node + 1] < offsets[node]) fail(where, "split record offsets: not in order at node " + std::to_string(node));
-    if (model.is_leaf(node)) {
-      if (offsets[node + 1] != offsets[node]) fail(where, "split records: leaf " + std::to_string(node) + " has a record");
-      continue;
+  map_ranges(n, kParallelNodes, [&](size_t begin, size_t end) {
+    for (uint32_t node = uint32_t(begin); node < end; ++node) {
+      if (offsets[node + 1] < offsets[node]) fail(where, "split record offsets: not in order at node " + std::to_string(node));
+      if (model.is_leaf(node)) {
+        if (offsets[node + 1] != offsets[node]) fail(where, "split records: leaf " + std::to_string(node) + " has a record");
+        continue;
+      }
+      BitReader r(records, offsets[node], offsets[node + 1], where + ": split record of node " + std::to_string(node));
+      if (!(codec.decode(split_context(model, q, node), r) == split_payload(model, q, node)) || r.bits_left() != 0)
+        fail(where, "split records: node " + std::to_string(node) + "'s record is not its split");
     }
-    BitReader r(records, offsets[node], offsets[node + 1], where + ": split record of node " + std::to_string(node));
-    if (!(codec.decode(split_context(model, q, node), r) == split_payload(model, q, node)) || r.bits_left() != 0)
-      fail(where, "split records: node " + std::to_string(node) + "'s record is not its split");
-  }
+    return end - begin;  // nodes checked
+  });
   return codec;
 }
 
