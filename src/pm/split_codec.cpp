@@ -136,10 +136,10 @@ bool parting(VertexId ref, VertexId target, Parting& p) {
     p = {true, 0, 0};
     return true;
   }
-  const int dr = ref.depth(), dt = target.depth();
-  int c = std::min(dr, dt);
-  uint64_t a = ref.node >> (dr - c), b = target.node >> (dt - c);
-  while (a != b) a >>= 1, b >>= 1, --c;
+  const int dr = ref.depth(), dt = target.depth(), shallower = std::min(dr, dt);
+  // Both ids cut to the shallower depth agree above their highest differing bit.
+  const uint64_t a = ref.node >> (dr - shallower), b = target.node >> (dt - shallower);
+  const int c = shallower - int(std::bit_width(a ^ b));  // the depth of their deepest common ancestor
   if (c == dr || c == dt) return false;  // one is the other's ancestor: no parting bit
   p = {false, uint32_t(dr - 1 - c), uint32_t(dt - c - 1), int64_t(dt) - dr};
   return true;
