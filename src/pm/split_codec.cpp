@@ -396,8 +396,7 @@ int64_t color_step(uint8_t s, uint8_t t) { return int8_t(uint8_t(t - s)); }
 
 }  // namespace
 
-template <class Out> void SplitCodec::emit(const SplitContext& c, const SplitPayload& p, Out& out) const {
-  // Cut vertices.
+template <class Out> void SplitCodec::emit_cuts(const SplitContext& c, const SplitPayload& p, Out& out) const {
   if (!is_vertex(p.cut_l) && !is_vertex(p.cut_r)) fail("split record", "split of " + to_string(c.vs) + " has no cut vertex");
   uint32_t ref_slot = kSlotCutRef;
   for (int side = 0; side < 2; ++side) {
@@ -445,6 +444,10 @@ template <class Out> void SplitCodec::emit(const SplitContext& c, const SplitPay
     put_int(out, cut_slot(kSlotCutRest, c, max_depth_, side, refs[best].leaf), best_parting.depth_step, topology);
     out.raw(cut.node, best_parting.rest, topology);
   }
+}
+
+template <class Out> void SplitCodec::emit(const SplitContext& c, const SplitPayload& p, Out& out) const {
+  emit_cuts(c, p, out);
   // Position of v_t against v_s's.
   const PositionFrame frame = position_frame(c.info_s, steps_, position_bits_);
   int64_t d[3] = {0, 0, 0};
@@ -661,16 +664,24 @@ SplitCodec SplitCodec::build(const ModelData& model, std::span<const uint32_t> p
   codec.has_normals_ = !model.normals.empty();
   codec.has_colors_ = !model.colors.empty();
   for (size_t n = 0; n < model.node_count(); ++n) codec.max_depth_ = std::max<uint32_t>(codec.max_depth_, uint32_t(model.id(uint32_t(n)).depth()));
-  // Two fits: the first chooses references by their rest alone, the second by the first fit's costs.
+  // Two fits: the first chooses references by their rest alone, the second by the first fit's costs. Only
+  // the cut vertices' symbols depend on the tables, so the second counts those and keeps the rest.
+  Counts counts;
   for (int pass = 0; pass < 2; ++pass) {
     std::vector<Counts> parts = map_ranges(model.node_count(), kParallelNodes, [&](size_t begin, size_t end) {
-      Counts counts;
-      for (uint32_t node = uint32_t(begin); node < end; ++node)
-        if (!model.is_leaf(node)) codec.emit(split_context(model, positions, node), split_payload(model, positions, node), counts);
-      return counts;
+      Counts part;
+      for (uint32_t node = uint32_t(begin); node < end; ++node) {
+        if (model.is_leaf(node)) continue;
+        const SplitContext context = split_context(model, positions, node);
+        const SplitPayload payload = split_payload(model, positions, node);
+        if (pass == 0) codec.emit(context, payload, part);
+        else codec.emit_cuts(context, payload, part);
+      }
+      return part;
     });
-    Counts& counts = parts[0];
-    for (size_t i = 1; i < parts.size(); ++i) counts.add(parts[i]);
+    for (size_t i = 1; i < parts.size(); ++i) parts[0].add(parts[i]);
+    for (uint32_t s = 0; s < kSlotCount; ++s)
+      if (pass == 0 || s < kSlotPosition) counts.counts[s] = parts[0].counts[s];
     // The escape, the missing side and every escaped depth keep a code word in every table they may be
     // needed in: a reference the final tables price differently can move v̂_r to another table.
     for (uint32_t slot = kSlotCutRef; slot < kSlotCutUp; ++slot) ++counts.counts[slot][kEscapeSymbol], ++counts.counts[slot][kAbsentSymbol];
