@@ -12,6 +12,12 @@
 namespace pms {
 namespace {
 
+uint32_t reverse_bits(uint32_t code, unsigned length) {
+  uint32_t reversed = 0;
+  for (unsigned i = 0; i < length; ++i, code >>= 1) reversed = (reversed << 1) | (code & 1);
+  return reversed;
+}
+
 // Huffman code lengths of the symbols with count > 0 (others 0); the tree's depth may exceed the limit.
 std::vector<uint8_t> huffman_lengths(std::span<const uint64_t> counts) {
   struct Node {
@@ -76,7 +82,8 @@ PrefixCode::PrefixCode(std::vector<uint8_t> lengths) : lengths_(std::move(length
   for (unsigned l = 1; l <= kMaxCodeLength; ++l)
     for (uint32_t s = 0; s < lengths_.size(); ++s)
       if (lengths_[s] == l) {
-        codes_[s] = uint16_t(next[l]++);
+        // The stream takes a code word's most significant bit first; BitWriter fills from the lowest bit.
+        codes_[s] = uint16_t(reverse_bits(next[l]++, l));
         sorted_.push_back(s);
       }
   count_[0] = 0;
@@ -97,8 +104,7 @@ PrefixCode PrefixCode::from_counts(std::span<const uint64_t> counts) {
 void PrefixCode::write(BitWriter& w, uint32_t symbol) const {
   if (!has(symbol)) fail("prefix code", "symbol " + std::to_string(symbol) + " has no code word");
   if (single_) return;
-  const unsigned length = lengths_[symbol];
-  for (unsigned i = length; i-- > 0;) w.bit((codes_[symbol] >> i) & 1);
+  w.bits(codes_[symbol], lengths_[symbol]);
 }
 
 uint32_t PrefixCode::read(BitReader& r, const char* field) const {

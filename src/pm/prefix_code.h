@@ -39,7 +39,7 @@ class PrefixCode {
 
  private:
   std::vector<uint8_t> lengths_;
-  std::vector<uint16_t> codes_;     // per symbol, canonical, read most significant bit first
+  std::vector<uint16_t> codes_;     // per symbol, canonical, bit-reversed: in stream order from the lowest bit
   std::vector<uint16_t> count_;     // code words per length, 0..kMaxCodeLength
   std::vector<uint32_t> sorted_;    // symbols in canonical order (by length, then symbol)
   bool single_ = false;
