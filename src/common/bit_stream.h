@@ -88,6 +88,23 @@ class BitReader {
     }
     return value;
   }
+  // The next n <= 32 bits without reading them, for table-driven decoders. Bits past the window's end are
+  // what follows it in the data, or 0 past the data: the caller checks what it uses against bits_left().
+  uint32_t peek(unsigned n) const {
+    const size_t byte = size_t(pos_ >> 3);
+    const size_t count = byte < data_.size() ? std::min<size_t>(8, data_.size() - byte) : 0;
+    uint64_t word = 0;
+    if (count == 8 && std::endian::native == std::endian::little) {
+      std::memcpy(&word, data_.data() + byte, 8);
+    } else {
+      for (size_t i = 0; i < count; ++i) word |= uint64_t(data_[byte + i]) << (8 * i);
+    }
+    return uint32_t((word >> (pos_ & 7)) & ((uint64_t(1) << n) - 1));
+  }
+  void skip(unsigned n, const char* field) {
+    if (n > end_ - pos_) fail(what_, std::string(field) + ": truncated");
+    pos_ += n;
+  }
   uint64_t position() const { return pos_; }
   uint64_t bits_left() const { return end_ - pos_; }
   [[noreturn]] void fail_field(const char* field, const std::string& problem) const {

@@ -87,6 +87,13 @@ PrefixCode::PrefixCode(std::vector<uint8_t> lengths) : lengths_(std::move(length
         sorted_.push_back(s);
       }
   count_[0] = 0;
+  if (single_ || present == 0 || lengths_.size() > 4096) return;
+  fast_.assign(size_t(1) << kFastBits, 0);
+  for (uint32_t s : sorted_) {
+    const unsigned l = lengths_[s];
+    if (l > kFastBits) break;  // sorted_ is by length
+    for (uint32_t high = 0; high < (1u << (kFastBits - l)); ++high) fast_[codes_[s] | (high << l)] = uint16_t(l << 12 | s);
+  }
 }
 
 PrefixCode PrefixCode::from_counts(std::span<const uint64_t> counts) {
@@ -110,6 +117,13 @@ void PrefixCode::write(BitWriter& w, uint32_t symbol) const {
 uint32_t PrefixCode::read(BitReader& r, const char* field) const {
   if (sorted_.empty()) r.fail_field(field, "the code has no symbols");
   if (single_) return sorted_[0];
+  if (!fast_.empty()) {
+    const uint16_t entry = fast_[r.peek(kFastBits)];
+    if (entry != 0 && unsigned(entry >> 12) <= r.bits_left()) {
+      r.skip(entry >> 12, field);
+      return entry & 0xFFF;
+    }
+  }
   uint32_t code = 0, first = 0, index = 0;  // first code word of this length, its index in sorted_
   for (unsigned l = 1; l <= kMaxCodeLength; ++l) {
     code |= r.bit(field);

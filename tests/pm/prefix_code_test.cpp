@@ -2,7 +2,9 @@
 // hostile tables and streams rejected with pms::Error.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstdint>
+#include <optional>
 #include <random>
 #include <vector>
 
@@ -122,6 +124,51 @@ TEST(PrefixCode, RandomStreamsDecodeOrFailCleanly) {
     try {
       while (true) EXPECT_TRUE(code.has(code.read(r, "symbol")));
     } catch (const Error&) {
+    }
+  }
+}
+
+// The canonical code (two symbols or more) read one bit at a time, straight from the lengths: what read()'s
+// table must agree with.
+std::optional<uint32_t> read_by_bits(const std::vector<uint8_t>& lengths, BitReader& r) {
+  uint32_t code = 0, first = 0;
+  for (unsigned l = 1; l <= kMaxCodeLength; ++l) {
+    if (r.bits_left() == 0) return std::nullopt;
+    code |= r.bit("symbol");
+    std::vector<uint32_t> of_length;
+    for (uint32_t s = 0; s < lengths.size(); ++s)
+      if (lengths[s] == l) of_length.push_back(s);
+    if (code - first < of_length.size()) return of_length[code - first];
+    first = uint32_t(first + of_length.size()) << 1;
+    code <<= 1;
+  }
+  return std::nullopt;
+}
+
+TEST(PrefixCode, TableDecodingAgreesWithBitByBitDecoding) {
+  std::mt19937_64 rng(5);
+  for (int trial = 0; trial < 300; ++trial) {
+    // Skewed counts give code words from 1 to kMaxCodeLength bits; some symbols absent.
+    std::vector<uint64_t> counts(1 + rng() % 200);
+    for (uint64_t& c : counts) c = rng() % 4 == 0 ? 0 : uint64_t(1) << (rng() % 24);
+    const PrefixCode code = PrefixCode::from_counts(counts);
+    if (std::count_if(counts.begin(), counts.end(), [](uint64_t c) { return c != 0; }) < 2) continue;  // reads no bits
+    std::vector<uint8_t> bytes(rng() % 40);
+    for (uint8_t& b : bytes) b = uint8_t(rng());
+    const uint64_t end = bytes.empty() ? 0 : rng() % (8 * bytes.size() + 1);  // windows that end mid-data
+    BitReader fast(bytes, 0, end, "fast"), slow(bytes, 0, end, "slow");
+    for (;;) {
+      std::optional<uint32_t> expected;
+      try {
+        expected = read_by_bits(code.lengths(), slow);
+      } catch (const Error&) {
+      }
+      if (!expected) {
+        EXPECT_THROW(code.read(fast, "symbol"), Error);
+        break;
+      }
+      ASSERT_EQ(code.read(fast, "symbol"), *expected);
+      ASSERT_EQ(fast.position(), slow.position());
     }
   }
 }
