@@ -15,6 +15,19 @@
 
 namespace pms {
 
+// Up to 8 bytes of `data` from `byte` on, as a little-endian word; bytes past the data read as 0. One load
+// where the data has 8 bytes left.
+inline uint64_t load_word(std::span<const uint8_t> data, size_t byte) {
+  const size_t count = byte < data.size() ? std::min<size_t>(8, data.size() - byte) : 0;
+  uint64_t word = 0;
+  if (count == 8 && std::endian::native == std::endian::little) {
+    std::memcpy(&word, data.data() + byte, 8);
+  } else {
+    for (size_t i = 0; i < count; ++i) word |= uint64_t(data[byte + i]) << (8 * i);
+  }
+  return word;
+}
+
 class BitWriter {
  public:
   void bits(uint64_t value, unsigned n) {  // n <= 64; bits of value above n are ignored
@@ -39,14 +52,7 @@ class BitWriter {
     bytes_.reserve(size_t((size_ + (end - begin) + 7) >> 3));
     for (unsigned n; begin < end; begin += n) {
       n = unsigned(std::min<uint64_t>(56, end - begin));  // 56 bits from any offset fit in 8 bytes
-      const size_t first = size_t(begin >> 3), count = std::min<size_t>(8, data.size() - first);
-      uint64_t word = 0;
-      if (count == 8 && std::endian::native == std::endian::little) {
-        std::memcpy(&word, data.data() + first, 8);  // one load where the data has 8 bytes left
-      } else {
-        for (size_t i = 0; i < count; ++i) word |= uint64_t(data[first + i]) << (8 * i);
-      }
-      bits(word >> (begin & 7), n);
+      bits(load_word(data, size_t(begin >> 3)) >> (begin & 7), n);
     }
   }
   void append(const BitWriter& other) { append(other.bytes_, 0, other.size_); }
@@ -91,15 +97,7 @@ class BitReader {
   // The next n <= 32 bits without reading them, for table-driven decoders. Bits past the window's end are
   // what follows it in the data, or 0 past the data: the caller checks what it uses against bits_left().
   uint32_t peek(unsigned n) const {
-    const size_t byte = size_t(pos_ >> 3);
-    const size_t count = byte < data_.size() ? std::min<size_t>(8, data_.size() - byte) : 0;
-    uint64_t word = 0;
-    if (count == 8 && std::endian::native == std::endian::little) {
-      std::memcpy(&word, data_.data() + byte, 8);
-    } else {
-      for (size_t i = 0; i < count; ++i) word |= uint64_t(data_[byte + i]) << (8 * i);
-    }
-    return uint32_t((word >> (pos_ & 7)) & ((uint64_t(1) << n) - 1));
+    return uint32_t((load_word(data_, size_t(pos_ >> 3)) >> (pos_ & 7)) & ((uint64_t(1) << n) - 1));
   }
   void skip(unsigned n, const char* field) {
     if (n > end_ - pos_) fail(what_, std::string(field) + ": truncated");
