@@ -105,7 +105,7 @@ void ReceiverClient::open(const std::string& model) {
   session_.on_base(protocol::decode_base(answer.body));
   model_ = model;
   // The body format of the answers (docs/protocol.md, "Receiver-driven over HTTP"): compact split records.
-  constexpr uint32_t kRecordsFormat = 3;
+  constexpr uint32_t kRecordsFormat = 4;
   uint32_t records_format = 0;
   for (const nlohmann::json& entry : catalogue())
     if (entry.is_object() && entry.value("name", "") == model) records_format = entry.value("records_format", 0u);
@@ -220,7 +220,7 @@ std::vector<ReceiverClient::Request> ReceiverClient::list_requests(const std::ve
   std::vector<Request> out;
   out.reserve(lists.size());
   for (auto& [rank, r] : lists) {
-    // The answer comes in code order, which format 3's bands are read in.
+    // The answer comes in code order, which the bands are read in.
     std::sort(r.request.ids.begin(), r.request.ids.end(), protocol::code_order);
     r.target = protocol::model_path(model_) + "/splits/" + protocol::base64url_encode(protocol::encode_split_request(r.request));
     out.push_back(std::move(r));
@@ -236,7 +236,7 @@ size_t ReceiverClient::list_size(uint32_t depth) const {
 // of the first id that needs it. An id the client lacks is a leaf of what it holds; the splits of its band
 // above it would have come with its own block, so the id is that block's root, a vertex the client has,
 // and no block is fetched twice (it would have brought the id): no record arrives twice. A block's answer is that of the request
-// "its root, block_depth levels down", which is how format 3's bands are read.
+// "its root, block_depth levels down", which is how the bands are read.
 std::vector<ReceiverClient::Request> ReceiverClient::block_requests(const std::vector<Wanted>& ids) const {
   std::set<std::pair<uint32_t, uint64_t>> asked;
   std::vector<Request> out;

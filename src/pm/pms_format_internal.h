@@ -22,7 +22,7 @@ constexpr char kMagic[8] = {'P', 'M', 'S', 'T', 'R', 'E', 'A', 'M'};
 // as lattice entries; version 4 predicts v_t in v_s's tangent plane (the split tables carry the grid's step ratios); version 3
 // added the compressed split records (SRTB, SROF, SREC); version 2 stored refinement info at the
 // precision the wire carries (version 1 had finer RINF).
-constexpr uint32_t kVersion = 6;
+constexpr uint32_t kVersion = 7;
 constexpr uint64_t kAlignment = 64;  // every section starts here, so spans into a mapping are aligned
 
 struct FileHeader {

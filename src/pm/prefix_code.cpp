@@ -4,6 +4,7 @@
 #include "pm/prefix_code.h"
 
 #include <algorithm>
+#include <bit>
 #include <queue>
 #include <string>
 
@@ -136,9 +137,14 @@ uint32_t PrefixCode::read(BitReader& r, const char* field) const {
   r.fail_field(field, "not a code word of the model's code");
 }
 
-void PrefixCode::serialize(BitWriter& w) const {
+size_t PrefixCode::serialized_symbols() const {
   size_t m = lengths_.size();
   while (m > 0 && lengths_[m - 1] == 0) --m;
+  return m;
+}
+
+void PrefixCode::serialize(BitWriter& w) const {
+  const size_t m = serialized_symbols();
   if (m > UINT16_MAX) fail("prefix code", "alphabet too large to serialize");
   w.bits(m, 16);
   for (size_t s = 0; s < m; ++s) w.bits(lengths_[s], 4);
@@ -155,6 +161,67 @@ PrefixCode PrefixCode::deserialize(BitReader& r, size_t alphabet, const char* fi
   } catch (const Error& e) {
     r.fail_field(field, e.what());
   }
+}
+
+namespace {
+
+constexpr int kLengthSteps = 2 * kMaxCodeLength + 1;  // -15 .. +15
+
+// Calls `step(symbol)` for each length of `code` up to its last symbol with one, as a step symbol.
+template <class Step> void for_each_length_step(const PrefixCode& code, Step step) {
+  int previous = 0;
+  const size_t m = code.serialized_symbols();
+  for (size_t s = 0; s < m; ++s) {
+    const int length = code.lengths()[s];
+    step(uint32_t(length - previous + int(kMaxCodeLength)));
+    if (length != 0) previous = length;
+  }
+}
+
+constexpr unsigned kMaxGammaZeros = 16;  // m + 1 <= 65536
+
+}  // namespace
+
+void serialize_code_set(std::span<const PrefixCode* const> codes, BitWriter& w) {
+  std::vector<uint64_t> counts(kLengthSteps, 0);
+  for (const PrefixCode* code : codes) for_each_length_step(*code, [&](uint32_t step) { ++counts[step]; });
+  const PrefixCode steps = PrefixCode::from_counts(counts);
+  steps.serialize(w);
+  for (const PrefixCode* code : codes) {
+    const uint64_t n = code->serialized_symbols() + 1;
+    const auto zeros = unsigned(std::bit_width(n) - 1);
+    if (zeros > kMaxGammaZeros) fail("prefix code", "alphabet too large to serialize");
+    w.bits(uint64_t(1) << zeros, zeros + 1);
+    w.bits(n, zeros);  // the bits below the leading one
+    for_each_length_step(*code, [&](uint32_t step) { steps.write(w, step); });
+  }
+}
+
+std::vector<PrefixCode> deserialize_code_set(BitReader& r, std::span<const size_t> alphabets, const char* field) {
+  const PrefixCode steps = PrefixCode::deserialize(r, kLengthSteps, field);
+  std::vector<PrefixCode> codes;
+  codes.reserve(alphabets.size());
+  for (const size_t alphabet : alphabets) {
+    unsigned zeros = 0;
+    while (r.bits(1, field) == 0)
+      if (++zeros > kMaxGammaZeros) r.fail_field(field, "a symbol count above 65535");
+    const uint64_t m = ((uint64_t(1) << zeros) | r.bits(zeros, field)) - 1;
+    if (m > alphabet) r.fail_field(field, std::to_string(m) + " symbols, the alphabet has " + std::to_string(alphabet));
+    std::vector<uint8_t> lengths(alphabet, 0);
+    int previous = 0;
+    for (size_t s = 0; s < m; ++s) {
+      const int length = previous + int(steps.read(r, field)) - int(kMaxCodeLength);
+      if (length < 0 || length > int(kMaxCodeLength)) r.fail_field(field, "a code length outside 0..15");
+      lengths[s] = uint8_t(length);
+      if (length != 0) previous = length;
+    }
+    try {
+      codes.emplace_back(std::move(lengths));
+    } catch (const Error& e) {
+      r.fail_field(field, e.what());
+    }
+  }
+  return codes;
 }
 
 }  // namespace pms

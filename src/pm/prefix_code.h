@@ -36,6 +36,8 @@ class PrefixCode {
   // then m lengths of 4 bits. `deserialize` accepts m <= alphabet and fills the rest with 0.
   void serialize(BitWriter& w) const;
   static PrefixCode deserialize(BitReader& r, size_t alphabet, const char* field);
+  // The symbols-with-lengths count m as above.
+  size_t serialized_symbols() const;
 
  private:
   std::vector<uint8_t> lengths_;
@@ -48,5 +50,14 @@ class PrefixCode {
   std::vector<uint16_t> fast_;
   bool single_ = false;
 };
+
+// Many codes serialized together, for a coder with hundreds of mostly small tables. First a code for the
+// steps between lengths (31 symbols: step + 15) in the form above, fitted to the whole set; then per code
+// m + 1 as an Elias gamma code (bit_width(m + 1) - 1 zero bits, a one, then the bits below the leading
+// one) and its m lengths, each as the step from the previous nonzero length (0 before the first).
+// `deserialize_code_set` takes each code's alphabet and rejects what `deserialize` does, and steps that
+// take a length outside 0..kMaxCodeLength.
+void serialize_code_set(std::span<const PrefixCode* const> codes, BitWriter& w);
+std::vector<PrefixCode> deserialize_code_set(BitReader& r, std::span<const size_t> alphabets, const char* field);
 
 }  // namespace pms

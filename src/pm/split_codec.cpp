@@ -5,11 +5,13 @@
 // - Cut vertices: a fundamental cut vertex is a leaf next to v_s's leaves, so its id shares a long prefix
 //   with an id the client already holds (the id-prefix property behind ActiveAncestor, kim-lee-kobbelt §4):
 //   v_s itself (the sibling's subtree and nearby), the cut vertices of v_s's nearest ancestors, and for
-//   v̂_r the v̂_l just decoded. A record names the reference, how far above it the two ids part, and the
-//   rest of the path below the parting bit (which is implied: the other child). Ids far from every
-//   reference escape to tree-id, depth and path.
-// - Position: v_t − v_s per axis on the grid, as a magnitude class (prefix coded, with a table per class
-//   of v_s's radius: the radius bounds |p_t − p_s|) and the class's low bits raw.
+//   v̂_r the v̂_l just decoded. A record names the reference (the first the id follows furthest down, so
+//   each id has one coding), how far above it the two ids part, and the rest of the path below the
+//   parting bit (which is implied: the other child). Ids in no reference's tree escape to tree-id, depth
+//   and path.
+// - Position: v_t − v_s on the grid, the two differences in v_s's tangent plane larger first, then the
+//   third against the plane, each as a magnitude step (prefix coded, the first in a table per class of
+//   v_s's radius: the radius bounds |p_t − p_s|) and the step's low bits raw.
 // - Refinement info: each child's radius, mu, delta and cone angle as the entry of the lattice below v_s's
 //   that the builder rounded it up to (pm/nested_info.h), its own cone axis in coarse steps from v_s's.
 //   Values no entry holds travel exact, so any canonical info can be coded.
@@ -48,7 +50,7 @@ constexpr uint32_t kFineAxisSymbol = kIntSymbols;  // after the integers, in the
 constexpr unsigned kExactLengthBits = 15 - kLengthDroppedBits;  // a length code up to infinity's
 
 constexpr uint32_t kMaxDepthSymbols = 64;
-constexpr uint32_t kEqualSymbol = kMaxDepthSymbols;  // "the reference itself", in the parting codes
+constexpr uint32_t kEqualSymbol = 0;  // "the reference itself", in the parting codes; up u is 1 + u
 constexpr uint32_t kReferences = 2 + 2 * kCutAncestors;  // v_s, ancestor cuts, v̂_l (for v̂_r)
 // Reference symbols: escape, 1 + reference index, or "no cut vertex on this side".
 constexpr uint32_t kEscapeSymbol = 0;
@@ -58,20 +60,29 @@ constexpr uint32_t kRadiusClasses = 64;   // v_s's radius by half octaves (half-
 constexpr size_t kParallelNodes = size_t(1) << 14;  // whole-model passes (fit, encode, check) below this run inline
 constexpr uint32_t kGridBits = 24;          // finer than this, positions are float bits (position_grid.h)
 constexpr uint32_t kSizeClasses = 26;      // magnitude classes of a coordinate difference, clamped
-// First axis: radius class; second: class of the first; third: the larger class of the other two, or,
-// predicted in v_s's tangent plane, the class of the offset the plane allows (plane_context).
-constexpr uint32_t kPositionContexts = kRadiusClasses + 3 * kSizeClasses;
+// v_t − v_s in v_s's tangent plane is an edge of about the local edge length in any direction: the larger
+// of the two in-plane differences goes first, by quarter octaves (the flag saying which it is folded into
+// its symbol), in a table by v_s's radius; the smaller one by quarter octaves in a table by the larger's
+// step; the third, predicted on the plane, by half octaves in a table by the class of the offset the
+// plane allows (plane_context), or without a plane by the larger's class.
+constexpr uint32_t kInPlanePrecision = 2, kOffPlanePrecision = 1;
+constexpr uint32_t kLargerSteps = 64;      // quarter-octave steps of the larger difference, clamped
+constexpr uint32_t kPositionContexts = kRadiusClasses + kLargerSteps + 2 * kSizeClasses;
 constexpr uint32_t kFlagContexts = 10;    // v_s never refines, or the class of its radius over its mu
 constexpr uint32_t kChainContexts = 12;   // the previous field's symbol, clamped
 constexpr uint32_t kAxisContexts = 13;    // no parent cone, or the class of the angle the child leaves inside it
 
 // Code slots, in serialization order; [..] are the contexts.
 constexpr uint32_t kCutHeights = 12;  // v_s's height above the deepest level, clamped
+constexpr uint32_t kOwnLevels = 8;    // levels of a reference's path no earlier reference shares, clamped
+constexpr uint32_t kUpContexts = 8;   // up, clamped, for the depth step's tables
 constexpr uint32_t kSlotCutRef = 0;                                 // [v̂_l; v̂_r after each v̂_l symbol]
-constexpr uint32_t kSlotCutUp = kSlotCutRef + 1 + kRefSymbols;      // [side][reference is v_s: 0, a leaf: 1][height]
-constexpr uint32_t kSlotCutRest = kSlotCutUp + 4 * kCutHeights;     // [side][same][height]
-constexpr uint32_t kSlotCutDepth = kSlotCutRest + 4 * kCutHeights;  // escaped ids
-constexpr uint32_t kSlotPosition = kSlotCutDepth + 1;               // [axis][radius class]
+constexpr uint32_t kSlotCutUp = kSlotCutRef + 1 + kRefSymbols;      // [side][reference is v_s: 0, a leaf: 1][height][own levels]
+constexpr uint32_t kSlotCutRest = kSlotCutUp + 4 * kCutHeights * kOwnLevels;  // [side][same][up]
+constexpr uint32_t kSlotCutDepth = kSlotCutRest + 4 * kUpContexts;  // escaped ids
+constexpr uint32_t kSlotPosition = kSlotCutDepth + 1;               // [radius class]: the larger in-plane difference
+constexpr uint32_t kSlotPositionSmaller = kSlotPosition + kRadiusClasses;     // [the larger's step]
+constexpr uint32_t kSlotPositionThird = kSlotPositionSmaller + kLargerSteps;  // [larger's class; plane context]
 constexpr uint32_t kSlotInfoFlags = kSlotPosition + kPositionContexts;  // [flag context]
 constexpr uint32_t kSlotRadius = kSlotInfoFlags + kFlagContexts;    // [t, or u without t: height; u: t's radius symbol]
 constexpr uint32_t kSlotMu = kSlotRadius + 2 * kFlagContexts + kChainContexts;                      // [child][radius symbol]
@@ -79,7 +90,7 @@ constexpr uint32_t kSlotDelta = kSlotMu + 2 * kChainContexts;       // [child][m
 constexpr uint32_t kSlotAngle = kSlotDelta + 2 * kChainContexts;    // [child][parent has a cone]
 constexpr uint32_t kSlotAxis = kSlotAngle + 4;                      // [child][axis context]
 constexpr uint32_t kCoreSlots = kSlotAxis + 2 * kAxisContexts;      // serialized for every model
-static_assert(kCoreSlots == 374, "docs/protocol.md, \"Split records\", gives the count");
+static_assert(kCoreSlots == 732, "docs/protocol.md, \"Split records\", gives the count");
 // Attributes of v_t against an origin the client holds; the first value's table by the size of the step
 // (the edge's magnitude class, or the cone angle class of the origin), each later one's by the class of the
 // one before.
@@ -94,10 +105,19 @@ constexpr uint32_t kSlotCount = kSlotColorNext + 3 * kColorClasses;
 static_assert(kSlotCount - kSlotNormal == 66 + 53, "docs/protocol.md, \"Split records\", gives the counts");
 constexpr uint8_t kHasNormals = 1, kHasColors = 2;
 
+// Integers by magnitude steps of `precision` bits: magnitudes below 2^precision each a step, larger ones
+// by their bit_width and the `precision` bits below the leading one, the bits below those raw. A symbol is
+// 0 for 0, else 2 step − 1 plus 1 when negative. Precision 0 is one class per octave.
+constexpr uint32_t int_symbols(uint32_t precision) { return 2 * ((kMaxClass - precision + 1) << precision) - 1; }
+static_assert(int_symbols(0) == kIntSymbols);
+
 uint32_t alphabet(uint32_t slot) {
   if (slot < kSlotCutUp) return kRefSymbols;
   if (slot < kSlotCutRest) return kMaxDepthSymbols + 1;
   if (slot == kSlotCutDepth) return kMaxDepthSymbols;
+  if (slot >= kSlotPosition && slot < kSlotPositionSmaller) return 2 * int_symbols(kInPlanePrecision);
+  if (slot >= kSlotPositionSmaller && slot < kSlotPositionThird) return int_symbols(kInPlanePrecision);
+  if (slot >= kSlotPositionThird && slot < kSlotInfoFlags) return int_symbols(kOffPlanePrecision);
   if (slot >= kSlotInfoFlags && slot < kSlotRadius) return 4;
   if (slot >= kSlotRadius && slot < kSlotAngle) return kEntrySymbols;
   if (slot >= kSlotAngle && slot < kSlotAxis) return kEntrySymbols + 1;
@@ -109,40 +129,32 @@ enum Part { topology, geometry, refinement, normal, color };
 
 uint32_t tree_bits(uint32_t root_count) { return root_count <= 1 ? 1 : uint32_t(std::bit_width(root_count - 1)); }
 
-uint32_t int_symbol(int64_t v) {
-  if (v == 0) return 0;
-  const uint64_t magnitude = v < 0 ? uint64_t(-v) : uint64_t(v);
-  const auto k = uint32_t(std::bit_width(magnitude));
+uint64_t magnitude(int64_t v) { return v < 0 ? uint64_t(0) - uint64_t(v) : uint64_t(v); }
+
+// An integer as coded: its symbol, its magnitude step, and the raw bits after the symbol.
+struct IntCode {
+  uint32_t symbol = 0, step = 0;
+  uint64_t raw = 0;
+  unsigned raw_bits = 0;
+};
+IntCode int_code(int64_t v, uint32_t precision) {
+  const uint64_t m = magnitude(v);
+  const auto k = uint32_t(std::bit_width(m));
   if (k > kMaxClass) fail("split record", "value " + std::to_string(v) + " too large to code");
-  return 2 * k - 1 + (v < 0);
+  if (k <= precision) return {m == 0 ? 0 : 2 * uint32_t(m) - 1 + (v < 0), uint32_t(m)};
+  const unsigned low = k - 1 - precision;
+  const uint32_t step = ((k - precision) << precision) | uint32_t((m >> low) & ((1u << precision) - 1));
+  return {2 * step - 1 + (v < 0), step, m & ((uint64_t(1) << low) - 1), low};
 }
 
 
-struct Reference {
-  VertexId id = kNoVertex;
-  bool leaf = false;  // a cut vertex (can equal the target); else v_s (cannot)
-};
-
-// How `target` is coded against `ref`: equal, or parting `up` levels above ref and `rest` levels below
-// the implied parting bit. False when ref cannot express it (another tree, or one id above the other).
-struct Parting {
-  bool equal = false;
-  uint32_t up = 0, rest = 0;
-  int64_t depth_step = 0;  // depth(target) - depth(ref) = rest - up, what is coded
-};
-bool parting(VertexId ref, VertexId target, Parting& p) {
-  if (!is_vertex(ref) || ref.tree != target.tree) return false;
-  if (ref == target) {
-    p = {true, 0, 0};
-    return true;
-  }
-  const int dr = ref.depth(), dt = target.depth(), shallower = std::min(dr, dt);
+// The depth of the deepest common ancestor of two ids, -1 in different trees.
+int common_depth(VertexId a, VertexId b) {
+  if (a.tree != b.tree) return -1;
+  const int da = a.depth(), db = b.depth(), shallower = std::min(da, db);
   // Both ids cut to the shallower depth agree above their highest differing bit.
-  const uint64_t a = ref.node >> (dr - shallower), b = target.node >> (dt - shallower);
-  const int c = shallower - int(std::bit_width(a ^ b));  // the depth of their deepest common ancestor
-  if (c == dr || c == dt) return false;  // one is the other's ancestor: no parting bit
-  p = {false, uint32_t(dr - 1 - c), uint32_t(dt - c - 1), int64_t(dt) - dr};
-  return true;
+  const uint64_t x = a.node >> (da - shallower), y = b.node >> (db - shallower);
+  return shallower - int(std::bit_width(x ^ y));
 }
 
 }  // namespace
@@ -182,29 +194,75 @@ struct Writing {
   }
 };
 
-template <class Out> uint32_t put_int(Out& out, uint32_t slot, int64_t v, Part part) {
-  const uint32_t sym = int_symbol(v);
-  out.symbol(slot, sym, part);
-  if (sym == 0) return sym;
-  const uint32_t k = (sym + 1) / 2;
-  const uint64_t magnitude = v < 0 ? uint64_t(-v) : uint64_t(v);
-  out.raw(magnitude, k - 1, part);  // the bits below the leading one
-  return sym;
+template <class Out> void put_raw(Out& out, const IntCode& code, Part part) {
+  if (code.raw_bits > 0) out.raw(code.raw, code.raw_bits, part);
+}
+// Returns the symbol (whose step, (symbol + 1) / 2, is the class at precision 0).
+template <class Out> uint32_t put_int(Out& out, uint32_t slot, int64_t v, Part part, uint32_t precision = 0) {
+  const IntCode code = int_code(v, precision);
+  out.symbol(slot, code.symbol, part);
+  put_raw(out, code, part);
+  return code.symbol;
 }
 
-int64_t get_int(uint32_t sym, BitReader& r, const char* field) {
+int64_t get_int(uint32_t sym, BitReader& r, const char* field, uint32_t precision = 0) {
   if (sym == 0) return 0;
-  if (sym >= kIntSymbols) r.fail_field(field, "not an integer symbol");
-  const uint32_t k = (sym + 1) / 2;
-  const uint64_t magnitude = (uint64_t(1) << (k - 1)) | r.bits(k - 1, field);
-  return sym % 2 == 0 ? -int64_t(magnitude) : int64_t(magnitude);
+  if (sym >= int_symbols(precision)) r.fail_field(field, "not an integer symbol");
+  const uint32_t step = (sym + 1) / 2;
+  uint64_t m = step;
+  if (step >= (1u << precision)) {
+    const uint32_t k = (step >> precision) + precision;
+    const unsigned low = k - 1 - precision;
+    m = (uint64_t(1) << (k - 1)) | (uint64_t(step & ((1u << precision) - 1)) << low) | r.bits(low, field);
+  }
+  return sym % 2 == 0 ? -int64_t(m) : int64_t(m);
 }
 
-// The references a cut vertex of `side` may be coded against, in symbol order.
-void references(const SplitContext& c, int side, VertexId cut_l, Reference out[kReferences]) {
-  out[0] = {c.vs, false};
-  for (int i = 0; i < 2 * kCutAncestors; ++i) out[1 + i] = {c.ancestor_cuts[i], true};
-  out[kReferences - 1] = {side == 1 ? cut_l : kNoVertex, true};
+// The ids a cut vertex of `side` is coded against, each once, in symbol order: v_s, the ancestors' cut
+// vertices, and for v̂_r the v̂_l just decoded. A cut vertex parts from the first of them whose path it
+// follows furthest down, so a reference only ever serves for its `own` lowest levels: the part of its path
+// that no earlier reference shares. That makes the coding canonical, and how many levels a reference
+// owns is the context of how far above it the target parts.
+struct References {
+  uint32_t count = 0;
+  VertexId id[kReferences];
+  uint32_t own[kReferences];
+};
+References references(const SplitContext& c, int side, VertexId cut_l) {
+  References refs;
+  const auto add = [&refs](VertexId v) {
+    if (!is_vertex(v)) return;
+    int shared = -1;
+    for (uint32_t i = 0; i < refs.count; ++i) {
+      if (refs.id[i] == v) return;
+      shared = std::max(shared, common_depth(refs.id[i], v));
+    }
+    refs.id[refs.count] = v;
+    refs.own[refs.count++] = uint32_t(std::max(0, v.depth() - 1 - shared));
+  };
+  add(c.vs);
+  for (VertexId cut : c.ancestor_cuts) add(cut);
+  if (side == 1) add(cut_l);
+  return refs;
+}
+
+// How a cut vertex is coded: against the reference it follows furthest down (the first on ties), with
+// the depth of their deepest common ancestor; or escaped (`ref` = refs.count) when no reference is in its
+// tree or one of the two ids lies above the other (no parting bit).
+struct CutCoding {
+  uint32_t ref = 0;
+  int common = -1;
+  bool equal = false;
+};
+CutCoding cut_coding(const References& refs, VertexId cut) {
+  CutCoding coding{refs.count};
+  for (uint32_t i = 0; i < refs.count; ++i)
+    if (const int common = common_depth(refs.id[i], cut); common > coding.common) coding = {i, common};
+  if (coding.ref == refs.count) return coding;
+  const VertexId ref = refs.id[coding.ref];
+  coding.equal = ref == cut;
+  if (!coding.equal && (coding.common == ref.depth() || coding.common == cut.depth())) coding.ref = refs.count;
+  return coding;
 }
 
 // A half float's exponent and top mantissa bit.
@@ -254,14 +312,12 @@ uint32_t plane_context(const PositionFrame& f, const int64_t d[3]) {
   const uint64_t offset = uint64_t(std::max(std::abs(d[f.order[0]]), std::abs(d[f.order[1]])));
   return std::min<uint32_t>(uint32_t(std::bit_width((offset * uint64_t(f.angle + 1)) >> 8)), kSizeClasses - 1);
 }
-// The slot of the position code for the axis at `index` in the frame's order, given the symbols before it.
-uint32_t position_slot(const SplitContext& c, const PositionFrame& f, uint32_t index, const uint32_t classes[3],
-                       const int64_t d[3]) {
-  constexpr uint32_t sized = kSlotPosition + kRadiusClasses;
-  if (index == 0) return kSlotPosition + position_class(c);
-  if (index == 1) return sized + std::min(classes[0], kSizeClasses - 1);
-  if (f.plane) return sized + 2 * kSizeClasses + plane_context(f, d);
-  return sized + kSizeClasses + std::min(std::max(classes[0], classes[1]), kSizeClasses - 1);
+// The table of the third difference: on the plane, by the offset the plane allows; else by the larger
+// in-plane difference's class.
+uint32_t third_position_slot(const PositionFrame& f, const int64_t d[3]) {
+  if (f.plane) return kSlotPositionThird + kSizeClasses + plane_context(f, d);
+  const uint64_t larger = std::max(magnitude(d[f.order[0]]), magnitude(d[f.order[1]]));
+  return kSlotPositionThird + std::min<uint32_t>(uint32_t(std::bit_width(larger)), kSizeClasses - 1);
 }
 
 // Whether v_s's children never refine, and how far below v_s their bounds are, depend on how far v_s is
@@ -274,8 +330,13 @@ uint32_t height_context(const SplitContext& c, uint32_t max_depth) {
 uint32_t cut_height(const SplitContext& c, uint32_t max_depth) {
   return std::min<uint32_t>(uint32_t(std::max(0, int(max_depth) - c.vs.depth())), kCutHeights - 1);
 }
-uint32_t cut_slot(uint32_t base, const SplitContext& c, uint32_t max_depth, int side, bool leaf_reference) {
-  return base + (2 * uint32_t(side) + (leaf_reference ? 1 : 0)) * kCutHeights + cut_height(c, max_depth);
+uint32_t up_slot(const SplitContext& c, uint32_t max_depth, int side, uint32_t ref, uint32_t own) {
+  const uint32_t kind = 2 * uint32_t(side) + (ref > 0 ? 1 : 0);  // reference 0 is v_s, the others leaves
+  return kSlotCutUp + (kind * kCutHeights + cut_height(c, max_depth)) * kOwnLevels + std::min(own, kOwnLevels - 1);
+}
+uint32_t depth_step_slot(int side, uint32_t ref, uint32_t up) {
+  const uint32_t kind = 2 * uint32_t(side) + (ref > 0 ? 1 : 0);
+  return kSlotCutRest + kind * kUpContexts + std::min(up, kUpContexts - 1);
 }
 uint32_t chain_context(uint32_t previous_symbol) { return std::min(previous_symbol, kChainContexts - 1); }
 // v_s's sphere is v_t's moved or v_u's, so how close v_t's radius came to its bound says about v_u's.
@@ -408,41 +469,25 @@ template <class Out> void SplitCodec::emit_cuts(const SplitContext& c, const Spl
     }
     if (cut.tree >= root_count_ || uint32_t(cut.depth()) > max_depth_ || is_ancestor_or_self(c.vs, cut))
       fail("split record", "split of " + to_string(c.vs) + ": cut vertex " + to_string(cut) + " cannot be coded");
-    Reference refs[kReferences];
-    references(c, side, p.cut_l, refs);
-    // The cheapest reference under the current tables (or, before any, the shortest rest), first on ties.
-    // With tables, only references whose symbols all have code words; the escape always has one (build).
-    uint32_t best = kReferences;
-    Parting best_parting;
-    uint64_t best_cost = UINT64_MAX;
-    for (uint32_t i = 0; i < kReferences; ++i) {
-      Parting pt;
-      if (!parting(refs[i].id, cut, pt) || (pt.equal && !refs[i].leaf)) continue;
-      uint64_t cost = pt.rest;
-      if (!codes_.empty()) {
-        const PrefixCode& ref_code = codes_[ref_slot];
-        const PrefixCode& up_code = codes_[cut_slot(kSlotCutUp, c, max_depth_, side, refs[i].leaf)];
-        const PrefixCode& step_code = codes_[cut_slot(kSlotCutRest, c, max_depth_, side, refs[i].leaf)];
-        const uint32_t up = pt.equal ? kEqualSymbol : pt.up, step = int_symbol(pt.depth_step);
-        if (!ref_code.has(1 + i) || !up_code.has(up) || (!pt.equal && !step_code.has(step))) continue;
-        cost += ref_code.cost(1 + i) + up_code.cost(up);
-        if (!pt.equal) cost += step_code.cost(step) + (step + 1) / 2 - (step != 0);
-      }
-      if (cost < best_cost) best = i, best_parting = pt, best_cost = cost;
-    }
-    const uint32_t ref_symbol = best == kReferences ? kEscapeSymbol : 1 + best;
+    const References refs = references(c, side, p.cut_l);
+    const CutCoding coding = cut_coding(refs, cut);
+    const uint32_t best = coding.ref;
+    const bool escape = best == refs.count, equal = coding.equal;
+    const uint32_t ref_symbol = escape ? kEscapeSymbol : 1 + best;
     out.symbol(ref_slot, ref_symbol, topology);
     ref_slot = kSlotCutRef + 1 + ref_symbol;
-    if (best == kReferences) {
+    if (escape) {
       out.raw(cut.tree, tree_bits(root_count_), topology);
       out.symbol(kSlotCutDepth, uint32_t(cut.depth()), topology);
       out.raw(cut.node, unsigned(cut.depth()), topology);
       continue;
     }
-    out.symbol(cut_slot(kSlotCutUp, c, max_depth_, side, refs[best].leaf), best_parting.equal ? kEqualSymbol : best_parting.up, topology);
-    if (best_parting.equal) continue;
-    put_int(out, cut_slot(kSlotCutRest, c, max_depth_, side, refs[best].leaf), best_parting.depth_step, topology);
-    out.raw(cut.node, best_parting.rest, topology);
+    const VertexId ref = refs.id[best];
+    const uint32_t up = equal ? 0 : uint32_t(ref.depth() - 1 - coding.common);
+    out.symbol(up_slot(c, max_depth_, side, best, refs.own[best]), equal ? kEqualSymbol : 1 + up, topology);
+    if (equal) continue;
+    put_int(out, depth_step_slot(side, best, up), int64_t(cut.depth()) - ref.depth(), topology);
+    out.raw(cut.node, unsigned(cut.depth() - coding.common - 1), topology);
   }
 }
 
@@ -451,16 +496,19 @@ template <class Out> void SplitCodec::emit(const SplitContext& c, const SplitPay
   // Position of v_t against v_s's.
   const PositionFrame frame = position_frame(c.info_s, steps_, position_bits_);
   int64_t d[3] = {0, 0, 0};
-  uint32_t classes[3] = {0, 0, 0};
-  for (uint32_t index = 0; index < 3; ++index) {
-    const uint32_t axis = frame.order[index];
+  for (uint32_t axis = 0; axis < 3; ++axis) {
     if (position_bits_ < 32 && p.position_t[axis] >> position_bits_)
       fail("split record", "split of " + to_string(c.vs) + ": position outside the grid");
     d[axis] = int64_t(p.position_t[axis]) - int64_t(c.position_s[axis]);
-    const int64_t predicted = index == 2 && frame.plane ? plane_prediction(frame, d) : 0;
-    const uint32_t sym = put_int(out, position_slot(c, frame, index, classes, d), d[axis] - predicted, geometry);
-    classes[index] = (sym + 1) / 2;
   }
+  const int64_t a = d[frame.order[0]], b = d[frame.order[1]];
+  const bool swapped = magnitude(b) > magnitude(a);  // the larger goes first, a on ties
+  const IntCode larger = int_code(swapped ? b : a, kInPlanePrecision);
+  out.symbol(kSlotPosition + position_class(c), 2 * larger.symbol + (swapped ? 1 : 0), geometry);
+  put_raw(out, larger, geometry);
+  put_int(out, kSlotPositionSmaller + std::min(larger.step, kLargerSteps - 1), swapped ? a : b, geometry, kInPlanePrecision);
+  const int64_t predicted = frame.plane ? plane_prediction(frame, d) : 0;
+  put_int(out, third_position_slot(frame, d), d[frame.order[2]] - predicted, geometry, kOffPlanePrecision);
   const uint32_t edge = edge_class(d);
   // Refinement info of v_t and v_u against v_s's.
   const RefineInfo* child[2] = {&p.info_t, &p.info_u};
@@ -561,6 +609,7 @@ SplitPayload SplitCodec::decode(const SplitContext& c, BitReader& r) const {
     const uint32_t sym = codes_[ref_slot].read(r, field);
     ref_slot = kSlotCutRef + 1 + sym;
     if (sym == kAbsentSymbol) continue;
+    const References refs = references(c, side, p.cut_l);
     VertexId cut;
     if (sym == kEscapeSymbol) {
       cut.tree = uint32_t(r.bits(tree_bits(root_count_), field));
@@ -568,44 +617,54 @@ SplitPayload SplitCodec::decode(const SplitContext& c, BitReader& r) const {
       if (depth > max_depth_) r.fail_field(field, "deeper than the model");
       cut.node = (uint64_t(1) << depth) | r.bits(depth, field);
     } else {
-      Reference refs[kReferences];
-      references(c, side, p.cut_l, refs);
-      const Reference& ref = refs[sym - 1];
-      if (!is_vertex(ref.id)) r.fail_field(field, "names a reference the client does not hold");
-      const uint32_t up = codes_[cut_slot(kSlotCutUp, c, max_depth_, side, ref.leaf)].read(r, field);
-      if (up == kEqualSymbol) {
-        if (!ref.leaf) r.fail_field(field, "equal to v_s");
-        cut = ref.id;
+      const uint32_t i = sym - 1;
+      if (i >= refs.count) r.fail_field(field, "names a reference the client does not hold");
+      const VertexId ref = refs.id[i];
+      const uint32_t up_symbol = codes_[up_slot(c, max_depth_, side, i, refs.own[i])].read(r, field);
+      if (up_symbol == kEqualSymbol) {
+        if (i == 0) r.fail_field(field, "equal to v_s");
+        cut = ref;
       } else {
-        const int dr = ref.id.depth();
+        const uint32_t up = up_symbol - 1;
+        const int dr = ref.depth();
         if (int(up) >= dr) r.fail_field(field, "parts above the root");
         const int common = dr - 1 - int(up);
-        const uint64_t prefix = ref.id.node >> (dr - common);
-        const uint64_t other = ((ref.id.node >> (dr - common - 1)) & 1) ^ 1;
-        const int64_t rest = get_int(codes_[cut_slot(kSlotCutRest, c, max_depth_, side, ref.leaf)].read(r, field), r, field) + int64_t(up);
+        const uint64_t prefix = ref.node >> (dr - common);
+        const uint64_t other = ((ref.node >> (dr - common - 1)) & 1) ^ 1;
+        const int64_t rest = get_int(codes_[depth_step_slot(side, i, up)].read(r, field), r, field) + int64_t(up);
         if (rest < 0 || common + 1 + rest > int64_t(max_depth_)) r.fail_field(field, "depth outside the model");
-        cut = {ref.id.tree, (((prefix << 1) | other) << rest) | r.bits(unsigned(rest), field)};
+        cut = {ref.tree, (((prefix << 1) | other) << rest) | r.bits(unsigned(rest), field)};
       }
     }
     if (cut.tree >= root_count_) r.fail_field(field, "tree-id outside the model");
     if (is_ancestor_or_self(c.vs, cut)) r.fail_field(field, "inside v_s's subtree");
+    // Each id has one coding, the encoder's: a record that decodes is the one its split encodes to.
+    if (cut_coding(refs, cut).ref != (sym == kEscapeSymbol ? refs.count : sym - 1))
+      r.fail_field(field, "not coded against the reference its path follows furthest");
     (side == 0 ? p.cut_l : p.cut_r) = cut;
   }
   if (!is_vertex(p.cut_l) && !is_vertex(p.cut_r)) r.fail_field("v̂_r", "neither v̂_l nor v̂_r is present");
   const PositionFrame frame = position_frame(c.info_s, steps_, position_bits_);
   int64_t d[3] = {0, 0, 0};
-  uint32_t classes[3] = {0, 0, 0};
   const int64_t top = position_bits_ >= 32 ? int64_t(UINT32_MAX) : (int64_t(1) << position_bits_) - 1;
-  for (uint32_t index = 0; index < 3; ++index) {
-    const uint32_t axis = frame.order[index];
-    const uint32_t sym = codes_[position_slot(c, frame, index, classes, d)].read(r, "position");
-    const int64_t predicted = index == 2 && frame.plane ? plane_prediction(frame, d) : 0;
-    d[axis] = predicted + get_int(sym, r, "position");
-    classes[index] = (sym + 1) / 2;
-    const int64_t v = int64_t(c.position_s[axis]) + d[axis];
+  const auto place = [&](uint32_t axis, int64_t step) {
+    const int64_t v = int64_t(c.position_s[axis]) + step;
     if (v < 0 || v > top) r.fail_field("position", "outside the grid");
+    d[axis] = step;
     p.position_t[axis] = uint32_t(v);
-  }
+  };
+  const uint32_t first = codes_[kSlotPosition + position_class(c)].read(r, "position");
+  const bool swapped = first & 1;
+  const int64_t larger = get_int(first >> 1, r, "position", kInPlanePrecision);
+  const uint32_t larger_step = ((first >> 1) + 1) / 2;
+  const int64_t smaller = get_int(codes_[kSlotPositionSmaller + std::min(larger_step, kLargerSteps - 1)].read(r, "position"),
+                                  r, "position", kInPlanePrecision);
+  if (magnitude(smaller) > magnitude(larger) || (swapped && magnitude(smaller) == magnitude(larger)))
+    r.fail_field("position", "the in-plane differences are not larger first");
+  place(frame.order[0], swapped ? smaller : larger);
+  place(frame.order[1], swapped ? larger : smaller);
+  const int64_t predicted = frame.plane ? plane_prediction(frame, d) : 0;
+  place(frame.order[2], predicted + get_int(codes_[third_position_slot(frame, d)].read(r, "position"), r, "position", kOffPlanePrecision));
   const uint32_t edge = edge_class(d);
   const RefineInfo& s = c.info_s;
   const uint32_t flags = codes_[kSlotInfoFlags + height_context(c, max_depth_)].read(r, "info flags");
@@ -664,32 +723,18 @@ SplitCodec SplitCodec::build(const ModelData& model, std::span<const uint32_t> p
   codec.has_normals_ = !model.normals.empty();
   codec.has_colors_ = !model.colors.empty();
   for (size_t n = 0; n < model.node_count(); ++n) codec.max_depth_ = std::max<uint32_t>(codec.max_depth_, uint32_t(model.id(uint32_t(n)).depth()));
-  // Two fits: the first chooses references by their rest alone, the second by the first fit's costs. Only
-  // the cut vertices' symbols depend on the tables, so the second counts those and keeps the rest.
-  Counts counts;
-  for (int pass = 0; pass < 2; ++pass) {
-    std::vector<Counts> parts = map_ranges(model.node_count(), kParallelNodes, [&](size_t begin, size_t end) {
-      Counts part;
-      for (uint32_t node = uint32_t(begin); node < end; ++node) {
-        if (model.is_leaf(node)) continue;
-        const SplitContext context = split_context(model, positions, node);
-        const SplitPayload payload = split_payload(model, positions, node);
-        if (pass == 0) codec.emit(context, payload, part);
-        else codec.emit_cuts(context, payload, part);
-      }
-      return part;
-    });
-    for (size_t i = 1; i < parts.size(); ++i) parts[0].add(parts[i]);
-    for (uint32_t s = 0; s < kSlotCount; ++s)
-      if (pass == 0 || s < kSlotPosition) counts.counts[s] = parts[0].counts[s];
-    // The escape, the missing side and every escaped depth keep a code word in every table they may be
-    // needed in: a reference the final tables price differently can move v̂_r to another table.
-    for (uint32_t slot = kSlotCutRef; slot < kSlotCutUp; ++slot) ++counts.counts[slot][kEscapeSymbol], ++counts.counts[slot][kAbsentSymbol];
-    for (uint32_t depth = 0; depth <= codec.max_depth_; ++depth) ++counts.counts[kSlotCutDepth][depth];
-    std::vector<PrefixCode> codes;
-    for (uint32_t s = 0; s < kSlotCount; ++s) codes.push_back(PrefixCode::from_counts(counts.counts[s]));
-    codec.codes_ = std::move(codes);
-  }
+  // One fit: every choice the coding makes is canonical, so no symbol depends on the tables.
+  std::vector<Counts> parts = map_ranges(model.node_count(), kParallelNodes, [&](size_t begin, size_t end) {
+    Counts part;
+    for (uint32_t node = uint32_t(begin); node < end; ++node) {
+      if (model.is_leaf(node)) continue;
+      codec.emit(split_context(model, positions, node), split_payload(model, positions, node), part);
+    }
+    return part;
+  });
+  for (size_t i = 1; i < parts.size(); ++i) parts[0].add(parts[i]);
+  codec.codes_.reserve(kSlotCount);
+  for (uint32_t s = 0; s < kSlotCount; ++s) codec.codes_.push_back(PrefixCode::from_counts(parts[0].counts[s]));
   return codec;
 }
 
@@ -706,8 +751,10 @@ void SplitCodec::serialize(BitWriter& w) const {
   for (uint16_t step : steps_) w.bits(step, 16);
   w.bits(std::bit_cast<uint32_t>(grid_step_), 32);
   w.bits((has_normals_ ? kHasNormals : 0) | (has_colors_ ? kHasColors : 0), 8);
+  std::vector<const PrefixCode*> carried_codes;
   for (uint32_t slot = 0; slot < kSlotCount; ++slot)
-    if (carried(slot)) codes_[slot].serialize(w);
+    if (carried(slot)) carried_codes.push_back(&codes_[slot]);
+  serialize_code_set(carried_codes, w);
 }
 
 SplitCodec SplitCodec::deserialize(BitReader& r) {
@@ -725,9 +772,13 @@ SplitCodec SplitCodec::deserialize(BitReader& r) {
   if (attributes & ~uint32_t(kHasNormals | kHasColors)) r.fail_field("attributes", "unknown bits set");
   codec.has_normals_ = attributes & kHasNormals;
   codec.has_colors_ = attributes & kHasColors;
-  codec.codes_.resize(kSlotCount);
+  std::vector<uint32_t> slots;
+  std::vector<size_t> alphabets;
   for (uint32_t s = 0; s < kSlotCount; ++s)
-    if (codec.carried(s)) codec.codes_[s] = PrefixCode::deserialize(r, alphabet(s), "code table");
+    if (codec.carried(s)) slots.push_back(s), alphabets.push_back(alphabet(s));
+  std::vector<PrefixCode> codes = deserialize_code_set(r, alphabets, "code table");
+  codec.codes_.resize(kSlotCount);
+  for (size_t i = 0; i < slots.size(); ++i) codec.codes_[slots[i]] = std::move(codes[i]);
   return codec;
 }
 

@@ -94,7 +94,7 @@ class SplitCodec {
  private:
   struct Counts;
   template <class Out> void emit(const SplitContext& context, const SplitPayload& payload, Out& out) const;
-  // The cut vertices alone: the only part whose symbols depend on the tables (through the references).
+  // The cut vertices (topology).
   template <class Out> void emit_cuts(const SplitContext& context, const SplitPayload& payload, Out& out) const;
 
   // Whether the tables of `slot` are serialized: every core slot, an attribute's only when the model has it.

@@ -37,10 +37,11 @@ struct ServedModel {
   // `codec_frame` after BASE.
   protocol::PacketTable packets;
   std::unique_ptr<const Dag> dag;  // the DAG mode's operations, on the wire grid's positions
-  // The receiver-driven answers' body format (server/split_records_body.h), part of every ETag: 3, the
-  // compact records with their tables' attribute section (2 had none, and no normals or colors; 1 was
-  // VSPLITS packets), so a client of another format is refused with its number, not a parse error.
-  static constexpr uint32_t records_format = 3;
+  // The receiver-driven answers' body format (server/split_records_body.h), part of every ETag: 4, the
+  // compact records with canonical cut references and in-plane positions larger first (3 coded each axis
+  // alone; 2 had no attribute section, and no normals or colors; 1 was VSPLITS packets), so a client of
+  // another format is refused with its number, not a parse error.
+  static constexpr uint32_t records_format = 4;
   protocol::StoredRecords records;     // the file's own at the served grid, or `own_records`
   EncodedRecords own_records;          // coded at load when the file's records are at another grid
   std::shared_ptr<const std::vector<uint8_t>> codec_tables;  // serialized (GET /models/{m}/codec)

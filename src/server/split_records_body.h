@@ -1,6 +1,6 @@
 // The body of a receiver-driven answer: the split records of the ids asked for and their descendants. One
 // function, so the record format can change without the HTTP code (docs/protocol.md, "Receiver-driven over
-// HTTP"). A model's format (ServedModel::records_format) is part of every ETag: 3, the compact records'
+// HTTP"). A model's format (ServedModel::records_format) is part of every ETag: 4, the compact records'
 // bands (protocol/split_bands.h).
 #pragma once
 #include <cstdint>

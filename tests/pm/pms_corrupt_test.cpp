@@ -179,13 +179,13 @@ TEST(PmsCorrupt, WrongMagicAndNewerVersion) {
   f.bytes[0] = 'X';
   expect_error(f, "header: ", "not a .pms file");
   f = small();
-  store<uint32_t>(f.bytes, kVersionAt, 7);
+  store<uint32_t>(f.bytes, kVersionAt, 8);
   f.fix_checksums();
-  EXPECT_EQ(f.error(), "header: unsupported version 7 (this build reads 6)");
+  EXPECT_EQ(f.error(), "header: unsupported version 8 (this build reads 7)");
   f = small();
-  store<uint32_t>(f.bytes, kVersionAt, 5);
+  store<uint32_t>(f.bytes, kVersionAt, 6);
   f.fix_checksums();
-  EXPECT_EQ(f.error(), "header: unsupported version 5 (this build reads 6; rebuild the file with this pmstream)");
+  EXPECT_EQ(f.error(), "header: unsupported version 6 (this build reads 7; rebuild the file with this pmstream)");
 }
 
 TEST(PmsCorrupt, AbsurdNodeCountInHead) {

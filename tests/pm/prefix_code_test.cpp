@@ -105,6 +105,52 @@ TEST(PrefixCode, SerializesAndRejectsHostileTables) {
   EXPECT_THROW(PrefixCode(std::vector<uint8_t>{16, 1}), Error);
 }
 
+TEST(PrefixCode, CodeSetsRoundTripAndRejectHostileSets) {
+  std::mt19937_64 rng(7);
+  std::vector<PrefixCode> codes;
+  std::vector<size_t> alphabets;
+  for (int i = 0; i < 60; ++i) {
+    std::vector<uint64_t> counts(1 + rng() % 300, 0);
+    const int used = i % 7 == 0 ? 0 : int(1 + rng() % 40);  // some codes empty, some with one symbol
+    for (int k = 0; k < used; ++k) counts[rng() % counts.size()] += 1 + rng() % 1000;
+    codes.push_back(PrefixCode::from_counts(counts));
+    alphabets.push_back(counts.size());
+  }
+  std::vector<const PrefixCode*> pointers;
+  for (const PrefixCode& c : codes) pointers.push_back(&c);
+  BitWriter w;
+  serialize_code_set(pointers, w);
+  size_t plain = 0;
+  for (const PrefixCode& c : codes) plain += 16 + 4 * c.serialized_symbols();
+  EXPECT_LT(w.size(), plain);  // smaller than each code on its own
+  BitReader r(w.bytes(), 0, w.size(), "set");
+  const std::vector<PrefixCode> back = deserialize_code_set(r, alphabets, "set");
+  ASSERT_EQ(back.size(), codes.size());
+  for (size_t i = 0; i < codes.size(); ++i) EXPECT_EQ(back[i].lengths(), codes[i].lengths()) << i;
+  EXPECT_EQ(r.bits_left(), 0u);
+  for (uint64_t end = 0; end < w.size(); end += 1 + end / 16) {
+    BitReader truncated(w.bytes(), 0, end, "set");
+    EXPECT_THROW(deserialize_code_set(truncated, alphabets, "set"), Error) << end;
+  }
+  std::vector<size_t> smaller = alphabets;
+  for (size_t& a : smaller) a = std::max<size_t>(1, a / 2);
+  BitReader too_many(w.bytes(), 0, w.size(), "set");
+  EXPECT_THROW(deserialize_code_set(too_many, smaller, "set"), Error);
+  // A symbol count of 65536 or more; a step to a length below 0.
+  std::vector<uint8_t> step_lengths(31, 0);
+  step_lengths[14] = step_lengths[15] = 1;  // steps -1 (code word 0) and 0
+  const PrefixCode steps(step_lengths);
+  for (const bool long_count : {true, false}) {
+    BitWriter bad;
+    steps.serialize(bad);
+    if (long_count) bad.bits(uint64_t(1) << 17, 18);  // 17 zero bits, then a one
+    else bad.bits(0b010, 3);  // m + 1 = 2 (a zero, a one, then 0): one length, then step -1 below
+    bad.bits(0, 32);
+    BitReader rb(bad.bytes(), 0, bad.size(), "set");
+    EXPECT_THROW(deserialize_code_set(rb, std::vector<size_t>{100}, "set"), Error) << long_count;
+  }
+}
+
 TEST(PrefixCode, UnusedCodeWordsOfAnIncompleteCodeAreRejected) {
   const PrefixCode code(std::vector<uint8_t>{1, 2});  // 0, 10; 11 is unused
   BitWriter w;

@@ -54,9 +54,9 @@ std::string splits_url(const SplitRequest& request) {
 }
 
 // The splits an answer to `request` carries, in its order, read as a client that holds the base mesh
-// reads them (records format 3: the bands need the client's hierarchy to decode).
+// reads them (records format 4: the bands need the client's hierarchy to decode).
 std::vector<VertexId> split_ids(const std::vector<uint8_t>& body, const SplitRequest& request) {
-  EXPECT_EQ(served().records_format, 3u);
+  EXPECT_EQ(served().records_format, 4u);
   const std::vector<uint8_t>& frame = *served().base_frame;
   const protocol::Base base = protocol::decode_base(std::span(frame).subspan(protocol::kFrameHeaderBytes));
   VertexHierarchy h;
