@@ -75,11 +75,13 @@ constexpr uint32_t kAxisContexts = 13;    // no parent cone, or the class of the
 // Code slots, in serialization order; [..] are the contexts.
 constexpr uint32_t kCutHeights = 12;  // v_s's height above the deepest level, clamped
 constexpr uint32_t kOwnLevels = 8;    // levels of a reference's path no earlier reference shares, clamped
-constexpr uint32_t kUpContexts = 8;   // up, clamped, for the depth step's tables
-constexpr uint32_t kSlotCutRef = 0;                                 // [v̂_l; v̂_r after each v̂_l symbol]
-constexpr uint32_t kSlotCutUp = kSlotCutRef + 1 + kRefSymbols;      // [side][reference is v_s: 0, a leaf: 1][height][own levels]
-constexpr uint32_t kSlotCutRest = kSlotCutUp + 4 * kCutHeights * kOwnLevels;  // [side][same][up]
-constexpr uint32_t kSlotCutDepth = kSlotCutRest + 4 * kUpContexts;  // escaped ids
+constexpr uint32_t kUpContexts = 4;   // up, clamped, for the depth step's tables
+constexpr uint32_t kLeftReferenceCounts = kReferences - 1;          // v̂_l's list: v_s and the ancestors' cuts
+constexpr uint32_t kSlotCutRef = 0;                                 // [v̂_l: its list's length; v̂_r: after each v̂_l symbol]
+constexpr uint32_t kSlotCutRight = kSlotCutRef + kLeftReferenceCounts;
+constexpr uint32_t kSlotCutUp = kSlotCutRight + kRefSymbols;        // [side][reference is v_s: 0, a leaf: 1][height][own levels]
+constexpr uint32_t kSlotCutRest = kSlotCutUp + 4 * kCutHeights * kOwnLevels;   // [side][same][height][up]
+constexpr uint32_t kSlotCutDepth = kSlotCutRest + 4 * kCutHeights * kUpContexts;  // escaped ids
 constexpr uint32_t kSlotPosition = kSlotCutDepth + 1;               // [radius class]: the larger in-plane difference
 constexpr uint32_t kSlotPositionSmaller = kSlotPosition + kRadiusClasses;     // [the larger's step]
 constexpr uint32_t kSlotPositionThird = kSlotPositionSmaller + kLargerSteps;  // [larger's class; plane context]
@@ -90,7 +92,7 @@ constexpr uint32_t kSlotDelta = kSlotMu + 2 * kChainContexts;       // [child][m
 constexpr uint32_t kSlotAngle = kSlotDelta + 2 * kChainContexts;    // [child][parent has a cone]
 constexpr uint32_t kSlotAxis = kSlotAngle + 4;                      // [child][axis context]
 constexpr uint32_t kCoreSlots = kSlotAxis + 2 * kAxisContexts;      // serialized for every model
-static_assert(kCoreSlots == 732, "docs/protocol.md, \"Split records\", gives the count");
+static_assert(kCoreSlots == 902, "docs/protocol.md, \"Split records\", gives the count");
 // Attributes of v_t against an origin the client holds; the first value's table by the size of the step
 // (the edge's magnitude class, or the cone angle class of the origin), each later one's by the class of the
 // one before.
@@ -334,9 +336,13 @@ uint32_t up_slot(const SplitContext& c, uint32_t max_depth, int side, uint32_t r
   const uint32_t kind = 2 * uint32_t(side) + (ref > 0 ? 1 : 0);  // reference 0 is v_s, the others leaves
   return kSlotCutUp + (kind * kCutHeights + cut_height(c, max_depth)) * kOwnLevels + std::min(own, kOwnLevels - 1);
 }
-uint32_t depth_step_slot(int side, uint32_t ref, uint32_t up) {
+// v̂_l's reference in a table by how many references there are to choose from (1 .. 11).
+uint32_t left_reference_slot(const SplitContext& c) {
+  return kSlotCutRef + std::max<uint32_t>(references(c, 0, kNoVertex).count, 1) - 1;
+}
+uint32_t depth_step_slot(const SplitContext& c, uint32_t max_depth, int side, uint32_t ref, uint32_t up) {
   const uint32_t kind = 2 * uint32_t(side) + (ref > 0 ? 1 : 0);
-  return kSlotCutRest + kind * kUpContexts + std::min(up, kUpContexts - 1);
+  return kSlotCutRest + (kind * kCutHeights + cut_height(c, max_depth)) * kUpContexts + std::min(up, kUpContexts - 1);
 }
 uint32_t chain_context(uint32_t previous_symbol) { return std::min(previous_symbol, kChainContexts - 1); }
 // v_s's sphere is v_t's moved or v_u's, so how close v_t's radius came to its bound says about v_u's.
@@ -459,12 +465,12 @@ int64_t color_step(uint8_t s, uint8_t t) { return int8_t(uint8_t(t - s)); }
 
 template <class Out> void SplitCodec::emit_cuts(const SplitContext& c, const SplitPayload& p, Out& out) const {
   if (!is_vertex(p.cut_l) && !is_vertex(p.cut_r)) fail("split record", "split of " + to_string(c.vs) + " has no cut vertex");
-  uint32_t ref_slot = kSlotCutRef;
+  uint32_t ref_slot = left_reference_slot(c);
   for (int side = 0; side < 2; ++side) {
     const VertexId cut = side == 0 ? p.cut_l : p.cut_r;
     if (!is_vertex(cut)) {
       out.symbol(ref_slot, kAbsentSymbol, topology);
-      ref_slot = kSlotCutRef + 1 + kAbsentSymbol;
+      ref_slot = kSlotCutRight + kAbsentSymbol;
       continue;
     }
     if (cut.tree >= root_count_ || uint32_t(cut.depth()) > max_depth_ || is_ancestor_or_self(c.vs, cut))
@@ -475,7 +481,7 @@ template <class Out> void SplitCodec::emit_cuts(const SplitContext& c, const Spl
     const bool escape = best == refs.count, equal = coding.equal;
     const uint32_t ref_symbol = escape ? kEscapeSymbol : 1 + best;
     out.symbol(ref_slot, ref_symbol, topology);
-    ref_slot = kSlotCutRef + 1 + ref_symbol;
+    ref_slot = kSlotCutRight + ref_symbol;
     if (escape) {
       out.raw(cut.tree, tree_bits(root_count_), topology);
       out.symbol(kSlotCutDepth, uint32_t(cut.depth()), topology);
@@ -486,7 +492,7 @@ template <class Out> void SplitCodec::emit_cuts(const SplitContext& c, const Spl
     const uint32_t up = equal ? 0 : uint32_t(ref.depth() - 1 - coding.common);
     out.symbol(up_slot(c, max_depth_, side, best, refs.own[best]), equal ? kEqualSymbol : 1 + up, topology);
     if (equal) continue;
-    put_int(out, depth_step_slot(side, best, up), int64_t(cut.depth()) - ref.depth(), topology);
+    put_int(out, depth_step_slot(c, max_depth_, side, best, up), int64_t(cut.depth()) - ref.depth(), topology);
     out.raw(cut.node, unsigned(cut.depth() - coding.common - 1), topology);
   }
 }
@@ -603,11 +609,11 @@ void SplitCodec::encode(const SplitContext& context, const SplitPayload& payload
 SplitPayload SplitCodec::decode(const SplitContext& c, BitReader& r) const {
   if (codes_.size() != kSlotCount) fail("split record", "the codec has no tables");
   SplitPayload p;
-  uint32_t ref_slot = kSlotCutRef;
+  uint32_t ref_slot = left_reference_slot(c);
   for (int side = 0; side < 2; ++side) {
     const char* field = side == 0 ? "v̂_l" : "v̂_r";
     const uint32_t sym = codes_[ref_slot].read(r, field);
-    ref_slot = kSlotCutRef + 1 + sym;
+    ref_slot = kSlotCutRight + sym;
     if (sym == kAbsentSymbol) continue;
     const References refs = references(c, side, p.cut_l);
     VertexId cut;
@@ -631,7 +637,7 @@ SplitPayload SplitCodec::decode(const SplitContext& c, BitReader& r) const {
         const int common = dr - 1 - int(up);
         const uint64_t prefix = ref.node >> (dr - common);
         const uint64_t other = ((ref.node >> (dr - common - 1)) & 1) ^ 1;
-        const int64_t rest = get_int(codes_[depth_step_slot(side, i, up)].read(r, field), r, field) + int64_t(up);
+        const int64_t rest = get_int(codes_[depth_step_slot(c, max_depth_, side, i, up)].read(r, field), r, field) + int64_t(up);
         if (rest < 0 || common + 1 + rest > int64_t(max_depth_)) r.fail_field(field, "depth outside the model");
         cut = {ref.tree, (((prefix << 1) | other) << rest) | r.bits(unsigned(rest), field)};
       }
