@@ -165,16 +165,31 @@ PrefixCode PrefixCode::deserialize(BitReader& r, size_t alphabet, const char* fi
 
 namespace {
 
-constexpr int kLengthSteps = 2 * kMaxCodeLength + 1;  // -15 .. +15
+// Steps -15 .. +15 between nonzero lengths as symbols 0 .. 30; symbols without a code word one at a time,
+// or in runs as DEFLATE codes them (RFC 1951 §3.2.7): 3-10 with 3 raw bits, 11-138 with 7.
+constexpr uint32_t kNoWordSymbol = 2 * kMaxCodeLength + 1;
+constexpr uint32_t kShortRunSymbol = kNoWordSymbol + 1, kLongRunSymbol = kNoWordSymbol + 2;
+constexpr uint32_t kLengthSymbols = kLongRunSymbol + 1;
+constexpr size_t kShortRun = 3, kLongRun = 11, kLongestRun = 138;
 
-// Calls `step(symbol)` for each length of `code` up to its last symbol with one, as a step symbol.
+// Calls `step(symbol, raw, raw_bits)` for the lengths of `code` up to its last symbol with one.
 template <class Step> void for_each_length_step(const PrefixCode& code, Step step) {
   int previous = 0;
   const size_t m = code.serialized_symbols();
-  for (size_t s = 0; s < m; ++s) {
+  for (size_t s = 0; s < m;) {
     const int length = code.lengths()[s];
-    step(uint32_t(length - previous + int(kMaxCodeLength)));
-    if (length != 0) previous = length;
+    if (length != 0) {
+      step(uint32_t(length - previous + int(kMaxCodeLength)), 0, 0);
+      previous = length;
+      ++s;
+      continue;
+    }
+    size_t run = 1;
+    while (s + run < m && run < kLongestRun && code.lengths()[s + run] == 0) ++run;
+    if (run < kShortRun) step(kNoWordSymbol, 0, 0), run = 1;
+    else if (run < kLongRun) step(kShortRunSymbol, run - kShortRun, 3);
+    else step(kLongRunSymbol, run - kLongRun, 7);
+    s += run;
   }
 }
 
@@ -183,8 +198,8 @@ constexpr unsigned kMaxGammaZeros = 16;  // m + 1 <= 65536
 }  // namespace
 
 void serialize_code_set(std::span<const PrefixCode* const> codes, BitWriter& w) {
-  std::vector<uint64_t> counts(kLengthSteps, 0);
-  for (const PrefixCode* code : codes) for_each_length_step(*code, [&](uint32_t step) { ++counts[step]; });
+  std::vector<uint64_t> counts(kLengthSymbols, 0);
+  for (const PrefixCode* code : codes) for_each_length_step(*code, [&](uint32_t step, uint64_t, unsigned) { ++counts[step]; });
   const PrefixCode steps = PrefixCode::from_counts(counts);
   steps.serialize(w);
   for (const PrefixCode* code : codes) {
@@ -193,12 +208,15 @@ void serialize_code_set(std::span<const PrefixCode* const> codes, BitWriter& w) 
     if (zeros > kMaxGammaZeros) fail("prefix code", "alphabet too large to serialize");
     w.bits(uint64_t(1) << zeros, zeros + 1);
     w.bits(n, zeros);  // the bits below the leading one
-    for_each_length_step(*code, [&](uint32_t step) { steps.write(w, step); });
+    for_each_length_step(*code, [&](uint32_t step, uint64_t raw, unsigned raw_bits) {
+      steps.write(w, step);
+      w.bits(raw, raw_bits);
+    });
   }
 }
 
 std::vector<PrefixCode> deserialize_code_set(BitReader& r, std::span<const size_t> alphabets, const char* field) {
-  const PrefixCode steps = PrefixCode::deserialize(r, kLengthSteps, field);
+  const PrefixCode steps = PrefixCode::deserialize(r, kLengthSymbols, field);
   std::vector<PrefixCode> codes;
   codes.reserve(alphabets.size());
   for (const size_t alphabet : alphabets) {
@@ -210,10 +228,18 @@ std::vector<PrefixCode> deserialize_code_set(BitReader& r, std::span<const size_
     std::vector<uint8_t> lengths(alphabet, 0);
     int previous = 0;
     for (size_t s = 0; s < m; ++s) {
-      const int length = previous + int(steps.read(r, field)) - int(kMaxCodeLength);
-      if (length < 0 || length > int(kMaxCodeLength)) r.fail_field(field, "a code length outside 0..15");
+      const uint32_t symbol = steps.read(r, field);
+      if (symbol == kNoWordSymbol) continue;
+      if (symbol == kShortRunSymbol || symbol == kLongRunSymbol) {
+        const uint64_t run = symbol == kShortRunSymbol ? kShortRun + r.bits(3, field) : kLongRun + r.bits(7, field);
+        if (run > m - s) r.fail_field(field, "a run past the symbol count");
+        s += run - 1;
+        continue;
+      }
+      const int length = previous + int(symbol) - int(kMaxCodeLength);
+      if (length < 1 || length > int(kMaxCodeLength)) r.fail_field(field, "a code length outside 1..15");
       lengths[s] = uint8_t(length);
-      if (length != 0) previous = length;
+      previous = length;
     }
     try {
       codes.emplace_back(std::move(lengths));

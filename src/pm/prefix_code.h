@@ -51,12 +51,13 @@ class PrefixCode {
   bool single_ = false;
 };
 
-// Many codes serialized together, for a coder with hundreds of mostly small tables. First a code for the
-// steps between lengths (31 symbols: step + 15) in the form above, fitted to the whole set; then per code
-// m + 1 as an Elias gamma code (bit_width(m + 1) - 1 zero bits, a one, then the bits below the leading
-// one) and its m lengths, each as the step from the previous nonzero length (0 before the first).
-// `deserialize_code_set` takes each code's alphabet and rejects what `deserialize` does, and steps that
-// take a length outside 0..kMaxCodeLength.
+// Many codes serialized together, for a coder with hundreds of mostly small tables. First the *length
+// code*, fitted to the whole set, in the form above: 34 symbols, 0..30 the step from the previous nonzero
+// length of the code (from 0 for its first) to the next, minus 15; 31 one symbol without a code word; 32
+// and 33 runs of 3-10 and 11-138 of them, with 3 and 7 raw bits (DEFLATE's code-length codes, RFC 1951
+// §3.2.7). Then per code m + 1 as an Elias gamma code (bit_width(m + 1) - 1 zero bits, a one, then the
+// bits below the leading one) and its m lengths in the length code. `deserialize_code_set` takes each
+// code's alphabet and rejects what `deserialize` does, steps to a length outside 1..15 and runs past m.
 void serialize_code_set(std::span<const PrefixCode* const> codes, BitWriter& w);
 std::vector<PrefixCode> deserialize_code_set(BitReader& r, std::span<const size_t> alphabets, const char* field);
 

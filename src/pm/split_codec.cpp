@@ -46,7 +46,9 @@ constexpr uint32_t kFirstClass = 5, kLastClass = 10;  // bit_width of kDirectEnt
 constexpr uint32_t kEntrySymbols = kFirstClassSymbol + kLastClass - kFirstClass + 1;
 static_assert(kLatticeOctaves * 64 / kMuCodesPerStep < (1u << kLastClass), "the finest lattice's entries have a class");
 constexpr uint32_t kNoConeSymbol = kEntrySymbols;  // after the entries, in the angle codes
-constexpr uint32_t kFineAxisSymbol = kIntSymbols;  // after the integers, in the axis codes: both coordinates raw
+// An axis's two steps from its origin like the position's in-plane pair: the larger by quarter octaves
+// (the flag for which one folded in), then the smaller in a table by the larger's step.
+constexpr uint32_t kAxisLargerSteps = 32;
 constexpr unsigned kExactLengthBits = 15 - kLengthDroppedBits;  // a length code up to infinity's
 
 constexpr uint32_t kMaxDepthSymbols = 64;
@@ -90,9 +92,10 @@ constexpr uint32_t kSlotRadius = kSlotInfoFlags + kFlagContexts;    // [t, or u 
 constexpr uint32_t kSlotMu = kSlotRadius + 2 * kFlagContexts + kChainContexts;                      // [child][radius symbol]
 constexpr uint32_t kSlotDelta = kSlotMu + 2 * kChainContexts;       // [child][mu symbol]
 constexpr uint32_t kSlotAngle = kSlotDelta + 2 * kChainContexts;    // [child][parent has a cone]
-constexpr uint32_t kSlotAxis = kSlotAngle + 4;                      // [child][axis context]
-constexpr uint32_t kCoreSlots = kSlotAxis + 2 * kAxisContexts;      // serialized for every model
-static_assert(kCoreSlots == 902, "docs/protocol.md, \"Split records\", gives the count");
+constexpr uint32_t kSlotAxis = kSlotAngle + 4;                      // [child][axis context]: the larger step
+constexpr uint32_t kSlotAxisSmaller = kSlotAxis + 2 * kAxisContexts;  // [child][the larger's step]
+constexpr uint32_t kCoreSlots = kSlotAxisSmaller + 2 * kAxisLargerSteps;  // serialized for every model
+static_assert(kCoreSlots == 966, "docs/protocol.md, \"Split records\", gives the count");
 // Attributes of v_t against an origin the client holds; the first value's table by the size of the step
 // (the edge's magnitude class, or the cone angle class of the origin), each later one's by the class of the
 // one before.
@@ -112,6 +115,7 @@ constexpr uint8_t kHasNormals = 1, kHasColors = 2;
 // 0 for 0, else 2 step − 1 plus 1 when negative. Precision 0 is one class per octave.
 constexpr uint32_t int_symbols(uint32_t precision) { return 2 * ((kMaxClass - precision + 1) << precision) - 1; }
 static_assert(int_symbols(0) == kIntSymbols);
+constexpr uint32_t kFineAxisSymbol = 0;  // first in the axis codes (then 1 + the larger's symbol): both coordinates raw
 
 uint32_t alphabet(uint32_t slot) {
   if (slot < kSlotCutUp) return kRefSymbols;
@@ -123,7 +127,8 @@ uint32_t alphabet(uint32_t slot) {
   if (slot >= kSlotInfoFlags && slot < kSlotRadius) return 4;
   if (slot >= kSlotRadius && slot < kSlotAngle) return kEntrySymbols;
   if (slot >= kSlotAngle && slot < kSlotAxis) return kEntrySymbols + 1;
-  if (slot >= kSlotAxis && slot < kCoreSlots) return kIntSymbols + 1;
+  if (slot >= kSlotAxis && slot < kSlotAxisSmaller) return 2 * int_symbols(kInPlanePrecision) + 1;
+  if (slot >= kSlotAxisSmaller && slot < kCoreSlots) return int_symbols(kInPlanePrecision);
   return kIntSymbols;
 }
 
@@ -547,8 +552,14 @@ template <class Out> void SplitCodec::emit(const SplitContext& c, const SplitPay
       continue;
     }
     const RefineInfo* t = k == 1 ? child[0] : nullptr;
-    put_int(out, axis_slot, coarse_axis(v.cone_x) - axis_origin(s, t, v, &RefineInfo::cone_x), refinement);
-    put_int(out, axis_slot, coarse_axis(v.cone_y) - axis_origin(s, t, v, &RefineInfo::cone_y), refinement);
+    const int64_t dx = coarse_axis(v.cone_x) - axis_origin(s, t, v, &RefineInfo::cone_x);
+    const int64_t dy = coarse_axis(v.cone_y) - axis_origin(s, t, v, &RefineInfo::cone_y);
+    const bool swapped = magnitude(dy) > magnitude(dx);
+    const IntCode larger = int_code(swapped ? dy : dx, kInPlanePrecision);
+    out.symbol(axis_slot, 1 + 2 * larger.symbol + (swapped ? 1 : 0), refinement);
+    put_raw(out, larger, refinement);
+    put_int(out, kSlotAxisSmaller + k * kAxisLargerSteps + std::min(larger.step, kAxisLargerSteps - 1), swapped ? dx : dy,
+            refinement, kInPlanePrecision);
   }
   emit_attributes(c, p, edge, out);
 }
@@ -702,10 +713,17 @@ SplitPayload SplitCodec::decode(const SplitContext& c, BitReader& r) const {
         for (uint16_t RefineInfo::*q : {&RefineInfo::cone_x, &RefineInfo::cone_y})
           v.*q = uint16_t(int16_t(int64_t(r.bits(kAxisBits, field)) - kAxisSteps));
       } else {
+        const bool swapped = (x_sym - 1) & 1;
+        const int64_t larger = get_int((x_sym - 1) >> 1, r, field, kInPlanePrecision);
+        const uint32_t larger_step = (((x_sym - 1) >> 1) + 1) / 2;
+        const int64_t smaller = get_int(
+            codes_[kSlotAxisSmaller + k * kAxisLargerSteps + std::min(larger_step, kAxisLargerSteps - 1)].read(r, field), r,
+            field, kInPlanePrecision);
+        if (magnitude(smaller) > magnitude(larger) || (swapped && magnitude(smaller) == magnitude(larger)))
+          r.fail_field(field, "the axis steps are not larger first");
         for (uint16_t RefineInfo::*q : {&RefineInfo::cone_x, &RefineInfo::cone_y}) {
-          const uint32_t axis_sym = q == &RefineInfo::cone_x ? x_sym : axis_code.read(r, field);
-          if (axis_sym == kFineAxisSymbol) r.fail_field(field, "a fine axis coordinate after a coarse one");
-          const int64_t value = (axis_origin(s, k == 1 ? &p.info_t : nullptr, v, q) + get_int(axis_sym, r, field)) * kAxisSnap;
+          const int64_t step = (q == &RefineInfo::cone_x) != swapped ? larger : smaller;
+          const int64_t value = (axis_origin(s, k == 1 ? &p.info_t : nullptr, v, q) + step) * kAxisSnap;
           if (value < -kAxisSteps || value > kAxisSteps) r.fail_field(field, "cone axis out of range");
           v.*q = uint16_t(int16_t(value));
         }

@@ -136,18 +136,22 @@ TEST(PrefixCode, CodeSetsRoundTripAndRejectHostileSets) {
   for (size_t& a : smaller) a = std::max<size_t>(1, a / 2);
   BitReader too_many(w.bytes(), 0, w.size(), "set");
   EXPECT_THROW(deserialize_code_set(too_many, smaller, "set"), Error);
-  // A symbol count of 65536 or more; a step to a length below 0.
-  std::vector<uint8_t> step_lengths(31, 0);
-  step_lengths[14] = step_lengths[15] = 1;  // steps -1 (code word 0) and 0
+  // A symbol count of 65536 or more; a step to a length below 1; a run of no code words past the count.
+  std::vector<uint8_t> step_lengths(34, 0);
+  step_lengths[14] = step_lengths[32] = 1;  // step -1 (code word 0) and a run of 3-10 (code word 1)
   const PrefixCode steps(step_lengths);
-  for (const bool long_count : {true, false}) {
+  for (const int hostile : {0, 1, 2}) {
     BitWriter bad;
     steps.serialize(bad);
-    if (long_count) bad.bits(uint64_t(1) << 17, 18);  // 17 zero bits, then a one
-    else bad.bits(0b010, 3);  // m + 1 = 2 (a zero, a one, then 0): one length, then step -1 below
+    if (hostile == 0) {
+      bad.bits(uint64_t(1) << 17, 18);  // 17 zero bits, then a one
+    } else {
+      bad.bits(0b010, 3);               // m + 1 = 2 (a zero, a one, then 0): one length follows
+      bad.bits(hostile == 1 ? 0 : 1, 1);  // step -1 from 0, or a run of at least 3
+    }
     bad.bits(0, 32);
     BitReader rb(bad.bytes(), 0, bad.size(), "set");
-    EXPECT_THROW(deserialize_code_set(rb, std::vector<size_t>{100}, "set"), Error) << long_count;
+    EXPECT_THROW(deserialize_code_set(rb, std::vector<size_t>{100}, "set"), Error) << hostile;
   }
 }
 
