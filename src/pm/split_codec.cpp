@@ -234,22 +234,23 @@ struct References {
   uint32_t count = 0;
   VertexId id[kReferences];
   uint32_t own[kReferences];
-};
-References references(const SplitContext& c, int side, VertexId cut_l) {
-  References refs;
-  const auto add = [&refs](VertexId v) {
+
+  void add(VertexId v) {
     if (!is_vertex(v)) return;
     int shared = -1;
-    for (uint32_t i = 0; i < refs.count; ++i) {
-      if (refs.id[i] == v) return;
-      shared = std::max(shared, common_depth(refs.id[i], v));
+    for (uint32_t i = 0; i < count; ++i) {
+      if (id[i] == v) return;
+      shared = std::max(shared, common_depth(id[i], v));
     }
-    refs.id[refs.count] = v;
-    refs.own[refs.count++] = uint32_t(std::max(0, v.depth() - 1 - shared));
-  };
-  add(c.vs);
-  for (VertexId cut : c.ancestor_cuts) add(cut);
-  if (side == 1) add(cut_l);
+    id[count] = v;
+    own[count++] = uint32_t(std::max(0, v.depth() - 1 - shared));
+  }
+};
+// v̂_l's references; v̂_r's add v̂_l.
+References references(const SplitContext& c) {
+  References refs;
+  refs.add(c.vs);
+  for (VertexId cut : c.ancestor_cuts) refs.add(cut);
   return refs;
 }
 
@@ -342,9 +343,7 @@ uint32_t up_slot(const SplitContext& c, uint32_t max_depth, int side, uint32_t r
   return kSlotCutUp + (kind * kCutHeights + cut_height(c, max_depth)) * kOwnLevels + std::min(own, kOwnLevels - 1);
 }
 // v̂_l's reference in a table by how many references there are to choose from (1 .. 11).
-uint32_t left_reference_slot(const SplitContext& c) {
-  return kSlotCutRef + std::max<uint32_t>(references(c, 0, kNoVertex).count, 1) - 1;
-}
+uint32_t left_reference_slot(const References& refs) { return kSlotCutRef + std::max<uint32_t>(refs.count, 1) - 1; }
 uint32_t depth_step_slot(const SplitContext& c, uint32_t max_depth, int side, uint32_t ref, uint32_t up) {
   const uint32_t kind = 2 * uint32_t(side) + (ref > 0 ? 1 : 0);
   return kSlotCutRest + (kind * kCutHeights + cut_height(c, max_depth)) * kUpContexts + std::min(up, kUpContexts - 1);
@@ -470,9 +469,11 @@ int64_t color_step(uint8_t s, uint8_t t) { return int8_t(uint8_t(t - s)); }
 
 template <class Out> void SplitCodec::emit_cuts(const SplitContext& c, const SplitPayload& p, Out& out) const {
   if (!is_vertex(p.cut_l) && !is_vertex(p.cut_r)) fail("split record", "split of " + to_string(c.vs) + " has no cut vertex");
-  uint32_t ref_slot = left_reference_slot(c);
+  References refs = references(c);
+  uint32_t ref_slot = left_reference_slot(refs);
   for (int side = 0; side < 2; ++side) {
     const VertexId cut = side == 0 ? p.cut_l : p.cut_r;
+    if (side == 1) refs.add(p.cut_l);
     if (!is_vertex(cut)) {
       out.symbol(ref_slot, kAbsentSymbol, topology);
       ref_slot = kSlotCutRight + kAbsentSymbol;
@@ -480,7 +481,6 @@ template <class Out> void SplitCodec::emit_cuts(const SplitContext& c, const Spl
     }
     if (cut.tree >= root_count_ || uint32_t(cut.depth()) > max_depth_ || is_ancestor_or_self(c.vs, cut))
       fail("split record", "split of " + to_string(c.vs) + ": cut vertex " + to_string(cut) + " cannot be coded");
-    const References refs = references(c, side, p.cut_l);
     const CutCoding coding = cut_coding(refs, cut);
     const uint32_t best = coding.ref;
     const bool escape = best == refs.count, equal = coding.equal;
@@ -620,13 +620,14 @@ void SplitCodec::encode(const SplitContext& context, const SplitPayload& payload
 SplitPayload SplitCodec::decode(const SplitContext& c, BitReader& r) const {
   if (codes_.size() != kSlotCount) fail("split record", "the codec has no tables");
   SplitPayload p;
-  uint32_t ref_slot = left_reference_slot(c);
+  References refs = references(c);
+  uint32_t ref_slot = left_reference_slot(refs);
   for (int side = 0; side < 2; ++side) {
     const char* field = side == 0 ? "v̂_l" : "v̂_r";
+    if (side == 1) refs.add(p.cut_l);
     const uint32_t sym = codes_[ref_slot].read(r, field);
     ref_slot = kSlotCutRight + sym;
     if (sym == kAbsentSymbol) continue;
-    const References refs = references(c, side, p.cut_l);
     VertexId cut;
     if (sym == kEscapeSymbol) {
       cut.tree = uint32_t(r.bits(tree_bits(root_count_), field));
