@@ -48,7 +48,7 @@ static_assert(kLatticeOctaves * 64 / kMuCodesPerStep < (1u << kLastClass), "the 
 constexpr uint32_t kNoConeSymbol = kEntrySymbols;  // after the entries, in the angle codes
 // An axis's two steps from its origin like the position's in-plane pair: the larger by quarter octaves
 // (the flag for which one folded in), then the smaller in a table by the larger's step.
-constexpr uint32_t kAxisLargerSteps = 32;
+constexpr uint32_t kAxisLargerSteps = 16;
 constexpr unsigned kExactLengthBits = 15 - kLengthDroppedBits;  // a length code up to infinity's
 
 constexpr uint32_t kMaxDepthSymbols = 64;
@@ -95,7 +95,7 @@ constexpr uint32_t kSlotAngle = kSlotDelta + 2 * kChainContexts;    // [child][p
 constexpr uint32_t kSlotAxis = kSlotAngle + 4;                      // [child][axis context]: the larger step
 constexpr uint32_t kSlotAxisSmaller = kSlotAxis + 2 * kAxisContexts;  // [child][the larger's step]
 constexpr uint32_t kCoreSlots = kSlotAxisSmaller + 2 * kAxisLargerSteps;  // serialized for every model
-static_assert(kCoreSlots == 966, "docs/protocol.md, \"Split records\", gives the count");
+static_assert(kCoreSlots == 934, "docs/protocol.md, \"Split records\", gives the count");
 // Attributes of v_t against an origin the client holds; the first value's table by the size of the step
 // (the edge's magnitude class, or the cone angle class of the origin), each later one's by the class of the
 // one before.
