@@ -4,9 +4,11 @@
 // server in CPU time and bytes out, sender- vs receiver-driven, along the same path; E6 and E8, image
 // quality against bytes received and with only the visible splits fetched (receiver_quality.h).
 #include <algorithm>
+#include <chrono>
 #include <cstdio>
 #include <limits>
 #include <optional>
+#include <thread>
 
 #include "apps/bench/bench.h"
 #include "apps/bench/bench_model.h"
@@ -138,6 +140,18 @@ Counters http_counters(const ServeStats& s) {
           h.at("requests").get<uint64_t>()};
 }
 
+// A TCP session adds its splits to the server's counters when it closes, which the client's disconnect
+// only starts: the counters once no session is open, so a reading never misses the last flight's splits.
+ServeStats settled_stats(ServeChild& server) {
+  constexpr int kPolls = 200;  // 2 s
+  for (int poll = 0;; ++poll) {
+    ServeStats stats = server.stats();
+    if (stats.sessions_active == 0) return stats;
+    if (poll == kPolls) fail("bench", "the server still had a session open 2 s after the flight");
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+}
+
 // The server's counters just before and just after `flight`, which flies one client along the path: what
 // the flight cost, without the model's loading.
 template <class Read, class Flight>
@@ -150,7 +164,7 @@ ServerCost server_cost(const BenchContext& context, const BenchModel& m, bool ht
     const uint16_t port = http ? server.listening().at("http_port").get<uint16_t>() : server.port();
     const Counters before = read(server.stats());
     flight(port);
-    const Counters after = read(server.stats());
+    const Counters after = read(settled_stats(server));
     server.stop();
     cost.cpu_s = after.cpu_s - before.cpu_s;
     cost.bytes_out = after.bytes_out - before.bytes_out;
