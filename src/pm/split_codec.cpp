@@ -225,6 +225,34 @@ int64_t get_int(uint32_t sym, BitReader& r, const char* field, uint32_t precisio
   return sym % 2 == 0 ? -int64_t(m) : int64_t(m);
 }
 
+// Two differences that make one short vector in any direction (the position's in-plane pair, a cone axis's
+// steps): the larger first by quarter octaves, its symbol times 2 plus 1 when it is b (a on ties) after
+// `offset` symbols of the first table; then the smaller by quarter octaves in the table `smaller_base` +
+// the larger's step, clamped below `smaller_tables`.
+struct PairTables {
+  uint32_t first, offset, smaller_base, smaller_tables;
+};
+template <class Out> void put_pair(Out& out, const PairTables& t, int64_t a, int64_t b, Part part) {
+  const bool swapped = magnitude(b) > magnitude(a);
+  const IntCode larger = int_code(swapped ? b : a, kInPlanePrecision);
+  out.symbol(t.first, t.offset + 2 * larger.symbol + (swapped ? 1 : 0), part);
+  put_raw(out, larger, part);
+  put_int(out, t.smaller_base + std::min(larger.step, t.smaller_tables - 1), swapped ? a : b, part, kInPlanePrecision);
+}
+// The pair after its first symbol, less the offset, was read.
+void get_pair(const std::vector<PrefixCode>& codes, const PairTables& t, uint32_t first, BitReader& r, const char* field,
+              int64_t pair[2]) {
+  const bool swapped = first & 1;
+  const int64_t larger = get_int(first >> 1, r, field, kInPlanePrecision);
+  const uint32_t larger_step = ((first >> 1) + 1) / 2;
+  const int64_t smaller = get_int(codes[t.smaller_base + std::min(larger_step, t.smaller_tables - 1)].read(r, field), r,
+                                  field, kInPlanePrecision);
+  if (magnitude(smaller) > magnitude(larger) || (swapped && magnitude(smaller) == magnitude(larger)))
+    r.fail_field(field, "a pair of differences not larger first");
+  pair[0] = swapped ? smaller : larger;
+  pair[1] = swapped ? larger : smaller;
+}
+
 // The ids a cut vertex of `side` is coded against, each once, in symbol order: v_s, the ancestors' cut
 // vertices, and for v̂_r the v̂_l just decoded. A cut vertex parts from the first of them whose path it
 // follows furthest down, so a reference only ever serves for its `own` lowest levels: the part of its path
@@ -320,6 +348,14 @@ uint32_t plane_context(const PositionFrame& f, const int64_t d[3]) {
   const uint64_t offset = uint64_t(std::max(std::abs(d[f.order[0]]), std::abs(d[f.order[1]])));
   return std::min<uint32_t>(uint32_t(std::bit_width((offset * uint64_t(f.angle + 1)) >> 8)), kSizeClasses - 1);
 }
+PairTables in_plane_tables(const SplitContext& c) {
+  return {kSlotPosition + position_class(c), 0, kSlotPositionSmaller, kLargerSteps};
+}
+// A child's axis steps; symbol 0 of the first table is kFineAxisSymbol.
+PairTables axis_tables(uint32_t first, uint32_t child) {
+  return {first, 1, kSlotAxisSmaller + child * kAxisLargerSteps, kAxisLargerSteps};
+}
+
 // The table of the third difference: on the plane, by the offset the plane allows; else by the larger
 // in-plane difference's class.
 uint32_t third_position_slot(const PositionFrame& f, const int64_t d[3]) {
@@ -512,12 +548,7 @@ template <class Out> void SplitCodec::emit(const SplitContext& c, const SplitPay
       fail("split record", "split of " + to_string(c.vs) + ": position outside the grid");
     d[axis] = int64_t(p.position_t[axis]) - int64_t(c.position_s[axis]);
   }
-  const int64_t a = d[frame.order[0]], b = d[frame.order[1]];
-  const bool swapped = magnitude(b) > magnitude(a);  // the larger goes first, a on ties
-  const IntCode larger = int_code(swapped ? b : a, kInPlanePrecision);
-  out.symbol(kSlotPosition + position_class(c), 2 * larger.symbol + (swapped ? 1 : 0), geometry);
-  put_raw(out, larger, geometry);
-  put_int(out, kSlotPositionSmaller + std::min(larger.step, kLargerSteps - 1), swapped ? a : b, geometry, kInPlanePrecision);
+  put_pair(out, in_plane_tables(c), d[frame.order[0]], d[frame.order[1]], geometry);
   const int64_t predicted = frame.plane ? plane_prediction(frame, d) : 0;
   put_int(out, third_position_slot(frame, d), d[frame.order[2]] - predicted, geometry, kOffPlanePrecision);
   const uint32_t edge = edge_class(d);
@@ -554,12 +585,7 @@ template <class Out> void SplitCodec::emit(const SplitContext& c, const SplitPay
     const RefineInfo* t = k == 1 ? child[0] : nullptr;
     const int64_t dx = coarse_axis(v.cone_x) - axis_origin(s, t, v, &RefineInfo::cone_x);
     const int64_t dy = coarse_axis(v.cone_y) - axis_origin(s, t, v, &RefineInfo::cone_y);
-    const bool swapped = magnitude(dy) > magnitude(dx);
-    const IntCode larger = int_code(swapped ? dy : dx, kInPlanePrecision);
-    out.symbol(axis_slot, 1 + 2 * larger.symbol + (swapped ? 1 : 0), refinement);
-    put_raw(out, larger, refinement);
-    put_int(out, kSlotAxisSmaller + k * kAxisLargerSteps + std::min(larger.step, kAxisLargerSteps - 1), swapped ? dx : dy,
-            refinement, kInPlanePrecision);
+    put_pair(out, axis_tables(axis_slot, k), dx, dy, refinement);
   }
   emit_attributes(c, p, edge, out);
 }
@@ -671,16 +697,11 @@ SplitPayload SplitCodec::decode(const SplitContext& c, BitReader& r) const {
     d[axis] = step;
     p.position_t[axis] = uint32_t(v);
   };
-  const uint32_t first = codes_[kSlotPosition + position_class(c)].read(r, "position");
-  const bool swapped = first & 1;
-  const int64_t larger = get_int(first >> 1, r, "position", kInPlanePrecision);
-  const uint32_t larger_step = ((first >> 1) + 1) / 2;
-  const int64_t smaller = get_int(codes_[kSlotPositionSmaller + std::min(larger_step, kLargerSteps - 1)].read(r, "position"),
-                                  r, "position", kInPlanePrecision);
-  if (magnitude(smaller) > magnitude(larger) || (swapped && magnitude(smaller) == magnitude(larger)))
-    r.fail_field("position", "the in-plane differences are not larger first");
-  place(frame.order[0], swapped ? smaller : larger);
-  place(frame.order[1], swapped ? larger : smaller);
+  const PairTables in_plane = in_plane_tables(c);
+  int64_t pair[2];
+  get_pair(codes_, in_plane, codes_[in_plane.first].read(r, "position"), r, "position", pair);
+  place(frame.order[0], pair[0]);
+  place(frame.order[1], pair[1]);
   const int64_t predicted = frame.plane ? plane_prediction(frame, d) : 0;
   place(frame.order[2], predicted + get_int(codes_[third_position_slot(frame, d)].read(r, "position"), r, "position", kOffPlanePrecision));
   const uint32_t edge = edge_class(d);
@@ -714,16 +735,10 @@ SplitPayload SplitCodec::decode(const SplitContext& c, BitReader& r) const {
         for (uint16_t RefineInfo::*q : {&RefineInfo::cone_x, &RefineInfo::cone_y})
           v.*q = uint16_t(int16_t(int64_t(r.bits(kAxisBits, field)) - kAxisSteps));
       } else {
-        const bool swapped = (x_sym - 1) & 1;
-        const int64_t larger = get_int((x_sym - 1) >> 1, r, field, kInPlanePrecision);
-        const uint32_t larger_step = (((x_sym - 1) >> 1) + 1) / 2;
-        const int64_t smaller = get_int(
-            codes_[kSlotAxisSmaller + k * kAxisLargerSteps + std::min(larger_step, kAxisLargerSteps - 1)].read(r, field), r,
-            field, kInPlanePrecision);
-        if (magnitude(smaller) > magnitude(larger) || (swapped && magnitude(smaller) == magnitude(larger)))
-          r.fail_field(field, "the axis steps are not larger first");
+        int64_t steps[2];
+        get_pair(codes_, axis_tables(0, k), x_sym - 1, r, field, steps);
         for (uint16_t RefineInfo::*q : {&RefineInfo::cone_x, &RefineInfo::cone_y}) {
-          const int64_t step = (q == &RefineInfo::cone_x) != swapped ? larger : smaller;
+          const int64_t step = steps[q == &RefineInfo::cone_x ? 0 : 1];
           const int64_t value = (axis_origin(s, k == 1 ? &p.info_t : nullptr, v, q) + step) * kAxisSnap;
           if (value < -kAxisSteps || value > kAxisSteps) r.fail_field(field, "cone axis out of range");
           v.*q = uint16_t(int16_t(value));
