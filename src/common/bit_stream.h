@@ -31,15 +31,21 @@ inline uint64_t load_word(std::span<const uint8_t> data, size_t byte) {
 class BitWriter {
  public:
   void bits(uint64_t value, unsigned n) {  // n <= 64; bits of value above n are ignored
-    // Whole bytes at a time: servers copy records with it (append).
+    // Whole bytes at a time: servers copy records with it (append), and the builder writes every record.
     if (n == 0) return;
     if (n < 64) value &= (uint64_t(1) << n) - 1;
     const unsigned used = unsigned(size_ & 7);
-    size_t byte = size_t(size_ >> 3);
     size_ += n;
-    bytes_.resize(size_t((size_ + 7) >> 3));  // the new bytes are zero
-    bytes_[byte] |= uint8_t(value << used);
-    for (value >>= 8 - used; ++byte < bytes_.size(); value >>= 8) bytes_[byte] = uint8_t(value);
+    if (used != 0) {
+      bytes_.back() |= uint8_t(value << used);
+      if (n <= 8 - used) return;
+      value >>= 8 - used;
+      n -= 8 - used;
+    }
+    for (;; value >>= 8, n -= 8) {
+      bytes_.push_back(uint8_t(value));
+      if (n <= 8) return;
+    }
   }
   void bit(unsigned b) {
     if ((size_ & 7) == 0) bytes_.push_back(0);
@@ -49,7 +55,9 @@ class BitWriter {
   // Bits [begin, end) of `data`, as a BitReader over it would read them.
   void append(std::span<const uint8_t> data, uint64_t begin, uint64_t end) {
     if (end > 8 * uint64_t(data.size()) || begin > end) fail("bit stream", "appending bits outside the data");
-    bytes_.reserve(size_t((size_ + (end - begin) + 7) >> 3));
+    // Geometric growth: an exact reserve per call would copy the whole stream on every append.
+    if (const size_t needed = size_t((size_ + (end - begin) + 7) >> 3); needed > bytes_.capacity())
+      bytes_.reserve(std::max(needed, 2 * bytes_.capacity()));
     for (unsigned n; begin < end; begin += n) {
       n = unsigned(std::min<uint64_t>(56, end - begin));  // 56 bits from any offset fit in 8 bytes
       bits(load_word(data, size_t(begin >> 3)) >> (begin & 7), n);
