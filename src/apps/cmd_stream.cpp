@@ -198,6 +198,8 @@ void run_receiver(const StreamArgs& args) {
                         {"total_down_payload_bytes", c.payload_down},
                         {"http_requests", c.requests},
                         {"split_requests", client.split_requests()},
+                        {"requested_ids", client.totals().requested_ids},
+                        {"request_code_bytes", client.totals().request_code_bytes},
                         {"cache_hits", client.cache_hits()},
                         {"fetch", args.fetch},
                         {"frame_budget_ms", args.frame_budget_ms},

@@ -222,7 +222,9 @@ std::vector<ReceiverClient::Request> ReceiverClient::list_requests(const std::ve
   for (auto& [rank, r] : lists) {
     // The answer comes in code order, which the bands are read in.
     std::sort(r.request.ids.begin(), r.request.ids.end(), protocol::code_order);
-    r.target = protocol::model_path(model_) + "/splits/" + protocol::base64url_encode(protocol::encode_split_request(r.request));
+    const std::vector<uint8_t> code = protocol::encode_split_request(r.request);
+    r.code_bytes = uint32_t(code.size());
+    r.target = protocol::model_path(model_) + "/splits/" + protocol::base64url_encode(code);
     out.push_back(std::move(r));
   }
   return out;
@@ -306,6 +308,8 @@ bool ReceiverClient::over_budget(uint32_t answers, std::chrono::steady_clock::ti
 void ReceiverClient::send(Request&& request) {
   http_.send(request.target);
   ++totals_.split_requests;
+  totals_.requested_ids += request.request.ids.size();
+  totals_.request_code_bytes += request.code_bytes;
   wire_.push_back(std::move(request));
 }
 

@@ -76,6 +76,9 @@ struct ReceiverFrame {
 // A client's counts since it opened the model.
 struct ReceiverTotals {
   uint64_t split_requests = 0, cache_hits = 0;
+  // Ids named by the split GETs sent (a block's root counts once) and, for lists, the bytes of their id
+  // sets' codes before base64url (docs/protocol.md, "Split request code"): the bits per requested id.
+  uint64_t requested_ids = 0, request_code_bytes = 0;
   uint64_t cancelled = 0, stale_arrivals = 0, prefetched = 0, prefetch_used = 0;
 };
 
@@ -106,6 +109,7 @@ class ReceiverClient {
   struct Request {
     std::string target;
     protocol::SplitRequest request;  // format 3's answers are read by it
+    uint32_t code_bytes = 0;         // lists: the id set's code in the target, before base64url
     bool prefetch = false;           // asked for along the predicted path
     bool wanted = true;              // the last ranking wants one of its ids
     uint32_t stale = 0;              // of its ids, those the last ranking no longer wants (not prefetched ones)

@@ -244,6 +244,11 @@ TEST(Receiver, ReceivesTheSplitsTheSenderDrivenModeSendsOnTheSamePath) {
     EXPECT_EQ(faces_by_id(deep.session().mesh()), faces_by_id(sender.session().mesh()));
   }
   EXPECT_GT(deep.session().splits_received(), sender.session().splits_received()) << "some depth was asked for";
+  // Each id asked for once, each bringing its one split; the id sets' codes counted as sent.
+  EXPECT_EQ(receiver.totals().requested_ids, receiver.session().splits_received());
+  EXPECT_GT(receiver.totals().request_code_bytes, 0u);
+  EXPECT_LE(8 * receiver.totals().request_code_bytes, 27 * receiver.totals().requested_ids)
+      << "issue 19's bits per requested id (cheng-ooi: 27)";
 }
 
 // The compact records carry v_t's normal and color: the client ends on local refinement's mesh with the

@@ -16,6 +16,7 @@
 #include "apps/bench/report.h"
 #include "apps/bench/serve_child.h"
 #include "apps/bench/single_rate_codecs.h"
+#include "apps/bench/split_record_bits.h"
 #include "apps/camera_path.h"
 #include "client/receiver_client.h"
 #include "client/streaming_client.h"
@@ -124,6 +125,8 @@ json whole_model_record(const WholeModel& w) {
 struct ServerCost {
   uint64_t splits = 0, bytes_out = 0, requests = 0;
   double cpu_s = 0;
+  // What the receiver-driven client sent: ids its split GETs named, their codes' bytes, all its bytes up.
+  uint64_t requested_ids = 0, request_code_bytes = 0, bytes_up = 0;
   std::string error;  // the flight or the server's figures failed: the row has none
 };
 
@@ -186,13 +189,21 @@ ServerCost sender_cost(const BenchContext& context, const BenchModel& m, const s
 }
 
 ServerCost receiver_cost(const BenchContext& context, const BenchModel& m, const std::vector<Camera>& path) {
-  return server_cost(context, m, true, http_counters, [&](uint16_t port) {
+  client::ReceiverTotals totals;
+  uint64_t bytes_up = 0;
+  ServerCost cost = server_cost(context, m, true, http_counters, [&](uint16_t port) {
     client::ReceiverOptions options;
     options.tolerance = kTolerance;
     client::ReceiverClient client(client::HttpUrl{"127.0.0.1", port, ""}, options);
     client.open(m.name);
     for (const Camera& camera : path) client.frame(camera);
+    totals = client.totals();
+    bytes_up = client.counters().bytes_up;
   });
+  cost.requested_ids = totals.requested_ids;
+  cost.request_code_bytes = totals.request_code_bytes;
+  cost.bytes_up = bytes_up;
+  return cost;
 }
 
 Table e7_table() {
@@ -229,7 +240,72 @@ void add_e7_rows(BenchContext& context, const std::string& name, const ServerCos
 }
 
 json cost_record(const ServerCost& c) {
-  return {{"splits", c.splits}, {"requests", c.requests}, {"cpu_s", c.cpu_s}, {"bytes_out", c.bytes_out}, {"error", c.error}};
+  return {{"splits", c.splits},         {"requests", c.requests},
+          {"cpu_s", c.cpu_s},           {"bytes_out", c.bytes_out},
+          {"requested_ids", c.requested_ids}, {"request_code_bytes", c.request_code_bytes},
+          {"client_bytes_up", c.bytes_up}, {"error", c.error}};
+}
+
+// ---- up: bits per requested id, the E7 flights ----------------------------------------------------------
+
+Table up_table() {
+  return Table({{"model", false}, {"split GETs", true}, {"ids asked", true}, {"ids / GET", true},
+                {"code bits / id", true}, {"HTTP bytes up / id", true}});
+}
+
+std::vector<std::string> up_row(const std::string& name, const ServerCost& c) {
+  if (!c.error.empty()) return {name, "", "", "", "", ""};
+  return {name,
+          thousands(c.requests),
+          thousands(c.requested_ids),
+          fixed(per(c.requested_ids, c.requests), 1),
+          fixed(per(8 * c.request_code_bytes, c.requested_ids), 2),
+          fixed(per(c.bytes_up, c.requested_ids), 1)};
+}
+
+// ---- down: bits per split by part ------------------------------------------------------------------------
+
+// The records by part over every split and over E5's close view (the sender group's, at τ = 1 px), and for
+// the whole model what else the receiver-driven routes send: the bands' presence bits and padding
+// (framing), BASE and the code tables.
+struct SplitParts {
+  RecordBitsReport whole, close;
+};
+
+SplitParts measure_split_parts(const BenchModel& m) {
+  const ModelData& model = m.served->model();
+  const SplitCodec& codec = m.served->file->split_codec();
+  const std::vector<uint32_t> q = grid_positions(model, codec.position_bits());
+  SplitParts parts;
+  parts.whole = record_bits(model, codec, q, model.split_order);
+  parts.close = record_bits(model, codec, q, splits_for_view(model, close_view(model), kTolerance));
+  return parts;
+}
+
+Table parts_table() {
+  return Table({{"model", false}, {"splits", false}, {"count", true}, {"topology", true}, {"geometry", true},
+                {"refinement info", true}, {"normal + color", true}, {"records", true}, {"framing", true},
+                {"base + tables", true}, {"all", true}});
+}
+
+void add_parts_rows(const std::string& name, const SplitParts& parts, const WholeModel& w, Table& table) {
+  for (const auto& [label, r] : {std::pair{"whole model", &parts.whole}, std::pair{"E5 close view", &parts.close}}) {
+    const RecordBits& b = r->bits;
+    const auto bits = [&](uint64_t total) { return fixed(r->per_split(total), 2); };
+    std::vector<std::string> row = {name, label, thousands(r->splits), bits(b.topology), bits(b.geometry),
+                                    bits(b.refinement), bits(b.attributes()), bits(b.total()), "", "", ""};
+    if (r == &parts.whole) {
+      row[8] = bits(8 * w.wire_body_bytes - w.record_bits);
+      row[9] = bits(8 * (w.base_bytes + w.table_bytes));
+      row[10] = bits(8 * (w.wire_body_bytes + w.base_bytes + w.table_bytes));
+    }
+    print(table.add_row(row));
+  }
+}
+
+json parts_record(const RecordBitsReport& r) {
+  return {{"splits", r.splits},           {"topology_bits", r.bits.topology}, {"geometry_bits", r.bits.geometry},
+          {"refinement_bits", r.bits.refinement}, {"normal_bits", r.bits.normal}, {"color_bits", r.bits.color}};
 }
 
 }  // namespace
@@ -244,23 +320,34 @@ void run_receiver_group(BenchContext& context) {
   std::vector<std::string> names = context.options.models.empty() ? kDefaultModels : context.options.models;
   if (quick && context.options.models.empty()) names = {"bunny"};
 
-  Table whole = whole_model_table(), e7 = e7_table();
+  Table whole = whole_model_table(), parts = parts_table(), e7 = e7_table(), up = up_table();
   print("\nWhole model, bits per vertex at the records' position grid\n" + whole.header());
   std::vector<BenchModel> models;
+  std::vector<WholeModel> wholes;
   for (const std::string& name : names) {
     models.push_back(prepare_model(context, name));
-    const WholeModel w = measure_whole_model(models.back());
-    print(whole.add_row(whole_model_row(name, w)));
-    out["models"].push_back({{"model", name}, {"whole", whole_model_record(w)}});
+    wholes.push_back(measure_whole_model(models.back()));
+    print(whole.add_row(whole_model_row(name, wholes.back())));
+    out["models"].push_back({{"model", name}, {"whole", whole_model_record(wholes.back())}});
+  }
+  print("\nDown: bits per split by part\n" + parts.header());
+  for (size_t i = 0; i < models.size(); ++i) {
+    const SplitParts p = measure_split_parts(models[i]);
+    add_parts_rows(models[i].name, p, wholes[i], parts);
+    out["models"][i]["parts"] = {{"whole", parts_record(p.whole)}, {"close_view", parts_record(p.close)}};
   }
   print("\nE7: server CPU and bytes out per split, one client along an orbit at τ = 1 px\n" + e7.header());
+  std::vector<ServerCost> receivers;
   for (size_t i = 0; i < models.size(); ++i) {
     const BenchModel& m = models[i];
     const std::vector<Camera> path = path_of(m, PathKind::orbit, quick ? kQuickPathFrames : kPathFrames);
     const ServerCost sender = sender_cost(context, m, path), receiver = receiver_cost(context, m, path);
     add_e7_rows(context, m.name, sender, receiver, e7);
+    receivers.push_back(receiver);
     out["models"][i]["e7"] = {{"frames", path.size()}, {"sender", cost_record(sender)}, {"receiver", cost_record(receiver)}};
   }
+  print("\nUp: bits per requested id, the receiver-driven E7 flights\n" + up.header());
+  for (size_t i = 0; i < models.size(); ++i) print(up.add_row(up_row(models[i].name, receivers[i])));
   const std::string quality = e6_e8_sections(context, models, out["models"]);
 
   section += "### The whole model, bits per vertex\n\n" + whole.markdown() +
@@ -272,12 +359,27 @@ void run_receiver_group(BenchContext& context) {
              "x, y, z, 0 as 16-bit lanes; gzip -9 and zstd -19 of those two streams; Draco 1.5 edgebreaker at speed 0 "
              "(`-cl 10`) with its own position quantization at 16 and at 14 bits. Every stream is decoded again and "
              "checked. The single-rate codecs have no levels of detail, no random access and no refinement info.\n\n";
+  section += "### Down: bits per split by part\n\n" + parts.markdown() +
+             "\nBits per split, the records as stored in the .pms (docs/protocol.md, \"Split records\"): topology = the "
+             "cut vertices, geometry = v_t's position, refinement info = the children's, normal + color = v_t's "
+             "attributes where the model has them. \"whole model\" is every split; \"E5 close view\" the splits local "
+             "refinement makes from the base mesh for the sender group's E5 close view at τ = 1 px (E6's mid view). "
+             "For the whole model: framing = the receiver-driven bands' presence bits and byte padding (each tree as "
+             "one band), base + tables = BASE and the code tables, all = everything a client downloads to hold every "
+             "split, HTTP heads aside. Issue 19's targets: all ≤ 40 on dragon, topology + geometry ≤ 34, the close "
+             "view's refinement info ≤ 24.\n\n";
   section += "### E7: server CPU and bytes out per split served\n\n" + e7.markdown() +
              "\nOne `pmstream serve` child per row (TCP for sender-driven, `--http-port` for receiver-driven), one "
              "client in this process flying the same orbit at τ = 1 px. Server CPU is the child's user + system time "
              "over the flight (its counters read by SIGUSR1 before and after, so loading the model is not counted); "
              "bytes out are the server's own count (TCP payload, or HTTP headers and bodies). Issue 19's targets: "
              "CPU per split ≥ 30 % and bytes out ≥ 40 % below the sender-driven mode's (cheng-ooi: −24 % and −40 %).\n\n";
+  section += "### Up: bits per requested id\n\n" + up.markdown() +
+             "\nThe receiver-driven client of the E7 flights: split GETs sent, the ids they named (each with its "
+             "descendant depth, docs/protocol.md \"Receiver-driven client\"), the bits of their id sets' codes (docs/"
+             "protocol.md, \"Split request code\"; whole bytes, before base64url) per id, and every byte the client "
+             "sent (request lines and headers, the catalogue and BASE GETs included) per id. Issue 19's target: ≤ 27 "
+             "code bits per requested id (cheng-ooi: 27).\n\n";
   section += quality;
   write_text_file(context.options.out_dir / "receiver.json", out.dump(2) + "\n");
   context.report += section;
