@@ -289,11 +289,12 @@ Table parts_table() {
 }
 
 void add_parts_rows(const std::string& name, const SplitParts& parts, const WholeModel& w, Table& table) {
-  for (const auto& [label, r] : {std::pair{"whole model", &parts.whole}, std::pair{"E5 close view", &parts.close}}) {
+  for (const RecordBitsReport* r : {&parts.whole, &parts.close}) {
     const RecordBits& b = r->bits;
-    const auto bits = [&](uint64_t total) { return fixed(r->per_split(total), 2); };
-    std::vector<std::string> row = {name, label, thousands(r->splits), bits(b.topology), bits(b.geometry),
-                                    bits(b.refinement), bits(b.attributes()), bits(b.total()), "", "", ""};
+    const auto bits = [r](uint64_t total) { return fixed(r->per_split(total), 2); };
+    std::vector<std::string> row = {name, r == &parts.whole ? "whole model" : "E5 close view", thousands(r->splits),
+                                    bits(b.topology), bits(b.geometry), bits(b.refinement), bits(b.attributes()),
+                                    bits(b.total()), "", "", ""};
     if (r == &parts.whole) {
       row[8] = bits(8 * w.wire_body_bytes - w.record_bits);
       row[9] = bits(8 * (w.base_bytes + w.table_bytes));
