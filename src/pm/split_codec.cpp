@@ -261,17 +261,19 @@ void get_pair(const std::vector<PrefixCode>& codes, const PairTables& t, uint32_
 struct References {
   uint32_t count = 0;
   VertexId id[kReferences];
-  uint32_t own[kReferences];
 
   void add(VertexId v) {
     if (!is_vertex(v)) return;
-    int shared = -1;
-    for (uint32_t i = 0; i < count; ++i) {
+    for (uint32_t i = 0; i < count; ++i)
       if (id[i] == v) return;
-      shared = std::max(shared, common_depth(id[i], v));
-    }
-    id[count] = v;
-    own[count++] = uint32_t(std::max(0, v.depth() - 1 - shared));
+    id[count++] = v;
+  }
+  // The levels of reference i's path that no earlier reference shares. Asked of the one reference a cut
+  // vertex is coded against, so computed then rather than for every reference listed.
+  uint32_t own(uint32_t i) const {
+    int shared = -1;
+    for (uint32_t j = 0; j < i; ++j) shared = std::max(shared, common_depth(id[j], id[i]));
+    return uint32_t(std::max(0, id[i].depth() - 1 - shared));
   }
 };
 // v̂_l's references; v̂_r's add v̂_l.
@@ -531,7 +533,7 @@ template <class Out> void SplitCodec::emit_cuts(const SplitContext& c, const Spl
     }
     const VertexId ref = refs.id[best];
     const uint32_t up = equal ? 0 : uint32_t(ref.depth() - 1 - coding.common);
-    out.symbol(up_slot(c, max_depth_, side, best, refs.own[best]), equal ? kEqualSymbol : 1 + up, topology);
+    out.symbol(up_slot(c, max_depth_, side, best, refs.own(best)), equal ? kEqualSymbol : 1 + up, topology);
     if (equal) continue;
     put_int(out, depth_step_slot(c, max_depth_, side, best, up), int64_t(cut.depth()) - ref.depth(), topology);
     out.raw(cut.node, unsigned(cut.depth() - coding.common - 1), topology);
@@ -664,7 +666,7 @@ SplitPayload SplitCodec::decode(const SplitContext& c, BitReader& r) const {
       const uint32_t i = sym - 1;
       if (i >= refs.count) r.fail_field(field, "names a reference the client does not hold");
       const VertexId ref = refs.id[i];
-      const uint32_t up_symbol = codes_[up_slot(c, max_depth_, side, i, refs.own[i])].read(r, field);
+      const uint32_t up_symbol = codes_[up_slot(c, max_depth_, side, i, refs.own(i))].read(r, field);
       if (up_symbol == kEqualSymbol) {
         if (i == 0) r.fail_field(field, "equal to v_s");
         cut = ref;
