@@ -144,10 +144,13 @@ struct IntCode {
   uint64_t raw = 0;
   unsigned raw_bits = 0;
 };
+[[noreturn, gnu::cold, gnu::noinline]] void fail_too_large(int64_t v) {
+  fail("split record", "value " + std::to_string(v) + " too large to code");
+}
 IntCode int_code(int64_t v, uint32_t precision) {
   const uint64_t m = magnitude(v);
   const auto k = uint32_t(std::bit_width(m));
-  if (k > kMaxClass) fail("split record", "value " + std::to_string(v) + " too large to code");
+  if (k > kMaxClass) fail_too_large(v);
   if (k <= precision) return {m == 0 ? 0 : 2 * uint32_t(m) - 1 + (v < 0), uint32_t(m)};
   const unsigned low = k - 1 - precision;
   const uint32_t step = ((k - precision) << precision) | uint32_t((m >> low) & ((1u << precision) - 1));
