@@ -72,21 +72,23 @@ PrefixCode::PrefixCode(std::vector<uint8_t> lengths) : lengths_(std::move(length
   for (unsigned l = 1; l <= kMaxCodeLength; ++l) kraft += uint64_t(count_[l]) << (kMaxCodeLength - l);
   if (kraft > (uint64_t(1) << kMaxCodeLength)) fail("prefix code", "lengths oversubscribe the code space");
   single_ = present == 1;
-  // Canonical code words: by length, then by symbol.
+  // Canonical code words: by length, then by symbol, in one pass over the symbols (each length's words
+  // and places in sorted_ start where the shorter ones end).
   codes_.assign(lengths_.size(), 0);
-  uint32_t next[kMaxCodeLength + 2] = {};
+  uint32_t next[kMaxCodeLength + 2] = {}, place[kMaxCodeLength + 2] = {};
   uint32_t code = 0;
   for (unsigned l = 1; l <= kMaxCodeLength; ++l) {
     code = (code + count_[l - 1]) << 1;
     next[l] = code;
+    place[l + 1] = place[l] + count_[l];
   }
-  for (unsigned l = 1; l <= kMaxCodeLength; ++l)
-    for (uint32_t s = 0; s < lengths_.size(); ++s)
-      if (lengths_[s] == l) {
-        // The stream takes a code word's most significant bit first; BitWriter fills from the lowest bit.
-        codes_[s] = uint16_t(reverse_bits(next[l]++, l));
-        sorted_.push_back(s);
-      }
+  sorted_.assign(present, 0);
+  for (uint32_t s = 0; s < lengths_.size(); ++s)
+    if (const unsigned l = lengths_[s]; l != 0) {
+      // The stream takes a code word's most significant bit first; BitWriter fills from the lowest bit.
+      codes_[s] = uint16_t(reverse_bits(next[l]++, l));
+      sorted_[place[l]++] = s;
+    }
   count_[0] = 0;
   if (single_ || present == 0 || lengths_.size() > 4096) return;
   fast_.assign(size_t(1) << kFastBits, 0);
