@@ -265,9 +265,7 @@ std::vector<std::string> up_row(const std::string& name, const ServerCost& c) {
 
 // ---- down: bits per split by part ------------------------------------------------------------------------
 
-// The records by part over every split and over E5's close view (the sender group's, at τ = 1 px), and for
-// the whole model what else the receiver-driven routes send: the bands' presence bits and padding
-// (framing), BASE and the code tables.
+// The records by part over every split and over E5's close view (the sender group's, at τ = 1 px).
 struct SplitParts {
   RecordBitsReport whole, close;
 };
@@ -288,6 +286,8 @@ Table parts_table() {
                 {"base + tables", true}, {"all", true}});
 }
 
+// A row each; the whole model's also gets what else the receiver-driven routes send for every split: the
+// bands' presence bits and padding (framing), BASE and the code tables.
 void add_parts_rows(const std::string& name, const SplitParts& parts, const WholeModel& w, Table& table) {
   for (const RecordBitsReport* r : {&parts.whole, &parts.close}) {
     const RecordBits& b = r->bits;
