@@ -27,6 +27,9 @@ void run_info(const std::string& path, bool json) {
   s.max_depth = depth;
   s.node_id_bits = depth;
   s.tree_id_bits = tree_id_bits(m.root_count);
+  // The compact split records (docs/protocol.md, "Split records"): what streaming every split costs.
+  const uint64_t record_bits = file->split_offsets().empty() ? 0 : file->split_offsets().back();
+  const double bits_per_split = s.vsplits ? double(record_bits) / double(s.vsplits) : 0;
   if (json) {
     nlohmann::json j = stats_json(s);
     j["seconds"] = s.seconds;
@@ -34,6 +37,10 @@ void run_info(const std::string& path, bool json) {
     j["input_name"] = s.input_name;
     j["options"] = s.options;
     j["tool_version"] = s.tool_version;
+    j["record_bytes"] = file->split_records().size();
+    j["record_bits_per_split"] = bits_per_split;
+    j["record_table_bytes"] = file->split_tables().size();
+    j["record_position_bits"] = file->split_codec().position_bits();
     std::printf("%s\n", j.dump().c_str());
     return;
   }
@@ -46,6 +53,9 @@ void run_info(const std::string& path, bool json) {
   std::printf("  vsplits:    %llu\n", (unsigned long long)s.vsplits);
   std::printf("  ids:        <%u, %u> bits (tree, node), max depth %u\n", s.tree_id_bits, s.node_id_bits, s.max_depth);
   std::printf("  attributes: %s%s\n", m.normals.empty() ? "" : "normals ", m.colors.empty() ? "" : "colors");
+  std::printf("  records:    %llu bytes, %.2f bits per split at %u-bit positions, code tables %llu bytes\n",
+              (unsigned long long)file->split_records().size(), bits_per_split, file->split_codec().position_bits(),
+              (unsigned long long)file->split_tables().size());
   std::printf("  cleaning:   %s\n", s.clean_report.c_str());
 }
 

@@ -51,6 +51,7 @@ class PmsFile {
   // The compressed split records (pm/split_codec.h; pms-format.md SRTB, SROF, SREC), checked at open:
   // internal node i's record is bits [split_offsets()[i], split_offsets()[i + 1]) of split_records().
   const SplitCodec& split_codec() const { return split_codec_; }
+  std::span<const uint8_t> split_tables() const { return split_tables_; }  // split_codec() serialized
   std::span<const uint64_t> split_offsets() const { return split_offsets_; }
   std::span<const uint8_t> split_records() const { return split_records_; }
 

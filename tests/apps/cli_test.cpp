@@ -5,6 +5,7 @@
 #include <sys/wait.h>
 
 #include <array>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -42,6 +43,12 @@ TEST(Cli, BuildInfoRefineRoundTrip) {
   for (const char* field : {"input_vertices", "input_faces", "base_vertices", "base_faces", "vsplits", "tree_id_bits",
                             "node_id_bits", "max_depth"})
     EXPECT_EQ(info_stats[field], stats[field]) << field;
+  // The records: every split has one, a whole number of bytes holds them all, tables come with them.
+  const double record_bits = info_stats["record_bits_per_split"].get<double>() * stats["vsplits"].get<double>();
+  EXPECT_GT(record_bits, 0);
+  EXPECT_EQ(info_stats["record_bytes"].get<uint64_t>(), uint64_t(std::ceil(record_bits / 8 - 1e-6)));
+  EXPECT_GT(info_stats["record_table_bytes"].get<uint64_t>(), 0u);
+  EXPECT_EQ(info_stats["record_position_bits"], 16);
 
   const std::string full = (dir / "full.ply").string(), coarse = (dir / "coarse.ply").string();
   const RunResult refine = run("refine " + pms_path + " --full -o " + full + " --json");
