@@ -27,6 +27,8 @@ class PrefixCode {
   // Bits the symbol costs (0 for the only symbol of a one-symbol code); the symbol must be present.
   unsigned cost(uint32_t symbol) const { return single_ ? 0 : lengths_[symbol]; }
   const std::vector<uint8_t>& lengths() const { return lengths_; }
+  // The code word write() puts, in stream order from the lowest bit; the symbol must be present.
+  uint32_t word(uint32_t symbol) const { return single_ ? 0 : codes_[symbol]; }
 
   // Throws pms::Error when the symbol has no code word.
   void write(BitWriter& w, uint32_t symbol) const;

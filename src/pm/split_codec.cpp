@@ -117,7 +117,7 @@ constexpr uint32_t int_symbols(uint32_t precision) { return 2 * ((kMaxClass - pr
 static_assert(int_symbols(0) == kIntSymbols);
 constexpr uint32_t kFineAxisSymbol = 0;  // first in the axis codes (then 1 + the larger's symbol): both coordinates raw
 
-uint32_t alphabet(uint32_t slot) {
+constexpr uint32_t alphabet(uint32_t slot) {
   if (slot < kSlotCutUp) return kRefSymbols;
   if (slot < kSlotCutRest) return kMaxDepthSymbols + 1;
   if (slot == kSlotCutDepth) return kMaxDepthSymbols;
@@ -169,17 +169,84 @@ int common_depth(VertexId a, VertexId b) {
 
 }  // namespace
 
-// Symbol counts per slot, for fitting the tables; costs from a previous fit choose the references.
+// Where each slot's symbols start in one array over every slot's alphabet (symbol counts, code words).
+constexpr std::array<uint32_t, kSlotCount + 1> kFirstSymbol = [] {
+  std::array<uint32_t, kSlotCount + 1> first{};
+  for (uint32_t s = 0; s < kSlotCount; ++s) first[s + 1] = first[s] + alphabet(s);
+  return first;
+}();
+constexpr uint32_t kAllSymbols = kFirstSymbol[kSlotCount];
+
+// Symbol counts, for fitting the tables.
 struct SplitCodec::Counts {
-  std::vector<std::vector<uint64_t>> counts;
-  Counts() : counts(kSlotCount) {
-    for (uint32_t s = 0; s < kSlotCount; ++s) counts[s].assign(alphabet(s), 0);
-  }
-  void symbol(uint32_t slot, uint32_t sym, Part) { ++counts[slot][sym]; }
+  std::vector<uint64_t> counts = std::vector<uint64_t>(kAllSymbols);
+  void symbol(uint32_t slot, uint32_t sym, Part) { ++counts[kFirstSymbol[slot] + sym]; }
   void raw(uint64_t, unsigned, Part) {}
   void add(const Counts& other) {
-    for (uint32_t s = 0; s < kSlotCount; ++s)
-      for (size_t sym = 0; sym < counts[s].size(); ++sym) counts[s][sym] += other.counts[s][sym];
+    for (size_t i = 0; i < counts.size(); ++i) counts[i] += other.counts[i];
+  }
+  std::span<const uint64_t> of(uint32_t slot) const {
+    return std::span(counts).subspan(kFirstSymbol[slot], alphabet(slot));
+  }
+};
+
+// A range of nodes' symbols and raw bits, in order, as the fit met them: writing the records then needs
+// only the tables. A word per symbol, its index in kFirstSymbol's array; raw bits as a word with kRawFlag
+// and their count, holding up to kInlineRawBits of them, else followed by the 64-bit value in two words;
+// each node's record ends with kEndOfRecord (a leaf's is only that).
+struct SplitCodec::SymbolLog {
+  static constexpr unsigned kCountShift = 24, kInlineRawBits = kCountShift;
+  static constexpr uint32_t kRawFlag = 1u << 31, kEndOfRecord = kRawFlag - 1;
+  static constexpr size_t kExpectedWordsPerNode = 12;  // a little above the scans', leaves included
+  static_assert(kAllSymbols < kEndOfRecord);
+  static_assert(64 < 1u << (31 - kCountShift));  // a raw count up to 64 fits
+  std::vector<uint32_t> words;
+
+  void raw(uint64_t value, unsigned n) {
+    if (n < 64) value &= (uint64_t(1) << n) - 1;
+    if (n <= kInlineRawBits) {
+      words.push_back(kRawFlag | n << kCountShift | uint32_t(value));
+      return;
+    }
+    words.insert(words.end(), {kRawFlag | n << kCountShift, uint32_t(value), uint32_t(value >> 32)});
+  }
+  void end_record() { words.push_back(kEndOfRecord); }
+
+  // The records into `w`, each one's start into `offsets`; `code_words` as SplitCodec::code_words().
+  void write(std::span<const uint32_t> code_words, BitWriter& w, std::vector<uint64_t>& offsets) const {
+    bool record_start = true;
+    for (size_t i = 0; i < words.size();) {
+      if (record_start) offsets.push_back(w.size());
+      const uint32_t word = words[i++];
+      record_start = word == kEndOfRecord;
+      if (record_start) continue;
+      if (!(word & kRawFlag)) {
+        const uint32_t code = code_words[word];
+        w.bits(code, code >> 16);
+        continue;
+      }
+      const unsigned n = (word & ~kRawFlag) >> kCountShift;
+      if (n <= kInlineRawBits) {
+        w.bits(word, n);
+      } else {
+        w.bits(words[i] | uint64_t(words[i + 1]) << 32, n);
+        i += 2;
+      }
+    }
+  }
+};
+
+// The fit's output: symbol counts, and with a log every symbol and raw bits in order.
+struct SplitCodec::Fitting {
+  Counts& counts;
+  SymbolLog* log;
+  void symbol(uint32_t slot, uint32_t sym, Part) {
+    const uint32_t index = kFirstSymbol[slot] + sym;
+    ++counts.counts[index];
+    if (log) log->words.push_back(index);
+  }
+  void raw(uint64_t value, unsigned n, Part) {
+    if (log) log->raw(value, n);
   }
 };
 
@@ -757,6 +824,11 @@ SplitPayload SplitCodec::decode(const SplitContext& c, BitReader& r) const {
 }
 
 SplitCodec SplitCodec::build(const ModelData& model, std::span<const uint32_t> positions, uint32_t position_bits) {
+  return fit(model, positions, position_bits, nullptr);
+}
+
+SplitCodec SplitCodec::fit(const ModelData& model, std::span<const uint32_t> positions, uint32_t position_bits,
+                           std::vector<SymbolLog>* logs) {
   check_node_arrays(model);
   if (positions.size() != 3 * model.node_count()) fail("split record", "positions are not 3 per node");
   if (!(position_bits >= 1 && position_bits <= 32)) fail("split record", "position bits outside 1..32");
@@ -769,18 +841,34 @@ SplitCodec SplitCodec::build(const ModelData& model, std::span<const uint32_t> p
   codec.has_colors_ = !model.colors.empty();
   for (size_t n = 0; n < model.node_count(); ++n) codec.max_depth_ = std::max<uint32_t>(codec.max_depth_, uint32_t(model.id(uint32_t(n)).depth()));
   // One fit: every choice the coding makes is canonical, so no symbol depends on the tables.
-  std::vector<Counts> parts = map_ranges(model.node_count(), kParallelNodes, [&](size_t begin, size_t end) {
-    Counts part;
+  struct Range {
+    Counts counts;
+    SymbolLog log;
+  };
+  std::vector<Range> parts = map_ranges(model.node_count(), kParallelNodes, [&](size_t begin, size_t end) {
+    Range part;
+    Fitting out{part.counts, logs ? &part.log : nullptr};
+    if (logs) part.log.words.reserve((end - begin) * SymbolLog::kExpectedWordsPerNode);
     for (uint32_t node = uint32_t(begin); node < end; ++node) {
-      if (model.is_leaf(node)) continue;
-      codec.emit(split_context(model, positions, node), split_payload(model, positions, node), part);
+      if (!model.is_leaf(node)) codec.emit(split_context(model, positions, node), split_payload(model, positions, node), out);
+      if (logs) part.log.end_record();
     }
     return part;
   });
-  for (size_t i = 1; i < parts.size(); ++i) parts[0].add(parts[i]);
+  for (size_t i = 1; i < parts.size(); ++i) parts[0].counts.add(parts[i].counts);
   codec.codes_.reserve(kSlotCount);
-  for (uint32_t s = 0; s < kSlotCount; ++s) codec.codes_.push_back(PrefixCode::from_counts(parts[0].counts[s]));
+  for (uint32_t s = 0; s < kSlotCount; ++s) codec.codes_.push_back(PrefixCode::from_counts(parts[0].counts.of(s)));
+  if (logs)
+    for (Range& part : parts) logs->push_back(std::move(part.log));
   return codec;
+}
+
+std::vector<uint32_t> SplitCodec::code_words() const {
+  std::vector<uint32_t> words(kAllSymbols);
+  for (uint32_t s = 0; s < kSlotCount; ++s)
+    for (uint32_t sym = 0; sym < alphabet(s); ++sym)
+      if (codes_[s].has(sym)) words[kFirstSymbol[s] + sym] = codes_[s].cost(sym) << 16 | codes_[s].word(sym);
+  return words;
 }
 
 bool SplitCodec::carried(uint32_t slot) const {
@@ -901,7 +989,8 @@ std::vector<uint32_t> grid_positions(const ModelData& model, uint32_t position_b
 
 EncodedRecords encode_records(const ModelData& model, uint32_t position_bits) {
   const std::vector<uint32_t> q = grid_positions(model, position_bits);
-  const SplitCodec codec = SplitCodec::build(model, q, position_bits);
+  std::vector<SplitCodec::SymbolLog> logs;
+  const SplitCodec codec = SplitCodec::fit(model, q, position_bits, &logs);
   EncodedRecords out;
   BitWriter tables;
   codec.serialize(tables);
@@ -910,12 +999,12 @@ EncodedRecords encode_records(const ModelData& model, uint32_t position_bits) {
     BitWriter records;
     std::vector<uint64_t> offsets;  // from the range's start
   };
-  std::vector<Range> parts = map_ranges(model.node_count(), kParallelNodes, [&](size_t begin, size_t end) {
+  const std::vector<uint32_t> code_words = codec.code_words();
+  std::vector<Range> parts = map_ranges(logs.size(), 1, [&](size_t begin, size_t end) {
     Range part;
-    part.offsets.reserve(end - begin);
-    for (uint32_t node = uint32_t(begin); node < end; ++node) {
-      part.offsets.push_back(part.records.size());
-      if (!model.is_leaf(node)) codec.encode(split_context(model, q, node), split_payload(model, q, node), part.records);
+    for (size_t i = begin; i < end; ++i) {
+      logs[i].write(code_words, part.records, part.offsets);
+      logs[i] = {};
     }
     return part;
   });

@@ -64,6 +64,15 @@ struct RecordBits {
   }
 };
 
+// Every internal node's record, in node order, as the .pms file stores them (pms-format.md, SRTB, SROF,
+// SREC): the serialized tables, n + 1 bit offsets (node i's record is bits [offsets[i], offsets[i + 1]);
+// empty for a leaf) and the records' bit stream, padded to a byte.
+struct EncodedRecords {
+  std::vector<uint8_t> tables;
+  std::vector<uint64_t> offsets;
+  std::vector<uint8_t> records;
+};
+
 // A model's static code tables and the record coder over them.
 class SplitCodec {
  public:
@@ -71,6 +80,7 @@ class SplitCodec {
   // Tables fitted to every split of the model. `positions` holds 3 quantized coordinates per node on a
   // grid of `position_bits` (1..32) per axis.
   static SplitCodec build(const ModelData& model, std::span<const uint32_t> positions, uint32_t position_bits);
+  friend EncodedRecords encode_records(const ModelData& model, uint32_t position_bits);
 
   // Throws pms::Error for a payload the tables or the model's widths cannot carry.
   void encode(const SplitContext& context, const SplitPayload& payload, BitWriter& w, RecordBits* bits = nullptr) const;
@@ -93,6 +103,15 @@ class SplitCodec {
 
  private:
   struct Counts;
+  struct SymbolLog;
+  struct Fitting;
+  // build(); with `logs`, also each range of nodes' symbols, so encode_records() writes them without
+  // working them out again.
+  static SplitCodec fit(const ModelData& model, std::span<const uint32_t> positions, uint32_t position_bits,
+                        std::vector<SymbolLog>* logs);
+  // Every slot's code words in one array, at kFirstSymbol[slot] + symbol (split_codec.cpp): the word in
+  // stream order from the lowest bit, its length from bit 16.
+  std::vector<uint32_t> code_words() const;
   template <class Out> void emit(const SplitContext& context, const SplitPayload& payload, Out& out) const;
   // The cut vertices (topology).
   template <class Out> void emit_cuts(const SplitContext& context, const SplitPayload& payload, Out& out) const;
@@ -121,14 +140,7 @@ std::array<uint16_t, 3> grid_step_ratios(const ModelData& model);
 float largest_grid_step(const ModelData& model, uint32_t position_bits);
 std::vector<uint32_t> grid_positions(const ModelData& model, uint32_t position_bits);
 
-// Every internal node's record, in node order, as the .pms file stores them (pms-format.md, SRTB, SROF,
-// SREC): the serialized tables, n + 1 bit offsets (node i's record is bits [offsets[i], offsets[i + 1]);
-// empty for a leaf) and the records' bit stream, padded to a byte.
-struct EncodedRecords {
-  std::vector<uint8_t> tables;
-  std::vector<uint64_t> offsets;
-  std::vector<uint8_t> records;
-};
+// The tables fitted to the model and every record coded with them.
 EncodedRecords encode_records(const ModelData& model, uint32_t position_bits);
 
 // The codec of stored records, after checking them against the model: the tables parse, fit its ids and
