@@ -29,15 +29,6 @@ constexpr uint16_t kDroppedMask = (1u << kLengthDroppedBits) - 1;
 // (and the largest finite values round up to infinity, 0x7C00).
 uint16_t round_up_to_kept_bits(uint32_t half) { return uint16_t(std::min<uint32_t>((half + kDroppedMask) & ~uint32_t(kDroppedMask), kHalfInfinity)); }
 
-// Smallest kept-bits half h with decode_length(h) >= value: the division and the multiply each
-// round, so the first guess is checked against the exact decoder and bumped (at most a step).
-uint16_t encode_length(float value, float scale) {
-  if (std::isnan(value)) return kHalfInfinity;  // unknown bound: never culls, always refines
-  if (!(value > 0)) return 0;
-  uint16_t half = round_up_to_kept_bits(half_from_float_up(value / effective_scale(scale)));
-  while (half < kHalfInfinity && decode_length(half, scale) < value) half = round_up_to_kept_bits(half + 1u);
-  return half;
-}
 
 // Angle between unit `a` and the (nearly unit) float vector `b`; atan2 stays accurate for tiny
 // angles, where acos(dot) loses half its digits.
@@ -119,6 +110,16 @@ uint16_t half_from_float_up(float value) {
 }
 
 float float_from_half(uint16_t half) { return dequantize_detail::float_from_half(half); }
+
+// Smallest kept-bits half h with decode_length(h) >= value: the division and the multiply each
+// round, so the first guess is checked against the exact decoder and bumped (at most a step).
+uint16_t encode_length(float value, float scale) {
+  if (std::isnan(value)) return kHalfInfinity;  // unknown bound: never culls, always refines
+  if (!(value > 0)) return 0;
+  uint16_t half = round_up_to_kept_bits(half_from_float_up(value / effective_scale(scale)));
+  while (half < kHalfInfinity && decode_length(half, scale) < value) half = round_up_to_kept_bits(half + 1u);
+  return half;
+}
 
 RefineInfo quantize_refine(const RefineBounds& bounds, float scale) {
   RefineInfo info{};

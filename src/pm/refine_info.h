@@ -48,6 +48,8 @@ struct RefineBounds {
 };
 
 RefineInfo quantize_refine(const RefineBounds& bounds, float scale);
+// One length as quantize_refine stores it: the smallest stored half that decodes to at least `value`.
+uint16_t encode_length(float value, float scale);
 RefineBounds dequantize_refine(const RefineInfo& info, float scale);
 
 // Half-float helpers (exposed for tests): round toward +inf so decoded >= value for value >= 0.
