@@ -52,6 +52,7 @@ BuildRun build_mesh(Mesh mesh, const std::string& input_name, const std::string&
   run.clean_seconds = clean_time.seconds();
   Stopwatch build_time;
   BuildResult built = build_progressive_mesh(mesh, options);
+  mesh = {};  // the hierarchy holds what the file needs; the split records' coding wants the memory
   built.stats.input_name = input_name;
   built.stats.tool_version = PMSTREAM_VERSION;
   built.stats.clean_report = describe(run.clean);
