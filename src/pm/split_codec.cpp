@@ -26,6 +26,7 @@
 #include <string>
 
 #include "common/error.h"
+#include "common/huge_pages.h"
 #include "common/parallel.h"
 #include "pm/nested_info.h"
 #include "pm/octahedral_normal.h"
@@ -193,47 +194,62 @@ struct SplitCodec::Counts {
 // A range of nodes' symbols and raw bits, in order, as the fit met them: writing the records then needs
 // only the tables. A word per symbol, its index in kFirstSymbol's array; raw bits as a word with kRawFlag
 // and their count, holding up to kInlineRawBits of them, else followed by the 64-bit value in two words;
-// each node's record ends with kEndOfRecord (a leaf's is only that).
+// each node's record ends with kEndOfRecord (a leaf's is only that). The words go in chunks, each as large
+// as the log before it up to one 2 MiB page: a log grows without copies, and holds at most a third more
+// than it uses, one page at most.
 struct SplitCodec::SymbolLog {
   static constexpr unsigned kCountShift = 24, kInlineRawBits = kCountShift;
   static constexpr uint32_t kRawFlag = 1u << 31, kEndOfRecord = kRawFlag - 1;
-  static constexpr size_t kExpectedWordsPerNode = 12;  // a little above the scans', leaves included
+  static constexpr size_t kFirstChunkWords = size_t(1) << 14, kLargestChunkWords = kHugePage / sizeof(uint32_t);
   static_assert(kAllSymbols < kEndOfRecord);
   static_assert(64 < 1u << (31 - kCountShift));  // a raw count up to 64 fits
-  std::vector<uint32_t> words;
+  std::vector<std::vector<uint32_t>> chunks;
 
+  void symbol(uint32_t index) { room(1).push_back(index); }
   void raw(uint64_t value, unsigned n) {
     if (n < 64) value &= (uint64_t(1) << n) - 1;
     if (n <= kInlineRawBits) {
-      words.push_back(kRawFlag | n << kCountShift | uint32_t(value));
+      room(1).push_back(kRawFlag | n << kCountShift | uint32_t(value));
       return;
     }
-    words.insert(words.end(), {kRawFlag | n << kCountShift, uint32_t(value), uint32_t(value >> 32)});
+    std::vector<uint32_t>& chunk = room(3);  // a raw's words stay in one chunk
+    chunk.insert(chunk.end(), {kRawFlag | n << kCountShift, uint32_t(value), uint32_t(value >> 32)});
   }
-  void end_record() { words.push_back(kEndOfRecord); }
+  void end_record() { room(1).push_back(kEndOfRecord); }
 
   // The records into `w`, each one's start into `offsets`; `code_words` as SplitCodec::code_words().
   void write(std::span<const uint32_t> code_words, BitWriter& w, std::vector<uint64_t>& offsets) const {
     bool record_start = true;
-    for (size_t i = 0; i < words.size();) {
-      if (record_start) offsets.push_back(w.size());
-      const uint32_t word = words[i++];
-      record_start = word == kEndOfRecord;
-      if (record_start) continue;
-      if (!(word & kRawFlag)) {
-        const uint32_t code = code_words[word];
-        w.bits(code, code >> 16);
-        continue;
+    for (const std::vector<uint32_t>& words : chunks)
+      for (size_t i = 0; i < words.size();) {
+        if (record_start) offsets.push_back(w.size());
+        const uint32_t word = words[i++];
+        record_start = word == kEndOfRecord;
+        if (record_start) continue;
+        if (!(word & kRawFlag)) {
+          const uint32_t code = code_words[word];
+          w.bits(code, code >> 16);
+          continue;
+        }
+        const unsigned n = (word & ~kRawFlag) >> kCountShift;
+        if (n <= kInlineRawBits) {
+          w.bits(word, n);
+        } else {
+          w.bits(words[i] | uint64_t(words[i + 1]) << 32, n);
+          i += 2;
+        }
       }
-      const unsigned n = (word & ~kRawFlag) >> kCountShift;
-      if (n <= kInlineRawBits) {
-        w.bits(word, n);
-      } else {
-        w.bits(words[i] | uint64_t(words[i + 1]) << 32, n);
-        i += 2;
-      }
-    }
   }
+
+ private:
+  std::vector<uint32_t>& room(size_t words) {
+    if (chunks.empty() || chunks.back().size() + words > chunks.back().capacity()) {
+      if (!chunks.empty()) logged_ += chunks.back().size();
+      chunks.emplace_back().reserve(std::clamp(logged_, kFirstChunkWords, kLargestChunkWords));
+    }
+    return chunks.back();
+  }
+  size_t logged_ = 0;  // words in the chunks before the last
 };
 
 // The fit's output: symbol counts, and with a log every symbol and raw bits in order.
@@ -243,7 +259,7 @@ struct SplitCodec::Fitting {
   void symbol(uint32_t slot, uint32_t sym, Part) {
     const uint32_t index = kFirstSymbol[slot] + sym;
     ++counts.counts[index];
-    if (log) log->words.push_back(index);
+    if (log) log->symbol(index);
   }
   void raw(uint64_t value, unsigned n, Part) {
     if (log) log->raw(value, n);
@@ -848,7 +864,6 @@ SplitCodec SplitCodec::fit(const ModelData& model, std::span<const uint32_t> pos
   std::vector<Range> parts = map_ranges(model.node_count(), kParallelNodes, [&](size_t begin, size_t end) {
     Range part;
     Fitting out{part.counts, logs ? &part.log : nullptr};
-    if (logs) part.log.words.reserve((end - begin) * SymbolLog::kExpectedWordsPerNode);
     for (uint32_t node = uint32_t(begin); node < end; ++node) {
       if (!model.is_leaf(node)) codec.emit(split_context(model, positions, node), split_payload(model, positions, node), out);
       if (logs) part.log.end_record();
