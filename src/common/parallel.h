@@ -28,28 +28,42 @@ void for_each_range(size_t count, size_t min_parallel, Fn&& fn) {
   for (std::thread& w : workers) w.join();
 }
 
-// for_each_range with a result per range: fn(begin, end) of every range, in range order. A range that
-// throws does not stop the others; afterwards the first range's exception (in range order) is rethrown,
-// which is the one a sequential loop over [0, count) would have met first.
+// [0, count) cut into `ranges` contiguous ranges of equal size: their ranges + 1 bounds.
+inline std::vector<size_t> even_bounds(size_t count, size_t ranges) {
+  std::vector<size_t> bounds(ranges + 1);
+  for (size_t i = 0; i <= ranges; ++i) bounds[i] = count * i / ranges;
+  return bounds;
+}
+
+// fn(bounds[i], bounds[i + 1]) for every range, each on a thread of its own (the first on the caller's),
+// with a result per range in range order. A range that throws does not stop the others; afterwards the
+// first range's exception (in range order) is rethrown, which is the one a sequential loop over the
+// ranges would have met first.
 template <class Fn>
-auto map_ranges(size_t count, size_t min_parallel, Fn&& fn) -> std::vector<decltype(fn(size_t(0), size_t(0)))> {
-  const size_t threads = range_count(count, min_parallel);
-  std::vector<decltype(fn(size_t(0), size_t(0)))> results(threads);
-  std::vector<std::exception_ptr> errors(threads);
+auto map_bounded_ranges(const std::vector<size_t>& bounds, Fn&& fn) -> std::vector<decltype(fn(size_t(0), size_t(0)))> {
+  const size_t ranges = bounds.size() - 1;
+  std::vector<decltype(fn(size_t(0), size_t(0)))> results(ranges);
+  std::vector<std::exception_ptr> errors(ranges);
   const auto run = [&](size_t i) {
     try {
-      results[i] = fn(count * i / threads, count * (i + 1) / threads);
+      results[i] = fn(bounds[i], bounds[i + 1]);
     } catch (...) {
       errors[i] = std::current_exception();
     }
   };
   std::vector<std::thread> workers;
-  for (size_t i = 1; i < threads; ++i) workers.emplace_back(run, i);
+  for (size_t i = 1; i < ranges; ++i) workers.emplace_back(run, i);
   run(0);
   for (std::thread& w : workers) w.join();
   for (const std::exception_ptr& error : errors)
     if (error) std::rethrow_exception(error);
   return results;
+}
+
+// for_each_range with a result per range: map_bounded_ranges over equal ranges.
+template <class Fn>
+auto map_ranges(size_t count, size_t min_parallel, Fn&& fn) -> std::vector<decltype(fn(size_t(0), size_t(0)))> {
+  return map_bounded_ranges(even_bounds(count, range_count(count, min_parallel)), fn);
 }
 
 }  // namespace pms

@@ -1,5 +1,6 @@
 // common/parallel.h: map_ranges covers [0, count) once, in range order, and reports errors as a
-// sequential loop would (the first failing item's), however many ranges ran.
+// sequential loop would (the first failing item's), however many ranges ran; map_bounded_ranges runs
+// the ranges it is given.
 #include <gtest/gtest.h>
 
 #include <stdexcept>
@@ -43,6 +44,23 @@ TEST(Parallel, MapRangesRethrowsTheErrorASequentialLoopMeetsFirst) {
   } catch (const std::runtime_error& e) {
     EXPECT_EQ(std::string(e.what()), "item " + std::to_string(kCount / 2));
   }
+}
+
+TEST(Parallel, BoundedRangesRunTheGivenRangesInOrderEvenWhenUneven) {
+  const std::vector<size_t> bounds = {0, 90, 90, 95, 100};  // as split_codec's ranges of equal split counts
+  const auto ranges = map_bounded_ranges(bounds, [](size_t begin, size_t end) { return std::pair{begin, end}; });
+  ASSERT_EQ(ranges.size(), 4u);
+  for (size_t i = 0; i < ranges.size(); ++i) EXPECT_EQ(ranges[i], std::pair(bounds[i], bounds[i + 1]));
+  try {
+    map_bounded_ranges(bounds, [](size_t begin, size_t end) {
+      if (end == 100 || end == 95) throw std::runtime_error("range ending at " + std::to_string(end));
+      return begin;
+    });
+    FAIL() << "no error";
+  } catch (const std::runtime_error& e) {
+    EXPECT_EQ(std::string(e.what()), "range ending at 95");
+  }
+  EXPECT_EQ(even_bounds(10, 3), (std::vector<size_t>{0, 3, 6, 10}));
 }
 
 }  // namespace
