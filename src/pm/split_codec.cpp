@@ -195,8 +195,8 @@ struct SplitCodec::Counts {
 // only the tables. A word per symbol, its index in kFirstSymbol's array; raw bits as a word with kRawFlag
 // and their count, holding up to kInlineRawBits of them, else followed by the 64-bit value in two words;
 // each node's record ends with kEndOfRecord (a leaf's is only that). The words go in chunks, each as large
-// as the log before it up to one 2 MiB page: a log grows without copies, and holds at most a third more
-// than it uses, one page at most.
+// as the log before it up to one 2 MiB page: a log grows without copies, and what it reserves beyond what
+// it holds is never more than what it holds, nor than a page.
 struct SplitCodec::SymbolLog {
   static constexpr unsigned kCountShift = 24, kInlineRawBits = kCountShift;
   static constexpr uint32_t kRawFlag = 1u << 31, kEndOfRecord = kRawFlag - 1;
@@ -204,6 +204,7 @@ struct SplitCodec::SymbolLog {
   static_assert(kAllSymbols < kEndOfRecord);
   static_assert(64 < 1u << (31 - kCountShift));  // a raw count up to 64 fits
   std::vector<std::vector<uint32_t>> chunks;
+  size_t records = 0;  // nodes logged
 
   void symbol(uint32_t index) { room(1).push_back(index); }
   void raw(uint64_t value, unsigned n) {
@@ -215,10 +216,14 @@ struct SplitCodec::SymbolLog {
     std::vector<uint32_t>& chunk = room(3);  // a raw's words stay in one chunk
     chunk.insert(chunk.end(), {kRawFlag | n << kCountShift, uint32_t(value), uint32_t(value >> 32)});
   }
-  void end_record() { room(1).push_back(kEndOfRecord); }
+  void end_record() {
+    room(1).push_back(kEndOfRecord);
+    ++records;
+  }
 
   // The records into `w`, each one's start into `offsets`; `code_words` as SplitCodec::code_words().
   void write(std::span<const uint32_t> code_words, BitWriter& w, std::vector<uint64_t>& offsets) const {
+    offsets.reserve(offsets.size() + records);
     bool record_start = true;
     for (const std::vector<uint32_t>& words : chunks)
       for (size_t i = 0; i < words.size();) {
