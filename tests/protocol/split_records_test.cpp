@@ -143,6 +143,16 @@ TEST(SplitRecords, CoarseGridRoundTrips) {
   EXPECT_GT(s.splits, 0u);
 }
 
+// Float positions (32 bits) and the finest grid: position differences whose raw bits pass the 24 a symbol
+// log word holds inline (the stored records are coded from the fit's log; check_records compares each with
+// a record coded on its own).
+TEST(SplitRecords, FloatPositionsAndTheFinestGridRoundTrip) {
+  for (uint32_t bits : {24u, 32u}) {
+    const RecordStats s = check_records(test::terrain_model().model(), bits);
+    EXPECT_GT(s.splits, 0u) << bits << " bits";
+  }
+}
+
 TEST(SplitRecords, EveryBunnyRecordRoundTripsThroughAClient) {
   const test::BuiltModel* bunny = test::bunny_model();
   if (!bunny) GTEST_SKIP() << "../shared/models/bunny.ply.xz not found: this test needs the shared test meshes";
