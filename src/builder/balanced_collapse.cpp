@@ -66,10 +66,11 @@ bool by_key(const Entry& a, const Entry& b) {
   return a.key < b.key || (a.key == b.key && (a.t < b.t || (a.t == b.t && a.u < b.u)));
 }
 
-// Best targets of the vertices in [begin, end): read-only on the mesh, so chunks run in parallel.
-void collect_range(const CollapseMesh& mesh, const CollapseRecorder& recorder, const HeightWeights& weight,
-                   double epsilon, uint32_t begin, uint32_t end, NeighbourScratch& marks, std::vector<Entry>& out) {
-  out.clear();
+// Best targets of the vertices in [begin, end) into `out`, which has room for kTargetsPerVertex each;
+// returns how many. Read-only on the mesh, so chunks run in parallel.
+size_t collect_range(const CollapseMesh& mesh, const CollapseRecorder& recorder, const HeightWeights& weight,
+                     double epsilon, uint32_t begin, uint32_t end, NeighbourScratch& marks, Entry* out) {
+  Entry* const first = out;
   std::vector<uint32_t> neighbours;
   for (uint32_t t = begin; t < end; ++t) {
     if (!mesh.alive(t)) continue;
@@ -91,39 +92,47 @@ void collect_range(const CollapseMesh& mesh, const CollapseRecorder& recorder, c
       best[i] = e;
       for (; i > 0 && best[i].key < best[i - 1].key; --i) std::swap(best[i], best[i - 1]);
     }
-    out.insert(out.end(), best, best + kept);
+    out = std::copy_n(best, kept, out);
   }
+  return size_t(out - first);
 }
 
-// Candidates of every live vertex, in vertex order whatever the thread count.
+// Candidates of every live vertex, in vertex order whatever the thread count. Each thread writes its
+// chunk of vertices straight into the shared array, at room for kTargetsPerVertex per vertex, and the
+// chunks are closed up afterwards: no per-thread arrays (a sixth of the candidates' memory, at the
+// builder's peak) and no copy of the first chunk.
 class CandidateCollector {
  public:
-  CandidateCollector(size_t vertices, unsigned threads) : marks_(threads), parts_(threads) {
+  CandidateCollector(size_t vertices, unsigned threads) : marks_(threads) {
     for (NeighbourScratch& m : marks_) m.resize(vertices);
-    // The first round fills them: reserved here, on the main heap, rather than grown by doubling in
-    // the workers' own arenas (copies, and page faults on memory the build cannot reuse).
-    for (unsigned i = 1; i < threads; ++i) parts_[i].reserve(kTargetsPerVertex * (vertices / threads + 1));
   }
 
-  void collect(const CollapseMesh& mesh, const CollapseRecorder& recorder, const HeightWeights& weight, double epsilon,
-               std::vector<Entry>& out) {
+  // Into `out`, which has room for kTargetsPerVertex per vertex of `mesh`; returns how many.
+  size_t collect(const CollapseMesh& mesh, const CollapseRecorder& recorder, const HeightWeights& weight,
+                 double epsilon, std::vector<Entry>& out) {
     const uint32_t n = mesh.vertex_count();
-    const unsigned threads = unsigned(parts_.size());
+    const unsigned threads = unsigned(marks_.size());
+    std::vector<size_t> found(threads);
+    const auto run = [&](unsigned i) {
+      found[i] = collect_range(mesh, recorder, weight, epsilon, chunk(n, i), chunk(n, i + 1), marks_[i],
+                               out.data() + kTargetsPerVertex * size_t(chunk(n, i)));
+    };
     std::vector<std::thread> workers;
-    for (unsigned i = 1; i < threads; ++i)
-      workers.emplace_back([&, i] {
-        collect_range(mesh, recorder, weight, epsilon, chunk(n, i), chunk(n, i + 1), marks_[i], parts_[i]);
-      });
-    // The first chunk goes straight to `out` (parts_[0] stays empty): one copy of it less per round.
-    collect_range(mesh, recorder, weight, epsilon, 0, chunk(n, 1), marks_[0], out);
+    for (unsigned i = 1; i < threads; ++i) workers.emplace_back(run, i);
+    run(0);
     for (std::thread& w : workers) w.join();
-    for (unsigned i = 1; i < threads; ++i) out.insert(out.end(), parts_[i].begin(), parts_[i].end());
+    size_t count = found[0];
+    for (unsigned i = 1; i < threads; ++i) {
+      const auto chunk_begin = out.begin() + ptrdiff_t(kTargetsPerVertex * size_t(chunk(n, i)));
+      std::copy(chunk_begin, chunk_begin + ptrdiff_t(found[i]), out.begin() + ptrdiff_t(count));
+      count += found[i];
+    }
+    return count;
   }
 
  private:
-  uint32_t chunk(uint32_t n, unsigned i) const { return uint32_t(uint64_t(n) * i / parts_.size()); }
+  uint32_t chunk(uint32_t n, unsigned i) const { return uint32_t(uint64_t(n) * i / marks_.size()); }
   std::vector<NeighbourScratch> marks_;
-  std::vector<std::vector<Entry>> parts_;
 };
 
 }  // namespace
@@ -138,8 +147,8 @@ CollapseForest simplify_balanced(const Mesh& input, const BuildOptions& options)
   const double epsilon = 1e-10 * diagonal * diagonal;
 
   const HeightWeights early_weights(kEarlyRounds.height_base), late_weights(kLateRounds.height_base);
-  std::vector<Entry> entries;
-  entries.reserve(kTargetsPerVertex * size_t(mesh.vertex_count()));
+  // Sized once: compact() only ever shrinks the vertex count.
+  std::vector<Entry> entries(kTargetsPerVertex * size_t(mesh.vertex_count()));
   CandidateCollector collector(mesh.vertex_count(), std::clamp(std::thread::hardware_concurrency(), 1u, 8u));
   std::vector<uint8_t> touched(mesh.vertex_count(), 0);
   std::vector<uint32_t> new_index;
@@ -148,16 +157,17 @@ CollapseForest simplify_balanced(const Mesh& input, const BuildOptions& options)
     const uint32_t alive = mesh.alive_vertex_count();
     const bool late = uint64_t(alive) < uint64_t(kLateRoundsBelowBase) * target;
     const RoundRule& rule = late ? kLateRounds : kEarlyRounds;
-    collector.collect(mesh, recorder, late ? late_weights : early_weights, epsilon, entries);
+    const size_t candidates = collector.collect(mesh, recorder, late ? late_weights : early_weights, epsilon, entries);
+    const auto entries_end = entries.begin() + ptrdiff_t(candidates);
     const uint32_t quota = std::min<uint32_t>(alive - target, std::max<uint32_t>(1, uint32_t(alive * rule.share)));
     std::fill(touched.begin(), touched.end(), 0);
     // Usually the quota fills from the cheapest few quota-sized chunks: sort only what is walked.
     uint32_t accepted = 0;
     size_t sorted_end = 0;
-    for (size_t i = 0; i < entries.size() && accepted < quota; ++i) {
+    for (size_t i = 0; i < candidates && accepted < quota; ++i) {
       if (i == sorted_end) {
-        const size_t chunk_end = std::min(entries.size(), sorted_end + 2 * size_t(quota) + 1024);
-        std::nth_element(entries.begin() + sorted_end, entries.begin() + chunk_end - 1, entries.end(), by_key);
+        const size_t chunk_end = std::min(candidates, sorted_end + 2 * size_t(quota) + 1024);
+        std::nth_element(entries.begin() + sorted_end, entries.begin() + chunk_end - 1, entries_end, by_key);
         std::sort(entries.begin() + sorted_end, entries.begin() + chunk_end, by_key);
         sorted_end = chunk_end;
       }
@@ -177,7 +187,7 @@ CollapseForest simplify_balanced(const Mesh& input, const BuildOptions& options)
       touched[e.t] = touched[e.u] = 1;
       ++accepted;
     }
-    recorder.flush();
+    recorder.end_round();
     if (accepted == 0 || accepted < kMinQuotaShare * quota) break;
     if (mesh.alive_vertex_count() < mesh.vertex_count() / 2) {
       recorder.compact(new_index);

@@ -43,23 +43,39 @@ void CollapseRecorder::apply(uint32_t t, uint32_t u, const CollapseSite& site) {
   pending_.push_back({s, before_t.node, before_u.node, u});
 }
 
-void CollapseRecorder::flush() {
-  // Accepted in cost order, i.e. scattered over the mesh; computed in vertex order, the fans and
-  // samples they read are neighbours in memory. Every record of one round reads only the
+void CollapseRecorder::end_round() {
+  if (pending_.empty()) return;  // nothing to wait for: the round computing may go on
+  // Accepted in cost order, i.e. scattered over the mesh; captured and computed in vertex order, the
+  // fans and samples they read are neighbours in memory. Every record of one round reads only the
   // previous rounds' info and the round's final mesh, so the order does not change the result.
-  std::sort(pending_.begin(), pending_.end(), [](const Pending& a, const Pending& b) { return a.u < b.u; });
-  // Starting a thread (~0.1 ms) costs more than a few hundred records (~3 us each).
-  for_each_range(pending_.size(), 512, [this](size_t begin, size_t end) {
-    for (size_t i = begin; i < end; ++i) {
-      const Pending& p = pending_[i];
-      refinement_.compute(p.s, p.t_node, p.u_node, mesh_, p.u);
-    }
-  });
-  pending_.clear();
+  std::sort(pending_.begin(), pending_.end(), [](const auto& a, const auto& b) { return a.u < b.u; });
+  // This round's children may be the last round's nodes. Waiting before capturing keeps one round's
+  // copy alive at a time, at the price of the other core idling while this one captures.
+  computing_.wait();
+  computing_round_.capture(
+      pending_, mesh_, [this](uint32_t v) { return refinement_.samples_of(v); },
+      [this](uint32_t v) { return current_[v].survivor_leaf; });
+  const auto compute = [this](size_t begin, size_t end) {
+    computing_round_.for_each(begin, end, [this](const CapturedRound::Collapse& c, std::span<const uint32_t> corners,
+                                                 std::span<const uint32_t> samples) {
+      refinement_.compute(c.s, c.t_node, c.u_node, corners, samples);
+    });
+  };
+  // A thread costs more than a few hundred records (~3 us each).
+  const size_t count = computing_round_.collapses.size();
+  if (count < 2 * CapturedRound::kChunk)
+    compute(0, count);
+  else
+    computing_.start(count, CapturedRound::kChunk, compute);
+}
+
+void CollapseRecorder::flush() {
+  end_round();
+  computing_.wait();
 }
 
 void CollapseRecorder::compact(std::vector<uint32_t>& new_index) {
-  flush();
+  end_round();
   mesh_.compact(new_index);
   uint32_t live = 0;
   for (uint32_t v = 0; v < new_index.size(); ++v)

@@ -8,6 +8,7 @@
 #include <numbers>
 
 #include "builder/bounds.h"
+#include "builder/captured_round.h"
 #include "common/parallel.h"
 #include "pm/refine_info.h"
 
@@ -32,26 +33,6 @@ V3 normalized(V3 a) {
 }
 // atan2 form: acos of a dot product near 1 is ill-conditioned.
 double angle_between(V3 a, V3 b) { return std::atan2(length(cross(a, b)), dot(a, b)); }
-
-V3 closest_point_on_triangle(V3 p, V3 a, V3 b, V3 c) {
-  const V3 ab = b - a, ac = c - a, ap = p - a;
-  const double d1 = dot(ab, ap), d2 = dot(ac, ap);
-  if (d1 <= 0 && d2 <= 0) return a;
-  const V3 bp = p - b;
-  const double d3 = dot(ab, bp), d4 = dot(ac, bp);
-  if (d3 >= 0 && d4 <= d3) return b;
-  const double vc = d1 * d4 - d3 * d2;
-  if (vc <= 0 && d1 >= 0 && d3 <= 0) return a + ab * (d1 / (d1 - d3));
-  const V3 cp = p - c;
-  const double d5 = dot(ab, cp), d6 = dot(ac, cp);
-  if (d6 >= 0 && d5 <= d6) return c;
-  const double vb = d5 * d2 - d1 * d6;
-  if (vb <= 0 && d2 >= 0 && d6 <= 0) return a + ac * (d2 / (d2 - d6));
-  const double va = d3 * d6 - d5 * d4;
-  if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0) return b + (c - b) * ((d4 - d3) / ((d4 - d3) + (d5 - d6)));
-  const double denom = 1.0 / (va + vb + vc);
-  return a + ab * (vb * denom) + ac * (vc * denom);
-}
 
 struct Cone {
   V3 axis;
@@ -98,12 +79,42 @@ float float_at_least(double value) {
 // The faces around the surviving vertex right after the collapse: the surface the node's leaves are
 // measured against (bounded, as a fan is; a huge fan only makes the bound larger, never smaller).
 struct RefinementInfoBuilder::Fan {
+  // A face with what every closest-point query needs of it precomputed: its edges from a and their dot
+  // products turn Ericson's six dot products per query into two.
   struct Tri {
-    V3 a, b, c, n;
-    double d;
+    V3 a, ab, ac, n;
+    double d;  // plane offset: dot(n, p) - d is the signed distance of p
+    double ab_ab, ab_ac, ac_ac;
     V3 rest;  // the two corners other than the fan's centre u, summed
+
+    Tri(V3 a_, V3 b, V3 c) : a(a_), ab(b - a_), ac(c - a_), n(normalized(cross(ab, ac))), d(dot(n, a_)),
+        ab_ab(dot(ab, ab)), ab_ac(dot(ab, ac)), ac_ac(dot(ac, ac)) {}
+    Tri() = default;
+
+    // p minus its closest point on the triangle, `plane` = p's signed distance from it: Ericson's
+    // Voronoi-region test (§5.1.5) with ab.bp = ab.ap - ab.ab and its kin in place of the dot products
+    // against b and c. Inside, the error is the plane's normal times the distance: exactly zero for a
+    // point on a flat patch, where rebuilding the point from barycentric weights left rounding noise
+    // that τ = 0 took for a deviation.
+    V3 error(V3 p, double plane) const {
+      const V3 ap = p - a;
+      const double d1 = dot(ab, ap), d2 = dot(ac, ap);
+      if (d1 <= 0 && d2 <= 0) return ap;
+      const double d3 = d1 - ab_ab, d4 = d2 - ab_ac;
+      if (d3 >= 0 && d4 <= d3) return ap - ab;
+      const double vc = d1 * d4 - d3 * d2;
+      if (vc <= 0 && d1 >= 0 && d3 <= 0) return ap - ab * (d1 / (d1 - d3));
+      const double d5 = d1 - ab_ac, d6 = d2 - ac_ac;
+      if (d6 >= 0 && d5 <= d6) return ap - ac;
+      const double vb = d5 * d2 - d1 * d6;
+      if (vb <= 0 && d2 >= 0 && d6 <= 0) return ap - ac * (d2 / (d2 - d6));
+      const double va = d3 * d6 - d5 * d4;
+      if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0)
+        return ap - ab - (ac - ab) * ((d4 - d3) / ((d4 - d3) + (d5 - d6)));
+      return n * plane;
+    }
   };
-  static constexpr uint32_t kMax = 32;
+  static constexpr uint32_t kMax = CapturedRound::kMaxFanFaces;
   Tri tri[kMax];
   uint32_t size = 0;
 
@@ -117,7 +128,7 @@ struct RefinementInfoBuilder::Fan {
       const Tri& tri = this->tri[f];
       const double plane = dot(tri.n, p) - tri.d;
       if (plane * plane >= best) continue;  // the plane distance bounds the triangle distance from below
-      const V3 error = p - closest_point_on_triangle(p, tri.a, tri.b, tri.c);
+      const V3 error = tri.error(p, plane);
       const double d2 = dot(error, error);
       if (d2 < best) {
         best = d2;
@@ -134,10 +145,17 @@ struct RefinementInfoBuilder::Fan {
 struct RefinementInfoBuilder::DeviationSpace {
   V3 axis;
   double mu = 0, delta = 0;
+  double across_squared = 0;  // residuals' largest squared part across the axis, until settle()
   void add(V3 error) {
     const double along = dot(error, axis);
     delta = std::max(delta, std::abs(along));
-    mu = std::max(mu, length(error - axis * along));
+    const V3 across = error - axis * along;
+    across_squared = std::max(across_squared, dot(across, across));
+  }
+  // The root of the largest square is the largest root: one sqrt per batch of residuals, not one each.
+  void settle() {
+    mu = std::max(mu, std::sqrt(across_squared));
+    across_squared = 0;
   }
   void add(const DeviationSpace& other) {  // same axis
     delta = std::max(delta, other.delta);
@@ -211,8 +229,8 @@ void RefinementInfoBuilder::merge_leaves(uint32_t s, uint32_t, uint32_t u_node, 
 
 void RefinementInfoBuilder::compact(const std::vector<uint32_t>& new_index) { samples_.compact(new_index); }
 
-void RefinementInfoBuilder::compute(uint32_t s, uint32_t t_node, uint32_t u_node, const CollapseMesh& mesh,
-                                    uint32_t u) {
+void RefinementInfoBuilder::compute(uint32_t s, uint32_t t_node, uint32_t u_node, std::span<const uint32_t> corners,
+                                    std::span<const uint32_t> samples) {
   const RefineBounds bt = dequantize_refine(info_[t_node], scale_);
   const RefineBounds bu = dequantize_refine(info_[u_node], scale_);
   const double shift = length(load(leaf_position(survivor_[t_node])) - load(leaf_position(survivor_[s])));
@@ -225,10 +243,10 @@ void RefinementInfoBuilder::compute(uint32_t s, uint32_t t_node, uint32_t u_node
   const RefineBounds frame = dequantize_refine(info, scale_);
   const bool has_axis = frame.cone_angle < kPi / 2;
   DeviationSpace space{has_axis ? normalized(V3{frame.axis[0], frame.axis[1], frame.axis[2]}) : V3{0, 0, 1}};
-  const Fan fan = fan_around(mesh, u);
+  const Fan fan = fan_of(corners, survivor_[s]);
   DeviationSpace moved{space.axis};
   if (fan.size > 0) {
-    add_leaf_samples(fan, u, space);
+    add_leaf_samples(fan, samples, space);
     add_moved_surface(fan, survivor_[t_node], moved);
   }
   if (deviation_ == Deviation::bound) {
@@ -253,27 +271,27 @@ void RefinementInfoBuilder::compute(uint32_t s, uint32_t t_node, uint32_t u_node
   info_[s] = info;
 }
 
-RefinementInfoBuilder::Fan RefinementInfoBuilder::fan_around(const CollapseMesh& mesh, uint32_t u) {
+RefinementInfoBuilder::Fan RefinementInfoBuilder::fan_of(std::span<const uint32_t> corners, uint32_t u_leaf) const {
   Fan fan;
-  mesh.for_each_live_face(u, [&](uint32_t f, uint32_t) {
-    if (fan.size == Fan::kMax) return;
-    const uint32_t* t = mesh.face(f);
-    Fan::Tri tri{load(mesh.position(t[0])), load(mesh.position(t[1])), load(mesh.position(t[2])), {}, 0, {}};
+  for (size_t c = 0; c + 3 <= corners.size() && fan.size < Fan::kMax; c += 3) {
+    const uint32_t* leaves = &corners[c];
+    Fan::Tri& tri = fan.tri[fan.size++];
+    tri = Fan::Tri(load(leaf_position(leaves[0])), load(leaf_position(leaves[1])), load(leaf_position(leaves[2])));
+    tri.rest = {};
     for (int k = 0; k < 3; ++k)
-      if (t[k] != u) tri.rest = tri.rest + load(mesh.position(t[k]));
-    tri.n = normalized(cross(tri.b - tri.a, tri.c - tri.a));
-    tri.d = dot(tri.n, tri.a);
-    fan.tri[fan.size++] = tri;
-  });
+      if (leaves[k] != u_leaf) tri.rest = tri.rest + load(leaf_position(leaves[k]));
+  }
   return fan;
 }
 
 // Hoppe's own measure: sampled leaves of u's subtree against the new fan. It sees what the chain of
 // add_child() misses, such as a child's surface changed by its neighbours' collapses after its bounds
 // were computed.
-void RefinementInfoBuilder::add_leaf_samples(const Fan& fan, uint32_t u, DeviationSpace& space) const {
+void RefinementInfoBuilder::add_leaf_samples(const Fan& fan, std::span<const uint32_t> samples,
+                                             DeviationSpace& space) const {
   uint32_t nearest = 0;  // samples come in runs from one child's side: the last face found is a good start
-  for (const uint32_t leaf : samples_.of(u)) space.add(fan.residual(load(leaf_position(leaf)), nearest));
+  for (const uint32_t leaf : samples) space.add(fan.residual(load(leaf_position(leaf)), nearest));
+  space.settle();
 }
 
 // How far this collapse moved the surface: v_t itself, and each fan face (u, a, b) at the centroid of
@@ -288,6 +306,7 @@ void RefinementInfoBuilder::add_moved_surface(const Fan& fan, uint32_t t_leaf, D
     nearest = f;  // the face it came from
     space.add(fan.residual((fan.tri[f].rest + p_t) * (1.0 / 3), nearest));
   }
+  space.settle();
 }
 
 }  // namespace pms

@@ -5,6 +5,7 @@
 // (Deviation::bound), or the moved surface counted once beside the children's spaces (::estimate).
 #pragma once
 #include <cstdint>
+#include <span>
 #include <vector>
 
 #include "builder/build.h"
@@ -26,10 +27,15 @@ class RefinementInfoBuilder {
   // Node s was made by collapsing vertex t (node t_node) into vertex u (node u_node): u's leaf
   // samples become s's. Sequential.
   void merge_leaves(uint32_t s, uint32_t t_node, uint32_t u_node, uint32_t t, uint32_t u);
-  // Bounds of s; the surviving vertex u of `mesh` carries s. Merged from the children's *decoded*
-  // values so every parent contains its children exactly as every consumer will see them.
-  // Reads the mesh only and writes only node s: independent collapses may run in parallel.
-  void compute(uint32_t s, uint32_t t_node, uint32_t u_node, const CollapseMesh& mesh, uint32_t u);
+  // The leaf samples vertex v of the working mesh carries.
+  std::span<const uint32_t> samples_of(uint32_t v) const { return samples_.of(v); }
+  // Bounds of node s, made from t_node and u_node, merged from the children's *decoded* values so every
+  // parent contains its children exactly as every consumer will see them. `corners`: the faces around
+  // s's vertex right after its round, 3 leaves each (CapturedRound); `samples`: the leaf samples it
+  // carried then. Reads those and earlier rounds' bounds and writes only node s: a round's collapses
+  // may run in parallel, and while the next round collapses.
+  void compute(uint32_t s, uint32_t t_node, uint32_t u_node, std::span<const uint32_t> corners,
+               std::span<const uint32_t> samples);
 
   // Follows CollapseMesh::compact(): per-vertex arrays renumbered the same way.
   void compact(const std::vector<uint32_t>& new_index);
@@ -41,8 +47,8 @@ class RefinementInfoBuilder {
   const float* leaf_position(uint32_t leaf) const { return &positions_[3 * size_t(leaf)]; }
   struct Fan;             // the faces around a vertex right after its collapse
   struct DeviationSpace;  // (mu, delta) about an axis, Hoppe 1997 §4.3
-  static Fan fan_around(const CollapseMesh& mesh, uint32_t u);
-  void add_leaf_samples(const Fan& fan, uint32_t u, DeviationSpace& space) const;
+  Fan fan_of(std::span<const uint32_t> corners, uint32_t u_leaf) const;
+  void add_leaf_samples(const Fan& fan, std::span<const uint32_t> samples, DeviationSpace& space) const;
   void add_moved_surface(const Fan& fan, uint32_t t_leaf, DeviationSpace& space) const;
 
   const std::vector<float>& positions_;

@@ -6,8 +6,10 @@
 #include <vector>
 
 #include "builder/build.h"
+#include "builder/captured_round.h"
 #include "builder/collapse_mesh.h"
 #include "builder/refinement_info.h"
+#include "common/background_loop.h"
 #include "pm/refine_info.h"
 
 namespace pms {
@@ -31,10 +33,13 @@ class CollapseRecorder {
   CollapseRecorder(const Mesh& mesh, CollapseMesh& collapse_mesh, Deviation deviation);
 
   // Collapses t into u (check_collapse() must have accepted it) and records the new node. Its
-  // refinement info is computed by the next flush().
+  // refinement info is computed after the next end_round() or flush().
   void apply(uint32_t t, uint32_t u, const CollapseSite& site);
-  // Refinement info of the collapses applied since the last flush, in parallel when there are many.
-  // They must be independent (no vertex in two of them), as in one balanced round.
+  // Ends a round: the collapses applied since the last one (independent: no vertex in two of them)
+  // get their refinement info computed, a big round's on another thread while the caller goes on
+  // collapsing. The working mesh may change and be compacted meanwhile.
+  void end_round();
+  // end_round(), and returns once every collapse's refinement info is there.
   void flush();
   // Height of the subtree whose root is vertex v's current node (0 for an input vertex).
   uint32_t height(uint32_t v) const { return current_[v].height; }
@@ -43,7 +48,7 @@ class CollapseRecorder {
   CollapseForest finish();
 
   // Renumbers the working mesh's live vertices (CollapseMesh::compact) and every per-vertex array
-  // here with it; flush() first. new_index as compact() returns it.
+  // here with it; ends the round first. new_index as compact() returns it.
   void compact(std::vector<uint32_t>& new_index);
 
  private:
@@ -58,10 +63,9 @@ class CollapseRecorder {
     uint32_t survivor_leaf;  // of that node
   };
   std::vector<CurrentNode> current_;  // per working-mesh vertex
-  struct Pending {
-    uint32_t s, t_node, u_node, u;
-  };
-  std::vector<Pending> pending_;
+  std::vector<CapturedRound::Collapse> pending_;  // the round's collapses so far
+  CapturedRound computing_round_;
+  BackgroundLoop computing_;
 };
 
 // kim-lee-kobbelt §6.2: rounds of independent cheapest collapses, cost weighted by subtree height.
