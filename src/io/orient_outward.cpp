@@ -23,14 +23,35 @@ uint32_t find_root(std::vector<uint32_t>& parent, uint32_t f) {
 
 struct Components {
   std::vector<uint32_t> of_face;  // component index per face
-  std::vector<uint8_t> closed;    // per component
+  std::vector<uint8_t> closed;    // per component, once mark_closed() has run
   size_t count = 0;
 };
 
-// Faces joined across each directed edge and its reverse; a component with an edge whose reverse no face
-// has is open. An oriented manifold uses each directed edge once, so a vertex's outgoing edges (bucketed
-// by start vertex) hold at most one to any neighbour.
+// Faces joined through their vertices: in an oriented 2-manifold every vertex's faces are one fan, so
+// faces that share a vertex are joined across edges too, and these are the edge-connected components.
 Components find_components(const Mesh& mesh) {
+  std::vector<uint32_t> parent(mesh.vertex_count());
+  std::iota(parent.begin(), parent.end(), 0u);
+  for (size_t f = 0; f < mesh.face_count(); ++f)
+    for (size_t c = 3 * f + 1; c < 3 * f + 3; ++c) {
+      const uint32_t x = find_root(parent, mesh.indices[3 * f]), y = find_root(parent, mesh.indices[c]);
+      if (x != y) parent[std::max(x, y)] = std::min(x, y);
+    }
+  Components result;
+  result.of_face.resize(mesh.face_count());
+  std::vector<uint32_t> index_of_root(parent.size(), kNone);
+  for (size_t f = 0; f < mesh.face_count(); ++f) {
+    const uint32_t root = find_root(parent, mesh.indices[3 * f]);
+    if (index_of_root[root] == kNone) index_of_root[root] = uint32_t(result.count++);
+    result.of_face[f] = index_of_root[root];
+  }
+  return result;
+}
+
+// A component with a directed edge whose reverse no face has is open. An oriented manifold uses each
+// directed edge once, so a vertex's outgoing edges (bucketed by start vertex) hold at most one to any
+// neighbour.
+void mark_closed(const Mesh& mesh, Components& components) {
   const std::vector<uint32_t>& idx = mesh.indices;
   const size_t n = mesh.vertex_count(), corners = idx.size();
   std::vector<uint32_t> start(n + 1, 0), out(corners);
@@ -38,36 +59,13 @@ Components find_components(const Mesh& mesh) {
   std::partial_sum(start.begin(), start.end(), start.begin());
   std::vector<uint32_t> cursor(start.begin(), start.end() - 1);
   for (uint32_t c = 0; c < corners; ++c) out[cursor[idx[c]]++] = c;
-
-  std::vector<uint32_t> parent(corners / 3);
-  std::iota(parent.begin(), parent.end(), 0u);
-  std::vector<uint8_t> open_face(corners / 3, 0);
+  components.closed.assign(components.count, 1);
   for (uint32_t c = 0; c < corners; ++c) {
     const uint32_t a = idx[c], b = idx[next_corner(c)];
-    uint32_t reverse = kNone;
-    for (uint32_t k = start[b]; k < start[b + 1]; ++k)
-      if (idx[next_corner(out[k])] == a) reverse = out[k];
-    if (reverse == kNone) {
-      open_face[c / 3] = 1;
-      continue;
-    }
-    const uint32_t x = find_root(parent, c / 3), y = find_root(parent, reverse / 3);
-    if (x != y) parent[std::max(x, y)] = std::min(x, y);
+    bool reversed = false;
+    for (uint32_t k = start[b]; k < start[b + 1]; ++k) reversed |= idx[next_corner(out[k])] == a;
+    if (!reversed) components.closed[components.of_face[c / 3]] = 0;
   }
-
-  Components result;
-  result.of_face.assign(parent.size(), kNone);
-  std::vector<uint32_t> index_of_root(parent.size(), kNone);
-  for (uint32_t f = 0; f < parent.size(); ++f) {
-    const uint32_t root = find_root(parent, f);
-    if (index_of_root[root] == kNone) {
-      index_of_root[root] = uint32_t(result.count++);
-      result.closed.push_back(1);
-    }
-    result.of_face[f] = index_of_root[root];
-    if (open_face[f]) result.closed[result.of_face[f]] = 0;
-  }
-  return result;
 }
 
 using Point = std::array<double, 3>;
@@ -161,9 +159,12 @@ std::vector<size_t> enclosures(const Mesh& mesh, const Components& components) {
 
 OutwardReport orient_closed_components_outward(Mesh& mesh) {
   OutwardReport report;
-  const Components components = find_components(mesh);
+  Components components = find_components(mesh);
   const std::vector<double> volume = signed_volumes(mesh, components);
-  bool inside_out = false;  // some closed component with a negative volume; usually none
+  // Only a negative volume needs the edges looked at (usually no component has one).
+  if (std::none_of(volume.begin(), volume.end(), [](double v) { return v < 0; })) return report;
+  mark_closed(mesh, components);
+  bool inside_out = false;  // some closed component with a negative volume
   for (uint32_t k = 0; k < components.count; ++k) inside_out |= components.closed[k] && volume[k] < 0;
   if (!inside_out) return report;
   const std::vector<size_t> enclosing = enclosures(mesh, components);

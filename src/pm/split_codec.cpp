@@ -23,6 +23,7 @@
 #include <algorithm>
 #include <bit>
 #include <cmath>
+#include <memory>
 #include <string>
 
 #include "common/error.h"
@@ -203,21 +204,24 @@ struct SplitCodec::SymbolLog {
   static constexpr size_t kFirstChunkWords = size_t(1) << 14, kLargestChunkWords = kHugePage / sizeof(uint32_t);
   static_assert(kAllSymbols < kEndOfRecord);
   static_assert(64 < 1u << (31 - kCountShift));  // a raw count up to 64 fits
-  std::vector<std::vector<uint32_t>> chunks;
+  struct Chunk {
+    std::unique_ptr<uint32_t[]> words;  // uninitialised: every word is written before it is read
+    size_t size = 0;                    // words written; the last chunk's is next_'s offset
+  };
+  std::vector<Chunk> chunks;
   size_t records = 0;  // nodes logged
 
-  void symbol(uint32_t index) { room(1).push_back(index); }
+  // The fit logs a few words per node: one test and one store each, the chunk's end the only branch.
+  void symbol(uint32_t index) { put(index); }
   void raw(uint64_t value, unsigned n) {
     if (n < 64) value &= (uint64_t(1) << n) - 1;
-    if (n <= kInlineRawBits) {
-      room(1).push_back(kRawFlag | n << kCountShift | uint32_t(value));
-      return;
-    }
-    std::vector<uint32_t>& chunk = room(3);  // a raw's words stay in one chunk
-    chunk.insert(chunk.end(), {kRawFlag | n << kCountShift, uint32_t(value), uint32_t(value >> 32)});
+    if (n <= kInlineRawBits) return put(kRawFlag | n << kCountShift | uint32_t(value));
+    if (end_ - next_ < 3) grow(3);  // a raw's words stay in one chunk
+    next_[0] = kRawFlag | n << kCountShift, next_[1] = uint32_t(value), next_[2] = uint32_t(value >> 32);
+    next_ += 3;
   }
   void end_record() {
-    room(1).push_back(kEndOfRecord);
+    put(kEndOfRecord);
     ++records;
   }
 
@@ -225,8 +229,10 @@ struct SplitCodec::SymbolLog {
   void write(std::span<const uint32_t> code_words, BitWriter& w, std::vector<uint64_t>& offsets) const {
     offsets.reserve(offsets.size() + records);
     bool record_start = true;
-    for (const std::vector<uint32_t>& words : chunks)
-      for (size_t i = 0; i < words.size();) {
+    for (const Chunk& chunk : chunks) {
+      const uint32_t* words = chunk.words.get();
+      const size_t size = &chunk == &chunks.back() ? size_t(next_ - words) : chunk.size;
+      for (size_t i = 0; i < size;) {
         if (record_start) offsets.push_back(w.size());
         const uint32_t word = words[i++];
         record_start = word == kEndOfRecord;
@@ -244,16 +250,29 @@ struct SplitCodec::SymbolLog {
           i += 2;
         }
       }
+    }
   }
 
  private:
-  std::vector<uint32_t>& room(size_t words) {
-    if (chunks.empty() || chunks.back().size() + words > chunks.back().capacity()) {
-      if (!chunks.empty()) logged_ += chunks.back().size();
-      chunks.emplace_back().reserve(std::clamp(logged_, kFirstChunkWords, kLargestChunkWords));
-    }
-    return chunks.back();
+  void put(uint32_t word) {
+    if (next_ == end_) grow(1);
+    *next_++ = word;
   }
+  // A new chunk as large as the log so far, within [kFirstChunkWords, kLargestChunkWords]: a log grows
+  // without copies, and what it holds unused is never more than what it holds, nor than a page.
+  void grow(size_t words) {
+    if (!chunks.empty()) {
+      chunks.back().size = size_t(next_ - chunks.back().words.get());
+      logged_ += chunks.back().size;
+    }
+    const size_t size = std::max(words, std::clamp(logged_, kFirstChunkWords, kLargestChunkWords));
+    chunks.push_back({std::unique_ptr<uint32_t[]>(new uint32_t[size]), 0});
+    next_ = chunks.back().words.get();
+    end_ = next_ + size;
+  }
+  // Into the last chunk's words (moving the log moves the chunks, not their words).
+  uint32_t* next_ = nullptr;
+  uint32_t* end_ = nullptr;
   size_t logged_ = 0;  // words in the chunks before the last
 };
 
