@@ -111,11 +111,12 @@ class CandidateCollector {
   size_t collect(const CollapseMesh& mesh, const CollapseRecorder& recorder, const HeightWeights& weight,
                  double epsilon, std::vector<Entry>& out) {
     const uint32_t n = mesh.vertex_count();
-    const unsigned threads = unsigned(marks_.size());
+    // A thread (~50 us to start) costs more than a small round's candidates.
+    const unsigned threads = n < kParallelVertices ? 1u : unsigned(marks_.size());
     std::vector<size_t> found(threads);
     const auto run = [&](unsigned i) {
-      found[i] = collect_range(mesh, recorder, weight, epsilon, chunk(n, i), chunk(n, i + 1), marks_[i],
-                               out.data() + kTargetsPerVertex * size_t(chunk(n, i)));
+      found[i] = collect_range(mesh, recorder, weight, epsilon, chunk(n, i, threads), chunk(n, i + 1, threads),
+                               marks_[i], out.data() + kTargetsPerVertex * size_t(chunk(n, i, threads)));
     };
     std::vector<std::thread> workers;
     for (unsigned i = 1; i < threads; ++i) workers.emplace_back(run, i);
@@ -123,7 +124,7 @@ class CandidateCollector {
     for (std::thread& w : workers) w.join();
     size_t count = found[0];
     for (unsigned i = 1; i < threads; ++i) {
-      const auto chunk_begin = out.begin() + ptrdiff_t(kTargetsPerVertex * size_t(chunk(n, i)));
+      const auto chunk_begin = out.begin() + ptrdiff_t(kTargetsPerVertex * size_t(chunk(n, i, threads)));
       std::copy(chunk_begin, chunk_begin + ptrdiff_t(found[i]), out.begin() + ptrdiff_t(count));
       count += found[i];
     }
@@ -131,7 +132,8 @@ class CandidateCollector {
   }
 
  private:
-  uint32_t chunk(uint32_t n, unsigned i) const { return uint32_t(uint64_t(n) * i / marks_.size()); }
+  static constexpr uint32_t kParallelVertices = 4096;
+  static uint32_t chunk(uint32_t n, unsigned i, unsigned threads) { return uint32_t(uint64_t(n) * i / threads); }
   std::vector<NeighbourScratch> marks_;
 };
 

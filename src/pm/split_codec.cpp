@@ -1043,7 +1043,9 @@ PositionGrid model_grid(const ModelData& model, uint32_t position_bits) {
 std::vector<uint32_t> grid_positions(const ModelData& model, uint32_t position_bits) {
   const PositionGrid grid = model_grid(model, position_bits);
   std::vector<uint32_t> q(3 * model.node_count());
-  for (size_t n = 0; n < model.node_count(); ++n) quantize_position(grid, &model.position[3 * n], &q[3 * n]);
+  for_each_range(model.node_count(), size_t(1) << 15, [&](size_t begin, size_t end) {
+    for (size_t n = begin; n < end; ++n) quantize_position(grid, &model.position[3 * n], &q[3 * n]);
+  });
   return q;
 }
 
