@@ -33,7 +33,8 @@ struct CapturedRound {
   std::vector<uint8_t> face_count, sample_count;
   std::vector<uint32_t> corners;  // 3 leaves per face, in face order
   std::vector<uint32_t> samples;
-  std::vector<size_t> chunk_corners, chunk_samples;  // where each kChunk collapses' corners and samples begin, and the end
+  // Where each kChunk collapses' corners and samples begin; one more entry holds where the last ends.
+  std::vector<size_t> chunk_corners, chunk_samples;
 
   // The round of `round_collapses`, which gets back the previous round's list (cleared, for its room).
   // samples_of(v): the leaf samples vertex v carries; leaf_of(v): the leaf whose position vertex v has.
@@ -92,12 +93,12 @@ struct CapturedRound {
     size_t sample = chunk_samples[begin / kChunk];
     for (size_t i = begin; i < end; ++i) {
       const size_t corner_count = 3 * size_t(face_count[i]);
-      fn(collapses[i], std::span(corners).subspan(corner, corner_count), std::span(samples).subspan(sample, sample_count[i]));
+      fn(collapses[i], std::span(corners).subspan(corner, corner_count),
+         std::span(samples).subspan(sample, sample_count[i]));
       corner += corner_count;
       sample += sample_count[i];
     }
   }
-
 };
 
 }  // namespace pms
