@@ -260,14 +260,9 @@ void RefinementInfoBuilder::compute(uint32_t s, uint32_t t_node, uint32_t u_node
   }
   bounds.mu = float_at_least(has_axis ? space.mu : std::hypot(space.mu, space.delta));
   bounds.delta = float_at_least(space.delta);
-  // Only the deviation is new: quantize it alone (no cone: no second axis search) into the info above.
-  RefineBounds deviation;
-  deviation.mu = bounds.mu;
-  deviation.delta = bounds.delta;
-  deviation.cone_angle = kPi;
-  const RefineInfo lengths = quantize_refine(deviation, scale_);
-  info.mu = lengths.mu;
-  info.delta = lengths.delta;
+  // Only the deviation is new: its two lengths go into the info above, as quantize_refine stores them.
+  info.mu = encode_length(bounds.mu, scale_);
+  info.delta = encode_length(bounds.delta, scale_);
   info_[s] = info;
 }
 

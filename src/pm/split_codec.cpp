@@ -226,31 +226,48 @@ struct SplitCodec::SymbolLog {
   }
 
   // The records into `w`, each one's start into `offsets`; `code_words` as SplitCodec::code_words().
+  // Fields of up to 32 bits (code words, inline raws) gather in a 64-bit word that goes out 32 bits at a
+  // time: one BitWriter call per 32 bits rather than per field.
   void write(std::span<const uint32_t> code_words, BitWriter& w, std::vector<uint64_t>& offsets) const {
+    static_assert(kInlineRawBits <= 32);
     offsets.reserve(offsets.size() + records);
+    uint64_t pending = 0;
+    unsigned pending_bits = 0;  // below 32 between fields
+    const auto put = [&](uint64_t value, unsigned n) {  // n <= 32, value below 2^n
+      pending |= value << pending_bits;
+      pending_bits += n;
+      if (pending_bits >= 32) {
+        w.bits(pending, 32);
+        pending >>= 32;
+        pending_bits -= 32;
+      }
+    };
     bool record_start = true;
     for (const Chunk& chunk : chunks) {
       const uint32_t* words = chunk.words.get();
       const size_t size = &chunk == &chunks.back() ? size_t(next_ - words) : chunk.size;
       for (size_t i = 0; i < size;) {
-        if (record_start) offsets.push_back(w.size());
+        if (record_start) offsets.push_back(w.size() + pending_bits);
         const uint32_t word = words[i++];
         record_start = word == kEndOfRecord;
         if (record_start) continue;
         if (!(word & kRawFlag)) {
           const uint32_t code = code_words[word];
-          w.bits(code, code >> 16);
+          put(code & 0xffff, code >> 16);
           continue;
         }
         const unsigned n = (word & ~kRawFlag) >> kCountShift;
         if (n <= kInlineRawBits) {
-          w.bits(word, n);
+          put(word & ((uint32_t(1) << n) - 1), n);
         } else {
+          w.bits(pending, pending_bits);  // a long raw goes straight out, after what is pending
+          pending = 0, pending_bits = 0;
           w.bits(words[i] | uint64_t(words[i + 1]) << 32, n);
           i += 2;
         }
       }
     }
+    w.bits(pending, pending_bits);
   }
 
  private:
