@@ -41,8 +41,8 @@ class BackgroundLoop {
     });
   }
 
-  // Returns once every item is done, having run the ones left on this thread too. Rethrows the
-  // first exception either thread met (the loop stops taking chunks at it).
+  // Returns once every item is done, having run the ones left on this thread too. An exception stops
+  // the loop taking chunks and is rethrown here: this thread's if it met one, else the loop thread's.
   void wait() {
     if (!thread_.joinable()) return;
     std::exception_ptr error;
