@@ -5,7 +5,6 @@
 
 #include <algorithm>
 #include <bit>
-#include <queue>
 #include <string>
 
 #include "common/error.h"
@@ -19,44 +18,39 @@ uint32_t reverse_bits(uint32_t code, unsigned length) {
   return reversed;
 }
 
-// Huffman code lengths of the symbols with count > 0 (others 0); the tree's depth may exceed the limit.
-std::vector<uint8_t> huffman_lengths(std::span<const uint64_t> counts) {
+// Huffman code lengths of `weights` (all > 0); the tree's depth may exceed the limit. Ties go to the
+// lower index, symbols before internal nodes, so the lengths depend on the weights alone.
+std::vector<uint32_t> huffman_depths(std::span<const uint64_t> weights) {
   struct Node {
     uint64_t weight;
-    uint32_t index;  // < counts.size(): a symbol; else internal node index + counts.size()
+    uint32_t index;  // < weights.size(): a symbol; else internal node index + weights.size()
   };
   auto heavier = [](const Node& a, const Node& b) { return a.weight != b.weight ? a.weight > b.weight : a.index > b.index; };
-  std::priority_queue<Node, std::vector<Node>, decltype(heavier)> queue(heavier);
-  const auto n = uint32_t(counts.size());
-  for (uint32_t s = 0; s < n; ++s)
-    if (counts[s] > 0) queue.push({counts[s], s});
-  std::vector<uint8_t> lengths(n, 0);
-  if (queue.size() == 1) {
-    lengths[queue.top().index] = 1;
-    return lengths;
+  const auto n = uint32_t(weights.size());
+  std::vector<Node> heap;
+  heap.reserve(n);
+  for (uint32_t i = 0; i < n; ++i) heap.push_back({weights[i], i});
+  std::make_heap(heap.begin(), heap.end(), heavier);
+  std::vector<uint32_t> parent(n > 0 ? 2 * n - 1 : 0, UINT32_MAX);  // symbols, then internal nodes
+  const auto pop = [&] {
+    std::pop_heap(heap.begin(), heap.end(), heavier);
+    const Node top = heap.back();
+    heap.pop_back();
+    return top;
+  };
+  for (uint32_t internal = n; heap.size() > 1; ++internal) {
+    const Node a = pop(), b = pop();
+    parent[a.index] = parent[b.index] = internal;
+    heap.push_back({a.weight + b.weight, internal});
+    std::push_heap(heap.begin(), heap.end(), heavier);
   }
-  std::vector<uint32_t> parent;  // of internal nodes, by internal index; and of symbols below
-  std::vector<uint32_t> symbol_parent(n, UINT32_MAX);
-  while (queue.size() > 1) {
-    const Node a = queue.top();
-    queue.pop();
-    const Node b = queue.top();
-    queue.pop();
-    const auto internal = uint32_t(parent.size());
-    parent.push_back(UINT32_MAX);
-    for (const Node& child : {a, b}) {
-      if (child.index < n) symbol_parent[child.index] = internal;
-      else parent[child.index - n] = internal;
-    }
-    queue.push({a.weight + b.weight, internal + n});
-  }
-  for (uint32_t s = 0; s < n; ++s) {
-    if (symbol_parent[s] == UINT32_MAX) continue;
-    unsigned depth = 0;
-    for (uint32_t p = symbol_parent[s]; p != UINT32_MAX; p = parent[p]) ++depth;
-    lengths[s] = uint8_t(std::min(depth, 255u));
-  }
-  return lengths;
+  // Internal nodes are created after their children, so a node's depth is its parent's plus one, found
+  // from the root down.
+  std::vector<uint32_t> depth(parent.size(), 0);
+  for (size_t i = parent.size(); i-- > 0;)
+    if (parent[i] != UINT32_MAX) depth[i] = depth[parent[i]] + 1;
+  depth.resize(n);
+  return depth;
 }
 
 }  // namespace
@@ -100,14 +94,20 @@ PrefixCode::PrefixCode(std::vector<uint8_t> lengths) : lengths_(std::move(length
 }
 
 PrefixCode PrefixCode::from_counts(std::span<const uint64_t> counts) {
-  std::vector<uint64_t> scaled(counts.begin(), counts.end());
+  std::vector<uint32_t> present;
+  std::vector<uint64_t> scaled;
+  for (uint32_t s = 0; s < counts.size(); ++s)
+    if (counts[s] > 0) present.push_back(s), scaled.push_back(counts[s]);
+  std::vector<uint8_t> lengths(counts.size(), 0);
+  if (present.size() == 1) lengths[present[0]] = 1;
+  if (present.size() <= 1) return PrefixCode(std::move(lengths));
   for (;;) {
-    std::vector<uint8_t> lengths = huffman_lengths(scaled);
-    uint8_t longest = 0;
-    for (uint8_t l : lengths) longest = std::max(longest, l);
-    if (longest <= kMaxCodeLength) return PrefixCode(std::move(lengths));
-    for (uint64_t& c : scaled)
-      if (c > 0) c = std::max<uint64_t>(1, c >> 1);
+    const std::vector<uint32_t> depths = huffman_depths(scaled);
+    if (*std::max_element(depths.begin(), depths.end()) <= kMaxCodeLength) {
+      for (size_t i = 0; i < present.size(); ++i) lengths[present[i]] = uint8_t(depths[i]);
+      return PrefixCode(std::move(lengths));
+    }
+    for (uint64_t& c : scaled) c = std::max<uint64_t>(1, c >> 1);
   }
 }
 

@@ -179,9 +179,25 @@ constexpr std::array<uint32_t, kSlotCount + 1> kFirstSymbol = [] {
 }();
 constexpr uint32_t kAllSymbols = kFirstSymbol[kSlotCount];
 
-// Symbol counts, for fitting the tables.
+// Slot ranges holding about as many symbols each, one per core: the tables are fitted and turned into
+// code words a range at a time (the position slots hold most symbols, so equal slot counts would not do).
+const std::vector<size_t>& slot_bounds() {
+  static const std::vector<size_t> bounds = [] {
+    const size_t ranges = range_count(kAllSymbols, 1);
+    std::vector<size_t> b{0};
+    for (size_t k = 1, s = 0; k < ranges; ++k) {
+      while (s < kSlotCount && kFirstSymbol[s] * ranges < kAllSymbols * k) ++s;
+      b.push_back(s);
+    }
+    b.push_back(kSlotCount);
+    return b;
+  }();
+  return bounds;
+}
+
+// Symbol counts, for fitting the tables; sized by the fit that fills them (results start empty).
 struct SplitCodec::Counts {
-  std::vector<uint64_t> counts = std::vector<uint64_t>(kAllSymbols);
+  std::vector<uint64_t> counts;
   void symbol(uint32_t slot, uint32_t sym, Part) { ++counts[kFirstSymbol[slot] + sym]; }
   void raw(uint64_t, unsigned, Part) {}
   void add(const Counts& other) {
@@ -925,6 +941,7 @@ SplitCodec SplitCodec::fit(const ModelData& model, std::span<const uint32_t> pos
   };
   std::vector<Range> parts = map_bounded_ranges(split_bounds(model), [&](size_t begin, size_t end) {
     Range part;
+    part.counts.counts.assign(kAllSymbols, 0);
     Fitting out{part.counts, logs ? &part.log : nullptr};
     for (uint32_t node = uint32_t(begin); node < end; ++node) {
       if (!model.is_leaf(node)) codec.emit(split_context(model, positions, node), split_payload(model, positions, node), out);
@@ -933,8 +950,11 @@ SplitCodec SplitCodec::fit(const ModelData& model, std::span<const uint32_t> pos
     return part;
   });
   for (size_t i = 1; i < parts.size(); ++i) parts[0].counts.add(parts[i].counts);
-  codec.codes_.reserve(kSlotCount);
-  for (uint32_t s = 0; s < kSlotCount; ++s) codec.codes_.push_back(PrefixCode::from_counts(parts[0].counts.of(s)));
+  codec.codes_.resize(kSlotCount);
+  map_bounded_ranges(slot_bounds(), [&](size_t begin, size_t end) {
+    for (size_t s = begin; s < end; ++s) codec.codes_[s] = PrefixCode::from_counts(parts[0].counts.of(uint32_t(s)));
+    return end - begin;  // slots fitted
+  });
   if (logs)
     for (Range& part : parts) logs->push_back(std::move(part.log));
   return codec;
@@ -942,9 +962,15 @@ SplitCodec SplitCodec::fit(const ModelData& model, std::span<const uint32_t> pos
 
 std::vector<uint32_t> SplitCodec::code_words() const {
   std::vector<uint32_t> words(kAllSymbols);
-  for (uint32_t s = 0; s < kSlotCount; ++s)
-    for (uint32_t sym = 0; sym < alphabet(s); ++sym)
-      if (codes_[s].has(sym)) words[kFirstSymbol[s] + sym] = codes_[s].cost(sym) << 16 | codes_[s].word(sym);
+  map_bounded_ranges(slot_bounds(), [&](size_t begin, size_t end) {
+    for (size_t s = begin; s < end; ++s) {
+      const PrefixCode& code = codes_[s];
+      uint32_t* slot_words = &words[kFirstSymbol[s]];
+      for (uint32_t sym = 0; sym < code.alphabet(); ++sym)
+        if (code.has(sym)) slot_words[sym] = code.cost(sym) << 16 | code.word(sym);
+    }
+    return end - begin;  // slots done
+  });
   return words;
 }
 
