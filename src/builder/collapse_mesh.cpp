@@ -55,15 +55,14 @@ CollapseMesh::CollapseMesh(const Mesh& mesh)
   // reads every fan and runs on all cores; their quadrics are then added in vertex order, as ever.
   for (const uint32_t v : vertices_with_boundary_edge()) {
     NeighbourScratch& marks = scratch_marks_;
-    const uint32_t stamp = marks.next();
+    marks.next();
     for_each_live_face(v, [&](uint32_t f, uint32_t slot) {
       const uint32_t b = faces_[3 * f + (slot + 2) % 3];
-      if (marks.mark[b] != stamp) { marks.mark[b] = stamp; marks.bits[b] = 0; }
-      marks.bits[b] |= 2;  // b -> v exists
+      marks.add(b, NeighbourScratch::kToCentre);
     });
     for_each_live_face(v, [&](uint32_t f, uint32_t slot) {
       const uint32_t a = faces_[3 * f + (slot + 1) % 3];
-      if (marks.mark[a] == stamp && (marks.bits[a] & 2)) return;
+      if (marks.has(a, NeighbourScratch::kToCentre)) return;
       const Vec3 edge = sub(position(a), position(v));
       const uint32_t* t = face(f);
       const Vec3 n = triangle_normal(position(t[0]), position(t[1]), position(t[2]));
@@ -96,26 +95,25 @@ std::vector<uint32_t> CollapseMesh::vertices_with_boundary_edge() const {
 }
 
 uint32_t NeighbourScratch::next() {
-  if (++stamp == 0) {  // wrapped: clear so stale marks cannot match
+  stamp += kEdgeBits + 1;
+  if (stamp == 0) {  // wrapped: clear so stale marks cannot match
     std::fill(mark.begin(), mark.end(), 0);
-    stamp = 1;
+    stamp = kEdgeBits + 1;
   }
   return stamp;
 }
 
 bool CollapseMesh::neighbours(uint32_t v, std::vector<uint32_t>& out, NeighbourScratch& marks) const {
   out.clear();
-  const uint32_t stamp = marks.next();
+  marks.next();
   for_each_live_face(v, [&](uint32_t f, uint32_t slot) {
     const uint32_t a = faces_[3 * f + (slot + 1) % 3];
     const uint32_t b = faces_[3 * f + (slot + 2) % 3];
-    if (marks.mark[a] != stamp) { marks.mark[a] = stamp; marks.bits[a] = 0; out.push_back(a); }
-    if (marks.mark[b] != stamp) { marks.mark[b] = stamp; marks.bits[b] = 0; out.push_back(b); }
-    marks.bits[a] |= 1;  // v -> a
-    marks.bits[b] |= 2;  // b -> v
+    if (marks.add(a, NeighbourScratch::kFromCentre)) out.push_back(a);  // v -> a
+    if (marks.add(b, NeighbourScratch::kToCentre)) out.push_back(b);    // b -> v
   });
   bool boundary = false;
-  for (uint32_t n : out) boundary |= marks.bits[n] != 3;
+  for (uint32_t n : out) boundary |= !marks.both_edges(n);
   return boundary;
 }
 
@@ -149,14 +147,13 @@ bool CollapseMesh::check_collapse(uint32_t t, uint32_t u, CollapseSite& site) {
 
   // Link condition: the only common neighbours of t and u are the apexes of the edge's faces.
   // neighbours(t) left N(t) marked with the current stamp.
-  const uint32_t stamp = scratch_marks_.stamp;
   bool link_ok = true;
   uint32_t u_valence_faces = 0;
   for_each_face(u, [&](uint32_t f, uint32_t slot) {
     ++u_valence_faces;
     for (uint32_t k = 1; k <= 2; ++k) {
       const uint32_t w = faces_[3 * f + (slot + k) % 3];
-      if (w != t && scratch_marks_.mark[w] == stamp && w != site.l && w != site.r) link_ok = false;
+      if (w != t && scratch_marks_.in_set(w) && w != site.l && w != site.r) link_ok = false;
     }
   });
   if (!link_ok) return false;

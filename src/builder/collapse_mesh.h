@@ -18,13 +18,25 @@ struct CollapseSite {
   uint32_t l = UINT32_MAX, r = UINT32_MAX;
 };
 
-// Marks for neighbour sets: mark[v] == stamp means "in the current set". One per thread.
+// Marks for neighbour sets, one word per vertex w: the set's stamp above two bits for the directed
+// edges between w and the set's centre v, so marking a neighbour costs one cache line, not two.
+// One per thread.
 struct NeighbourScratch {
+  static constexpr uint32_t kFromCentre = 1, kToCentre = 2, kEdgeBits = kFromCentre | kToCentre;
   std::vector<uint32_t> mark;
-  std::vector<uint8_t> bits;  // 1: v -> w exists, 2: w -> v exists
-  uint32_t stamp = 0;
-  void resize(size_t vertices) { mark.assign(vertices, 0), bits.assign(vertices, 0), stamp = 0; }
+  uint32_t stamp = 0;  // the current set's, a multiple of 4
+  void resize(size_t vertices) { mark.assign(vertices, 0), stamp = 0; }
   uint32_t next();
+  bool in_set(uint32_t w) const { return (mark[w] & ~kEdgeBits) == stamp; }
+  bool has(uint32_t w, uint32_t edge) const { return in_set(w) && (mark[w] & edge); }
+  bool both_edges(uint32_t w) const { return (mark[w] & kEdgeBits) == kEdgeBits; }
+  // Puts w in the set with `edge`; returns whether it was new.
+  bool add(uint32_t w, uint32_t edge) {
+    uint32_t& m = mark[w];
+    const bool added = (m & ~kEdgeBits) != stamp;
+    m = (added ? stamp : m) | edge;
+    return added;
+  }
 };
 
 class CollapseMesh {
