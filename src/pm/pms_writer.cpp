@@ -1,6 +1,7 @@
 // Writing a .pms file (docs/pms-format.md): the hierarchy is validated with the reader's own
 // checks first, so no writer bug produces a file the reader rejects, then streamed section by
-// section from the vectors (no copy of the model) into PATH.tmp, which is renamed into place.
+// section from the vectors (no copy of the model) into PATH.tmp, which is renamed into place. The
+// split records, coded last, go after the hierarchy's sections and the header goes in at the end.
 #include <fcntl.h>
 #include <unistd.h>
 #include <xxhash.h>
@@ -94,6 +95,24 @@ class AtomicFile {
     static constexpr char zeros[kAlignment] = {};
     write(zeros, align_up(written_) - written_);
   }
+  uint64_t written() const { return written_; }
+  // Overwrites bytes already written (the header, once the sections after it are known).
+  void write_at(uint64_t offset, const void* data, uint64_t bytes) {
+    const char* p = static_cast<const char*>(data);
+    while (bytes > 0) {
+      const ssize_t done = ::pwrite(fd_, p, std::min<uint64_t>(bytes, 1u << 30), off_t(offset));
+      if (done < 0 && errno == EINTR) continue;
+      if (done <= 0) io_error("cannot write " + tmp_);
+      p += done, offset += uint64_t(done), bytes -= uint64_t(done);
+    }
+  }
+  // Asks the kernel to start writing what is written so far, without waiting: advice, so errors are
+  // left to commit()'s fsync.
+  void start_writeback() {
+#if defined(__linux__)
+    ::sync_file_range(fd_, 0, 0, SYNC_FILE_RANGE_WRITE);
+#endif
+  }
   void commit() {
     if (::fsync(fd_) != 0) io_error("cannot write " + tmp_);
     const int fd = fd_;
@@ -120,11 +139,6 @@ void write_pms(const std::string& path, const Hierarchy& h, const BuildStats& st
   std::vector<uint64_t> node_id;
   validate_model(where, model_of(h), tree_id, node_id);
 
-  ModelData model = model_of(h);
-  model.tree_id = tree_id;
-  model.node_id = node_id;
-  const EncodedRecords records = encode_records(model, kDefaultPositionBits);
-
   const HeadSection head = make_head(h);
   const std::string meta = stats_to_json(stats);
   const uint64_t n = h.node_count();
@@ -141,38 +155,45 @@ void write_pms(const std::string& path, const Hierarchy& h, const BuildStats& st
                                {SplitOrder, h.split_order.data(), h.split_order.size()}};
   if (!h.normals.empty()) chunks.push_back({Normal, h.normals.data(), n});
   if (!h.colors.empty()) chunks.push_back({Color, h.colors.data(), n});
-  chunks.push_back({SplitTables, records.tables.data(), records.tables.size()});
-  chunks.push_back({SplitOffsets, records.offsets.data(), records.offsets.size()});
-  chunks.push_back({SplitRecords, records.records.data(), records.records.size()});
+  constexpr size_t kRecordSections = 3;  // tables, offsets, records: last, so nothing before them waits
 
   FileHeader header{};
   std::memcpy(header.magic, kMagic, sizeof kMagic);
   header.version = kVersion;
   header.header_bytes = sizeof header;
-  header.section_count = uint32_t(chunks.size());
-  std::vector<uint8_t> header_and_table(sizeof header + chunks.size() * sizeof(SectionEntry));
-  uint64_t end = header_and_table.size();
-  for (size_t i = 0; i < chunks.size(); ++i) {
+  header.section_count = uint32_t(chunks.size() + kRecordSections);
+  std::vector<uint8_t> header_and_table(sizeof header + header.section_count * sizeof(SectionEntry));
+  AtomicFile file(path);
+  file.write(header_and_table.data(), header_and_table.size());  // zeros until every section is known
+  size_t entry_count = 0;
+  const auto put = [&](const Chunk& c) {
+    file.align();
     SectionEntry e{};
-    std::memcpy(e.tag, kSections[chunks[i].section].tag, sizeof e.tag);
-    e.element_size = kSections[chunks[i].section].element_size;
-    e.offset = align_up(end);
-    e.count = chunks[i].count;
-    e.checksum = XXH64(chunks[i].data, chunks[i].bytes(), 0);
-    std::memcpy(&header_and_table[sizeof header + i * sizeof e], &e, sizeof e);
-    end = e.offset + chunks[i].bytes();
-  }
-  header.file_size = end;
+    std::memcpy(e.tag, kSections[c.section].tag, sizeof e.tag);
+    e.element_size = kSections[c.section].element_size;
+    e.offset = file.written();
+    e.count = c.count;
+    e.checksum = XXH64(c.data, c.bytes(), 0);
+    std::memcpy(&header_and_table[sizeof header + entry_count++ * sizeof e], &e, sizeof e);
+    file.write(c.data, c.bytes());
+  };
+  for (const Chunk& c : chunks) put(c);
+  // The disk takes the hierarchy while the records are coded: the final fsync waits for their part only.
+  file.start_writeback();
+
+  ModelData model = model_of(h);
+  model.tree_id = tree_id;
+  model.node_id = node_id;
+  const EncodedRecords records = encode_records(model, kDefaultPositionBits);
+  put({SplitTables, records.tables.data(), records.tables.size()});
+  put({SplitOffsets, records.offsets.data(), records.offsets.size()});
+  put({SplitRecords, records.records.data(), records.records.size()});
+
+  header.file_size = file.written();
   std::memcpy(header_and_table.data(), &header, sizeof header);
   header.header_checksum = header_checksum(header_and_table.data(), header_and_table.size());
   std::memcpy(header_and_table.data(), &header, sizeof header);
-
-  AtomicFile file(path);
-  file.write(header_and_table.data(), header_and_table.size());
-  for (const Chunk& c : chunks) {
-    file.align();
-    file.write(c.data, c.bytes());
-  }
+  file.write_at(0, header_and_table.data(), header_and_table.size());
   file.commit();
 }
 
