@@ -14,8 +14,6 @@ namespace {
 
 constexpr uint32_t kNone = UINT32_MAX;
 
-uint32_t next_corner(uint32_t c) { return c % 3 == 2 ? c - 2 : c + 1; }
-
 uint32_t find_root(std::vector<uint32_t>& parent, uint32_t f) {
   while (parent[f] != f) f = parent[f] = parent[parent[f]];
   return f;
@@ -48,24 +46,20 @@ Components find_components(const Mesh& mesh) {
   return result;
 }
 
-// A component with a directed edge whose reverse no face has is open. An oriented manifold uses each
-// directed edge once, so a vertex's outgoing edges (bucketed by start vertex) hold at most one to any
-// neighbour.
+// A component with a boundary vertex is open. In an oriented manifold a vertex's faces (v, a, b) make one
+// fan: closed, the a's and the b's are the same ring of neighbours; open, a chain w0 .. wk whose a's and
+// b's differ by its two distinct ends. So a vertex is on the boundary exactly when the sum of its a's
+// differs from the sum of its b's, which takes one pass over the corners and no lookups.
 void mark_closed(const Mesh& mesh, Components& components) {
   const std::vector<uint32_t>& idx = mesh.indices;
-  const size_t n = mesh.vertex_count(), corners = idx.size();
-  std::vector<uint32_t> start(n + 1, 0), out(corners);
-  for (uint32_t v : idx) ++start[v + 1];
-  std::partial_sum(start.begin(), start.end(), start.begin());
-  std::vector<uint32_t> cursor(start.begin(), start.end() - 1);
-  for (uint32_t c = 0; c < corners; ++c) out[cursor[idx[c]]++] = c;
+  std::vector<uint64_t> next_minus_previous(mesh.vertex_count(), 0);  // modulo 2^64: |w0 - wk| < 2^32
+  for (size_t f = 0; f < mesh.face_count(); ++f)
+    for (size_t k = 0; k < 3; ++k)
+      next_minus_previous[idx[3 * f + k]] += uint64_t(idx[3 * f + (k + 1) % 3]) - idx[3 * f + (k + 2) % 3];
   components.closed.assign(components.count, 1);
-  for (uint32_t c = 0; c < corners; ++c) {
-    const uint32_t a = idx[c], b = idx[next_corner(c)];
-    bool reversed = false;
-    for (uint32_t k = start[b]; k < start[b + 1]; ++k) reversed |= idx[next_corner(out[k])] == a;
-    if (!reversed) components.closed[components.of_face[c / 3]] = 0;
-  }
+  for (size_t f = 0; f < mesh.face_count(); ++f)
+    for (size_t c = 3 * f; c < 3 * f + 3; ++c)
+      if (next_minus_previous[idx[c]] != 0) components.closed[components.of_face[f]] = 0;
 }
 
 using Point = std::array<double, 3>;
@@ -178,18 +172,18 @@ OutwardReport orient_closed_components_outward(Mesh& mesh) {
     }
   }
   if (report.components == 0) return report;
-  std::vector<uint8_t> negated(mesh.vertex_count(), 0);
+  std::vector<uint8_t> turned_vertex(mesh.vertex_count(), 0);
   for (size_t f = 0; f < mesh.face_count(); ++f) {
     if (!turn[components.of_face[f]]) continue;
     std::swap(mesh.indices[3 * f + 1], mesh.indices[3 * f + 2]);
     ++report.faces;
-    for (size_t c = 3 * f; c < 3 * f + 3 && mesh.has_normals(); ++c) {
-      const uint32_t v = mesh.indices[c];
-      if (negated[v]) continue;
-      negated[v] = 1;
-      for (size_t i = 0; i < 3; ++i) mesh.normals[3 * size_t(v) + i] = -mesh.normals[3 * size_t(v) + i];
-    }
+    for (size_t c = 3 * f; c < 3 * f + 3; ++c) turned_vertex[mesh.indices[c]] = 1;
   }
+  // In vertex order: each normal once, and the array read front to back rather than face by face.
+  if (mesh.has_normals())
+    for (size_t v = 0; v < mesh.vertex_count(); ++v)
+      if (turned_vertex[v])
+        for (size_t i = 0; i < 3; ++i) mesh.normals[3 * v + i] = -mesh.normals[3 * v + i];
   return report;
 }
 

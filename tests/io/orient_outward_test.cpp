@@ -114,5 +114,23 @@ TEST(OrientOutward, OpenSurfacesKeepTheirWinding) {
   EXPECT_EQ(cut_sphere.indices, before.indices);
 }
 
+// Side by side, both inside out: the closed sphere turns, the one with a face missing (a boundary whose
+// vertices sit in one component with interior ones) keeps its winding.
+TEST(OrientOutward, OnlyTheClosedOfTwoInsideOutComponentsTurns) {
+  const Mesh sphere = make_sphere(10, 12);
+  Mesh cut = sphere;
+  cut.indices.resize(cut.indices.size() - 3);
+  Mesh expected;
+  append(expected, sphere, 1, 0);
+  append(expected, cut, 1, 5);
+  Mesh mesh = expected;
+  reverse_winding(mesh);
+  reverse_winding(expected, sphere.face_count());  // the cut sphere's faces stay reversed
+  const OutwardReport report = orient_closed_components_outward(mesh);
+  EXPECT_EQ(report.components, 1u);
+  EXPECT_EQ(report.faces, sphere.face_count());
+  EXPECT_EQ(mesh.indices, expected.indices);
+}
+
 }  // namespace
 }  // namespace pms
