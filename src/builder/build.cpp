@@ -26,16 +26,17 @@ std::vector<uint32_t> breadth_first(const CollapseForest& forest) {
   order.reserve(forest.node_count());
   // Half-float bits of non-negative values order as the values.
   const auto deviation = [&](uint32_t node) { return std::max(forest.info[node].mu, forest.info[node].delta); };
-  std::vector<uint32_t> parents;
+  // A level's parents as one word each, the larger deviation first, then the level's order (a stable
+  // sort's), and the parent's place in the level: sorting plain integers reads no node while it compares.
+  std::vector<uint64_t> parents;
   for (size_t level_begin = 0; level_begin < order.size();) {
     const size_t level_end = order.size();
     parents.clear();
     for (size_t i = level_begin; i < level_end; ++i)
-      if (order[i] >= forest.leaf_count) parents.push_back(order[i]);
-    std::stable_sort(parents.begin(), parents.end(),
-                     [&](uint32_t a, uint32_t b) { return deviation(a) > deviation(b); });
-    for (const uint32_t node : parents) {
-      const uint32_t k = node - forest.leaf_count;
+      if (order[i] >= forest.leaf_count) parents.push_back(uint64_t(UINT16_MAX - deviation(order[i])) << 32 | (i - level_begin));
+    std::sort(parents.begin(), parents.end());
+    for (const uint64_t parent : parents) {
+      const uint32_t k = order[level_begin + uint32_t(parent)] - forest.leaf_count;
       order.push_back(forest.child_t[k]);
       order.push_back(forest.child_u[k]);
     }
