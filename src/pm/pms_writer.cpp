@@ -79,16 +79,10 @@ class AtomicFile {
   AtomicFile(const AtomicFile&) = delete;
   AtomicFile& operator=(const AtomicFile&) = delete;
 
+  // Appends after what is written.
   void write(const void* data, uint64_t bytes) {
-    const char* p = static_cast<const char*>(data);
-    while (bytes > 0) {
-      const ssize_t done = ::write(fd_, p, std::min<uint64_t>(bytes, 1u << 30));
-      if (done < 0 && errno == EINTR) continue;
-      if (done <= 0) io_error("cannot write " + tmp_);
-      p += done;
-      bytes -= uint64_t(done);
-      written_ += uint64_t(done);
-    }
+    write_at(written_, data, bytes);
+    written_ += bytes;
   }
   // Zero padding up to the next section start (the same align_up the table was laid out with).
   void align() {
@@ -96,7 +90,7 @@ class AtomicFile {
     write(zeros, align_up(written_) - written_);
   }
   uint64_t written() const { return written_; }
-  // Overwrites bytes already written (the header, once the sections after it are known).
+  // At `offset`: the end, or over bytes already written (the header, once the sections after it are known).
   void write_at(uint64_t offset, const void* data, uint64_t bytes) {
     const char* p = static_cast<const char*>(data);
     while (bytes > 0) {
