@@ -15,11 +15,11 @@
 
 #include "builder/build.h"
 #include "io/shapes.h"
-#include "pm/pms_file.h"
+#include "spm/pms_file.h"
 #include "protocol/client_messages.h"
 #include "protocol/framing.h"
 #include "protocol/message_types.h"
-#include "refine/dag_compact.h"
+#include "dag/compact.h"
 #include "server/catalogue.h"
 #include "server/dag_mode.h"
 #include "server/limits.h"

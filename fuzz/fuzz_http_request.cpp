@@ -12,7 +12,7 @@
 
 #include "builder/build.h"
 #include "io/shapes.h"
-#include "pm/pms_file.h"
+#include "spm/pms_file.h"
 #include "protocol/base64url.h"
 #include "server/catalogue.h"
 #include "server/http_message.h"

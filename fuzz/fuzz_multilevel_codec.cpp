@@ -1,4 +1,4 @@
-// libFuzzer target for the compressed levels' decoder (refine/multilevel_codec.h) behind addLevel. Three
+// libFuzzer target for the compressed levels' decoder (multilevel/codec.h) behind addLevel. Three
 // kinds of input, told apart by the first byte:
 //   'R' raw: a compressed head (64 bytes, or 80 when its HEAD flags texture coordinates), then levels, each
 //       a u32 little-endian length and that many bytes, coarsest first, as a client receives them;
@@ -16,10 +16,10 @@
 #include "builder/build.h"
 #include "common/error.h"
 #include "io/shapes.h"
-#include "refine/multilevel_build.h"
-#include "refine/multilevel_codec.h"
-#include "refine/multilevel_loader.h"
-#include "refine/multilevel_mesh.h"
+#include "multilevel/build.h"
+#include "multilevel/codec.h"
+#include "multilevel/loader.h"
+#include "multilevel/mesh.h"
 #include "multilevel_touch.h"
 
 namespace {

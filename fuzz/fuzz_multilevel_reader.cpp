@@ -10,8 +10,8 @@
 #include <vector>
 
 #include "common/error.h"
-#include "refine/multilevel_file.h"
-#include "refine/multilevel_mesh.h"
+#include "multilevel/file.h"
+#include "multilevel/mesh.h"
 #include "multilevel_touch.h"
 
 namespace {

@@ -8,9 +8,9 @@
 #include <vector>
 
 #include "common/error.h"
-#include "pm/hierarchy.h"
-#include "pm/pms_file.h"
-#include "pm/pms_format_internal.h"
+#include "spm/hierarchy.h"
+#include "spm/pms_file.h"
+#include "spm/pms_format_internal.h"
 
 namespace {
 

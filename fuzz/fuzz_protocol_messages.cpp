@@ -15,8 +15,8 @@
 
 #include "common/bit_stream.h"
 #include "common/error.h"
-#include "pm/split_codec.h"
-#include "pm/split_record.h"
+#include "spm/split_codec.h"
+#include "spm/split_record.h"
 #include "protocol/client_messages.h"
 #include "protocol/message_types.h"
 #include "protocol/server_messages.h"

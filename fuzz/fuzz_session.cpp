@@ -27,9 +27,9 @@
 
 #include "builder/build.h"
 #include "io/shapes.h"
-#include "pm/hierarchy.h"
-#include "pm/pms_file.h"
-#include "pm/vertex_id.h"
+#include "spm/hierarchy.h"
+#include "spm/pms_file.h"
+#include "spm/vertex_id.h"
 #include "protocol/client_messages.h"
 #include "protocol/framing.h"
 #include "protocol/message_types.h"

@@ -11,11 +11,11 @@
 #include "common/bit_stream.h"
 #include "common/error.h"
 #include "io/shapes.h"
-#include "pm/refine_info.h"
-#include "pm/split_codec.h"
+#include "spm/refine_info.h"
+#include "spm/split_codec.h"
 #include "protocol/split_bands.h"
-#include "refine/selective_mesh.h"
-#include "refine/vertex_hierarchy.h"
+#include "spm/selective_mesh.h"
+#include "spm/vertex_hierarchy.h"
 
 namespace {
 

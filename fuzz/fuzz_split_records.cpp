@@ -1,4 +1,4 @@
-// libFuzzer target for the split-record decoders (pm/split_codec.h, pm/prefix_code.h): the input is
+// libFuzzer target for the split-record decoders (spm/split_codec.h, common/prefix_code.h): the input is
 // u16 table bytes T | T bytes of code tables | a record. Hostile tables and records either decode or throw
 // pms::Error; a record that decodes re-encodes (where the tables allow) to one that decodes the same. The
 // tables' attribute flags come from the input, so v_t's normal and color fields are decoded too, against a
@@ -9,10 +9,10 @@
 
 #include "common/bit_stream.h"
 #include "common/error.h"
-#include "pm/octahedral_normal.h"
-#include "pm/refine_info.h"
-#include "pm/split_codec.h"
-#include "pm/vertex_id.h"
+#include "spm/octahedral_normal.h"
+#include "spm/refine_info.h"
+#include "spm/split_codec.h"
+#include "spm/vertex_id.h"
 
 namespace {
 

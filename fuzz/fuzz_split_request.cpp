@@ -7,7 +7,7 @@
 #include <span>
 #include <vector>
 
-#include "pm/vertex_id.h"
+#include "spm/vertex_id.h"
 #include "protocol/message_types.h"
 #include "protocol/split_request.h"
 

@@ -3,8 +3,8 @@
 #pragma once
 #include <cstdint>
 
-#include "refine/multilevel_file.h"
-#include "refine/multilevel_mesh.h"
+#include "multilevel/file.h"
+#include "multilevel/mesh.h"
 
 namespace fuzz {
 

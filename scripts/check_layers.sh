@@ -6,10 +6,11 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 
 declare -A rank=(
-  [common]=0 [io]=1 [pm]=2 [builder]=3 [refine]=4
-  [render]=5 [protocol]=5
-  [server]=6 [client]=6
-  [apps]=7
+  [common]=0 [io]=1 [spm]=2
+  [builder]=3 [dag]=3 [multilevel]=3
+  [render]=4 [protocol]=4
+  [server]=5 [client]=5
+  [apps]=6
 )
 
 violations=0

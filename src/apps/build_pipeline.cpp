@@ -15,7 +15,7 @@
 #include "common/error.h"
 #include "common/huge_pages.h"
 #include "io/shapes.h"
-#include "pm/pms_file.h"
+#include "spm/pms_file.h"
 
 namespace pms::app {
 

@@ -5,7 +5,7 @@
 
 #include "builder/build.h"
 #include "io/mesh.h"
-#include "pm/pms_file.h"
+#include "spm/pms_file.h"
 
 namespace pms::app {
 

@@ -7,7 +7,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "refine/camera.h"
+#include "common/camera.h"
 
 namespace pms::app {
 

@@ -5,7 +5,7 @@
 #include <numbers>
 
 #include "common/error.h"
-#include "pm/hierarchy.h"
+#include "spm/hierarchy.h"
 
 namespace pms::app {
 namespace {

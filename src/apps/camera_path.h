@@ -6,8 +6,8 @@
 #include <string>
 #include <vector>
 
-#include "pm/hierarchy.h"
-#include "refine/camera.h"
+#include "spm/hierarchy.h"
+#include "common/camera.h"
 
 namespace pms::app {
 

@@ -5,7 +5,7 @@
 #include "apps/commands.h"
 #include "apps/progress_bar.h"
 #include "apps/resource_usage.h"
-#include "pm/pms_file.h"
+#include "spm/pms_file.h"
 
 namespace pms::app {
 namespace {

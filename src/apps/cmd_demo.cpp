@@ -11,8 +11,8 @@
 #include "apps/refine_pipeline.h"
 #include "apps/resource_usage.h"
 #include "common/error.h"
-#include "pm/hierarchy.h"
-#include "pm/pms_file.h"
+#include "spm/hierarchy.h"
+#include "spm/pms_file.h"
 
 namespace pms::app {
 namespace {

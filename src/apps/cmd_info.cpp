@@ -3,8 +3,8 @@
 
 #include "apps/build_pipeline.h"
 #include "apps/commands.h"
-#include "pm/hierarchy.h"
-#include "pm/pms_file.h"
+#include "spm/hierarchy.h"
+#include "spm/pms_file.h"
 
 namespace pms::app {
 namespace {

@@ -18,13 +18,13 @@
 #include "builder/build.h"
 #include "common/error.h"
 #include "io/mesh.h"
-#include "refine/multilevel_build.h"
-#include "refine/multilevel_cluster.h"
-#include "refine/multilevel_codec.h"
-#include "refine/multilevel_file.h"
-#include "refine/multilevel_local.h"
-#include "refine/multilevel_region.h"
-#include "refine/multilevel_mesh.h"
+#include "multilevel/build.h"
+#include "multilevel/cluster.h"
+#include "multilevel/codec.h"
+#include "multilevel/file.h"
+#include "multilevel/local.h"
+#include "multilevel/region.h"
+#include "multilevel/mesh.h"
 
 namespace pms::app {
 namespace {

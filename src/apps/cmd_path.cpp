@@ -5,7 +5,7 @@
 #include "apps/camera_path.h"
 #include "apps/commands.h"
 #include "common/error.h"
-#include "pm/pms_file.h"
+#include "spm/pms_file.h"
 
 namespace pms::app {
 namespace {

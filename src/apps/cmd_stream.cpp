@@ -24,8 +24,8 @@
 #include "io/mesh.h"
 #include "protocol/client_messages.h"
 #include "protocol/stream_mode.h"
-#include "refine/dag_traversal.h"
-#include "refine/selective_mesh.h"
+#include "dag/traversal.h"
+#include "spm/selective_mesh.h"
 #include "render/render.h"
 
 namespace pms::app {

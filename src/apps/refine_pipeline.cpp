@@ -1,9 +1,9 @@
 #include "apps/refine_pipeline.h"
 
-#include "pm/hierarchy.h"
-#include "refine/adapt.h"
-#include "refine/selective_mesh.h"
-#include "refine/stream_order.h"
+#include "spm/hierarchy.h"
+#include "spm/adapt.h"
+#include "spm/selective_mesh.h"
+#include "spm/stream_order.h"
 
 namespace pms::app {
 

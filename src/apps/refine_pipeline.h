@@ -4,9 +4,9 @@
 #include <cstdint>
 
 #include "io/mesh.h"
-#include "pm/hierarchy.h"
-#include "refine/camera.h"
-#include "refine/selective_mesh.h"
+#include "spm/hierarchy.h"
+#include "common/camera.h"
+#include "spm/selective_mesh.h"
 
 namespace pms::app {
 

@@ -8,7 +8,7 @@
 #include "apps/camera_json.h"
 #include "apps/refine_pipeline.h"
 #include "common/error.h"
-#include "pm/pms_file.h"
+#include "spm/pms_file.h"
 
 namespace pms::app {
 namespace {

@@ -5,7 +5,7 @@
 
 #include "apps/cli.h"
 #include "io/mesh.h"
-#include "refine/camera.h"
+#include "common/camera.h"
 #include "render/render.h"
 
 namespace pms::app {

@@ -9,9 +9,9 @@
 #include "builder/nested_refine_info.h"
 #include "builder/simplify.h"
 #include "common/error.h"
-#include "pm/hierarchy.h"
-#include "pm/pms_file.h"
-#include "pm/vertex_id.h"
+#include "spm/hierarchy.h"
+#include "spm/pms_file.h"
+#include "spm/vertex_id.h"
 
 namespace pms {
 namespace {

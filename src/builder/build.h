@@ -7,8 +7,8 @@
 
 #include "common/progress.h"
 #include "io/mesh.h"
-#include "pm/hierarchy.h"
-#include "pm/pms_file.h"
+#include "spm/hierarchy.h"
+#include "spm/pms_file.h"
 
 namespace pms {
 

@@ -1,5 +1,5 @@
 // Nested refinement info (issue 19): Hoppe 1997 §4's bounds, rounded up onto the lattices of
-// pm/nested_info.h below each node's parent. A parent's bounds hold its children's (refinement_info.cpp:
+// spm/nested_info.h below each node's parent. A parent's bounds hold its children's (refinement_info.cpp:
 // r(v_s) >= r(v_u), r(v_t) + |p_t - p_s|; the merged cone holds both cones; (mu, delta) of v_s is at least
 // each child's re-expressed on v_s's axis), so the parent's own value is always an entry that holds the
 // child's, and the entries below it cost a child a few bits each (docs/internals.md, "Split records").
@@ -10,9 +10,9 @@
 #include <numbers>
 
 #include "common/parallel.h"
-#include "pm/dequantize_inline.h"
-#include "pm/nested_info.h"
-#include "pm/refine_info.h"
+#include "spm/dequantize_inline.h"
+#include "spm/nested_info.h"
+#include "spm/refine_info.h"
 
 namespace pms {
 namespace {

@@ -10,7 +10,7 @@
 #include "builder/bounds.h"
 #include "builder/captured_round.h"
 #include "common/parallel.h"
-#include "pm/refine_info.h"
+#include "spm/refine_info.h"
 
 namespace pms {
 namespace {

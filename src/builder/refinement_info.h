@@ -12,7 +12,7 @@
 #include "builder/collapse_mesh.h"
 #include "builder/leaf_samples.h"
 #include "io/mesh.h"
-#include "pm/refine_info.h"
+#include "spm/refine_info.h"
 
 namespace pms {
 

@@ -10,7 +10,7 @@
 #include "builder/collapse_mesh.h"
 #include "builder/refinement_info.h"
 #include "common/background_loop.h"
-#include "pm/refine_info.h"
+#include "spm/refine_info.h"
 
 namespace pms {
 

@@ -12,10 +12,10 @@
 #include <vector>
 
 #include "client/client_session.h"
-#include "pm/vertex_id.h"
+#include "spm/vertex_id.h"
 #include "protocol/client_messages.h"
 #include "protocol/server_messages.h"
-#include "refine/camera.h"
+#include "common/camera.h"
 
 namespace pms::client {
 

@@ -7,14 +7,14 @@
 #include <cstdint>
 
 #include "common/error.h"
-#include "pm/split_record.h"
-#include "pm/vertex_id.h"
+#include "spm/split_record.h"
+#include "spm/vertex_id.h"
 #include "protocol/client_messages.h"
 #include "protocol/model_messages.h"
 #include "protocol/server_messages.h"
 #include "protocol/split_bands.h"
-#include "refine/selective_mesh.h"
-#include "refine/vertex_hierarchy.h"
+#include "spm/selective_mesh.h"
+#include "spm/vertex_hierarchy.h"
 
 namespace pms::client {
 

@@ -7,16 +7,16 @@
 #include <span>
 #include <vector>
 
-#include "pm/split_codec.h"
-#include "pm/vertex_id.h"
+#include "spm/split_codec.h"
+#include "spm/vertex_id.h"
 #include "protocol/client_messages.h"
 #include "protocol/server_messages.h"
 #include "protocol/split_request.h"
 #include "protocol/stream_context.h"
-#include "refine/adapt.h"
-#include "refine/camera.h"
-#include "refine/selective_mesh.h"
-#include "refine/vertex_hierarchy.h"
+#include "spm/adapt.h"
+#include "common/camera.h"
+#include "spm/selective_mesh.h"
+#include "spm/vertex_hierarchy.h"
 
 namespace pms::client {
 

@@ -5,9 +5,9 @@
 
 #include "client/link.h"
 #include "common/error.h"
-#include "pm/hierarchy.h"
-#include "pm/split_record.h"
-#include "pm/vertex_id.h"
+#include "spm/hierarchy.h"
+#include "spm/split_record.h"
+#include "spm/vertex_id.h"
 #include "protocol/client_messages.h"
 #include "protocol/framing.h"
 #include "protocol/message_types.h"

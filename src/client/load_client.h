@@ -10,14 +10,14 @@
 #include <vector>
 
 #include "client/server_connection.h"
-#include "pm/hierarchy.h"
-#include "pm/split_record.h"
-#include "pm/vertex_id.h"
+#include "spm/hierarchy.h"
+#include "spm/split_record.h"
+#include "spm/vertex_id.h"
 #include "protocol/framing.h"
 #include "protocol/message_types.h"
 #include "protocol/stream_context.h"
-#include "refine/camera.h"
-#include "refine/vertex_hierarchy.h"
+#include "common/camera.h"
+#include "spm/vertex_hierarchy.h"
 
 namespace pms::client {
 

@@ -14,9 +14,9 @@
 #include "client/client_mode.h"
 #include "client/http_connection.h"
 #include "io/mesh.h"
-#include "refine/camera.h"
-#include "refine/multilevel_loader.h"
-#include "refine/multilevel_mesh.h"
+#include "common/camera.h"
+#include "multilevel/loader.h"
+#include "multilevel/mesh.h"
 
 namespace pms::client {
 

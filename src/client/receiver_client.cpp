@@ -20,8 +20,8 @@
 #include "protocol/server_messages.h"
 #include "protocol/split_request.h"
 #include "protocol/url_segment.h"
-#include "refine/adapt.h"
-#include "refine/criteria.h"
+#include "spm/adapt.h"
+#include "spm/criteria.h"
 
 namespace pms::client {
 namespace {

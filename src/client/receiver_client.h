@@ -16,10 +16,10 @@
 #include "client/client_session.h"
 #include "client/http_connection.h"
 #include "client/screen_importance.h"
-#include "pm/split_codec.h"
-#include "pm/vertex_id.h"
+#include "spm/split_codec.h"
+#include "spm/vertex_id.h"
 #include "protocol/split_request.h"
-#include "refine/camera.h"
+#include "common/camera.h"
 
 namespace pms::client {
 

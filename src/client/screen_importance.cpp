@@ -3,7 +3,7 @@
 
 #include <algorithm>
 
-#include "pm/vertex_id.h"
+#include "spm/vertex_id.h"
 
 namespace pms::client {
 

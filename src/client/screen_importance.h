@@ -9,8 +9,8 @@
 #include <functional>
 #include <vector>
 
-#include "refine/camera.h"
-#include "refine/selective_mesh.h"
+#include "common/camera.h"
+#include "spm/selective_mesh.h"
 #include "render/render.h"
 
 namespace pms::client {

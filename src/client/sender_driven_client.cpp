@@ -1,6 +1,6 @@
 #include "client/sender_driven_client.h"
 
-#include "refine/adapt.h"
+#include "spm/adapt.h"
 
 namespace pms::client {
 

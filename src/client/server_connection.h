@@ -13,7 +13,7 @@
 #include "protocol/message_types.h"
 #include "protocol/server_messages.h"
 #include "protocol/stream_context.h"
-#include "refine/camera.h"
+#include "common/camera.h"
 
 namespace pms::client {
 

@@ -15,7 +15,7 @@
 #include "protocol/framing.h"
 #include "protocol/message_types.h"
 #include "protocol/server_messages.h"
-#include "refine/camera.h"
+#include "common/camera.h"
 
 namespace pms::client {
 

@@ -1,6 +1,6 @@
 // LSB-first bit streams (docs/protocol.md, "Bit stream"): bit k of the stream is bit k mod 8 of byte
 // k div 8, an n-bit field goes least significant bit first. Shared by codecs below the protocol layer
-// (pm/split_codec.h); every read is bounds-checked and fails with pms::Error, never reads past the data.
+// (spm/split_codec.h); every read is bounds-checked and fails with pms::Error, never reads past the data.
 #pragma once
 #include <algorithm>
 #include <bit>

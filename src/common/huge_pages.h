@@ -35,7 +35,7 @@ inline void* allocate_on_huge_pages(size_t bytes) {
 // A freed block of `bytes` (a multiple of kHugePage) that the next request for the same size and kind
 // takes back with its pages still mapped (recycled_blocks.cpp); nullptr when none. Kind 0: blocks of
 // allocate_on_huge_pages (RecycledVector). Other kinds: blocks of map_zeroed, for arrays that are never
-// initialised as a whole (refine/slot_array.h), so the next array may read what the last one left and a
+// initialised as a whole (spm/slot_array.h), so the next array may read what the last one left and a
 // block goes back only to its own kind.
 void* take_recycled_block(size_t bytes, int kind = 0);
 void recycle_block(void* block, size_t bytes, int kind = 0);

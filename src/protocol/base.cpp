@@ -3,8 +3,8 @@
 // and the stream context both ends derive from it. Also the catalogue entry of a model.
 #include <cmath>
 
-#include "pm/hierarchy.h"
-#include "pm/vertex_id.h"
+#include "spm/hierarchy.h"
+#include "spm/vertex_id.h"
 #include "protocol/message_types.h"
 #include "protocol/model_messages.h"
 #include "protocol/position_grid.h"

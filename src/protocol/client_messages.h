@@ -8,11 +8,11 @@
 #include <string>
 #include <vector>
 
-#include "pm/vertex_id.h"
+#include "spm/vertex_id.h"
 #include "protocol/message_types.h"
 #include "protocol/stream_mode.h"
-#include "refine/camera.h"
-#include "refine/dag_traversal.h"
+#include "common/camera.h"
+#include "dag/traversal.h"
 
 namespace pms::protocol {
 

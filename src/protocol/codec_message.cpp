@@ -5,7 +5,7 @@
 #include <string>
 
 #include "common/bit_stream.h"
-#include "pm/split_codec.h"
+#include "spm/split_codec.h"
 #include "protocol/message_types.h"
 #include "protocol/server_messages.h"
 #include "protocol/stream_context.h"

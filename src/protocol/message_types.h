@@ -7,7 +7,7 @@
 #include <string>
 
 #include "common/error.h"
-#include "pm/position_grid.h"
+#include "spm/position_grid.h"
 
 namespace pms::protocol {
 

@@ -3,7 +3,7 @@
 #include <cstdint>
 #include <string>
 
-#include "pm/hierarchy.h"
+#include "spm/hierarchy.h"
 #include "protocol/message_types.h"
 #include "protocol/server_messages.h"
 #include "protocol/stream_context.h"

@@ -6,7 +6,7 @@
 // alone (docs/architecture.md, "Scale-out": resume) — instead of a ~40-bit <tree-id, node-id> per leaf.
 #include <algorithm>
 
-#include "pm/vertex_id.h"
+#include "spm/vertex_id.h"
 #include "protocol/client_messages.h"
 #include "protocol/message_types.h"
 #include "protocol/wire_internal.h"

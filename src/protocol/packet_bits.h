@@ -2,8 +2,8 @@
 #pragma once
 #include <cstdint>
 
-#include "pm/split_record.h"
-#include "pm/vertex_id.h"
+#include "spm/split_record.h"
+#include "spm/vertex_id.h"
 #include "protocol/stream_context.h"
 
 namespace pms::protocol {

@@ -5,8 +5,8 @@
 
 #include "common/bit_stream.h"
 #include "common/parallel.h"
-#include "pm/hierarchy.h"
-#include "pm/refine_info.h"
+#include "spm/hierarchy.h"
+#include "spm/refine_info.h"
 #include "protocol/message_types.h"
 #include "protocol/packet_table.h"
 #include "protocol/stream_context.h"

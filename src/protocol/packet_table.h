@@ -6,8 +6,8 @@
 #include <span>
 #include <vector>
 
-#include "pm/hierarchy.h"
-#include "pm/refine_info.h"
+#include "spm/hierarchy.h"
+#include "spm/refine_info.h"
 #include "protocol/split_bands.h"
 #include "protocol/stream_context.h"
 

@@ -1,7 +1,7 @@
-// Quantized positions on the wire: the grid lives in pm/position_grid.h (the builder codes split records on
+// Quantized positions on the wire: the grid lives in spm/position_grid.h (the builder codes split records on
 // it offline); the protocol layer names it as its own.
 #pragma once
-#include "pm/position_grid.h"
+#include "spm/position_grid.h"
 
 namespace pms::protocol {
 

@@ -7,10 +7,10 @@
 #include <string>
 #include <vector>
 
-#include "pm/hierarchy.h"
-#include "pm/refine_info.h"
-#include "pm/split_codec.h"
-#include "pm/split_record.h"
+#include "spm/hierarchy.h"
+#include "spm/refine_info.h"
+#include "spm/split_codec.h"
+#include "spm/split_record.h"
 #include "protocol/message_types.h"
 #include "protocol/stream_context.h"
 
@@ -112,7 +112,7 @@ VSplits decode_vsplits(std::span<const uint8_t> payload, const StreamContext& co
 ErrorMessage decode_error(std::span<const uint8_t> payload);
 DagOps decode_dag_ops(std::span<const uint8_t> payload, const StreamContext& context);  // codes this build does not know pass through
 
-// What a receiver decodes for `info` (pm/refine_info.h): every mode, split records included, delivers it.
+// What a receiver decodes for `info` (spm/refine_info.h): every mode, split records included, delivers it.
 using pms::as_sent;
 
 }  // namespace pms::protocol

@@ -4,9 +4,9 @@
 #include <string>
 
 #include "common/error.h"
-#include "pm/octahedral_normal.h"
-#include "pm/refine_info.h"
-#include "pm/split_record.h"
+#include "spm/octahedral_normal.h"
+#include "spm/refine_info.h"
+#include "spm/split_record.h"
 
 namespace pms::protocol {
 namespace {
@@ -68,7 +68,7 @@ SplitContext held_split_context(const VertexHierarchy& h, uint32_t slot, const P
   c.vs = h.id(slot);
   quantize_position(grid, h.position(slot), c.position_s);
   c.info_s = h.refine(slot);
-  // A normal decoded from the wire encodes back to the integers sent (pm/octahedral_normal.h).
+  // A normal decoded from the wire encodes back to the integers sent (spm/octahedral_normal.h).
   if (h.has_normals()) encode_normal(h.normal(slot), c.normal_s);
   if (h.has_colors()) std::copy_n(h.color(slot), 4, c.color_s);
   uint32_t s = slot;

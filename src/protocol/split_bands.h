@@ -1,5 +1,5 @@
 // The body of a receiver-driven answer in records format 3 (docs/protocol.md, "Receiver-driven over HTTP"):
-// for each requested id, the compact split records (pm/split_codec.h) of its band — the id's split and its
+// for each requested id, the compact split records (spm/split_codec.h) of its band — the id's split and its
 // descendants' down to the request's depth — in one bit stream. Both ends walk the band the same way, so
 // the stream needs no ids: a record's children are known from its id, and whether a child has a split of
 // its own is implied by its refinement info unless that info never refines (then one bit says).
@@ -11,12 +11,12 @@
 #include <vector>
 
 #include "common/bit_stream.h"
-#include "pm/hierarchy.h"
-#include "pm/position_grid.h"
-#include "pm/split_record.h"
-#include "pm/split_codec.h"
+#include "spm/hierarchy.h"
+#include "spm/position_grid.h"
+#include "spm/split_record.h"
+#include "spm/split_codec.h"
 #include "protocol/split_request.h"
-#include "refine/vertex_hierarchy.h"
+#include "spm/vertex_hierarchy.h"
 
 namespace pms::protocol {
 
@@ -30,7 +30,7 @@ struct StoredRecords {
 uint32_t write_split_band(const ModelData& model, const StoredRecords& records, uint32_t root, uint32_t depth,
                           BitWriter& w);
 
-// What a client holds about the split of `slot` (pm/split_codec.h, SplitContext), from its own hierarchy:
+// What a client holds about the split of `slot` (spm/split_codec.h, SplitContext), from its own hierarchy:
 // the position re-quantized (the grid gives the sent integers back), the info as sent, the normal
 // re-quantized and the color, the ancestors' cuts.
 SplitContext held_split_context(const VertexHierarchy& h, uint32_t slot, const PositionGrid& grid);

@@ -5,7 +5,7 @@
 #include <string>
 
 #include "common/error.h"
-#include "pm/vertex_id.h"
+#include "spm/vertex_id.h"
 #include "protocol/message_types.h"
 #include "protocol/split_request.h"
 

@@ -8,7 +8,7 @@
 #include <span>
 #include <vector>
 
-#include "pm/vertex_id.h"
+#include "spm/vertex_id.h"
 
 namespace pms::protocol {
 

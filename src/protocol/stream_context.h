@@ -4,9 +4,9 @@
 #include <functional>
 #include <memory>
 
-#include "pm/hierarchy.h"
-#include "pm/split_codec.h"
-#include "pm/vertex_id.h"
+#include "spm/hierarchy.h"
+#include "spm/split_codec.h"
+#include "spm/vertex_id.h"
 #include "protocol/position_grid.h"
 
 namespace pms::protocol {

@@ -17,7 +17,7 @@ namespace pms::protocol {
 // info; the client applies every split as it arrives and never coarsens. On the wire an option of the
 // sender-driven mode (OPEN flag bit 2).
 // dag: zheng-chan 2006 for a thin client: the server keeps the client's cut of the DAG of operations
-// (refine/dag_cut.h) and answers each DAG_VIEW with MANAGE-TRAVERSAL's collapses and splits, the splits with
+// (dag/cut.h) and answers each DAG_VIEW with MANAGE-TRAVERSAL's collapses and splits, the splits with
 // their geometry; the client applies them in order and evaluates nothing itself (OPEN flag bit 3).
 enum class StreamMode : uint8_t { sender_driven, view_independent, sender_plain, dag };
 

@@ -8,7 +8,7 @@
 // byte-aligned (docs/protocol.md has the measurements that chose this). DAG_OPS (StreamMode::dag) is the same
 // packets after a list of collapse ids in the same id code.
 // In a session with split records (StreamContext::records, issue 19) a packet is v_s's id and then the
-// compact split record (pm/split_codec.h) coded against what the receiver holds about v_s.
+// compact split record (spm/split_codec.h) coded against what the receiver holds about v_s.
 #include <algorithm>
 #include <bit>
 #include <cmath>
@@ -16,9 +16,9 @@
 #include <unordered_map>
 #include <utility>
 
-#include "pm/refine_info.h"
-#include "pm/split_record.h"
-#include "pm/vertex_id.h"
+#include "spm/refine_info.h"
+#include "spm/split_record.h"
+#include "spm/vertex_id.h"
 #include "protocol/message_types.h"
 #include "protocol/packet_bits.h"
 #include "protocol/position_grid.h"

@@ -4,7 +4,7 @@
 #include <cmath>
 #include <cstring>
 
-#include "pm/refine_info.h"
+#include "spm/refine_info.h"
 #include "protocol/message_types.h"
 #include "protocol/position_grid.h"
 #include "protocol/server_messages.h"

@@ -9,9 +9,9 @@
 #include <string>
 #include <vector>
 
-#include "pm/octahedral_normal.h"
-#include "pm/refine_info.h"
-#include "pm/split_record.h"
+#include "spm/octahedral_normal.h"
+#include "spm/refine_info.h"
+#include "spm/split_record.h"
 #include "protocol/message_types.h"
 #include "protocol/stream_context.h"
 

@@ -7,7 +7,7 @@
 // here, before they cost a record and a bin entry.
 #include <cmath>
 
-#include "pm/vertex_id.h"
+#include "spm/vertex_id.h"
 #include "render/raster_internal.h"
 
 namespace pms::render_detail {

@@ -4,7 +4,7 @@
 #include <limits>
 
 #include "common/error.h"
-#include "pm/vertex_id.h"
+#include "spm/vertex_id.h"
 #include "render/render.h"
 
 namespace pms {

@@ -7,7 +7,7 @@
 #include <algorithm>
 #include <cmath>
 
-#include "pm/vertex_id.h"
+#include "spm/vertex_id.h"
 #include "render/raster_internal.h"
 
 namespace pms::render_detail {

@@ -9,7 +9,7 @@
 #include <string>
 #include <vector>
 
-#include "refine/camera.h"  // ViewParam"
+#include "common/camera.h"  // ViewParam"
 
 namespace pms {
 

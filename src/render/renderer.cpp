@@ -8,7 +8,7 @@
 #include <thread>
 
 #include "common/error.h"
-#include "pm/vertex_id.h"
+#include "spm/vertex_id.h"
 #include "render/raster_internal.h"
 
 namespace pms {

@@ -5,15 +5,15 @@
 #include <string>
 #include <vector>
 
-#include "pm/hierarchy.h"
-#include "pm/pms_file.h"
+#include "spm/hierarchy.h"
+#include "spm/pms_file.h"
 #include "protocol/message_types.h"
 #include "protocol/packet_table.h"
 #include "protocol/server_messages.h"
 #include "protocol/split_bands.h"
 #include "protocol/stream_context.h"
-#include "refine/criteria.h"
-#include "refine/dag.h"
+#include "spm/criteria.h"
+#include "dag/dag.h"
 #include "server/limits.h"
 #include "server/selective_streaming.h"
 #include "server/served_multilevel.h"

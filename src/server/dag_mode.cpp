@@ -7,13 +7,13 @@
 #include <variant>
 
 #include "common/error.h"
-#include "pm/hierarchy.h"
-#include "pm/vertex_id.h"
+#include "spm/hierarchy.h"
+#include "spm/vertex_id.h"
 #include "protocol/client_messages.h"
 #include "protocol/message_types.h"
 #include "protocol/server_messages.h"
-#include "pm/split_record.h"
-#include "refine/dag_cut.h"
+#include "spm/split_record.h"
+#include "dag/cut.h"
 
 namespace pms::server {
 

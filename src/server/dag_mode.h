@@ -1,10 +1,10 @@
 // The DAG mode (zheng-chan 2006 §4–5, StreamMode::dag): a thin client with no hierarchy walk and no criteria
 // of its own, driven by the server. The session holds the client's cut of the model's DAG of operations
-// (refine/dag_cut.h, about a byte per node) and a traverser; each DAG_VIEW runs MANAGE-TRAVERSAL once on it
+// (dag/cut.h, about a byte per node) and a traverser; each DAG_VIEW runs MANAGE-TRAVERSAL once on it
 // (the first one: the converged cut of its view) and the operations go down as DAG_OPS in batches, collapses
 // first, then splits with their geometry and fundamental cut vertices (docs/internals.md, "The DAG mode": why
 // not the actual ones), so the client's mesh is the server's cut after every answer. An OPEN with a resume
-// front lists the client's mesh (refine/dag_cut.h, cut_front), rebuilt here into the cut a slice at a time.
+// front lists the client's mesh (dag/cut.h, cut_front), rebuilt here into the cut a slice at a time.
 #pragma once
 #include <cstddef>
 #include <cstdint>
@@ -14,8 +14,8 @@
 #include "protocol/client_messages.h"
 #include "protocol/stream_context.h"
 #include "protocol/framing.h"
-#include "refine/dag_compact.h"
-#include "refine/dag_traversal.h"
+#include "dag/compact.h"
+#include "dag/traversal.h"
 #include "server/session_mode.h"
 
 namespace pms::server {

@@ -8,7 +8,7 @@
 #include <cstdio>
 #include <nlohmann/json.hpp>
 
-#include "pm/vertex_id.h"
+#include "spm/vertex_id.h"
 #include "protocol/base64url.h"
 #include "protocol/message_types.h"
 #include "protocol/split_request.h"

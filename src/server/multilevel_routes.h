@@ -1,6 +1,6 @@
 // The multilevel mode's resources (gueziec et al. 1999; docs/protocol.md, "Multilevel over HTTP"):
 // GET /models/{m}/head and GET /models/{m}/levels/{level}, immutable, one per level, coarsest first, and
-// the same under /models/{m}/compressed/ in the compressed form (refine/multilevel_codec.h).
+// the same under /models/{m}/compressed/ in the compressed form (multilevel/codec.h).
 #pragma once
 #include <nlohmann/json_fwd.hpp>
 #include <span>

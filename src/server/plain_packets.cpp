@@ -2,8 +2,8 @@
 #include "server/plain_packets.h"
 
 #include "common/error.h"
-#include "pm/split_record.h"
-#include "pm/vertex_id.h"
+#include "spm/split_record.h"
+#include "spm/vertex_id.h"
 #include "protocol/server_messages.h"
 
 namespace pms::server {

@@ -8,7 +8,7 @@
 #include <span>
 #include <vector>
 
-#include "pm/hierarchy.h"
+#include "spm/hierarchy.h"
 #include "protocol/stream_context.h"
 #include "server/selective_streaming.h"
 

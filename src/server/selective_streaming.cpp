@@ -5,8 +5,8 @@
 #include <stdexcept>
 
 #include "common/parallel.h"
-#include "pm/hierarchy.h"
-#include "pm/vertex_id.h"
+#include "spm/hierarchy.h"
+#include "spm/vertex_id.h"
 
 namespace pms {
 namespace {

@@ -8,7 +8,7 @@
 #include <functional>
 #include <vector>
 
-#include "pm/hierarchy.h"
+#include "spm/hierarchy.h"
 #include "server/active_tags.h"
 
 namespace pms {

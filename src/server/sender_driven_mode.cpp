@@ -8,8 +8,8 @@
 #include <utility>
 #include <variant>
 
-#include "pm/hierarchy.h"
-#include "pm/vertex_id.h"
+#include "spm/hierarchy.h"
+#include "spm/vertex_id.h"
 #include "protocol/message_types.h"
 #include "server/plain_packets.h"
 

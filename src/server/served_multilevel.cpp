@@ -5,10 +5,10 @@
 #include <cmath>
 #include <filesystem>
 
-#include "refine/multilevel_codec.h"
-#include "refine/multilevel_file.h"
-#include "refine/multilevel_loader.h"
-#include "refine/multilevel_mesh.h"
+#include "multilevel/codec.h"
+#include "multilevel/file.h"
+#include "multilevel/loader.h"
+#include "multilevel/mesh.h"
 #include "server/http_answers.h"
 #include "server/served_multilevel.h"
 

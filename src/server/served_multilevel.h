@@ -22,7 +22,7 @@ struct ServedMultilevel {
   // Per level, index = the level (0 finest): its LEVL section, ETag, and its LOD's size and error.
   std::vector<std::shared_ptr<const std::vector<uint8_t>>> levels;
   std::vector<std::string> level_etags;
-  // The compressed form (refine/multilevel_codec.h): its head and levels, indexed likewise.
+  // The compressed form (multilevel/codec.h): its head and levels, indexed likewise.
   uint32_t position_bits = 0;
   std::shared_ptr<const std::vector<uint8_t>> compressed_head;
   std::string compressed_head_etag;
@@ -35,7 +35,7 @@ struct ServedMultilevel {
   uint32_t level_count() const { return uint32_t(levels.size()); }
 };
 
-// Reads either form (refine/multilevel_file.h); pms::Error naming the file.
+// Reads either form (multilevel/file.h); pms::Error naming the file.
 std::unique_ptr<ServedMultilevel> open_multilevel(const std::string& path);
 
 }  // namespace pms::server

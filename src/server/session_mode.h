@@ -12,7 +12,7 @@
 #include "protocol/client_messages.h"
 #include "protocol/dispatch.h"
 #include "protocol/framing.h"
-#include "refine/criteria.h"
+#include "spm/criteria.h"
 #include "server/active_tags.h"
 #include "server/catalogue.h"
 #include "server/limits.h"

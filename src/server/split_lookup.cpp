@@ -1,7 +1,7 @@
 // Resolving a receiver-driven request to model nodes: bounded by the answer's size before it is built.
 #include <string>
 
-#include "pm/vertex_id.h"
+#include "spm/vertex_id.h"
 #include "protocol/message_types.h"
 #include "server/split_lookup.h"
 

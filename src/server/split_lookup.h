@@ -4,7 +4,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "pm/hierarchy.h"
+#include "spm/hierarchy.h"
 #include "protocol/split_request.h"
 
 namespace pms::server {

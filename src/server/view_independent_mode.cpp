@@ -6,8 +6,8 @@
 #include <variant>
 #include <vector>
 
-#include "pm/hierarchy.h"
-#include "pm/split_record.h"
+#include "spm/hierarchy.h"
+#include "spm/split_record.h"
 #include "protocol/message_types.h"
 #include "protocol/server_messages.h"
 

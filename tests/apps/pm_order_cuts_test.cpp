@@ -12,9 +12,9 @@
 #include "apps/bench/split_record_bits.h"
 #include "builder/build.h"
 #include "io/mesh.h"
-#include "pm/hierarchy.h"
-#include "pm/pms_file.h"
-#include "pm/split_codec.h"
+#include "spm/hierarchy.h"
+#include "spm/pms_file.h"
+#include "spm/split_codec.h"
 #include "record_bits_model.h"
 #include "test_support.h"
 

@@ -13,8 +13,8 @@
 #include "apps/bench/serve_child.h"
 #include "client/receiver_client.h"
 #include "client/streaming_client.h"
-#include "refine/adapt.h"
-#include "refine/stream_order.h"
+#include "spm/adapt.h"
+#include "spm/stream_order.h"
 #include "test_support.h"
 
 namespace pms::app {

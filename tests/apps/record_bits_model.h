@@ -7,8 +7,8 @@
 
 #include "builder/build.h"
 #include "io/mesh.h"
-#include "pm/hierarchy.h"
-#include "pm/pms_file.h"
+#include "spm/hierarchy.h"
+#include "spm/pms_file.h"
 #include "test_support.h"
 
 #define PMS_MEASURE_RECORD_BITS_MODEL(measure) PMS_MEASURE_RECORD_BITS_MODEL_BUILT(measure, ::pms::BuildOptions{})

@@ -21,10 +21,10 @@
 
 #include "apps/bench/bench_refine.h"
 #include "apps/bench/split_record_bits.h"
-#include "pm/prefix_code.h"
-#include "pm/split_codec.h"
+#include "common/prefix_code.h"
+#include "spm/split_codec.h"
 #include "record_bits_model.h"
-#include "refine/adapt.h"
+#include "spm/adapt.h"
 
 namespace pms::app {
 namespace {

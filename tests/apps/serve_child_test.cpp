@@ -13,7 +13,7 @@
 #include "apps/bench/serve_child.h"
 #include "apps/camera_path.h"
 #include "common/error.h"
-#include "pm/pms_file.h"
+#include "spm/pms_file.h"
 #include "test_support.h"
 
 namespace pms::app {

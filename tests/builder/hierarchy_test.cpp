@@ -7,9 +7,9 @@
 #include "builder/build.h"
 #include "io/manifold_check.h"
 #include "io/shapes.h"
-#include "pm/hierarchy.h"
-#include "pm/refine_info.h"
-#include "pm/vertex_id.h"
+#include "spm/hierarchy.h"
+#include "spm/refine_info.h"
+#include "spm/vertex_id.h"
 #include "test_support.h"
 
 namespace pms {

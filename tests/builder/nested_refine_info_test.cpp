@@ -8,8 +8,8 @@
 
 #include "builder/build.h"
 #include "io/mesh.h"
-#include "pm/nested_info.h"
-#include "pm/refine_info.h"
+#include "spm/nested_info.h"
+#include "spm/refine_info.h"
 #include "test_support.h"
 
 namespace pms {

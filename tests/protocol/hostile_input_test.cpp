@@ -5,8 +5,8 @@
 #include <cstring>
 #include <functional>
 
-#include "pm/split_record.h"
-#include "pm/vertex_id.h"
+#include "spm/split_record.h"
+#include "spm/vertex_id.h"
 #include "protocol/client_messages.h"
 #include "protocol/message_types.h"
 #include "protocol/model_messages.h"

@@ -6,10 +6,10 @@
 #include <cmath>
 #include <cstring>
 
-#include "pm/hierarchy.h"
-#include "pm/refine_info.h"
-#include "pm/split_record.h"
-#include "pm/vertex_id.h"
+#include "spm/hierarchy.h"
+#include "spm/refine_info.h"
+#include "spm/split_record.h"
+#include "spm/vertex_id.h"
 #include "protocol/client_messages.h"
 #include "protocol/dispatch.h"
 #include "protocol/framing.h"

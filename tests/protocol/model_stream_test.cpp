@@ -10,10 +10,10 @@
 
 #include "common/bit_stream.h"
 #include "io/shapes.h"
-#include "pm/hierarchy.h"
-#include "pm/split_codec.h"
-#include "pm/split_record.h"
-#include "pm/vertex_id.h"
+#include "spm/hierarchy.h"
+#include "spm/split_codec.h"
+#include "spm/split_record.h"
+#include "spm/vertex_id.h"
 #include "protocol/client_messages.h"
 #include "protocol/dispatch.h"
 #include "protocol/framing.h"
@@ -26,8 +26,8 @@
 #include "protocol/split_bands.h"
 #include "protocol/stream_context.h"
 #include "protocol_fixtures.h"
-#include "refine/selective_mesh.h"
-#include "refine/vertex_hierarchy.h"
+#include "spm/selective_mesh.h"
+#include "spm/vertex_hierarchy.h"
 #include "test_support.h"
 
 namespace pms::protocol {

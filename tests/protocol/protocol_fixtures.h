@@ -9,10 +9,10 @@
 #include <vector>
 
 #include "builder/build.h"
-#include "pm/hierarchy.h"
-#include "pm/refine_info.h"
-#include "pm/split_record.h"
-#include "pm/vertex_id.h"
+#include "spm/hierarchy.h"
+#include "spm/refine_info.h"
+#include "spm/split_record.h"
+#include "spm/vertex_id.h"
 #include "protocol/message_types.h"
 #include "protocol/stream_context.h"
 

@@ -6,13 +6,13 @@
 #include <vector>
 
 #include "common/error.h"
-#include "pm/hierarchy.h"
-#include "pm/refine_info.h"
-#include "pm/split_codec.h"
+#include "spm/hierarchy.h"
+#include "spm/refine_info.h"
+#include "spm/split_codec.h"
 #include "protocol/position_grid.h"
 #include "protocol/split_bands.h"
 #include "protocol_fixtures.h"
-#include "refine/vertex_hierarchy.h"
+#include "spm/vertex_hierarchy.h"
 
 namespace pms::protocol {
 namespace {

@@ -1,4 +1,4 @@
-// Compressed split records (pm/split_codec.h) on real models at the wire's 16-bit grid: every record of the
+// Compressed split records (spm/split_codec.h) on real models at the wire's 16-bit grid: every record of the
 // bunny, the horse (normals) and a sphere with normals and colors round-trips, a client that holds only
 // what the base mesh and earlier records gave it decodes them (its contexts come from its own
 // VertexHierarchy, not from the model), it ends with the model's quantized values, and the bits per part
@@ -9,9 +9,9 @@
 #include <vector>
 
 #include "common/bit_stream.h"
-#include "pm/hierarchy.h"
-#include "pm/split_codec.h"
-#include "pm/split_record.h"
+#include "spm/hierarchy.h"
+#include "spm/split_codec.h"
+#include "spm/split_record.h"
 #include "protocol/model_messages.h"
 #include "protocol/packet_bits.h"
 #include "protocol/position_grid.h"
@@ -20,7 +20,7 @@
 #include "protocol/stream_context.h"
 #include "protocol/wire_internal.h"
 #include "protocol_fixtures.h"
-#include "refine/vertex_hierarchy.h"
+#include "spm/vertex_hierarchy.h"
 
 namespace pms::protocol {
 namespace {

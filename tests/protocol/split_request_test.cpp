@@ -4,16 +4,16 @@
 #include <algorithm>
 #include <cstdio>
 
-#include "pm/hierarchy.h"
-#include "pm/vertex_id.h"
+#include "spm/hierarchy.h"
+#include "spm/vertex_id.h"
 #include "protocol/base64url.h"
 #include "protocol/message_types.h"
 #include "protocol_fixtures.h"
 #include "protocol/split_request.h"
-#include "refine/adapt.h"
-#include "refine/camera.h"
-#include "refine/selective_mesh.h"
-#include "refine/vertex_hierarchy.h"
+#include "spm/adapt.h"
+#include "common/camera.h"
+#include "spm/selective_mesh.h"
+#include "spm/vertex_hierarchy.h"
 
 namespace pms::test {
 namespace {

@@ -5,7 +5,7 @@
 #include <random>
 
 #include "common/error.h"
-#include "pm/vertex_id.h"
+#include "spm/vertex_id.h"
 #include "render/render.h"
 #include "render_fixtures.h"
 

@@ -5,7 +5,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "refine/camera.h"
+#include "common/camera.h"
 #include "render/render.h"
 
 namespace pms::test {

@@ -6,7 +6,7 @@
 
 #include "common/error.h"
 #include "io/shapes.h"
-#include "pm/vertex_id.h"
+#include "spm/vertex_id.h"
 #include "render/render.h"
 #include "render_fixtures.h"
 

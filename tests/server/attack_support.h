@@ -19,7 +19,7 @@
 
 #include "protocol/framing.h"
 #include "protocol/message_types.h"
-#include "refine/camera.h"
+#include "common/camera.h"
 #include "streaming_fixture.h"
 
 namespace pms::test {

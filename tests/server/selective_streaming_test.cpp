@@ -7,11 +7,11 @@
 
 #include "builder/build.h"
 #include "io/shapes.h"
-#include "pm/hierarchy.h"
-#include "pm/split_record.h"
-#include "pm/vertex_id.h"
-#include "refine/selective_mesh.h"
-#include "refine/vertex_hierarchy.h"
+#include "spm/hierarchy.h"
+#include "spm/split_record.h"
+#include "spm/vertex_id.h"
+#include "spm/selective_mesh.h"
+#include "spm/vertex_hierarchy.h"
 #include "server/selective_streaming.h"
 
 namespace pms {

@@ -8,7 +8,7 @@
 
 #include "builder/build.h"
 #include "io/shapes.h"
-#include "pm/hierarchy.h"
+#include "spm/hierarchy.h"
 #include "protocol/message_types.h"
 #include "protocol/split_request.h"
 #include "server/split_lookup.h"

@@ -8,12 +8,12 @@
 #include <vector>
 
 #include "io/mesh.h"
-#include "pm/hierarchy.h"
-#include "pm/vertex_id.h"
+#include "spm/hierarchy.h"
+#include "spm/vertex_id.h"
 #include "protocol/message_types.h"
 #include "protocol/server_messages.h"
-#include "refine/camera.h"
-#include "refine/selective_mesh.h"
+#include "common/camera.h"
+#include "spm/selective_mesh.h"
 #include "client/streaming_client.h"
 #include "server/catalogue.h"
 #include "server/limits.h"

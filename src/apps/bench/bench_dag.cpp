@@ -24,8 +24,8 @@
 #include "client/streaming_client.h"
 #include "common/error.h"
 #include "protocol/client_messages.h"
-#include "refine/dag_compact.h"
-#include "refine/dag_traversal.h"
+#include "dag/compact.h"
+#include "dag/traversal.h"
 #include "server/dag_mode.h"
 #include "server/session_mode.h"
 

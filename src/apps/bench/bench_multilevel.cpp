@@ -13,10 +13,10 @@
 #include "apps/bench/multilevel_sizes.h"
 #include "apps/bench/report.h"
 #include "common/error.h"
-#include "refine/multilevel_codec.h"
-#include "refine/multilevel_file.h"
-#include "refine/multilevel_loader.h"
-#include "refine/multilevel_mesh.h"
+#include "multilevel/codec.h"
+#include "multilevel/file.h"
+#include "multilevel/loader.h"
+#include "multilevel/mesh.h"
 
 namespace pms::app {
 namespace {

@@ -4,9 +4,9 @@
 #include <string>
 
 #include "apps/bench/bench.h"
-#include "pm/hierarchy.h"
-#include "refine/camera.h"
-#include "refine/vertex_hierarchy.h"
+#include "spm/hierarchy.h"
+#include "common/camera.h"
+#include "spm/vertex_hierarchy.h"
 
 namespace pms::app {
 

@@ -13,8 +13,8 @@
 #include "apps/percentile.h"
 #include "apps/resource_usage.h"
 #include "common/error.h"
-#include "refine/adapt.h"
-#include "refine/selective_mesh.h"
+#include "spm/adapt.h"
+#include "spm/selective_mesh.h"
 
 namespace pms::app {
 using nlohmann::json;

@@ -23,8 +23,8 @@
 #include "client/streaming_client.h"
 #include "common/error.h"
 #include "common/bit_stream.h"
-#include "pm/hierarchy.h"
-#include "pm/split_codec.h"
+#include "spm/hierarchy.h"
+#include "spm/split_codec.h"
 #include "protocol/client_messages.h"
 #include "protocol/packet_bits.h"
 

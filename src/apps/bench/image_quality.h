@@ -5,9 +5,9 @@
 #include <string>
 #include <vector>
 
-#include "pm/hierarchy.h"
-#include "refine/camera.h"
-#include "refine/selective_mesh.h"
+#include "spm/hierarchy.h"
+#include "common/camera.h"
+#include "spm/selective_mesh.h"
 #include "render/render.h"
 
 namespace pms::app {

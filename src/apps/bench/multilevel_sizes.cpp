@@ -11,9 +11,9 @@
 
 #include "apps/bench/single_rate_codecs.h"
 #include "common/error.h"
-#include "refine/multilevel_codec.h"
-#include "refine/multilevel_file.h"
-#include "refine/multilevel_loader.h"
+#include "multilevel/codec.h"
+#include "multilevel/file.h"
+#include "multilevel/loader.h"
 
 namespace pms::app {
 namespace {

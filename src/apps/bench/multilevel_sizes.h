@@ -6,7 +6,7 @@
 #include <cstdint>
 #include <nlohmann/json_fwd.hpp>
 
-#include "refine/multilevel_mesh.h"
+#include "multilevel/mesh.h"
 
 namespace pms::app {
 

@@ -6,7 +6,7 @@
 #include <vector>
 
 #include "common/error.h"
-#include "pm/hierarchy.h"
+#include "spm/hierarchy.h"
 
 namespace pms::app {
 namespace {

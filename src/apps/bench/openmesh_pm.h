@@ -10,7 +10,7 @@
 #include <span>
 #include <string>
 
-#include "pm/hierarchy.h"
+#include "spm/hierarchy.h"
 
 namespace pms::app {
 

@@ -10,8 +10,8 @@
 
 #include "apps/bench/bench_model.h"
 #include "protocol/stream_mode.h"
-#include "refine/camera.h"
-#include "refine/selective_mesh.h"
+#include "common/camera.h"
+#include "spm/selective_mesh.h"
 #include "render/render.h"
 
 namespace pms::app {

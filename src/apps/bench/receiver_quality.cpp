@@ -11,8 +11,8 @@
 #include "apps/bench/quality_curve.h"
 #include "apps/bench/report.h"
 #include "apps/bench/serve_child.h"
-#include "refine/adapt.h"
-#include "refine/stream_order.h"
+#include "spm/adapt.h"
+#include "spm/stream_order.h"
 
 namespace pms::app {
 using nlohmann::json;

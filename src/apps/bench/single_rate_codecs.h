@@ -8,7 +8,7 @@
 #include <vector>
 
 #include "io/mesh.h"
-#include "pm/position_grid.h"
+#include "spm/position_grid.h"
 
 namespace pms::app {
 

@@ -2,12 +2,12 @@
 
 #include "apps/camera_path.h"
 #include "common/bit_stream.h"
-#include "pm/split_record.h"
+#include "spm/split_record.h"
 #include "protocol/model_messages.h"
 #include "protocol/packet_bits.h"
-#include "refine/adapt.h"
-#include "refine/selective_mesh.h"
-#include "refine/vertex_hierarchy.h"
+#include "spm/adapt.h"
+#include "spm/selective_mesh.h"
+#include "spm/vertex_hierarchy.h"
 
 namespace pms::app {
 

@@ -1,13 +1,13 @@
-// Split records (pm/split_codec.h) measured on a model at the wire's position grid: bits per split by part
+// Split records (spm/split_codec.h) measured on a model at the wire's position grid: bits per split by part
 // over the whole split order, or over the splits one view asks for (E5's close view).
 #pragma once
 #include <cstdint>
 #include <span>
 #include <vector>
 
-#include "pm/hierarchy.h"
-#include "pm/split_codec.h"
-#include "refine/camera.h"
+#include "spm/hierarchy.h"
+#include "spm/split_codec.h"
+#include "common/camera.h"
 
 namespace pms::app {
 

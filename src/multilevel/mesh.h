@@ -1,0 +1,120 @@
+// Progressive multilevel meshes (gueziec, taubin, horn, lazarus 1999, "Progressive multilevel mesh"):
+// vertices and triangles sorted by decreasing level plus a representative per vertex, so the LOD of any
+// level is one pass over index arrays, and a fractional level is a geomorph between two of them.
+#pragma once
+#include <cstdint>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "io/mesh.h"
+#include "multilevel/representative_array.h"
+
+namespace pms {
+
+// Levels run from 0 (finest) to level_count() - 1 (coarsest). LOD l is made of the vertices and triangles
+// of levels >= l: a prefix of both arrays, [0, vertex_count[l]) and [0, triangle_count[l]). A triangle of
+// LOD l that names a vertex >= vertex_count[l] follows representatives (each lower than the vertex it
+// stands for) until it falls below vertex_count[l].
+struct MultilevelMesh {
+  static constexpr uint32_t kNoRepresentative = RepresentativeArray::kNone;
+
+  uint32_t dimension = 3;                // coordinates per vertex (the paper's Fig. 6 is 2D)
+  std::vector<float> positions;          // dimension per vertex
+  std::vector<float> normals;            // 3 per vertex, or empty
+  std::vector<uint8_t> colors;           // r g b a per vertex, or empty
+  std::vector<float> texcoords;          // u v per vertex, or empty
+  std::vector<uint32_t> triangles;       // 3 per triangle
+  RepresentativeArray representative;    // per vertex; kNoRepresentative where none is stored
+  std::vector<uint32_t> vertex_count;    // n_l per level: vertices of levels >= l (non-increasing in l)
+  std::vector<uint32_t> triangle_count;  // likewise for triangles
+
+  uint32_t level_count() const { return uint32_t(vertex_count.size()); }
+  uint32_t vertices() const { return vertex_count.empty() ? 0 : vertex_count[0]; }
+  uint32_t faces() const { return triangle_count.empty() ? 0 : triangle_count[0]; }
+  uint64_t stored_representatives() const;
+  // Vertices and triangles that belong to level l itself (its batch in a file).
+  uint32_t level_vertices(uint32_t l) const;
+  uint32_t level_triangles(uint32_t l) const;
+};
+
+// pms::Error ("WHERE: what") unless the structure is consistent: array sizes, non-increasing counts,
+// indices in range, every representative below its vertex, and every triangle of level l resolving each
+// corner below n_l. What the readers check after parsing, and the writers before writing.
+void validate_multilevel(const std::string& where, const MultilevelMesh& mesh);
+
+// The representatives a file states right after triangle t of level l (Fig. 6: "6, 2, 8, 0, 1"): for each
+// corner at or above n_l whose representative was not stated before, that representative, and if it is
+// itself at or above n_l and unstated, its own, and so on. Appends (vertex, representative) pairs to `out`;
+// `stated` (one flag per vertex) remembers what earlier triangles stated.
+void representatives_stated_by(const MultilevelMesh& mesh, uint32_t t, uint32_t n_l, std::vector<uint8_t>& stated,
+                               std::vector<uint32_t>& out);
+
+// The (vertex, representative) pairs level `level`'s batch carries: in the order its triangles state them,
+// then those of its own vertices that no triangle states (only geomorphs use them), by vertex. Levels are
+// taken coarsest first with one `stated` (a flag per vertex) across them.
+std::vector<uint32_t> level_representatives(const MultilevelMesh& mesh, uint32_t level, std::vector<uint8_t>& stated);
+
+// Per level, how many representatives its triangles state (what its ASCII batch carries).
+std::vector<uint32_t> representatives_per_level(const MultilevelMesh& mesh);
+
+// Per level, how many of its own vertices have a representative that no triangle states. No discrete LOD
+// needs one (a triangle of level k states every representative LOD k needs, and a vertex of level l is
+// below n_l, so only coarser triangles can state its); a geomorph from level l to l + 1 puts the vertex
+// there at t = 0 (MultilevelRepresentatives::geomorph). The binary and compressed forms carry them with
+// the vertex's level; the paper's ASCII form has no place for them and leaves them out.
+std::vector<uint32_t> geomorph_representatives_per_level(const MultilevelMesh& mesh);
+uint64_t geomorph_representative_count(const MultilevelMesh& mesh);  // their sum
+
+// Per level, the geometric error of its LOD: the longest distance from a vertex of a finer level to the
+// vertex it stands at in that LOD (its path-compressed representative); 0 for level 0. What a screen-size
+// rule projects to pixels. O(n) per level.
+std::vector<float> multilevel_level_errors(const MultilevelMesh& mesh);
+
+// One LOD of a multilevel mesh at a time (the paper's setLevel). The mesh must outlive it.
+class MultilevelLod {
+ public:
+  explicit MultilevelLod(const MultilevelMesh& mesh);
+
+  // LOD `level` straight from whatever level was set: a path-compressed copy of the representatives
+  // (the original array is kept) and one pass over the LOD's triangles.
+  void set_level(uint32_t level);
+  // setLevel(float): geomorph(floor(x), floor(x) + 1 - x); integral x is set_level(uint32_t).
+  void set_level(float x);
+  // LOD lo's connectivity with the vertices of level lo at (1 - t) * their representative's position at
+  // level lo + 1 + t * their own (attributes likewise): t = 1 is LOD lo; t = 0 is LOD lo + 1 as a surface
+  // (level lo's triangles have zero area) when every vertex of level lo that the LOD names has a
+  // representative, which the geomorph representatives ensure; one without stays put.
+  void geomorph(uint32_t lo, float t);
+
+  float level() const { return level_; }
+  uint32_t vertex_count() const { return vertex_count_; }
+  std::span<const uint32_t> indices() const { return indices_; }
+  std::span<const float> positions() const;
+  std::span<const float> normals() const;
+  std::span<const uint8_t> colors() const;
+  std::span<const float> texcoords() const;
+
+ private:
+  void connect(uint32_t level);
+  bool connect_by_walking(uint32_t level);
+  void prepare_morph(uint32_t lo);
+
+  const MultilevelMesh& mesh_;
+  float level_ = -1;
+  uint32_t connected_ = 0xFFFFFFFFu;  // the level whose connectivity indices_ holds
+  bool morphed_ = false;
+  uint32_t vertex_count_ = 0;
+  std::vector<uint32_t> pc_rep_;      // path-compressed representatives for `connected_`
+  std::vector<uint32_t> indices_;
+  uint32_t morph_level_ = 0xFFFFFFFFu;  // the level whose own vertices morph_source_ covers
+  std::vector<uint32_t> morph_source_;  // per vertex of that level: its representative at level + 1
+  std::vector<float> morph_positions_, morph_normals_, morph_texcoords_;
+  std::vector<uint8_t> morph_colors_;
+};
+
+// The LOD `lod` holds as a plain indexed mesh (a 2D mesh lies in z = 0), with its normals, colours and
+// texture coordinates.
+Mesh lod_mesh(const MultilevelMesh& mesh, const MultilevelLod& lod);
+
+}  // namespace pms
