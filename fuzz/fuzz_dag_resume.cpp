@@ -14,16 +14,16 @@
 #include <vector>
 
 #include "builder/build.h"
+#include "dag/compact.h"
 #include "io/shapes.h"
-#include "spm/pms_file.h"
 #include "protocol/client_messages.h"
 #include "protocol/framing.h"
 #include "protocol/message_types.h"
-#include "dag/compact.h"
 #include "server/catalogue.h"
 #include "server/dag_mode.h"
 #include "server/limits.h"
 #include "server/session.h"
+#include "spm/pms_file.h"
 
 namespace pms::fuzz {
 namespace {

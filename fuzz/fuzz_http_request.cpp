@@ -12,11 +12,11 @@
 
 #include "builder/build.h"
 #include "io/shapes.h"
-#include "spm/pms_file.h"
 #include "protocol/base64url.h"
 #include "server/catalogue.h"
 #include "server/http_message.h"
 #include "server/limits.h"
+#include "spm/pms_file.h"
 
 namespace {
 
@@ -46,7 +46,8 @@ const Fixture& fixture() {
     std::filesystem::remove_all(dir);
     // A vsplit packet is under 1024 bits; BASE and the catalogue are what they are.
     f.body_bound = std::max<size_t>(f.catalogue->find("terrain")->base_frame->size(),
-                                    size_t(f.limits.max_response_splits) * 128 + 16) + 4096;
+                                    size_t(f.limits.max_response_splits) * 128 + 16) +
+                   4096;
     return f;
   }();
   return f;
@@ -96,8 +97,10 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     serve_bytes(rest);
   } else {
     const std::string code = protocol::base64url_encode({data + 1, size - 1});
-    serve_bytes("GET /models/terrain/splits/" + code + " HTTP/1.1\r\nHost: f\r\n\r\nPOST /models/terrain/splits "
-                "HTTP/1.1\r\nHost: f\r\nContent-Length: " + std::to_string(size - 1) + "\r\n\r\n" + std::string(rest));
+    serve_bytes("GET /models/terrain/splits/" + code +
+                " HTTP/1.1\r\nHost: f\r\n\r\nPOST /models/terrain/splits "
+                "HTTP/1.1\r\nHost: f\r\nContent-Length: " +
+                std::to_string(size - 1) + "\r\n\r\n" + std::string(rest));
   }
   return 0;
 }

@@ -23,7 +23,8 @@ using fuzz::touch;
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   try {
-    touch(pms::parse_multilevel_ascii("fuzz.txt", std::string_view(reinterpret_cast<const char*>(data), size), kLimits));
+    touch(
+        pms::parse_multilevel_ascii("fuzz.txt", std::string_view(reinterpret_cast<const char*>(data), size), kLimits));
   } catch (const pms::Error&) {
   }
   std::vector<uint8_t> bytes(data, data + size);

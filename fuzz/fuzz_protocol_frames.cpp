@@ -69,8 +69,7 @@ void decode_frames(const std::vector<Frame>& frames) {
         }
       } else {
         const ClientMessage message = decode_client_message(frame, 1u << 16);
-        if (const Open* open = std::get_if<Open>(&message))
-          has_refinement = open->mode == StreamMode::sender_driven;
+        if (const Open* open = std::get_if<Open>(&message)) has_refinement = open->mode == StreamMode::sender_driven;
       }
     } catch (const ProtocolError&) {
     }

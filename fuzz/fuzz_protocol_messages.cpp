@@ -1,26 +1,26 @@
 // libFuzzer target for every protocol message decoder (docs/architecture.md, "Correctness properties", 5): the
 // first byte picks the decoder, VSPLITS and DAG_OPS take its stream context from the next 8 bytes, the rest is the
 // payload. VSPLITS with split records (which = 12) and CODEC (13) take u16 T | T bytes of code tables first
-// (hostile tables too) and a context made to fit them, whose client holds the roots. Any bytes must decode or throw ProtocolError — never crash, hang, over-allocate or throw anything
-// else — and what decodes must re-encode and decode to the same message (byte for byte where no quantization
-// is involved).
+// (hostile tables too) and a context made to fit them, whose client holds the roots. Any bytes must decode or throw
+// ProtocolError — never crash, hang, over-allocate or throw anything else — and what decodes must re-encode and decode
+// to the same message (byte for byte where no quantization is involved).
 #include <algorithm>
 #include <bit>
 #include <cstddef>
-#include <memory>
 #include <cstdint>
 #include <cstring>
+#include <memory>
 #include <span>
 #include <vector>
 
 #include "common/bit_stream.h"
 #include "common/error.h"
-#include "spm/split_codec.h"
-#include "spm/split_record.h"
 #include "protocol/client_messages.h"
 #include "protocol/message_types.h"
 #include "protocol/server_messages.h"
 #include "protocol/stream_context.h"
+#include "spm/split_codec.h"
+#include "spm/split_record.h"
 
 namespace {
 
@@ -100,13 +100,27 @@ void fuzz_one(uint8_t which, std::span<const uint8_t> payload, const StreamConte
   std::vector<uint8_t> tables;
   if (which % 14 >= 12 && !records_context(payload, context, tables)) return;
   switch (which % 14) {
-    case 0: check(same(payload_of(encode(decode_hello(payload))), payload)); break;
-    case 1: check(same(payload_of(encode(decode_list(payload))), payload)); break;
-    case 2: check(same(payload_of(encode(decode_open(payload, 1u << 16))), payload)); break;
-    case 3: check(same(payload_of(encode(decode_view(payload))), payload)); break;
-    case 4: check(same(payload_of(encode(decode_close(payload))), payload)); break;
-    case 5: check(same(payload_of(encode(decode_hello_ok(payload))), payload)); break;
-    case 6: check(same(payload_of(encode(decode_catalogue(payload))), payload)); break;
+    case 0:
+      check(same(payload_of(encode(decode_hello(payload))), payload));
+      break;
+    case 1:
+      check(same(payload_of(encode(decode_list(payload))), payload));
+      break;
+    case 2:
+      check(same(payload_of(encode(decode_open(payload, 1u << 16))), payload));
+      break;
+    case 3:
+      check(same(payload_of(encode(decode_view(payload))), payload));
+      break;
+    case 4:
+      check(same(payload_of(encode(decode_close(payload))), payload));
+      break;
+    case 5:
+      check(same(payload_of(encode(decode_hello_ok(payload))), payload));
+      break;
+    case 6:
+      check(same(payload_of(encode(decode_catalogue(payload))), payload));
+      break;
     case 7: {
       // Positions and normals may move by a rounding step when re-quantized; the rest must not change.
       const Base base = decode_base(payload);
@@ -123,8 +137,12 @@ void fuzz_one(uint8_t which, std::span<const uint8_t> payload, const StreamConte
       for (size_t i = 0; i < batch.splits.size(); ++i) check(same_split(back.splits[i], batch.splits[i]));
       break;
     }
-    case 9: check(same(payload_of(encode(decode_error(payload))), payload)); break;
-    case 10: check(same(payload_of(encode(decode_dag_view(payload))), payload)); break;
+    case 9:
+      check(same(payload_of(encode(decode_error(payload))), payload));
+      break;
+    case 10:
+      check(same(payload_of(encode(decode_dag_view(payload))), payload));
+      break;
     case 12: {
       const VSplits batch = decode_vsplits(payload, context);
       std::vector<uint8_t> again;

@@ -27,9 +27,6 @@
 
 #include "builder/build.h"
 #include "io/shapes.h"
-#include "spm/hierarchy.h"
-#include "spm/pms_file.h"
-#include "spm/vertex_id.h"
 #include "protocol/client_messages.h"
 #include "protocol/framing.h"
 #include "protocol/message_types.h"
@@ -39,6 +36,9 @@
 #include "server/limits.h"
 #include "server/session.h"
 #include "session_client.h"
+#include "spm/hierarchy.h"
+#include "spm/pms_file.h"
+#include "spm/vertex_id.h"
 
 namespace pms::fuzz {
 namespace {
@@ -57,12 +57,12 @@ struct Fixture {
   const server::ServedModel* served = nullptr;
   server::ServerLimits limits;
   float center[3] = {0, 0, 0}, diagonal = 1;
-  uint64_t work_bound = 0;   // units one receive() or pump() may do
+  uint64_t work_bound = 0;      // units one receive() or pump() may do
   uint64_t dag_work_bound = 0;  // the same in a DAG session, whose one turn is a whole traversal
-  size_t tags_bound = 0;     // bytes of one set of active tags
-  size_t state_bound = 0;    // Session::state_bytes()
-  size_t outbox_bound = 0;   // bytes waiting in the outbox
-  uint64_t quiet_pumps = 0;  // pumps after the last input before the session must have nothing left to do
+  size_t tags_bound = 0;        // bytes of one set of active tags
+  size_t state_bound = 0;       // Session::state_bytes()
+  size_t outbox_bound = 0;      // bytes waiting in the outbox
+  uint64_t quiet_pumps = 0;     // pumps after the last input before the session must have nothing left to do
 };
 
 Fixture make_fixture(const BuildOptions& options) {
@@ -456,12 +456,25 @@ class Harness {
     const uint8_t management = in.byte();
     m.management = DagMode(management < 252 ? management % 2 : management);
     const uint64_t faces = dag_.base_faces();
-    const uint64_t budgets[] = {0, 1, 2, faces - 1, faces, faces + 16, 2 * faces, 500, 3000, 1u << 20,
-                                protocol::kMaxDagBudget, protocol::kMaxDagBudget + 1, UINT64_MAX, in.u32()};
+    const uint64_t budgets[] = {0,
+                                1,
+                                2,
+                                faces - 1,
+                                faces,
+                                faces + 16,
+                                2 * faces,
+                                500,
+                                3000,
+                                1u << 20,
+                                protocol::kMaxDagBudget,
+                                protocol::kMaxDagBudget + 1,
+                                UINT64_MAX,
+                                in.u32()};
     const uint8_t budget = in.byte();
     if (m.management == DagMode::budget || budget >= 240) m.budget = budgets[budget % std::size(budgets)];
-    const uint32_t max_ops[] = {0, 1, 2, 3, 16, 300, protocol::kMaxDagOps - 1, protocol::kMaxDagOps,
-                                protocol::kMaxDagOps + 1, UINT32_MAX, in.u16()};
+    const uint32_t max_ops[] = {
+        0,          1,       2, 3, 16, 300, protocol::kMaxDagOps - 1, protocol::kMaxDagOps, protocol::kMaxDagOps + 1,
+        UINT32_MAX, in.u16()};
     m.max_ops = max_ops[in.byte() % std::size(max_ops)];
     send(protocol::encode(m));
   }

@@ -11,10 +11,10 @@
 #include "common/bit_stream.h"
 #include "common/error.h"
 #include "io/shapes.h"
-#include "spm/refine_info.h"
-#include "spm/split_codec.h"
 #include "protocol/split_bands.h"
+#include "spm/refine_info.h"
 #include "spm/selective_mesh.h"
+#include "spm/split_codec.h"
 #include "spm/vertex_hierarchy.h"
 
 namespace {

@@ -7,9 +7,9 @@
 #include <span>
 #include <vector>
 
-#include "spm/vertex_id.h"
 #include "protocol/message_types.h"
 #include "protocol/split_request.h"
+#include "spm/vertex_id.h"
 
 namespace {
 

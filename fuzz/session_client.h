@@ -15,10 +15,9 @@
 #include <vector>
 
 #include "common/error.h"
-#include "spm/hierarchy.h"
-#include "spm/split_codec.h"
-#include "spm/split_record.h"
-#include "spm/vertex_id.h"
+#include "dag/cut.h"
+#include "dag/dag.h"
+#include "dag/traversal.h"
 #include "protocol/client_messages.h"
 #include "protocol/dispatch.h"
 #include "protocol/framing.h"
@@ -27,13 +26,14 @@
 #include "protocol/position_grid.h"
 #include "protocol/server_messages.h"
 #include "protocol/stream_context.h"
-#include "dag/dag.h"
-#include "dag/cut.h"
-#include "dag/traversal.h"
 #include "server/catalogue.h"
 #include "server/dag_mode.h"
 #include "server/limits.h"
 #include "server/session.h"
+#include "spm/hierarchy.h"
+#include "spm/split_codec.h"
+#include "spm/split_record.h"
+#include "spm/vertex_id.h"
 
 namespace pms::fuzz {
 
@@ -131,9 +131,7 @@ class SimulatedClient {
   protocol::StreamMode mode() const { return front_mode_; }  // of the session the leaves came from
   std::optional<protocol::ErrorCode> error() const { return s_.error; }
   // After BASE, whether the CODEC the session owes has come.
-  bool codec_pending() const {
-    return s_.context && !s_.context->records && protocol::carries_split_records(s_.mode);
-  }
+  bool codec_pending() const { return s_.context && !s_.context->records && protocol::carries_split_records(s_.mode); }
   const std::string& error_text() const { return s_.error_text; }
 
   // The session went quiet after every frame was read: each request has had its answer, and the server's
@@ -158,7 +156,7 @@ class SimulatedClient {
   // of the candidates) and what it has made so far.
   struct DagAnswer {
     uint32_t frame = 0;
-    std::optional<uint64_t> budget;              // BUDGET mode's
+    std::optional<uint64_t> budget;                     // BUDGET mode's
     std::optional<uint32_t> max_collapses, max_splits;  // N, from the session's second answer on
     uint32_t collapses = 0, splits = 0;
   };
@@ -259,7 +257,8 @@ class SimulatedClient {
     a.collapses += uint32_t(m.collapses.size());
     a.splits += uint32_t(m.splits.size());
     if (a.max_collapses && a.collapses > *a.max_collapses)
-      fail("an answer of " + std::to_string(a.collapses) + " collapses, over its N " + std::to_string(*a.max_collapses));
+      fail("an answer of " + std::to_string(a.collapses) + " collapses, over its N " +
+           std::to_string(*a.max_collapses));
     if (a.max_splits && a.splits > *a.max_splits)
       fail("an answer of " + std::to_string(a.splits) + " splits, over its N " + std::to_string(*a.max_splits));
     if (!m.final) return;
@@ -293,7 +292,8 @@ class SimulatedClient {
       unlimited_splits |= v.traversal == DagTraversal::constant_time;
       n = std::max(n, v.max_ops);
     }
-    if (!named) fail("a DAG_OPS for frame " + std::to_string(frame) + ", which no DAG_VIEW since the last answer named");
+    if (!named)
+      fail("a DAG_OPS for frame " + std::to_string(frame) + ", which no DAG_VIEW since the last answer named");
     if (free) a.budget.reset();
     if (s_.dag_answered) {
       a.max_collapses = n;
@@ -304,7 +304,8 @@ class SimulatedClient {
   }
   uint32_t dag_node(const VertexId& v, const char* what) const {
     const uint32_t node = model_.find(v);
-    if (node == kNone || model_.is_leaf(node)) fail(std::string(what) + " of " + to_string(v) + ", which the model does not split");
+    if (node == kNone || model_.is_leaf(node))
+      fail(std::string(what) + " of " + to_string(v) + ", which the model does not split");
     return dag_.node_of(node);
   }
   void dag_collapse(const VertexId& v) {
@@ -389,10 +390,10 @@ class SimulatedClient {
   const ModelData& model_;
   const Dag& dag_;
   const server::ServerLimits& limits_;
-  std::vector<uint8_t> held_;  // per node: a leaf of the client's partial hierarchy
-  std::optional<DagCut> cut_;  // the DAG mode: the client's mesh, once a DAG session's BASE came
+  std::vector<uint8_t> held_;        // per node: a leaf of the client's partial hierarchy
+  std::optional<DagCut> cut_;        // the DAG mode: the client's mesh, once a DAG session's BASE came
   std::vector<uint32_t> positions_;  // the model's on the wire grid, for split record contexts
-  bool has_front_ = false;     // a BASE arrived in this or an earlier session
+  bool has_front_ = false;           // a BASE arrived in this or an earlier session
   protocol::StreamMode front_mode_ = protocol::StreamMode::sender_driven;
   PerSession s_;
   std::vector<uint8_t> last_base_bytes_;
@@ -405,7 +406,8 @@ class SimulatedClient {
 // bad OPEN still reach the session and may end it first.
 class Expectation {
  public:
-  Expectation(const ModelData& model, const Dag& dag, const std::string& name) : model_(model), dag_(dag), name_(name) {}
+  Expectation(const ModelData& model, const Dag& dag, const std::string& name)
+      : model_(model), dag_(dag), name_(name) {}
 
   void received(const protocol::Frame& frame, SimulatedClient& client) {
     using protocol::ErrorCode;
@@ -446,9 +448,10 @@ class Expectation {
     }
     if (const auto* view = std::get_if<protocol::DagView>(&message)) {
       trace([&] {
-        return "   DAG_VIEW " + std::to_string(view->view.frame) + ": traversal " + std::to_string(int(view->traversal)) +
-               (view->management == DagMode::budget ? ", budget " + std::to_string(view->budget) : ", free") +
-               ", N " + std::to_string(view->max_ops) + ", tolerance " + std::to_string(view->view.tolerance) + " px";
+        return "   DAG_VIEW " + std::to_string(view->view.frame) + ": traversal " +
+               std::to_string(int(view->traversal)) +
+               (view->management == DagMode::budget ? ", budget " + std::to_string(view->budget) : ", free") + ", N " +
+               std::to_string(view->max_ops) + ", tolerance " + std::to_string(view->view.tolerance) + " px";
       });
       // Only a DAG session takes it, and a sender-driven one only VIEW.
       if (!open_ || mode_ != protocol::StreamMode::dag) return allow(ErrorCode::out_of_order);
@@ -481,7 +484,8 @@ class Expectation {
       return allow(ErrorCode::too_large);  // a front longer than the model's leaves may be refused as such
     }
     // A DAG session's front is the client's mesh: it resumes when that is a cut of the DAG.
-    if (open.mode == protocol::StreamMode::dag && !cut_of_front(model_, dag_, open.resume)) return allow(ErrorCode::bad_id);
+    if (open.mode == protocol::StreamMode::dag && !cut_of_front(model_, dag_, open.resume))
+      return allow(ErrorCode::bad_id);
     client.open_accepted(open.mode, open.resume);
   }
   // The decoder returns a complete front of trees 0..R-1 in preorder: it is a cut of the model's forest

@@ -1,5 +1,7 @@
 #include "test_support.h"
 
+#include <sys/wait.h>
+#include <unistd.h>
 #include <algorithm>
 #include <atomic>
 #include <cstdio>
@@ -8,8 +10,6 @@
 #include <iterator>
 #include <mutex>
 #include <vector>
-#include <sys/wait.h>
-#include <unistd.h>
 
 namespace pms::test {
 

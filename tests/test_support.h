@@ -35,7 +35,9 @@ CliRun run_pmstream(const std::string& args);
 }  // namespace pms::test
 
 // Skips the test with a clear message when the shared model is not available (a user's fresh clone).
-#define PMS_REQUIRE_SHARED_MODEL(var, file)                                                        \
-  const auto var = ::pms::test::shared_model(file);                                                \
-  if (var.empty()) GTEST_SKIP() << "../shared/models/" << (file) << " not found: this test needs " \
-                                   "the shared test meshes (CI has them beside the checkout)"
+#define PMS_REQUIRE_SHARED_MODEL(var, file)         \
+  const auto var = ::pms::test::shared_model(file); \
+  if (var.empty())                                  \
+  GTEST_SKIP() << "../shared/models/" << (file)     \
+               << " not found: this test needs "    \
+                  "the shared test meshes (CI has them beside the checkout)"

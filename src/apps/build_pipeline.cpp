@@ -34,10 +34,9 @@ std::string describe(const CleanReport& r) {
   add(r.nonmanifold_vertices, "non-manifold vertices split");
   add(r.flipped_faces, "faces reoriented");
   if (r.inside_out_components > 0)
-    add(r.inside_out_components,
-        (std::string(r.inside_out_components == 1 ? "closed component" : "closed components") +
-         " turned outward (" + std::to_string(r.inside_out_faces) + " faces)")
-            .c_str());
+    add(r.inside_out_components, (std::string(r.inside_out_components == 1 ? "closed component" : "closed components") +
+                                  " turned outward (" + std::to_string(r.inside_out_faces) + " faces)")
+                                     .c_str());
   return s.empty() ? "nothing to repair" : s;
 }
 
@@ -127,9 +126,8 @@ BuildRun build_file(const std::string& in_path, const std::string& out_path, con
 }
 
 nlohmann::json stats_json(const BuildStats& s) {
-  return {{"input_vertices", s.input_vertices}, {"input_faces", s.input_faces},
-          {"base_vertices", s.base_vertices},   {"base_faces", s.base_faces},
-          {"vsplits", s.vsplits},               {"tree_id_bits", s.tree_id_bits},
+  return {{"input_vertices", s.input_vertices}, {"input_faces", s.input_faces}, {"base_vertices", s.base_vertices},
+          {"base_faces", s.base_faces},         {"vsplits", s.vsplits},         {"tree_id_bits", s.tree_id_bits},
           {"node_id_bits", s.node_id_bits},     {"max_depth", s.max_depth}};
 }
 

@@ -23,8 +23,7 @@ struct BuildRun {
 std::string describe(const CleanReport& report);
 
 // Builds an already loaded mesh (cleaned here) and writes OUT.pms.
-BuildRun build_mesh(Mesh mesh, const std::string& input_name, const std::string& out_path,
-                    const BuildOptions& options);
+BuildRun build_mesh(Mesh mesh, const std::string& input_name, const std::string& out_path, const BuildOptions& options);
 // A mesh file (any supported format, .gz/.xz), or "terrain:FACES" for the built-in terrain.
 Mesh load_input(const std::string& in_path, const ProgressFn& progress);
 // Loads IN (see load_input) then as above.

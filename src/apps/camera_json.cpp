@@ -57,7 +57,7 @@ Camera camera_from_json(const nlohmann::json& value, const std::string& where) {
 
 nlohmann::json camera_to_json(const Camera& camera) {
   auto vec = [](const float v[3]) { return nlohmann::json::array({v[0], v[1], v[2]}); };
-  return {{"eye", vec(camera.eye)},       {"target", vec(camera.target)}, {"up", vec(camera.up)},
+  return {{"eye", vec(camera.eye)},      {"target", vec(camera.target)}, {"up", vec(camera.up)},
           {"fovy_deg", camera.fovy_deg}, {"width", camera.width},        {"height", camera.height}};
 }
 

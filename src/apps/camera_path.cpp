@@ -147,9 +147,12 @@ std::vector<Camera> make_camera_path(PathKind kind, const ModelData& model, cons
   if (!model.bbox_min || !model.bbox_max) fail("model", "no bounding box");
   const Frame3 f = frame_of(model);
   switch (kind) {
-    case PathKind::orbit: return orbit(model, options, f);
-    case PathKind::scan: return scan(model, options, f);
-    case PathKind::zoom: return zoom(model, options, f);
+    case PathKind::orbit:
+      return orbit(model, options, f);
+    case PathKind::scan:
+      return scan(model, options, f);
+    case PathKind::zoom:
+      return zoom(model, options, f);
   }
   fail("path", "unknown kind");
 }

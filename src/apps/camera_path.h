@@ -6,8 +6,8 @@
 #include <string>
 #include <vector>
 
-#include "spm/hierarchy.h"
 #include "common/camera.h"
+#include "spm/hierarchy.h"
 
 namespace pms::app {
 

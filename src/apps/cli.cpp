@@ -1,9 +1,9 @@
 #include "apps/cli.h"
 
+#include <CLI/CLI.hpp>
 #include <cstdio>
 #include <exception>
 #include <vector>
-#include <CLI/CLI.hpp>
 
 namespace pms::app {
 

@@ -50,8 +50,7 @@ class CliCommand {
   void on_run(std::function<void()> run);
 
  private:
-  friend int run_cli(int, char**, const std::string&, const std::string&,
-                     std::span<void (*const)(CliCommand&)>);
+  friend int run_cli(int, char**, const std::string&, const std::string&, std::span<void (*const)(CliCommand&)>);
   explicit CliCommand(CLI::App* app) : app_(app) {}
   CLI::App* app_;
 };

@@ -20,7 +20,8 @@ namespace fs = std::filesystem;
 // The experiment groups (docs/architecture.md, "Experiments"): a new group is one function and one line here.
 constexpr BenchGroup kGroups[] = {
     {"build", "E12 build time and memory, E1 hierarchy statistics, terrain scaling", run_build_group},
-    {"refine", "adaptation time and ops/s on a scan path, renderer speed, image quality at far/mid/close", run_refine_group},
+    {"refine", "adaptation time and ops/s on a scan path, renderer speed, image quality at far/mid/close",
+     run_refine_group},
     {"sender", "E2 packet bits, E3 server memory, E4 two laps, E5 bytes to satisfy tolerance, E11 many clients",
      run_sender_group},
     {"receiver",
@@ -31,7 +32,8 @@ constexpr BenchGroup kGroups[] = {
      run_multilevel_group},
     {"soak", "many clients resuming and reconnecting for minutes: server RSS over time, failures, latency per minute",
      run_soak_group},
-    {"dag", "E9 DAG traversals: time per frame, accuracy against priority, fronts, session memory, bytes down", run_dag_group},
+    {"dag", "E9 DAG traversals: time per frame, accuracy against priority, fronts, session memory, bytes down",
+     run_dag_group},
 };
 
 std::span<const BenchGroup> bench_groups() { return kGroups; }
@@ -72,8 +74,9 @@ std::vector<const BenchGroup*> select_groups(const std::vector<std::string>& onl
 }
 
 std::string shell_quote(const std::string& arg) {
-  const bool plain = !arg.empty() && arg.find_first_not_of("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ"
-                                                           "0123456789-_./=,:+@%") == std::string::npos;
+  const bool plain = !arg.empty() && arg.find_first_not_of(
+                                         "abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ"
+                                         "0123456789-_./=,:+@%") == std::string::npos;
   if (plain) return arg;
   std::string quoted = "'";
   for (char c : arg) quoted += c == '\'' ? std::string("'\\''") : std::string(1, c);
@@ -122,10 +125,12 @@ class TempDir {
 
 std::string report_header(const BenchContext& context) {
   std::string s = "# pmstream bench\n\n";
-  s += "- command: `" + context.options.command_line + "`" + (context.options.quick ? " (quick: small series)" : "") + "\n";
+  s += "- command: `" + context.options.command_line + "`" + (context.options.quick ? " (quick: small series)" : "") +
+       "\n";
   s += "- machine: " + machine_description() + "\n";
   s += "- pmstream " + std::string(PMSTREAM_VERSION) + ", run " + utc_now() + "\n";
-  s += "- models: " + (context.models_dir.empty() ? std::string("../shared/models not found") : context.models_dir.string()) + "\n";
+  s += "- models: " +
+       (context.models_dir.empty() ? std::string("../shared/models not found") : context.models_dir.string()) + "\n";
   return s;
 }
 

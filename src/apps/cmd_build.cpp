@@ -43,7 +43,8 @@ void run_build(const BuildArgs& args) {
   std::printf("  vsplits:    %llu (%s)\n", (unsigned long long)s.vsplits, s.options.c_str());
   std::printf("  ids:        <%u, %u> bits (tree, node), max depth %u\n", s.tree_id_bits, s.node_id_bits, s.max_depth);
   std::printf("  time:       %.2f s (load %.2f, clean %.2f, hierarchy %.2f, write %.2f), peak RSS %.0f MB\n", seconds,
-              run.load_seconds, run.clean_seconds, run.build_seconds - run.write_seconds, run.write_seconds, peak_rss_mb());
+              run.load_seconds, run.clean_seconds, run.build_seconds - run.write_seconds, run.write_seconds,
+              peak_rss_mb());
   std::printf("  output:     %llu bytes\n", (unsigned long long)run.output_bytes);
   if (run.texcoords_dropped) std::printf("  note:       .pms has no texture coordinates; they were left out\n");
 }

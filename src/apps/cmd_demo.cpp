@@ -59,13 +59,14 @@ std::string prepare_model(const DemoArgs& args) {
   if (!args.model.empty() && !fs::is_regular_file(args.model)) fail(args.model, "no such file");
   const bool own = !args.model.empty();
   // What the build records as its input: a file's name (its date decides, as for make), or the generator.
-  const std::string input_name = own ? fs::path(args.model).filename().string() : "terrain:" + std::to_string(kDemoFaces);
+  const std::string input_name =
+      own ? fs::path(args.model).filename().string() : "terrain:" + std::to_string(kDemoFaces);
   const std::string pms_path = args.out_dir + "/" + (own ? model_name_of(args.model) : "terrain") + ".pms";
   if (args.rebuild || !cache_is_current(pms_path, input_name, own ? args.model : "")) {
-    if (own)
-      std::printf("building %s into %s\n", args.model.c_str(), pms_path.c_str());
+    if (own) std::printf("building %s into %s\n", args.model.c_str(), pms_path.c_str());
     else
-      std::printf("building the built-in terrain (%llu faces) into %s\n", (unsigned long long)kDemoFaces, pms_path.c_str());
+      std::printf("building the built-in terrain (%llu faces) into %s\n", (unsigned long long)kDemoFaces,
+                  pms_path.c_str());
     Stopwatch clock;
     ProgressBar bar(true);
     BuildOptions options;

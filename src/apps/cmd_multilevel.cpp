@@ -1,8 +1,7 @@
-// pmstream multilevel build IN -o OUT [--levels L] [--cluster grid:N,...|FILE.json] [--ascii] [--base-vertices N] [--json]
-// pmstream multilevel info FILE [--json]
-// pmstream multilevel level FILE --level X -o OUT.ply
-// pmstream multilevel level FILE (--region x0,y0,z0,x1,y1,z1 | --sphere x,y,z,r | --camera CAM.json [--pixels P]) [--level X] -o OUT.ply
-// Progressive multilevel meshes (gueziec et al. 1999; docs/multilevel-format.md, docs/cli.md).
+// pmstream multilevel build IN -o OUT [--levels L] [--cluster grid:N,...|FILE.json] [--ascii] [--base-vertices N]
+// [--json] pmstream multilevel info FILE [--json] pmstream multilevel level FILE --level X -o OUT.ply pmstream
+// multilevel level FILE (--region x0,y0,z0,x1,y1,z1 | --sphere x,y,z,r | --camera CAM.json [--pixels P]) [--level X] -o
+// OUT.ply Progressive multilevel meshes (gueziec et al. 1999; docs/multilevel-format.md, docs/cli.md).
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -23,8 +22,8 @@
 #include "multilevel/codec.h"
 #include "multilevel/file.h"
 #include "multilevel/local.h"
-#include "multilevel/region.h"
 #include "multilevel/mesh.h"
+#include "multilevel/region.h"
 
 namespace pms::app {
 namespace {
@@ -68,7 +67,8 @@ std::vector<VertexClustering> clusterings_from_file(const std::string& path) {
       VertexClustering clustering;
       clustering.cluster = c.at("cluster").get<std::vector<uint32_t>>();
       clustering.positions = c.at("positions").get<std::vector<float>>();
-      if (clustering.positions.size() % 3) fail(path, "clustering " + std::to_string(out.size()) + ": positions are not x, y, z triples");
+      if (clustering.positions.size() % 3)
+        fail(path, "clustering " + std::to_string(out.size()) + ": positions are not x, y, z triples");
       out.push_back(std::move(clustering));
     }
     return out;
@@ -137,17 +137,24 @@ void run_multilevel_build(const MultilevelBuildArgs& args) {
   const uint64_t morph = geomorph_representative_count(ml);
   const uint64_t written = ml.stored_representatives() - (args.ascii ? morph : 0);
   if (args.json) {
-    nlohmann::json j = {{"input", args.input},         {"output", args.output},
+    nlohmann::json j = {{"input", args.input},
+                        {"output", args.output},
                         {"format", args.ascii ? "ascii" : "binary"},
-                        {"vertices", ml.vertices()},   {"triangles", ml.faces()},
-                        {"levels", ml.level_count()},  {operations, source.operations},
+                        {"vertices", ml.vertices()},
+                        {"triangles", ml.faces()},
+                        {"levels", ml.level_count()},
+                        {operations, source.operations},
                         {"representatives", written},
                         {"geomorph_representatives", args.ascii ? 0 : morph},
                         {"geomorph_representatives_dropped", args.ascii ? morph : 0},
-                        {"output_bytes", bytes},       {"attributes_dropped", dropped},
-                        {"load_seconds", load_seconds}, {args.cluster.empty() ? "collapse_seconds" : "cluster_seconds", pm_seconds},
-                        {"multilevel_seconds", ml_seconds}, {"write_seconds", write_seconds},
-                        {"seconds", total.seconds()},  {"peak_rss_mb", peak_rss_mb()}};
+                        {"output_bytes", bytes},
+                        {"attributes_dropped", dropped},
+                        {"load_seconds", load_seconds},
+                        {args.cluster.empty() ? "collapse_seconds" : "cluster_seconds", pm_seconds},
+                        {"multilevel_seconds", ml_seconds},
+                        {"write_seconds", write_seconds},
+                        {"seconds", total.seconds()},
+                        {"peak_rss_mb", peak_rss_mb()}};
     std::printf("%s\n", j.dump().c_str());
     return;
   }
@@ -163,10 +170,13 @@ void run_multilevel_build(const MultilevelBuildArgs& args) {
               load_seconds, operations, pm_seconds, ml_seconds, write_seconds);
   std::printf("  output:          %llu bytes\n", (unsigned long long)bytes);
   if (dropped)
-    std::printf("  note:            the ASCII form has no normals, colours or texture coordinates; they were left out\n");
+    std::printf(
+        "  note:            the ASCII form has no normals, colours or texture coordinates; they were left out\n");
   if (args.ascii && morph)
-    std::printf("  note:            the ASCII form has no place for the %llu representatives only geomorphs use;"
-                " they were left out\n", (unsigned long long)morph);
+    std::printf(
+        "  note:            the ASCII form has no place for the %llu representatives only geomorphs use;"
+        " they were left out\n",
+        (unsigned long long)morph);
 }
 
 // Milliseconds of a set_level jump to `level` from the opposite end, and of a geomorph frame there: the
@@ -219,8 +229,11 @@ void run_multilevel_info(const std::string& path, bool json) {
                       {"set_level_ms", t.jump_ms},
                       {"geomorph_ms", t.morph_ms},
                       {"compressed_bytes", compressed.levels[levels.size()].size()},
-                      {"compressed_bits", {{"header", b.header}, {"representatives", b.representatives},
-                                           {"vertices", b.vertices}, {"triangles", b.triangles}}}});
+                      {"compressed_bits",
+                       {{"header", b.header},
+                        {"representatives", b.representatives},
+                        {"vertices", b.vertices},
+                        {"triangles", b.triangles}}}});
   }
   if (json) {
     const nlohmann::json j = {{"file", path},
@@ -245,17 +258,17 @@ void run_multilevel_info(const std::string& path, bool json) {
               (unsigned long long)bytes, m.level_count(), m.vertices(), m.faces(), m.dimension,
               m.normals.empty() ? "" : ", normals", m.colors.empty() ? "" : ", colors",
               m.texcoords.empty() ? "" : ", texture coordinates");
-  std::printf("  representatives: %llu stored (%llu only for geomorphs)\n", (unsigned long long)m.stored_representatives(),
-              (unsigned long long)geomorph_representative_count(m));
+  std::printf("  representatives: %llu stored (%llu only for geomorphs)\n",
+              (unsigned long long)m.stored_representatives(), (unsigned long long)geomorph_representative_count(m));
   std::printf("  compressed (%u-bit grid): %llu bytes, head and every level\n", kDefaultPositionBits,
               (unsigned long long)compressed_bytes);
-  std::printf("  %5s %10s %10s %10s %10s %8s %8s %10s %10s\n", "level", "LOD verts", "LOD tris", "+verts", "+tris", "reps",
-              "+morph", "setLevel", "geomorph");
+  std::printf("  %5s %10s %10s %10s %10s %8s %8s %10s %10s\n", "level", "LOD verts", "LOD tris", "+verts", "+tris",
+              "reps", "+morph", "setLevel", "geomorph");
   for (const auto& row : levels)
     std::printf("  %5u %10u %10u %10u %10u %8u %8u %8.3f ms %8.3f ms\n", row["level"].get<uint32_t>(),
-                row["vertices"].get<uint32_t>(), row["triangles"].get<uint32_t>(), row["level_vertices"].get<uint32_t>(),
-                row["level_triangles"].get<uint32_t>(), row["representatives"].get<uint32_t>(),
-                row["geomorph_representatives"].get<uint32_t>(),
+                row["vertices"].get<uint32_t>(), row["triangles"].get<uint32_t>(),
+                row["level_vertices"].get<uint32_t>(), row["level_triangles"].get<uint32_t>(),
+                row["representatives"].get<uint32_t>(), row["geomorph_representatives"].get<uint32_t>(),
                 row["set_level_ms"].get<double>(), row["geomorph_ms"].get<double>());
 }
 
@@ -276,7 +289,8 @@ void check_level(const std::string& path, const MultilevelMesh& m, double level)
   fail(path, text);
 }
 
-std::vector<uint32_t> wanted_splits(const MultilevelLevelArgs& args, const MultilevelMesh& m, const MultilevelDag& dag) {
+std::vector<uint32_t> wanted_splits(const MultilevelLevelArgs& args, const MultilevelMesh& m,
+                                    const MultilevelDag& dag) {
   if (!args.camera.empty()) {
     float lo[3], hi[3];
     for (int k = 0; k < 3; ++k) lo[k] = 1e30f, hi[k] = -1e30f;

@@ -1,11 +1,11 @@
 // pmstream serve FILES_OR_DIRS... [--port 7300] [--http-port P] [--host 0.0.0.0] [--max-sessions N] [--json] ...
 // Runs the sender-driven TCP server, and with --http-port the receiver-driven HTTP server beside it, until
 // SIGINT or SIGTERM; SIGUSR1 prints the totals so far.
+#include <pthread.h>
 #include <algorithm>
 #include <csignal>
 #include <cstdio>
 #include <ctime>
-#include <pthread.h>
 #include <nlohmann/json.hpp>
 
 #include "apps/commands.h"
@@ -99,20 +99,20 @@ void print_line(const std::string& line) {
 }
 
 void print_totals(const server::ServerStats& s) {
-  std::printf("stopped: %llu sessions (%llu refused, %llu timed out, %llu failed), %llu protocol errors, "
-              "%llu bytes in, %llu bytes out, %llu vsplits sent, "
-              "peak session state %llu bytes (%llu without its active tags), peak RSS %.0f MB\n",
-              (unsigned long long)s.sessions_opened.load(), (unsigned long long)s.sessions_refused.load(),
-              (unsigned long long)s.sessions_timed_out.load(), (unsigned long long)s.sessions_failed.load(),
-              (unsigned long long)s.protocol_errors.load(), (unsigned long long)s.bytes_in.load(),
-              (unsigned long long)s.bytes_out.load(), (unsigned long long)s.splits_sent.load(),
-              (unsigned long long)s.peak_state_bytes.load(), (unsigned long long)s.peak_buffer_bytes.load(),
-              peak_rss_mb());
+  std::printf(
+      "stopped: %llu sessions (%llu refused, %llu timed out, %llu failed), %llu protocol errors, "
+      "%llu bytes in, %llu bytes out, %llu vsplits sent, "
+      "peak session state %llu bytes (%llu without its active tags), peak RSS %.0f MB\n",
+      (unsigned long long)s.sessions_opened.load(), (unsigned long long)s.sessions_refused.load(),
+      (unsigned long long)s.sessions_timed_out.load(), (unsigned long long)s.sessions_failed.load(),
+      (unsigned long long)s.protocol_errors.load(), (unsigned long long)s.bytes_in.load(),
+      (unsigned long long)s.bytes_out.load(), (unsigned long long)s.splits_sent.load(),
+      (unsigned long long)s.peak_state_bytes.load(), (unsigned long long)s.peak_buffer_bytes.load(), peak_rss_mb());
   std::fflush(stdout);
 }
 
-void print_stats(const char* event, const ServeArgs& args, const server::TcpServer& tcp,
-                 const server::HttpServer* http, const Stopwatch& uptime) {
+void print_stats(const char* event, const ServeArgs& args, const server::TcpServer& tcp, const server::HttpServer* http,
+                 const Stopwatch& uptime) {
   if (args.json) {
     nlohmann::json line = stats_json(event, tcp.stats(), uptime);
     if (http) add_http_stats(line, http->stats());
@@ -121,13 +121,14 @@ void print_stats(const char* event, const ServeArgs& args, const server::TcpServ
     print_totals(tcp.stats());
     if (http) {
       const server::HttpStats& s = http->stats();
-      std::printf("http: %llu connections (%llu refused, %llu timed out), %llu requests (%llu not modified, "
-                  "%llu client errors), %llu bytes in, %llu bytes out, %llu splits served in %llu split requests\n",
-                  (unsigned long long)s.connections_opened.load(), (unsigned long long)s.connections_refused.load(),
-                  (unsigned long long)s.connections_timed_out.load(), (unsigned long long)s.requests.load(),
-                  (unsigned long long)s.not_modified.load(), (unsigned long long)s.client_errors.load(),
-                  (unsigned long long)s.bytes_in.load(), (unsigned long long)s.bytes_out.load(),
-                  (unsigned long long)s.splits_served.load(), (unsigned long long)s.split_requests.load());
+      std::printf(
+          "http: %llu connections (%llu refused, %llu timed out), %llu requests (%llu not modified, "
+          "%llu client errors), %llu bytes in, %llu bytes out, %llu splits served in %llu split requests\n",
+          (unsigned long long)s.connections_opened.load(), (unsigned long long)s.connections_refused.load(),
+          (unsigned long long)s.connections_timed_out.load(), (unsigned long long)s.requests.load(),
+          (unsigned long long)s.not_modified.load(), (unsigned long long)s.client_errors.load(),
+          (unsigned long long)s.bytes_in.load(), (unsigned long long)s.bytes_out.load(),
+          (unsigned long long)s.splits_served.load(), (unsigned long long)s.split_requests.load());
       std::fflush(stdout);
     }
   }
@@ -155,8 +156,11 @@ void run_serve(ServeArgs args) {
   if (args.json) {
     nlohmann::json models = nlohmann::json::array();
     for (const auto& model : catalogue->models())
-      models.push_back({{"name", model->name}, {"path", model->path}, {"faces", model->info.input_faces},
-                        {"base_vertices", model->info.base_vertices}, {"vsplits", model->info.vsplits}});
+      models.push_back({{"name", model->name},
+                        {"path", model->path},
+                        {"faces", model->info.input_faces},
+                        {"base_vertices", model->info.base_vertices},
+                        {"vsplits", model->info.vsplits}});
     nlohmann::json line{{"event", "listening"}, {"host", args.host}, {"port", tcp.port()}, {"models", models}};
     if (http) line["http_port"] = http->port();
     print_line(line.dump());
@@ -206,11 +210,13 @@ void add_serve_command(CliCommand& app) {
             "An HTTP request, once begun, must arrive whole within this");
   add_limit(cmd, "--http-write-timeout-ms", http.write_timeout_ms,
             "Close an HTTP peer that takes no answer byte for this long");
-  add_limit(cmd, "--http-max-url-bytes", http.max_target_bytes, "Longest request URL (414 over it; POST takes longer codes)");
+  add_limit(cmd, "--http-max-url-bytes", http.max_target_bytes,
+            "Longest request URL (414 over it; POST takes longer codes)");
   add_limit(cmd, "--http-max-header-bytes", http.max_header_bytes, "Request line and headers together (431 over it)");
   add_limit(cmd, "--http-max-body-bytes", http.max_body_bytes, "A POSTed request code (413 over it)");
   add_limit(cmd, "--http-max-request-ids", http.max_request_ids, "Ids one request code may name (413 over it)");
-  add_limit(cmd, "--http-max-request-depth", http.max_request_depth, "Descendant depth one request may ask for (400 over it)");
+  add_limit(cmd, "--http-max-request-depth", http.max_request_depth,
+            "Descendant depth one request may ask for (400 over it)");
   add_limit(cmd, "--http-max-response-splits", http.max_response_splits,
             "Split records one answer may carry, descendants included (413 over it)");
   cmd.flag("--json", args->json, "Print one JSON object per line: listening, stats (SIGUSR1), stopped");
@@ -235,7 +241,9 @@ void add_serve_command(CliCommand& app) {
   cmd.option("--send-queue-bytes", limits.send_queue_bytes,
              "Answer bytes queued per session before it waits for the peer to read")
       .show_default();
-  cmd.option("--batch", limits.batch_splits, "vsplit packets per VSPLITS message").range(1u, protocol::kMaxPacketsPerMessage).show_default();
+  cmd.option("--batch", limits.batch_splits, "vsplit packets per VSPLITS message")
+      .range(1u, protocol::kMaxPacketsPerMessage)
+      .show_default();
   add_limit(cmd, "--position-bits", limits.position_bits, "Bits per coordinate on the wire (1-24, or 32)");
   cmd.on_run([args, http_port] {
     args->http_port_given = http_port.given();

@@ -8,8 +8,8 @@
 // The headless viewer: follows a camera path, streaming what each frame needs, and reports per frame.
 #include <cstdio>
 #include <filesystem>
-#include <optional>
 #include <nlohmann/json.hpp>
+#include <optional>
 
 #include "apps/camera_json.h"
 #include "apps/commands.h"
@@ -21,12 +21,12 @@
 #include "client/streaming_client.h"
 #include "client/transport.h"
 #include "common/error.h"
+#include "dag/traversal.h"
 #include "io/mesh.h"
 #include "protocol/client_messages.h"
 #include "protocol/stream_mode.h"
-#include "dag/traversal.h"
-#include "spm/selective_mesh.h"
 #include "render/render.h"
+#include "spm/selective_mesh.h"
 
 namespace pms::app {
 namespace {
@@ -77,8 +77,8 @@ Mesh current_mesh(Client& client) {
 }
 
 template <class Client>
-void snapshot(Client& client, const Camera& camera, const std::string& dir, size_t index,
-              Renderer& renderer, Image& image) {
+void snapshot(Client& client, const Camera& camera, const std::string& dir, size_t index, Renderer& renderer,
+              Image& image) {
   const Mesh mesh = current_mesh(client);
   renderer.render({mesh.positions, mesh.indices, mesh.colors}, view_of(client, camera), image);
   char name[32];
@@ -87,8 +87,8 @@ void snapshot(Client& client, const Camera& camera, const std::string& dir, size
 }
 
 nlohmann::json frame_json(const client::FrameReport& r, size_t index, uint32_t lap) {
-  return {{"frame", index},         {"lap", lap},           {"up_bytes", r.up_bytes}, {"down_bytes", r.down_bytes},
-          {"faces", r.faces},       {"vsplits", r.vsplits}, {"latency_ms", r.latency_ms}};
+  return {{"frame", index},   {"lap", lap},           {"up_bytes", r.up_bytes},    {"down_bytes", r.down_bytes},
+          {"faces", r.faces}, {"vsplits", r.vsplits}, {"latency_ms", r.latency_ms}};
 }
 
 void progress(const StreamArgs& args, size_t index, size_t frames, const client::FrameReport& r) {
@@ -247,8 +247,11 @@ void run_multilevel(const StreamArgs& args) {
   });
   nlohmann::json arrivals = nlohmann::json::array();
   for (const client::LevelArrival& a : client.arrivals())
-    arrivals.push_back({{"level", a.level}, {"bytes", a.bytes}, {"down_bytes", a.down_bytes},
-                        {"down_payload_bytes", a.payload_down}, {"ms", a.ms}});
+    arrivals.push_back({{"level", a.level},
+                        {"bytes", a.bytes},
+                        {"down_bytes", a.down_bytes},
+                        {"down_payload_bytes", a.payload_down},
+                        {"ms", a.ms}});
   const client::HttpCounters& c = client.counters();
   nlohmann::json out = {{"frames", frames},
                         {"total_up_bytes", c.bytes_up},
@@ -312,7 +315,8 @@ void run_stream(const StreamArgs& args) {
   options.answer_timeout = std::chrono::milliseconds(args.timeout_ms);
   options.connect_timeout = std::chrono::milliseconds(args.connect_timeout_ms);
   options.on_reconnect = [&](const std::string& reason, uint32_t attempt) {
-    std::fprintf(stderr, "\n%s; reconnecting and resuming the session (%u/%u)\n", reason.c_str(), attempt, args.reconnect);
+    std::fprintf(stderr, "\n%s; reconnecting and resuming the session (%u/%u)\n", reason.c_str(), attempt,
+                 args.reconnect);
   };
   client::StreamingClient client(host, port, options);
   client.open(args.model);

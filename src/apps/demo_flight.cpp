@@ -2,12 +2,12 @@
 // over real loopback TCP, exactly as `serve` and `stream` would over a network.
 #include "apps/demo_flight.h"
 
+#include <unistd.h>
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
-#include <unistd.h>
 
 #include "apps/camera_path.h"
 #include "apps/percentile.h"
@@ -15,13 +15,13 @@
 #include "client/streaming_client.h"
 #include "client/transport.h"
 #include "common/error.h"
-#include "spm/hierarchy.h"
 #include "protocol/client_messages.h"
-#include "spm/selective_mesh.h"
 #include "render/render.h"
 #include "server/catalogue.h"
 #include "server/limits.h"
 #include "server/tcp_server.h"
+#include "spm/hierarchy.h"
+#include "spm/selective_mesh.h"
 
 namespace pms::app {
 namespace {
@@ -130,16 +130,18 @@ std::string summary_table(client::StreamingClient& client, const Flight& flight,
   const client::LinkCounters c = client.counters();
   const double share = all_splits ? double(client.session().splits_received()) / double(all_splits) : 0;
   char table[2048];
-  std::snprintf(table, sizeof table,
-                "| frames | faces (last / mean) | vsplits received | bytes down | bytes up | VIEW requests | latency p50 / p99 "
-                "| view-independent bytes down |\n"
-                "|---|---|---|---|---|---|---|---|\n"
-                "| %zu | %llu / %.0f | %llu (%.1f %% of %llu) | %llu (base %llu) | %llu | %llu | %.2f / %.2f ms | %llu (%.2fx) |\n",
-                frames, (unsigned long long)client.session().mesh().face_count(), double(flight.face_sum) / double(frames),
-                (unsigned long long)client.session().splits_received(), 100 * share, (unsigned long long)all_splits,
-                (unsigned long long)c.bytes_down, (unsigned long long)base_bytes, (unsigned long long)c.bytes_up,
-                (unsigned long long)flight.requests, percentile(flight.latencies, 0.5), percentile(flight.latencies, 0.99),
-                (unsigned long long)vi_bytes, double(vi_bytes) / double(std::max<uint64_t>(c.bytes_down, 1)));
+  std::snprintf(
+      table, sizeof table,
+      "| frames | faces (last / mean) | vsplits received | bytes down | bytes up | VIEW requests | latency p50 / p99 "
+      "| view-independent bytes down |\n"
+      "|---|---|---|---|---|---|---|---|\n"
+      "| %zu | %llu / %.0f | %llu (%.1f %% of %llu) | %llu (base %llu) | %llu | %llu | %.2f / %.2f ms | %llu (%.2fx) "
+      "|\n",
+      frames, (unsigned long long)client.session().mesh().face_count(), double(flight.face_sum) / double(frames),
+      (unsigned long long)client.session().splits_received(), 100 * share, (unsigned long long)all_splits,
+      (unsigned long long)c.bytes_down, (unsigned long long)base_bytes, (unsigned long long)c.bytes_up,
+      (unsigned long long)flight.requests, percentile(flight.latencies, 0.5), percentile(flight.latencies, 0.99),
+      (unsigned long long)vi_bytes, double(vi_bytes) / double(std::max<uint64_t>(c.bytes_down, 1)));
   return table;
 }
 

@@ -32,7 +32,8 @@ void ProgressBar::draw(std::string_view phase, double fraction) {
   bar.resize(kWidth, '.');
   const double elapsed = std::chrono::duration<double>(now - phase_start_).count();
   char eta[32] = "";
-  if (fraction > 0.02 && fraction < 1) std::snprintf(eta, sizeof eta, " ETA %.0fs", elapsed * (1 - fraction) / fraction);
+  if (fraction > 0.02 && fraction < 1)
+    std::snprintf(eta, sizeof eta, " ETA %.0fs", elapsed * (1 - fraction) / fraction);
   std::fprintf(stderr, "\r%-10s [%s] %3d%%%-12s", phase_.c_str(), bar.c_str(), int(fraction * 100), eta);
   std::fflush(stderr);
   drawn_ = true;

@@ -1,7 +1,7 @@
 #include "apps/refine_pipeline.h"
 
-#include "spm/hierarchy.h"
 #include "spm/adapt.h"
+#include "spm/hierarchy.h"
 #include "spm/selective_mesh.h"
 #include "spm/stream_order.h"
 

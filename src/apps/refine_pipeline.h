@@ -3,9 +3,9 @@
 #pragma once
 #include <cstdint>
 
+#include "common/camera.h"
 #include "io/mesh.h"
 #include "spm/hierarchy.h"
-#include "common/camera.h"
 #include "spm/selective_mesh.h"
 
 namespace pms::app {

@@ -4,8 +4,8 @@
 #include <string>
 
 #include "apps/cli.h"
-#include "io/mesh.h"
 #include "common/camera.h"
+#include "io/mesh.h"
 #include "render/render.h"
 
 namespace pms::app {
@@ -29,7 +29,9 @@ struct CameraArgs {
   uint32_t width = 0, height = 0;  // 0: the camera file's
 };
 void add_camera_options(CliCommand& cmd, CameraArgs& args);
-inline Camera load_camera_sized(const CameraArgs& args) { return load_camera_sized(args.camera, args.width, args.height); }
+inline Camera load_camera_sized(const CameraArgs& args) {
+  return load_camera_sized(args.camera, args.width, args.height);
+}
 
 // make_view() with near/far around [box_min, box_max] (an empty box, min > max, becomes the camera's
 // target point); a degenerate camera is reported against `camera_path`.

@@ -33,7 +33,8 @@ std::vector<uint32_t> breadth_first(const CollapseForest& forest) {
     const size_t level_end = order.size();
     parents.clear();
     for (size_t i = level_begin; i < level_end; ++i)
-      if (order[i] >= forest.leaf_count) parents.push_back(uint64_t(UINT16_MAX - deviation(order[i])) << 32 | (i - level_begin));
+      if (order[i] >= forest.leaf_count)
+        parents.push_back(uint64_t(UINT16_MAX - deviation(order[i])) << 32 | (i - level_begin));
     std::sort(parents.begin(), parents.end());
     for (const uint64_t parent : parents) {
       const uint32_t k = order[level_begin + uint32_t(parent)] - forest.leaf_count;

@@ -21,7 +21,7 @@ enum class Deviation {
 };
 
 struct BuildOptions {
-  bool greedy = false;         // classic one-at-a-time PM order (the view-independent baseline)
+  bool greedy = false;  // classic one-at-a-time PM order (the view-independent baseline)
   // Stop once the base mesh has this many vertices, or earlier when no valid collapse is left
   // (0: as coarse as the mesh allows). The default keeps the base a few KB and ids short: the last
   // few rounds below it add a level to the hierarchy each while removing only a handful of vertices.

@@ -48,7 +48,8 @@ CollapseMesh::CollapseMesh(const Mesh& mesh)
     if (len == 0) continue;
     const Vec3 unit{n.x / len, n.y / len, n.z / len};
     const float* p = position(t[0]);
-    const Quadric q = Quadric::plane(unit.x, unit.y, unit.z, -(unit.x * p[0] + unit.y * p[1] + unit.z * p[2]), len * 0.5);
+    const Quadric q =
+        Quadric::plane(unit.x, unit.y, unit.z, -(unit.x * p[0] + unit.y * p[1] + unit.z * p[2]), len * 0.5);
     for (int k = 0; k < 3; ++k) quadrics_[t[k]] += q;
   }
   // A directed edge v->a is on the boundary when no face holds a->v. Finding the vertices with one
@@ -132,8 +133,14 @@ bool CollapseMesh::check_collapse(uint32_t t, uint32_t u, CollapseSite& site) {
     ++t_faces;
     const uint32_t a = faces_[3 * f + (slot + 1) % 3];
     const uint32_t b = faces_[3 * f + (slot + 2) % 3];
-    if (a == u) { site.face_l = f; site.l = b; }
-    if (b == u) { site.face_r = f; site.r = a; }
+    if (a == u) {
+      site.face_l = f;
+      site.l = b;
+    }
+    if (b == u) {
+      site.face_r = f;
+      site.r = a;
+    }
   });
   const bool has_l = site.face_l != UINT32_MAX, has_r = site.face_r != UINT32_MAX;
   if (!has_l && !has_r) return false;  // not an edge

@@ -99,10 +99,10 @@ class CollapseMesh {
   static constexpr uint32_t kEnd = UINT32_MAX;
   BigVector<float> positions_;
   BigVector<uint32_t> faces_;
-  BigVector<uint32_t> original_;   // input corners, never modified: the dual view of every face
+  BigVector<uint32_t> original_;  // input corners, never modified: the dual view of every face
   BigVector<uint8_t> face_alive_;
   BigVector<uint32_t> next_corner_;
-  BigVector<uint32_t> head_;       // first corner of each vertex; kEnd once the vertex is gone
+  BigVector<uint32_t> head_;  // first corner of each vertex; kEnd once the vertex is gone
   BigVector<uint8_t> vertex_alive_;
   BigVector<Quadric> quadrics_;
   uint32_t alive_vertices_ = 0;
@@ -123,7 +123,8 @@ void CollapseMesh::for_each_face(uint32_t v, Fn&& fn) {
     const uint32_t next = next_corner_[c];
     const uint32_t f = c / 3;
     if (!face_alive_[f]) {
-      if (prev == kEnd) head_[v] = next; else next_corner_[prev] = next;
+      if (prev == kEnd) head_[v] = next;
+      else next_corner_[prev] = next;
     } else {
       fn(f, c - 3 * f);
       prev = c;

@@ -56,17 +56,16 @@ void CollapseRecorder::end_round() {
       pending_, mesh_, [this](uint32_t v) { return refinement_.samples_of(v); },
       [this](uint32_t v) { return current_[v].survivor_leaf; });
   const auto compute = [this](size_t begin, size_t end) {
-    computing_round_.for_each(begin, end, [this](const CapturedRound::Collapse& c, std::span<const uint32_t> corners,
-                                                 std::span<const uint32_t> samples) {
-      refinement_.compute(c.s, c.t_node, c.u_node, corners, samples);
-    });
+    computing_round_.for_each(
+        begin, end,
+        [this](const CapturedRound::Collapse& c, std::span<const uint32_t> corners, std::span<const uint32_t> samples) {
+          refinement_.compute(c.s, c.t_node, c.u_node, corners, samples);
+        });
   };
   // A thread costs more than a few hundred records (~3 us each).
   const size_t count = computing_round_.collapses.size();
-  if (count < 2 * CapturedRound::kChunk)
-    compute(0, count);
-  else
-    computing_.start(count, CapturedRound::kChunk, compute);
+  if (count < 2 * CapturedRound::kChunk) compute(0, count);
+  else computing_.start(count, CapturedRound::kChunk, compute);
 }
 
 void CollapseRecorder::flush() {

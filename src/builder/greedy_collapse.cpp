@@ -26,7 +26,8 @@ class GreedySimplifier {
     targets_.clear();
     for (uint32_t u : neighbours_)
       targets_.push_back({mesh_.quadric(t).error_sum(mesh_.quadric(u), mesh_.position(u)), t, u, version_[t]});
-    std::sort(targets_.begin(), targets_.end(), [](const QueueEntry& a, const QueueEntry& b) { return a.cost < b.cost; });
+    std::sort(targets_.begin(), targets_.end(),
+              [](const QueueEntry& a, const QueueEntry& b) { return a.cost < b.cost; });
     CollapseSite site;
     for (const QueueEntry& e : targets_)
       if (mesh_.check_collapse(t, e.u, site)) {

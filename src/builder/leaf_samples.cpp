@@ -16,7 +16,10 @@ size_t capacity_for(size_t live) { return 2 * live + 1024 + 2 * LeafSamples::kMa
 }  // namespace
 
 LeafSamples::LeafSamples(uint32_t vertex_count)
-    : arena_(vertex_count), offset_(vertex_count), count_(vertex_count, 1), leaf_count_(vertex_count, 1),
+    : arena_(vertex_count),
+      offset_(vertex_count),
+      count_(vertex_count, 1),
+      leaf_count_(vertex_count, 1),
       live_(vertex_count) {
   for (uint32_t v = 0; v < vertex_count; ++v) {
     arena_[v] = v;
@@ -28,9 +31,8 @@ LeafSamples::LeafSamples(uint32_t vertex_count)
 void LeafSamples::merge(uint32_t t, uint32_t u) {
   const uint32_t have_t = count_[t], have_u = count_[u];
   const uint64_t total = uint64_t(leaf_count_[t]) + leaf_count_[u];
-  uint32_t from_t = have_t + have_u <= kMax
-                        ? have_t
-                        : std::clamp<uint32_t>(uint32_t(kMax * leaf_count_[t] / total), 1, kMax - 1);
+  uint32_t from_t =
+      have_t + have_u <= kMax ? have_t : std::clamp<uint32_t>(uint32_t(kMax * leaf_count_[t] / total), 1, kMax - 1);
   from_t = std::min(from_t, have_t);
   const uint32_t from_u = std::min(have_u, kMax - from_t);
   leaf_count_[u] = uint32_t(std::min<uint64_t>(total, std::numeric_limits<uint32_t>::max()));
@@ -55,7 +57,8 @@ void LeafSamples::collect_garbage() {
   packed.reserve(capacity_for(live_));
   for (size_t v = 0; v < offset_.size(); ++v) {
     const size_t start = packed.size();
-    packed.insert(packed.end(), arena_.begin() + ptrdiff_t(offset_[v]), arena_.begin() + ptrdiff_t(offset_[v] + count_[v]));
+    packed.insert(packed.end(), arena_.begin() + ptrdiff_t(offset_[v]),
+                  arena_.begin() + ptrdiff_t(offset_[v] + count_[v]));
     offset_[v] = start;
   }
   arena_.swap(packed);

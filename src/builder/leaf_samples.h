@@ -42,7 +42,7 @@ class LeafSamples {
   BigVector<size_t> offset_;  // per vertex: where its set starts in arena_
   BigVector<uint8_t> count_;  // per vertex: samples in its set (0: collapsed away)
   BigVector<uint32_t> leaf_count_;
-  size_t live_ = 0;           // samples in the sets of live vertices
+  size_t live_ = 0;  // samples in the sets of live vertices
 };
 
 }  // namespace pms

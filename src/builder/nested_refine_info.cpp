@@ -17,13 +17,14 @@
 namespace pms {
 namespace {
 
-constexpr size_t kParallelNodes = size_t(1) << 14;  // fewer run inline
+constexpr size_t kParallelNodes = size_t(1) << 14;                     // fewer run inline
 constexpr double kConeUnit = std::numbers::pi / 2 / (kConeSteps + 1);  // one step of RefineInfo::cone_angle
 
 double angle_between(const float a[3], const float b[3]) {
   const double cx = double(a[1]) * b[2] - double(a[2]) * b[1], cy = double(a[2]) * b[0] - double(a[0]) * b[2],
                cz = double(a[0]) * b[1] - double(a[1]) * b[0];
-  return std::atan2(std::sqrt(cx * cx + cy * cy + cz * cz), double(a[0]) * b[0] + double(a[1]) * b[1] + double(a[2]) * b[2]);
+  return std::atan2(std::sqrt(cx * cx + cy * cy + cz * cz),
+                    double(a[0]) * b[0] + double(a[1]) * b[1] + double(a[2]) * b[2]);
 }
 
 // The stored half at or above a length (relative to the scale, as RefineInfo stores it).
@@ -44,7 +45,8 @@ RefineInfo snap_axis(const RefineInfo& own) {
   constexpr int kStep = 1 << kAxisSnapBits, kLimit = kAxisSteps / kStep * kStep;
   const auto snap = [&](uint16_t q, bool up) {
     const int v = int16_t(q);
-    return uint16_t(int16_t(std::clamp((v >= 0 ? v / kStep : -((-v + kStep - 1) / kStep)) * kStep + (up ? kStep : 0), -kLimit, kLimit)));
+    return uint16_t(int16_t(
+        std::clamp((v >= 0 ? v / kStep : -((-v + kStep - 1) / kStep)) * kStep + (up ? kStep : 0), -kLimit, kLimit)));
   };
   // Rank the candidates by cosine (cheap); only the winner's angle needs atan2.
   RefineInfo best = own;
@@ -56,14 +58,16 @@ RefineInfo snap_axis(const RefineInfo& own) {
     candidate.cone_y = snap(own.cone_y, i & 2);
     float snapped[3];
     decode_axis(candidate.cone_x, candidate.cone_y, snapped);
-    const double length = std::sqrt(double(snapped[0]) * snapped[0] + double(snapped[1]) * snapped[1] +
-                                    double(snapped[2]) * snapped[2]);
-    const double cosine = (double(snapped[0]) * axis[0] + double(snapped[1]) * axis[1] + double(snapped[2]) * axis[2]) / length;
+    const double length =
+        std::sqrt(double(snapped[0]) * snapped[0] + double(snapped[1]) * snapped[1] + double(snapped[2]) * snapped[2]);
+    const double cosine =
+        (double(snapped[0]) * axis[0] + double(snapped[1]) * axis[1] + double(snapped[2]) * axis[2]) / length;
     if (cosine > best_cos) best_cos = cosine, best = candidate, std::copy_n(snapped, 3, best_axis);
   }
   if (best.cone_x == own.cone_x && best.cone_y == own.cone_y) return own;  // on the grid already
   const double best_error = angle_between(best_axis, axis);
-  const double angle = double(decode_cone_angle(own.cone_angle)) + best_error + 1e-6;  // 1e-6: float slack, as quantize_refine
+  const double angle =
+      double(decode_cone_angle(own.cone_angle)) + best_error + 1e-6;  // 1e-6: float slack, as quantize_refine
   auto units = uint32_t(std::ceil(angle / kConeUnit));
   while (units <= kConeSteps && double(decode_cone_angle(uint16_t(units))) < angle) ++units;
   if (units > kConeSteps) return own;
@@ -114,7 +118,8 @@ void nest_refine_info(CollapseForest& forest) {
   // node after its parent is final.
   for (size_t k = forest.child_t.size(); k-- > 0;) {
     const RefineInfo parent = forest.info[forest.leaf_count + k];
-    for (const uint32_t child : {forest.child_t[k], forest.child_u[k]}) forest.info[child] = nest(parent, forest.info[child]);
+    for (const uint32_t child : {forest.child_t[k], forest.child_u[k]})
+      forest.info[child] = nest(parent, forest.info[child]);
   }
 }
 

@@ -87,8 +87,15 @@ struct RefinementInfoBuilder::Fan {
     double ab_ab, ab_ac, ac_ac;
     V3 rest;  // the two corners other than the fan's centre u, summed
 
-    Tri(V3 a_, V3 b, V3 c) : a(a_), ab(b - a_), ac(c - a_), n(normalized(cross(ab, ac))), d(dot(n, a_)),
-        ab_ab(dot(ab, ab)), ab_ac(dot(ab, ac)), ac_ac(dot(ac, ac)) {}
+    Tri(V3 a_, V3 b, V3 c)
+        : a(a_),
+          ab(b - a_),
+          ac(c - a_),
+          n(normalized(cross(ab, ac))),
+          d(dot(n, a_)),
+          ab_ab(dot(ab, ab)),
+          ab_ac(dot(ab, ac)),
+          ac_ac(dot(ac, ac)) {}
     Tri() = default;
 
     // p minus its closest point on the triangle, `plane` = p's signed distance from it: Ericson's
@@ -212,9 +219,8 @@ RefinementInfoBuilder::RefinementInfoBuilder(const Mesh& mesh, const CollapseMes
       });
       axis = normalized(axis);
       double min_cos = 1;
-      connectivity.for_each_live_face(v, [&](uint32_t f, uint32_t) {
-        min_cos = std::min(min_cos, dot(axis, face_normal[f]));
-      });
+      connectivity.for_each_live_face(
+          v, [&](uint32_t f, uint32_t) { min_cos = std::min(min_cos, dot(axis, face_normal[f])); });
       const Cone cone{axis, std::acos(std::clamp(min_cos, -1.0, 1.0)) + 1e-6};
       info_[v] = quantize_refine(to_bounds(std::sqrt(radius_squared), cone, 0, 0), scale_);
       survivor_[v] = v;

@@ -55,8 +55,8 @@ class RefinementInfoBuilder {
   Deviation deviation_;
   float scale_ = 1;
   std::vector<RefineInfo> info_;
-  BigVector<uint32_t> survivor_;   // per node: leaf carrying its position
-  LeafSamples samples_;  // per current vertex, leaves of its subtree (Hoppe's points)
+  BigVector<uint32_t> survivor_;  // per node: leaf carrying its position
+  LeafSamples samples_;           // per current vertex, leaves of its subtree (Hoppe's points)
 };
 
 }  // namespace pms

@@ -19,11 +19,11 @@ namespace pms {
 struct CollapseForest {
   uint32_t leaf_count = 0;
   std::vector<uint32_t> child_t, child_u;
-  std::vector<uint32_t> cut_l, cut_r;      // fundamental cut leaves (input vertices), UINT32_MAX if absent
-  std::vector<uint32_t> root_node;         // temporary node of each base vertex
-  std::vector<uint32_t> base_faces;        // 3 per base face, indices into root_node
-  std::vector<RefineInfo> info;            // per temporary node
-  std::vector<uint32_t> survivor_leaf;     // per temporary node: the leaf whose position/attributes it carries
+  std::vector<uint32_t> cut_l, cut_r;   // fundamental cut leaves (input vertices), UINT32_MAX if absent
+  std::vector<uint32_t> root_node;      // temporary node of each base vertex
+  std::vector<uint32_t> base_faces;     // 3 per base face, indices into root_node
+  std::vector<RefineInfo> info;         // per temporary node
+  std::vector<uint32_t> survivor_leaf;  // per temporary node: the leaf whose position/attributes it carries
 
   uint32_t node_count() const { return leaf_count + uint32_t(child_t.size()); }
 };
@@ -62,7 +62,7 @@ class CollapseRecorder {
     uint32_t height;         // of that node's subtree
     uint32_t survivor_leaf;  // of that node
   };
-  std::vector<CurrentNode> current_;  // per working-mesh vertex
+  std::vector<CurrentNode> current_;              // per working-mesh vertex
   std::vector<CapturedRound::Collapse> pending_;  // the round's collapses so far
   CapturedRound computing_round_;
   BackgroundLoop computing_;

@@ -12,10 +12,10 @@
 #include <vector>
 
 #include "client/client_session.h"
-#include "spm/vertex_id.h"
+#include "common/camera.h"
 #include "protocol/client_messages.h"
 #include "protocol/server_messages.h"
-#include "common/camera.h"
+#include "spm/vertex_id.h"
 
 namespace pms::client {
 
@@ -24,8 +24,8 @@ struct FrameReport {
   uint64_t up_bytes = 0, down_bytes = 0;  // this frame's traffic
   uint64_t vsplits = 0;                   // packets received this frame
   uint64_t faces = 0;
-  bool requested = false;                 // a VIEW was sent
-  double latency_ms = 0;                  // VIEW sent -> last split of its answer applied (0 if none)
+  bool requested = false;  // a VIEW was sent
+  double latency_ms = 0;   // VIEW sent -> last split of its answer applied (0 if none)
 };
 
 // Called with each batch of an answer after the session attached it to the hierarchy.

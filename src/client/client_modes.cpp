@@ -11,10 +11,14 @@ namespace pms::client {
 
 std::unique_ptr<ClientMode> make_client_mode(protocol::StreamMode mode) {
   switch (mode) {
-    case protocol::StreamMode::sender_driven: return std::make_unique<SenderDrivenClient>();
-    case protocol::StreamMode::view_independent: return std::make_unique<ViewIndependentClient>();
-    case protocol::StreamMode::sender_plain: return std::make_unique<SenderPlainClient>();
-    case protocol::StreamMode::dag: return std::make_unique<DagClient>();
+    case protocol::StreamMode::sender_driven:
+      return std::make_unique<SenderDrivenClient>();
+    case protocol::StreamMode::view_independent:
+      return std::make_unique<ViewIndependentClient>();
+    case protocol::StreamMode::sender_plain:
+      return std::make_unique<SenderPlainClient>();
+    case protocol::StreamMode::dag:
+      return std::make_unique<DagClient>();
   }
   fail("client", "a streaming mode this client does not know");
 }

@@ -7,14 +7,14 @@
 #include <cstdint>
 
 #include "common/error.h"
-#include "spm/split_record.h"
-#include "spm/vertex_id.h"
 #include "protocol/client_messages.h"
 #include "protocol/model_messages.h"
 #include "protocol/server_messages.h"
 #include "protocol/split_bands.h"
 #include "spm/selective_mesh.h"
+#include "spm/split_record.h"
 #include "spm/vertex_hierarchy.h"
+#include "spm/vertex_id.h"
 
 namespace pms::client {
 
@@ -41,7 +41,8 @@ void ClientSession::on_base(const protocol::Base& base) {
 void ClientSession::on_codec(const protocol::Codec& codec) {
   if (!has_model()) fail("CODEC", "received before BASE");
   if (context_.records) {
-    if (codec.tables != codec_tables_) fail("CODEC", "the server's split record tables are not the ones this client holds");
+    if (codec.tables != codec_tables_)
+      fail("CODEC", "the server's split record tables are not the ones this client holds");
     return;
   }
   codec_tables_ = codec.tables;

@@ -7,16 +7,16 @@
 #include <span>
 #include <vector>
 
-#include "spm/split_codec.h"
-#include "spm/vertex_id.h"
+#include "common/camera.h"
 #include "protocol/client_messages.h"
 #include "protocol/server_messages.h"
 #include "protocol/split_request.h"
 #include "protocol/stream_context.h"
 #include "spm/adapt.h"
-#include "common/camera.h"
 #include "spm/selective_mesh.h"
+#include "spm/split_codec.h"
 #include "spm/vertex_hierarchy.h"
+#include "spm/vertex_id.h"
 
 namespace pms::client {
 
@@ -33,7 +33,8 @@ class ClientSession {
   void on_vsplits(const protocol::VSplits& batch);
   // The same for a receiver-driven answer in records format 3 (protocol/split_bands.h): the bands of
   // `request`'s ids, coded with `codec`. Returns the splits attached.
-  uint32_t on_split_bands(std::span<const uint8_t> body, const protocol::SplitRequest& request, const SplitCodec& codec);
+  uint32_t on_split_bands(std::span<const uint8_t> body, const protocol::SplitRequest& request,
+                          const SplitCodec& codec);
   // Makes every split of an attached batch on the mesh, in order: for the modes whose client applies
   // splits as they arrive. pms::Error naming `promise` (the order the server owes) when one cannot be made.
   void apply_as_they_come(const protocol::VSplits& batch, const char* promise);

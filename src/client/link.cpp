@@ -2,11 +2,11 @@
 // connect, the reads into a FrameReader, the writes of queued frames one after another, and the deadlines
 // on all three (asio's chat_client shape, with the timeouts of its timeouts/ examples). The caller's
 // threads only touch what the mutex guards and hand frames over with asio::post.
-#include <utility>  // before asio with C++20 (docs/architecture.md, "Stack")
-#include <boost/asio.hpp>
 #include <array>
+#include <boost/asio.hpp>
 #include <functional>
 #include <thread>
+#include <utility>  // before asio with C++20 (docs/architecture.md, "Stack")
 
 #include "client/link.h"
 #include "client/transport.h"
@@ -101,7 +101,8 @@ struct Link::Impl {
 
   void on_read(const error_code& ec, size_t n) {
     if (ec == asio::error::eof)
-      return lost(reader.mid_frame() ? "the server closed the connection mid-frame" : "the server closed the connection");
+      return lost(reader.mid_frame() ? "the server closed the connection mid-frame"
+                                     : "the server closed the connection");
     if (ec) return lost(ec.message());
     bool completed = false, paused = false;
     {

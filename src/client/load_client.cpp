@@ -5,15 +5,15 @@
 
 #include "client/link.h"
 #include "common/error.h"
-#include "spm/hierarchy.h"
-#include "spm/split_record.h"
-#include "spm/vertex_id.h"
 #include "protocol/client_messages.h"
 #include "protocol/framing.h"
 #include "protocol/message_types.h"
 #include "protocol/model_messages.h"
 #include "protocol/server_messages.h"
 #include "protocol/split_bands.h"
+#include "spm/hierarchy.h"
+#include "spm/split_record.h"
+#include "spm/vertex_id.h"
 
 namespace pms::client {
 
@@ -88,8 +88,9 @@ void LoadClient::hold(const SplitRecord& split) {
   if (n == kNone || model.is_leaf(n))
     fail("server", "a split of " + pms::to_string(split.vs) + ", which the model cannot split");
   if (!held(n))
-    fail("server", "a split of " + pms::to_string(split.vs) + ", which is not a leaf this client holds "
-                   "(sent before, or its parent never was)");
+    fail("server", "a split of " + pms::to_string(split.vs) +
+                       ", which is not a leaf this client holds "
+                       "(sent before, or its parent never was)");
   leaf_bits_[n / 64] &= ~(uint64_t(1) << (n % 64));
   for (uint32_t child : {model.first_child[n], model.first_child[n] + 1})
     leaf_bits_[child / 64] |= uint64_t(1) << (child % 64);

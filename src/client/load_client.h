@@ -10,14 +10,14 @@
 #include <vector>
 
 #include "client/server_connection.h"
-#include "spm/hierarchy.h"
-#include "spm/split_record.h"
-#include "spm/vertex_id.h"
+#include "common/camera.h"
 #include "protocol/framing.h"
 #include "protocol/message_types.h"
 #include "protocol/stream_context.h"
-#include "common/camera.h"
+#include "spm/hierarchy.h"
+#include "spm/split_record.h"
 #include "spm/vertex_hierarchy.h"
+#include "spm/vertex_id.h"
 
 namespace pms::client {
 
@@ -60,9 +60,9 @@ class LoadClient {
   std::unique_ptr<ServerConnection> server_;
   protocol::StreamContext context_;
   uint32_t frame_ = 0;
-  uint64_t splits_received_ = 0;       // over every session
-  uint64_t held_splits_ = 0;           // in the hierarchy held now
-  std::vector<uint64_t> leaf_bits_;    // per model node: a leaf of the partial hierarchy held
+  uint64_t splits_received_ = 0;     // over every session
+  uint64_t held_splits_ = 0;         // in the hierarchy held now
+  std::vector<uint64_t> leaf_bits_;  // per model node: a leaf of the partial hierarchy held
   // A session whose packets are split records decodes them against the hierarchy they make (what
   // ClientSession holds): ids, positions, refinement info and cut vertices, nothing of a mesh.
   std::unique_ptr<VertexHierarchy> hierarchy_;

@@ -14,7 +14,9 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-double ms_since(Clock::time_point start) { return std::chrono::duration<double, std::milli>(Clock::now() - start).count(); }
+double ms_since(Clock::time_point start) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+}
 
 [[noreturn]] void refused(const std::string& target, const HttpAnswer& answer) {
   std::string text(answer.body.begin(), answer.body.begin() + std::min<size_t>(answer.body.size(), 200));
@@ -33,7 +35,8 @@ nlohmann::json catalogue_models(HttpConnection& http) {
 }
 
 bool is_multilevel(const nlohmann::json& entry) {
-  return entry.is_object() && entry.value("kind", "") == "multilevel" && entry.contains("name") && entry["name"].is_string();
+  return entry.is_object() && entry.value("kind", "") == "multilevel" && entry.contains("name") &&
+         entry["name"].is_string();
 }
 
 // `count` finite numbers, coarsest first in the catalogue, returned per level (0 finest).
@@ -41,7 +44,8 @@ template <typename T>
 std::vector<T> per_level(const nlohmann::json& entry, const char* key, uint32_t count) {
   const auto it = entry.find(key);
   if (it == entry.end() || !it->is_array() || it->size() != count)
-    fail("GET /models", std::string("the multilevel entry's '") + key + "' is not " + std::to_string(count) + " numbers");
+    fail("GET /models",
+         std::string("the multilevel entry's '") + key + "' is not " + std::to_string(count) + " numbers");
   std::vector<T> out(count);
   for (uint32_t i = 0; i < count; ++i) {
     const nlohmann::json& x = (*it)[i];
@@ -87,8 +91,9 @@ void MultilevelClient::read_entry(const std::string& model) {
     const auto center = entry.find("center");
     const auto radius = entry.find("radius");
     const auto finite = [](const nlohmann::json& x) { return x.is_number() && std::isfinite(x.get<double>()); };
-    if (center == entry.end() || !center->is_array() || center->size() != 3 || !std::all_of(center->begin(), center->end(), finite) ||
-        radius == entry.end() || !finite(*radius) || radius->get<double>() < 0)
+    if (center == entry.end() || !center->is_array() || center->size() != 3 ||
+        !std::all_of(center->begin(), center->end(), finite) || radius == entry.end() || !finite(*radius) ||
+        radius->get<double>() < 0)
       fail("GET /models", "model '" + model + "' has no valid bounding sphere");
     for (int k = 0; k < 3; ++k) center_[k] = (*center)[k].get<float>();
     radius_ = radius->get<float>();

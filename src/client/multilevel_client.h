@@ -13,16 +13,16 @@
 
 #include "client/client_mode.h"
 #include "client/http_connection.h"
-#include "io/mesh.h"
 #include "common/camera.h"
+#include "io/mesh.h"
 #include "multilevel/loader.h"
 #include "multilevel/mesh.h"
 
 namespace pms::client {
 
 struct MultilevelOptions {
-  uint64_t budget = 0;   // > 0: the finest LOD of at most this many triangles; 0: the screen-size rule
-  float tolerance = 1;   // screen-size rule: the coarsest LOD whose error covers at most this many pixels
+  uint64_t budget = 0;        // > 0: the finest LOD of at most this many triangles; 0: the screen-size rule
+  float tolerance = 1;        // screen-size rule: the coarsest LOD whose error covers at most this many pixels
   uint32_t morph_frames = 0;  // a LOD switch moves 1 / N level per frame (a geomorph); 0 = at once
   bool compressed = true;     // the compressed levels (positions on the server's grid), or the binary form's
   HttpOptions http;
@@ -32,26 +32,26 @@ struct MultilevelOptions {
 // When a level became usable: counted from the start of open().
 struct LevelArrival {
   uint32_t level = 0;
-  uint64_t bytes = 0;          // its body
-  uint64_t down_bytes = 0;     // everything received on the wire by then (catalogue and head included)
-  uint64_t payload_down = 0;   // the bodies alone
+  uint64_t bytes = 0;         // its body
+  uint64_t down_bytes = 0;    // everything received on the wire by then (catalogue and head included)
+  uint64_t payload_down = 0;  // the bodies alone
   double ms = 0;
 };
 
 struct MultilevelFrame {
-  FrameReport report;          // up/down bytes on the wire; vsplits: levels received this frame
+  FrameReport report;  // up/down bytes on the wire; vsplits: levels received this frame
   uint64_t payload_down = 0;
-  uint32_t wanted_level = 0;   // what the rule asks for
-  float level = 0;             // what is shown (fractional during a geomorph)
+  uint32_t wanted_level = 0;  // what the rule asks for
+  float level = 0;            // what is shown (fractional during a geomorph)
   uint32_t levels_loaded = 0;
-  double lod_ms = 0;           // setLevel for this frame
+  double lod_ms = 0;  // setLevel for this frame
 };
 
 class MultilevelClient {
  public:
   MultilevelClient(const HttpUrl& server, const MultilevelOptions& options = {});
 
-  std::vector<std::string> list();  // GET /models: the multilevel models' names
+  std::vector<std::string> list();      // GET /models: the multilevel models' names
   void open(const std::string& model);  // GET /models (its entry), GET /models/{m}/head
 
   MultilevelFrame frame(const Camera& camera);

@@ -9,10 +9,10 @@
 #include <algorithm>
 #include <cmath>
 #include <iterator>
+#include <nlohmann/json.hpp>
 #include <optional>
 #include <set>
 #include <utility>
-#include <nlohmann/json.hpp>
 
 #include "common/bit_stream.h"
 #include "common/error.h"
@@ -205,7 +205,7 @@ std::vector<ReceiverClient::Request> ReceiverClient::requests_for(const std::vec
 // Lists of ids with one descendant depth each, in the rank order of their first ids: ids_per_request >> depth
 // ids to a URL (an answer holds about as many splits at each depth); each URL is the code of its id set.
 std::vector<ReceiverClient::Request> ReceiverClient::list_requests(const std::vector<Wanted>& ids) const {
-  std::vector<std::pair<size_t, Request>> lists;  // (rank of the first id, request)
+  std::vector<std::pair<size_t, Request>> lists;                      // (rank of the first id, request)
   std::vector<size_t> open(options_.descendant_depth + 1, SIZE_MAX);  // per depth: the list being filled
   for (size_t rank = 0; rank < ids.size(); ++rank) {
     const uint32_t depth = ids[rank].depth;
@@ -237,8 +237,8 @@ size_t ReceiverClient::list_size(uint32_t depth) const {
 // The block of each id (its ancestor at the top of its band of block_depth + 1 levels), in the rank order
 // of the first id that needs it. An id the client lacks is a leaf of what it holds; the splits of its band
 // above it would have come with its own block, so the id is that block's root, a vertex the client has,
-// and no block is fetched twice (it would have brought the id): no record arrives twice. A block's answer is that of the request
-// "its root, block_depth levels down", which is how the bands are read.
+// and no block is fetched twice (it would have brought the id): no record arrives twice. A block's answer is that of
+// the request "its root, block_depth levels down", which is how the bands are read.
 std::vector<ReceiverClient::Request> ReceiverClient::block_requests(const std::vector<Wanted>& ids) const {
   std::set<std::pair<uint32_t, uint64_t>> asked;
   std::vector<Request> out;
@@ -269,8 +269,8 @@ bool ReceiverClient::rerank(const Camera& camera) {
     return std::binary_search(set.begin(), set.end(), id, protocol::code_order);
   };
   for (Request& sent : wire_) {
-    const auto unwanted = uint32_t(std::count_if(sent.request.ids.begin(), sent.request.ids.end(),
-                                                 [&](VertexId id) { return !in(wanted, id); }));
+    const auto unwanted = uint32_t(
+        std::count_if(sent.request.ids.begin(), sent.request.ids.end(), [&](VertexId id) { return !in(wanted, id); }));
     sent.wanted = unwanted < sent.request.ids.size();
     if (!sent.prefetch) sent.stale = unwanted;
   }
@@ -281,8 +281,8 @@ bool ReceiverClient::rerank(const Camera& camera) {
   for (const Request& r : queue) queued.insert(queued.end(), r.request.ids.begin(), r.request.ids.end());
   std::sort(queued.begin(), queued.end(), protocol::code_order);
   for (const Request& r : queue_)
-    totals_.cancelled += uint64_t(std::count_if(r.request.ids.begin(), r.request.ids.end(),
-                                                [&](VertexId id) { return !in(queued, id); }));
+    totals_.cancelled += uint64_t(
+        std::count_if(r.request.ids.begin(), r.request.ids.end(), [&](VertexId id) { return !in(queued, id); }));
   queue_.assign(std::make_move_iterator(queue.begin()), std::make_move_iterator(queue.end()));
   return round_open();
 }
@@ -295,8 +295,7 @@ size_t ReceiverClient::queued_ids() const {
 
 // The view wants something not in yet: queued, or on the wire.
 bool ReceiverClient::round_open() const {
-  return !queue_.empty() ||
-         std::any_of(wire_.begin(), wire_.end(), [](const Request& sent) { return sent.wanted; });
+  return !queue_.empty() || std::any_of(wire_.begin(), wire_.end(), [](const Request& sent) { return sent.wanted; });
 }
 
 bool ReceiverClient::over_budget(uint32_t answers, std::chrono::steady_clock::time_point start) const {
@@ -435,8 +434,8 @@ uint32_t ReceiverClient::count_prefetch_used() {
 ReceiverFrame ReceiverClient::frame(const Camera& camera) { return run(camera, false); }
 
 // Rounds of adapt -> rank -> GET -> attach until the view wants nothing more or the budget is spent;
-// prefetch only in a path's frames, not while settling. A round ends when the answers to what it asked for are in; a frame's
-// first round re-ranks what the last frame left queued.
+// prefetch only in a path's frames, not while settling. A round ends when the answers to what it asked for are in; a
+// frame's first round re-ranks what the last frame left queued.
 ReceiverFrame ReceiverClient::run(const Camera& camera, bool settling) {
   if (!session_.has_model()) fail("stream", "no model open");
   ReceiverFrame out;

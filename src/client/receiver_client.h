@@ -4,10 +4,10 @@
 // a ClientMode (docs/architecture.md, "Streaming modes"); it shares ClientSession and FrameReport with them.
 #pragma once
 #include <chrono>
-#include <nlohmann/json.hpp>
 #include <cstdint>
 #include <deque>
 #include <functional>
+#include <nlohmann/json.hpp>
 #include <span>
 #include <string>
 #include <vector>
@@ -16,10 +16,10 @@
 #include "client/client_session.h"
 #include "client/http_connection.h"
 #include "client/screen_importance.h"
+#include "common/camera.h"
+#include "protocol/split_request.h"
 #include "spm/split_codec.h"
 #include "spm/vertex_id.h"
-#include "protocol/split_request.h"
-#include "common/camera.h"
 
 namespace pms::client {
 
@@ -35,19 +35,19 @@ FetchPolicy fetch_policy_named(const std::string& name, const std::string& where
 struct ReceiverOptions {
   float tolerance = 1;
   uint32_t morph_frames = 0;
-  uint32_t max_ops = 0;            // per frame, 0 = no cap
+  uint32_t max_ops = 0;  // per frame, 0 = no cap
   FetchPolicy fetch = FetchPolicy::lists;
-  uint32_t ids_per_request = 64;   // lists: split ids in one GET /splits/{code}
-  uint32_t block_depth = 2;        // blocks: levels below a block's root; GET /models suggests the same
+  uint32_t ids_per_request = 64;  // lists: split ids in one GET /splits/{code}
+  uint32_t block_depth = 2;       // blocks: levels below a block's root; GET /models suggests the same
   // lists: at most this many levels below a visible leaf whose screen error is many times τ come with it
   // (receiver_client.cpp, descendant_depth()); 0: the ids alone, exactly the splits the views want.
   uint32_t descendant_depth = 2;
-  HttpOptions http;                // deadlines, requests in flight, answer limits
-  // The frame budget (docs/protocol.md, "Frame budget, cancel and prefetch"): with either set, a frame also ends once it has
-  // read frame_answers answers or spent frame_budget_ms (checked between answers, so a frame overruns by at
-  // most one answer; one answer is always read when one is due). The rest carries to the next frame: GETs
-  // sent stay in flight and are read then, ids not yet sent stay queued and are re-ranked for the next view,
-  // which drops those it no longer wants. Both 0: each frame runs until its view is satisfied.
+  HttpOptions http;  // deadlines, requests in flight, answer limits
+  // The frame budget (docs/protocol.md, "Frame budget, cancel and prefetch"): with either set, a frame also ends once
+  // it has read frame_answers answers or spent frame_budget_ms (checked between answers, so a frame overruns by at most
+  // one answer; one answer is always read when one is due). The rest carries to the next frame: GETs sent stay in
+  // flight and are read then, ids not yet sent stay queued and are re-ranked for the next view, which drops those it no
+  // longer wants. Both 0: each frame runs until its view is satisfied.
   uint32_t frame_budget_ms = 0;
   uint32_t frame_answers = 0;
   // When the view's wants are all sent and the pipe has room, GET (one pipe-full a frame) the splits the
@@ -59,18 +59,18 @@ struct ReceiverOptions {
 };
 
 struct ReceiverFrame {
-  FrameReport report;          // up/down bytes are on the wire, headers included
-  uint64_t payload_down = 0;   // the answers' bodies alone
-  uint32_t split_requests = 0; // GETs of split ids this frame
-  uint32_t cache_hits = 0;     // of those, answers a cache in between served (X-Cache-Status: HIT)
-  uint32_t rounds = 0;         // rankings of the front that wanted something (adapt -> rank; answers come between)
-  uint32_t cancelled = 0;      // queued ids (blocks: block roots) dropped unsent: this view no longer wants them
-  uint32_t stale_arrivals = 0; // ids whose answers came after the view stopped wanting them (attached all the same)
-  uint32_t prefetched = 0;     // ids asked for along the predicted path
-  uint32_t prefetch_used = 0;  // prefetched ids whose splits the mesh has made by this frame's end
-  uint32_t queued = 0;         // ids left queued at the frame's end
-  uint32_t in_flight = 0;      // GETs left on the wire at the frame's end
-  bool satisfied = true;       // the view wants nothing more: local refinement's mesh for it
+  FrameReport report;           // up/down bytes are on the wire, headers included
+  uint64_t payload_down = 0;    // the answers' bodies alone
+  uint32_t split_requests = 0;  // GETs of split ids this frame
+  uint32_t cache_hits = 0;      // of those, answers a cache in between served (X-Cache-Status: HIT)
+  uint32_t rounds = 0;          // rankings of the front that wanted something (adapt -> rank; answers come between)
+  uint32_t cancelled = 0;       // queued ids (blocks: block roots) dropped unsent: this view no longer wants them
+  uint32_t stale_arrivals = 0;  // ids whose answers came after the view stopped wanting them (attached all the same)
+  uint32_t prefetched = 0;      // ids asked for along the predicted path
+  uint32_t prefetch_used = 0;   // prefetched ids whose splits the mesh has made by this frame's end
+  uint32_t queued = 0;          // ids left queued at the frame's end
+  uint32_t in_flight = 0;       // GETs left on the wire at the frame's end
+  bool satisfied = true;        // the view wants nothing more: local refinement's mesh for it
 };
 
 // A client's counts since it opened the model.
@@ -86,7 +86,7 @@ class ReceiverClient {
  public:
   ReceiverClient(const HttpUrl& server, const ReceiverOptions& options = {});
 
-  std::vector<std::string> list();   // GET /models: the names
+  std::vector<std::string> list();      // GET /models: the names
   void open(const std::string& model);  // GET /models/{m}/base
 
   // One frame: adapt; while qrefine wants splits the client lacks, rank them by screen area × squared
@@ -157,7 +157,7 @@ class ReceiverClient {
   // Prefetched ids whose splits the mesh has not made yet: each id at most once (it is a leaf until its
   // answer comes, and on the wire till then), so bounded by the model's splits.
   std::vector<VertexId> prefetched_;
-  std::vector<Camera> cameras_;       // the last two frames' (prefetch extrapolates them)
+  std::vector<Camera> cameras_;  // the last two frames' (prefetch extrapolates them)
 };
 
 }  // namespace pms::client

@@ -10,8 +10,8 @@
 #include <vector>
 
 #include "common/camera.h"
-#include "spm/selective_mesh.h"
 #include "render/render.h"
+#include "spm/selective_mesh.h"
 
 namespace pms::client {
 
@@ -32,7 +32,8 @@ class ScreenImportance {
   // Renders `mesh` as `view` sees it and returns its active vertices that are leaves of the partial
   // hierarchy (and pass `can_split`, when given) with a non-zero area, most pixels first (ties: lower
   // slot first, so the order is deterministic).
-  const std::vector<VertexArea>& rank(const SelectiveMesh& mesh, const ViewParams& view, const CanSplit& can_split = {});
+  const std::vector<VertexArea>& rank(const SelectiveMesh& mesh, const ViewParams& view,
+                                      const CanSplit& can_split = {});
 
   // Of the last rank(): the frame drawn (its face ids index the faces of mesh_arrays(); no rgb), and the pixels
   // some face covers.

@@ -8,12 +8,12 @@
 #include <string>
 
 #include "client/transport.h"
+#include "common/camera.h"
 #include "protocol/client_messages.h"
 #include "protocol/framing.h"
 #include "protocol/message_types.h"
 #include "protocol/server_messages.h"
 #include "protocol/stream_context.h"
-#include "common/camera.h"
 
 namespace pms::client {
 

@@ -75,8 +75,7 @@ void StreamingClient::open(const std::string& model) {
   protocol::Open message{model, {}, mode_->wire_mode()};
   if (session_.has_model()) message.resume = mode_->resume_front(session_);
   session_.on_base(server_->open(message));
-  if (protocol::carries_split_records(message.mode))
-    session_.on_codec(server_->next_codec(session_.context()));
+  if (protocol::carries_split_records(message.mode)) session_.on_codec(server_->next_codec(session_.context()));
 }
 
 void StreamingClient::resume(const std::string& host, uint16_t port) {

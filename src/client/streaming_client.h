@@ -11,11 +11,11 @@
 #include "client/client_session.h"
 #include "client/server_connection.h"
 #include "client/transport.h"
+#include "common/camera.h"
 #include "protocol/client_messages.h"
 #include "protocol/framing.h"
 #include "protocol/message_types.h"
 #include "protocol/server_messages.h"
-#include "common/camera.h"
 
 namespace pms::client {
 

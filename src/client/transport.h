@@ -12,7 +12,7 @@
 namespace pms::client {
 
 struct LinkCounters {
-  uint64_t bytes_up = 0, bytes_down = 0;      // whole frames, as on the wire
+  uint64_t bytes_up = 0, bytes_down = 0;  // whole frames, as on the wire
   uint64_t frames_up = 0, frames_down = 0;
   uint64_t payload_up() const { return bytes_up - frames_up * protocol::kFrameHeaderBytes; }
   uint64_t payload_down() const { return bytes_down - frames_down * protocol::kFrameHeaderBytes; }

@@ -4,10 +4,13 @@ namespace pms::client {
 
 void ViewIndependentClient::frame(const Camera& camera, ClientSession& session, ViewRequests& server,
                                   FrameReport& report) {
-  report.vsplits = server.request_view(camera, [&session](const protocol::VSplits& batch) {
-    // PM order: a split's ancestors and cut-vertex splits came earlier, so it can be made now.
-    session.apply_as_they_come(batch, "the packets are not in PM order");
-  }, report);
+  report.vsplits = server.request_view(
+      camera,
+      [&session](const protocol::VSplits& batch) {
+        // PM order: a split's ancestors and cut-vertex splits came earlier, so it can be made now.
+        session.apply_as_they_come(batch, "the packets are not in PM order");
+      },
+      report);
 }
 
 }  // namespace pms::client

@@ -4,8 +4,8 @@
 #pragma once
 #include <algorithm>
 #include <bit>
-#include <cstring>
 #include <cstdint>
+#include <cstring>
 #include <span>
 #include <string>
 #include <utility>
@@ -82,7 +82,8 @@ class BitReader {
       : data_(data), pos_(start), end_(end), what_(std::move(what)) {
     if (end > 8 * uint64_t(data.size()) || start > end) fail(what_, "bit range outside the data");
   }
-  BitReader(std::span<const uint8_t> data, std::string what) : BitReader(data, 0, 8 * uint64_t(data.size()), std::move(what)) {}
+  BitReader(std::span<const uint8_t> data, std::string what)
+      : BitReader(data, 0, 8 * uint64_t(data.size()), std::move(what)) {}
 
   unsigned bit(const char* field) {
     if (pos_ >= end_) fail(what_, std::string(field) + ": truncated");

@@ -71,7 +71,8 @@ Mat4 multiply(const Mat4& a, const Mat4& b) {
 }
 
 void transform_point(const Mat4& m, const float p[3], float clip[4]) {
-  for (int r = 0; r < 4; ++r) clip[r] = m.m[4 * r] * p[0] + m.m[4 * r + 1] * p[1] + m.m[4 * r + 2] * p[2] + m.m[4 * r + 3];
+  for (int r = 0; r < 4; ++r)
+    clip[r] = m.m[4 * r] * p[0] + m.m[4 * r + 1] * p[1] + m.m[4 * r + 2] * p[2] + m.m[4 * r + 3];
 }
 
 ViewParams make_view(const Camera& camera, const float box_min[3], const float box_max[3]) {

@@ -11,7 +11,7 @@ struct Camera {
   float eye[3] = {0, 0, 3};
   float target[3] = {0, 0, 0};
   float up[3] = {0, 1, 0};
-  float fovy_deg = 45;  // vertical field of view
+  float fovy_deg = 45;   // vertical field of view
   uint32_t width = 800;  // viewport in pixels
   uint32_t height = 600;
 };
@@ -25,9 +25,9 @@ struct Mat4 {
 struct ViewParams {
   Camera camera;
   float near_plane = 0.01f, far_plane = 100;
-  Mat4 view;            // model -> eye
-  Mat4 projection;      // eye -> clip
-  Mat4 view_projection; // model -> clip
+  Mat4 view;             // model -> eye
+  Mat4 projection;       // eye -> clip
+  Mat4 view_projection;  // model -> clip
   // The 6 frustum planes in model space, (a, b, c, d) with unit (a, b, c) pointing inside:
   // a point p is inside when a*p.x + b*p.y + c*p.z + d >= 0 for all six (left, right, bottom, top, near, far).
   float planes[6][4] = {};

@@ -73,7 +73,9 @@ struct HugePageAllocator {
     std::free(p);
   }
   template <class U>
-  bool operator==(const HugePageAllocator<U, kRecycle>&) const { return true; }
+  bool operator==(const HugePageAllocator<U, kRecycle>&) const {
+    return true;
+  }
 };
 
 template <class T>

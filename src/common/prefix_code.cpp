@@ -25,7 +25,9 @@ std::vector<uint32_t> huffman_depths(std::span<const uint64_t> weights) {
     uint64_t weight;
     uint32_t index;  // < weights.size(): a symbol; else internal node index + weights.size()
   };
-  auto heavier = [](const Node& a, const Node& b) { return a.weight != b.weight ? a.weight > b.weight : a.index > b.index; };
+  auto heavier = [](const Node& a, const Node& b) {
+    return a.weight != b.weight ? a.weight > b.weight : a.index > b.index;
+  };
   const auto n = uint32_t(weights.size());
   std::vector<Node> heap;
   heap.reserve(n);
@@ -58,7 +60,8 @@ std::vector<uint32_t> huffman_depths(std::span<const uint64_t> weights) {
 PrefixCode::PrefixCode(std::vector<uint8_t> lengths) : lengths_(std::move(lengths)), count_(kMaxCodeLength + 1, 0) {
   uint32_t present = 0;
   for (uint8_t l : lengths_) {
-    if (l > kMaxCodeLength) fail("prefix code", "code length " + std::to_string(l) + " above " + std::to_string(kMaxCodeLength));
+    if (l > kMaxCodeLength)
+      fail("prefix code", "code length " + std::to_string(l) + " above " + std::to_string(kMaxCodeLength));
     if (l) ++count_[l], ++present;
   }
   // Kraft: sum of 2^-l <= 1, in units of 2^-kMaxCodeLength.
@@ -89,7 +92,8 @@ PrefixCode::PrefixCode(std::vector<uint8_t> lengths) : lengths_(std::move(length
   for (uint32_t s : sorted_) {
     const unsigned l = lengths_[s];
     if (l > kFastBits) break;  // sorted_ is by length
-    for (uint32_t high = 0; high < (1u << (kFastBits - l)); ++high) fast_[codes_[s] | (high << l)] = uint16_t(l << 12 | s);
+    for (uint32_t high = 0; high < (1u << (kFastBits - l)); ++high)
+      fast_[codes_[s] | (high << l)] = uint16_t(l << 12 | s);
   }
 }
 
@@ -175,7 +179,8 @@ constexpr uint32_t kLengthSymbols = kLongRunSymbol + 1;
 constexpr size_t kShortRun = 3, kLongRun = 11, kLongestRun = 138;
 
 // Calls `step(symbol, raw, raw_bits)` for the lengths of `code` up to its last symbol with one.
-template <class Step> void for_each_length_step(const PrefixCode& code, Step step) {
+template <class Step>
+void for_each_length_step(const PrefixCode& code, Step step) {
   int previous = 0;
   const size_t m = code.serialized_symbols();
   for (size_t s = 0; s < m;) {
@@ -201,7 +206,8 @@ constexpr unsigned kMaxGammaZeros = 16;  // m + 1 <= 65536
 
 void serialize_code_set(std::span<const PrefixCode* const> codes, BitWriter& w) {
   std::vector<uint64_t> counts(kLengthSymbols, 0);
-  for (const PrefixCode* code : codes) for_each_length_step(*code, [&](uint32_t step, uint64_t, unsigned) { ++counts[step]; });
+  for (const PrefixCode* code : codes)
+    for_each_length_step(*code, [&](uint32_t step, uint64_t, unsigned) { ++counts[step]; });
   const PrefixCode steps = PrefixCode::from_counts(counts);
   steps.serialize(w);
   for (const PrefixCode* code : codes) {

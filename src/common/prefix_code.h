@@ -43,9 +43,9 @@ class PrefixCode {
 
  private:
   std::vector<uint8_t> lengths_;
-  std::vector<uint16_t> codes_;     // per symbol, canonical, bit-reversed: in stream order from the lowest bit
-  std::vector<uint16_t> count_;     // code words per length, 0..kMaxCodeLength
-  std::vector<uint32_t> sorted_;    // symbols in canonical order (by length, then symbol)
+  std::vector<uint16_t> codes_;   // per symbol, canonical, bit-reversed: in stream order from the lowest bit
+  std::vector<uint16_t> count_;   // code words per length, 0..kMaxCodeLength
+  std::vector<uint32_t> sorted_;  // symbols in canonical order (by length, then symbol)
   // Per kFastBits-bit window of the stream (first bit lowest): length << 12 | symbol of the code word it
   // starts with, 0 when that word is longer or unused; read() falls back to one bit at a time then.
   static constexpr unsigned kFastBits = 8;

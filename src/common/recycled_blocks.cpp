@@ -82,7 +82,8 @@ void* map_zeroed(size_t bytes) {
   if (p == MAP_FAILED) return nullptr;
   const uintptr_t start = reinterpret_cast<uintptr_t>(p), begin = (start + kHugePage - 1) & ~(kHugePage - 1);
   if (begin > start) munmap(p, begin - start);
-  if (const size_t tail = start + span - (begin + bytes); tail > 0) munmap(reinterpret_cast<void*>(begin + bytes), tail);
+  if (const size_t tail = start + span - (begin + bytes); tail > 0)
+    munmap(reinterpret_cast<void*>(begin + bytes), tail);
 #if defined(MADV_HUGEPAGE)
   madvise(reinterpret_cast<void*>(begin), bytes, MADV_HUGEPAGE);  // advice only
 #endif

@@ -11,8 +11,8 @@
 #include <span>
 #include <vector>
 
-#include "dag/dag.h"
 #include "dag/cut.h"
+#include "dag/dag.h"
 
 namespace pms {
 
@@ -35,7 +35,9 @@ class CompactDagCut {
   uint64_t triangles() const { return triangles_; }
   uint64_t code_bits() const { return bits_; }
   const std::vector<DagCut::Watch>& watch() const { return watch_; }
-  size_t memory_bytes() const { return words_.capacity() * sizeof(uint64_t) + watch_.capacity() * sizeof(DagCut::Watch); }
+  size_t memory_bytes() const {
+    return words_.capacity() * sizeof(uint64_t) + watch_.capacity() * sizeof(DagCut::Watch);
+  }
 
  private:
   friend class LoadedDagCut;
@@ -73,7 +75,7 @@ class LoadedDagCut {
   void borrow(const Dag& dag);
   void give_back();
   Slot* slot_ = nullptr;
-  DagCut* cut_ = nullptr;  // slot_'s
+  DagCut* cut_ = nullptr;      // slot_'s
   std::unique_ptr<Slot> own_;  // when this thread's slot of the DAG is on loan already
 };
 

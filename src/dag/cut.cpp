@@ -289,7 +289,8 @@ bool DagCut::check(std::string* why) const {
     } else {
       for (uint32_t p : dag.parents(n)) count += is_split(p);
     }
-    if (count != counter(n)) return bad("counter " + std::to_string(counter(n)) + " != recount " + std::to_string(count), n);
+    if (count != counter(n))
+      return bad("counter " + std::to_string(counter(n)) + " != recount " + std::to_string(count), n);
     fc += in_fc(n);
     fs += in_fs(n);
     const bool fc_bit = (fc_bits_[n / 64] >> (n % 64)) & 1;

@@ -1,11 +1,11 @@
 // One cut of the DAG of operations (Zheng & Chan 2006 §3, Fig. 1): which nodes are split, a counter per
 // node, and the two fronts kept incrementally. A split node's counter is the number of its split DAG
 // children (0: in Fc, legal to collapse); a collapsed node's the number of its split DAG parents (all of
-// them: in Fs, legal to split). So the base mesh is all zeros, and a return to it is a clear of the arrays. Each front is a bit per node, swept in node order (depth, then deviation)
-// from a cursor that outlives a frame: the linear and constant-time traversals continue where they
-// stopped. This dense form is a traversal's working copy (a per-thread scratch, dag/compact.h); a
-// session keeps its cut between turns as a CompactDagCut, a few bits per split node.
-// Shared with the browser build: single-threaded, no std::ranges algorithms, std::format or coroutines.
+// them: in Fs, legal to split). So the base mesh is all zeros, and a return to it is a clear of the arrays. Each front
+// is a bit per node, swept in node order (depth, then deviation) from a cursor that outlives a frame: the linear and
+// constant-time traversals continue where they stopped. This dense form is a traversal's working copy (a per-thread
+// scratch, dag/compact.h); a session keeps its cut between turns as a CompactDagCut, a few bits per split node. Shared
+// with the browser build: single-threaded, no std::ranges algorithms, std::format or coroutines.
 #pragma once
 #include <cstdint>
 #include <span>
@@ -129,8 +129,8 @@ class DagCut {
   const Dag* dag_;
   std::vector<uint8_t> state_;
   std::vector<uint64_t> fc_bits_, candidate_bits_;  // a bit per node: in Fc, a split candidate
-  std::vector<uint32_t> wide_nodes_;     // ascending: the nodes whose counters are in the side table
-  std::vector<uint16_t> wide_counters_;  // theirs
+  std::vector<uint32_t> wide_nodes_;                // ascending: the nodes whose counters are in the side table
+  std::vector<uint16_t> wide_counters_;             // theirs
   std::vector<uint32_t> marked_;
   std::vector<Watch> watch_;
   uint64_t triangles_ = 0;

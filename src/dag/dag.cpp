@@ -97,7 +97,8 @@ Dag::Dag(const ModelData& model, std::span<const float> positions) {
     hierarchy_parent_[n] = p == kNone ? kNone : node_of_[p];
     if (p == kNone) roots_.push_back(n);
     raw.parent[n] = hierarchy_parent_[n];
-    for (int k = 0; k < 2; ++k) hierarchy_child_[2 * size_t(n) + uint32_t(k)] = node_of_[model.first_child[m] + uint32_t(k)];
+    for (int k = 0; k < 2; ++k)
+      hierarchy_child_[2 * size_t(n) + uint32_t(k)] = node_of_[model.first_child[m] + uint32_t(k)];
     const uint32_t cl = model.cut_left[m], cr = model.cut_right[m];
     if ((cl != kNone && (cl >= count || !model.is_leaf(cl))) || (cr != kNone && (cr >= count || !model.is_leaf(cr))))
       fail(kWhere, "a cut vertex that is not a leaf");
@@ -178,8 +179,7 @@ Dag::Dag(const ModelData& model, std::span<const float> positions) {
 
 size_t Dag::memory_bytes() const {
   return 4 * (model_node_.size() + node_of_.size() + hierarchy_parent_.size() + roots_.size() +
-              hierarchy_child_.size() + in_begin_.size() + in_edges_.size() + out_begin_.size() +
-              out_edges_.size()) +
+              hierarchy_child_.size() + in_begin_.size() + in_edges_.size() + out_begin_.size() + out_edges_.size()) +
          faces_.size() + criteria_.size() * sizeof(NodeCriteria);
 }
 

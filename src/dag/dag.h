@@ -9,8 +9,8 @@
 #include <span>
 #include <vector>
 
-#include "spm/hierarchy.h"
 #include "spm/criteria.h"
+#include "spm/hierarchy.h"
 
 namespace pms {
 
@@ -19,11 +19,11 @@ struct DagStats {
   uint64_t parent_edges = 0;      // hierarchy parent -> child (v_s must be active to split)
   uint64_t dependency_edges = 0;  // deepest common ancestor of v̂_l, v̂_r -> node (v_l != v_r)
   // Candidates left out because another path already implies them (transitive reduction).
-  uint64_t redundant_ancestor = 0;     // the common ancestor is an ancestor of the node itself
-  uint64_t redundant_dependency = 0;   // implied by the parent's requirements
-  uint64_t redundant_parent = 0;       // implied by the dependency's requirements
-  uint32_t max_children = 0;           // largest out-degree
-  double seconds = 0;                  // build time
+  uint64_t redundant_ancestor = 0;    // the common ancestor is an ancestor of the node itself
+  uint64_t redundant_dependency = 0;  // implied by the parent's requirements
+  uint64_t redundant_parent = 0;      // implied by the dependency's requirements
+  uint32_t max_children = 0;          // largest out-degree
+  double seconds = 0;                 // build time
   double edges_per_node() const { return nodes ? double(parent_edges + dependency_edges) / nodes : 0; }
 };
 

@@ -44,8 +44,7 @@ DagTraverser::Scratch& DagTraverser::scratch() {
 size_t DagTraverser::thread_scratch_bytes() {
   const Scratch& s = scratch();
   return (s.collapse_heap.capacity() + s.split_heap.capacity()) * sizeof(Ranked) + s.due.capacity() * sizeof(Due) +
-         s.stack.capacity() * sizeof(uint64_t) +
-         s.hot.capacity() * sizeof(uint32_t);
+         s.stack.capacity() * sizeof(uint64_t) + s.hot.capacity() * sizeof(uint32_t);
 }
 
 bool DagTraverser::qrefine(uint32_t n, DagFrameStats& stats) {
@@ -141,7 +140,8 @@ void DagTraverser::prepare_watch(uint32_t share) {
   }
   watch.resize(kept);
   if (due.size() > share) {
-    std::nth_element(due.begin(), due.begin() + share, due.end(), [](const Due& a, const Due& b) { return a.closeness > b.closeness; });
+    std::nth_element(due.begin(), due.begin() + share, due.end(),
+                     [](const Due& a, const Due& b) { return a.closeness > b.closeness; });
     for (size_t i = share; i < due.size(); ++i) watch.push_back(due[i].entry);
     due.resize(share);
   }
@@ -337,7 +337,8 @@ void DagTraverser::priority_split(Limits& limits, DagFrameStats& stats, std::vec
 // behind a front of tens of thousands of nodes at N a call the sweep would reach it only frames later.
 template <class Live, class Predicted, class Pop, class Rewind, class TryApply>
 void DagTraverser::fifo_phase(const uint32_t& applied, const Limits& limits, DagFrameStats& stats,
-                              std::vector<uint32_t>* hot, Live live, Predicted predicted, Pop pop, Rewind rewind, TryApply try_apply) {
+                              std::vector<uint32_t>* hot, Live live, Predicted predicted, Pop pop, Rewind rewind,
+                              TryApply try_apply) {
   DagCut& cut = *cut_;
   const uint32_t evaluated_before = stats.evaluated;
   if (hot) hot->clear();  // a phase's own: the nodes left are in their front
@@ -370,8 +371,8 @@ void DagTraverser::fifo_collapse(const Limits& limits, DagFrameStats& stats, std
                                  std::vector<uint32_t>* hot) {
   DagCut& cut = *cut_;
   fifo_phase(
-      stats.collapses, limits, stats, hot, [&](uint32_t n) { return cut.in_fc(n); }, [] { return kNone; }, [&] { return cut.pop_collapse(); },
-      [&](uint32_t n) { cut.rewind_collapse(n); },
+      stats.collapses, limits, stats, hot, [&](uint32_t n) { return cut.in_fc(n); }, [] { return kNone; },
+      [&] { return cut.pop_collapse(); }, [&](uint32_t n) { cut.rewind_collapse(n); },
       [&](uint32_t n) {
         if (qrefine(n, stats)) return Outcome::not_needed;
         collapse(n, stats, ops);
@@ -385,7 +386,8 @@ void DagTraverser::fifo_collapse(const Limits& limits, DagFrameStats& stats, std
       });
 }
 
-void DagTraverser::fifo_split(Limits& limits, DagFrameStats& stats, std::vector<DagOp>& ops, std::vector<uint32_t>* hot) {
+void DagTraverser::fifo_split(Limits& limits, DagFrameStats& stats, std::vector<DagOp>& ops,
+                              std::vector<uint32_t>* hot) {
   DagCut& cut = *cut_;
   const Dag& dag = cut.dag();
   if (hot) prepare_watch(uint32_t(kWatchShare * float(limits.max_evaluated)));

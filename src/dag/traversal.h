@@ -10,8 +10,8 @@
 #include <cstdint>
 #include <vector>
 
-#include "spm/criteria.h"
 #include "dag/cut.h"
+#include "spm/criteria.h"
 
 namespace pms {
 namespace criteria_detail {
@@ -107,7 +107,7 @@ class DagTraverser {
   DagCut* cut_;
   ViewCriteria view_;
   bool has_view_ = false;
-  bool justified_ = false;  // priority: marks say which split nodes the view's target mesh keeps
+  bool justified_ = false;                         // priority: marks say which split nodes the view's target mesh keeps
   float eye_distance_ = 1, inverse_distance_ = 1;  // to the DAG's centre
   float watch_floor_ = 0;
   uint32_t watch_limit_ = 0;

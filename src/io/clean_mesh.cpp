@@ -58,8 +58,8 @@ void check_input(const Mesh& mesh) {
     fail("", "mesh: texture coordinate count differs from the vertex count");
   for (size_t c = 0; c < mesh.indices.size(); ++c)
     if (mesh.indices[c] >= n)
-      fail("", "mesh: face " + std::to_string(c / 3) + " uses vertex " + std::to_string(mesh.indices[c]) +
-                   " of " + std::to_string(n));
+      fail("", "mesh: face " + std::to_string(c / 3) + " uses vertex " + std::to_string(mesh.indices[c]) + " of " +
+                   std::to_string(n));
 }
 
 // ---- 1. Weld ----------------------------------------------------------------------------------------
@@ -119,7 +119,9 @@ void weld(Mesh& mesh, CleanReport& report) {
 std::vector<uint8_t> find_duplicates(const Mesh& mesh, const std::vector<uint8_t>& keep, CleanReport& report) {
   const size_t n = mesh.vertex_count(), m = mesh.face_count();
   std::vector<uint32_t> offsets(n + 1, 0), bucket;
-  auto smallest = [&](size_t f) { return std::min({mesh.indices[3 * f], mesh.indices[3 * f + 1], mesh.indices[3 * f + 2]}); };
+  auto smallest = [&](size_t f) {
+    return std::min({mesh.indices[3 * f], mesh.indices[3 * f + 1], mesh.indices[3 * f + 2]});
+  };
   for (size_t f = 0; f < m; ++f)
     if (keep[f]) ++offsets[smallest(f) + 1];
   for (size_t v = 0; v < n; ++v) offsets[v + 1] += offsets[v];

@@ -38,8 +38,8 @@ class Output {
   void advance(size_t produced) {
     used_ += produced;
     if (used_ > limit_)
-      fail(name_, "decompresses to more than " + std::to_string(limit_) +
-                      " bytes (refusing a possible decompression bomb)");
+      fail(name_,
+           "decompresses to more than " + std::to_string(limit_) + " bytes (refusing a possible decompression bomb)");
   }
 
   // Room for one byte past the limit: a stream of exactly `limit` bytes may need another call to
@@ -102,13 +102,20 @@ std::vector<uint8_t> gunzip(const std::string& name, std::span<const uint8_t> in
 
 const char* lzma_problem(lzma_ret ret) {
   switch (ret) {
-    case LZMA_FORMAT_ERROR: return "not xz data (bad magic)";
-    case LZMA_OPTIONS_ERROR: return "unsupported xz options";
-    case LZMA_DATA_ERROR: return "corrupt xz data";
-    case LZMA_BUF_ERROR: return "truncated xz data";
-    case LZMA_MEMLIMIT_ERROR: return "xz stream needs a dictionary larger than 1 GiB";
-    case LZMA_MEM_ERROR: return "out of memory while decompressing xz data";
-    default: return "xz decoder error";
+    case LZMA_FORMAT_ERROR:
+      return "not xz data (bad magic)";
+    case LZMA_OPTIONS_ERROR:
+      return "unsupported xz options";
+    case LZMA_DATA_ERROR:
+      return "corrupt xz data";
+    case LZMA_BUF_ERROR:
+      return "truncated xz data";
+    case LZMA_MEMLIMIT_ERROR:
+      return "xz stream needs a dictionary larger than 1 GiB";
+    case LZMA_MEM_ERROR:
+      return "out of memory while decompressing xz data";
+    default:
+      return "xz decoder error";
   }
 }
 
@@ -116,8 +123,7 @@ std::vector<uint8_t> unxz(const std::string& name, std::span<const uint8_t> in, 
                           uint64_t max_output) {
   lzma_stream strm = LZMA_STREAM_INIT;
   // LZMA_CONCATENATED: like xz(1), accept several streams and stream padding.
-  if (lzma_stream_decoder(&strm, kXzMemoryLimit, LZMA_CONCATENATED) != LZMA_OK)
-    fail(name, "cannot initialise liblzma");
+  if (lzma_stream_decoder(&strm, kXzMemoryLimit, LZMA_CONCATENATED) != LZMA_OK) fail(name, "cannot initialise liblzma");
   struct End {
     lzma_stream* strm;
     ~End() { lzma_end(strm); }
@@ -161,9 +167,12 @@ std::string_view strip_compression_suffix(std::string_view name) {
 std::vector<uint8_t> decompress(const std::string& name, Compression codec, std::span<const uint8_t> bytes,
                                 const ProgressFn& progress, uint64_t max_output) {
   switch (codec) {
-    case Compression::gzip: return gunzip(name, bytes, progress, max_output);
-    case Compression::xz: return unxz(name, bytes, progress, max_output);
-    case Compression::none: break;
+    case Compression::gzip:
+      return gunzip(name, bytes, progress, max_output);
+    case Compression::xz:
+      return unxz(name, bytes, progress, max_output);
+    case Compression::none:
+      break;
   }
   return {bytes.begin(), bytes.end()};
 }

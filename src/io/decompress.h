@@ -26,7 +26,6 @@ std::string_view strip_compression_suffix(std::string_view name);
 // fractions of the input consumed. Throws pms::Error "NAME: problem" on corrupt or truncated
 // data and when the output would exceed `max_output` bytes.
 std::vector<uint8_t> decompress(const std::string& name, Compression codec, std::span<const uint8_t> bytes,
-                                const ProgressFn& progress = {},
-                                uint64_t max_output = kMaxDecompressedBytes);
+                                const ProgressFn& progress = {}, uint64_t max_output = kMaxDecompressedBytes);
 
 }  // namespace pms

@@ -3,9 +3,9 @@
 // two copies; point and line primitives are dropped. Normals, colours (set 0) and texture coordinates
 // (set 0: glTF's TEXCOORD_0, as u v with v up, the convention assimp hands every format over in) are kept
 // when every merged mesh has them.
-#include <assimp/Importer.hpp>
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
+#include <assimp/Importer.hpp>
 
 #include <algorithm>
 #include <utility>
@@ -76,8 +76,8 @@ struct Merge {
 Mesh import_assimp(const std::string& name, std::span<const uint8_t> data, const std::string& extension) {
   Assimp::Importer importer;
   if (extension.empty() || !importer.IsExtensionSupported("." + extension))
-    fail(name, extension.empty() ? "no file extension to tell the mesh format"
-                                 : "unknown mesh format '." + extension + "'");
+    fail(name,
+         extension.empty() ? "no file extension to tell the mesh format" : "unknown mesh format '." + extension + "'");
   unsigned flags = aiProcess_Triangulate;
   if (extension == "stl") {
     // STL repeats every corner per triangle, each with the face normal; dropping the normals lets
@@ -88,7 +88,8 @@ Mesh import_assimp(const std::string& name, std::span<const uint8_t> data, const
   const aiScene* scene = importer.ReadFileFromMemory(data.data(), data.size(), flags, extension.c_str());
   if (!scene || !scene->mRootNode) {
     std::string why = scene ? "the scene has no nodes" : importer.GetErrorString();
-    std::replace_if(why.begin(), why.end(), [](char c) { return c == '\n' || c == '\r'; }, ' ');
+    std::replace_if(
+        why.begin(), why.end(), [](char c) { return c == '\n' || c == '\r'; }, ' ');
     fail(name, "cannot read as ." + extension + " (assimp: " + why + ")");
   }
 

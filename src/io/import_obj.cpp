@@ -29,8 +29,8 @@ struct ObjParser {
   const char* end;
   Mesh mesh;
   bool every_vertex_colored = true;
-  std::vector<float> uvs;              // u v per 'vt' line
-  std::vector<uint32_t> corner_uv;     // per corner of mesh.indices: its texture vertex, or kNoTexcoord
+  std::vector<float> uvs;           // u v per 'vt' line
+  std::vector<uint32_t> corner_uv;  // per corner of mesh.indices: its texture vertex, or kNoTexcoord
   bool every_corner_textured = true;
 
   [[noreturn]] void bad(const char* at, const std::string& problem) const {
@@ -110,9 +110,9 @@ struct ObjParser {
   // Per-vertex texture coordinates from the corners' texture vertices, splitting seams.
   void split_by_texcoords() {
     const size_t n = mesh.vertex_count();
-    std::vector<uint32_t> first(n, kNoTexcoord);         // the texture vertex that keeps vertex v
-    std::unordered_map<uint64_t, uint32_t> copy_of;      // (vertex, other texture vertex) -> its copy
-    std::vector<uint32_t> source, source_uv;             // per copy: its vertex and texture vertex
+    std::vector<uint32_t> first(n, kNoTexcoord);     // the texture vertex that keeps vertex v
+    std::unordered_map<uint64_t, uint32_t> copy_of;  // (vertex, other texture vertex) -> its copy
+    std::vector<uint32_t> source, source_uv;         // per copy: its vertex and texture vertex
     for (size_t c = 0; c < mesh.indices.size(); ++c) {
       uint32_t& v = mesh.indices[c];
       const uint32_t uv = corner_uv[c];
@@ -134,9 +134,11 @@ struct ObjParser {
       const size_t v = source[i];
       std::copy_n(&uvs[2 * size_t(source_uv[i])], 2, &mesh.texcoords[2 * (n + i)]);
       // By value: a range of the vector itself must not be inserted into it.
-      mesh.positions.insert(mesh.positions.end(), {mesh.positions[3 * v], mesh.positions[3 * v + 1], mesh.positions[3 * v + 2]});
+      mesh.positions.insert(mesh.positions.end(),
+                            {mesh.positions[3 * v], mesh.positions[3 * v + 1], mesh.positions[3 * v + 2]});
       if (mesh.has_colors())
-        mesh.colors.insert(mesh.colors.end(), {mesh.colors[4 * v], mesh.colors[4 * v + 1], mesh.colors[4 * v + 2], mesh.colors[4 * v + 3]});
+        mesh.colors.insert(mesh.colors.end(), {mesh.colors[4 * v], mesh.colors[4 * v + 1], mesh.colors[4 * v + 2],
+                                               mesh.colors[4 * v + 3]});
     }
   }
 

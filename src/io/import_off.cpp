@@ -17,10 +17,7 @@ namespace {
 class OffParser {
  public:
   OffParser(const std::string& name, std::span<const uint8_t> data)
-      : name_(name),
-        begin_(reinterpret_cast<const char*>(data.data())),
-        end_(begin_ + data.size()),
-        p_(begin_) {}
+      : name_(name), begin_(reinterpret_cast<const char*>(data.data())), end_(begin_ + data.size()), p_(begin_) {}
 
   Mesh parse(const ProgressFn& progress) {
     parse_keyword();
@@ -72,8 +69,7 @@ class OffParser {
     const char* word_end = first_;
     while (word_end < last_ && !text::is_blank(*word_end)) ++word_end;
     const std::string_view word(first_, size_t(word_end - first_));
-    if (word.size() < 3 || word.substr(word.size() - 3) != "OFF")
-      fail(name_, "not an OFF file (missing OFF keyword)");
+    if (word.size() < 3 || word.substr(word.size() - 3) != "OFF") fail(name_, "not an OFF file (missing OFF keyword)");
     const std::string_view prefix = word.substr(0, word.size() - 3);
     has_colors_ = prefix == "C" || prefix == "CN";
     has_normals_ = prefix == "N" || prefix == "CN";
@@ -87,7 +83,7 @@ class OffParser {
 
   // A header of counts that the rest of the file cannot hold is lying; check before allocating.
   void check_counts_fit(uint64_t vertices, uint64_t faces) const {
-    const uint64_t left = uint64_t(end_ - p_) + 1;  // the last line needs no newline
+    const uint64_t left = uint64_t(end_ - p_) + 1;    // the last line needs no newline
     const uint64_t kVertexBytes = 6, kFaceBytes = 2;  // "0 0 0\n", and "0\n" for an empty face
     if (vertices > left / kVertexBytes || faces > (left - vertices * kVertexBytes) / kFaceBytes)
       fail(name_, "OFF header declares " + std::to_string(vertices) + " vertices and " + std::to_string(faces) +
@@ -143,8 +139,7 @@ class OffParser {
     for (int64_t k = 0; k < corners; ++k) {
       const int64_t index = integer("a vertex index");
       if (index < 0 || uint64_t(index) >= vertex_count)
-        bad("vertex index " + std::to_string(index) + " out of range (" + std::to_string(vertex_count) +
-            " vertices)");
+        bad("vertex index " + std::to_string(index) + " out of range (" + std::to_string(vertex_count) + " vertices)");
       fan.add(uint32_t(index));
     }
   }
@@ -152,9 +147,9 @@ class OffParser {
   const std::string& name_;
   const char* begin_;
   const char* end_;
-  const char* p_;                          // start of the next line
-  const char* first_ = nullptr;            // the current line's unread content...
-  const char* last_ = nullptr;             // ...up to its end or comment
+  const char* p_;                // start of the next line
+  const char* first_ = nullptr;  // the current line's unread content...
+  const char* last_ = nullptr;   // ...up to its end or comment
   bool has_colors_ = false;
   bool has_normals_ = false;
 };

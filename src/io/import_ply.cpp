@@ -1,9 +1,9 @@
 // PLY importer (Turk, "The PLY Polygon File Format", 1994): ascii, binary_little_endian and
 // binary_big_endian. The header declares elements (records) and their typed properties; the body
 // holds the records in header order. We keep vertex x y z, optional nx ny nz, red green blue [alpha]
-// and texture coordinates (s t, u v, texture_u texture_v or texture_s texture_t), and the face index list (vertex_indices or vertex_index), fan-triangulated; every other
-// property and element is skipped by its type. Counts in the header are checked against the bytes
-// that follow before anything is allocated from them.
+// and texture coordinates (s t, u v, texture_u texture_v or texture_s texture_t), and the face index list
+// (vertex_indices or vertex_index), fan-triangulated; every other property and element is skipped by its type. Counts
+// in the header are checked against the bytes that follow before anything is allocated from them.
 #include <bit>
 #include <cstring>
 #include <string_view>
@@ -24,10 +24,10 @@ struct ScalarName {
   Scalar type;
 };
 constexpr ScalarName kScalarNames[] = {
-    {"char", Scalar::i8},    {"int8", Scalar::i8},     {"uchar", Scalar::u8},    {"uint8", Scalar::u8},
-    {"short", Scalar::i16},  {"int16", Scalar::i16},   {"ushort", Scalar::u16},  {"uint16", Scalar::u16},
-    {"int", Scalar::i32},    {"int32", Scalar::i32},   {"uint", Scalar::u32},    {"uint32", Scalar::u32},
-    {"float", Scalar::f32},  {"float32", Scalar::f32}, {"double", Scalar::f64},  {"float64", Scalar::f64},
+    {"char", Scalar::i8},   {"int8", Scalar::i8},     {"uchar", Scalar::u8},   {"uint8", Scalar::u8},
+    {"short", Scalar::i16}, {"int16", Scalar::i16},   {"ushort", Scalar::u16}, {"uint16", Scalar::u16},
+    {"int", Scalar::i32},   {"int32", Scalar::i32},   {"uint", Scalar::u32},   {"uint32", Scalar::u32},
+    {"float", Scalar::f32}, {"float32", Scalar::f32}, {"double", Scalar::f64}, {"float64", Scalar::f64},
 };
 
 size_t scalar_size(Scalar type) {
@@ -97,9 +97,9 @@ Slot vertex_slot(std::string_view property) {
     Slot slot;
   };
   static constexpr Name kNames[] = {
-      {"x", kX},   {"y", kY},         {"z", kZ},         {"nx", kNx},        {"ny", kNy},        {"nz", kNz},
-      {"red", kRed}, {"green", kGreen}, {"blue", kBlue}, {"alpha", kAlpha},  {"s", kU},          {"t", kV},
-      {"u", kU},   {"v", kV},         {"texture_u", kU}, {"texture_v", kV},  {"texture_s", kU},  {"texture_t", kV}};
+      {"x", kX},     {"y", kY},         {"z", kZ},         {"nx", kNx},       {"ny", kNy},       {"nz", kNz},
+      {"red", kRed}, {"green", kGreen}, {"blue", kBlue},   {"alpha", kAlpha}, {"s", kU},         {"t", kV},
+      {"u", kU},     {"v", kV},         {"texture_u", kU}, {"texture_v", kV}, {"texture_s", kU}, {"texture_t", kV}};
   for (const Name& entry : kNames)
     if (entry.name == property) return entry.slot;
   return kSkip;
@@ -183,8 +183,8 @@ Header parse_header(const std::string& name, std::span<const uint8_t> data) {
       assign_slots(name, header);
       return header;
     } else {
-      fail(name, "unknown PLY header keyword '" + std::string(tokens[0].substr(0, 24)) + "' on line " +
-                     std::to_string(line));
+      fail(name,
+           "unknown PLY header keyword '" + std::string(tokens[0].substr(0, 24)) + "' on line " + std::to_string(line));
     }
   }
   fail(name, "PLY header has no end_header line");
@@ -202,8 +202,8 @@ void check_counts_fit(const std::string& name, const Header& header, uint64_t da
     }
     if (record == 0) continue;
     if (element.count > left / record)
-      fail(name, "PLY header declares " + std::to_string(element.count) + " " + element.name +
-                     " records but only " + std::to_string(data_bytes) + " bytes of data follow");
+      fail(name, "PLY header declares " + std::to_string(element.count) + " " + element.name + " records but only " +
+                     std::to_string(data_bytes) + " bytes of data follow");
     left -= element.count * record;
   }
 }
@@ -270,14 +270,30 @@ class BinaryReader {
     if (size_t(end_ - p_) < scalar_size(type)) throw Truncated{};
     double value = 0;
     switch (type) {
-      case Scalar::i8: value = int8_t(*p_); break;
-      case Scalar::u8: value = uint8_t(*p_); break;
-      case Scalar::i16: value = int16_t(load<uint16_t>()); break;
-      case Scalar::u16: value = load<uint16_t>(); break;
-      case Scalar::i32: value = int32_t(load<uint32_t>()); break;
-      case Scalar::u32: value = load<uint32_t>(); break;
-      case Scalar::f32: value = std::bit_cast<float>(load<uint32_t>()); break;
-      case Scalar::f64: value = std::bit_cast<double>(load<uint64_t>()); break;
+      case Scalar::i8:
+        value = int8_t(*p_);
+        break;
+      case Scalar::u8:
+        value = uint8_t(*p_);
+        break;
+      case Scalar::i16:
+        value = int16_t(load<uint16_t>());
+        break;
+      case Scalar::u16:
+        value = load<uint16_t>();
+        break;
+      case Scalar::i32:
+        value = int32_t(load<uint32_t>());
+        break;
+      case Scalar::u32:
+        value = load<uint32_t>();
+        break;
+      case Scalar::f32:
+        value = std::bit_cast<float>(load<uint32_t>());
+        break;
+      case Scalar::f64:
+        value = std::bit_cast<double>(load<uint64_t>());
+        break;
     }
     p_ += scalar_size(type);
     return value;

@@ -151,7 +151,9 @@ Mesh make_sphere(int rings, int segments) {
   }
   const uint32_t south = uint32_t(m.vertex_count());
   add_vertex(m, 0, 0, -1);
-  auto ring_vertex = [&](int r, int s) { return uint32_t(1 + uint32_t(r - 1) * uint32_t(segments) + uint32_t(s % segments)); };
+  auto ring_vertex = [&](int r, int s) {
+    return uint32_t(1 + uint32_t(r - 1) * uint32_t(segments) + uint32_t(s % segments));
+  };
   for (int s = 0; s < segments; ++s) add_face(m, 0, ring_vertex(1, s), ring_vertex(1, s + 1));
   for (int r = 1; r + 1 < rings; ++r)
     for (int s = 0; s < segments; ++s)
@@ -200,17 +202,16 @@ Mesh make_grid(int nx, int ny) {
 // gives edge 1-3 a third face; two faces glued along 15-17 with opposite orientations; an unused vertex.
 Mesh make_nonmanifold_fixture() {
   Mesh m;
-  const float p[][3] = {{0, 0, 0},  {1, 0, 0},  {0, 1, 0}, {0, 0, 1}, {-1, 0, 0}, {0, -1, 0}, {0, 0, -1},
-                        {3, 0, 0},  {3, 1, 0},  {4, 0, 0}, {2, 0, 0}, {3, 0, 1},  {0, 0, 1},  {1, 1, 1},
-                        {9, 9, 9},  {10, 0, 0}, {11, 0, 0}, {11, 1, 0}, {10, 1, 0}};
+  const float p[][3] = {{0, 0, 0}, {1, 0, 0},  {0, 1, 0},  {0, 0, 1},  {-1, 0, 0}, {0, -1, 0}, {0, 0, -1},
+                        {3, 0, 0}, {3, 1, 0},  {4, 0, 0},  {2, 0, 0},  {3, 0, 1},  {0, 0, 1},  {1, 1, 1},
+                        {9, 9, 9}, {10, 0, 0}, {11, 0, 0}, {11, 1, 0}, {10, 1, 0}};
   for (const auto& v : p) add_vertex(m, v[0], v[1], v[2]);
-  const uint32_t faces[][3] = {
-      {0, 2, 1},  {0, 1, 3}, {0, 3, 2}, {1, 2, 3},     // tetrahedron in the positive octant
-      {0, 4, 5},  {0, 6, 4}, {0, 5, 6}, {4, 6, 5},     // tetrahedron in the negative octant
-      {7, 8, 9},  {8, 7, 10}, {7, 8, 11},              // book
-      {3, 2, 1},  {1, 1, 2}, {7, 9, 10},               // duplicate, repeated corner, collinear
-      {12, 1, 13},                                     // welds to (3, 1, 13)
-      {15, 16, 17}, {15, 18, 17}};                     // the second one runs 17->15 like the first
+  const uint32_t faces[][3] = {{0, 2, 1},    {0, 1, 3},   {0, 3, 2},  {1, 2, 3},  // tetrahedron in the positive octant
+                               {0, 4, 5},    {0, 6, 4},   {0, 5, 6},  {4, 6, 5},  // tetrahedron in the negative octant
+                               {7, 8, 9},    {8, 7, 10},  {7, 8, 11},             // book
+                               {3, 2, 1},    {1, 1, 2},   {7, 9, 10},  // duplicate, repeated corner, collinear
+                               {12, 1, 13},                            // welds to (3, 1, 13)
+                               {15, 16, 17}, {15, 18, 17}};            // the second one runs 17->15 like the first
   for (const auto& f : faces) add_face(m, f[0], f[1], f[2]);
   return m;
 }

@@ -117,7 +117,8 @@ Shape shape_of(const std::string& where, std::string_view text, const Multilevel
   }
   for (const auto& [numbers, line] : vertex_batches)
     if (numbers % 3 && numbers % 2)
-      fail(where, "line " + str(line) + ": a vertex batch of " + str(numbers) + " numbers is not whole 2D or 3D vertices");
+      fail(where,
+           "line " + str(line) + ": a vertex batch of " + str(numbers) + " numbers is not whole 2D or 3D vertices");
   fail(where, "vertex batches mix 2D and 3D coordinates");
 }
 
@@ -142,7 +143,8 @@ void read_triangles(Lexer& lex, uint32_t level, uint32_t n, MultilevelMesh& m, s
       m.triangles.push_back(v);
       while (v >= n && stated[v] == kNoRep) {
         if (t != Token::number)
-          lex.error("vertex " + str(v) + " is not in level " + str(level) + " or above: its representative must follow the triangle");
+          lex.error("vertex " + str(v) + " is not in level " + str(level) +
+                    " or above: its representative must follow the triangle");
         const uint32_t r = vertex("representative");
         if (r >= v) lex.error("representative " + str(r) + " of vertex " + str(v) + " is not below it");
         stated[v] = r;
@@ -218,7 +220,8 @@ std::string format_multilevel_ascii(const MultilevelMesh& m) {
       }
       if (v + 1 < v_end) out += ",\n";
     }
-    out += "}\n{#level " + str(level) + " triangles (" + str(t_end - t_begin) + "), each followed by the representatives it states\n";
+    out += "}\n{#level " + str(level) + " triangles (" + str(t_end - t_begin) +
+           "), each followed by the representatives it states\n";
     for (uint32_t t = t_begin; t < t_end; ++t) {
       reps.clear();
       representatives_stated_by(m, t, v_end, stated, reps);

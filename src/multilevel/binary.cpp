@@ -53,7 +53,8 @@ class SectionReader {
 
   // Header and table checks; returns the entries.
   std::vector<SectionEntry> table() const {
-    if (bytes_.size() < sizeof(FileHeader)) error(0, "header: " + str(bytes_.size()) + " bytes, too short for a header");
+    if (bytes_.size() < sizeof(FileHeader))
+      error(0, "header: " + str(bytes_.size()) + " bytes, too short for a header");
     FileHeader h;
     std::memcpy(&h, bytes_.data(), sizeof h);
     if (std::memcmp(h.magic, kMagic, 8) != 0) error(0, "header: not a binary multilevel file (magic)");
@@ -75,10 +76,12 @@ class SectionReader {
       std::memcpy(&e, bytes_.data() + at, sizeof e);
       const std::string name = "section " + str(i) + " (" + std::string(e.tag, 4) + ")";
       if (e.element_size == 0) error(at, name + ": element size 0");
-      if (e.offset % kAlignment || e.offset < end) error(at, name + ": offset " + str(e.offset) + " misaligned or overlapping");
+      if (e.offset % kAlignment || e.offset < end)
+        error(at, name + ": offset " + str(e.offset) + " misaligned or overlapping");
       if (e.offset > bytes_.size() || e.count > (bytes_.size() - e.offset) / e.element_size)
         error(at, name + ": " + str(e.count) + " elements past the end of the file");
-      if (XXH64(bytes_.data() + e.offset, e.count * e.element_size, 0) != e.checksum) error(e.offset, name + ": checksum mismatch");
+      if (XXH64(bytes_.data() + e.offset, e.count * e.element_size, 0) != e.checksum)
+        error(e.offset, name + ": checksum mismatch");
       end = e.offset + e.count * e.element_size;
     }
     return entries;
@@ -106,7 +109,8 @@ void reseal_multilevel_binary(std::span<uint8_t> bytes) {
     uint8_t* at = bytes.data() + sizeof h + uint64_t(i) * sizeof(SectionEntry);
     SectionEntry e;
     std::memcpy(&e, at, sizeof e);
-    if (e.element_size == 0 || e.offset > bytes.size() || e.count > (bytes.size() - e.offset) / e.element_size) continue;
+    if (e.element_size == 0 || e.offset > bytes.size() || e.count > (bytes.size() - e.offset) / e.element_size)
+      continue;
     e.checksum = XXH64(bytes.data() + e.offset, e.count * e.element_size, 0);
     std::memcpy(at, &e, sizeof e);
   }
@@ -163,8 +167,7 @@ MultilevelMesh parse_multilevel_binary(const std::string& where, std::span<const
   for (++i; i < table.size(); ++i) {
     const SectionEntry& e = table[i];
     if (!tag_is(e, "LEVL")) continue;
-    if (e.element_size != 4)
-      in.error(e.offset, "section LEVL: element size " + str(e.element_size) + " (4 expected)");
+    if (e.element_size != 4) in.error(e.offset, "section LEVL: element size " + str(e.element_size) + " (4 expected)");
     loader.add_level(where, bytes.subspan(e.offset, e.count * 4), e.offset);
   }
   if (!loader.complete())

@@ -23,13 +23,17 @@ struct CollapsePlayback {
   std::vector<uint32_t> corners;             // current vertex of each corner
   std::vector<std::vector<uint32_t>> faces;  // per live vertex: triangles that were live when added
   std::vector<uint8_t> removed_vertex, removed_face;
-  std::vector<uint32_t> running_level;       // 1-based, as in the paper
-  std::vector<uint32_t> last_touched_by;     // per vertex: the blue vertex of the last collapse that set its level
-  std::vector<uint32_t> listed_for;          // per blue vertex: 1 + the collapse whose touchers last listed it
+  std::vector<uint32_t> running_level;    // 1-based, as in the paper
+  std::vector<uint32_t> last_touched_by;  // per vertex: the blue vertex of the last collapse that set its level
+  std::vector<uint32_t> listed_for;       // per blue vertex: 1 + the collapse whose touchers last listed it
 
   explicit CollapsePlayback(const Mesh& mesh)
-      : corners(mesh.indices), faces(mesh.vertex_count()), removed_vertex(mesh.vertex_count()),
-        removed_face(mesh.face_count()), running_level(mesh.vertex_count()), last_touched_by(mesh.vertex_count(), kNoRep),
+      : corners(mesh.indices),
+        faces(mesh.vertex_count()),
+        removed_vertex(mesh.vertex_count()),
+        removed_face(mesh.face_count()),
+        running_level(mesh.vertex_count()),
+        last_touched_by(mesh.vertex_count(), kNoRep),
         listed_for(mesh.vertex_count(), 0) {
     for (uint32_t t = 0; t < mesh.face_count(); ++t) {
       if (degenerate(&corners[3 * size_t(t)])) {
@@ -65,8 +69,7 @@ struct CollapsePlayback {
 
 void check_collapse(const CollapsePlayback& p, const EdgeCollapse& c, size_t i) {
   const size_t n = p.removed_vertex.size();
-  if (c.removed >= n || c.survivor >= n)
-    fail("", "collapse " + str(i) + " names a vertex beyond the mesh's " + str(n));
+  if (c.removed >= n || c.survivor >= n) fail("", "collapse " + str(i) + " names a vertex beyond the mesh's " + str(n));
   if (c.removed == c.survivor) fail("", "collapse " + str(i) + " collapses vertex " + str(c.removed) + " onto itself");
   if (p.removed_vertex[c.removed] || p.removed_vertex[c.survivor])
     fail("", "collapse " + str(i) + " names a vertex an earlier collapse removed");

@@ -6,8 +6,8 @@
 #include <vector>
 
 #include "io/mesh.h"
-#include "spm/hierarchy.h"
 #include "multilevel/mesh.h"
+#include "spm/hierarchy.h"
 
 namespace pms {
 

@@ -24,15 +24,16 @@ float distance2(const float* a, const float* b) {
 }
 
 // Per cluster, its preferred ancestor among the live vertices.
-std::vector<uint32_t> preferred_ancestors(const Mesh& mesh, const VertexClustering& c, const std::vector<uint8_t>& removed,
-                                          size_t index) {
+std::vector<uint32_t> preferred_ancestors(const Mesh& mesh, const VertexClustering& c,
+                                          const std::vector<uint8_t>& removed, size_t index) {
   const size_t clusters = c.positions.size() / 3;
   std::vector<uint32_t> best(clusters, kNoRep);
   for (uint32_t v = 0; v < mesh.vertex_count(); ++v) {
     if (removed[v]) continue;
     const uint32_t k = c.cluster[v];
-    if (k >= clusters) fail("", "clustering " + str(index) + " puts vertex " + str(v) + " in cluster " + str(k) +
-                                    ", which has no position (" + str(clusters) + " clusters)");
+    if (k >= clusters)
+      fail("", "clustering " + str(index) + " puts vertex " + str(v) + " in cluster " + str(k) +
+                   ", which has no position (" + str(clusters) + " clusters)");
     const float* at = &c.positions[3 * size_t(k)];
     if (best[k] == kNoRep ||
         distance2(&mesh.positions[3 * size_t(v)], at) < distance2(&mesh.positions[3 * size_t(best[k])], at))
@@ -55,7 +56,8 @@ CollapseLevels assign_cluster_levels(const Mesh& mesh, std::span<const VertexClu
   for (uint32_t t = 0; t < f; ++t) removed_face[t] = degenerate(&corners[3 * size_t(t)]);  // level 0
   for (size_t i = 0; i < clusterings.size(); ++i) {
     const VertexClustering& c = clusterings[i];
-    if (c.cluster.size() != n) fail("", "clustering " + str(i) + " maps " + str(c.cluster.size()) + " vertices, not " + str(n));
+    if (c.cluster.size() != n)
+      fail("", "clustering " + str(i) + " maps " + str(c.cluster.size()) + " vertices, not " + str(n));
     const std::vector<uint32_t> best = preferred_ancestors(mesh, c, removed_vertex, i);
     const uint32_t level = uint32_t(i);
     for (uint32_t v = 0; v < n; ++v) {

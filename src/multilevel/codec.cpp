@@ -34,7 +34,8 @@ constexpr uint32_t kCornerSymbols = kRecent + kClasses;
 // (after the corner's, so that a mesh without texture coordinates codes as it did before them).
 enum Slot : uint32_t { kRepGap, kRepDelta, kAxis, kCorner = kAxis + 3, kTexcoord, kSlots = kTexcoord + 2 };
 constexpr uint32_t alphabet(uint32_t slot) { return slot == kCorner ? kCornerSymbols : kClasses; }
-constexpr const char* kSlotNames[kSlots] = {"representative vertex", "representative", "x", "y", "z", "corner", "u", "v"};
+constexpr const char* kSlotNames[kSlots] = {
+    "representative vertex", "representative", "x", "y", "z", "corner", "u", "v"};
 
 // Grid coordinates per vertex in the encoder's and decoder's arrays: the position's, then the texture
 // coordinates' (when the mesh has them).
@@ -73,11 +74,13 @@ struct LevelInput {
   std::span<const uint32_t> quantized;  // grid_width per vertex
   std::span<const uint8_t> known;       // per vertex: its representative is stated by this level or a coarser one
   uint32_t level, position_bits, texcoord_bits;
-  std::vector<uint32_t> pairs;          // (vertex, representative), by vertex
+  std::vector<uint32_t> pairs;  // (vertex, representative), by vertex
 };
 
 // The vertex whose grid coordinates predict v's; kNoRep: the middle of the grid.
-uint32_t predictor(uint32_t v, uint32_t representative) { return representative != kNoRep ? representative : v > 0 ? v - 1 : kNoRep; }
+uint32_t predictor(uint32_t v, uint32_t representative) {
+  return representative != kNoRep ? representative : v > 0 ? v - 1 : kNoRep;
+}
 
 // The encoder's pass over a level: counts symbols (Counter) or writes them (Writer).
 template <class Sink>
@@ -217,7 +220,9 @@ class LevelDecoder {
   }
 
  private:
-  [[noreturn]] void error(const std::string& what) const { fail(where_, "compressed level " + str(c_.level) + ": " + what); }
+  [[noreturn]] void error(const std::string& what) const {
+    fail(where_, "compressed level " + str(c_.level) + ": " + what);
+  }
 
   void read_header() {
     h_.level = uint32_t(r_.bits(32, "level"));
@@ -225,7 +230,8 @@ class LevelDecoder {
     h_.triangles = uint32_t(r_.bits(32, "triangle count"));
     h_.representatives = uint32_t(r_.bits(32, "representative count"));
     if (h_.level != c_.level) error("says it is level " + str(h_.level));
-    if (h_.vertices > c_.vertices_left || h_.triangles > c_.triangles_left || h_.representatives > c_.representatives_left)
+    if (h_.vertices > c_.vertices_left || h_.triangles > c_.triangles_left ||
+        h_.representatives > c_.representatives_left)
       error("more vertices, triangles or representatives than the head's totals leave");
     const auto used = slots_used(c_.dimension, c_.texcoords, h_.vertices, h_.triangles, h_.representatives);
     for (uint32_t s = 0; s < kSlots; ++s)
@@ -297,7 +303,8 @@ class LevelDecoder {
       const uint32_t s = codes_[kCorner].read(r_, kSlotNames[kCorner]);
       uint32_t v = 0, i = kRecent;
       if (s < kRecent) {
-        if (s >= recent.size()) error("corner " + str(c) + " names recent corner " + str(s) + " of " + str(recent.size()));
+        if (s >= recent.size())
+          error("corner " + str(c) + " names recent corner " + str(s) + " of " + str(recent.size()));
         i = s;
         v = recent.at(i);
       } else {
@@ -365,7 +372,9 @@ void snap_all(std::vector<float>& values, uint32_t d, const PositionGrid& grid) 
 
 }  // namespace
 
-PositionGrid multilevel_grid(const MultilevelMesh& m, uint32_t bits) { return grid_over(m.positions, m.dimension, bits, "position"); }
+PositionGrid multilevel_grid(const MultilevelMesh& m, uint32_t bits) {
+  return grid_over(m.positions, m.dimension, bits, "position");
+}
 
 PositionGrid multilevel_texcoord_grid(const MultilevelMesh& m, uint32_t bits) {
   return grid_over(m.texcoords, 2, bits, "texture coordinate");

@@ -9,9 +9,9 @@
 #include <string>
 #include <vector>
 
-#include "spm/position_grid.h"
 #include "multilevel/loader.h"
 #include "multilevel/mesh.h"
+#include "spm/position_grid.h"
 
 namespace pms {
 
@@ -32,7 +32,8 @@ PositionGrid multilevel_grid(const MultilevelMesh& mesh, uint32_t bits);
 // Likewise over the box of every vertex's texture coordinates (u, v; z unused).
 PositionGrid multilevel_texcoord_grid(const MultilevelMesh& mesh, uint32_t bits);
 // The mesh with every position and texture coordinate on those grids: what the compressed form delivers.
-MultilevelMesh snapped_multilevel(const MultilevelMesh& mesh, uint32_t bits, uint32_t texcoord_bits = kDefaultTexcoordBits);
+MultilevelMesh snapped_multilevel(const MultilevelMesh& mesh, uint32_t bits,
+                                  uint32_t texcoord_bits = kDefaultTexcoordBits);
 
 // The compressed form in the pieces a client loads: the 64-byte compressed head (80 bytes with texture
 // coordinates: their grid's box follows), then each level coarsest first. `bits`, if given, gets each
@@ -45,16 +46,16 @@ MultilevelParts multilevel_compressed_parts(const MultilevelMesh& mesh, uint32_t
 struct CompressedLevelContext {
   uint32_t level = 0, dimension = 3;
   bool normals = false, colors = false, texcoords = false;
-  PositionGrid grid, texcoord_grid;  // texcoord_grid: only when `texcoords`
+  PositionGrid grid, texcoord_grid;                     // texcoord_grid: only when `texcoords`
   const RepresentativeArray* representative = nullptr;  // every vertex's, as loaded so far
   uint32_t vertices_loaded = 0;
   uint32_t vertices_left = 0, triangles_left = 0, representatives_left = 0;  // what the head's totals allow
 };
 
 // The LEVL section a compressed level stands for; appends its vertices' grid coordinates (dimension per
-// vertex, then 2 for the texture coordinates if any) to `quantized`, which holds those of every loaded vertex. pms::Error "WHERE: what" for a level
-// that is not one: truncated, counts over what is left, unknown code words, values outside the grid or
-// the mesh, representatives not below their vertex.
+// vertex, then 2 for the texture coordinates if any) to `quantized`, which holds those of every loaded vertex.
+// pms::Error "WHERE: what" for a level that is not one: truncated, counts over what is left, unknown code words, values
+// outside the grid or the mesh, representatives not below their vertex.
 std::vector<uint8_t> decode_compressed_level(const std::string& where, std::span<const uint8_t> level,
                                              const CompressedLevelContext& context, std::vector<uint32_t>& quantized);
 

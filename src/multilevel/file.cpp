@@ -24,7 +24,8 @@ MultilevelMesh read_multilevel(const std::string& path, const MultilevelLimits& 
   file.seekg(0);
   if (!file.read(reinterpret_cast<char*>(bytes.data()), std::streamsize(size))) fail(path, "read failed");
   if (is_multilevel_binary(bytes)) return parse_multilevel_binary(path, bytes, limits);
-  return parse_multilevel_ascii(path, std::string_view(reinterpret_cast<const char*>(bytes.data()), bytes.size()), limits);
+  return parse_multilevel_ascii(path, std::string_view(reinterpret_cast<const char*>(bytes.data()), bytes.size()),
+                                limits);
 }
 
 void write_multilevel(const std::string& path, const MultilevelMesh& mesh, bool ascii) {

@@ -22,7 +22,8 @@ struct MultilevelLimits {
 // format has no normals, colours or texture coordinates (its Fig. 9 model has them, but Fig. 6's file
 // "doesn't show this"), and no place for the representatives only geomorphs use
 // (geomorph_representatives_per_level): they are left out, so what reads back has the discrete LODs'.
-MultilevelMesh parse_multilevel_ascii(const std::string& where, std::string_view text, const MultilevelLimits& limits = {});
+MultilevelMesh parse_multilevel_ascii(const std::string& where, std::string_view text,
+                                      const MultilevelLimits& limits = {});
 std::string format_multilevel_ascii(const MultilevelMesh& mesh);
 
 // Binary (docs/multilevel-format.md): errors name the section or byte offset.

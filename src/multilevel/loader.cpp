@@ -18,8 +18,8 @@ using multilevel_binary::HeadSection;
 using multilevel_binary::kHasColors;
 using multilevel_binary::kHasNormals;
 using multilevel_binary::kHasTexcoords;
-using multilevel_binary::LevelHeader;
 using multilevel_binary::level_section_bytes;
+using multilevel_binary::LevelHeader;
 using multilevel_binary::TexcoordBox;
 
 constexpr uint32_t kNoRep = MultilevelMesh::kNoRepresentative;
@@ -34,9 +34,9 @@ void append_bytes(std::vector<uint8_t>& out, const T* data, size_t count) {
   std::memcpy(out.data() + at, data, count * sizeof(T));
 }
 
-// One level's LEVL section: its header, vertices (positions, normals, colours, texture coordinates), triangles, then the
-// representatives it carries (level_representatives: what its triangles state, in the ASCII form's order,
-// then its own vertices' geomorph representatives).
+// One level's LEVL section: its header, vertices (positions, normals, colours, texture coordinates), triangles, then
+// the representatives it carries (level_representatives: what its triangles state, in the ASCII form's order, then its
+// own vertices' geomorph representatives).
 std::vector<uint8_t> level_section(const MultilevelMesh& m, uint32_t level, std::vector<uint8_t>& stated) {
   const uint32_t v_end = m.vertex_count[level], t_end = m.triangle_count[level];
   const uint32_t v_begin = v_end - m.level_vertices(level), t_begin = t_end - m.level_triangles(level);
@@ -46,8 +46,9 @@ std::vector<uint8_t> level_section(const MultilevelMesh& m, uint32_t level, std:
     return array.empty() ? std::span(array.data(), 0) : std::span(array.data() + begin, count);
   };
   const size_t d = m.dimension;
-  return level_section_bytes(h, part(m.positions, v_begin * d, h.vertices * d), part(m.normals, v_begin * 3, h.vertices * 3),
-                             part(m.colors, v_begin * 4, h.vertices * 4), part(m.texcoords, v_begin * 2, h.vertices * 2),
+  return level_section_bytes(h, part(m.positions, v_begin * d, h.vertices * d),
+                             part(m.normals, v_begin * 3, h.vertices * 3), part(m.colors, v_begin * 4, h.vertices * 4),
+                             part(m.texcoords, v_begin * 2, h.vertices * 2),
                              part(m.triangles, t_begin * 3, h.triangles * 3), reps);
 }
 
@@ -89,13 +90,15 @@ HeadSection multilevel_binary::head_section(const MultilevelMesh& m) {
 }
 
 std::vector<uint8_t> multilevel_binary::level_section_bytes(const LevelHeader& h, std::span<const float> positions,
-                                                            std::span<const float> normals, std::span<const uint8_t> colors,
+                                                            std::span<const float> normals,
+                                                            std::span<const uint8_t> colors,
                                                             std::span<const float> texcoords,
                                                             std::span<const uint32_t> triangles,
                                                             std::span<const uint32_t> representatives) {
   std::vector<uint8_t> out;
-  out.reserve(sizeof h + 4 * (positions.size() + normals.size() + texcoords.size() + triangles.size() +
-                              representatives.size()) + colors.size());
+  out.reserve(sizeof h +
+              4 * (positions.size() + normals.size() + texcoords.size() + triangles.size() + representatives.size()) +
+              colors.size());
   append_bytes(out, &h, 1);
   append_bytes(out, positions.data(), positions.size());
   append_bytes(out, normals.data(), normals.size());
@@ -135,7 +138,8 @@ MultilevelLoader::MultilevelLoader(const std::string& where, std::span<const uin
     fail(where, "section HEAD: more than 2^31 vertices or triangles, or more representatives than vertices");
   const uint64_t per_vertex = 4 * (h.dimension + (h.flags & kHasNormals ? 3 : 0) + (h.flags & kHasTexcoords ? 2 : 0)) +
                               (h.flags & kHasColors ? 4 : 0);
-  const uint64_t bytes = per_vertex * h.vertex_count + 12 * uint64_t(h.triangle_count) + 8 * uint64_t(h.representative_count);
+  const uint64_t bytes =
+      per_vertex * h.vertex_count + 12 * uint64_t(h.triangle_count) + 8 * uint64_t(h.representative_count);
   if (bytes > limits.max_file_bytes)
     fail(where, "section HEAD: a mesh of " + str(bytes) + " bytes, over the limit of " + str(limits.max_file_bytes));
   flags_ = h.flags;
@@ -166,8 +170,8 @@ void MultilevelLoader::read_compressed_head(const std::string& where, std::span<
   }
   TexcoordBox box;
   std::memcpy(&box, head.data() + sizeof h, sizeof box);
-  texcoord_grid_ = head_grid(where, h.texcoord_bits, box.min, box.max, 2, "texture coordinate bits",
-                             "the texture coordinates' box");
+  texcoord_grid_ =
+      head_grid(where, h.texcoord_bits, box.min, box.max, 2, "texture coordinate bits", "the texture coordinates' box");
 }
 
 void MultilevelLoader::add_level(const std::string& where, std::span<const uint8_t> section, uint64_t offset) {
@@ -234,7 +238,8 @@ void MultilevelLoader::add_plain_level(const std::string& where, std::span<const
   check_level_triangles(where, t_begin, n_l);
   ++loaded_;
   if (!complete()) return;
-  if (mesh_.vertices() != total_vertices_ || mesh_.faces() != total_triangles_ || representatives_ != total_representatives_)
+  if (mesh_.vertices() != total_vertices_ || mesh_.faces() != total_triangles_ ||
+      representatives_ != total_representatives_)
     fail(where, "section HEAD: its totals disagree with the LEVL sections");
   validate_multilevel(where, mesh_);
 }
@@ -242,7 +247,8 @@ void MultilevelLoader::add_plain_level(const std::string& where, std::span<const
 void MultilevelLoader::take_representatives(const std::string& where, std::span<const uint32_t> pairs) {
   for (size_t k = 0; k < pairs.size(); k += 2) {
     const uint32_t v = pairs[k], r = pairs[k + 1];
-    if (v >= total_vertices_) fail(where, "a representative of vertex " + str(v) + ", beyond the file's " + str(total_vertices_));
+    if (v >= total_vertices_)
+      fail(where, "a representative of vertex " + str(v) + ", beyond the file's " + str(total_vertices_));
     if (r >= v) fail(where, "vertex " + str(v) + " has representative " + str(r) + ", which is not below it");
     if (mesh_.representative[v] != kNoRep) fail(where, "vertex " + str(v) + " has two representatives");
     mesh_.representative[v] = r;
@@ -258,7 +264,8 @@ void MultilevelLoader::check_level_triangles(const std::string& where, uint32_t 
   for (uint32_t t = t_begin; t < mesh_.faces(); ++t) {
     for (int k = 0; k < 3; ++k) {
       const uint32_t v = mesh_.triangles[3 * size_t(t) + k];
-      if (v >= total_vertices_) fail(where, "triangle " + str(t) + " names vertex " + str(v) + " of " + str(total_vertices_));
+      if (v >= total_vertices_)
+        fail(where, "triangle " + str(t) + " names vertex " + str(v) + " of " + str(total_vertices_));
       uint32_t u = v;
       while (u >= n_l && !resolved_[u]) {
         u = mesh_.representative[u];

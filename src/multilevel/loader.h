@@ -9,9 +9,9 @@
 #include <utility>
 #include <vector>
 
-#include "spm/position_grid.h"
 #include "multilevel/file.h"
 #include "multilevel/mesh.h"
+#include "spm/position_grid.h"
 
 namespace pms {
 
@@ -48,7 +48,7 @@ class MultilevelLoader {
   uint32_t levels_loaded() const { return loaded_; }
   bool complete() const { return loaded_ == mesh_.level_count(); }
   uint32_t next_level() const { return mesh_.level_count() - 1 - loaded_; }  // only while !complete()
-  uint32_t finest_loaded() const { return mesh_.level_count() - loaded_; }  // level_count() before the first
+  uint32_t finest_loaded() const { return mesh_.level_count() - loaded_; }   // level_count() before the first
   const MultilevelMesh& mesh() const { return mesh_; }
   // The whole mesh once complete() (validated by the last add_level); the loader is left empty.
   MultilevelMesh release() { return std::move(mesh_); }
@@ -65,8 +65,8 @@ class MultilevelLoader {
   uint32_t loaded_ = 0;
   std::vector<uint8_t> resolved_;  // per vertex: its chain is known to reach a loaded vertex
   MultilevelForm form_;
-  PositionGrid grid_;               // the compressed form's
-  PositionGrid texcoord_grid_;      // the compressed form's, when it has texture coordinates (z unused)
+  PositionGrid grid_;                // the compressed form's
+  PositionGrid texcoord_grid_;       // the compressed form's, when it has texture coordinates (z unused)
   std::vector<uint32_t> quantized_;  // the compressed form's: grid coordinates of the loaded vertices
 };
 

@@ -45,8 +45,10 @@ bool MultilevelRefinement::can_collapse(uint32_t v) const {
 void MultilevelRefinement::split(uint32_t v) {
   if (!can_split(v))
     fail("local refinement", "vertex " + str(v) + " cannot be split (" +
-                                 (!dag_.is_node(v) ? "not a collapse" : split_[v] ? "already split" :
-                                  str(split_constraints(v)) + " prerequisites collapsed") + ")");
+                                 (!dag_.is_node(v) ? "not a collapse"
+                                  : split_[v]      ? "already split"
+                                                   : str(split_constraints(v)) + " prerequisites collapsed") +
+                                 ")");
   split_[v] = 1;
   ++split_count_;
   for (uint32_t d : dag_.dependents_of(v)) add(split_constraints_, d, -1);
@@ -56,15 +58,18 @@ void MultilevelRefinement::split(uint32_t v) {
 void MultilevelRefinement::collapse(uint32_t v) {
   if (!can_collapse(v))
     fail("local refinement", "vertex " + str(v) + " cannot be collapsed (" +
-                                 (!dag_.is_node(v) ? "not a collapse" : !split_[v] ? "already collapsed" :
-                                  str(collapse_constraints(v)) + " dependents split") + ")");
+                                 (!dag_.is_node(v) ? "not a collapse"
+                                  : !split_[v]     ? "already collapsed"
+                                                   : str(collapse_constraints(v)) + " dependents split") +
+                                 ")");
   split_[v] = 0;
   --split_count_;
   for (uint32_t d : dag_.dependents_of(v)) add(split_constraints_, d, +1);
   for (uint32_t p : dag_.prerequisites_of(v)) add(collapse_constraints_, p, -1);
 }
 
-void MultilevelRefinement::close_over_prerequisites(std::span<const uint32_t> wanted, std::vector<uint8_t>& mark) const {
+void MultilevelRefinement::close_over_prerequisites(std::span<const uint32_t> wanted,
+                                                    std::vector<uint8_t>& mark) const {
   std::vector<uint32_t> stack;
   for (uint32_t v : wanted)
     if (dag_.is_node(v) && !mark[v]) {
@@ -86,7 +91,8 @@ void MultilevelRefinement::close_over_prerequisites(std::span<const uint32_t> wa
 // dependents that are leaving too, so its collapse constraints fall to zero once they are collapsed.
 // Splitting: a kept node's collapsed prerequisites are all kept, so its split constraints fall to zero once
 // they are split. A node is queued when its count reaches zero, which happens once.
-void MultilevelRefinement::change_status(bool splitting, const std::vector<uint8_t>& kept, std::vector<uint32_t>& done) {
+void MultilevelRefinement::change_status(bool splitting, const std::vector<uint8_t>& kept,
+                                         std::vector<uint32_t>& done) {
   const auto ready_to_change = [&](uint32_t v) {
     return splitting ? kept[v] && !split_[v] && split_constraints(v) == 0
                      : !kept[v] && split_[v] && collapse_constraints(v) == 0;

@@ -36,8 +36,10 @@ LocalMesh local_mesh(const MultilevelMesh& m, const MultilevelDag& dag, const Mu
   for (size_t i = 0; i < out.vertex.size(); ++i) {
     const uint32_t v = out.vertex[i];
     std::copy_n(&m.positions[size_t(v) * d], d, &out.mesh.positions[3 * i]);
-    if (!m.normals.empty()) out.mesh.normals.insert(out.mesh.normals.end(), &m.normals[3 * size_t(v)], &m.normals[3 * size_t(v)] + 3);
-    if (!m.colors.empty()) out.mesh.colors.insert(out.mesh.colors.end(), &m.colors[4 * size_t(v)], &m.colors[4 * size_t(v)] + 4);
+    if (!m.normals.empty())
+      out.mesh.normals.insert(out.mesh.normals.end(), &m.normals[3 * size_t(v)], &m.normals[3 * size_t(v)] + 3);
+    if (!m.colors.empty())
+      out.mesh.colors.insert(out.mesh.colors.end(), &m.colors[4 * size_t(v)], &m.colors[4 * size_t(v)] + 4);
     if (!m.texcoords.empty())
       out.mesh.texcoords.insert(out.mesh.texcoords.end(), &m.texcoords[2 * size_t(v)], &m.texcoords[2 * size_t(v)] + 2);
   }
@@ -50,7 +52,8 @@ LocalMesh local_mesh(const MultilevelMesh& m, const MultilevelDag& dag, const Mu
         uint32_t v = m.triangles[3 * size_t(t) + k];
         while (v != kNoRep && !in[v]) v = m.representative[v];
         if (v == kNoRep)
-          fail("local refinement", "triangle " + std::to_string(t) + " has a corner with no representative in the mesh");
+          fail("local refinement",
+               "triangle " + std::to_string(t) + " has a corner with no representative in the mesh");
         out.mesh.indices.push_back(new_index[v]);
       }
     }

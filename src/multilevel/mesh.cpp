@@ -145,7 +145,8 @@ std::vector<uint32_t> geomorph_representatives_per_level(const MultilevelMesh& m
   std::vector<uint32_t> count(m.level_count(), 0);
   for (uint32_t l = 0; l < m.level_count(); ++l) {
     const uint32_t v_end = m.vertex_count[l];
-    for (uint32_t v = v_end - m.level_vertices(l); v < v_end; ++v) count[l] += m.representative[v] != kNoRep && !stated[v];
+    for (uint32_t v = v_end - m.level_vertices(l); v < v_end; ++v)
+      count[l] += m.representative[v] != kNoRep && !stated[v];
   }
   return count;
 }
@@ -284,7 +285,8 @@ void MultilevelLod::geomorph(uint32_t lo, float t) {
         len += nrm[k] * nrm[k];
       }
       const float scale = len > 0 ? 1 / std::sqrt(len) : 0;
-      for (int k = 0; k < 3; ++k) morph_normals_[size_t(v) * 3 + k] = len > 0 ? nrm[k] * scale : m.normals[size_t(v) * 3 + k];
+      for (int k = 0; k < 3; ++k)
+        morph_normals_[size_t(v) * 3 + k] = len > 0 ? nrm[k] * scale : m.normals[size_t(v) * 3 + k];
     }
     if (!m.colors.empty())
       for (int k = 0; k < 4; ++k)
@@ -292,7 +294,8 @@ void MultilevelLod::geomorph(uint32_t lo, float t) {
             uint8_t(std::lround(s * m.colors[size_t(from) * 4 + k] + t * m.colors[size_t(v) * 4 + k]));
     if (!m.texcoords.empty())
       for (int k = 0; k < 2; ++k)
-        morph_texcoords_[size_t(v) * 2 + k] = s * m.texcoords[size_t(from) * 2 + k] + t * m.texcoords[size_t(v) * 2 + k];
+        morph_texcoords_[size_t(v) * 2 + k] =
+            s * m.texcoords[size_t(from) * 2 + k] + t * m.texcoords[size_t(v) * 2 + k];
   }
   morphed_ = true;
   level_ = float(lo + 1) - t;

@@ -105,7 +105,7 @@ class MultilevelLod {
   uint32_t connected_ = 0xFFFFFFFFu;  // the level whose connectivity indices_ holds
   bool morphed_ = false;
   uint32_t vertex_count_ = 0;
-  std::vector<uint32_t> pc_rep_;      // path-compressed representatives for `connected_`
+  std::vector<uint32_t> pc_rep_;  // path-compressed representatives for `connected_`
   std::vector<uint32_t> indices_;
   uint32_t morph_level_ = 0xFFFFFFFFu;  // the level whose own vertices morph_source_ covers
   std::vector<uint32_t> morph_source_;  // per vertex of that level: its representative at level + 1

@@ -83,7 +83,9 @@ class RepresentativeArray {
     for (size_t v = 0; v < size_; ++v) out[v] = (*this)[v];
     return out;
   }
-  friend bool operator==(const RepresentativeArray& a, const RepresentativeArray& b) { return a.values() == b.values(); }
+  friend bool operator==(const RepresentativeArray& a, const RepresentativeArray& b) {
+    return a.values() == b.values();
+  }
   friend bool operator==(const RepresentativeArray& a, const std::vector<uint32_t>& b) { return a.values() == b; }
 
  private:

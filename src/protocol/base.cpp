@@ -3,14 +3,14 @@
 // and the stream context both ends derive from it. Also the catalogue entry of a model.
 #include <cmath>
 
-#include "spm/hierarchy.h"
-#include "spm/vertex_id.h"
 #include "protocol/message_types.h"
 #include "protocol/model_messages.h"
 #include "protocol/position_grid.h"
 #include "protocol/server_messages.h"
 #include "protocol/stream_context.h"
 #include "protocol/wire_internal.h"
+#include "spm/hierarchy.h"
+#include "spm/vertex_id.h"
 
 namespace pms::protocol {
 namespace {
@@ -54,9 +54,7 @@ StreamContext stream_context(const Base& base) {
   return c;
 }
 
-bool carries_split_records(StreamMode mode) {
-  return mode == StreamMode::sender_driven;
-}
+bool carries_split_records(StreamMode mode) { return mode == StreamMode::sender_driven; }
 
 std::vector<uint8_t> encode(const Base& m) {
   check_sizes(m);

@@ -133,12 +133,14 @@ DagView decode_dag_view(std::span<const uint8_t> payload) {
   if (m.max_ops < 1 || m.max_ops > kMaxDagOps) r.fail(ErrorCode::bad_message, "max ops", "must be 1..65536");
   if (traversal > uint8_t(DagTraversal::constant_time))
     r.fail(ErrorCode::bad_message, "traversal", "is not priority (0), linear (1) or constant-time (2)");
-  if (management > uint8_t(DagMode::budget)) r.fail(ErrorCode::bad_message, "management", "is not free (0) or budget (1)");
+  if (management > uint8_t(DagMode::budget))
+    r.fail(ErrorCode::bad_message, "management", "is not free (0) or budget (1)");
   m.traversal = DagTraversal(traversal);
   m.management = DagMode(management);
   if (m.management == DagMode::budget && (m.budget < 1 || m.budget > kMaxDagBudget))
     r.fail(ErrorCode::bad_message, "budget", "must be 1..2^32 triangles in BUDGET mode");
-  if (m.management == DagMode::free && m.budget != 0) r.fail(ErrorCode::bad_message, "budget", "must be 0 in FREE mode");
+  if (m.management == DagMode::free && m.budget != 0)
+    r.fail(ErrorCode::bad_message, "budget", "must be 0 in FREE mode");
   return m;
 }
 

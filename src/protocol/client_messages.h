@@ -8,11 +8,11 @@
 #include <string>
 #include <vector>
 
-#include "spm/vertex_id.h"
-#include "protocol/message_types.h"
-#include "protocol/stream_mode.h"
 #include "common/camera.h"
 #include "dag/traversal.h"
+#include "protocol/message_types.h"
+#include "protocol/stream_mode.h"
+#include "spm/vertex_id.h"
 
 namespace pms::protocol {
 
@@ -100,7 +100,7 @@ Hello decode_hello(std::span<const uint8_t> payload);  // checks the magic; the 
 List decode_list(std::span<const uint8_t> payload);
 Open decode_open(std::span<const uint8_t> payload, uint64_t max_resume_leaves = kDefaultMaxResumeLeaves);
 OpenHeader decode_open_header(std::span<const uint8_t> payload);  // the front is left to a FrontDecoder
-View decode_view(std::span<const uint8_t> payload);  // also rejects cameras make_view() would refuse
+View decode_view(std::span<const uint8_t> payload);               // also rejects cameras make_view() would refuse
 Close decode_close(std::span<const uint8_t> payload);
 DagView decode_dag_view(std::span<const uint8_t> payload);  // the checks of VIEW and the bounds above
 

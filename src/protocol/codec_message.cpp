@@ -5,11 +5,11 @@
 #include <string>
 
 #include "common/bit_stream.h"
-#include "spm/split_codec.h"
 #include "protocol/message_types.h"
 #include "protocol/server_messages.h"
 #include "protocol/stream_context.h"
 #include "protocol/wire_internal.h"
+#include "spm/split_codec.h"
 
 namespace pms::protocol {
 

@@ -18,19 +18,32 @@ const char* hex_digits = "0123456789abcdef";
 
 std::string to_string(MessageType type) {
   switch (type) {
-    case MessageType::hello: return "HELLO";
-    case MessageType::list: return "LIST";
-    case MessageType::open: return "OPEN";
-    case MessageType::view: return "VIEW";
-    case MessageType::close: return "CLOSE";
-    case MessageType::dag_view: return "DAG_VIEW";
-    case MessageType::dag_ops: return "DAG_OPS";
-    case MessageType::codec: return "CODEC";
-    case MessageType::hello_ok: return "HELLO_OK";
-    case MessageType::catalogue: return "CATALOGUE";
-    case MessageType::base: return "BASE";
-    case MessageType::vsplits: return "VSPLITS";
-    case MessageType::error: return "ERROR";
+    case MessageType::hello:
+      return "HELLO";
+    case MessageType::list:
+      return "LIST";
+    case MessageType::open:
+      return "OPEN";
+    case MessageType::view:
+      return "VIEW";
+    case MessageType::close:
+      return "CLOSE";
+    case MessageType::dag_view:
+      return "DAG_VIEW";
+    case MessageType::dag_ops:
+      return "DAG_OPS";
+    case MessageType::codec:
+      return "CODEC";
+    case MessageType::hello_ok:
+      return "HELLO_OK";
+    case MessageType::catalogue:
+      return "CATALOGUE";
+    case MessageType::base:
+      return "BASE";
+    case MessageType::vsplits:
+      return "VSPLITS";
+    case MessageType::error:
+      return "ERROR";
   }
   const unsigned byte = unsigned(type);
   return std::string("type 0x") + hex_digits[byte >> 4] + hex_digits[byte & 15];
@@ -38,15 +51,24 @@ std::string to_string(MessageType type) {
 
 std::string to_string(ErrorCode code) {
   switch (code) {
-    case ErrorCode::bad_message: return "bad_message";
-    case ErrorCode::unsupported_version: return "unsupported_version";
-    case ErrorCode::unknown_model: return "unknown_model";
-    case ErrorCode::bad_id: return "bad_id";
-    case ErrorCode::too_large: return "too_large";
-    case ErrorCode::out_of_order: return "out_of_order";
-    case ErrorCode::server_full: return "server_full";
-    case ErrorCode::timeout: return "timeout";
-    case ErrorCode::internal: return "internal";
+    case ErrorCode::bad_message:
+      return "bad_message";
+    case ErrorCode::unsupported_version:
+      return "unsupported_version";
+    case ErrorCode::unknown_model:
+      return "unknown_model";
+    case ErrorCode::bad_id:
+      return "bad_id";
+    case ErrorCode::too_large:
+      return "too_large";
+    case ErrorCode::out_of_order:
+      return "out_of_order";
+    case ErrorCode::server_full:
+      return "server_full";
+    case ErrorCode::timeout:
+      return "timeout";
+    case ErrorCode::internal:
+      return "internal";
   }
   return "code " + std::to_string(unsigned(code));
 }
@@ -63,8 +85,8 @@ void FrameReader::feed(const uint8_t* data, size_t size) {
       data += take;
       size -= take;
       if (header_fill_ < kFrameHeaderBytes) return;
-      payload_size_ = uint32_t(header_[0]) | uint32_t(header_[1]) << 8 | uint32_t(header_[2]) << 16 |
-                      uint32_t(header_[3]) << 24;
+      payload_size_ =
+          uint32_t(header_[0]) | uint32_t(header_[1]) << 8 | uint32_t(header_[2]) << 16 | uint32_t(header_[3]) << 24;
       current_.type = MessageType(header_[4]);
       if (payload_size_ > max_payload_) {
         failed_ = "frame: " + to_string(current_.type) + " announces " + std::to_string(payload_size_) +

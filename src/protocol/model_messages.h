@@ -3,11 +3,11 @@
 #include <cstdint>
 #include <string>
 
-#include "spm/hierarchy.h"
 #include "protocol/message_types.h"
 #include "protocol/server_messages.h"
 #include "protocol/stream_context.h"
 #include "protocol/stream_mode.h"
+#include "spm/hierarchy.h"
 
 namespace pms::protocol {
 

@@ -6,10 +6,10 @@
 // alone (docs/architecture.md, "Scale-out": resume) — instead of a ~40-bit <tree-id, node-id> per leaf.
 #include <algorithm>
 
-#include "spm/vertex_id.h"
 #include "protocol/client_messages.h"
 #include "protocol/message_types.h"
 #include "protocol/wire_internal.h"
+#include "spm/vertex_id.h"
 
 namespace pms::protocol {
 namespace {
@@ -54,7 +54,8 @@ std::vector<uint8_t> encode(const Open& m) {
   w.string(m.model, kMaxNameBytes, "model");
   const bool vi = m.mode == StreamMode::view_independent, plain = m.mode == StreamMode::sender_plain,
              dag = m.mode == StreamMode::dag;
-  if (!vi && !plain && !dag && m.mode != StreamMode::sender_driven) fail("OPEN", "mode: not a mode this protocol knows");
+  if (!vi && !plain && !dag && m.mode != StreamMode::sender_driven)
+    fail("OPEN", "mode: not a mode this protocol knows");
   w.u8(uint8_t((m.resume.empty() ? 0 : kFlagResume) | (vi ? kFlagViewIndependent : 0) | (plain ? kFlagPlain : 0) |
                (dag ? kFlagDag : 0)));
   if (!m.resume.empty()) {
@@ -99,7 +100,9 @@ OpenHeader decode_open_header(std::span<const uint8_t> payload) {
 }
 
 FrontDecoder::FrontDecoder(std::span<const uint8_t> payload, const OpenHeader& header, uint64_t max_leaves)
-    : payload_(payload), bit_(header.front_bit), trees_(header.resume ? header.resume_trees : 0),
+    : payload_(payload),
+      bit_(header.front_bit),
+      trees_(header.resume ? header.resume_trees : 0),
       max_leaves_(max_leaves) {
   stack_.reserve(kMaxDepth + 1);
   done_ = trees_ == 0;
@@ -139,7 +142,8 @@ Open decode_open(std::span<const uint8_t> payload, uint64_t max_resume_leaves) {
   const OpenHeader header = decode_open_header(payload);
   Open m{header.model, {}, header.mode};
   FrontDecoder front(payload, header, max_resume_leaves);
-  while (!front.next(SIZE_MAX, m.resume)) {}
+  while (!front.next(SIZE_MAX, m.resume)) {
+  }
   return m;
 }
 

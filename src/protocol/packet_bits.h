@@ -2,9 +2,9 @@
 #pragma once
 #include <cstdint>
 
+#include "protocol/stream_context.h"
 #include "spm/split_record.h"
 #include "spm/vertex_id.h"
-#include "protocol/stream_context.h"
 
 namespace pms::protocol {
 

@@ -5,12 +5,12 @@
 
 #include "common/bit_stream.h"
 #include "common/parallel.h"
-#include "spm/hierarchy.h"
-#include "spm/refine_info.h"
 #include "protocol/message_types.h"
 #include "protocol/packet_table.h"
 #include "protocol/stream_context.h"
 #include "protocol/wire_internal.h"
+#include "spm/hierarchy.h"
+#include "spm/refine_info.h"
 
 namespace pms::protocol {
 namespace {
@@ -20,8 +20,8 @@ namespace {
 constexpr size_t kBlockNodes = 4096;
 
 struct Block {
-  std::vector<uint8_t> bytes;          // the block's packets back to back, padded to a byte
-  std::vector<uint64_t> where;         // per node of the block: bit offset in the block << kLengthBits | count
+  std::vector<uint8_t> bytes;   // the block's packets back to back, padded to a byte
+  std::vector<uint64_t> where;  // per node of the block: bit offset in the block << kLengthBits | count
 };
 
 }  // namespace
@@ -29,7 +29,8 @@ struct Block {
 PacketTable::PacketTable(const ModelData& model, const StreamContext& context, const StoredRecords& records) {
   if (const std::string why = check_context(context); !why.empty()) fail("VSPLITS", "stream context: " + why);
   if (!context.records) fail("VSPLITS", "stream context: no split records");
-  if (records.offsets.size() != model.node_count() + 1) fail("VSPLITS", "split records: not one offset per node plus one");
+  if (records.offsets.size() != model.node_count() + 1)
+    fail("VSPLITS", "split records: not one offset per node plus one");
   build(model, [&](Writer& w, uint32_t node) {
     write_id(w, model.id(node), context, "v_s");
     BitReader record(records.bits, records.offsets[node], records.offsets[node + 1], "stored record");
@@ -58,7 +59,8 @@ void PacketTable::build(const ModelData& model, const std::function<void(Writer&
           const uint64_t at = w.payload_bits();
           write(w, uint32_t(v));
           const uint64_t length = w.payload_bits() - at;
-          if (length >= (uint64_t(1) << kLengthBits)) fail("VSPLITS", "a packet of " + std::to_string(length) + " bits");
+          if (length >= (uint64_t(1) << kLengthBits))
+            fail("VSPLITS", "a packet of " + std::to_string(length) + " bits");
           block.where.push_back(at << kLengthBits | length);
         }
         w.align();

@@ -6,10 +6,10 @@
 #include <span>
 #include <vector>
 
-#include "spm/hierarchy.h"
-#include "spm/refine_info.h"
 #include "protocol/split_bands.h"
 #include "protocol/stream_context.h"
+#include "spm/hierarchy.h"
+#include "spm/refine_info.h"
 
 namespace pms::protocol {
 
@@ -37,8 +37,8 @@ class PacketTable {
   // Every internal node's packet, as `write` puts it into a batch's bit stream.
   void build(const ModelData& model, const std::function<void(Writer& w, uint32_t node)>& write);
   static constexpr unsigned kLengthBits = 10;  // a packet is < 1024 bits (3 ids of <= 101 bits, info, attributes)
-  std::vector<uint64_t> bits_;   // the packets back to back
-  std::vector<uint64_t> where_;  // per node: bit offset << kLengthBits | bit count; 0 for a leaf
+  std::vector<uint64_t> bits_;                 // the packets back to back
+  std::vector<uint64_t> where_;                // per node: bit offset << kLengthBits | bit count; 0 for a leaf
 };
 
 }  // namespace pms::protocol

@@ -6,8 +6,8 @@
 namespace pms::protocol {
 
 using pms::dequantize_position;
-using pms::PositionGrid;
 using pms::position_error_bound;
+using pms::PositionGrid;
 using pms::quantize_position;
 using pms::snap_position;
 using pms::valid_position_bits;

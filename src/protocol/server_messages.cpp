@@ -1,6 +1,6 @@
 // Server -> client messages other than BASE and VSPLITS: HELLO_OK, CATALOGUE, ERROR (docs/protocol.md).
-#include "protocol/message_types.h"
 #include "protocol/server_messages.h"
+#include "protocol/message_types.h"
 #include "protocol/wire_internal.h"
 
 namespace pms::protocol {

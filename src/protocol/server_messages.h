@@ -7,12 +7,12 @@
 #include <string>
 #include <vector>
 
+#include "protocol/message_types.h"
+#include "protocol/stream_context.h"
 #include "spm/hierarchy.h"
 #include "spm/refine_info.h"
 #include "spm/split_codec.h"
 #include "spm/split_record.h"
-#include "protocol/message_types.h"
-#include "protocol/stream_context.h"
 
 namespace pms::protocol {
 
@@ -52,9 +52,9 @@ struct Base {
   bool has_colors = false;
   std::vector<float> positions;  // 3 per root
   std::vector<RefineInfo> refine;
-  std::vector<float> normals;    // 3 per root when has_normals (octahedral 2 x 16 bits on the wire)
-  std::vector<uint8_t> colors;   // 4 per root when has_colors
-  std::vector<uint32_t> faces;   // 3 root indices per face, CCW
+  std::vector<float> normals;   // 3 per root when has_normals (octahedral 2 x 16 bits on the wire)
+  std::vector<uint8_t> colors;  // 4 per root when has_colors
+  std::vector<uint32_t> faces;  // 3 root indices per face, CCW
   uint32_t root_count() const { return uint32_t(refine.size()); }
 };
 
@@ -110,7 +110,8 @@ Codec decode_codec(std::span<const uint8_t> payload, const StreamContext& contex
 // one split twice in the batch; bad_message for a record SplitCodec::decode refuses.
 VSplits decode_vsplits(std::span<const uint8_t> payload, const StreamContext& context);
 ErrorMessage decode_error(std::span<const uint8_t> payload);
-DagOps decode_dag_ops(std::span<const uint8_t> payload, const StreamContext& context);  // codes this build does not know pass through
+DagOps decode_dag_ops(std::span<const uint8_t> payload,
+                      const StreamContext& context);  // codes this build does not know pass through
 
 // What a receiver decodes for `info` (spm/refine_info.h): every mode, split records included, delivers it.
 using pms::as_sent;

@@ -48,7 +48,8 @@ uint32_t write_split_band(const ModelData& model, const StoredRecords& records, 
   return uint32_t(queue.size());
 }
 
-SplitRecord split_record_of(VertexId vs, const SplitPayload& payload, const PositionGrid& grid, const SplitCodec& codec) {
+SplitRecord split_record_of(VertexId vs, const SplitPayload& payload, const PositionGrid& grid,
+                            const SplitCodec& codec) {
   SplitRecord split;
   split.vs = vs;
   split.cut_l = payload.cut_l;

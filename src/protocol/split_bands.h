@@ -11,11 +11,11 @@
 #include <vector>
 
 #include "common/bit_stream.h"
+#include "protocol/split_request.h"
 #include "spm/hierarchy.h"
 #include "spm/position_grid.h"
-#include "spm/split_record.h"
 #include "spm/split_codec.h"
-#include "protocol/split_request.h"
+#include "spm/split_record.h"
 #include "spm/vertex_hierarchy.h"
 
 namespace pms::protocol {
@@ -41,7 +41,8 @@ std::function<bool(VertexId, SplitContext&)> held_in(const VertexHierarchy& h, c
 
 // The split a decoded record describes, for VertexHierarchy::add_split: v_t's normal and color when the
 // codec's records carry them.
-SplitRecord split_record_of(VertexId vs, const SplitPayload& payload, const PositionGrid& grid, const SplitCodec& codec);
+SplitRecord split_record_of(VertexId vs, const SplitPayload& payload, const PositionGrid& grid,
+                            const SplitCodec& codec);
 
 // Reads an answer to `request` and adds every split it carries that `h` lacks (one it already holds is
 // decoded and checked for its children, then skipped). Returns the splits added. Throws pms::Error for a

@@ -5,9 +5,9 @@
 #include <string>
 
 #include "common/error.h"
-#include "spm/vertex_id.h"
 #include "protocol/message_types.h"
 #include "protocol/split_request.h"
+#include "spm/vertex_id.h"
 
 namespace pms::protocol {
 namespace {
@@ -101,17 +101,17 @@ struct TreeDecoder {
     if (right) descend(node << 1 | 1, depth + 1);
     if (left || right) return;
     if (depth > limits.max_node_depth)
-      r.fail(ErrorCode::bad_id, "subtree code", "tree " + std::to_string(tree) + " has no split at depth " +
-                                                    std::to_string(depth));
+      r.fail(ErrorCode::bad_id, "subtree code",
+             "tree " + std::to_string(tree) + " has no split at depth " + std::to_string(depth));
     if (ids.size() >= limits.max_ids)
       r.fail(ErrorCode::too_large, "subtree code", "more than " + std::to_string(limits.max_ids) + " ids");
     ids.push_back({tree, node});
   }
   void descend(uint64_t child, int depth) {
     if (depth > limits.max_node_depth)
-      r.fail(ErrorCode::bad_id, "subtree code", "tree " + std::to_string(tree) + " has no split at depth " +
-                                                    std::to_string(depth) + " (the model's deepest split is at " +
-                                                    std::to_string(limits.max_node_depth) + ")");
+      r.fail(ErrorCode::bad_id, "subtree code",
+             "tree " + std::to_string(tree) + " has no split at depth " + std::to_string(depth) +
+                 " (the model's deepest split is at " + std::to_string(limits.max_node_depth) + ")");
     subtree(child, depth);
   }
 };
@@ -154,13 +154,13 @@ std::vector<uint8_t> encode_split_request(const SplitRequest& request) {
 SplitRequest decode_split_request(std::span<const uint8_t> code, const SplitRequestLimits& limits) {
   BitReader r(code);
   if (code.size() > limits.max_bytes)
-    r.fail(ErrorCode::too_large, "code", std::to_string(code.size()) + " bytes, over the limit of " +
-                                             std::to_string(limits.max_bytes));
+    r.fail(ErrorCode::too_large, "code",
+           std::to_string(code.size()) + " bytes, over the limit of " + std::to_string(limits.max_bytes));
   SplitRequest request;
   const uint64_t depth = r.golomb("depth");
   if (depth > limits.max_depth)
-    r.fail(ErrorCode::bad_message, "depth", std::to_string(depth) + " levels, over the limit of " +
-                                                std::to_string(limits.max_depth));
+    r.fail(ErrorCode::bad_message, "depth",
+           std::to_string(depth) + " levels, over the limit of " + std::to_string(limits.max_depth));
   request.depth = uint32_t(depth);
   request.ids.reserve(std::min<size_t>(limits.max_ids, 4 * code.size()));  // an id takes 2 bits or more
   const uint64_t trees = r.golomb("tree count") + 1;
@@ -169,8 +169,8 @@ SplitRequest decode_split_request(std::span<const uint8_t> code, const SplitRequ
   for (uint64_t t = 0; t < trees; ++t) {
     tree = t == 0 ? r.golomb("tree id") : tree + 1 + r.golomb("tree id delta");
     if (tree >= limits.root_count)
-      r.fail(ErrorCode::bad_id, "tree id", "tree " + std::to_string(tree) + " of a model with " +
-                                               std::to_string(limits.root_count) + " trees");
+      r.fail(ErrorCode::bad_id, "tree id",
+             "tree " + std::to_string(tree) + " of a model with " + std::to_string(limits.root_count) + " trees");
     TreeDecoder{r, limits, request.ids, uint32_t(tree)}.subtree(1, 0);
   }
   r.expect_end();

@@ -23,11 +23,11 @@ struct SplitRequest {
 
 // What a decoder accepts: everything a peer sends is bounded before any work is done for it.
 struct SplitRequestLimits {
-  uint32_t root_count = 0;     // tree ids must be below it
-  int max_node_depth = 62;     // deepest id the model can split (its node-id bits - 1); -1: none
-  uint32_t max_ids = 4096;     // ids per request
-  uint32_t max_depth = 8;      // the descendant depth
-  size_t max_bytes = 16384;    // of the code
+  uint32_t root_count = 0;   // tree ids must be below it
+  int max_node_depth = 62;   // deepest id the model can split (its node-id bits - 1); -1: none
+  uint32_t max_ids = 4096;   // ids per request
+  uint32_t max_depth = 8;    // the descendant depth
+  size_t max_bytes = 16384;  // of the code
 };
 
 // The code of `request`: ids sorted and deduplicated first, so equal sets give equal bytes. Throws

@@ -4,10 +4,10 @@
 #include <functional>
 #include <memory>
 
+#include "protocol/position_grid.h"
 #include "spm/hierarchy.h"
 #include "spm/split_codec.h"
 #include "spm/vertex_id.h"
-#include "protocol/position_grid.h"
 
 namespace pms::protocol {
 

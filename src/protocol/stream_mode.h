@@ -21,7 +21,8 @@ namespace pms::protocol {
 // their geometry; the client applies them in order and evaluates nothing itself (OPEN flag bit 3).
 enum class StreamMode : uint8_t { sender_driven, view_independent, sender_plain, dag };
 
-// The CLI's name of a mode ("sender", "vi", "sender-plain", "dag"), and back; every name, comma-separated, for help texts.
+// The CLI's name of a mode ("sender", "vi", "sender-plain", "dag"), and back; every name, comma-separated, for help
+// texts.
 const char* mode_name(StreamMode mode);
 std::optional<StreamMode> mode_named(std::string_view name);
 std::string mode_names();

@@ -4,11 +4,11 @@
 // i.e. the heap node-id without its implicit leading 1, so an id costs what its depth needs rather than
 // the model's worst case. Then v_t's quantized position (v_u keeps v_s's), info_t and info_u (43 or 65
 // bits each) and the optional normal / color of v_t (info_t and info_u only when the session's context
-// has refinement info: not in a view-independent session). The whole batch is one bit stream padded once at the end: packets are not
-// byte-aligned (docs/protocol.md has the measurements that chose this). DAG_OPS (StreamMode::dag) is the same
-// packets after a list of collapse ids in the same id code.
-// In a session with split records (StreamContext::records, issue 19) a packet is v_s's id and then the
-// compact split record (spm/split_codec.h) coded against what the receiver holds about v_s.
+// has refinement info: not in a view-independent session). The whole batch is one bit stream padded once at the end:
+// packets are not byte-aligned (docs/protocol.md has the measurements that chose this). DAG_OPS (StreamMode::dag) is
+// the same packets after a list of collapse ids in the same id code. In a session with split records
+// (StreamContext::records, issue 19) a packet is v_s's id and then the compact split record (spm/split_codec.h) coded
+// against what the receiver holds about v_s.
 #include <algorithm>
 #include <bit>
 #include <cmath>
@@ -16,9 +16,6 @@
 #include <unordered_map>
 #include <utility>
 
-#include "spm/refine_info.h"
-#include "spm/split_record.h"
-#include "spm/vertex_id.h"
 #include "protocol/message_types.h"
 #include "protocol/packet_bits.h"
 #include "protocol/position_grid.h"
@@ -26,6 +23,9 @@
 #include "protocol/split_bands.h"
 #include "protocol/stream_context.h"
 #include "protocol/wire_internal.h"
+#include "spm/refine_info.h"
+#include "spm/split_record.h"
+#include "spm/vertex_id.h"
 
 namespace pms::protocol {
 namespace {
@@ -177,7 +177,8 @@ void write_record_packet(Writer& w, const SplitRecord& s, const StreamContext& c
   c.records->encode(context, payload, record);
   write_id(w, s.vs, c, "v_s");
   const std::vector<uint8_t>& bytes = record.bytes();
-  for (uint64_t i = 0; i < record.size(); i += 8) w.bits(bytes[i / 8], unsigned(std::min<uint64_t>(8, record.size() - i)));
+  for (uint64_t i = 0; i < record.size(); i += 8)
+    w.bits(bytes[i / 8], unsigned(std::min<uint64_t>(8, record.size() - i)));
   batch.split(context, payload);
 }
 
@@ -336,7 +337,8 @@ VSplits decode_vsplits(std::span<const uint8_t> payload, const StreamContext& c)
 std::vector<uint8_t> encode(const DagOps& m, const StreamContext& c) {
   if (const std::string why = check_context(c); !why.empty()) fail("DAG_OPS", "stream context: " + why);
   if (c.records) fail("DAG_OPS", "stream context: DAG_OPS packets are not split records");
-  if (m.collapses.size() > UINT32_MAX || m.splits.size() > kMaxPacketsPerMessage) fail("DAG_OPS", "too many operations");
+  if (m.collapses.size() > UINT32_MAX || m.splits.size() > kMaxPacketsPerMessage)
+    fail("DAG_OPS", "too many operations");
   Writer w(MessageType::dag_ops);
   w.reserve_payload(13 + m.splits.size() * min_packet_bits(c) / 8 + m.collapses.size() * 4);
   w.u32(m.frame);

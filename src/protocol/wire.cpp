@@ -4,12 +4,12 @@
 #include <cmath>
 #include <cstring>
 
-#include "spm/refine_info.h"
 #include "protocol/message_types.h"
 #include "protocol/position_grid.h"
 #include "protocol/server_messages.h"
 #include "protocol/stream_context.h"
 #include "protocol/wire_internal.h"
+#include "spm/refine_info.h"
 
 namespace pms::protocol {
 
@@ -35,8 +35,8 @@ void Writer::f32(float v) { u32(std::bit_cast<uint32_t>(v)); }
 
 void Writer::string(const std::string& s, size_t max, const char* field) {
   if (s.size() > max || s.size() > UINT16_MAX)
-    fail(to_string(type_), std::string(field) + " is " + std::to_string(s.size()) + " bytes, at most " +
-                               std::to_string(max) + " fit");
+    fail(to_string(type_),
+         std::string(field) + " is " + std::to_string(s.size()) + " bytes, at most " + std::to_string(max) + " fit");
   u16(uint16_t(s.size()));
   for (unsigned char c : s) u8(c);
 }
@@ -105,8 +105,7 @@ void Reader::check_count(uint64_t count, uint64_t min_bits, const char* field) {
   // Division, not multiplication: a hostile count must not overflow its way past the check.
   if (min_bits > 0 && count > bits_left() / min_bits)
     fail(ErrorCode::bad_message, field,
-         "count " + std::to_string(count) + " does not fit in the " + std::to_string(bits_left() / 8) +
-             " bytes left");
+         "count " + std::to_string(count) + " does not fit in the " + std::to_string(bits_left() / 8) + " bytes left");
 }
 
 void Reader::expect_end() {
@@ -128,7 +127,6 @@ void Reader::fail(ErrorCode code, const char* field, const std::string& what) co
 // Lengths are half floats whose sign and low kLengthDroppedBits are always 0; the cone axis only
 // exists when there is a cone (the angle field's top value means "no cone").
 constexpr uint32_t kNoConeOnWire = (1u << kConeAngleBits) - 1;
-
 
 void write_refine(Writer& w, const RefineInfo& info, const char* field) {
   if (!is_canonical(info)) fail(field, "refinement info is not at the stored precision (pms-format.md RINF)");
@@ -165,7 +163,8 @@ RefineInfo read_refine(Reader& r, const char* field) {
   }
   // Lengths above +inf (NaN), an axis coordinate above kAxisSteps or the one unused angle would poison
   // qrefine's comparisons or mean nothing.
-  if (!is_canonical(info)) r.fail(ErrorCode::bad_message, field, "a length is NaN, or the cone axis or angle is out of range");
+  if (!is_canonical(info))
+    r.fail(ErrorCode::bad_message, field, "a length is NaN, or the cone axis or angle is out of range");
   return info;
 }
 

@@ -9,11 +9,11 @@
 #include <string>
 #include <vector>
 
+#include "protocol/message_types.h"
+#include "protocol/stream_context.h"
 #include "spm/octahedral_normal.h"
 #include "spm/refine_info.h"
 #include "spm/split_record.h"
-#include "protocol/message_types.h"
-#include "protocol/stream_context.h"
 
 namespace pms::protocol {
 

@@ -7,8 +7,8 @@
 // here, before they cost a record and a bin entry.
 #include <cmath>
 
-#include "spm/vertex_id.h"
 #include "render/raster_internal.h"
+#include "spm/vertex_id.h"
 
 namespace pms::render_detail {
 namespace {

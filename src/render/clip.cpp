@@ -15,11 +15,16 @@ enum Plane { kNear, kGuardLeft, kGuardRight, kGuardBottom, kGuardTop };
 
 float distance(Plane plane, const float c[4], const Frame& frame) {
   switch (plane) {
-    case kNear: return c[2] + c[3];
-    case kGuardLeft: return c[0] + frame.guard_x * c[3];
-    case kGuardRight: return frame.guard_x * c[3] - c[0];
-    case kGuardBottom: return c[1] + frame.guard_y * c[3];
-    case kGuardTop: return frame.guard_y * c[3] - c[1];
+    case kNear:
+      return c[2] + c[3];
+    case kGuardLeft:
+      return c[0] + frame.guard_x * c[3];
+    case kGuardRight:
+      return frame.guard_x * c[3] - c[0];
+    case kGuardBottom:
+      return c[1] + frame.guard_y * c[3];
+    case kGuardTop:
+      return frame.guard_y * c[3] - c[1];
   }
   return 0;
 }

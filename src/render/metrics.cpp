@@ -4,8 +4,8 @@
 #include <limits>
 
 #include "common/error.h"
-#include "spm/vertex_id.h"
 #include "render/render.h"
+#include "spm/vertex_id.h"
 
 namespace pms {
 

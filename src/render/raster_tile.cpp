@@ -7,8 +7,8 @@
 #include <algorithm>
 #include <cmath>
 
-#include "spm/vertex_id.h"
 #include "render/raster_internal.h"
+#include "spm/vertex_id.h"
 
 namespace pms::render_detail {
 namespace {
@@ -35,10 +35,8 @@ struct Span {
     if (step > 0) {
       if (w < 0) first = std::max(first, (-w + step - 1) / step);
     } else if (step < 0) {
-      if (w < 0)
-        last = -1;
-      else
-        last = std::min(last, w / -step);
+      if (w < 0) last = -1;
+      else last = std::min(last, w / -step);
     } else if (w < 0) {
       last = -1;
     }
@@ -124,10 +122,8 @@ void draw_all(const Frame& frame, uint32_t tile, const Tri* tris, const uint32_t
 
 void raster_tile(const Frame& frame, uint32_t tile, const Tri* tris, const uint32_t* entries, size_t begin, size_t end,
                  const Target& target) {
-  if (target.rgb)
-    draw_all<true>(frame, tile, tris, entries, begin, end, target);
-  else
-    draw_all<false>(frame, tile, tris, entries, begin, end, target);
+  if (target.rgb) draw_all<true>(frame, tile, tris, entries, begin, end, target);
+  else draw_all<false>(frame, tile, tris, entries, begin, end, target);
 }
 
 void clear_tile(const Frame& frame, uint32_t tile, const Target& target) {

@@ -8,8 +8,8 @@
 #include <thread>
 
 #include "common/error.h"
-#include "spm/vertex_id.h"
 #include "render/raster_internal.h"
+#include "spm/vertex_id.h"
 
 namespace pms {
 
@@ -140,10 +140,8 @@ void Renderer::render(const RenderMesh& mesh, const ViewParams& view, Image& out
   out.width = frame.width;
   out.height = frame.height;
   const size_t pixels = size_t(frame.width) * frame.height;
-  if (options.shade)
-    out.rgb.resize(3 * pixels);
-  else
-    out.rgb.clear();
+  if (options.shade) out.rgb.resize(3 * pixels);
+  else out.rgb.clear();
   out.depth.resize(pixels);
   out.face_id.resize(pixels);
   Target target{options.shade ? out.rgb.data() : nullptr, out.depth.data(), out.face_id.data(), {}};

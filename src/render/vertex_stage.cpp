@@ -27,8 +27,8 @@ Frame make_frame(const ViewParams& view) {
 namespace {
 
 [[noreturn]] void index_out_of_range(size_t face, size_t vertex_count) {
-  fail("render", "face " + std::to_string(face) + " uses a vertex index out of range (" +
-                     std::to_string(vertex_count) + " vertices)");
+  fail("render", "face " + std::to_string(face) + " uses a vertex index out of range (" + std::to_string(vertex_count) +
+                     " vertices)");
 }
 
 }  // namespace

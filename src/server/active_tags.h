@@ -48,7 +48,7 @@ class ActiveTags {
  private:
   void drop_leading_zero_words();
 
-  uint64_t first_word_ = 0;     // index of words_[0] in the whole bit array
+  uint64_t first_word_ = 0;      // index of words_[0] in the whole bit array
   std::vector<uint64_t> words_;  // the window, word-aligned
   size_t active_ = 0;
 };

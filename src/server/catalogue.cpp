@@ -4,11 +4,6 @@
 
 #include "common/bit_stream.h"
 #include "common/error.h"
-#include "spm/hierarchy.h"
-#include "spm/pms_file.h"
-#include "spm/refine_info.h"
-#include "spm/split_codec.h"
-#include "spm/vertex_id.h"
 #include "protocol/message_types.h"
 #include "protocol/model_messages.h"
 #include "protocol/packet_table.h"
@@ -17,6 +12,11 @@
 #include "protocol/stream_context.h"
 #include "server/catalogue.h"
 #include "server/limits.h"
+#include "spm/hierarchy.h"
+#include "spm/pms_file.h"
+#include "spm/refine_info.h"
+#include "spm/split_codec.h"
+#include "spm/vertex_id.h"
 
 namespace pms::server {
 namespace {
@@ -84,7 +84,8 @@ void attach_records(ServedModel& model) {
   }
   BitReader tables(*model.codec_tables, "split tables");
   model.codec = std::make_shared<const SplitCodec>(SplitCodec::deserialize(tables));
-  model.codec_frame = std::make_shared<const std::vector<uint8_t>>(protocol::encode(protocol::Codec{*model.codec_tables, {}}));
+  model.codec_frame =
+      std::make_shared<const std::vector<uint8_t>>(protocol::encode(protocol::Codec{*model.codec_tables, {}}));
 }
 
 std::unique_ptr<ServedModel> open_model(const std::string& path, uint32_t position_bits) {
@@ -116,7 +117,8 @@ std::unique_ptr<ServedModel> open_model(const std::string& path, uint32_t positi
 std::shared_ptr<const Catalogue> Catalogue::open(const std::vector<std::string>& paths, uint32_t position_bits) {
   auto catalogue = std::make_shared<Catalogue>();
   const auto check_unique = [&](const std::string& file, const std::string& name) {
-    if (catalogue->find(name) || catalogue->find_multilevel(name)) fail(file, "a model named '" + name + "' is already served");
+    if (catalogue->find(name) || catalogue->find_multilevel(name))
+      fail(file, "a model named '" + name + "' is already served");
   };
   for (const std::string& file : model_files(paths)) {
     if (fs::path(file).extension() == ".pml") {

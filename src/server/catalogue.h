@@ -5,18 +5,18 @@
 #include <string>
 #include <vector>
 
-#include "spm/hierarchy.h"
-#include "spm/pms_file.h"
+#include "dag/dag.h"
 #include "protocol/message_types.h"
 #include "protocol/packet_table.h"
 #include "protocol/server_messages.h"
 #include "protocol/split_bands.h"
 #include "protocol/stream_context.h"
-#include "spm/criteria.h"
-#include "dag/dag.h"
 #include "server/limits.h"
 #include "server/selective_streaming.h"
 #include "server/served_multilevel.h"
+#include "spm/criteria.h"
+#include "spm/hierarchy.h"
+#include "spm/pms_file.h"
 
 namespace pms::server {
 
@@ -42,8 +42,8 @@ struct ServedModel {
   // alone; 2 had no attribute section, and no normals or colors; 1 was VSPLITS packets), so a client of
   // another format is refused with its number, not a parse error.
   static constexpr uint32_t records_format = 4;
-  protocol::StoredRecords records;     // the file's own at the served grid, or `own_records`
-  EncodedRecords own_records;          // coded at load when the file's records are at another grid
+  protocol::StoredRecords records;  // the file's own at the served grid, or `own_records`
+  EncodedRecords own_records;       // coded at load when the file's records are at another grid
   std::shared_ptr<const std::vector<uint8_t>> codec_tables;  // serialized (GET /models/{m}/codec)
   std::shared_ptr<const SplitCodec> codec;                   // the tables
   std::shared_ptr<const std::vector<uint8_t>> codec_frame;   // CODEC, the tables for a sender-driven session

@@ -7,13 +7,13 @@
 #include <variant>
 
 #include "common/error.h"
-#include "spm/hierarchy.h"
-#include "spm/vertex_id.h"
+#include "dag/cut.h"
 #include "protocol/client_messages.h"
 #include "protocol/message_types.h"
 #include "protocol/server_messages.h"
+#include "spm/hierarchy.h"
 #include "spm/split_record.h"
-#include "dag/cut.h"
+#include "spm/vertex_id.h"
 
 namespace pms::server {
 
@@ -34,7 +34,8 @@ struct DagSessionMode::Resume {
   std::vector<uint32_t> split;   // DAG nodes
 };
 
-DagSessionMode::DagSessionMode(const protocol::OpenHeader& open, protocol::Frame& open_frame, const ModeContext& context)
+DagSessionMode::DagSessionMode(const protocol::OpenHeader& open, protocol::Frame& open_frame,
+                               const ModeContext& context)
     : context_(context), wire_(context.served.context) {
   wire_.has_refinement = false;
   if (!open.resume) {
@@ -59,7 +60,8 @@ void DagSessionMode::pump_resume(uint64_t& work) {
   work += r.leaves.size();
   for (const VertexId& id : r.leaves) {
     const uint32_t node = model.find(id);
-    if (node == kNone) throw ProtocolError(ErrorCode::bad_id, "OPEN: resume id " + to_string(id) + " is not in the model");
+    if (node == kNone)
+      throw ProtocolError(ErrorCode::bad_id, "OPEN: resume id " + to_string(id) + " is not in the model");
     append_closed_splits(model, dag, node, r.split);
   }
   if (!decoded) return;
@@ -68,8 +70,8 @@ void DagSessionMode::pump_resume(uint64_t& work) {
     work += r.split.size();
     cut_ = loaded.store();
   } catch (const Error& e) {
-    throw ProtocolError(ErrorCode::bad_id, std::string("OPEN: resume: the mesh is not a cut of the model's DAG (") +
-                                               e.what() + ")");
+    throw ProtocolError(ErrorCode::bad_id,
+                        std::string("OPEN: resume: the mesh is not a cut of the model's DAG (") + e.what() + ")");
   }
   answered_ = cut_.split_count() > 0;  // the client has a picture: N applies from its first DAG_VIEW
   resume_.reset();

@@ -11,11 +11,11 @@
 #include <memory>
 #include <vector>
 
-#include "protocol/client_messages.h"
-#include "protocol/stream_context.h"
-#include "protocol/framing.h"
 #include "dag/compact.h"
 #include "dag/traversal.h"
+#include "protocol/client_messages.h"
+#include "protocol/framing.h"
+#include "protocol/stream_context.h"
 #include "server/session_mode.h"
 
 namespace pms::server {

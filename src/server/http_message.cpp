@@ -30,7 +30,8 @@ HttpAnswer answer_request(const Catalogue& catalogue, const HttpLimits& limits,
   r.method = view_of(request.method_string());
   r.target = view_of(request.target());
   r.body = request.body();
-  if (const auto it = request.find(http::field::if_none_match); it != request.end()) r.if_none_match = view_of(it->value());
+  if (const auto it = request.find(http::field::if_none_match); it != request.end())
+    r.if_none_match = view_of(it->value());
   return route(catalogue, limits, r);
 }
 

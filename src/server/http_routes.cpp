@@ -1,6 +1,7 @@
 // The routes of the receiver-driven mode: GET /models, GET /models/M/base, POST /models/M/splits and its
 // GET form /models/M/splits/CODE, and GET /models/M/blocks/TREE/NODE/DEPTH (docs/protocol.md,
-// "Receiver-driven over HTTP"); a multilevel model's go to multilevel_routes.h. Each URL has one answer for a given model file: strong ETags, immutable.
+// "Receiver-driven over HTTP"); a multilevel model's go to multilevel_routes.h. Each URL has one answer for a given
+// model file: strong ETags, immutable.
 #define XXH_INLINE_ALL
 #include <xxhash.h>
 #include <array>
@@ -8,7 +9,6 @@
 #include <cstdio>
 #include <nlohmann/json.hpp>
 
-#include "spm/vertex_id.h"
 #include "protocol/base64url.h"
 #include "protocol/message_types.h"
 #include "protocol/split_request.h"
@@ -18,6 +18,7 @@
 #include "server/multilevel_routes.h"
 #include "server/split_lookup.h"
 #include "server/split_records_body.h"
+#include "spm/vertex_id.h"
 
 namespace pms::server {
 namespace {
@@ -82,9 +83,12 @@ bool matches(std::string_view if_none_match, std::string_view etag) {
 
 int status_of(ErrorCode code) {
   switch (code) {
-    case ErrorCode::bad_id: return 404;
-    case ErrorCode::too_large: return 413;
-    default: return 400;
+    case ErrorCode::bad_id:
+      return 404;
+    case ErrorCode::too_large:
+      return 413;
+    default:
+      return 400;
   }
 }
 
@@ -163,9 +167,11 @@ HttpAnswer block_answer(const ServedModel& model, const HttpLimits& limits, cons
     return error_answer(404, to_string(id) + " is not a split of model '" + model.name + "'");
   // One URL per set of records: blocks tile each tree in bands of depth + 1 levels.
   if (id.depth() % (depth + 1) != 0)
-    return error_answer(400, "a block of depth " + std::to_string(depth) + " starts at a node whose depth is a "
-                             "multiple of " + std::to_string(depth + 1) + "; " + to_string(id) + " is at depth " +
-                             std::to_string(id.depth()));
+    return error_answer(400, "a block of depth " + std::to_string(depth) +
+                                 " starts at a node whose depth is a "
+                                 "multiple of " +
+                                 std::to_string(depth + 1) + "; " + to_string(id) + " is at depth " +
+                                 std::to_string(id.depth()));
   return splits_answer(model, limits, request, {uint32_t(depth), {id}},
                        etag_of(model, {"/blocks/", at[0], "/", at[1], "/", at[2]}));
 }
@@ -178,8 +184,8 @@ HttpAnswer model_route(const Catalogue& catalogue, const HttpLimits& limits, con
     return multilevel_route(*multilevel, request, s);
   const bool get = request.method == "GET" || request.method == "HEAD";
   const bool post_route = s.size() == 3 && s[2] == "splits";
-  const bool get_route = (s.size() == 3 && (s[2] == "base" || s[2] == "codec")) || (s.size() == 4 && s[2] == "splits") ||
-                         (s.size() == 6 && s[2] == "blocks");
+  const bool get_route = (s.size() == 3 && (s[2] == "base" || s[2] == "codec")) ||
+                         (s.size() == 4 && s[2] == "splits") || (s.size() == 6 && s[2] == "blocks");
   if (!post_route && !get_route) return error_answer(404, "no such resource (docs/protocol.md lists them)");
   if (post_route && request.method != "POST") return method_not_allowed("POST");
   if (get_route && !get) return method_not_allowed("GET, HEAD");
@@ -196,7 +202,8 @@ HttpAnswer model_route(const Catalogue& catalogue, const HttpLimits& limits, con
   const auto code = protocol::base64url_decode(s[3]);
   if (!code) return error_answer(400, "the request code is not canonical base64url (RFC 4648 §5, no padding)");
   // Strict base64url has one text per code: the segment is the canonical URL's.
-  return splits_answer(*model, limits, request, decode_code(*model, limits, *code), etag_of(*model, {"/splits/", s[3]}));
+  return splits_answer(*model, limits, request, decode_code(*model, limits, *code),
+                       etag_of(*model, {"/splits/", s[3]}));
 }
 
 }  // namespace
@@ -238,7 +245,8 @@ HttpAnswer error_answer(int status, const std::string& text) {
 
 HttpAnswer route(const Catalogue& catalogue, const HttpLimits& limits, const HttpRequest& request) {
   if (request.target.size() > limits.max_target_bytes)
-    return error_answer(414, "the URL is over " + std::to_string(limits.max_target_bytes) + " bytes; POST large requests");
+    return error_answer(414,
+                        "the URL is over " + std::to_string(limits.max_target_bytes) + " bytes; POST large requests");
   if (request.target.empty() || request.target[0] != '/' || request.target.find('?') != std::string_view::npos)
     return error_answer(400, "the URL must be a path without a query string");
   const Segments segments = segments_of(request.target);

@@ -24,10 +24,10 @@ struct HttpRequest {
 struct HttpAnswer {
   int status = 200;
   std::string_view content_type = "text/plain; charset=utf-8";  // a literal
-  std::string etag;        // strong, quoted; empty for errors
-  bool cacheable = false;  // immutable for a year; errors are not stored
-  std::string allow;       // the methods a 405's resource takes
-  uint64_t splits = 0;     // split records in the body
+  std::string etag;                                             // strong, quoted; empty for errors
+  bool cacheable = false;                                       // immutable for a year; errors are not stored
+  std::string allow;                                            // the methods a 405's resource takes
+  uint64_t splits = 0;                                          // split records in the body
   bool split_resource = false;  // an answer of /splits or /blocks (200 or 304): what a cache saves the origin
   // The body: bytes shared with the catalogue (BASE), from an offset, or its own.
   std::shared_ptr<const std::vector<uint8_t>> shared;

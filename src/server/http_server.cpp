@@ -13,8 +13,8 @@
 // request_timeout_ms for the rest of it, and write_timeout_ms for each piece of the answer to be taken.
 #include "server/http_server.h"
 
-#include <utility>  // before asio with C++20 (docs/architecture.md, "Stack")
 #include <boost/asio.hpp>
+#include <utility>  // before asio with C++20 (docs/architecture.md, "Stack")
 
 #include <array>
 #include <atomic>
@@ -113,7 +113,8 @@ class HttpConnection : public std::enable_shared_from_this<HttpConnection> {
   void serve() {
     for (int answered = 0; !closed_;) {
       if (writing_) return;
-      if (answered == kAnswersPerTurn) return asio::post(socket_.get_executor(), [self = shared_from_this()] { self->serve(); });
+      if (answered == kAnswersPerTurn)
+        return asio::post(socket_.get_executor(), [self = shared_from_this()] { self->serve(); });
       if (!parser_) {
         parser_.emplace();
         bound_parser(*parser_, limits_);
@@ -228,7 +229,8 @@ class HttpConnection : public std::enable_shared_from_this<HttpConnection> {
 
   std::array<asio::const_buffer, 2> unwritten() const {
     const size_t head = head_text_.size();
-    if (written_ >= head) return {asio::const_buffer(), asio::buffer(body_.data() + (written_ - head), body_.size() - (written_ - head))};
+    if (written_ >= head)
+      return {asio::const_buffer(), asio::buffer(body_.data() + (written_ - head), body_.size() - (written_ - head))};
     return {asio::buffer(head_text_.data() + written_, head - written_), asio::buffer(body_.data(), body_.size())};
   }
 

@@ -11,36 +11,36 @@ namespace pms::server {
 // Every bound the server puts on a peer (docs/operating.md says what each one protects against).
 struct ServerLimits {
   uint32_t max_sessions = 1000;
-  uint32_t max_client_message = 4u << 20;  // a resume front of millions of leaves is ~2 bits each
+  uint32_t max_client_message = 4u << 20;                      // a resume front of millions of leaves is ~2 bits each
   uint32_t max_server_message = protocol::kDefaultMaxMessage;  // BASE, CATALOGUE and VSPLITS; checked at start
-  size_t send_queue_bytes = 64u << 10;     // back-pressure: no new batch while more than this waits
-  size_t send_burst_bytes = 1u << 20;      // sent at once by one handler before other sessions get a turn
-  uint32_t batch_splits = 1024;            // vsplit packets per VSPLITS message
-  uint32_t slice_work = 2048;              // nodes evaluated or split per Session::pump() call (~0.15 ms)
-  uint32_t turn_us = 1000;                 // one session's turn on an I/O thread before others get theirs
-  uint32_t max_message_rate = 500;         // messages a session may send per second (bursts of as many); 0 = any
-  uint32_t idle_timeout_ms = 120000;       // no message in and no answer byte out for this long: closed
-  uint32_t handshake_timeout_ms = 10000;   // HELLO and OPEN must be done within this of connecting
-  uint32_t frame_timeout_ms = 10000;       // a frame, once begun, must arrive whole within this
-  uint32_t write_timeout_ms = 10000;       // answer bytes waiting and none taken for this long: closed
-  uint32_t accept_backoff_ms = 1000;       // longest pause after a failed accept (EMFILE...), doubling from 10 ms
+  size_t send_queue_bytes = 64u << 10;                         // back-pressure: no new batch while more than this waits
+  size_t send_burst_bytes = 1u << 20;     // sent at once by one handler before other sessions get a turn
+  uint32_t batch_splits = 1024;           // vsplit packets per VSPLITS message
+  uint32_t slice_work = 2048;             // nodes evaluated or split per Session::pump() call (~0.15 ms)
+  uint32_t turn_us = 1000;                // one session's turn on an I/O thread before others get theirs
+  uint32_t max_message_rate = 500;        // messages a session may send per second (bursts of as many); 0 = any
+  uint32_t idle_timeout_ms = 120000;      // no message in and no answer byte out for this long: closed
+  uint32_t handshake_timeout_ms = 10000;  // HELLO and OPEN must be done within this of connecting
+  uint32_t frame_timeout_ms = 10000;      // a frame, once begun, must arrive whole within this
+  uint32_t write_timeout_ms = 10000;      // answer bytes waiting and none taken for this long: closed
+  uint32_t accept_backoff_ms = 1000;      // longest pause after a failed accept (EMFILE...), doubling from 10 ms
   uint32_t position_bits = protocol::kDefaultPositionBits;
-  uint32_t threads = 0;                    // I/O threads; 0 = one per core
+  uint32_t threads = 0;  // I/O threads; 0 = one per core
 };
 
 // Every bound the HTTP transport (receiver-driven mode) puts on a peer (docs/operating.md, "HTTP").
 struct HttpLimits {
-  uint32_t max_connections = 1000;         // more are answered 503 and closed
-  uint32_t max_target_bytes = 4096;        // the request line's URL: 414 over it (larger codes are POSTed)
-  uint32_t max_header_bytes = 8192;        // request line and headers: 431 over it
-  uint32_t max_body_bytes = 16384;         // a POSTed request code: 413 over it
-  uint32_t max_request_ids = 4096;         // ids in one request code: 413 over it
-  uint32_t max_request_depth = 8;          // a request's descendant depth: 400 over it
-  uint32_t max_response_splits = 65536;    // split records in one answer (ids and their descendants): 413
-  uint32_t idle_timeout_ms = 30000;        // keep-alive: no request begun for this long: closed
-  uint32_t request_timeout_ms = 10000;     // a request, once begun, must arrive whole within this
-  uint32_t write_timeout_ms = 10000;       // answer bytes waiting and none taken for this long: closed
-  uint32_t threads = 0;                    // I/O threads; 0 = one per core
+  uint32_t max_connections = 1000;       // more are answered 503 and closed
+  uint32_t max_target_bytes = 4096;      // the request line's URL: 414 over it (larger codes are POSTed)
+  uint32_t max_header_bytes = 8192;      // request line and headers: 431 over it
+  uint32_t max_body_bytes = 16384;       // a POSTed request code: 413 over it
+  uint32_t max_request_ids = 4096;       // ids in one request code: 413 over it
+  uint32_t max_request_depth = 8;        // a request's descendant depth: 400 over it
+  uint32_t max_response_splits = 65536;  // split records in one answer (ids and their descendants): 413
+  uint32_t idle_timeout_ms = 30000;      // keep-alive: no request begun for this long: closed
+  uint32_t request_timeout_ms = 10000;   // a request, once begun, must arrive whole within this
+  uint32_t write_timeout_ms = 10000;     // answer bytes waiting and none taken for this long: closed
+  uint32_t threads = 0;                  // I/O threads; 0 = one per core
 };
 
 }  // namespace pms::server

@@ -33,11 +33,13 @@ HttpAnswer multilevel_route(const ServedMultilevel& model, const HttpRequest& re
   if (compressed) s.erase(s.begin() + 2);
   const bool head = s.size() == 3 && s[2] == "head", level = s.size() == 4 && s[2] == "levels";
   if (!head && !level)
-    return error_answer(404, "model '" + model.name + "' is a multilevel mesh: its resources are /head and /levels/LEVEL, "
-                             "and /compressed/head and /compressed/levels/LEVEL");
+    return error_answer(404, "model '" + model.name +
+                                 "' is a multilevel mesh: its resources are /head and /levels/LEVEL, "
+                                 "and /compressed/head and /compressed/levels/LEVEL");
   if (request.method != "GET" && request.method != "HEAD") return method_not_allowed("GET, HEAD");
-  if (head) return compressed ? shared_answer(request, model.compressed_head_etag, model.compressed_head)
-                              : shared_answer(request, model.head_etag, model.head);
+  if (head)
+    return compressed ? shared_answer(request, model.compressed_head_etag, model.compressed_head)
+                      : shared_answer(request, model.head_etag, model.head);
   uint64_t l = 0;
   if (!parse_decimal(s[3], l)) return error_answer(400, "a level is /models/M/levels/LEVEL in plain decimal");
   if (l >= model.level_count())

@@ -2,9 +2,9 @@
 #include "server/plain_packets.h"
 
 #include "common/error.h"
+#include "protocol/server_messages.h"
 #include "spm/split_record.h"
 #include "spm/vertex_id.h"
-#include "protocol/server_messages.h"
 
 namespace pms::server {
 namespace {

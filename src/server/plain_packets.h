@@ -8,9 +8,9 @@
 #include <span>
 #include <vector>
 
-#include "spm/hierarchy.h"
 #include "protocol/stream_context.h"
 #include "server/selective_streaming.h"
+#include "spm/hierarchy.h"
 
 namespace pms::server {
 

@@ -8,8 +8,8 @@
 #include <functional>
 #include <vector>
 
-#include "spm/hierarchy.h"
 #include "server/active_tags.h"
+#include "spm/hierarchy.h"
 
 namespace pms {
 

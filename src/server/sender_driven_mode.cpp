@@ -8,10 +8,10 @@
 #include <utility>
 #include <variant>
 
-#include "spm/hierarchy.h"
-#include "spm/vertex_id.h"
 #include "protocol/message_types.h"
 #include "server/plain_packets.h"
+#include "spm/hierarchy.h"
+#include "spm/vertex_id.h"
 
 namespace pms::server {
 
@@ -36,8 +36,10 @@ struct SenderDrivenMode::Resume {
 
 SenderDrivenMode::SenderDrivenMode(const protocol::OpenHeader& open, protocol::Frame& open_frame,
                                    const ModeContext& context)
-    : context_(context), importance_(view_.importance(context.served.criteria)),
-      plain_(open.mode == protocol::StreamMode::sender_plain), plain_wire_(context.served.context) {
+    : context_(context),
+      importance_(view_.importance(context.served.criteria)),
+      plain_(open.mode == protocol::StreamMode::sender_plain),
+      plain_wire_(context.served.context) {
   plain_wire_.has_refinement = false;
   const uint32_t roots = context_.served.model().root_count;
   if (!open.resume) {
@@ -138,8 +140,8 @@ void SenderDrivenMode::emit_batch(size_t count, bool final) {
 }
 
 size_t SenderDrivenMode::state_bytes() const {
-  size_t bytes = sizeof(*this) + tags_.memory_bytes() + streamer_.memory_bytes() + batch_.capacity() * sizeof(uint32_t) +
-                 batch_cuts_.capacity() * sizeof(ActualCuts);
+  size_t bytes = sizeof(*this) + tags_.memory_bytes() + streamer_.memory_bytes() +
+                 batch_.capacity() * sizeof(uint32_t) + batch_cuts_.capacity() * sizeof(ActualCuts);
   if (resume_)
     bytes += sizeof(Resume) + resume_->payload.capacity() + resume_->tags.memory_bytes() +
              resume_->leaves.capacity() * sizeof(VertexId);

@@ -24,8 +24,8 @@ std::string etag_of(const std::vector<uint8_t>& bytes, const std::string& resour
 using Bytes = std::shared_ptr<const std::vector<uint8_t>>;
 
 // One form's head and levels (parts.levels is coarsest first) as resources under `prefix`, indexed by level.
-void cut(MultilevelParts parts, const std::string& prefix, Bytes& head, std::string& head_etag, std::vector<Bytes>& levels,
-         std::vector<std::string>& level_etags) {
+void cut(MultilevelParts parts, const std::string& prefix, Bytes& head, std::string& head_etag,
+         std::vector<Bytes>& levels, std::vector<std::string>& level_etags) {
   head_etag = etag_of(parts.head, prefix + "/head");
   head = std::make_shared<const std::vector<uint8_t>>(std::move(parts.head));
   const auto count = uint32_t(parts.levels.size());

@@ -86,9 +86,9 @@ void Session::handle(protocol::Frame& frame) {
 void Session::on_hello(const protocol::Hello& m) {
   if (greeted_) throw ProtocolError(ErrorCode::out_of_order, "HELLO: sent twice");
   if (m.version != protocol::kProtocolVersion)
-    throw ProtocolError(ErrorCode::unsupported_version,
-                        "HELLO: protocol version " + std::to_string(m.version) + " (this server speaks " +
-                            std::to_string(protocol::kProtocolVersion) + ")");
+    throw ProtocolError(ErrorCode::unsupported_version, "HELLO: protocol version " + std::to_string(m.version) +
+                                                            " (this server speaks " +
+                                                            std::to_string(protocol::kProtocolVersion) + ")");
   greeted_ = true;
   protocol::HelloOk ok;
   ok.server_name = "pmstream";

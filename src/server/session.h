@@ -46,7 +46,7 @@ class Session {
   const std::deque<Buffer>& outbox() const { return outbox_; }
   bool closing() const { return closing_; }
   bool greeted() const { return greeted_; }
-  bool opened() const { return mode_ && mode_->opened(); }  // BASE queued
+  bool opened() const { return mode_ && mode_->opened(); }         // BASE queued
   const SessionMode* session_mode() const { return mode_.get(); }  // nullptr before OPEN
   // Bytes this session holds beyond the shared model (the outbox is the transport's and counted there),
   // and the part of them that grows with the client's front.

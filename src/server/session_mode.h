@@ -12,11 +12,11 @@
 #include "protocol/client_messages.h"
 #include "protocol/dispatch.h"
 #include "protocol/framing.h"
-#include "spm/criteria.h"
 #include "server/active_tags.h"
 #include "server/catalogue.h"
 #include "server/limits.h"
 #include "server/selective_streaming.h"
+#include "spm/criteria.h"
 
 namespace pms::server {
 

@@ -11,9 +11,12 @@ std::unique_ptr<SessionMode> open_session_mode(const protocol::OpenHeader& open,
                                                const ModeContext& context) {
   switch (open.mode) {
     case protocol::StreamMode::sender_driven:
-    case protocol::StreamMode::sender_plain: return std::make_unique<SenderDrivenMode>(open, open_frame, context);
-    case protocol::StreamMode::view_independent: return std::make_unique<ViewIndependentMode>(open, context);
-    case protocol::StreamMode::dag: return std::make_unique<DagSessionMode>(open, open_frame, context);
+    case protocol::StreamMode::sender_plain:
+      return std::make_unique<SenderDrivenMode>(open, open_frame, context);
+    case protocol::StreamMode::view_independent:
+      return std::make_unique<ViewIndependentMode>(open, context);
+    case protocol::StreamMode::dag:
+      return std::make_unique<DagSessionMode>(open, open_frame, context);
   }
   throw protocol::ProtocolError(protocol::ErrorCode::bad_message, "OPEN: a mode this server does not stream");
 }

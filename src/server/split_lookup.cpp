@@ -1,9 +1,9 @@
 // Resolving a receiver-driven request to model nodes: bounded by the answer's size before it is built.
 #include <string>
 
-#include "spm/vertex_id.h"
 #include "protocol/message_types.h"
 #include "server/split_lookup.h"
+#include "spm/vertex_id.h"
 
 namespace pms::server {
 
@@ -23,7 +23,8 @@ std::vector<uint32_t> requested_nodes(const ModelData& model, const protocol::Sp
   for (VertexId id : request.ids) {
     const uint32_t node = id.tree < model.root_count ? model.find(id) : kNone;
     if (node == kNone) throw ProtocolError(ErrorCode::bad_id, to_string(id) + " is not a vertex of the model");
-    if (model.is_leaf(node)) throw ProtocolError(ErrorCode::bad_id, to_string(id) + " has no split (a leaf of the model)");
+    if (model.is_leaf(node))
+      throw ProtocolError(ErrorCode::bad_id, to_string(id) + " has no split (a leaf of the model)");
     // Breadth-first, one level at a time: nodes[level_begin, end) is the level being expanded.
     size_t level_begin = nodes.size();
     add(node);

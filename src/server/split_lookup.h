@@ -4,8 +4,8 @@
 #include <cstdint>
 #include <vector>
 
-#include "spm/hierarchy.h"
 #include "protocol/split_request.h"
+#include "spm/hierarchy.h"
 
 namespace pms::server {
 

@@ -20,7 +20,7 @@ struct ServerStats {
 // The HTTP transport's counters (docs/operating.md, "The JSON lines").
 struct HttpStats {
   std::atomic<uint64_t> connections_opened{0}, connections_active{0}, connections_refused{0};
-  std::atomic<uint64_t> connections_timed_out{0};  // closed by a deadline (idle, request, write)
+  std::atomic<uint64_t> connections_timed_out{0};                        // closed by a deadline (idle, request, write)
   std::atomic<uint64_t> requests{0}, not_modified{0}, client_errors{0};  // 4xx answers
   std::atomic<uint64_t> bytes_in{0}, bytes_out{0}, splits_served{0};
   std::atomic<uint64_t> split_requests{0};  // 200s and 304s of the split resources (splits, blocks)

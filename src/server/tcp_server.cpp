@@ -4,15 +4,15 @@
 // only ever touched by one thread at a time.
 // Every peer is presumed hostile: a connection's turn on a thread is bounded in time (turn_us), its
 // memory by the frame limit and the send queue, and every wait by a deadline (docs/operating.md).
-#include <utility>  // before asio with C++20 (docs/architecture.md, "Stack")
-#include <boost/asio.hpp>
 #include <linux/sockios.h>
 #include <sys/ioctl.h>
 #include <array>
+#include <boost/asio.hpp>
 #include <cstdio>
 #include <mutex>
 #include <set>
 #include <thread>
+#include <utility>  // before asio with C++20 (docs/architecture.md, "Stack")
 
 #include "common/error.h"
 #include "protocol/framing.h"
@@ -36,7 +36,8 @@ using std::chrono::milliseconds;
 
 void update_max(std::atomic<uint64_t>& target, uint64_t value) {
   uint64_t seen = target.load(std::memory_order_relaxed);
-  while (value > seen && !target.compare_exchange_weak(seen, value, std::memory_order_relaxed)) {}
+  while (value > seen && !target.compare_exchange_weak(seen, value, std::memory_order_relaxed)) {
+  }
 }
 
 // What a peer must take per write deadline for it to count as reading (or all it was sent, if less).
@@ -200,10 +201,8 @@ void Connection::start() {
 
 void Connection::read() {
   pending_.read = true;
-  socket_.async_read_some(asio::buffer(read_buffer_),
-                          [self = shared_from_this()](const boost::system::error_code& ec, size_t n) {
-                            self->on_read(ec, n);
-                          });
+  socket_.async_read_some(asio::buffer(read_buffer_), [self = shared_from_this()](const boost::system::error_code& ec,
+                                                                                  size_t n) { self->on_read(ec, n); });
 }
 
 void Connection::on_read(const boost::system::error_code& ec, size_t n) {
@@ -259,7 +258,8 @@ bool Connection::may_handle_a_frame() {
 void Connection::throttle_until_a_token() {
   pending_.throttle = reads_paused_ = true;
   const double rate = limits_.max_message_rate;
-  throttle_.expires_after(std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>((1 - tokens_) / rate)));
+  throttle_.expires_after(
+      std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>((1 - tokens_) / rate)));
   throttle_.async_wait([self = shared_from_this()](const boost::system::error_code& ec) {
     self->pending_.throttle = false;
     if (!ec) self->serve();
@@ -332,8 +332,7 @@ bool Connection::encode_and_send(Clock::time_point turn_end) {
     encode(turn_end);
     if (pending_.writable || closed()) return socket_full;
     socket_full = write_now();
-    if (closed() || socket_full || queue_full() || !session_.has_work() || Clock::now() >= turn_end)
-      return socket_full;
+    if (closed() || socket_full || queue_full() || !session_.has_work() || Clock::now() >= turn_end) return socket_full;
   }
 }
 
@@ -582,8 +581,7 @@ struct TcpServer::Impl {
   // Out of descriptors or memory, accepting again at once would fail again at once: wait, longer each time.
   void accept_failed(const boost::system::error_code& ec) {
     stats.accept_failures++;
-    backoff_ms = std::min<uint32_t>(std::max<uint32_t>(1, limits.accept_backoff_ms),
-                                    backoff_ms ? backoff_ms * 2 : 10);
+    backoff_ms = std::min<uint32_t>(std::max<uint32_t>(1, limits.accept_backoff_ms), backoff_ms ? backoff_ms * 2 : 10);
     if (backoff_ms >= limits.accept_backoff_ms || stats.accept_failures.load() == 1)
       log_line("accept: " + ec.message() + "; retrying in " + std::to_string(backoff_ms) + " ms");
     backoff.expires_after(milliseconds(backoff_ms));
@@ -596,8 +594,7 @@ struct TcpServer::Impl {
   void admit(tcp::socket socket) {
     if (registry.size() >= limits.max_sessions) return refuse(socket);
     try {
-      auto connection =
-          std::make_shared<Connection>(std::move(socket), catalogue, limits, stats, registry, ++next_id);
+      auto connection = std::make_shared<Connection>(std::move(socket), catalogue, limits, stats, registry, ++next_id);
       registry.add(connection);
       stats.sessions_opened++;
       stats.sessions_active++;

@@ -6,10 +6,10 @@
 #include <variant>
 #include <vector>
 
-#include "spm/hierarchy.h"
-#include "spm/split_record.h"
 #include "protocol/message_types.h"
 #include "protocol/server_messages.h"
+#include "spm/hierarchy.h"
+#include "spm/split_record.h"
 
 namespace pms::server {
 
@@ -67,9 +67,12 @@ void ViewIndependentMode::pump(uint64_t& work) {
   }
   Prefix& p = *prefix_;
   switch (p.phase) {
-    case Prefix::Phase::walking: return walk(p, work);
-    case Prefix::Phase::advancing: return advance(p, work);
-    case Prefix::Phase::streaming: return stream(p, work);
+    case Prefix::Phase::walking:
+      return walk(p, work);
+    case Prefix::Phase::advancing:
+      return advance(p, work);
+    case Prefix::Phase::streaming:
+      return stream(p, work);
   }
 }
 

@@ -19,14 +19,14 @@
 #include <cstring>
 
 #include "common/error.h"
+#include "spm/criteria_inline.h"
 #include "spm/hierarchy.h"
 #include "spm/refine_info.h"
-#include "spm/split_record.h"
-#include "spm/vertex_id.h"
-#include "spm/criteria_inline.h"
 #include "spm/selective_mesh.h"
 #include "spm/slot_growth.h"
+#include "spm/split_record.h"
 #include "spm/vertex_hierarchy.h"
+#include "spm/vertex_id.h"
 
 namespace pms {
 namespace {
@@ -52,7 +52,10 @@ uint32_t new_stamp() {
 }  // namespace
 
 SelectiveRefinement::SelectiveRefinement(SelectiveMesh& mesh, float model_scale, const AdaptOptions& options)
-    : mesh_(&mesh), scale_(dequantize_detail::effective_scale(model_scale)), stamp_(new_stamp()), synced_(mesh.hierarchy().size()) {
+    : mesh_(&mesh),
+      scale_(dequantize_detail::effective_scale(model_scale)),
+      stamp_(new_stamp()),
+      synced_(mesh.hierarchy().size()) {
   static_assert(sizeof(Slot) == 64);
   // The roots' common parent for walk_qrefine's bounds: the mean of their positions (any point would
   // do; a central one lets a view that holds the whole model skip the roots' planes too).
@@ -67,7 +70,8 @@ SelectiveRefinement::SelectiveRefinement(SelectiveMesh& mesh, float model_scale,
 }
 
 void SelectiveRefinement::set_options(const AdaptOptions& options) {
-  if (!(options.tolerance >= 0) || !std::isfinite(options.tolerance)) fail(kWhere, "tolerance must be a finite number >= 0");
+  if (!(options.tolerance >= 0) || !std::isfinite(options.tolerance))
+    fail(kWhere, "tolerance must be a finite number >= 0");
   if (options.morph_frames != options_.morph_frames || options.max_ops != options_.max_ops) settled_ = false;
   options_ = options;
   morphs_.set_frames(options.morph_frames);
@@ -98,7 +102,8 @@ void SelectiveRefinement::update_plane_bounds() {
   reach_scale_ = normal * kReachRoundUp;
   plane_error_ = terms * kPlaneRounding + kTinyBound;
   float lowest = INFINITY;
-  for (const float* plane : view_.planes) lowest = std::min(lowest, criteria_detail::dot3(plane, root_centre_) + plane[3]);
+  for (const float* plane : view_.planes)
+    lowest = std::min(lowest, criteria_detail::dot3(plane, root_centre_) + plane[3]);
   root_margin_ = lowest - plane_error_;
 }
 
@@ -180,7 +185,7 @@ uint32_t SelectiveRefinement::dependency(uint32_t slot) {
     }
     dep = h.find({a.tree, common});
     if (dep == kNone) return kNone;  // not known (only while the node is not split): ask again later
-    state(dep);  // decoded now, so keep() reads its slot without the checks
+    state(dep);                      // decoded now, so keep() reads its slot without the checks
   }
   slots_[slot].dependency = dep;
   return dep;
@@ -197,7 +202,8 @@ uint32_t SelectiveRefinement::dependency(uint32_t slot) {
 // too, unless v was split this frame: below a node split earlier most such v_t are settled, and the
 // visit's branch on them mispredicted, while a fresh pair's v_t mostly wants its split, and would pay
 // the screen test twice. Not with geomorphs, which see every visit.
-[[gnu::always_inline]] inline uint32_t SelectiveRefinement::keep(uint32_t v, bool parent_kept, float margin, bool just_split) {
+[[gnu::always_inline]] inline uint32_t SelectiveRefinement::keep(uint32_t v, bool parent_kept, float margin,
+                                                                 bool just_split) {
   const uint32_t t = slots_[v].first_child;
   if (t + 1 >= slot_count_) grow(t + 2);
   slots_[v].kept = frame_;
@@ -296,7 +302,8 @@ void SelectiveRefinement::pin_chain(uint32_t v) {
     morphs_.cancel_collapse(h, v);  // its parent is kept: a collapse under way is called off
   }
   const Slot& slot = slots_[v];  // decoded by the walk
-  if (!walk_qrefine(slot, margin)) [[likely]] return kNone;
+  if (!walk_qrefine(slot, margin)) [[likely]]
+    return kNone;
   if (slot.first_child == kNone) {  // a leaf of what is known
     report_missing(v);
     return kNone;
@@ -317,7 +324,7 @@ void SelectiveRefinement::pin_chain(uint32_t v) {
 
 [[gnu::always_inline]] inline uint32_t SelectiveRefinement::visit_split(uint32_t v, float& margin) {
   if (walk_qrefine(slots_[v], margin)) return keep(v, true, margin, false);  // decoded, not kept: see adapt()
-  tops_.push_back(v);  // may still be forced later this frame
+  tops_.push_back(v);                                                        // may still be forced later this frame
   return kNone;
 }
 
@@ -470,8 +477,8 @@ ViewRefineResult refine_for_view(const ModelData& model, const Camera& camera, f
   SelectiveRefinement refinement(mesh, model.scale, options);
   refinement.set_view(view);
   ViewRefineResult result;
-  result.stats = refinement.converge(
-      [&](std::span<const uint32_t> leaves) { return add_model_splits(hierarchy, model, leaves); });
+  result.stats =
+      refinement.converge([&](std::span<const uint32_t> leaves) { return add_model_splits(hierarchy, model, leaves); });
   refinement.extract(result.mesh);
   return result;
 }

@@ -10,15 +10,15 @@
 #include <span>
 #include <vector>
 
-#include "common/huge_pages.h"
-#include "spm/hierarchy.h"
-#include "spm/vertex_id.h"
 #include "common/camera.h"
+#include "common/huge_pages.h"
 #include "spm/criteria.h"
 #include "spm/geomorph.h"
+#include "spm/hierarchy.h"
 #include "spm/selective_mesh.h"
 #include "spm/slot_array.h"
 #include "spm/vertex_hierarchy.h"
+#include "spm/vertex_id.h"
 
 namespace pms {
 
@@ -30,7 +30,7 @@ struct AdaptOptions {
 constexpr uint32_t kDefaultMorphFrames = 8;
 
 struct FrameStats {
-  uint32_t vsplits = 0;    // splits done, including those the partial order forced
+  uint32_t vsplits = 0;  // splits done, including those the partial order forced
   uint32_t ecols = 0;
   uint32_t missing = 0;    // leaves reported by missing()
   uint32_t evaluated = 0;  // qrefine evaluations
@@ -42,7 +42,7 @@ struct FrameStats {
 struct ConvergeStats {
   uint32_t frames = 0;
   uint64_t vsplits = 0, ecols = 0;
-  uint64_t fetched = 0;    // splits the fetch callback added
+  uint64_t fetched = 0;  // splits the fetch callback added
 };
 
 // Owns no mesh: adapts `mesh` (and reads its hierarchy, which may grow between frames as packets arrive).
@@ -92,13 +92,15 @@ class SelectiveRefinement {
   struct Slot;
   // v's slot, grown and decoded on first use (out of line: the walk's fast path stays small).
   Slot& state(uint32_t v) {
-    if (v < slot_count_ && slots_[v].stamp == stamp_) [[likely]] return slots_[v];
+    if (v < slot_count_ && slots_[v].stamp == stamp_) [[likely]]
+      return slots_[v];
     return first_use(v);
   }
   Slot& first_use(uint32_t v);
   // state() of a slot below slot_count_ (the walk grows the slots before it reaches them).
   Slot& grown_state(uint32_t v) {
-    if (slots_[v].stamp == stamp_) [[likely]] return slots_[v];
+    if (slots_[v].stamp == stamp_) [[likely]]
+      return slots_[v];
     return first_use(v);
   }
   void grow(uint32_t end);
@@ -149,8 +151,8 @@ class SelectiveRefinement {
     uint32_t stamp = 0;               // stamp_ once load() has set every field (else stale or zero bytes)
   };
   static constexpr int kSlotArrayKind = 2;  // SlotArray's kind: blocks go back to the next refinement's slots
-  SlotArray<Slot, kSlotArrayKind> slots_;  // on huge pages: the walk reads them at random
-  uint32_t slot_count_ = 0;  // slots_.size(), one compare for the walk
+  SlotArray<Slot, kSlotArrayKind> slots_;   // on huge pages: the walk reads them at random
+  uint32_t slot_count_ = 0;                 // slots_.size(), one compare for the walk
   // This refinement's mark on the slots it loaded, unique in the process: a slot array's blocks pass
   // from one refinement to the next with the old slots in them.
   uint32_t stamp_;
@@ -163,7 +165,7 @@ class SelectiveRefinement {
   float coordinate_bound_ = 0, plane_error_ = 0, reach_scale_ = 1;
   float root_centre_[3] = {0, 0, 0}, root_margin_ = -INFINITY;
   std::vector<StackEntry> stack_;
-  std::vector<uint32_t> tops_;        // split nodes not wanted, whose subtrees may have to collapse
+  std::vector<uint32_t> tops_;  // split nodes not wanted, whose subtrees may have to collapse
   std::vector<uint32_t> subtree_, collapse_, retry_;
   std::vector<uint32_t> missing_;
   Geomorphs morphs_;

@@ -61,5 +61,4 @@ bool qrefine(const ViewCriteria& view, const NodeCriteria& node) { return qrefin
 
 float refinement_priority(const ViewCriteria& view, const NodeCriteria& node) { return priority_inline(view, node); }
 
-
 }  // namespace pms

@@ -11,8 +11,8 @@
 #pragma once
 #include <cstdint>
 
-#include "spm/refine_info.h"
 #include "common/camera.h"
+#include "spm/refine_info.h"
 
 namespace pms {
 
@@ -20,7 +20,7 @@ namespace pms {
 struct ViewCriteria {
   float planes[6][4] = {};  // ViewParams::planes: inside when a*x + b*y + c*z + d >= 0
   float eye[3] = {0, 0, 0};
-  float kappa2 = 0;         // kappa² = (τ · pixel_angle)², Hoppe 1997 §4.3
+  float kappa2 = 0;  // kappa² = (τ · pixel_angle)², Hoppe 1997 §4.3
 };
 
 // `tolerance_px` = τ >= 0 (pms::Error otherwise).
@@ -30,8 +30,8 @@ ViewCriteria make_criteria(const ViewParams& view, float tolerance_px);
 struct NodeCriteria {
   float p[3] = {0, 0, 0};
   float radius = 0;
-  float mu2 = 0, delta2 = 0;  // mu², delta²
-  float axis[3] = {0, 0, 1};  // normal-cone axis = the direction delta is measured along
+  float mu2 = 0, delta2 = 0;    // mu², delta²
+  float axis[3] = {0, 0, 1};    // normal-cone axis = the direction delta is measured along
   float cos_a = -1, sin_a = 0;  // cone half-angle; cos_a <= 0: the cone test never culls
 };
 

@@ -7,8 +7,8 @@
 #include <cmath>
 #include <vector>
 
-#include "spm/dequantize_inline.h"
 #include "spm/criteria.h"
+#include "spm/dequantize_inline.h"
 
 namespace pms::criteria_detail {
 // Float slack, relative to the eye distance, for the two culling tests: rounding in the planes, the
@@ -83,7 +83,8 @@ struct EyeOffset {
   return false;
 }
 
-[[gnu::always_inline]] inline bool outside_frustum_inline(const ViewCriteria& view, const NodeCriteria& node, float& lowest) {
+[[gnu::always_inline]] inline bool outside_frustum_inline(const ViewCriteria& view, const NodeCriteria& node,
+                                                          float& lowest) {
   return outside_frustum_inline(view, node, eye_offset(view, node), lowest);
 }
 
@@ -139,7 +140,8 @@ struct EyeOffset {
   return std::max(node.mu2, node.delta2 * (d2 - along * along) / d2) / bound;
 }
 
-[[gnu::always_inline]] inline bool qrefine_inline(const ViewCriteria& view, const NodeCriteria& node, const EyeOffset& o) {
+[[gnu::always_inline]] inline bool qrefine_inline(const ViewCriteria& view, const NodeCriteria& node,
+                                                  const EyeOffset& o) {
   float lowest;
   return screen_error_exceeds_inline(view, node, o) && !outside_frustum_inline(view, node, o, lowest) &&
          !back_facing_inline(node, o);

@@ -4,9 +4,9 @@
 
 #include <algorithm>
 
-#include "spm/vertex_id.h"
 #include "spm/selective_mesh.h"
 #include "spm/vertex_hierarchy.h"
+#include "spm/vertex_id.h"
 
 namespace pms {
 

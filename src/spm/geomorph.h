@@ -9,9 +9,9 @@
 #include <cstdint>
 #include <vector>
 
-#include "spm/vertex_id.h"
 #include "spm/selective_mesh.h"
 #include "spm/vertex_hierarchy.h"
+#include "spm/vertex_id.h"
 
 namespace pms {
 
@@ -73,10 +73,10 @@ class Geomorphs {
   uint32_t frames_;
   // Per slot, up to the highest slot morphed or shown so far (grown geometrically; beyond it a slot has
   // state 0 and no record).
-  std::vector<float> shown_;       // 3 per slot: valid when state_ is set
-  std::vector<uint8_t> state_;     // per slot: 1 = shown_ is where it is (or was, when last active) shown
-  std::vector<uint32_t> record_;   // per slot: index in records_, kNone when not morphing
-  uint32_t synced_ = 0;            // hierarchy size sync() has seen; 0: not yet (or morphing was off)
+  std::vector<float> shown_;      // 3 per slot: valid when state_ is set
+  std::vector<uint8_t> state_;    // per slot: 1 = shown_ is where it is (or was, when last active) shown
+  std::vector<uint32_t> record_;  // per slot: index in records_, kNone when not morphing
+  uint32_t synced_ = 0;           // hierarchy size sync() has seen; 0: not yet (or morphing was off)
   std::vector<Record> records_;
 };
 

@@ -96,9 +96,10 @@ ModelData model_of(const Hierarchy& h) {
 
 void check_node_arrays(const ModelData& model) {
   const size_t n = model.node_count();
-  if (model.root_count > n || model.first_child.size() < n || model.position.size() < 3 * n || model.refine.size() < n ||
-      model.cut_left.size() < n || model.cut_right.size() < n || model.tree_id.size() < n || model.node_id.size() < n ||
-      (!model.normals.empty() && model.normals.size() < 3 * n) || (!model.colors.empty() && model.colors.size() < 4 * n))
+  if (model.root_count > n || model.first_child.size() < n || model.position.size() < 3 * n ||
+      model.refine.size() < n || model.cut_left.size() < n || model.cut_right.size() < n || model.tree_id.size() < n ||
+      model.node_id.size() < n || (!model.normals.empty() && model.normals.size() < 3 * n) ||
+      (!model.colors.empty() && model.colors.size() < 4 * n))
     fail("model", "node arrays shorter than the node count");
 }
 

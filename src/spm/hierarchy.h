@@ -18,20 +18,20 @@ namespace pms {
 // split only introduces v_t's position.
 struct Hierarchy {
   uint32_t root_count = 0;
-  std::vector<uint32_t> base_faces;    // 3 root indices per face, CCW
-  std::vector<uint32_t> parent;        // per node; kNone for roots
-  std::vector<uint32_t> first_child;   // per node; kNone for leaves
-  std::vector<float> position;         // 3 per node
-  std::vector<uint32_t> cut_left;      // per node: leaf index of v̂_l; kNone for leaves or no left face
-  std::vector<uint32_t> cut_right;     // per node: leaf index of v̂_r; kNone for leaves or no right face
-  std::vector<RefineInfo> refine;      // per node
-  std::vector<uint32_t> leaf_vertex;   // per node: vertex index in the cleaned input; kNone if internal
-  std::vector<uint32_t> split_order;   // internal nodes in PM order (reverse of collapse order)
-  std::vector<float> normals;          // optional: 3 per node (internal nodes: survivor leaf's)
-  std::vector<uint8_t> colors;         // optional: 4 per node
+  std::vector<uint32_t> base_faces;   // 3 root indices per face, CCW
+  std::vector<uint32_t> parent;       // per node; kNone for roots
+  std::vector<uint32_t> first_child;  // per node; kNone for leaves
+  std::vector<float> position;        // 3 per node
+  std::vector<uint32_t> cut_left;     // per node: leaf index of v̂_l; kNone for leaves or no left face
+  std::vector<uint32_t> cut_right;    // per node: leaf index of v̂_r; kNone for leaves or no right face
+  std::vector<RefineInfo> refine;     // per node
+  std::vector<uint32_t> leaf_vertex;  // per node: vertex index in the cleaned input; kNone if internal
+  std::vector<uint32_t> split_order;  // internal nodes in PM order (reverse of collapse order)
+  std::vector<float> normals;         // optional: 3 per node (internal nodes: survivor leaf's)
+  std::vector<uint8_t> colors;        // optional: 4 per node
   float bbox_min[3] = {0, 0, 0};
   float bbox_max[3] = {0, 0, 0};
-  float scale = 1;                     // bounding-box diagonal; refinement info is relative to it
+  float scale = 1;  // bounding-box diagonal; refinement info is relative to it
 
   // Derived from the structure (not stored in the file): ids per node.
   std::vector<uint32_t> tree_id;
@@ -41,8 +41,8 @@ struct Hierarchy {
   size_t leaf_count() const;
   bool is_leaf(uint32_t n) const { return first_child[n] == kNone; }
   VertexId id(uint32_t n) const { return {tree_id[n], node_id[n]}; }
-  void compute_ids();                  // fills tree_id/node_id from parent/first_child
-  uint32_t find(VertexId id) const;    // node index by walking from the root; kNone if absent
+  void compute_ids();                // fills tree_id/node_id from parent/first_child
+  uint32_t find(VertexId id) const;  // node index by walking from the root; kNone if absent
 };
 
 // Bits needed to write ids, as reported by build/info (kim-lee-kobbelt §6.2 Table 1).

@@ -62,7 +62,7 @@ void octahedral_step(const uint16_t from[2], const uint16_t to[2], int64_t d[2])
   // `to` itself, then its copies beyond the right, left, top and bottom edges; a copy counts only strictly
   // outside the square (on an edge it would be `to`'s mirror image, which the canonical form excludes).
   const int64_t copies[5][2] = {{xt, yt}, {2 * m - xt, -yt}, {-2 * m - xt, -yt}, {-xt, 2 * m - yt}, {-xt, -2 * m - yt}};
-  const bool outside[5] = {true, xt < m, xt > -m, yt < m, yt > -m};
+  const bool outside[5] = {true, xt<m, xt> - m, yt<m, yt> - m};
   d[0] = xt - xs, d[1] = yt - ys;
   for (int i = 1; i < 5; ++i)
     if (outside[i] && step_bits(copies[i][0] - xs, copies[i][1] - ys) < step_bits(d[0], d[1]))

@@ -141,7 +141,8 @@ void PmsFile::parse(const std::string& name) {
   model_.tree_id = tree_id_;
   model_.node_id = node_id_;
   if (sections[SplitOffsets].count != uint64_t(head.node_count) + 1)
-    section_error(name, SplitOffsets, str(sections[SplitOffsets].count) + " elements for " + str(head.node_count) + " nodes");
+    section_error(name, SplitOffsets,
+                  str(sections[SplitOffsets].count) + " elements for " + str(head.node_count) + " nodes");
   split_tables_ = {sections[SplitTables].data, size_t(sections[SplitTables].count)};
   split_offsets_ = typed<uint64_t>(sections[SplitOffsets], 1);
   split_records_ = {sections[SplitRecords].data, size_t(sections[SplitRecords].count)};

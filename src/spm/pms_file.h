@@ -22,11 +22,11 @@ struct BuildStats {
   uint64_t base_vertices = 0;
   uint64_t base_faces = 0;
   uint64_t vsplits = 0;
-  uint32_t tree_id_bits = 0;    // ceil(log2(base_vertices))
-  uint32_t node_id_bits = 0;    // max depth (the implicit leading 1 is not counted)
+  uint32_t tree_id_bits = 0;  // ceil(log2(base_vertices))
+  uint32_t node_id_bits = 0;  // max depth (the implicit leading 1 is not counted)
   uint32_t max_depth = 0;
-  double seconds = 0;           // build time, load excluded
-  std::string clean_report;     // human summary of what cleaning changed
+  double seconds = 0;        // build time, load excluded
+  std::string clean_report;  // human summary of what cleaning changed
 };
 
 // The .pms file: docs/pms-format.md has its properties ("Properties") and its layout.

@@ -19,18 +19,18 @@ static_assert(std::endian::native == std::endian::little, ".pms sections are lit
 
 constexpr char kMagic[8] = {'P', 'M', 'S', 'T', 'R', 'E', 'A', 'M'};
 // Version 5 nests each child's refinement info in its parent's (spm/nested_info.h) and codes the records' info
-// as lattice entries; version 4 predicts v_t in v_s's tangent plane (the split tables carry the grid's step ratios); version 3
-// added the compressed split records (SRTB, SROF, SREC); version 2 stored refinement info at the
-// precision the wire carries (version 1 had finer RINF).
+// as lattice entries; version 4 predicts v_t in v_s's tangent plane (the split tables carry the grid's step ratios);
+// version 3 added the compressed split records (SRTB, SROF, SREC); version 2 stored refinement info at the precision
+// the wire carries (version 1 had finer RINF).
 constexpr uint32_t kVersion = 7;
 constexpr uint64_t kAlignment = 64;  // every section starts here, so spans into a mapping are aligned
 
 struct FileHeader {
   char magic[8];
   uint32_t version;
-  uint32_t header_bytes;     // sizeof(FileHeader); the section table follows it
+  uint32_t header_bytes;  // sizeof(FileHeader); the section table follows it
   uint32_t section_count;
-  uint32_t flags;            // none defined yet: must be 0
+  uint32_t flags;  // none defined yet: must be 0
   uint64_t file_size;
   uint64_t header_checksum;  // xxh64 of header + table with this field zero
 };
@@ -61,8 +61,25 @@ struct HeadSection {
 static_assert(sizeof(HeadSection) == 48);
 
 // Sections in file order; Section values index kSections.
-enum Section : int { Head, Meta, Base, Parent, Children, Position, CutLeft, CutRight, Refine, Leaf, SplitOrder,
-                     Normal, Color, SplitTables, SplitOffsets, SplitRecords, kSectionCount };
+enum Section : int {
+  Head,
+  Meta,
+  Base,
+  Parent,
+  Children,
+  Position,
+  CutLeft,
+  CutRight,
+  Refine,
+  Leaf,
+  SplitOrder,
+  Normal,
+  Color,
+  SplitTables,
+  SplitOffsets,
+  SplitRecords,
+  kSectionCount
+};
 
 struct SectionKind {
   char tag[5];
@@ -70,11 +87,22 @@ struct SectionKind {
   bool required;
 };
 
-inline constexpr SectionKind kSections[kSectionCount] = {
-    {"HEAD", sizeof(HeadSection), true}, {"META", 1, false},  {"BASE", 12, true}, {"PRNT", 4, true},
-    {"CHLD", 4, true},                   {"POSI", 12, true},  {"CUTL", 4, true},  {"CUTR", 4, true},
-    {"RINF", sizeof(RefineInfo), true},  {"LEAF", 4, true},   {"SORD", 4, true},  {"NRML", 12, false},
-    {"COLR", 4, false},                  {"SRTB", 1, true},   {"SROF", 8, true},  {"SREC", 1, true}};
+inline constexpr SectionKind kSections[kSectionCount] = {{"HEAD", sizeof(HeadSection), true},
+                                                         {"META", 1, false},
+                                                         {"BASE", 12, true},
+                                                         {"PRNT", 4, true},
+                                                         {"CHLD", 4, true},
+                                                         {"POSI", 12, true},
+                                                         {"CUTL", 4, true},
+                                                         {"CUTR", 4, true},
+                                                         {"RINF", sizeof(RefineInfo), true},
+                                                         {"LEAF", 4, true},
+                                                         {"SORD", 4, true},
+                                                         {"NRML", 12, false},
+                                                         {"COLR", 4, false},
+                                                         {"SRTB", 1, true},
+                                                         {"SROF", 8, true},
+                                                         {"SREC", 1, true}};
 
 // xxh64 of the header and section table with the header_checksum field counted as zero.
 uint64_t header_checksum(const uint8_t* header_and_table, uint64_t bytes);

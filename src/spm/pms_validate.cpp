@@ -155,7 +155,8 @@ void check_finite(const std::string& where, Section section, std::span<const flo
 void check_refine(const std::string& where, const ModelData& m) {
   for (size_t i = 0; i < m.refine.size(); ++i)
     if (!is_canonical(m.refine[i]))
-      section_error(where, Refine, "node " + str(i) + ": a length is negative, NaN or finer than stored, or the cone is out of range");
+      section_error(where, Refine,
+                    "node " + str(i) + ": a length is negative, NaN or finer than stored, or the cone is out of range");
 }
 
 }  // namespace

@@ -13,7 +13,7 @@
 namespace pms {
 namespace {
 
-constexpr uint32_t kRawBits = 32;  // positions as their float32 bits
+constexpr uint32_t kRawBits = 32;      // positions as their float32 bits
 constexpr uint32_t kMaxGridBits = 24;  // a float has 24 significant bits: a finer grid adds nothing
 
 double grid_steps(uint32_t bits) { return double((uint64_t(1) << bits) - 1); }

@@ -27,8 +27,9 @@ constexpr uint16_t kDroppedMask = (1u << kLengthDroppedBits) - 1;
 
 // The next half at or above `half` whose dropped bits are 0; a carry correctly bumps the exponent
 // (and the largest finite values round up to infinity, 0x7C00).
-uint16_t round_up_to_kept_bits(uint32_t half) { return uint16_t(std::min<uint32_t>((half + kDroppedMask) & ~uint32_t(kDroppedMask), kHalfInfinity)); }
-
+uint16_t round_up_to_kept_bits(uint32_t half) {
+  return uint16_t(std::min<uint32_t>((half + kDroppedMask) & ~uint32_t(kDroppedMask), kHalfInfinity));
+}
 
 // Angle between unit `a` and the (nearly unit) float vector `b`; atan2 stays accurate for tiny
 // angles, where acos(dot) loses half its digits.
@@ -65,8 +66,8 @@ EncodedAxis encode_axis(const double axis[3]) {
     const auto qy = int16_t(std::clamp((i & 2) ? std::ceil(sy) : std::floor(sy), -steps, steps));
     float decoded[3];
     decode_axis(uint16_t(qx), uint16_t(qy), decoded);
-    const double len = std::sqrt(double(decoded[0]) * decoded[0] + double(decoded[1]) * decoded[1] +
-                                 double(decoded[2]) * decoded[2]);
+    const double len =
+        std::sqrt(double(decoded[0]) * decoded[0] + double(decoded[1]) * decoded[1] + double(decoded[2]) * decoded[2]);
     const double cosine = (axis[0] * decoded[0] + axis[1] * decoded[1] + axis[2] * decoded[2]) / len;
     if (cosine > best_cos) {
       best_cos = cosine;

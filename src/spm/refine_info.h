@@ -10,19 +10,19 @@ namespace pms {
 // The precision is what a vsplit packet carries (65 bits per node with a cone, 43 without: two
 // nodes per packet are most of a packet), so the file holds exactly what the wire can say.
 struct RefineInfo {
-  uint16_t radius;      // half-float bits of radius / scale, rounded toward +inf to kLengthKeptBits
-  uint16_t mu;          // same, of mu / scale (uniform deviation)
-  uint16_t delta;       // same, of delta / scale (deviation along the normal)
-  uint16_t cone_x;      // octahedral-encoded cone axis: int16 in [-kAxisSteps, kAxisSteps] per coordinate
+  uint16_t radius;  // half-float bits of radius / scale, rounded toward +inf to kLengthKeptBits
+  uint16_t mu;      // same, of mu / scale (uniform deviation)
+  uint16_t delta;   // same, of delta / scale (deviation along the normal)
+  uint16_t cone_x;  // octahedral-encoded cone axis: int16 in [-kAxisSteps, kAxisSteps] per coordinate
   uint16_t cone_y;
   uint16_t cone_angle;  // half-angle in units of (pi/2) / (kConeSteps + 1), rounded up; kNoCone = never back-facing
   friend bool operator==(const RefineInfo&, const RefineInfo&) = default;
 };
 static_assert(sizeof(RefineInfo) == 12);
-constexpr uint16_t kNoCone = 0xFFFF;        // the axis is then +z (0, 0)
-constexpr uint32_t kLengthDroppedBits = 4;  // low half-float mantissa bits that are always 0
+constexpr uint16_t kNoCone = 0xFFFF;                       // the axis is then +z (0, 0)
+constexpr uint32_t kLengthDroppedBits = 4;                 // low half-float mantissa bits that are always 0
 constexpr uint32_t kLengthBits = 15 - kLengthDroppedBits;  // what is left without the sign
-constexpr uint32_t kAxisBits = 11;          // per octahedral coordinate, sign included
+constexpr uint32_t kAxisBits = 11;                         // per octahedral coordinate, sign included
 constexpr int16_t kAxisSteps = (1 << (kAxisBits - 1)) - 1;
 constexpr uint32_t kConeAngleBits = 10;
 constexpr uint16_t kConeSteps = (1 << kConeAngleBits) - 2;  // largest cone_angle below pi/2
@@ -40,11 +40,11 @@ RefineInfo as_sent(const RefineInfo& info);
 
 // Decoded, in model units.
 struct RefineBounds {
-  float radius = 0;     // sphere around the node's position bounding its descendants' input faces
-  float mu = 0;         // deviation space D(mu, delta) around the normal (Hoppe 1997 §4.3)
+  float radius = 0;  // sphere around the node's position bounding its descendants' input faces
+  float mu = 0;      // deviation space D(mu, delta) around the normal (Hoppe 1997 §4.3)
   float delta = 0;
   float axis[3] = {0, 0, 1};
-  float cone_angle = 0; // radians; >= pi/2 (or kNoCone) means the cone test never culls
+  float cone_angle = 0;  // radians; >= pi/2 (or kNoCone) means the cone test never culls
 };
 
 RefineInfo quantize_refine(const RefineBounds& bounds, float scale);

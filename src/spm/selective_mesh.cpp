@@ -18,10 +18,10 @@
 #include <iterator>
 
 #include "common/error.h"
-#include "spm/vertex_id.h"
 #include "spm/selective_mesh.h"
 #include "spm/slot_growth.h"
 #include "spm/vertex_hierarchy.h"
+#include "spm/vertex_id.h"
 
 namespace pms {
 namespace {
@@ -50,7 +50,8 @@ SelectiveMesh::SelectiveMesh(const VertexHierarchy& hierarchy, std::span<const u
     corner_[c] = hierarchy.root_slot(base_faces[c]);
   }
   for (uint32_t c = 0; c < corners; ++c)
-    if (corner_[c] == corner_[c - c % 3 + kNextCorner[c % 3]]) fail("base mesh", "face " + std::to_string(c / 3) + " is degenerate");
+    if (corner_[c] == corner_[c - c % 3 + kNextCorner[c % 3]])
+      fail("base mesh", "face " + std::to_string(c / 3) + " is degenerate");
   reserve_faces();
   uint32_t root_end = 0;
   for (uint32_t r = 0; r < hierarchy.root_count(); ++r) root_end = std::max(root_end, hierarchy.root_slot(r) + 1);
@@ -76,7 +77,8 @@ SelectiveMesh::SelectiveMesh(const VertexHierarchy& hierarchy, std::span<const u
       fail("base mesh", "root " + to_string(hierarchy.id(slot)) + " is non-manifold (its faces form several fans)");
   }
   active_.reserve(hierarchy.root_count());
-  for (uint32_t r = 0; r < hierarchy.root_count(); ++r) activate(hierarchy.root_slot(r), hierarchy.id(hierarchy.root_slot(r)));
+  for (uint32_t r = 0; r < hierarchy.root_count(); ++r)
+    activate(hierarchy.root_slot(r), hierarchy.id(hierarchy.root_slot(r)));
 }
 
 // The prefetch helpers are always inlined: GCC deems a function that only prefetches free of side
@@ -220,7 +222,8 @@ void SelectiveMesh::free_block(uint32_t begin, uint32_t capacity) {
 void SelectiveMesh::append_face(uint32_t v, uint32_t f) {
   VertexRecord& record = vertex_[v];
   if (record.size == record.capacity) {  // full: move to the next larger pool block
-    if (record.capacity >= kMaxFanCapacity) fail(kWhere, "vertex " + to_string(hierarchy_->id(v)) + " has too many faces");
+    if (record.capacity >= kMaxFanCapacity)
+      fail(kWhere, "vertex " + to_string(hierarchy_->id(v)) + " has too many faces");
     const uint32_t capacity = std::bit_ceil(std::max(record.capacity + 1, kMinPoolCapacity));  // a size class
     const uint32_t begin = alloc_block(capacity);  // may move pool_: read the old list after it
     std::copy_n(faces_of(record), record.size, pool_.begin() + begin);
@@ -236,7 +239,8 @@ void SelectiveMesh::append_face(uint32_t v, uint32_t f) {
 // entries as three 4-lane vectors (lanes 0-3, 4-7, 6-9; the last two overlap and get the same values);
 // each lane takes its own entry, the one before it (shifted) or f. The lane before entry 0 is read from
 // the record's bytes and never taken. Returns false, changing nothing, when the anchor is not listed.
-[[gnu::always_inline]] inline bool SelectiveMesh::insert_inline_face(VertexRecord& record, uint32_t f, uint32_t anchor, bool after) {
+[[gnu::always_inline]] inline bool SelectiveMesh::insert_inline_face(VertexRecord& record, uint32_t f, uint32_t anchor,
+                                                                     bool after) {
   using Lanes = int32_t __attribute__((vector_size(16)));  // signed: SSE2 compares signed lanes only
   static_assert(kInlineFaces == 10 && offsetof(VertexRecord, inline_faces) >= sizeof(uint32_t));
   unsigned char* const bytes = reinterpret_cast<unsigned char*>(&record) + offsetof(VertexRecord, inline_faces);
@@ -290,7 +294,8 @@ void SelectiveMesh::remove_face(uint32_t v, uint32_t f) {
   uint32_t* list = faces_of(record);
   uint32_t i = 0;
   while (i < record.size && list[i] != f) ++i;
-  if (i == record.size) fail(kWhere, "face list of " + to_string(hierarchy_->id(v)) + " lacks face " + std::to_string(f));
+  if (i == record.size)
+    fail(kWhere, "face list of " + to_string(hierarchy_->id(v)) + " lacks face " + std::to_string(f));
   std::copy(list + i + 1, list + record.size, list + i);
   --record.size;
 }
@@ -318,7 +323,8 @@ void SelectiveMesh::remove_face(uint32_t v, uint32_t f) {
 }
 
 [[gnu::always_inline]] inline uint32_t SelectiveMesh::new_face(uint32_t a, uint32_t b, uint32_t c) {
-  if (free_face_ == kNone) [[unlikely]] add_free_faces();
+  if (free_face_ == kNone) [[unlikely]]
+    add_free_faces();
   const uint32_t f = free_face_;
   free_face_ = corner_[3 * size_t(f) + 1];
   uint32_t* corner = &corner_[3 * size_t(f)];
@@ -393,7 +399,8 @@ void SelectiveMesh::prepare_lookup(std::vector<Corner>& fan) {
 // Puts a vertex's corners (`fan`, any order) in CCW fan order into `ordered`: face (v, a, b) is followed
 // by (v, b, c), and an open fan starts after its gap. Returns whether the fan is closed. When the faces
 // form several fans (a bad base mesh), `ordered` ends up shorter than `fan`.
-bool SelectiveMesh::order_fan(std::vector<Corner>& fan, std::vector<Corner>& ordered, std::vector<uint32_t>& successor) {
+bool SelectiveMesh::order_fan(std::vector<Corner>& fan, std::vector<Corner>& ordered,
+                              std::vector<uint32_t>& successor) {
   const uint32_t n = uint32_t(fan.size());
   prepare_lookup(fan);
   successor.resize(n);
@@ -502,7 +509,8 @@ std::pair<uint32_t, uint32_t> SelectiveMesh::cut_ancestors(VertexId cut_l, Verte
     const VertexRecord& record = vertex_[v];
     const int d = 63 - __builtin_clzll(record.node);  // an active id is never 0
     for (int i = 0; i < 2; ++i) {
-      if ((wanted >> i & 1) && record.tree == cuts[i].tree && d <= depth[i] && (cuts[i].node >> (depth[i] - d)) == record.node) {
+      if ((wanted >> i & 1) && record.tree == cuts[i].tree && d <= depth[i] &&
+          (cuts[i].node >> (depth[i] - d)) == record.node) {
         found[i] = v;
         wanted &= ~(1u << i);
       }
@@ -514,7 +522,8 @@ std::pair<uint32_t, uint32_t> SelectiveMesh::cut_ancestors(VertexId cut_l, Verte
     if ((wanted >> i & 1) == 0) continue;
     found[i] = active_ancestor(cuts[i]);
     if (found[i] == kNone)
-      fail(kWhere, "vertex " + to_string(hierarchy_->id(slot)) + ": no active ancestor for cut vertex " + to_string(cuts[i]));
+      fail(kWhere,
+           "vertex " + to_string(hierarchy_->id(slot)) + ": no active ancestor for cut vertex " + to_string(cuts[i]));
   }
   return {found[0], found[1]};
 }
@@ -527,7 +536,9 @@ std::pair<uint32_t, uint32_t> SelectiveMesh::cut_ancestors(VertexId cut_l, Verte
 // so inconsistent packets leave the mesh as it was.
 void SelectiveMesh::split_fan(uint32_t s, uint32_t l, uint32_t r) {  // fan_: s's corners
   const uint32_t t = hierarchy_->first_child(s), u = t + 1;
-  const auto reject = [&](const std::string& why) { fail(kWhere, "vsplit " + to_string(hierarchy_->id(s)) + ": " + why); };
+  const auto reject = [&](const std::string& why) {
+    fail(kWhere, "vsplit " + to_string(hierarchy_->id(s)) + ": " + why);
+  };
   const bool closed = order_fan(fan_, ordered_, successor_);
   if (ordered_.size() != fan_.size()) reject("corrupted fan");
   const uint32_t n = uint32_t(ordered_.size());
@@ -543,7 +554,8 @@ void SelectiveMesh::split_fan(uint32_t s, uint32_t l, uint32_t r) {  // fan_: s'
   }
   for (auto [v, found] : {std::pair{l, l_found}, std::pair{r, r_found}})
     if (v != kNone && !found) reject("cut vertex " + to_string(hierarchy_->id(v)) + " is not a neighbour");
-  if ((l == kNone || r == kNone || (ia == kNone && ib == kNone)) && closed) reject("boundary split of an interior vertex");
+  if ((l == kNone || r == kNone || (ia == kNone && ib == kNone)) && closed)
+    reject("boundary split of an interior vertex");
 
   // v_t's faces: the cyclic range [first, last] of the ordered fan (empty when neither side is found).
   const bool any = ia != kNone || ib != kNone;
@@ -654,7 +666,9 @@ bool SelectiveMesh::split_between(uint32_t s, VertexId cut_l, VertexId cut_r) {
   // branches they mispredicted.
   const bool wraps = ia > ib;
   const uint32_t wrap_mask = 0 - uint32_t(wraps);
-  const auto pick = [wrap_mask](uint32_t if_wraps, uint32_t otherwise) { return otherwise ^ ((if_wraps ^ otherwise) & wrap_mask); };
+  const auto pick = [wrap_mask](uint32_t if_wraps, uint32_t otherwise) {
+    return otherwise ^ ((if_wraps ^ otherwise) & wrap_mask);
+  };
   const uint32_t t_count = ib - ia + 1 + (n & wrap_mask);
   assign_faces(t, t_count + 2);  // may move pool_: the lists are read once both are assigned
   assign_faces(u, n - t_count + 2);
@@ -854,8 +868,8 @@ void SelectiveMesh::join_fans(uint32_t p, uint32_t fl, uint32_t fr, bool t_open,
   while (b < m && fan_u_[b].face != fl) ++b;
   // An open list cannot have the pair across its end (that is its gap).
   const bool in_order = fl != kNone && fr != kNone && n <= kScannedFan && m <= kScannedFan && a < n && b < m &&
-                        fan_[(a + 1) % n].face == fl && fan_u_[(b + 1) % m].face == fr &&
-                        !(t_open && a + 1 == n) && !(u_open && b + 1 == m);
+                        fan_[(a + 1) % n].face == fl && fan_u_[(b + 1) % m].face == fr && !(t_open && a + 1 == n) &&
+                        !(u_open && b + 1 == m);
   if (!in_order) {
     for (const std::vector<Corner>* fan : {&fan_, &fan_u_})
       for (uint32_t i = 0; i < fan->size(); ++i)

@@ -9,9 +9,9 @@
 #include <vector>
 
 #include "common/huge_pages.h"
-#include "spm/vertex_id.h"
 #include "spm/slot_array.h"
 #include "spm/vertex_hierarchy.h"
+#include "spm/vertex_id.h"
 
 namespace pms {
 
@@ -128,7 +128,7 @@ class SelectiveMesh {
   static void prepare_lookup(std::vector<Corner>& fan);
   static uint32_t find_next(const std::vector<Corner>& fan, uint32_t w);  // index of the corner with `next` w
   std::pair<uint32_t, uint32_t> cut_ancestors(VertexId cut_l, VertexId cut_r, uint32_t slot) const;  // over fan_ (slot)
-  void split_fan(uint32_t s, uint32_t l, uint32_t r);         // over fan_ (s)
+  void split_fan(uint32_t s, uint32_t l, uint32_t r);                                                // over fan_ (s)
   bool split_between(uint32_t s, VertexId cut_l, VertexId cut_r);  // vsplit's common case, before fan_ is read
   // What split_between read of v_s's fan: per listed face, v_s's corner and the one after it.
   struct FanReading {
@@ -137,10 +137,10 @@ class SelectiveMesh {
   };
   bool split_one_side(uint32_t s, const FanReading& fan, uint64_t match, bool left);
   void join_fans(uint32_t p, uint32_t fl, uint32_t fr, bool t_open, bool u_open);  // over fan_ (t), fan_u_ (u)
-  void put_in_fan_order(uint32_t v);                           // the lists' order, restored the slow way
-  bool repeats_directed_edge(uint32_t v);                      // over fan_ (v): a bad base mesh
+  void put_in_fan_order(uint32_t v);       // the lists' order, restored the slow way
+  bool repeats_directed_edge(uint32_t v);  // over fan_ (v): a bad base mesh
   void start_after_gap(uint32_t v);
-  bool breaks_split_order(uint32_t u) const;                  // over fan_ (t)
+  bool breaks_split_order(uint32_t u) const;  // over fan_ (t)
   // Over fan_ (t) and fan_u_ (u), whose open ends (kNone: closed) are given.
   bool link_condition(uint32_t t, uint32_t l, uint32_t r, uint32_t t_end, uint32_t u_end);
   uint32_t new_face(uint32_t a, uint32_t b, uint32_t c);
@@ -148,7 +148,9 @@ class SelectiveMesh {
   void free_face(uint32_t f);
   uint32_t alloc_block(uint32_t capacity);
   void free_block(uint32_t begin, uint32_t capacity);
-  uint32_t* faces_of(VertexRecord& v) { return v.capacity <= kInlineFaces ? v.inline_faces : &pool_[v.inline_faces[0]]; }
+  uint32_t* faces_of(VertexRecord& v) {
+    return v.capacity <= kInlineFaces ? v.inline_faces : &pool_[v.inline_faces[0]];
+  }
   const uint32_t* faces_of(const VertexRecord& v) const {
     return v.capacity <= kInlineFaces ? v.inline_faces : &pool_[v.inline_faces[0]];
   }
@@ -161,7 +163,7 @@ class SelectiveMesh {
   void remove_face(uint32_t v, uint32_t f);  // keeps the others' order
   void activate(uint32_t v, VertexId id);
   void deactivate(uint32_t v);
-  bool pool_blocks_disjoint(std::vector<std::pair<uint32_t, uint32_t>>& blocks) const;  // audit
+  bool pool_blocks_disjoint(std::vector<std::pair<uint32_t, uint32_t>>& blocks) const;              // audit
   static bool in_fan_order(const uint32_t* list, const std::vector<Corner>& ordered, bool closed);  // audit
 
   const VertexHierarchy* hierarchy_;
@@ -177,14 +179,14 @@ class SelectiveMesh {
   // activates and read only while it is active, so a fresh mesh pays for what it refines, not for the
   // model.
   SlotArray<VertexRecord, kRecordArrayKind> vertex_;
-  std::vector<uint64_t> active_bits_;  // per slot, 1 = active: the adaptation walk asks for every node
-  uint32_t reserved_for_ = 0;          // hierarchy size the face arrays were reserved for
-  RecycledVector<uint32_t> pool_;    // incident-face blocks; a free block holds the next free one
-  uint32_t free_block_[32];      // per log2(capacity): first free block
-  RecycledVector<uint32_t> active_;  // active slots
+  std::vector<uint64_t> active_bits_;          // per slot, 1 = active: the adaptation walk asks for every node
+  uint32_t reserved_for_ = 0;                  // hierarchy size the face arrays were reserved for
+  RecycledVector<uint32_t> pool_;              // incident-face blocks; a free block holds the next free one
+  uint32_t free_block_[32];                    // per log2(capacity): first free block
+  RecycledVector<uint32_t> active_;            // active slots
   std::vector<Corner> fan_, fan_u_, ordered_;  // scratch, kept to avoid allocating per operation
-  std::vector<uint32_t> chain_;    // vsplit's forced chain
-  std::vector<uint32_t> successor_;  // order_fan's
+  std::vector<uint32_t> chain_;                // vsplit's forced chain
+  std::vector<uint32_t> successor_;            // order_fan's
 };
 
 }  // namespace pms

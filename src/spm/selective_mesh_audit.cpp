@@ -4,9 +4,9 @@
 #include <bit>
 
 #include "common/error.h"
-#include "spm/vertex_id.h"
 #include "spm/selective_mesh.h"
 #include "spm/vertex_hierarchy.h"
+#include "spm/vertex_id.h"
 
 namespace pms {
 
@@ -83,7 +83,8 @@ bool SelectiveMesh::check_invariants(std::string* why) const {
     const uint32_t* c = face(f);
     for (int k = 0; k < 3; ++k)
       if (!is_active(c[k])) return fail_with(why, "face " + std::to_string(f) + " uses an inactive vertex");
-    if (c[0] == c[1] || c[1] == c[2] || c[2] == c[0]) return fail_with(why, "face " + std::to_string(f) + " is degenerate");
+    if (c[0] == c[1] || c[1] == c[2] || c[2] == c[0])
+      return fail_with(why, "face " + std::to_string(f) + " is degenerate");
   }
   for (uint32_t f = free_face_; f != kNone; f = corner_[3 * size_t(f) + 1]) {
     if (f >= face_capacity() || face_alive(f) || ++dead > face_capacity()) return fail_with(why, "corrupted free list");
@@ -110,7 +111,8 @@ bool SelectiveMesh::check_invariants(std::string* why) const {
   std::vector<uint32_t> corners(vertex_.size(), 0);
   for (uint32_t c = 0; c < corner_.size(); ++c)
     if (face_alive(c / 3)) {
-      if (corner_[c] >= slots) return fail_with(why, "face " + std::to_string(c / 3) + " has a corner past the hierarchy");
+      if (corner_[c] >= slots)
+        return fail_with(why, "face " + std::to_string(c / 3) + " has a corner past the hierarchy");
       ++corners[corner_[c]];
     }
   for (uint32_t v = slots; v < vertex_.size(); ++v)
@@ -146,7 +148,8 @@ bool SelectiveMesh::check_invariants(std::string* why) const {
     if (record.active_pos >= active_.size() || active_[record.active_pos] != v)
       return fail_with(why, "vertex " + name(v) + " is missing from the active list");
     for (uint32_t a = h.parent(v); a != kNone; a = h.parent(a))
-      if (is_active(a)) return fail_with(why, "vertex " + name(v) + " and its ancestor " + name(a) + " are both active");
+      if (is_active(a))
+        return fail_with(why, "vertex " + name(v) + " and its ancestor " + name(a) + " are both active");
   }
   if (active_count != active_.size()) return fail_with(why, "active list has stale entries");
   if (!pool_blocks_disjoint(blocks)) return fail_with(why, "face-list pool blocks overlap or run past the pool");

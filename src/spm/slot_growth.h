@@ -16,7 +16,8 @@ constexpr size_t kSmallSlotBytes = size_t(64) << 10;
 // The capacity to reserve for slots [0, end) of `known`, given the current capacity.
 inline size_t slot_capacity(size_t end, size_t capacity, size_t known, size_t bytes_per_slot) {
   if (end <= capacity) return capacity;
-  if (known * bytes_per_slot <= kSmallSlotBytes) return std::max(end, std::min(2 * capacity, kSmallSlotBytes / bytes_per_slot));
+  if (known * bytes_per_slot <= kSmallSlotBytes)
+    return std::max(end, std::min(2 * capacity, kSmallSlotBytes / bytes_per_slot));
   return std::max(known, 2 * capacity);
 }
 

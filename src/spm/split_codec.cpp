@@ -54,60 +54,61 @@ constexpr uint32_t kAxisLargerSteps = 16;
 constexpr unsigned kExactLengthBits = 15 - kLengthDroppedBits;  // a length code up to infinity's
 
 constexpr uint32_t kMaxDepthSymbols = 64;
-constexpr uint32_t kEqualSymbol = 0;  // "the reference itself", in the parting codes; up u is 1 + u
+constexpr uint32_t kEqualSymbol = 0;                     // "the reference itself", in the parting codes; up u is 1 + u
 constexpr uint32_t kReferences = 2 + 2 * kCutAncestors;  // v_s, ancestor cuts, v̂_l (for v̂_r)
 // Reference symbols: escape, 1 + reference index, or "no cut vertex on this side".
 constexpr uint32_t kEscapeSymbol = 0;
 constexpr uint32_t kAbsentSymbol = kReferences + 1;
 constexpr uint32_t kRefSymbols = kReferences + 2;
-constexpr uint32_t kRadiusClasses = 64;   // v_s's radius by half octaves (half-float exponent and top mantissa bit)
+constexpr uint32_t kRadiusClasses = 64;  // v_s's radius by half octaves (half-float exponent and top mantissa bit)
 constexpr size_t kParallelNodes = size_t(1) << 14;  // whole-model passes (fit, encode, check) below this run inline
-constexpr uint32_t kGridBits = 24;          // finer than this, positions are float bits (position_grid.h)
-constexpr uint32_t kSizeClasses = 26;      // magnitude classes of a coordinate difference, clamped
+constexpr uint32_t kGridBits = 24;                  // finer than this, positions are float bits (position_grid.h)
+constexpr uint32_t kSizeClasses = 26;               // magnitude classes of a coordinate difference, clamped
 // v_t − v_s in v_s's tangent plane is an edge of about the local edge length in any direction: the larger
 // of the two in-plane differences goes first, by quarter octaves (the flag saying which it is folded into
 // its symbol), in a table by v_s's radius; the smaller one by quarter octaves in a table by the larger's
 // step; the third, predicted on the plane, by half octaves in a table by the class of the offset the
 // plane allows (plane_context), or without a plane by the larger's class.
 constexpr uint32_t kInPlanePrecision = 2, kOffPlanePrecision = 1;
-constexpr uint32_t kLargerSteps = 64;      // quarter-octave steps of the larger difference, clamped
+constexpr uint32_t kLargerSteps = 64;  // quarter-octave steps of the larger difference, clamped
 constexpr uint32_t kPositionContexts = kRadiusClasses + kLargerSteps + 2 * kSizeClasses;
-constexpr uint32_t kFlagContexts = 10;    // v_s never refines, or the class of its radius over its mu
-constexpr uint32_t kChainContexts = 12;   // the previous field's symbol, clamped
-constexpr uint32_t kAxisContexts = 13;    // no parent cone, or the class of the angle the child leaves inside it
+constexpr uint32_t kFlagContexts = 10;   // v_s never refines, or the class of its radius over its mu
+constexpr uint32_t kChainContexts = 12;  // the previous field's symbol, clamped
+constexpr uint32_t kAxisContexts = 13;   // no parent cone, or the class of the angle the child leaves inside it
 
 // Code slots, in serialization order; [..] are the contexts.
 constexpr uint32_t kCutHeights = 12;  // v_s's height above the deepest level, clamped
 constexpr uint32_t kOwnLevels = 8;    // levels of a reference's path no earlier reference shares, clamped
 constexpr uint32_t kUpContexts = 4;   // up, clamped, for the depth step's tables
-constexpr uint32_t kLeftReferenceCounts = kReferences - 1;          // v̂_l's list: v_s and the ancestors' cuts
-constexpr uint32_t kSlotCutRef = 0;                                 // [v̂_l: its list's length; v̂_r: after each v̂_l symbol]
+constexpr uint32_t kLeftReferenceCounts = kReferences - 1;  // v̂_l's list: v_s and the ancestors' cuts
+constexpr uint32_t kSlotCutRef = 0;  // [v̂_l: its list's length; v̂_r: after each v̂_l symbol]
 constexpr uint32_t kSlotCutRight = kSlotCutRef + kLeftReferenceCounts;
-constexpr uint32_t kSlotCutUp = kSlotCutRight + kRefSymbols;        // [side][reference is v_s: 0, a leaf: 1][height][own levels]
-constexpr uint32_t kSlotCutRest = kSlotCutUp + 4 * kCutHeights * kOwnLevels;   // [side][same][height][up]
+constexpr uint32_t kSlotCutUp =
+    kSlotCutRight + kRefSymbols;  // [side][reference is v_s: 0, a leaf: 1][height][own levels]
+constexpr uint32_t kSlotCutRest = kSlotCutUp + 4 * kCutHeights * kOwnLevels;      // [side][same][height][up]
 constexpr uint32_t kSlotCutDepth = kSlotCutRest + 4 * kCutHeights * kUpContexts;  // escaped ids
-constexpr uint32_t kSlotPosition = kSlotCutDepth + 1;               // [radius class]: the larger in-plane difference
+constexpr uint32_t kSlotPosition = kSlotCutDepth + 1;  // [radius class]: the larger in-plane difference
 constexpr uint32_t kSlotPositionSmaller = kSlotPosition + kRadiusClasses;     // [the larger's step]
 constexpr uint32_t kSlotPositionThird = kSlotPositionSmaller + kLargerSteps;  // [larger's class; plane context]
-constexpr uint32_t kSlotInfoFlags = kSlotPosition + kPositionContexts;  // [flag context]
-constexpr uint32_t kSlotRadius = kSlotInfoFlags + kFlagContexts;    // [t, or u without t: height; u: t's radius symbol]
-constexpr uint32_t kSlotMu = kSlotRadius + 2 * kFlagContexts + kChainContexts;                      // [child][radius symbol]
-constexpr uint32_t kSlotDelta = kSlotMu + 2 * kChainContexts;       // [child][mu symbol]
-constexpr uint32_t kSlotAngle = kSlotDelta + 2 * kChainContexts;    // [child][parent has a cone]
-constexpr uint32_t kSlotAxis = kSlotAngle + 4;                      // [child][axis context]: the larger step
-constexpr uint32_t kSlotAxisSmaller = kSlotAxis + 2 * kAxisContexts;  // [child][the larger's step]
+constexpr uint32_t kSlotInfoFlags = kSlotPosition + kPositionContexts;        // [flag context]
+constexpr uint32_t kSlotRadius = kSlotInfoFlags + kFlagContexts;  // [t, or u without t: height; u: t's radius symbol]
+constexpr uint32_t kSlotMu = kSlotRadius + 2 * kFlagContexts + kChainContexts;  // [child][radius symbol]
+constexpr uint32_t kSlotDelta = kSlotMu + 2 * kChainContexts;                   // [child][mu symbol]
+constexpr uint32_t kSlotAngle = kSlotDelta + 2 * kChainContexts;                // [child][parent has a cone]
+constexpr uint32_t kSlotAxis = kSlotAngle + 4;                            // [child][axis context]: the larger step
+constexpr uint32_t kSlotAxisSmaller = kSlotAxis + 2 * kAxisContexts;      // [child][the larger's step]
 constexpr uint32_t kCoreSlots = kSlotAxisSmaller + 2 * kAxisLargerSteps;  // serialized for every model
 static_assert(kCoreSlots == 934, "docs/protocol.md, \"Split records\", gives the count");
 // Attributes of v_t against an origin the client holds; the first value's table by the size of the step
 // (the edge's magnitude class, or the cone angle class of the origin), each later one's by the class of the
 // one before.
-constexpr uint32_t kConeClasses = 11;    // bit_width of a cone angle, 0 .. 1022
-constexpr uint32_t kNormalClasses = 18;  // bit_width of an octahedral difference up to 2 kOctahedralMax
-constexpr uint32_t kColorClasses = 9;    // bit_width of a channel difference in -128 .. 127
+constexpr uint32_t kConeClasses = 11;         // bit_width of a cone angle, 0 .. 1022
+constexpr uint32_t kNormalClasses = 18;       // bit_width of an octahedral difference up to 2 kOctahedralMax
+constexpr uint32_t kColorClasses = 9;         // bit_width of a channel difference in -128 .. 127
 constexpr uint32_t kSlotNormal = kCoreSlots;  // [edge class; v_t's cone angle class; v_s's cone angle class]
 constexpr uint32_t kSlotNormalSecond = kSlotNormal + kSizeClasses + 2 * kConeClasses;  // [class of the first]
-constexpr uint32_t kSlotColor = kSlotNormalSecond + kNormalClasses;                // [red: edge class]
-constexpr uint32_t kSlotColorNext = kSlotColor + kSizeClasses;                     // [channel 1..3][class of the one before]
+constexpr uint32_t kSlotColor = kSlotNormalSecond + kNormalClasses;                    // [red: edge class]
+constexpr uint32_t kSlotColorNext = kSlotColor + kSizeClasses;  // [channel 1..3][class of the one before]
 constexpr uint32_t kSlotCount = kSlotColorNext + 3 * kColorClasses;
 static_assert(kSlotCount - kSlotNormal == 66 + 53, "docs/protocol.md, \"Split records\", gives the counts");
 constexpr uint8_t kHasNormals = 1, kHasColors = 2;
@@ -158,7 +159,6 @@ IntCode int_code(int64_t v, uint32_t precision) {
   const uint32_t step = ((k - precision) << precision) | uint32_t((m >> low) & ((1u << precision) - 1));
   return {2 * step - 1 + (v < 0), step, m & ((uint64_t(1) << low) - 1), low};
 }
-
 
 // The depth of the deepest common ancestor of two ids, -1 in different trees.
 int common_depth(VertexId a, VertexId b) {
@@ -248,7 +248,7 @@ struct SplitCodec::SymbolLog {
     static_assert(kInlineRawBits <= 32);
     offsets.reserve(offsets.size() + records);
     uint64_t pending = 0;
-    unsigned pending_bits = 0;  // below 32 between fields
+    unsigned pending_bits = 0;                          // below 32 between fields
     const auto put = [&](uint64_t value, unsigned n) {  // n <= 32, value below 2^n
       pending |= value << pending_bits;
       pending_bits += n;
@@ -344,11 +344,13 @@ struct Writing {
   }
 };
 
-template <class Out> void put_raw(Out& out, const IntCode& code, Part part) {
+template <class Out>
+void put_raw(Out& out, const IntCode& code, Part part) {
   if (code.raw_bits > 0) out.raw(code.raw, code.raw_bits, part);
 }
 // Returns the symbol (whose step, (symbol + 1) / 2, is the class at precision 0).
-template <class Out> uint32_t put_int(Out& out, uint32_t slot, int64_t v, Part part, uint32_t precision = 0) {
+template <class Out>
+uint32_t put_int(Out& out, uint32_t slot, int64_t v, Part part, uint32_t precision = 0) {
   const IntCode code = int_code(v, precision);
   out.symbol(slot, code.symbol, part);
   put_raw(out, code, part);
@@ -375,7 +377,8 @@ int64_t get_int(uint32_t sym, BitReader& r, const char* field, uint32_t precisio
 struct PairTables {
   uint32_t first, offset, smaller_base, smaller_tables;
 };
-template <class Out> void put_pair(Out& out, const PairTables& t, int64_t a, int64_t b, Part part) {
+template <class Out>
+void put_pair(Out& out, const PairTables& t, int64_t a, int64_t b, Part part) {
   const bool swapped = magnitude(b) > magnitude(a);
   const IntCode larger = int_code(swapped ? b : a, kInPlanePrecision);
   out.symbol(t.first, t.offset + 2 * larger.symbol + (swapped ? 1 : 0), part);
@@ -383,8 +386,8 @@ template <class Out> void put_pair(Out& out, const PairTables& t, int64_t a, int
   put_int(out, t.smaller_base + std::min(larger.step, t.smaller_tables - 1), swapped ? a : b, part, kInPlanePrecision);
 }
 // The pair after its first symbol, less the offset, was read.
-void get_pair(const std::vector<PrefixCode>& codes, const PairTables& t, uint32_t first, BitReader& r, const char* field,
-              int64_t pair[2]) {
+void get_pair(const std::vector<PrefixCode>& codes, const PairTables& t, uint32_t first, BitReader& r,
+              const char* field, int64_t pair[2]) {
   const bool swapped = first & 1;
   const int64_t larger = get_int(first >> 1, r, field, kInPlanePrecision);
   const uint32_t larger_step = ((first >> 1) + 1) / 2;
@@ -465,7 +468,8 @@ PositionFrame position_frame(const RefineInfo& s, const std::array<uint16_t, 3>&
   int64_t x = int16_t(s.cone_x), y = int16_t(s.cone_y);
   const int64_t z = kAxisSteps - std::abs(x) - std::abs(y);
   if (z < 0) {  // the lower hemisphere, folded over the diagonals
-    const int64_t fx = (x >= 0 ? 1 : -1) * (kAxisSteps - std::abs(y)), fy = (y >= 0 ? 1 : -1) * (kAxisSteps - std::abs(x));
+    const int64_t fx = (x >= 0 ? 1 : -1) * (kAxisSteps - std::abs(y)),
+                  fy = (y >= 0 ? 1 : -1) * (kAxisSteps - std::abs(x));
     x = fx, y = fy;
   }
   const int64_t n[3] = {x * steps[0], y * steps[1], z * steps[2]};
@@ -533,7 +537,8 @@ uint32_t chain_context(uint32_t previous_symbol) { return std::min(previous_symb
 // v_s's sphere is v_t's moved or v_u's, so how close v_t's radius came to its bound says about v_u's.
 constexpr uint32_t kNoRadiusSymbol = UINT32_MAX;
 uint32_t radius_slot(const SplitContext& c, uint32_t max_depth, uint32_t child, uint32_t t_radius_symbol) {
-  if (child == 0 || t_radius_symbol == kNoRadiusSymbol) return kSlotRadius + child * kFlagContexts + height_context(c, max_depth);
+  if (child == 0 || t_radius_symbol == kNoRadiusSymbol)
+    return kSlotRadius + child * kFlagContexts + height_context(c, max_depth);
   return kSlotRadius + 2 * kFlagContexts + chain_context(t_radius_symbol);
 }
 // A child's cone lies inside its parent's, so its axis moves at most about the angle left between them.
@@ -572,7 +577,8 @@ EntryCode angle_code_of(uint16_t parent, uint16_t child) {
   if (k != kNoEntry && angle_at_entry(parent, k) != child) k = kNoEntry;
   return entry_code(k, child, kConeAngleBits);
 }
-template <class Out> void put_entry(Out& out, uint32_t slot, const EntryCode& e) {
+template <class Out>
+void put_entry(Out& out, uint32_t slot, const EntryCode& e) {
   out.symbol(slot, e.symbol, refinement);
   if (e.raw_bits > 0) out.raw(e.raw, e.raw_bits, refinement);
 }
@@ -593,26 +599,32 @@ uint16_t read_length(uint32_t sym, BitReader& r, uint16_t parent, uint32_t codes
 uint16_t read_angle(uint32_t sym, BitReader& r, uint16_t parent, const char* field) {
   if (sym == kZeroSymbol) return 0;
   if (sym != kExactSymbol && parent == kNoCone) r.fail_field(field, "a lattice entry below no cone");
-  const uint32_t value = sym == kExactSymbol ? uint32_t(r.bits(kConeAngleBits, field)) : angle_at_entry(parent, read_entry(sym, r, field));
+  const uint32_t value =
+      sym == kExactSymbol ? uint32_t(r.bits(kConeAngleBits, field)) : angle_at_entry(parent, read_entry(sym, r, field));
   if (value > kConeSteps) r.fail_field(field, "cone angle out of range");
   return uint16_t(value);
 }
 // Own axes lie on the coarse grid (kAxisSnapBits) and are coded in its steps from v_s's, rounded down.
 constexpr int64_t kAxisSnap = int64_t(1) << kAxisSnapBits;
-int64_t coarse_axis(uint16_t q) { return int64_t(int16_t(q)) >= 0 ? int16_t(q) / kAxisSnap : -((kAxisSnap - 1 - int16_t(q)) / kAxisSnap); }
+int64_t coarse_axis(uint16_t q) {
+  return int64_t(int16_t(q)) >= 0 ? int16_t(q) / kAxisSnap : -((kAxisSnap - 1 - int16_t(q)) / kAxisSnap);
+}
 // Where a child's axis coordinate is coded from, in coarse steps. v_t's: v_s's. v_u's: beyond v_s's from
 // v_t's, since the merged cone's axis lies between the children's, α_s − α_t from v_t's and α_s − α_u
 // from v_u's (refinement_info.cpp, merge_cones): v_s's coordinate plus (α_s − α_u) / (α_s − α_t) of v_t's
 // offset from it, in integers (the octahedral map is nearly linear over a cone's width).
 int64_t axis_origin(const RefineInfo& s, const RefineInfo* t, const RefineInfo& v, uint16_t RefineInfo::*q) {
   const int64_t from = int16_t(s.*q);
-  if (!t || s.cone_angle == kNoCone || t->cone_angle == kNoCone || never_refines(*t)) return coarse_axis(uint16_t(from));
+  if (!t || s.cone_angle == kNoCone || t->cone_angle == kNoCone || never_refines(*t))
+    return coarse_axis(uint16_t(from));
   const int64_t num = int64_t(s.cone_angle) - v.cone_angle, den = int64_t(s.cone_angle) - t->cone_angle;
   if (den <= 0 || num < 0) return coarse_axis(uint16_t(from));
   const int64_t predicted = std::clamp<int64_t>(from + (from - int16_t(t->*q)) * num / den, -kAxisSteps, kAxisSteps);
   return coarse_axis(uint16_t(int16_t(predicted)));
 }
-bool on_coarse_grid(const RefineInfo& v) { return int16_t(v.cone_x) % kAxisSnap == 0 && int16_t(v.cone_y) % kAxisSnap == 0; }
+bool on_coarse_grid(const RefineInfo& v) {
+  return int16_t(v.cone_x) % kAxisSnap == 0 && int16_t(v.cone_y) % kAxisSnap == 0;
+}
 
 // v_t's attributes move from v_s's by more the longer the edge between them (v_t - v_s on the grid).
 uint32_t edge_class(const int64_t d[3]) {
@@ -648,8 +660,10 @@ int64_t color_step(uint8_t s, uint8_t t) { return int8_t(uint8_t(t - s)); }
 
 }  // namespace
 
-template <class Out> void SplitCodec::emit_cuts(const SplitContext& c, const SplitPayload& p, Out& out) const {
-  if (!is_vertex(p.cut_l) && !is_vertex(p.cut_r)) fail("split record", "split of " + to_string(c.vs) + " has no cut vertex");
+template <class Out>
+void SplitCodec::emit_cuts(const SplitContext& c, const SplitPayload& p, Out& out) const {
+  if (!is_vertex(p.cut_l) && !is_vertex(p.cut_r))
+    fail("split record", "split of " + to_string(c.vs) + " has no cut vertex");
   References refs = references(c);
   uint32_t ref_slot = left_reference_slot(refs);
   for (int side = 0; side < 2; ++side) {
@@ -683,7 +697,8 @@ template <class Out> void SplitCodec::emit_cuts(const SplitContext& c, const Spl
   }
 }
 
-template <class Out> void SplitCodec::emit(const SplitContext& c, const SplitPayload& p, Out& out) const {
+template <class Out>
+void SplitCodec::emit(const SplitContext& c, const SplitPayload& p, Out& out) const {
   emit_cuts(c, p, out);
   // Position of v_t against v_s's.
   const PositionFrame frame = position_frame(c.info_s, steps_, position_bits_);
@@ -703,7 +718,8 @@ template <class Out> void SplitCodec::emit(const SplitContext& c, const SplitPay
     if (!is_canonical(*info) || !(*info == as_sent(*info)))
       fail("split record", "split of " + to_string(c.vs) + ": refinement info is not as sent");
   const RefineInfo& s = c.info_s;
-  out.symbol(kSlotInfoFlags + height_context(c, max_depth_), (never_refines(p.info_t) ? 1u : 0u) | (never_refines(p.info_u) ? 2u : 0u), refinement);
+  out.symbol(kSlotInfoFlags + height_context(c, max_depth_),
+             (never_refines(p.info_t) ? 1u : 0u) | (never_refines(p.info_u) ? 2u : 0u), refinement);
   uint32_t t_radius = kNoRadiusSymbol;
   for (uint32_t k = 0; k < 2; ++k) {
     const RefineInfo& v = *child[k];
@@ -724,7 +740,8 @@ template <class Out> void SplitCodec::emit(const SplitContext& c, const SplitPay
     const uint32_t axis_slot = kSlotAxis + k * kAxisContexts + axis_context(s, v);
     if (!on_coarse_grid(v)) {  // not an axis the builder snapped: both coordinates as stored
       out.symbol(axis_slot, kFineAxisSymbol, refinement);
-      for (uint16_t q : {v.cone_x, v.cone_y}) out.raw(uint64_t(int64_t(int16_t(q)) + kAxisSteps), kAxisBits, refinement);
+      for (uint16_t q : {v.cone_x, v.cone_y})
+        out.raw(uint64_t(int64_t(int16_t(q)) + kAxisSteps), kAxisBits, refinement);
       continue;
     }
     const RefineInfo* t = k == 1 ? child[0] : nullptr;
@@ -739,7 +756,8 @@ template <class Out>
 void SplitCodec::emit_attributes(const SplitContext& c, const SplitPayload& p, uint32_t edge, Out& out) const {
   const auto refuse = [&](const char* what) { fail("split record", "split of " + to_string(c.vs) + ": " + what); };
   if (has_normals_) {
-    if (!is_canonical_normal(c.normal_s) || !is_canonical_normal(p.normal_t)) refuse("a normal encode_normal does not produce");
+    if (!is_canonical_normal(c.normal_s) || !is_canonical_normal(p.normal_t))
+      refuse("a normal encode_normal does not produce");
     int64_t d[2];
     uint16_t origin[2];
     const uint32_t normal_class = normal_origin(c, p, edge, origin);
@@ -765,7 +783,9 @@ void SplitCodec::decode_attributes(const SplitContext& c, uint32_t edge, BitRead
     uint16_t origin[2];
     const uint32_t normal_class = normal_origin(c, p, edge, origin);
     const uint32_t first = codes_[kSlotNormal + normal_class].read(r, "normal");
-    const int64_t d[2] = {get_int(first, r, "normal"), get_int(codes_[kSlotNormalSecond + size_class(first, kNormalClasses)].read(r, "normal"), r, "normal")};
+    const int64_t d[2] = {
+        get_int(first, r, "normal"),
+        get_int(codes_[kSlotNormalSecond + size_class(first, kNormalClasses)].read(r, "normal"), r, "normal")};
     if (!octahedral_unstep(origin, d, p.normal_t)) r.fail_field("normal", "off the octahedral square");
     if (!is_canonical_normal(p.normal_t)) r.fail_field("normal", "the mirror image of the canonical point on an edge");
   }
@@ -781,7 +801,8 @@ void SplitCodec::decode_attributes(const SplitContext& c, uint32_t edge, BitRead
   }
 }
 
-void SplitCodec::encode(const SplitContext& context, const SplitPayload& payload, BitWriter& w, RecordBits* bits) const {
+void SplitCodec::encode(const SplitContext& context, const SplitPayload& payload, BitWriter& w,
+                        RecordBits* bits) const {
   if (codes_.size() != kSlotCount) fail("split record", "the codec has no tables");
   Writing out{codes_, w, {}};
   emit(context, payload, out);
@@ -820,7 +841,8 @@ SplitPayload SplitCodec::decode(const SplitContext& c, BitReader& r) const {
         const int common = dr - 1 - int(up);
         const uint64_t prefix = ref.node >> (dr - common);
         const uint64_t other = ((ref.node >> (dr - common - 1)) & 1) ^ 1;
-        const int64_t rest = get_int(codes_[depth_step_slot(c, max_depth_, side, i, up)].read(r, field), r, field) + int64_t(up);
+        const int64_t rest =
+            get_int(codes_[depth_step_slot(c, max_depth_, side, i, up)].read(r, field), r, field) + int64_t(up);
         if (rest < 0 || common + 1 + rest > int64_t(max_depth_)) r.fail_field(field, "depth outside the model");
         cut = {ref.tree, (((prefix << 1) | other) << rest) | r.bits(unsigned(rest), field)};
       }
@@ -848,7 +870,8 @@ SplitPayload SplitCodec::decode(const SplitContext& c, BitReader& r) const {
   place(frame.order[0], pair[0]);
   place(frame.order[1], pair[1]);
   const int64_t predicted = frame.plane ? plane_prediction(frame, d) : 0;
-  place(frame.order[2], predicted + get_int(codes_[third_position_slot(frame, d)].read(r, "position"), r, "position", kOffPlanePrecision));
+  place(frame.order[2], predicted + get_int(codes_[third_position_slot(frame, d)].read(r, "position"), r, "position",
+                                            kOffPlanePrecision));
   const uint32_t edge = edge_class(d);
   const RefineInfo& s = c.info_s;
   const uint32_t flags = codes_[kSlotInfoFlags + height_context(c, max_depth_)].read(r, "info flags");
@@ -933,7 +956,8 @@ SplitCodec SplitCodec::fit(const ModelData& model, std::span<const uint32_t> pos
   codec.grid_step_ = largest_grid_step(model, position_bits);
   codec.has_normals_ = !model.normals.empty();
   codec.has_colors_ = !model.colors.empty();
-  for (size_t n = 0; n < model.node_count(); ++n) codec.max_depth_ = std::max<uint32_t>(codec.max_depth_, uint32_t(model.id(uint32_t(n)).depth()));
+  for (size_t n = 0; n < model.node_count(); ++n)
+    codec.max_depth_ = std::max<uint32_t>(codec.max_depth_, uint32_t(model.id(uint32_t(n)).depth()));
   // One fit: every choice the coding makes is canonical, so no symbol depends on the tables.
   struct Range {
     Counts counts;
@@ -944,7 +968,8 @@ SplitCodec SplitCodec::fit(const ModelData& model, std::span<const uint32_t> pos
     part.counts.counts.assign(kAllSymbols, 0);
     Fitting out{part.counts, logs ? &part.log : nullptr};
     for (uint32_t node = uint32_t(begin); node < end; ++node) {
-      if (!model.is_leaf(node)) codec.emit(split_context(model, positions, node), split_payload(model, positions, node), out);
+      if (!model.is_leaf(node))
+        codec.emit(split_context(model, positions, node), split_payload(model, positions, node), out);
       if (logs) part.log.end_record();
     }
     return part;
@@ -1061,7 +1086,8 @@ SplitPayload split_payload(const ModelData& model, std::span<const uint32_t> pos
 
 std::array<uint16_t, 3> grid_step_ratios(const ModelData& model) {
   double extent[3], largest = 0;
-  for (int i = 0; i < 3; ++i) largest = std::max(largest, extent[i] = double(model.bbox_max[i]) - double(model.bbox_min[i]));
+  for (int i = 0; i < 3; ++i)
+    largest = std::max(largest, extent[i] = double(model.bbox_max[i]) - double(model.bbox_min[i]));
   std::array<uint16_t, 3> steps{};
   for (int i = 0; i < 3; ++i) steps[i] = largest > 0 ? uint16_t(std::lround(65535 * extent[i] / largest)) : 0;
   return steps;
@@ -1133,7 +1159,8 @@ SplitCodec check_records(const std::string& where, const ModelData& model, std::
   if (table_reader.bits_left() >= 8) fail(where, "split tables: bytes after the tables");
   uint32_t depth = 0;
   for (uint64_t id : model.node_id) depth = std::max(depth, uint32_t(63 - std::countl_zero(id)));
-  if (codec.root_count() != model.root_count || codec.max_depth() != depth || !valid_position_bits(codec.position_bits()))
+  if (codec.root_count() != model.root_count || codec.max_depth() != depth ||
+      !valid_position_bits(codec.position_bits()))
     fail(where, "split tables: root count, depth or position bits do not match the model");
   if (codec.has_normals() != !model.normals.empty() || codec.has_colors() != !model.colors.empty())
     fail(where, "split tables: the normals and colors they carry are not the model's");
@@ -1145,9 +1172,11 @@ SplitCodec check_records(const std::string& where, const ModelData& model, std::
   const std::vector<uint32_t> q = grid_positions(model, codec.position_bits());
   map_bounded_ranges(split_bounds(model), [&](size_t begin, size_t end) {
     for (uint32_t node = uint32_t(begin); node < end; ++node) {
-      if (offsets[node + 1] < offsets[node]) fail(where, "split record offsets: not in order at node " + std::to_string(node));
+      if (offsets[node + 1] < offsets[node])
+        fail(where, "split record offsets: not in order at node " + std::to_string(node));
       if (model.is_leaf(node)) {
-        if (offsets[node + 1] != offsets[node]) fail(where, "split records: leaf " + std::to_string(node) + " has a record");
+        if (offsets[node + 1] != offsets[node])
+          fail(where, "split records: leaf " + std::to_string(node) + " has a record");
         continue;
       }
       BitReader r(records, offsets[node], offsets[node + 1], where + ": split record of node " + std::to_string(node));

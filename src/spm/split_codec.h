@@ -11,9 +11,9 @@
 #include <vector>
 
 #include "common/bit_stream.h"
+#include "common/prefix_code.h"
 #include "spm/hierarchy.h"
 #include "spm/position_grid.h"
-#include "common/prefix_code.h"
 #include "spm/refine_info.h"
 #include "spm/vertex_id.h"
 
@@ -22,7 +22,8 @@ namespace pms {
 // How many of v_s's nearest ancestors lend their cut vertices as references for v_s's own.
 constexpr int kCutAncestors = 5;
 
-template <size_t N> constexpr std::array<VertexId, N> no_vertices() {
+template <size_t N>
+constexpr std::array<VertexId, N> no_vertices() {
   std::array<VertexId, N> ids;
   ids.fill(kNoVertex);
   return ids;
@@ -112,14 +113,16 @@ class SplitCodec {
   // Every slot's code words in one array, at kFirstSymbol[slot] + symbol (split_codec.cpp): the word in
   // stream order from the lowest bit, its length from bit 16.
   std::vector<uint32_t> code_words() const;
-  template <class Out> void emit(const SplitContext& context, const SplitPayload& payload, Out& out) const;
+  template <class Out>
+  void emit(const SplitContext& context, const SplitPayload& payload, Out& out) const;
   // The cut vertices (topology).
-  template <class Out> void emit_cuts(const SplitContext& context, const SplitPayload& payload, Out& out) const;
+  template <class Out>
+  void emit_cuts(const SplitContext& context, const SplitPayload& payload, Out& out) const;
 
   // Whether the tables of `slot` are serialized: every core slot, an attribute's only when the model has it.
   bool carried(uint32_t slot) const;
-  template <class Out> void emit_attributes(const SplitContext& context, const SplitPayload& payload, uint32_t edge,
-                                           Out& out) const;
+  template <class Out>
+  void emit_attributes(const SplitContext& context, const SplitPayload& payload, uint32_t edge, Out& out) const;
   void decode_attributes(const SplitContext& context, uint32_t edge, BitReader& r, SplitPayload& payload) const;
 
   uint32_t root_count_ = 0, max_depth_ = 0, position_bits_ = 0;
@@ -127,7 +130,7 @@ class SplitCodec {
   std::array<uint16_t, 3> steps_{};  // each axis's grid step over the largest, in 1/65535
   float grid_step_ = 0;              // the largest grid step over the model's scale; 0 without a grid (serialized,
                                      // read by no field since nested info: docs/protocol.md)
-  std::vector<PrefixCode> codes_;  // one per slot (split_codec.cpp)
+  std::vector<PrefixCode> codes_;    // one per slot (split_codec.cpp)
 };
 
 // The grid of `position_bits` per axis over the model's box, and the 3 quantized coordinates per node on

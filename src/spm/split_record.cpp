@@ -18,7 +18,8 @@ SplitRecord split_record(const ModelData& model, uint32_t node) {
   if (t + size_t(1) >= n) fail("model", "node " + std::to_string(node) + ": child index out of range");
   SplitRecord split;
   split.vs = model.id(node);
-  for (auto [cut, index] : {std::pair{&split.cut_l, model.cut_left[node]}, std::pair{&split.cut_r, model.cut_right[node]}}) {
+  for (auto [cut, index] :
+       {std::pair{&split.cut_l, model.cut_left[node]}, std::pair{&split.cut_r, model.cut_right[node]}}) {
     if (index == kNone) continue;
     if (index >= n) fail("model", "node " + std::to_string(node) + ": cut vertex index out of range");
     *cut = model.id(index);

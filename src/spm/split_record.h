@@ -16,9 +16,9 @@ struct SplitRecord {
   VertexId cut_r = kNoVertex;  // at least one is present
   float position_t[3] = {0, 0, 0};
   RefineInfo info_t{}, info_u{};
-  bool has_normal = false;     // required when the hierarchy keeps normals
+  bool has_normal = false;  // required when the hierarchy keeps normals
   float normal_t[3] = {0, 0, 0};
-  bool has_color = false;      // required when the hierarchy keeps colors
+  bool has_color = false;  // required when the hierarchy keeps colors
   uint8_t color_t[4] = {0, 0, 0, 0};
 };
 

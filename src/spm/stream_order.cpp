@@ -5,8 +5,8 @@
 
 #include "common/error.h"
 #include "spm/hierarchy.h"
-#include "spm/split_record.h"
 #include "spm/selective_mesh.h"
+#include "spm/split_record.h"
 #include "spm/vertex_hierarchy.h"
 
 namespace pms {

@@ -6,8 +6,8 @@
 #include "spm/hierarchy.h"
 #include "spm/refine_info.h"
 #include "spm/split_record.h"
-#include "spm/vertex_id.h"
 #include "spm/vertex_hierarchy.h"
+#include "spm/vertex_id.h"
 
 namespace pms {
 namespace {
@@ -119,8 +119,8 @@ VertexHierarchy VertexHierarchy::from_model(const ModelData& model) {
   VertexHierarchy h(normals, colors);
   h.reserve(model.root_count);
   for (uint32_t r = 0; r < model.root_count; ++r)
-    h.add_root(model.id(r), &model.position[3 * size_t(r)], model.refine[r], normals ? &model.normals[3 * size_t(r)] : nullptr,
-               colors ? &model.colors[4 * size_t(r)] : nullptr);
+    h.add_root(model.id(r), &model.position[3 * size_t(r)], model.refine[r],
+               normals ? &model.normals[3 * size_t(r)] : nullptr, colors ? &model.colors[4 * size_t(r)] : nullptr);
   return h;
 }
 

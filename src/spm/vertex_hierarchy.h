@@ -57,8 +57,8 @@ class VertexHierarchy {
   const uint8_t* color(uint32_t slot) const { return &color_[4 * size_t(slot)]; }
 
  private:
-  uint32_t push_slot(VertexId id, const float position[3], const RefineInfo& info, uint32_t parent,
-                     const float* normal, const uint8_t* color);
+  uint32_t push_slot(VertexId id, const float position[3], const RefineInfo& info, uint32_t parent, const float* normal,
+                     const uint8_t* color);
   void insert(uint32_t slot);
   void grow_table();
 

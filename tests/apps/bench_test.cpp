@@ -78,7 +78,7 @@ TEST(OpenMeshPm, CountsAndHierarchyHeight) {
   EXPECT_EQ(s.base_vertices, 4u);
   EXPECT_EQ(s.base_faces, 1u);
   EXPECT_EQ(s.details, 3u);
-  EXPECT_EQ(s.max_depth, 2u);  // vertex 0's tree: 0 -> {0, 4}, then 4 -> {4, 5}
+  EXPECT_EQ(s.max_depth, 2u);               // vertex 0's tree: 0 -> {0, 4}, then 4 -> {4, 5}
   EXPECT_EQ(s.isolated_base_vertices, 1u);  // vertex 3: in no face, never split
   EXPECT_EQ(s.tree_id_bits, 2u);            // ceil(log2 4)
 }
@@ -94,7 +94,8 @@ TEST(OpenMeshPm, ChainOfSplitsOnOneVertexDeepensEveryTime) {
 TEST(OpenMeshPm, ReadsFromFile) {
   const auto path = test::temp_dir() / "small.pm";
   const auto bytes = small_pm();
-  std::ofstream(path, std::ios::binary).write(reinterpret_cast<const char*>(bytes.data()), std::streamsize(bytes.size()));
+  std::ofstream(path, std::ios::binary)
+      .write(reinterpret_cast<const char*>(bytes.data()), std::streamsize(bytes.size()));
   EXPECT_EQ(read_openmesh_pm(path.string()).max_depth, 2u);
   EXPECT_THROW(read_openmesh_pm((test::temp_dir() / "missing.pm").string()), Error);
 }
@@ -152,7 +153,8 @@ std::string grid_off(int n) {
 // Checks the layout assumptions against the real tool: every vertex is a root or a split, and the
 // height agrees with what mkbalancedpm prints itself.
 TEST(OpenMeshPm, ReadsWhatMkBalancedPmWrites) {
-  if (find_program("OpenMesh-mkbalancedpm").empty()) GTEST_SKIP() << "OpenMesh-mkbalancedpm not installed (libopenmesh-apps)";
+  if (find_program("OpenMesh-mkbalancedpm").empty())
+    GTEST_SKIP() << "OpenMesh-mkbalancedpm not installed (libopenmesh-apps)";
   const auto dir = test::temp_dir();
   const int n = 12;
   write_text_file(dir / "grid.off", grid_off(n));
@@ -308,7 +310,8 @@ TEST(ReportTable, NumberFormats) {
 
 Plot two_axis_plot() {
   Plot plot{"title \"q\"", "faces", "seconds", "MB", true, true, {}};
-  plot.series = {{"seconds", {1e5, 5e5}, {0.5, 2.5}, false}, {"empty", {}, {}, false}, {"MB", {1e5, 5e5}, {40, 180}, true}};
+  plot.series = {
+      {"seconds", {1e5, 5e5}, {0.5, 2.5}, false}, {"empty", {}, {}, false}, {"MB", {1e5, 5e5}, {40, 180}, true}};
   return plot;
 }
 
@@ -412,7 +415,10 @@ TEST(BenchCommand, RejectsUnknownGroupsAndMissingSharedDir) {
   const auto out = test::temp_dir() / "out";
   const ChildResult unknown = run_child({PMSTREAM_BINARY, "bench", "--only", "build,nope", "--out", out.string()});
   EXPECT_EQ(unknown.exit_code, 1);
-  EXPECT_NE(unknown.err.find("unknown experiment group 'nope' (known: build, refine, sender, receiver, multilevel, soak, dag)"), std::string::npos) << unknown.err;
+  EXPECT_NE(unknown.err.find(
+                "unknown experiment group 'nope' (known: build, refine, sender, receiver, multilevel, soak, dag)"),
+            std::string::npos)
+      << unknown.err;
   EXPECT_FALSE(std::filesystem::exists(out));  // refused before creating anything
   const ChildResult shared =
       run_child({PMSTREAM_BINARY, "bench", "--shared", (test::temp_dir() / "none").string(), "--out", out.string()});

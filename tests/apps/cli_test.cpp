@@ -1,8 +1,8 @@
 // The `pmstream` binary end to end (docs/cli.md contracts): build/info/refine on a generated mesh,
 // JSON fields, exact reconstruction through files, and one-line errors with a non-zero exit code.
 #include <gtest/gtest.h>
-#include <nlohmann/json.hpp>
 #include <sys/wait.h>
+#include <nlohmann/json.hpp>
 
 #include <array>
 #include <cmath>
@@ -83,7 +83,8 @@ TEST(Cli, DemoStreamsTheUsersOwnModel) {
   ASSERT_EQ(again.exit_code, 0) << again.err;
   EXPECT_NE(again.out.find("using the cached build"), std::string::npos) << again.out;
 
-  const RunResult served = run("demo --model " + (dir / "demo" / "torus.pms").string() + " --out " + out + " --frames 2");
+  const RunResult served =
+      run("demo --model " + (dir / "demo" / "torus.pms").string() + " --out " + out + " --frames 2");
   ASSERT_EQ(served.exit_code, 0) << served.err;
   EXPECT_EQ(served.out.find("building"), std::string::npos) << "a .pms is streamed as it is";
 

@@ -77,7 +77,8 @@ TEST(MultilevelCli, BuildInfoLevelInBothForms) {
     EXPECT_EQ(morphed.face_count(), input.face_count()) << "a geomorph has the finer level's triangles";
     EXPECT_EQ(morphed.has_colors(), !ascii);
   }
-  const test::CliRun beyond = test::run_pmstream("multilevel level " + (dir / "torus.pml").string() + " --level 6 -o x.ply");
+  const test::CliRun beyond =
+      test::run_pmstream("multilevel level " + (dir / "torus.pml").string() + " --level 6 -o x.ply");
   EXPECT_NE(beyond.exit_code, 0);
   EXPECT_NE(beyond.err.find("level 6 is outside 0..5"), std::string::npos) << beyond.err;
 }
@@ -89,8 +90,8 @@ TEST(MultilevelCli, GeomorphRepresentativesOfABuiltInModel) {
   uint64_t kept = 0;
   for (const bool ascii : {false, true}) {
     const std::string out = (dir / (ascii ? "terrain.txt" : "terrain.pml")).string();
-    const test::CliRun build =
-        test::run_pmstream("multilevel build terrain:2000 -o " + out + " --levels 6 --json" + (ascii ? " --ascii" : ""));
+    const test::CliRun build = test::run_pmstream("multilevel build terrain:2000 -o " + out + " --levels 6 --json" +
+                                                  (ascii ? " --ascii" : ""));
     ASSERT_EQ(build.exit_code, 0) << build.err;
     const auto b = nlohmann::json::parse(build.out);
     if (!ascii) {
@@ -109,7 +110,8 @@ TEST(MultilevelCli, GeomorphRepresentativesOfABuiltInModel) {
 TEST(MultilevelCli, LevelOfARegion) {
   const auto dir = test::temp_dir();
   const Mesh input = make_torus(30, 12, 2.0f, 0.5f);
-  const std::string ply = (dir / "torus.ply").string(), out = (dir / "torus.pml").string(), lod = (dir / "r.ply").string();
+  const std::string ply = (dir / "torus.ply").string(), out = (dir / "torus.pml").string(),
+                    lod = (dir / "r.ply").string();
   save_ply(input, ply);
   ASSERT_EQ(test::run_pmstream("multilevel build " + ply + " -o " + out + " --levels 6").exit_code, 0);
   const auto faces = [&](const std::string& args) {
@@ -136,7 +138,8 @@ TEST(MultilevelCli, GridClusteringInput) {
   const auto dir = test::temp_dir();
   const std::string ply = (dir / "torus.ply").string(), out = (dir / "c.txt").string();
   save_ply(make_torus(40, 20, 2.0f, 0.5f), ply);
-  const test::CliRun build = test::run_pmstream("multilevel build " + ply + " -o " + out + " --cluster grid:12,4 --ascii --json");
+  const test::CliRun build =
+      test::run_pmstream("multilevel build " + ply + " -o " + out + " --cluster grid:12,4 --ascii --json");
   ASSERT_EQ(build.exit_code, 0) << build.err;
   const auto b = nlohmann::json::parse(build.out);
   EXPECT_EQ(b["levels"], 3);
@@ -154,8 +157,8 @@ TEST(MultilevelCli, GridClusteringInput) {
 TEST(MultilevelCli, ClusteringFileInput) {
   const auto dir = test::temp_dir();
   Mesh mesh;
-  const float xy[10][2] = {{-3, 3}, {3, 3}, {-3, -3}, {3, -3}, {-2.3f, 3}, {-3, 2.3f}, {-2.3f, 2.3f},
-                           {2.3f, 3}, {2.3f, 2.3f}, {3, 2.3f}};
+  const float xy[10][2] = {{-3, 3},    {3, 3},        {-3, -3},  {3, -3},      {-2.3f, 3},
+                           {-3, 2.3f}, {-2.3f, 2.3f}, {2.3f, 3}, {2.3f, 2.3f}, {3, 2.3f}};
   for (const auto& p : xy) mesh.positions.insert(mesh.positions.end(), {p[0], p[1], 0});
   mesh.indices = {6, 2, 8, 3, 8, 2, 4, 6, 7, 5, 2, 6, 6, 4, 5, 4, 0, 5, 8, 3, 9, 9, 1, 8, 7, 8, 1, 8, 7, 6};
   const std::string ply = (dir / "fig12.ply").string(), json = (dir / "fig12.json").string();
@@ -174,7 +177,8 @@ TEST(MultilevelCli, ClusteringFileInput) {
     out << nlohmann::json{{"clusterings", clusterings}}.dump();
   }
   const std::string out = (dir / "fig12.txt").string();
-  const test::CliRun build = test::run_pmstream("multilevel build " + ply + " -o " + out + " --cluster " + json + " --ascii --json");
+  const test::CliRun build =
+      test::run_pmstream("multilevel build " + ply + " -o " + out + " --cluster " + json + " --ascii --json");
   ASSERT_EQ(build.exit_code, 0) << build.err;
   const auto b = nlohmann::json::parse(build.out);
   EXPECT_EQ(b["levels"], 3);
@@ -220,7 +224,8 @@ TEST(MultilevelCli, TextureCoordinatesReachTheLevelPly) {
     for (size_t v = 0; v < got.vertex_count(); ++v)
       for (int k = 0; k < 2; ++k) ASSERT_NEAR(got.texcoords[2 * v + k], uv(&got.positions[3 * v], k), 1e-6f) << level;
   }
-  const test::CliRun ascii = test::run_pmstream("multilevel build " + ply + " -o " + (dir / "textured.txt").string() + " --ascii");
+  const test::CliRun ascii =
+      test::run_pmstream("multilevel build " + ply + " -o " + (dir / "textured.txt").string() + " --ascii");
   ASSERT_EQ(ascii.exit_code, 0) << ascii.err;
   EXPECT_NE(ascii.out.find("no normals, colours or texture coordinates"), std::string::npos) << ascii.out;
   const test::CliRun pms = test::run_pmstream("build " + ply + " -o " + (dir / "textured.pms").string() + " --json");

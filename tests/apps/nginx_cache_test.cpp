@@ -3,12 +3,12 @@
 // (`pmstream stream --mode receiver`) flying bunny through it. A second client on the same path is served
 // by the cache alone; ten clients on overlapping stretches of one orbit report the hit rate of each fetch
 // policy (docs/protocol.md, "Receiver-driven client").
-#include <utility>  // before asio with C++20 (docs/architecture.md, "Stack")
-#include <boost/asio.hpp>
 #include <gtest/gtest.h>
 #include <pwd.h>
 #include <signal.h>
 #include <unistd.h>
+#include <boost/asio.hpp>
+#include <utility>  // before asio with C++20 (docs/architecture.md, "Stack")
 
 #include <algorithm>
 #include <atomic>
@@ -126,9 +126,9 @@ struct Flight {
 Flight fly(const std::string& server, const fs::path& path, const std::string& fetch_flags, const fs::path& dir,
            const std::string& name) {
   const fs::path mesh = dir / (name + ".ply");
-  const test::CliRun run = test::run_pmstream("stream --mode receiver --server " + server + " --model bunny --path " +
-                                              path.string() + " " + fetch_flags + " --save-mesh " + mesh.string() +
-                                              " --json");
+  const test::CliRun run =
+      test::run_pmstream("stream --mode receiver --server " + server + " --model bunny --path " + path.string() + " " +
+                         fetch_flags + " --save-mesh " + mesh.string() + " --json");
   if (run.exit_code != 0) fail("pmstream stream", run.err);
   Flight flight{nlohmann::json::parse(run.out), slurp(mesh)};
   for (const nlohmann::json& frame : flight.report["frames"]) flight.rounds += frame["rounds"].get<uint64_t>();
@@ -150,7 +150,8 @@ class NginxCache : public ::testing::Test {
     pms_ = dir_ / "bunny.pms";
     const test::CliRun build = test::run_pmstream("build " + model.string() + " -o " + pms_.string());
     ASSERT_EQ(build.exit_code, 0) << build.err;
-    origin_ = std::make_unique<ServeChild>(PMSTREAM_BINARY, std::vector<std::string>{pms_.string(), "--http-port", "0"});
+    origin_ =
+        std::make_unique<ServeChild>(PMSTREAM_BINARY, std::vector<std::string>{pms_.string(), "--http-port", "0"});
     origin_port_ = origin_->listening()["http_port"].get<uint16_t>();
   }
 
@@ -224,19 +225,18 @@ TEST_F(NginxCache, TenClientsOnDifferentPathsShareTheCache) {
       return origin_after[counter].get<uint64_t>() - origin_before[counter].get<uint64_t>();
     };
     EXPECT_EQ(origin("split_requests"), requests - hits) << "each answer not from the cache is one origin request";
-    std::printf("nginx, %zu clients, bunny orbit stretches, %s: %llu split GETs, %llu HIT (hit rate %.1f %%); "
-                "origin: %llu split requests, %llu splits, %llu B out; per client: %.0f splits, %.0f B down "
-                "(%.0f payload), %.0f B up, %.1f GETs, %.1f rounds\n",
-                clients, fetch.c_str(), (unsigned long long)requests, (unsigned long long)hits,
-                100.0 * double(hits) / double(std::max<uint64_t>(requests, 1)),
-                (unsigned long long)origin("split_requests"), (unsigned long long)origin("splits_served"),
-                (unsigned long long)origin("bytes_out"),
-                double(splits) / double(clients), double(down) / double(clients), double(payload) / double(clients),
-                double(up) / double(clients), double(requests) / double(clients), double(rounds) / double(clients));
+    std::printf(
+        "nginx, %zu clients, bunny orbit stretches, %s: %llu split GETs, %llu HIT (hit rate %.1f %%); "
+        "origin: %llu split requests, %llu splits, %llu B out; per client: %.0f splits, %.0f B down "
+        "(%.0f payload), %.0f B up, %.1f GETs, %.1f rounds\n",
+        clients, fetch.c_str(), (unsigned long long)requests, (unsigned long long)hits,
+        100.0 * double(hits) / double(std::max<uint64_t>(requests, 1)), (unsigned long long)origin("split_requests"),
+        (unsigned long long)origin("splits_served"), (unsigned long long)origin("bytes_out"),
+        double(splits) / double(clients), double(down) / double(clients), double(payload) / double(clients),
+        double(up) / double(clients), double(requests) / double(clients), double(rounds) / double(clients));
     std::fflush(stdout);
   }
 }
-
 
 // The multilevel mode's levels are immutable resources too: a second viewer behind the cache loads every
 // level without the origin seeing a request, and ends on the same mesh.
@@ -250,9 +250,9 @@ TEST_F(NginxCache, MultilevelLevelsComeFromTheCacheTheSecondTime) {
   const fs::path path = make_path("zoom", 10);
   const auto fly_levels = [&](const std::string& name) {
     const fs::path mesh = dir_ / (name + ".ply");
-    const test::CliRun run = test::run_pmstream("stream --mode multilevel --server " + nginx.url() +
-                                                " --model bunnyml --path " + path.string() + " --save-mesh " +
-                                                mesh.string() + " --json");
+    const test::CliRun run =
+        test::run_pmstream("stream --mode multilevel --server " + nginx.url() + " --model bunnyml --path " +
+                           path.string() + " --save-mesh " + mesh.string() + " --json");
     if (run.exit_code != 0) fail("pmstream stream", run.err);
     return Flight{nlohmann::json::parse(run.out), slurp(mesh)};
   };

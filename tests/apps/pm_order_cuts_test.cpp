@@ -12,10 +12,10 @@
 #include "apps/bench/split_record_bits.h"
 #include "builder/build.h"
 #include "io/mesh.h"
+#include "record_bits_model.h"
 #include "spm/hierarchy.h"
 #include "spm/pms_file.h"
 #include "spm/split_codec.h"
-#include "record_bits_model.h"
 #include "test_support.h"
 
 namespace pms::app {
@@ -35,7 +35,8 @@ void measure(const char* name, const ModelData& model) {
   const size_t n = model.node_count();
   std::vector<uint64_t> split_time(n, UINT64_MAX);
   for (size_t i = 0; i < model.split_order.size(); ++i) split_time[model.split_order[i]] = i;
-  std::vector<uint32_t> cut_left(model.cut_left.begin(), model.cut_left.end()), cut_right(model.cut_right.begin(), model.cut_right.end());
+  std::vector<uint32_t> cut_left(model.cut_left.begin(), model.cut_left.end()),
+      cut_right(model.cut_right.begin(), model.cut_right.end());
   uint64_t levels = 0, cuts = 0;
   for (uint32_t node = 0; node < n; ++node) {
     if (model.is_leaf(node)) continue;
@@ -60,16 +61,15 @@ void measure(const char* name, const ModelData& model) {
     const RecordBitsReport whole = record_bits(*m, codec, q, m->split_order);
     const RecordBitsReport view = record_bits(*m, codec, q, close);
     std::printf("%s, %s cut vertices: topology %.2f bits per split (whole model), %.2f (E5 close view)\n", name,
-                m == &model ? "fundamental" : "PM-order", whole.per_split(whole.bits.topology), view.per_split(view.bits.topology));
+                m == &model ? "fundamental" : "PM-order", whole.per_split(whole.bits.topology),
+                view.per_split(view.bits.topology));
   }
   std::printf("%s: the PM-order cut vertex is %.2f levels above the fundamental one on average\n", name,
               double(levels) / double(cuts));
   EXPECT_GT(cuts, 0u);
 }
 
-TEST(PmOrderCuts, TopologyBitsAgainstFundamentalCuts) {
-  PMS_MEASURE_RECORD_BITS_MODEL(measure);
-}
+TEST(PmOrderCuts, TopologyBitsAgainstFundamentalCuts) { PMS_MEASURE_RECORD_BITS_MODEL(measure); }
 
 }  // namespace
 }  // namespace pms::app

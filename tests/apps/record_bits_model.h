@@ -14,14 +14,14 @@
 #define PMS_MEASURE_RECORD_BITS_MODEL(measure) PMS_MEASURE_RECORD_BITS_MODEL_BUILT(measure, ::pms::BuildOptions{})
 
 // The same with the bunny built with `options` (the file, when given, is measured as it is).
-#define PMS_MEASURE_RECORD_BITS_MODEL_BUILT(measure, options)    \
-  if (const char* path = std::getenv("PMSTREAM_RECORD_BITS_PMS")) { \
-    const auto file = ::pms::PmsFile::open(path);                \
-    measure(path, file->model());                                \
-    return;                                                      \
-  }                                                              \
-  PMS_REQUIRE_SHARED_MODEL(bunny_path, "bunny.ply.xz");          \
-  ::pms::Mesh mesh = ::pms::load_mesh(bunny_path.string());      \
-  ::pms::clean_mesh(mesh);                                       \
+#define PMS_MEASURE_RECORD_BITS_MODEL_BUILT(measure, options)                        \
+  if (const char* path = std::getenv("PMSTREAM_RECORD_BITS_PMS")) {                  \
+    const auto file = ::pms::PmsFile::open(path);                                    \
+    measure(path, file->model());                                                    \
+    return;                                                                          \
+  }                                                                                  \
+  PMS_REQUIRE_SHARED_MODEL(bunny_path, "bunny.ply.xz");                              \
+  ::pms::Mesh mesh = ::pms::load_mesh(bunny_path.string());                          \
+  ::pms::clean_mesh(mesh);                                                           \
   const ::pms::Hierarchy h = ::pms::build_progressive_mesh(mesh, options).hierarchy; \
   measure("bunny", ::pms::model_of(h))

@@ -22,9 +22,9 @@
 #include "apps/bench/bench_refine.h"
 #include "apps/bench/split_record_bits.h"
 #include "common/prefix_code.h"
-#include "spm/split_codec.h"
 #include "record_bits_model.h"
 #include "spm/adapt.h"
+#include "spm/split_codec.h"
 
 namespace pms::app {
 namespace {
@@ -42,10 +42,10 @@ constexpr uint32_t kOctaves = 12;
 struct Variant {
   const char* name;
   Lattice per_octave;
-  int inherit_steps;    // a child takes its parent's axis when that costs at most this many lattice steps
-                        // over mu, delta and angle together; -1: never
-  bool radius_shift;    // v_t's radius against r(v_s) - |p_t - p_s| (the grid's lower bound), not r(v_s)
-  uint32_t axis_drop;   // an own axis snapped to octahedral coordinates that are multiples of 2^axis_drop
+  int inherit_steps;   // a child takes its parent's axis when that costs at most this many lattice steps
+                       // over mu, delta and angle together; -1: never
+  bool radius_shift;   // v_t's radius against r(v_s) - |p_t - p_s| (the grid's lower bound), not r(v_s)
+  uint32_t axis_drop;  // an own axis snapped to octahedral coordinates that are multiples of 2^axis_drop
 };
 
 // What one child's nested info is, field by field: the lattice entry or an escape (Lattice above).
@@ -94,10 +94,13 @@ Pick lattice_angle(uint32_t needed, uint16_t base, uint32_t per_octave) {
 double angle_between(const float a[3], const float b[3]) {
   const double cx = double(a[1]) * b[2] - double(a[2]) * b[1], cy = double(a[2]) * b[0] - double(a[0]) * b[2],
                cz = double(a[0]) * b[1] - double(a[1]) * b[0];
-  return std::atan2(std::sqrt(cx * cx + cy * cy + cz * cz), double(a[0]) * b[0] + double(a[1]) * b[1] + double(a[2]) * b[2]);
+  return std::atan2(std::sqrt(cx * cx + cy * cy + cz * cz),
+                    double(a[0]) * b[0] + double(a[1]) * b[1] + double(a[2]) * b[2]);
 }
 
-float angle_to(const RefineInfo& info, const float axis[3]) { return float(angle_between(dequantize_refine(info, 1).axis, axis)); }
+float angle_to(const RefineInfo& info, const float axis[3]) {
+  return float(angle_between(dequantize_refine(info, 1).axis, axis));
+}
 
 // `own` with its axis moved to the nearest point of the coarser octahedral grid: the cone widened by the
 // move and (mu, delta) re-expressed about the new axis (a vector with perpendicular part <= mu and axial
@@ -116,7 +119,9 @@ Snapped snap_axis(const RefineInfo& own, uint32_t drop) {
   for (int i = 0; i < 4; ++i) {
     RefineInfo c = own;
     const int x = int16_t(own.cone_x), y = int16_t(own.cone_y);
-    const auto snap = [&](int v, bool up) { return std::clamp(int(std::floor(double(v) / step)) * step + (up ? step : 0), -limit, limit); };
+    const auto snap = [&](int v, bool up) {
+      return std::clamp(int(std::floor(double(v) / step)) * step + (up ? step : 0), -limit, limit);
+    };
     c.cone_x = uint16_t(int16_t(snap(x, i & 1)));
     c.cone_y = uint16_t(int16_t(snap(y, i & 2)));
     const double e = angle_to(c, b.axis);
@@ -177,28 +182,34 @@ Nested nest(const ModelData& model, std::span<const uint32_t> q, const Variant& 
     const RefineInfo orig = model.refine[n];
     const RefineBounds bp = dequantize_refine(parent, 1), bn = dequantize_refine(orig, 1);
     double radius_base = rel(parent.radius);
-    if (v.radius_shift && n == model.first_child[p]) radius_base = std::max(0.0, radius_base - shift_lower_bound(model, q, p, n));
+    if (v.radius_shift && n == model.first_child[p])
+      radius_base = std::max(0.0, radius_base - shift_lower_bound(model, q, p, n));
     const Pick radius = lattice_length(rel(own.radius), length_up(radius_base), o.radius);
     // Own axis.
     Pick mu = lattice_length(snapped.mu, parent.mu, o.mu), delta = lattice_length(snapped.delta, parent.delta, o.delta);
-    Pick angle = own.cone_angle == kNoCone ? Pick{e.angle, kNoCone} : lattice_angle(own.cone_angle, parent.cone_angle, o.angle);
+    Pick angle =
+        own.cone_angle == kNoCone ? Pick{e.angle, kNoCone} : lattice_angle(own.cone_angle, parent.cone_angle, o.angle);
     bool inherit = false;
     if (v.inherit_steps >= 0 && parent.cone_angle != kNoCone && orig.cone_angle != kNoCone) {
       const double theta = angle_between(bn.axis, bp.axis), s = std::sin(theta), c = std::abs(std::cos(theta));
       const double mu_about = std::max(rel(orig.mu), std::min(rel(orig.mu) + rel(orig.delta) * s, rel(parent.mu)));
-      const double delta_about = std::max(rel(orig.delta), std::min(rel(orig.delta) * c + rel(orig.mu) * s, rel(parent.delta)));
+      const double delta_about =
+          std::max(rel(orig.delta), std::min(rel(orig.delta) * c + rel(orig.mu) * s, rel(parent.delta)));
       auto needed = uint32_t(std::ceil((theta + bn.cone_angle + 1e-6) / kConeUnit));
       needed = std::max<uint32_t>(std::min<uint32_t>(needed, parent.cone_angle), orig.cone_angle);
-      const Pick mu_i = lattice_length(mu_about, parent.mu, o.mu), delta_i = lattice_length(delta_about, parent.delta, o.delta);
+      const Pick mu_i = lattice_length(mu_about, parent.mu, o.mu),
+                 delta_i = lattice_length(delta_about, parent.delta, o.delta);
       const Pick angle_i = lattice_angle(needed, parent.cone_angle, o.angle);
-      const int cost = int(mu.symbol + delta.symbol + angle.symbol) - int(mu_i.symbol + delta_i.symbol + angle_i.symbol);
+      const int cost =
+          int(mu.symbol + delta.symbol + angle.symbol) - int(mu_i.symbol + delta_i.symbol + angle_i.symbol);
       if (cost <= v.inherit_steps) inherit = true, mu = mu_i, delta = delta_i, angle = angle_i;
     }
     RefineInfo& info = out.info[n];
     info.radius = radius.value, info.mu = mu.value, info.delta = delta.value;
     info.cone_angle = angle.value;
     info.cone_x = inherit ? parent.cone_x : own.cone_x, info.cone_y = inherit ? parent.cone_y : own.cone_y;
-    sym = {radius.symbol, mu.symbol, delta.symbol, angle.symbol, !inherit, !inherit && own.cone_angle == kNoCone, false};
+    sym = {radius.symbol, mu.symbol, delta.symbol, angle.symbol, !inherit, !inherit && own.cone_angle == kNoCone,
+           false};
     out.inherited += inherit;
     out.escapes += (radius.symbol > e.radius) + (mu.symbol > e.mu) + (delta.symbol > e.delta) +
                    (angle.symbol > e.angle && own.cone_angle != kNoCone);
@@ -222,7 +233,8 @@ class InfoBits {
   }
   uint64_t bits(std::span<const uint32_t> nodes) const {
     uint64_t total = 0;
-    for (uint32_t s : nodes) emit(s, [&](uint32_t slot, uint32_t sym, uint32_t raw) { total += codes_.at(slot).cost(sym) + raw; });
+    for (uint32_t s : nodes)
+      emit(s, [&](uint32_t slot, uint32_t sym, uint32_t raw) { total += codes_.at(slot).cost(sym) + raw; });
     return total;
   }
 
@@ -232,7 +244,8 @@ class InfoBits {
     if (c.size() <= sym) c.resize(sym + 1);
     ++c[sym];
   }
-  template <class Out> void emit(uint32_t s, Out out) const {
+  template <class Out>
+  void emit(uint32_t s, Out out) const {
     const uint32_t height = std::min<uint32_t>(uint32_t(std::max(0, max_depth_ - model_.id(s).depth())), 11);
     const uint32_t t = model_.first_child[s];
     const RefineInfo& ps = nested_.info[s];
@@ -252,13 +265,18 @@ class InfoBits {
       // Angle and axis choice in one symbol: inherited-axis entries, own-axis entries, no cone.
       const uint32_t angle_sym = c.no_cone ? 2 * wide : (c.own_axis ? wide : 0) + c.angle;
       const bool parent_cone = ps.cone_angle != kNoCone;
-      out(3000 + k * 1000 + (parent_cone ? 1 + std::min(c.delta, 15u) : 0), angle_sym, !c.no_cone && c.angle > e.angle ? 10 : 0);
+      out(3000 + k * 1000 + (parent_cone ? 1 + std::min(c.delta, 15u) : 0), angle_sym,
+          !c.no_cone && c.angle > e.angle ? 10 : 0);
       if (c.no_cone || !c.own_axis) continue;
-      const uint32_t room = parent_cone ? 1 + std::min<uint32_t>(std::bit_width(uint32_t(std::max(0, int(ps.cone_angle) - int(info.cone_angle)))), 11) : 0;
+      const uint32_t room =
+          parent_cone ? 1 + std::min<uint32_t>(
+                                std::bit_width(uint32_t(std::max(0, int(ps.cone_angle) - int(info.cone_angle)))), 11)
+                      : 0;
       for (const auto& [a, b] : {std::pair{info.cone_x, ps.cone_x}, {info.cone_y, ps.cone_y}}) {
         // An own axis is a multiple of the coarse step: coded in steps from the parent's, rounded down.
         const int64_t step = int64_t(1) << (c.absolute ? 0 : v_.axis_drop), from = parent_cone ? int16_t(b) : 0;
-        const int64_t d = int64_t(std::floor(double(int16_t(a)) / double(step))) - int64_t(std::floor(double(from) / double(step)));
+        const int64_t d =
+            int64_t(std::floor(double(int16_t(a)) / double(step))) - int64_t(std::floor(double(from) / double(step)));
         const uint32_t width = d == 0 ? 0 : uint32_t(std::bit_width(uint64_t(std::abs(d))));
         out(6000 + k * 100 + room, d == 0 ? 0 : 2 * width - 1 + (d < 0), width > 0 ? width - 1 : 0);
       }
@@ -274,7 +292,9 @@ class InfoBits {
 };
 
 // Faces at tau = 1 px at issue 18's camera at distance d.
-size_t faces(const ModelData& model, float d) { return refine_for_view(model, srmesh_camera(model, d, 0), 1).mesh.indices.size() / 3; }
+size_t faces(const ModelData& model, float d) {
+  return refine_for_view(model, srmesh_camera(model, d, 0), 1).mesh.indices.size() / 3;
+}
 
 // The model's info as stored, coded by SplitCodec: E5's close view and the whole model; bunny's faces at
 // issue 18's cameras too.
@@ -282,11 +302,14 @@ void report_stored(const std::string& name, const ModelData& model) {
   const std::vector<uint32_t> q = grid_positions(model, kBits);
   const std::vector<uint32_t> close = splits_for_view(model, close_view(model), 1.0f);
   const SplitCodec codec = SplitCodec::build(model, q, kBits);
-  const RecordBitsReport view = record_bits(model, codec, q, close), whole = record_bits(model, codec, q, model.split_order);
-  std::printf("%s as stored: close view %zu splits, info %.2f bits per split, topology + geometry %.2f; whole model info "
-              "%.2f, topology + geometry %.2f\n",
-              name.c_str(), close.size(), view.per_split(view.bits.refinement), view.per_split(view.bits.topology + view.bits.geometry),
-              whole.per_split(whole.bits.refinement), whole.per_split(whole.bits.topology + whole.bits.geometry));
+  const RecordBitsReport view = record_bits(model, codec, q, close),
+                         whole = record_bits(model, codec, q, model.split_order);
+  std::printf(
+      "%s as stored: close view %zu splits, info %.2f bits per split, topology + geometry %.2f; whole model info "
+      "%.2f, topology + geometry %.2f\n",
+      name.c_str(), close.size(), view.per_split(view.bits.refinement),
+      view.per_split(view.bits.topology + view.bits.geometry), whole.per_split(whole.bits.refinement),
+      whole.per_split(whole.bits.topology + whole.bits.geometry));
   if (name.starts_with("bunny"))
     for (float d : {1.5f, 3.f, 10.f, 50.f}) std::printf("  d %.1f: %zu faces\n", d, faces(model, d));
 }
@@ -339,16 +362,16 @@ void measure(const char* name, const ModelData& model) {
     const SplitCodec codec = SplitCodec::build(nested_model, q, kBits);
     const RecordBitsReport view = record_bits(nested_model, codec, q, close);
     const RecordBitsReport whole = record_bits(nested_model, codec, q, model.split_order);
-    std::printf("%s, %s: %.1f %% inherit, %.2f exact values per child; close view %zu splits (%+.2f %%), info %.2f bits per "
-                "split, topology + geometry %.2f; whole model info %.2f (tables %.1f KB), topology + geometry %.2f\n",
-                name, v.name, 100.0 * double(nested.inherited) / double(nested.children),
-                double(nested.escapes) / double(nested.children), close.size(),
-                100.0 * (double(close.size()) / double(before.size()) - 1), view.per_split(info.bits(close)),
-                view.per_split(view.bits.topology + view.bits.geometry), whole.per_split(info.bits(model.split_order)),
-                double(info.table_bits()) / 8192, whole.per_split(whole.bits.topology + whole.bits.geometry));
+    std::printf(
+        "%s, %s: %.1f %% inherit, %.2f exact values per child; close view %zu splits (%+.2f %%), info %.2f bits per "
+        "split, topology + geometry %.2f; whole model info %.2f (tables %.1f KB), topology + geometry %.2f\n",
+        name, v.name, 100.0 * double(nested.inherited) / double(nested.children),
+        double(nested.escapes) / double(nested.children), close.size(),
+        100.0 * (double(close.size()) / double(before.size()) - 1), view.per_split(info.bits(close)),
+        view.per_split(view.bits.topology + view.bits.geometry), whole.per_split(info.bits(model.split_order)),
+        double(info.table_bits()) / 8192, whole.per_split(whole.bits.topology + whole.bits.geometry));
     if (bunny)
-      for (float d : {1.5f, 3.f, 10.f, 50.f})
-        std::printf("  d %.1f: %zu faces\n", d, faces(nested_model, d));
+      for (float d : {1.5f, 3.f, 10.f, 50.f}) std::printf("  d %.1f: %zu faces\n", d, faces(nested_model, d));
   }
 }
 

@@ -2,16 +2,16 @@
 // LoadClient received, a resume re-sends nothing, and a server that does not report is an error that
 // says why (E11 and the soak read the server only through ServeChild).
 #include <gtest/gtest.h>
-#include <utility>  // before asio with C++20
 #include <boost/asio.hpp>
-#include <nlohmann/json.hpp>
 #include <fstream>
 #include <functional>
+#include <nlohmann/json.hpp>
 #include <string>
+#include <utility>  // before asio with C++20
 
-#include "client/load_client.h"
 #include "apps/bench/serve_child.h"
 #include "apps/camera_path.h"
+#include "client/load_client.h"
 #include "common/error.h"
 #include "spm/pms_file.h"
 #include "test_support.h"
@@ -23,10 +23,10 @@ using nlohmann::json;
 
 json full_stats_line() {
   json line = {{"event", "stats"}, {"uptime_s", 1.5}, {"cpu_s", 0.25}};
-  for (const char* name : {"sessions_opened", "sessions_active", "sessions_refused", "sessions_timed_out",
-                           "sessions_failed", "protocol_errors", "accept_failures", "longest_turn_us", "bytes_in", "bytes_out",
-                           "splits_sent", "errors_sent", "peak_state_bytes", "peak_buffer_bytes", "rss_bytes",
-                           "peak_rss_bytes"})
+  for (const char* name :
+       {"sessions_opened", "sessions_active", "sessions_refused", "sessions_timed_out", "sessions_failed",
+        "protocol_errors", "accept_failures", "longest_turn_us", "bytes_in", "bytes_out", "splits_sent", "errors_sent",
+        "peak_state_bytes", "peak_buffer_bytes", "rss_bytes", "peak_rss_bytes"})
     line[name] = 7;
   return line;
 }
@@ -155,8 +155,8 @@ TEST(ServeChild, StreamReceiverWithAFrameBudgetReportsWhatItCarried) {
   const std::string stream = "stream --mode receiver --server http://127.0.0.1:" + std::to_string(http_port) +
                              " --model terrain --path " + path + " --ids-per-request 16 --json";
   const test::CliRun plain = test::run_pmstream(stream + " --save-mesh " + (dir / "plain.ply").string());
-  const test::CliRun budgeted = test::run_pmstream(stream + " --frame-answers 2 --prefetch --save-mesh " +
-                                                   (dir / "budgeted.ply").string());
+  const test::CliRun budgeted =
+      test::run_pmstream(stream + " --frame-answers 2 --prefetch --save-mesh " + (dir / "budgeted.ply").string());
   ASSERT_EQ(plain.exit_code, 0) << plain.err;
   ASSERT_EQ(budgeted.exit_code, 0) << budgeted.err;
   const json a = json::parse(plain.out), b = json::parse(budgeted.out);
@@ -168,8 +168,8 @@ TEST(ServeChild, StreamReceiverWithAFrameBudgetReportsWhatItCarried) {
   EXPECT_GT(b["frames_unsatisfied"].get<uint64_t>(), 0u);
   uint64_t carried = 0;
   for (const json& frame : b["frames"]) {
-    for (const char* field : {"satisfied", "queued", "in_flight", "cancelled", "stale_arrivals", "prefetched",
-                              "prefetch_used"})
+    for (const char* field :
+         {"satisfied", "queued", "in_flight", "cancelled", "stale_arrivals", "prefetched", "prefetch_used"})
       EXPECT_TRUE(frame.contains(field)) << field;
     carried += frame["in_flight"].get<uint64_t>();
   }
@@ -185,8 +185,8 @@ TEST(ServeChild, StreamReceiverWithAFrameBudgetReportsWhatItCarried) {
 // the limit is served; headers over --http-max-header-bytes get 431.
 TEST(ServeChild, HttpSizeLimitsComeFromTheCommandLine) {
   const auto pms = small_model(test::temp_dir());
-  ServeChild server(PMSTREAM_BINARY, {pms.string(), "--http-port", "0", "--http-max-url-bytes", "24",
-                                      "--http-max-header-bytes", "200"});
+  ServeChild server(PMSTREAM_BINARY,
+                    {pms.string(), "--http-port", "0", "--http-max-url-bytes", "24", "--http-max-header-bytes", "200"});
   const uint16_t http_port = server.listening()["http_port"];
   const std::string at_limit = "/models/terrain/base" + std::string(4, '/');  // 24 bytes: a route, not found
   ASSERT_EQ(at_limit.size(), 24u);

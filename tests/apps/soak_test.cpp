@@ -19,9 +19,10 @@ TEST(SoakBench, OneMinuteOfTenClientsOnDragon) {
   if (test::shared_models_dir().empty())
     GTEST_SKIP() << "../shared/models not found: the soak runs on the shared dragon scan";
   const auto out = test::temp_dir();
-  const test::CliRun run = test::run_pmstream("bench --only soak --soak-minutes 1 --soak-clients 10 --models dragon "
-                                              "--shared " + test::shared_models_dir().parent_path().string() +
-                                              " --out " + out.string());
+  const test::CliRun run = test::run_pmstream(
+      "bench --only soak --soak-minutes 1 --soak-clients 10 --models dragon "
+      "--shared " +
+      test::shared_models_dir().parent_path().string() + " --out " + out.string());
   ASSERT_EQ(run.exit_code, 0) << run.err;
   std::ifstream in(out / "soak.json");
   ASSERT_TRUE(in) << "no soak.json";

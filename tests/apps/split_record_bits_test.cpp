@@ -20,11 +20,12 @@ namespace {
 constexpr uint32_t kBits = 16;
 
 void print(const char* what, const RecordBitsReport& r) {
-  std::printf("%s: %zu splits, bits per split: topology %.2f, geometry %.2f, refinement %.2f, normal + color %.2f, "
-              "total %.2f (VSPLITS refinement today %.2f); tables %.1f KB\n",
-              what, r.splits, r.per_split(r.bits.topology), r.per_split(r.bits.geometry), r.per_split(r.bits.refinement),
-              r.per_split(r.bits.attributes()), r.per_split(r.bits.total()), r.per_split(r.packet_refinement),
-              double(r.table_bits) / 8192);
+  std::printf(
+      "%s: %zu splits, bits per split: topology %.2f, geometry %.2f, refinement %.2f, normal + color %.2f, "
+      "total %.2f (VSPLITS refinement today %.2f); tables %.1f KB\n",
+      what, r.splits, r.per_split(r.bits.topology), r.per_split(r.bits.geometry), r.per_split(r.bits.refinement),
+      r.per_split(r.bits.attributes()), r.per_split(r.bits.total()), r.per_split(r.packet_refinement),
+      double(r.table_bits) / 8192);
 }
 
 // Whole split order and E5's close view; returns the close view's report.

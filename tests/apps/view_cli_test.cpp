@@ -2,8 +2,8 @@
 // fields, deterministic paths with the geometry each kind promises, refine --camera JSON fields and a mesh
 // that matches them, and one-line errors with a non-zero exit code for bad inputs.
 #include <gtest/gtest.h>
-#include <nlohmann/json.hpp>
 #include <sys/wait.h>
+#include <nlohmann/json.hpp>
 
 #include <algorithm>
 #include <cmath>
@@ -80,7 +80,8 @@ TEST(ViewCli, PathsAreDeterministicAndShapedAsTheirKind) {
     } else if (kind == "scan") {  // rising from the bottom of the box (z = -0.5) to the top (0.5)
       EXPECT_NEAR(frames[0]["target"][2].get<float>(), -0.5f, 1e-3f);
       EXPECT_NEAR(frames[23]["target"][2].get<float>(), 0.5f, 1e-3f);
-      for (size_t i = 1; i < frames.size(); ++i) EXPECT_GT(frames[i]["eye"][2].get<float>(), frames[i - 1]["eye"][2].get<float>());
+      for (size_t i = 1; i < frames.size(); ++i)
+        EXPECT_GT(frames[i]["eye"][2].get<float>(), frames[i - 1]["eye"][2].get<float>());
       for (const auto& cam : frames) {  // just outside the box (half extents 2.5 x 2.5), a third of its height away
         EXPECT_GT(distance(cam["eye"], cam["target"]), 2.5f);
         EXPECT_LT(distance(cam["eye"], cam["target"]), 0.5f * (2.5f + 2.5f) * 1.42f + 0.4f) << "close to the surface";
@@ -89,7 +90,8 @@ TEST(ViewCli, PathsAreDeterministicAndShapedAsTheirKind) {
       EXPECT_GT(distance(frames[0]["eye"], frames[0]["target"]), 10.0f);
       EXPECT_LT(distance(frames[23]["eye"], frames[23]["target"]), 0.2f);
       for (size_t i = 1; i < frames.size(); ++i)
-        EXPECT_LT(distance(frames[i]["eye"], frames[i]["target"]), distance(frames[i - 1]["eye"], frames[i - 1]["target"]));
+        EXPECT_LT(distance(frames[i]["eye"], frames[i]["target"]),
+                  distance(frames[i - 1]["eye"], frames[i - 1]["target"]));
     }
   }
 }
@@ -104,10 +106,12 @@ TEST(ViewCli, RefineForACamera) {
   for (const std::string tolerance : {"0", "1", "8"}) {
     SCOPED_TRACE("tolerance " + tolerance);
     const std::string out = (model.dir / ("view-" + tolerance + ".ply")).string();
-    const RunResult r = run("refine " + model.pms + " --camera " + cam + " --tolerance " + tolerance + " -o " + out + " --json");
+    const RunResult r =
+        run("refine " + model.pms + " --camera " + cam + " --tolerance " + tolerance + " -o " + out + " --json");
     ASSERT_EQ(r.exit_code, 0) << r.err;
     const auto stats = nlohmann::json::parse(r.out);
-    for (const char* field : {"vertices", "faces", "vsplits_applied", "seconds"}) EXPECT_TRUE(stats.contains(field)) << field;
+    for (const char* field : {"vertices", "faces", "vsplits_applied", "seconds"})
+      EXPECT_TRUE(stats.contains(field)) << field;
     const Mesh mesh = load_mesh(out);
     EXPECT_EQ(stats["faces"].get<size_t>(), mesh.face_count());
     EXPECT_EQ(stats["vertices"].get<size_t>(), mesh.vertex_count());
@@ -118,9 +122,11 @@ TEST(ViewCli, RefineForACamera) {
     previous_faces = mesh.face_count();
   }
   // --tolerance defaults to 1 pixel.
-  const RunResult fallback = run("refine " + model.pms + " --camera " + cam + " -o " + (model.dir / "d.ply").string() + " --json");
+  const RunResult fallback =
+      run("refine " + model.pms + " --camera " + cam + " -o " + (model.dir / "d.ply").string() + " --json");
   ASSERT_EQ(fallback.exit_code, 0) << fallback.err;
-  const RunResult one = run("refine " + model.pms + " --camera " + cam + " --tolerance 1 -o " + (model.dir / "e.ply").string() + " --json");
+  const RunResult one = run("refine " + model.pms + " --camera " + cam + " --tolerance 1 -o " +
+                            (model.dir / "e.ply").string() + " --json");
   EXPECT_EQ(nlohmann::json::parse(fallback.out)["faces"], nlohmann::json::parse(one.out)["faces"]);
 }
 
@@ -148,12 +154,14 @@ TEST(ViewCli, BadInputsGiveOneLineErrors) {
   expect_one_line_error(run(refine + " --camera " + broken), broken);
 
   const std::string path = "path orbit --model " + model.pms + " -o " + (model.dir / "p.json").string();
-  expect_one_line_error(run("path spiral --model " + model.pms + " --frames 3 -o " + (model.dir / "p.json").string()), "spiral");
+  expect_one_line_error(run("path spiral --model " + model.pms + " --frames 3 -o " + (model.dir / "p.json").string()),
+                        "spiral");
   expect_one_line_error(run(path + " --frames 0"), "--frames");
   expect_one_line_error(run(path + " --frames 3 --fovy 200"), "--fovy");
   expect_one_line_error(run(path + " --frames 3 --width 0"), "--width");
   const std::string no_model = (model.dir / "nope.pms").string();
-  expect_one_line_error(run("path scan --model " + no_model + " --frames 3 -o " + (model.dir / "p.json").string()), no_model);
+  expect_one_line_error(run("path scan --model " + no_model + " --frames 3 -o " + (model.dir / "p.json").string()),
+                        no_model);
   EXPECT_FALSE(std::filesystem::exists(model.dir / "p.json"));
 }
 

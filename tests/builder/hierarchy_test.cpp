@@ -131,7 +131,8 @@ void expect_valid_hierarchy(const Mesh& mesh, const BuildResult& built) {
   }
   // The base mesh is a valid oriented manifold too.
   Mesh base;
-  for (uint32_t r = 0; r < h.root_count; ++r) base.positions.insert(base.positions.end(), &h.position[3 * r], &h.position[3 * r + 3]);
+  for (uint32_t r = 0; r < h.root_count; ++r)
+    base.positions.insert(base.positions.end(), &h.position[3 * r], &h.position[3 * r + 3]);
   base.indices = h.base_faces;
   std::string why;
   EXPECT_TRUE(is_oriented_manifold(base, &why)) << why;

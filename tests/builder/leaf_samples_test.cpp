@@ -58,7 +58,8 @@ TEST(LeafSamples, AMergeOverTheLimitKeepsBothSides) {
   forest.merge(3 * LeafSamples::kMax, 0);
   forest.expect_consistent(0);
   const auto set = forest.samples.of(0);
-  const size_t from_small = size_t(std::count_if(set.begin(), set.end(), [](uint32_t leaf) { return leaf >= 3 * LeafSamples::kMax; }));
+  const size_t from_small =
+      size_t(std::count_if(set.begin(), set.end(), [](uint32_t leaf) { return leaf >= 3 * LeafSamples::kMax; }));
   EXPECT_EQ(from_small, LeafSamples::kMax / 4) << "the smaller subtree gets its share of the samples";
 }
 

@@ -18,7 +18,8 @@ namespace {
 double angle(const float* a, const float* b) {
   const double cx = double(a[1]) * b[2] - double(a[2]) * b[1], cy = double(a[2]) * b[0] - double(a[0]) * b[2],
                cz = double(a[0]) * b[1] - double(a[1]) * b[0];
-  return std::atan2(std::sqrt(cx * cx + cy * cy + cz * cz), double(a[0]) * b[0] + double(a[1]) * b[1] + double(a[2]) * b[2]);
+  return std::atan2(std::sqrt(cx * cx + cy * cy + cz * cz),
+                    double(a[0]) * b[0] + double(a[1]) * b[1] + double(a[2]) * b[2]);
 }
 
 TEST(NestedRefineInfo, BunnyBoundsHoldTheirOwnAndNestInTheirParents) {
@@ -63,7 +64,8 @@ TEST(NestedRefineInfo, BunnyBoundsHoldTheirOwnAndNestInTheirParents) {
     for (int f = 0; f < 3; ++f) {
       ++lengths;
       const uint32_t k = length_entry(parent.*fields[f], b.*fields[f], steps[f]);
-      entries += b.*fields[f] == 0 || (k != kNoEntry && length_at_entry(parent.*fields[f], k, steps[f]) == b.*fields[f]);
+      entries +=
+          b.*fields[f] == 0 || (k != kNoEntry && length_at_entry(parent.*fields[f], k, steps[f]) == b.*fields[f]);
     }
   }
   EXPECT_GT(double(entries), 0.99 * double(lengths));

@@ -7,10 +7,10 @@
 
 #include "builder/build.h"
 #include "client/screen_importance.h"
-#include "io/shapes.h"
-#include "spm/hierarchy.h"
-#include "spm/adapt.h"
 #include "common/camera.h"
+#include "io/shapes.h"
+#include "spm/adapt.h"
+#include "spm/hierarchy.h"
 #include "spm/selective_mesh.h"
 #include "spm/vertex_hierarchy.h"
 
@@ -25,7 +25,8 @@ struct ClientMesh {
   std::unique_ptr<SelectiveMesh> mesh;
 
   ClientMesh(const Mesh& input, const Camera& camera, float tolerance)
-      : built(build_progressive_mesh(input, BuildOptions{}).hierarchy), model(model_of(built)),
+      : built(build_progressive_mesh(input, BuildOptions{}).hierarchy),
+        model(model_of(built)),
         hierarchy(VertexHierarchy::from_model(model)),
         mesh(std::make_unique<SelectiveMesh>(hierarchy, model.base_faces)) {
     if (tolerance <= 0) return;
@@ -79,7 +80,8 @@ TEST(ScreenImportance, AreasSumToTheCoveredPixelsMostFirst) {
   uint64_t expected = 0;
   for (uint32_t face : importance.image().face_id)
     if (face != kNone)
-      for (size_t k = 0; k < 3; ++k) expected += c.hierarchy.is_leaf(arrays.slots[arrays.indices[3 * size_t(face) + k]]);
+      for (size_t k = 0; k < 3; ++k)
+        expected += c.hierarchy.is_leaf(arrays.slots[arrays.indices[3 * size_t(face) + k]]);
   EXPECT_EQ(sum, expected);
   EXPECT_LE(sum, 3 * covered);
   EXPECT_GT(sum, 2 * covered) << "most corners are leaves";
@@ -102,8 +104,10 @@ TEST(ScreenImportance, AVertexBehindTheCameraGetsNoArea) {
   const auto behind = [&](uint32_t v) { return arrays.positions[3 * size_t(v)] < camera.eye[0]; };
   std::vector<bool> all_faces_behind(arrays.slots.size(), true);
   for (size_t f = 0; f < arrays.indices.size(); f += 3) {
-    const bool face_behind = behind(arrays.indices[f]) && behind(arrays.indices[f + 1]) && behind(arrays.indices[f + 2]);
-    for (size_t k = 0; k < 3; ++k) all_faces_behind[arrays.indices[f + k]] = all_faces_behind[arrays.indices[f + k]] && face_behind;
+    const bool face_behind =
+        behind(arrays.indices[f]) && behind(arrays.indices[f + 1]) && behind(arrays.indices[f + 2]);
+    for (size_t k = 0; k < 3; ++k)
+      all_faces_behind[arrays.indices[f + k]] = all_faces_behind[arrays.indices[f + k]] && face_behind;
   }
   size_t hidden = 0;
   for (size_t v = 0; v < arrays.slots.size(); ++v) {

@@ -61,7 +61,8 @@ TEST(BitStream, AppendCopiesAnyWindowBitForBit) {
     w.append(data, begin, end);
     ASSERT_EQ(w.size(), lead + end - begin);
     BitReader copied(w.bytes(), lead, w.size(), "copy");
-    for (uint64_t k = begin; k < end; ++k) ASSERT_EQ(copied.bit("bit"), (data[k >> 3] >> (k & 7)) & 1u) << begin << " " << end;
+    for (uint64_t k = begin; k < end; ++k)
+      ASSERT_EQ(copied.bit("bit"), (data[k >> 3] >> (k & 7)) & 1u) << begin << " " << end;
     for (uint64_t k = w.size(); k < 8 * w.bytes().size(); ++k) ASSERT_EQ((w.bytes()[k >> 3] >> (k & 7)) & 1, 0);
   }
   BitWriter w;

@@ -146,7 +146,7 @@ TEST(PrefixCode, CodeSetsRoundTripAndRejectHostileSets) {
     if (hostile == 0) {
       bad.bits(uint64_t(1) << 17, 18);  // 17 zero bits, then a one
     } else {
-      bad.bits(0b010, 3);               // m + 1 = 2 (a zero, a one, then 0): one length follows
+      bad.bits(0b010, 3);                 // m + 1 = 2 (a zero, a one, then 0): one length follows
       bad.bits(hostile == 1 ? 0 : 1, 1);  // step -1 from 0, or a run of at least 3
     }
     bad.bits(0, 32);

@@ -13,17 +13,17 @@
 #include <vector>
 
 #include "common/error.h"
-#include "spm/hierarchy.h"
-#include "spm/adapt.h"
-#include "spm/criteria.h"
-#include "dag/dag.h"
 #include "dag/compact.h"
 #include "dag/cut.h"
+#include "dag/dag.h"
 #include "dag/traversal.h"
+#include "fixtures/view_models.h"
+#include "spm/adapt.h"
+#include "spm/criteria.h"
+#include "spm/hierarchy.h"
 #include "spm/selective_mesh.h"
 #include "spm/vertex_hierarchy.h"
 #include "test_support.h"
-#include "fixtures/view_models.h"
 
 namespace pms {
 namespace {
@@ -92,7 +92,8 @@ std::vector<Camera> route_of(const BuiltModel& model) {
   route.push_back(test::framing_camera(model, {1, 0.5f, 0.4f}, 1));
   for (int i = 0; i <= 6; ++i) {  // moving close, sweeping around
     const float a = 0.35f * float(i);
-    route.push_back(test::framing_camera(model, {std::sin(a), 0.3f - 0.1f * float(i), std::cos(a)}, 1.0f - 0.1f * float(i)));
+    route.push_back(
+        test::framing_camera(model, {std::sin(a), 0.3f - 0.1f * float(i), std::cos(a)}, 1.0f - 0.1f * float(i)));
   }
   route.push_back(test::framing_camera(model, {1, 0.05f, -0.2f}, 0.6f, 30));
   route.push_back(test::framing_camera(model, {-0.4f, 0.3f, 1}, 0.35f));
@@ -130,12 +131,13 @@ void expect_sound_edges(const BuiltModel& model) {
   const ModelData m = model.model();
   const Dag dag(m);
   const DagStats& s = dag.stats();
-  std::printf("[ dag ] %s: %u nodes, %.4f edges per node (%llu parent, %llu dependency; redundant: %llu ancestor, "
-              "%llu dependency, %llu parent), max out-degree %u, %.1f ms, %.1f B per node shared\n",
-              model.name.c_str(), s.nodes, s.edges_per_node(), (unsigned long long)s.parent_edges,
-              (unsigned long long)s.dependency_edges, (unsigned long long)s.redundant_ancestor,
-              (unsigned long long)s.redundant_dependency, (unsigned long long)s.redundant_parent, s.max_children,
-              1e3 * s.seconds, double(dag.memory_bytes()) / s.nodes);
+  std::printf(
+      "[ dag ] %s: %u nodes, %.4f edges per node (%llu parent, %llu dependency; redundant: %llu ancestor, "
+      "%llu dependency, %llu parent), max out-degree %u, %.1f ms, %.1f B per node shared\n",
+      model.name.c_str(), s.nodes, s.edges_per_node(), (unsigned long long)s.parent_edges,
+      (unsigned long long)s.dependency_edges, (unsigned long long)s.redundant_ancestor,
+      (unsigned long long)s.redundant_dependency, (unsigned long long)s.redundant_parent, s.max_children,
+      1e3 * s.seconds, double(dag.memory_bytes()) / s.nodes);
   ASSERT_GT(s.nodes, 0u);
   uint64_t edges = 0;
   for (uint32_t n = 0; n < dag.size(); ++n) {
@@ -250,7 +252,9 @@ void expect_random_operations_legal(const BuiltModel& model, int steps, uint32_t
 
 TEST(Dag, RandomOperationsAreLegalSphere) { expect_random_operations_legal(test::built_sphere(), 6000, 1); }
 TEST(Dag, RandomOperationsAreLegalTerrain) { expect_random_operations_legal(test::built_terrain(), 20000, 2); }
-TEST(Dag, RandomOperationsAreLegalStuddedPlane) { expect_random_operations_legal(test::built_studded_plane(), 6000, 3); }
+TEST(Dag, RandomOperationsAreLegalStuddedPlane) {
+  expect_random_operations_legal(test::built_studded_plane(), 6000, 3);
+}
 // Counters in the side table (every node with a DAG child or parent there) behave the same.
 TEST(Dag, RandomOperationsAreLegalWithSideTableCountersTerrain) {
   expect_random_operations_legal(test::built_terrain(), 20000, 5, 0);
@@ -280,8 +284,9 @@ void expect_route(const BuiltModel& model, DagTraversal traversal, DagMode mode,
   // A budget the close views want more than (their converged mesh size, halved) and the route reaches
   // with N operations per frame (from the base mesh at N = 17, constant-time spends up to half its split
   // evaluations on its watch list and grows more slowly than the others: ~16 N triangles on bunny).
-  options.budget = std::min<uint64_t>(adapt_mesh(model, test::view_for(model, route[route.size() - 2]), tolerance).size() / 2,
-                                      dag.base_faces() + 2 * 12 * uint64_t(n_ops));
+  options.budget =
+      std::min<uint64_t>(adapt_mesh(model, test::view_for(model, route[route.size() - 2]), tolerance).size() / 2,
+                         dag.base_faces() + 2 * 12 * uint64_t(n_ops));
   uint64_t ops_total = 0;
   bool budget_stopped = false;
   for (const Camera& camera : route) {
@@ -446,7 +451,8 @@ struct FarTerrain {
 // The same, viewed close and low.
 struct CloseTerrain : FarTerrain {
   CloseTerrain() {
-    traverser.set_view(make_criteria(test::view_for(model, test::framing_camera(model, {1, 0.3f, 0.08f}, 0.45f, 60)), 1));
+    traverser.set_view(
+        make_criteria(test::view_for(model, test::framing_camera(model, {1, 0.3f, 0.08f}, 0.45f, 60)), 1));
   }
 };
 
@@ -542,7 +548,8 @@ TEST(DagTraversal, ConstantTimeWatchesWhatTheViewWillNeed) {
   uint32_t watching_splits = 0, blind_splits = 0;
   for (int frame = 0; frame < 6; ++frame) {
     const float distance = 1.2f - 0.1f * float(frame + 1);  // approaching
-    const ViewCriteria view = make_criteria(test::view_for(model, test::framing_camera(model, {0.3f, 0.2f, 1}, distance)), 1);
+    const ViewCriteria view =
+        make_criteria(test::view_for(model, test::framing_camera(model, {0.3f, 0.2f, 1}, distance)), 1);
     traverser.set_view(view);
     blind_traverser.set_view(view);
     ops.clear();

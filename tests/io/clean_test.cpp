@@ -33,7 +33,8 @@ void tag_vertices(Mesh& m) {
 }
 
 uint32_t tag_of(const Mesh& m, uint32_t v) {
-  return m.colors[4 * size_t(v)] | uint32_t(m.colors[4 * size_t(v) + 1]) << 8 | uint32_t(m.colors[4 * size_t(v) + 2]) << 16;
+  return m.colors[4 * size_t(v)] | uint32_t(m.colors[4 * size_t(v) + 1]) << 8 |
+         uint32_t(m.colors[4 * size_t(v) + 2]) << 16;
 }
 
 // Every cleaned vertex still carries the position, normal and color of one input vertex, in step.
@@ -112,7 +113,7 @@ TEST(Clean, RepairsTheNonManifoldFixture) {
   EXPECT_EQ(report.nonmanifold_edges, 2u);      // the book's spine 7-8 and 1-3 with a third face
   EXPECT_EQ(report.nonmanifold_vertices, 5u);   // 0 (two tetrahedra), 7 and 8, 1 and 3
   EXPECT_EQ(report.split_vertex_copies, 5u);
-  EXPECT_EQ(report.flipped_faces, 1u);          // (15, 18, 17)
+  EXPECT_EQ(report.flipped_faces, 1u);  // (15, 18, 17)
   EXPECT_EQ(mesh.vertex_count(), 19u - 1 - 1 + 5);
   EXPECT_EQ(mesh.face_count(), 17u - 3);
   expect_attributes_in_step(input, mesh);

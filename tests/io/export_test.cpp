@@ -17,10 +17,9 @@ using pms::Mesh;
 // Floats that a careless ascii writer would round: thirds, a subnormal, the extremes, -0.
 Mesh awkward_mesh() {
   Mesh mesh;
-  mesh.positions = {0.1f, 1.0f / 3.0f, -2.0f / 3.0f, FLT_MAX,  -FLT_MIN,          FLT_TRUE_MIN,
-                    -0.0f, 1e-7f,      123456.789f,  1.0f,    -1.0f,             0.5f};
-  mesh.normals = {0.0f, 0.0f, 1.0f, 0.577350269f, 0.577350269f, -0.577350269f,
-                  1.0f, 0.0f, 0.0f, -0.6f,        0.8f,         0.0f};
+  mesh.positions = {0.1f,  1.0f / 3.0f, -2.0f / 3.0f, FLT_MAX, -FLT_MIN, FLT_TRUE_MIN,
+                    -0.0f, 1e-7f,       123456.789f,  1.0f,    -1.0f,    0.5f};
+  mesh.normals = {0.0f, 0.0f, 1.0f, 0.577350269f, 0.577350269f, -0.577350269f, 1.0f, 0.0f, 0.0f, -0.6f, 0.8f, 0.0f};
   mesh.colors = {0, 1, 2, 3, 255, 128, 64, 32, 10, 20, 30, 40, 250, 251, 252, 253};
   mesh.texcoords = {0.0f, 1.0f, 1.0f / 3.0f, -0.0f, 2.5f, 1e-7f, -0.25f, 0.999999f};
   mesh.indices = {0, 1, 2, 0, 2, 3, 3, 2, 1};
@@ -83,9 +82,8 @@ TEST(SavePlyFormat, HeaderDeclaresTheAttributesPresent) {
   const std::string text = read_text(path);
   const std::string header = text.substr(0, text.find("end_header\n") + 11);
   EXPECT_EQ(header.rfind("ply\nformat binary_little_endian 1.0\n", 0), 0u);
-  for (const char* line : {"element vertex 4\n", "property float x\n", "property float nz\n",
-                           "property uchar red\n", "property uchar alpha\n", "property float s\n",
-                           "property float t\n", "element face 3\n",
+  for (const char* line : {"element vertex 4\n", "property float x\n", "property float nz\n", "property uchar red\n",
+                           "property uchar alpha\n", "property float s\n", "property float t\n", "element face 3\n",
                            "property list uchar int vertex_indices\n"})
     EXPECT_NE(header.find(line), std::string::npos) << line;
   // 4 vertices of 3+3+2 floats and 4 bytes, 3 faces of a count byte and 3 ints.
@@ -100,11 +98,12 @@ TEST(SavePlyFormat, AsciiIsOneRecordPerLine) {
   pms::save_ply(mesh, path, false);
   const std::string text = read_text(path);
   const std::string body = text.substr(text.find("end_header\n") + 11);
-  EXPECT_EQ(body, "0.1 0.33333334 -0.6666667 0 1 2 3\n"
-                  "3.4028235e+38 -1.1754944e-38 1e-45 255 128 64 32\n"
-                  "-0 1e-07 123456.79 10 20 30 40\n"
-                  "1 -1 0.5 250 251 252 253\n"
-                  "3 0 1 2\n3 0 2 3\n3 3 2 1\n");
+  EXPECT_EQ(body,
+            "0.1 0.33333334 -0.6666667 0 1 2 3\n"
+            "3.4028235e+38 -1.1754944e-38 1e-45 255 128 64 32\n"
+            "-0 1e-07 123456.79 10 20 30 40\n"
+            "1 -1 0.5 250 251 252 253\n"
+            "3 0 1 2\n3 0 2 3\n3 3 2 1\n");
 }
 
 TEST(SavePlyErrors, BadMeshOrPathNamesTheFile) {

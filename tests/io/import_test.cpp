@@ -187,34 +187,39 @@ TEST(ImportPly, TextureCoordinatesUnderEveryName) {
                              "property float x\nproperty float y\nproperty float z\nproperty float " + u +
                              "\nproperty uchar quality\nproperty double " + v +
                              "\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n";
-    const Mesh mesh = pms::load_mesh(write_file(std::string("uv_") + u + ".ply",
-                                                head + "0 0 0 0.25 7 0.75\n1 0 0 1 7 -0.5\n0 1 0 2.5 7 0.1\n3 0 1 2\n"));
+    const Mesh mesh = pms::load_mesh(write_file(
+        std::string("uv_") + u + ".ply", head + "0 0 0 0.25 7 0.75\n1 0 0 1 7 -0.5\n0 1 0 2.5 7 0.1\n3 0 1 2\n"));
     ASSERT_TRUE(mesh.has_texcoords()) << u;
     EXPECT_EQ(mesh.texcoords, (std::vector<float>{0.25f, 0.75f, 1.0f, -0.5f, 2.5f, 0.1f})) << u;
   }
   Bytes binary(true);
-  for (int k = 0; k < 3; ++k) binary.put<float>(float(k)).put<float>(0).put<float>(0).put<double>(0.125 * k).put<double>(1 - 0.125 * k);
+  for (int k = 0; k < 3; ++k)
+    binary.put<float>(float(k)).put<float>(0).put<float>(0).put<double>(0.125 * k).put<double>(1 - 0.125 * k);
   binary.put<uint8_t>(3).put<int32_t>(0).put<int32_t>(1).put<int32_t>(2);
-  const Mesh big = pms::load_mesh(write_file("uv_be.ply", "ply\nformat binary_big_endian 1.0\nelement vertex 3\n"
-                                                          "property float x\nproperty float y\nproperty float z\n"
-                                                          "property double texture_u\nproperty double texture_v\n"
-                                                          "element face 1\nproperty list uchar int vertex_indices\n"
-                                                          "end_header\n" + binary.data));
+  const Mesh big = pms::load_mesh(write_file("uv_be.ply",
+                                             "ply\nformat binary_big_endian 1.0\nelement vertex 3\n"
+                                             "property float x\nproperty float y\nproperty float z\n"
+                                             "property double texture_u\nproperty double texture_v\n"
+                                             "element face 1\nproperty list uchar int vertex_indices\n"
+                                             "end_header\n" +
+                                                 binary.data));
   EXPECT_EQ(big.texcoords, (std::vector<float>{0, 1, 0.125f, 0.875f, 0.25f, 0.75f}));
-  const Mesh half = pms::load_mesh(write_file("uv_half.ply", "ply\nformat ascii 1.0\nelement vertex 3\n"
-                                                             "property float x\nproperty float y\nproperty float z\n"
-                                                             "property float u\nelement face 1\n"
-                                                             "property list uchar int vertex_indices\nend_header\n"
-                                                             "0 0 0 1\n1 0 0 1\n0 1 0 1\n3 0 1 2\n"));
+  const Mesh half = pms::load_mesh(write_file("uv_half.ply",
+                                              "ply\nformat ascii 1.0\nelement vertex 3\n"
+                                              "property float x\nproperty float y\nproperty float z\n"
+                                              "property float u\nelement face 1\n"
+                                              "property list uchar int vertex_indices\nend_header\n"
+                                              "0 0 0 1\n1 0 0 1\n0 1 0 1\n3 0 1 2\n"));
   EXPECT_FALSE(half.has_texcoords());
 }
 
 TEST(ImportPly, NonFiniteTextureCoordinatesFail) {
-  expect_load_error(write_file("uv_nan.ply", "ply\nformat ascii 1.0\nelement vertex 3\n"
-                                             "property float x\nproperty float y\nproperty float z\n"
-                                             "property float s\nproperty float t\nelement face 1\n"
-                                             "property list uchar int vertex_indices\nend_header\n"
-                                             "0 0 0 0 0\n1 0 0 0 0\n0 1 0 nan 0\n3 0 1 2\n"),
+  expect_load_error(write_file("uv_nan.ply",
+                               "ply\nformat ascii 1.0\nelement vertex 3\n"
+                               "property float x\nproperty float y\nproperty float z\n"
+                               "property float s\nproperty float t\nelement face 1\n"
+                               "property list uchar int vertex_indices\nend_header\n"
+                               "0 0 0 0 0\n1 0 0 0 0\n0 1 0 nan 0\n3 0 1 2\n"),
                     "vertex 2 has a NaN or infinite texture coordinate");
 }
 
@@ -285,11 +290,13 @@ TEST(ImportOff, PolygonsCommentsAndFaceColors) {
 }
 
 TEST(ImportOff, IntegerAndUnitRangeVertexColors) {
-  const Mesh ints = pms::load_mesh(write_file("ints.off", "COFF\n3 1 0\n0 0 0 255 0 0 255\n1 0 0 0 255 0 128\n"
-                                                          "0 1 0 0 0 255 255\n3 0 1 2\n"));
+  const Mesh ints = pms::load_mesh(write_file("ints.off",
+                                              "COFF\n3 1 0\n0 0 0 255 0 0 255\n1 0 0 0 255 0 128\n"
+                                              "0 1 0 0 0 255 255\n3 0 1 2\n"));
   EXPECT_EQ(ints.colors, (std::vector<uint8_t>{255, 0, 0, 255, 0, 255, 0, 128, 0, 0, 255, 255}));
-  const Mesh units = pms::load_mesh(write_file("units.off", "COFF 3 1 0\n0 0 0 1.0 0.5 0.0\n1 0 0 0 0 0 0.0\n"
-                                                            "0 1 0 0.0 0.0 1.0 1.0\n3 0 1 2\n"));
+  const Mesh units = pms::load_mesh(write_file("units.off",
+                                               "COFF 3 1 0\n0 0 0 1.0 0.5 0.0\n1 0 0 0 0 0 0.0\n"
+                                               "0 1 0 0.0 0.0 1.0 1.0\n3 0 1 2\n"));
   EXPECT_EQ(units.colors, (std::vector<uint8_t>{255, 128, 0, 255, 0, 0, 0, 0, 0, 0, 255, 255}));
 }
 
@@ -363,8 +370,8 @@ const char* kGltf = R"({
   "meshes": [{"primitives": [{"attributes": {"POSITION": 1}, "indices": 0}]},
              {"primitives": [{"attributes": {"POSITION": 1}, "mode": 0}]}],
   "buffers": [{"byteLength": 44, "uri": "data:application/octet-stream;base64,)"
-                            "AAAAAAAAAAAAAAAAAACAPwAAAAAAAAAAAAAAAAAAgD8AAAAAAAABAAIAAAA="
-                            R"("}],
+                    "AAAAAAAAAAAAAAAAAACAPwAAAAAAAAAAAAAAAAAAgD8AAAAAAAABAAIAAAA="
+                    R"("}],
   "bufferViews": [{"buffer": 0, "byteOffset": 0, "byteLength": 36, "target": 34962},
                   {"buffer": 0, "byteOffset": 36, "byteLength": 6, "target": 34963}],
   "accessors": [{"bufferView": 1, "componentType": 5123, "count": 3, "type": "SCALAR", "min": [0], "max": [2]},
@@ -373,12 +380,13 @@ const char* kGltf = R"({
 })";
 
 // One triangle with TEXCOORD_0 (glTF's v runs down the image; assimp hands it over with v up, 1 - v).
-const char* kTexturedGltf = R"({
+const char* kTexturedGltf =
+    R"({
   "asset": {"version": "2.0"}, "scene": 0, "scenes": [{"nodes": [0]}], "nodes": [{"mesh": 0}],
   "meshes": [{"primitives": [{"attributes": {"POSITION": 1, "TEXCOORD_0": 2}, "indices": 0}]}],
   "buffers": [{"byteLength": 68, "uri": "data:application/octet-stream;base64,)"
-                                   "AAAAAAAAAAAAAAAAAACAPwAAAAAAAAAAAAAAAAAAgD8AAAAAAACAPgAAQD8AAIA/AAAAPwAAAAAAAAAAAAABAAIAAAA="
-                                   R"("}],
+    "AAAAAAAAAAAAAAAAAACAPwAAAAAAAAAAAAAAAAAAgD8AAAAAAACAPgAAQD8AAIA/AAAAPwAAAAAAAAAAAAABAAIAAAA="
+    R"("}],
   "bufferViews": [{"buffer": 0, "byteOffset": 0, "byteLength": 36, "target": 34962},
                   {"buffer": 0, "byteOffset": 36, "byteLength": 24, "target": 34962},
                   {"buffer": 0, "byteOffset": 60, "byteLength": 6, "target": 34963}],
@@ -456,8 +464,7 @@ TEST(ImportCompressed, GzipAndXzGiveTheInnerFormat) {
 TEST(ImportCompressed, ConcatenatedGzipMembersAreOneFile) {
   const std::string text = kPentagonPly;
   const std::string two_members = gzip(text.substr(0, 100)) + gzip(text.substr(100));
-  expect_same_mesh(pms::load_mesh(write_file("two.ply.gz", two_members)),
-                   pms::load_mesh(write_file("one.ply", text)));
+  expect_same_mesh(pms::load_mesh(write_file("two.ply.gz", two_members)), pms::load_mesh(write_file("one.ply", text)));
 }
 
 TEST(ImportCompressed, OutputCapStopsDecompressionBombs) {
@@ -500,9 +507,10 @@ TEST(ImportErrors, TruncatedAsciiPly) {
 }
 
 TEST(ImportErrors, CountsThatCannotFitFailBeforeAllocating) {
-  std::string lying = "ply\nformat binary_little_endian 1.0\nelement vertex 4000000000\n"
-                      "property float x\nproperty float y\nproperty float z\n"
-                      "element face 1\nproperty list uchar int vertex_indices\nend_header\n";
+  std::string lying =
+      "ply\nformat binary_little_endian 1.0\nelement vertex 4000000000\n"
+      "property float x\nproperty float y\nproperty float z\n"
+      "element face 1\nproperty list uchar int vertex_indices\nend_header\n";
   lying.resize(200, '\x01');
   expect_load_error(write_file("lying.ply", lying), "declares 4000000000 vertex records");
   std::string ascii_faces = kPentagonPly;

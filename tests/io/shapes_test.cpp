@@ -157,9 +157,7 @@ TEST(Shapes, TerrainHeightsDoNotDependOnResolutionOrThreads) {
       ASSERT_EQ(point(coarse, y * 41 + x), point(fine, 2 * y * 81 + 2 * x)) << x << ", " << y;
 }
 
-TEST(Shapes, TerrainRefusesAnUnboundedSize) {
-  EXPECT_THROW(make_terrain(uint64_t(1) << 40), Error);
-}
+TEST(Shapes, TerrainRefusesAnUnboundedSize) { EXPECT_THROW(make_terrain(uint64_t(1) << 40), Error); }
 
 }  // namespace
 }  // namespace pms

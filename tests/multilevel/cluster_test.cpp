@@ -7,10 +7,10 @@
 #include <array>
 
 #include "common/error.h"
+#include "fixtures/view_models.h"
 #include "io/shapes.h"
 #include "multilevel/cluster.h"
 #include "multilevel/file.h"
-#include "fixtures/view_models.h"
 
 namespace pms {
 namespace {
@@ -21,8 +21,8 @@ constexpr uint32_t kNo = MultilevelMesh::kNoRepresentative;
 // (2.3, 2.3), on top of vertex 8).
 Mesh figure12_mesh() {
   Mesh m;
-  const float xy[10][2] = {{-3, 3}, {3, 3}, {-3, -3}, {3, -3}, {-2.3f, 3}, {-3, 2.3f}, {-2.3f, 2.3f},
-                           {2.3f, 3}, {2.3f, 2.3f}, {3, 2.3f}};
+  const float xy[10][2] = {{-3, 3},    {3, 3},        {-3, -3},  {3, -3},      {-2.3f, 3},
+                           {-3, 2.3f}, {-2.3f, 2.3f}, {2.3f, 3}, {2.3f, 2.3f}, {3, 2.3f}};
   for (const auto& p : xy) m.positions.insert(m.positions.end(), {p[0], p[1], 0});
   m.indices = {6, 2, 8, 3, 8, 2, 4, 6, 7, 5, 2, 6, 6, 4, 5, 4, 0, 5, 8, 3, 9, 9, 1, 8, 7, 8, 1, 8, 7, 6};
   return m;
@@ -46,7 +46,8 @@ std::vector<std::array<uint32_t, 3>> lod_triangles(const MultilevelMesh& m, uint
   MultilevelLod lod(m);
   lod.set_level(level);
   std::vector<std::array<uint32_t, 3>> out;
-  for (size_t i = 0; i < lod.indices().size(); i += 3) out.push_back({lod.indices()[i], lod.indices()[i + 1], lod.indices()[i + 2]});
+  for (size_t i = 0; i < lod.indices().size(); i += 3)
+    out.push_back({lod.indices()[i], lod.indices()[i + 1], lod.indices()[i + 2]});
   return out;
 }
 

@@ -4,18 +4,18 @@
 
 #include <cmath>
 #include <cstring>
-#include <limits>
 #include <functional>
+#include <limits>
 #include <string>
 
 #include "common/error.h"
+#include "error_of.h"
+#include "expect.h"
+#include "fixtures/view_models.h"
 #include "multilevel/build.h"
 #include "multilevel/codec.h"
 #include "multilevel/file.h"
 #include "multilevel/loader.h"
-#include "error_of.h"
-#include "expect.h"
-#include "fixtures/view_models.h"
 
 namespace pms {
 namespace {
@@ -74,8 +74,16 @@ TEST(MultilevelCodec, PaperFigureSixIn2dRoundTrips) {
   m.dimension = 2;
   m.positions = {-3, 3, 3, 3, -3, -3, 3, -3, -2.3f, 3, -3, 2.3f, 2.3f, 2.3f, 2.3f, 3, 2.3f, 2.3f, 3, 2.3f};
   m.triangles = {6, 2, 8, 3, 8, 2, 4, 6, 7, 5, 2, 6, 6, 4, 5, 4, 0, 5, 8, 3, 9, 9, 1, 8, 7, 8, 1, 8, 7, 6};
-  m.representative = {MultilevelMesh::kNoRepresentative, MultilevelMesh::kNoRepresentative,
-                      MultilevelMesh::kNoRepresentative, MultilevelMesh::kNoRepresentative, 0, 2, 0, 1, 1, 3};
+  m.representative = {MultilevelMesh::kNoRepresentative,
+                      MultilevelMesh::kNoRepresentative,
+                      MultilevelMesh::kNoRepresentative,
+                      MultilevelMesh::kNoRepresentative,
+                      0,
+                      2,
+                      0,
+                      1,
+                      1,
+                      3};
   m.representative[4] = 0;
   m.vertex_count = {10, 7, 4};
   m.triangle_count = {10, 6, 2};
@@ -92,11 +100,13 @@ TEST(MultilevelCodec, HostileCompressedPiecesAreRefusedByName) {
             "h: compressed head: 32 bytes (64 expected)");
   std::vector<uint8_t> head = parts.head;
   head[32] = 30;  // position bits
-  EXPECT_EQ(error_of([&] { MultilevelLoader("h", head, {}, compressed); }), "h: compressed head: 30 position bits (1 to 24)");
+  EXPECT_EQ(error_of([&] { MultilevelLoader("h", head, {}, compressed); }),
+            "h: compressed head: 30 position bits (1 to 24)");
   head = parts.head;
   const float nan = std::numeric_limits<float>::quiet_NaN();
   std::memcpy(head.data() + 36, &nan, 4);
-  EXPECT_EQ(error_of([&] { MultilevelLoader("h", head, {}, compressed); }), "h: compressed head: the grid's box is not a box");
+  EXPECT_EQ(error_of([&] { MultilevelLoader("h", head, {}, compressed); }),
+            "h: compressed head: the grid's box is not a box");
 
   // A level out of order, truncated, or with counts past the head's totals.
   MultilevelLoader out_of_order("h", parts.head, {}, compressed);

@@ -7,12 +7,12 @@
 #include <fstream>
 
 #include "common/error.h"
-#include "multilevel/build.h"
-#include "multilevel/file.h"
-#include "test_support.h"
 #include "error_of.h"
 #include "expect.h"
 #include "fixtures/view_models.h"
+#include "multilevel/build.h"
+#include "multilevel/file.h"
+#include "test_support.h"
 
 namespace pms {
 namespace {
@@ -70,7 +70,6 @@ constexpr const char* kFigure13 = R"(#2-level progressive mesh
 4, 1, 7}
 )";
 
-
 const auto expect_same = test::expect_same_multilevel;
 
 using test::error_of;
@@ -90,7 +89,8 @@ TEST(MultilevelFile, Figure6ParsesWithItsLevelsAndThreeRepresentatives) {
   EXPECT_EQ(m.representative[7], 1u);
   MultilevelLod lod(m);
   lod.set_level(2u);  // "Vertex 6 requires a representative (this is 0) as well as vertex 8 (1)"
-  EXPECT_EQ(std::vector<uint32_t>(lod.indices().begin(), lod.indices().end()), (std::vector<uint32_t>{0, 2, 1, 3, 1, 2}));
+  EXPECT_EQ(std::vector<uint32_t>(lod.indices().begin(), lod.indices().end()),
+            (std::vector<uint32_t>{0, 2, 1, 3, 1, 2}));
   lod.set_level(1u);
   // (6, 2, 8): 6 is in level 1, 8 is not; (4, 6, 7): 7 is missing from level 1, its representative is 1.
   EXPECT_EQ(std::vector<uint32_t>(lod.indices().begin(), lod.indices().begin() + 9),
@@ -178,7 +178,8 @@ TEST(MultilevelFile, BunnyRoundTripsExactly) {
   const MultilevelMesh m = build_multilevel(bunny->input, collapses_of(bunny->h), 8);
   ASSERT_GT(geomorph_representative_count(m), 0u) << "merged levels need representatives for geomorphs";
   expect_same(parse_multilevel_binary("bunny.pml", format_multilevel_binary(m)), m);
-  const MultilevelMesh discrete = build_multilevel(bunny->input, collapses_of(bunny->h), 8, MultilevelRepresentatives::discrete);
+  const MultilevelMesh discrete =
+      build_multilevel(bunny->input, collapses_of(bunny->h), 8, MultilevelRepresentatives::discrete);
   const std::string text = format_multilevel_ascii(m);
   EXPECT_NE(text.find("#(without the " + std::to_string(geomorph_representative_count(m)) +
                       " representatives only geomorphs use)\n"),
@@ -197,7 +198,8 @@ TEST(MultilevelFile, MalformedAsciiNamesTheLine) {
       {"{0,0,0}", "m.txt: the last level has vertices but no triangle batch (an empty one is {})"},
       {"{0,0,0,1,1,1,1}{}", "m.txt: line 1: a vertex batch of 7 numbers is not whole 2D or 3D vertices"},
       {"{0,0,0, 1,0,0, 0,1,0}\n{0, 1}", "m.txt: line 2: a triangle of level 0 has 2 corners, not 3"},
-      {"{0,0,0, 1,0,0}\n{0, 1, 2}{0,1,0}{}", "m.txt: line 2: vertex 2 is not in level 1 or above: its representative must follow the triangle"},
+      {"{0,0,0, 1,0,0}\n{0, 1, 2}{0,1,0}{}",
+       "m.txt: line 2: vertex 2 is not in level 1 or above: its representative must follow the triangle"},
       {"{0,0,0, 1,0,0}\n{0, 1, 2, 2}{0,1,0}{}", "m.txt: line 2: representative 2 of vertex 2 is not below it"},
       {"{0,0,0, 1,0,0, 0,1,0}\n{0, 1, 5}", "m.txt: line 2: vertex 5 is beyond the file's 3 vertices"},
       {"{0,0,0, 1,0,0, 0,1,0}\n{0, 1, x}", "m.txt: line 2: 'x' is not a vertex index"},

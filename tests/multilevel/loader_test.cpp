@@ -7,11 +7,11 @@
 #include <string>
 
 #include "common/error.h"
+#include "error_of.h"
+#include "fixtures/view_models.h"
 #include "multilevel/build.h"
 #include "multilevel/loader.h"
 #include "multilevel/mesh.h"
-#include "error_of.h"
-#include "fixtures/view_models.h"
 
 namespace pms {
 namespace {
@@ -63,15 +63,17 @@ TEST(MultilevelLoader, HostilePiecesAreRefusedByName) {
   const MultilevelMesh& m = terrain_levels();
   const MultilevelParts parts = multilevel_parts(m);
   const uint32_t top = m.level_count() - 1;
-  EXPECT_EQ(error_of([&] { MultilevelLoader("h", std::vector<uint8_t>(31)); }), "h: section HEAD: 31 bytes (32 expected)");
+  EXPECT_EQ(error_of([&] { MultilevelLoader("h", std::vector<uint8_t>(31)); }),
+            "h: section HEAD: 31 bytes (32 expected)");
   auto head = parts.head;
   const uint32_t huge = 0x7FFFFFFF;
   std::memcpy(head.data() + 12, &huge, 4);
   EXPECT_NE(error_of([&] { MultilevelLoader("h", head); }).find("over the limit"), std::string::npos);
 
   MultilevelLoader out_of_order("h", parts.head);
-  EXPECT_EQ(error_of([&] { out_of_order.add_level("l", parts.levels[1]); }),
-            "l: offset 0: section LEVL of level " + std::to_string(top) + ": says it is level " + std::to_string(top - 1));
+  EXPECT_EQ(
+      error_of([&] { out_of_order.add_level("l", parts.levels[1]); }),
+      "l: offset 0: section LEVL of level " + std::to_string(top) + ": says it is level " + std::to_string(top - 1));
   MultilevelLoader truncated("h", parts.head);
   auto cut = parts.levels[0];
   cut.resize(cut.size() - 4);

@@ -9,12 +9,12 @@
 #include <map>
 
 #include "common/error.h"
+#include "fixtures/view_models.h"
 #include "io/shapes.h"
 #include "multilevel/build.h"
 #include "multilevel/cluster.h"
 #include "multilevel/local.h"
 #include "multilevel/region.h"
-#include "fixtures/view_models.h"
 
 namespace pms {
 namespace {
@@ -77,7 +77,8 @@ void expect_valid_mesh(const LocalMesh& local, const MultilevelRefinement& r, bo
     }
   }
   if (!manifold) return;
-  for (const auto& [edge, n] : directed) ASSERT_EQ(n, 1) << "edge " << edge.first << "-" << edge.second << " used " << n << " times";
+  for (const auto& [edge, n] : directed)
+    ASSERT_EQ(n, 1) << "edge " << edge.first << "-" << edge.second << " used " << n << " times";
 }
 
 float bounds(const MultilevelMesh& m, int axis, bool hi) {

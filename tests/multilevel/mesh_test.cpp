@@ -8,10 +8,10 @@
 #include <random>
 #include <vector>
 
+#include "fixtures/view_models.h"
 #include "io/shapes.h"
 #include "multilevel/build.h"
 #include "multilevel/mesh.h"
-#include "fixtures/view_models.h"
 
 namespace pms {
 namespace {
@@ -70,7 +70,8 @@ void expect_every_level_is_its_collapses(const test::BuiltModel& model) {
   for (uint32_t l = 0; l < ml.level_count(); ++l) {
     lod.set_level(l);
     const std::vector<Face> faces = lod_faces(lod, 3);
-    EXPECT_EQ(faces.size(), ml.triangle_count[l]) << model.name << " level " << l << ": a triangle of the LOD degenerated";
+    EXPECT_EQ(faces.size(), ml.triangle_count[l])
+        << model.name << " level " << l << ": a triangle of the LOD degenerated";
     EXPECT_EQ(faces, collapsed_faces(model.input, collapses, levels, l)) << model.name << " level " << l;
   }
   // Level 0 is the input itself.
@@ -81,7 +82,9 @@ void expect_every_level_is_its_collapses(const test::BuiltModel& model) {
 }
 
 TEST(Multilevel, EveryLevelIsTheMeshOfItsCollapsesSphere) { expect_every_level_is_its_collapses(test::built_sphere()); }
-TEST(Multilevel, EveryLevelIsTheMeshOfItsCollapsesTerrain) { expect_every_level_is_its_collapses(test::built_terrain()); }
+TEST(Multilevel, EveryLevelIsTheMeshOfItsCollapsesTerrain) {
+  expect_every_level_is_its_collapses(test::built_terrain());
+}
 
 TEST(Multilevel, EveryLevelIsTheMeshOfItsCollapsesBunny) {
   const test::BuiltModel* bunny = test::built_bunny();
@@ -115,7 +118,8 @@ TEST(Multilevel, GeomorphEndsAreTheLevels) {
   const test::BuiltModel& model = test::built_sphere();
   Mesh input = model.input;
   input.colors.assign(input.vertex_count() * 4, 0);
-  for (size_t v = 0; v < input.vertex_count(); ++v) input.colors[4 * v] = uint8_t(v * 37), input.colors[4 * v + 3] = 255;
+  for (size_t v = 0; v < input.vertex_count(); ++v)
+    input.colors[4 * v] = uint8_t(v * 37), input.colors[4 * v + 3] = 255;
   const MultilevelMesh ml = build_multilevel(input, collapses_of(model.h));
   MultilevelLod lod(ml), exact(ml);
   for (uint32_t lo = 0; lo + 1 < ml.level_count(); ++lo) {
@@ -158,7 +162,8 @@ TEST(Multilevel, GeomorphEndsAreTheLevels) {
 void expect_exact_geomorph_ends(const test::BuiltModel& model, uint32_t level_count) {
   Mesh input = model.input;
   input.colors.assign(input.vertex_count() * 4, 0);
-  for (size_t v = 0; v < input.vertex_count(); ++v) input.colors[4 * v + 1] = uint8_t(v * 53), input.colors[4 * v + 3] = 255;
+  for (size_t v = 0; v < input.vertex_count(); ++v)
+    input.colors[4 * v + 1] = uint8_t(v * 53), input.colors[4 * v + 3] = 255;
   const MultilevelMesh ml = build_multilevel(input, collapses_of(model.h), level_count);
   const std::string name = model.name + " " + std::to_string(ml.level_count()) + " levels";
   ASSERT_GT(ml.level_count(), 1u) << name;
@@ -172,8 +177,13 @@ void expect_exact_geomorph_ends(const test::BuiltModel& model, uint32_t level_co
 
     lod.geomorph(lo, 0);
     exact.set_level(lo + 1);
-    const auto at = [](const MultilevelLod& l, uint32_t v) { return Corner{l.positions()[3 * size_t(v)], l.positions()[3 * size_t(v) + 1], l.positions()[3 * size_t(v) + 2]}; };
-    const auto colour = [](const MultilevelLod& l, uint32_t v) { return std::array<uint8_t, 4>{l.colors()[4 * size_t(v)], l.colors()[4 * size_t(v) + 1], l.colors()[4 * size_t(v) + 2], l.colors()[4 * size_t(v) + 3]}; };
+    const auto at = [](const MultilevelLod& l, uint32_t v) {
+      return Corner{l.positions()[3 * size_t(v)], l.positions()[3 * size_t(v) + 1], l.positions()[3 * size_t(v) + 2]};
+    };
+    const auto colour = [](const MultilevelLod& l, uint32_t v) {
+      return std::array<uint8_t, 4>{l.colors()[4 * size_t(v)], l.colors()[4 * size_t(v) + 1],
+                                    l.colors()[4 * size_t(v) + 2], l.colors()[4 * size_t(v) + 3]};
+    };
     const uint32_t t_hi = ml.triangle_count[lo + 1], t_lo = ml.triangle_count[lo];
     size_t flat = 0, wrong_corners = 0;
     for (uint32_t t = t_hi; t < t_lo; ++t) {
@@ -186,7 +196,8 @@ void expect_exact_geomorph_ends(const test::BuiltModel& model, uint32_t level_co
         const uint32_t u = lod.indices()[3 * size_t(t) + k], w = exact.indices()[3 * size_t(t) + k];
         wrong_corners += at(lod, u) != at(exact, w) || colour(lod, u) != colour(exact, w);
       }
-    EXPECT_EQ(flat, t_lo - t_hi) << name << ", t = 0, level " << lo << ": level " << lo << "'s triangles have zero area";
+    EXPECT_EQ(flat, t_lo - t_hi) << name << ", t = 0, level " << lo << ": level " << lo
+                                 << "'s triangles have zero area";
     EXPECT_EQ(wrong_corners, 0u) << name << ", t = 0, level " << lo << ": coarser triangles are LOD " << lo + 1 << "'s";
   }
 }
@@ -240,8 +251,9 @@ TEST(Multilevel, MergedLevelsAreLevelsOfTheUnmergedMesh) {
     validate_multilevel("merged", merged);
     ASSERT_EQ(merged.level_count(), L);
     // The discrete LODs' representatives can only drop; a geomorph's cover at most the removed vertices.
-    EXPECT_LE(build_multilevel(model.input, collapses, L, MultilevelRepresentatives::discrete).stored_representatives(),
-              build_multilevel(model.input, collapses, 0, MultilevelRepresentatives::discrete).stored_representatives());
+    EXPECT_LE(
+        build_multilevel(model.input, collapses, L, MultilevelRepresentatives::discrete).stored_representatives(),
+        build_multilevel(model.input, collapses, 0, MultilevelRepresentatives::discrete).stored_representatives());
     EXPECT_LE(merged.stored_representatives(), merged.vertices() - merged.vertex_count.back());
     // Parents of a vertex's own merged level stay its representatives (multilevel_build.h).
     uint32_t own_level = 0;

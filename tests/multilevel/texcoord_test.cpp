@@ -15,14 +15,14 @@
 #include <vector>
 
 #include "common/error.h"
+#include "error_of.h"
+#include "expect.h"
+#include "fixtures/view_models.h"
 #include "multilevel/build.h"
 #include "multilevel/cluster.h"
 #include "multilevel/codec.h"
 #include "multilevel/file.h"
 #include "multilevel/loader.h"
-#include "error_of.h"
-#include "expect.h"
-#include "fixtures/view_models.h"
 
 namespace pms {
 namespace {
@@ -112,7 +112,8 @@ TEST(MultilevelTexcoords, EveryLevelAndAGeomorphCarryThem) {
     while (at != MultilevelMesh::kNoRepresentative && at >= m.vertex_count[2]) at = m.representative[at];
     if (at == MultilevelMesh::kNoRepresentative) continue;
     for (int k = 0; k < 2; ++k)
-      ASSERT_FLOAT_EQ(morph.texcoords[2 * size_t(v) + k], 0.5f * coarse.texcoords[2 * size_t(at) + k] + 0.5f * m.texcoords[2 * size_t(v) + k]);
+      ASSERT_FLOAT_EQ(morph.texcoords[2 * size_t(v) + k],
+                      0.5f * coarse.texcoords[2 * size_t(at) + k] + 0.5f * m.texcoords[2 * size_t(v) + k]);
     ++checked;
   }
   EXPECT_GT(checked, 0u);
@@ -141,7 +142,8 @@ TEST(MultilevelTexcoords, BinaryRoundTripIsExactAndCostsEightBytesAVertex) {
   MultilevelMesh plain = m;
   plain.texcoords.clear();
   const std::vector<uint8_t> without = format_multilevel_binary(plain);
-  EXPECT_EQ(bytes.size(), without.size() + 8 * size_t(m.vertices()));  // each LEVL grows by 8 bytes a vertex, all 8-aligned
+  EXPECT_EQ(bytes.size(),
+            without.size() + 8 * size_t(m.vertices()));  // each LEVL grows by 8 bytes a vertex, all 8-aligned
   EXPECT_TRUE(parse_multilevel_binary("t", without).texcoords.empty());
   // The ASCII form has no place for them (Fig. 6 "doesn't show this"): they are left out.
   EXPECT_TRUE(parse_multilevel_ascii("t", format_multilevel_ascii(m)).texcoords.empty());
@@ -149,7 +151,8 @@ TEST(MultilevelTexcoords, BinaryRoundTripIsExactAndCostsEightBytesAVertex) {
   // file whose first vertex's (in the coarsest level's section) were made NaN and resealed.
   MultilevelMesh broken = m;
   broken.texcoords[5] = std::nanf("");
-  EXPECT_NE(error_of([&] { format_multilevel_binary(broken); }).find("texture coordinate is not finite"), std::string::npos);
+  EXPECT_NE(error_of([&] { format_multilevel_binary(broken); }).find("texture coordinate is not finite"),
+            std::string::npos);
   std::vector<uint8_t> hostile = bytes;
   const auto first = std::search(hostile.begin(), hostile.end(), reinterpret_cast<const uint8_t*>(&m.texcoords[0]),
                                  reinterpret_cast<const uint8_t*>(&m.texcoords[0]) + 8);
@@ -157,7 +160,9 @@ TEST(MultilevelTexcoords, BinaryRoundTripIsExactAndCostsEightBytesAVertex) {
   const float nan = std::nanf("");
   std::memcpy(&*first, &nan, 4);
   reseal_multilevel_binary(hostile);
-  EXPECT_NE(error_of([&] { parse_multilevel_binary("t", hostile); }).find("a vertex texture coordinate of level 5 is not finite"),
+  EXPECT_NE(error_of([&] {
+              parse_multilevel_binary("t", hostile);
+            }).find("a vertex texture coordinate of level 5 is not finite"),
             std::string::npos);
 }
 
@@ -180,7 +185,8 @@ TEST(MultilevelTexcoords, CompressedRoundTripIsOnTheirGrid) {
     const PositionGrid grid = multilevel_texcoord_grid(m, bits);
     ASSERT_EQ(got.texcoords.size(), m.texcoords.size());
     for (size_t i = 0; i < m.texcoords.size(); ++i)
-      ASSERT_LE(std::abs(got.texcoords[i] - m.texcoords[i]), position_error_bound(grid, int(i % 2))) << bits << " bits, " << i;
+      ASSERT_LE(std::abs(got.texcoords[i] - m.texcoords[i]), position_error_bound(grid, int(i % 2)))
+          << bits << " bits, " << i;
   }
   // Without texture coordinates the compressed form is what it was: a 64-byte head and the same levels.
   MultilevelMesh plain = m;
@@ -190,7 +196,8 @@ TEST(MultilevelTexcoords, CompressedRoundTripIsOnTheirGrid) {
   uint64_t saved = 0;
   for (size_t i = 0; i < with.levels.size(); ++i) saved += with.levels[i].size() - without.levels[i].size();
   EXPECT_GT(saved, 0u);
-  EXPECT_LT(saved, 4 * uint64_t(m.vertices())) << "16-bit texture coordinates predicted from representatives: under 4 bytes a vertex";
+  EXPECT_LT(saved, 4 * uint64_t(m.vertices()))
+      << "16-bit texture coordinates predicted from representatives: under 4 bytes a vertex";
 }
 
 TEST(MultilevelTexcoords, HostileCompressedHeadsAreRefused) {

@@ -5,8 +5,6 @@
 #include <cstring>
 #include <functional>
 
-#include "spm/split_record.h"
-#include "spm/vertex_id.h"
 #include "protocol/client_messages.h"
 #include "protocol/message_types.h"
 #include "protocol/model_messages.h"
@@ -14,6 +12,8 @@
 #include "protocol/stream_context.h"
 #include "protocol/wire_internal.h"
 #include "protocol_fixtures.h"
+#include "spm/split_record.h"
+#include "spm/vertex_id.h"
 
 namespace pms::protocol {
 namespace {
@@ -182,9 +182,11 @@ TEST(HostileInput, OpenResume) {
     return payload_of(w.finish(), MessageType::open);
   };
   expect_rejected([&] { decode_open(open_payload(16, {}, {})); }, ErrorCode::bad_message, "OPEN: flags: unknown bits");
-  expect_rejected([&] { decode_open(open_payload(8 | 2, {}, {})); }, ErrorCode::bad_message, "OPEN: flags: the DAG mode");
+  expect_rejected([&] { decode_open(open_payload(8 | 2, {}, {})); }, ErrorCode::bad_message,
+                  "OPEN: flags: the DAG mode");
   EXPECT_EQ(decode_open(open_payload(8, {}, {})).mode, StreamMode::dag);
-  expect_rejected([&] { decode_open(open_payload(0x80, {}, {})); }, ErrorCode::bad_message, "OPEN: flags: unknown bits");
+  expect_rejected([&] { decode_open(open_payload(0x80, {}, {})); }, ErrorCode::bad_message,
+                  "OPEN: flags: unknown bits");
   // Plain (bit 2) is an option of the sender-driven mode: never with view-independent (bit 1), resume or not.
   expect_rejected([&] { decode_open(open_payload(6, {}, {})); }, ErrorCode::bad_message, "OPEN: flags: plain");
   expect_rejected([&] { decode_open(open_payload(7, {1}, {0})); }, ErrorCode::bad_message, "OPEN: flags: plain");
@@ -193,8 +195,11 @@ TEST(HostileInput, OpenResume) {
   EXPECT_EQ(plain_resume.mode, StreamMode::sender_plain);
   EXPECT_EQ(plain_resume.resume.size(), 2u) << "a plain session resumes as a sender-driven one does";
   expect_rejected([&] { decode_open(open_payload(1, {0}, {})); }, ErrorCode::bad_message, "resume tree count: is 0");
-  expect_rejected([&] { decode_open(open_payload(1, {0xFFFFFFFF}, {0, 0})); }, ErrorCode::bad_message,
-                  "resume tree count: count 4294967295 does not fit");
+  expect_rejected(
+      [&] {
+        decode_open(open_payload(1, {0xFFFFFFFF}, {0, 0}));
+      },
+      ErrorCode::bad_message, "resume tree count: count 4294967295 does not fit");
   // 64 "split" bits in a row: a split at depth 63 would need 65-bit node-ids.
   expect_rejected([&] { decode_open(open_payload(1, {1}, std::vector<int>(64, 1))); }, ErrorCode::bad_id,
                   "a split below depth 63");
@@ -233,7 +238,8 @@ TEST(HostileInput, CatalogueCountIsBoundedByBytes) {
 
 // BASE with one root at the origin of a unit box and the given header fields.
 Payload base_payload(uint32_t roots, uint32_t faces, uint8_t tree_bits, uint8_t position_bits, float bbox_min0 = 0,
-                     std::initializer_list<uint32_t> corners = {}, uint32_t radius_code = 0, uint32_t axis_code = 1023) {
+                     std::initializer_list<uint32_t> corners = {}, uint32_t radius_code = 0,
+                     uint32_t axis_code = 1023) {
   Writer w(MessageType::base);
   w.string("m", kMaxNameBytes, "model");
   for (float v : {bbox_min0, 0.0f, 0.0f, 1.0f, 1.0f, 1.0f, 1.0f}) w.f32(v);
@@ -258,8 +264,11 @@ Payload base_payload(uint32_t roots, uint32_t faces, uint8_t tree_bits, uint8_t 
 
 TEST(HostileInput, BaseFields) {
   EXPECT_NO_THROW(decode_base(base_payload(3, 1, 2, 8, 0, {0, 1, 2})));
-  expect_rejected([&] { decode_base(base_payload(3, 1, 2, 8, 0, {0, 1, 3})); }, ErrorCode::bad_id,
-                  "BASE: face 0: corner: 3 >= root count 3");
+  expect_rejected(
+      [&] {
+        decode_base(base_payload(3, 1, 2, 8, 0, {0, 1, 3}));
+      },
+      ErrorCode::bad_id, "BASE: face 0: corner: 3 >= root count 3");
   expect_rejected([&] { decode_base(base_payload(0xFFFFFFF, 0, 28, 8)); }, ErrorCode::bad_message,
                   "BASE: root count: count 268435455 does not fit");
   expect_rejected([&] { decode_base(base_payload(1, 0x7FFFFFFF, 1, 8)); }, ErrorCode::bad_message, "face count");

@@ -6,10 +6,6 @@
 #include <cmath>
 #include <cstring>
 
-#include "spm/hierarchy.h"
-#include "spm/refine_info.h"
-#include "spm/split_record.h"
-#include "spm/vertex_id.h"
 #include "protocol/client_messages.h"
 #include "protocol/dispatch.h"
 #include "protocol/framing.h"
@@ -20,6 +16,10 @@
 #include "protocol/server_messages.h"
 #include "protocol/stream_context.h"
 #include "protocol_fixtures.h"
+#include "spm/hierarchy.h"
+#include "spm/refine_info.h"
+#include "spm/split_record.h"
+#include "spm/vertex_id.h"
 
 namespace pms::protocol {
 namespace {
@@ -41,7 +41,6 @@ M round_trip(const M& m, MessageType type, Decode decode) {
 }
 
 bool same_id(VertexId a, VertexId b) { return a.tree == b.tree && a.node == b.node; }
-
 
 TEST(Messages, HelloRoundTrip) {
   for (uint64_t seed : kSeeds) {
@@ -80,7 +79,9 @@ TEST(Messages, OpenRoundTrip) {
     const Open plain = round_trip(m, MessageType::open, [](auto p) { return decode_open(p); });
     EXPECT_EQ(plain.mode, StreamMode::sender_plain);
     EXPECT_EQ(encode(m)[kFrameHeaderBytes + 2 + m.model.size()], 4) << "flags: bit 2 = plain (sender-driven option)";
-    m.mode = seed % 3 == 0 ? StreamMode::view_independent : seed % 3 == 1 ? StreamMode::sender_plain : StreamMode::sender_driven;
+    m.mode = seed % 3 == 0   ? StreamMode::view_independent
+             : seed % 3 == 1 ? StreamMode::sender_plain
+                             : StreamMode::sender_driven;
 
     m.resume = test::random_front(rng, uint32_t(1 + rng() % 100), 63);
     const Open back = round_trip(m, MessageType::open, [](auto p) { return decode_open(p); });
@@ -158,8 +159,8 @@ TEST(Messages, CatalogueRoundTrip) {
     Catalogue m;
     m.models.resize(rng() % 20);
     for (ModelInfo& info : m.models)
-      info = {random_name(rng, 30), rng(), uint32_t(rng()), rng(), uint32_t(1 + rng() % 32), uint32_t(rng() % 64),
-              bool(rng() & 1), bool(rng() & 1)};
+      info = {random_name(rng, 30), rng(),           uint32_t(rng()), rng(), uint32_t(1 + rng() % 32),
+              uint32_t(rng() % 64), bool(rng() & 1), bool(rng() & 1)};
     const Catalogue back = round_trip(m, MessageType::catalogue, [](auto p) { return decode_catalogue(p); });
     ASSERT_EQ(back.models.size(), m.models.size());
     for (size_t i = 0; i < m.models.size(); ++i) {
@@ -317,14 +318,14 @@ TEST(Messages, DispatchByDirection) {
   Frame frame{MessageType::hello, payload_of(hello, MessageType::hello)};
   EXPECT_TRUE(std::holds_alternative<Hello>(decode_client_message(frame)));
   test::expect_rejected([&] { decode_server_message(frame, nullptr); }, ErrorCode::bad_message,
-                  "HELLO: not a message a server sends");
+                        "HELLO: not a message a server sends");
 
   frame = {MessageType::error, payload_of(encode(ErrorMessage{ErrorCode::timeout, "late"}), MessageType::error)};
   const ServerMessage reply = decode_server_message(frame, nullptr);
   ASSERT_TRUE(std::holds_alternative<ErrorMessage>(reply));
   EXPECT_EQ(std::get<ErrorMessage>(reply).code, ErrorCode::timeout);
   test::expect_rejected([&] { decode_client_message(frame); }, ErrorCode::bad_message,
-                  "ERROR: not a message a client sends");
+                        "ERROR: not a message a client sends");
 
   frame = {MessageType(0x42), {}};
   test::expect_rejected([&] { decode_client_message(frame); }, ErrorCode::bad_message, "type 0x42");
@@ -349,7 +350,8 @@ TEST(Messages, DagOpsAndDagViewRoundTrip) {
   }
   const std::vector<uint8_t> bytes = encode(ops, c);
   Frame frame{MessageType::dag_ops, payload_of(bytes, MessageType::dag_ops)};
-  test::expect_rejected([&] { decode_server_message(frame, nullptr); }, ErrorCode::out_of_order, "DAG_OPS: before any BASE");
+  test::expect_rejected([&] { decode_server_message(frame, nullptr); }, ErrorCode::out_of_order,
+                        "DAG_OPS: before any BASE");
   const DagOps back = std::get<DagOps>(decode_server_message(frame, &c));
   EXPECT_EQ(back.frame, 12u);
   EXPECT_TRUE(back.final);

@@ -10,10 +10,6 @@
 
 #include "common/bit_stream.h"
 #include "io/shapes.h"
-#include "spm/hierarchy.h"
-#include "spm/split_codec.h"
-#include "spm/split_record.h"
-#include "spm/vertex_id.h"
 #include "protocol/client_messages.h"
 #include "protocol/dispatch.h"
 #include "protocol/framing.h"
@@ -26,8 +22,12 @@
 #include "protocol/split_bands.h"
 #include "protocol/stream_context.h"
 #include "protocol_fixtures.h"
+#include "spm/hierarchy.h"
 #include "spm/selective_mesh.h"
+#include "spm/split_codec.h"
+#include "spm/split_record.h"
 #include "spm/vertex_hierarchy.h"
+#include "spm/vertex_id.h"
 #include "test_support.h"
 
 namespace pms::protocol {
@@ -157,10 +157,11 @@ void expect_client_refines_fully(const ModelData& model, const Received& got, co
 
 void report(const char* name, const StreamContext& c, const PacketStats& s) {
   const double n = double(s.packets);
-  std::printf("[ %-8s ] tree %u bits, node %u bits, %zu packets: topology %.1f bits (max %u), position %.0f, "
-              "refinement %.0f, attributes %.0f; %.2f bytes/packet as one bit stream per batch, %.2f byte-aligned\n",
-              name, c.tree_id_bits, c.node_id_bits, s.packets, s.topology / n, s.max_topology, s.position / n,
-              s.refinement / n, s.attributes / n, s.stream_bytes / n, s.aligned_bytes / n);
+  std::printf(
+      "[ %-8s ] tree %u bits, node %u bits, %zu packets: topology %.1f bits (max %u), position %.0f, "
+      "refinement %.0f, attributes %.0f; %.2f bytes/packet as one bit stream per batch, %.2f byte-aligned\n",
+      name, c.tree_id_bits, c.node_id_bits, s.packets, s.topology / n, s.max_topology, s.position / n, s.refinement / n,
+      s.attributes / n, s.stream_bytes / n, s.aligned_bytes / n);
   ::testing::Test::RecordProperty(std::string(name) + "_topology_bits_mean", std::to_string(s.topology / n));
   ::testing::Test::RecordProperty(std::string(name) + "_bytes_per_packet", std::to_string(s.stream_bytes / n));
 }

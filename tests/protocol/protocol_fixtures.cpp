@@ -6,12 +6,12 @@
 
 #include "io/mesh.h"
 #include "io/shapes.h"
+#include "protocol/message_types.h"
+#include "protocol/stream_context.h"
 #include "spm/hierarchy.h"
 #include "spm/refine_info.h"
 #include "spm/split_record.h"
 #include "spm/vertex_id.h"
-#include "protocol/message_types.h"
-#include "protocol/stream_context.h"
 #include "test_support.h"
 
 namespace pms::test {

@@ -9,12 +9,12 @@
 #include <vector>
 
 #include "builder/build.h"
+#include "protocol/message_types.h"
+#include "protocol/stream_context.h"
 #include "spm/hierarchy.h"
 #include "spm/refine_info.h"
 #include "spm/split_record.h"
 #include "spm/vertex_id.h"
-#include "protocol/message_types.h"
-#include "protocol/stream_context.h"
 
 namespace pms::test {
 
@@ -24,10 +24,10 @@ struct BuiltModel {
   Hierarchy hierarchy;
   ModelData model() const { return model_of(hierarchy); }
 };
-const BuiltModel& sphere_model();            // make_sphere, with per-vertex normals and colors added
-const BuiltModel& terrain_model();           // make_terrain(20000)
-const BuiltModel* bunny_model();             // nullptr when ../shared/models/bunny.ply.xz is absent
-const BuiltModel* horse_model();             // with normals; nullptr when ../shared/models/horse.ply.xz is absent
+const BuiltModel& sphere_model();   // make_sphere, with per-vertex normals and colors added
+const BuiltModel& terrain_model();  // make_terrain(20000)
+const BuiltModel* bunny_model();    // nullptr when ../shared/models/bunny.ply.xz is absent
+const BuiltModel* horse_model();    // with normals; nullptr when ../shared/models/horse.ply.xz is absent
 
 // The payload of one encoded frame (checks the header's length and type on the way).
 std::vector<uint8_t> payload_of(const std::vector<uint8_t>& frame, protocol::MessageType type);

@@ -6,12 +6,12 @@
 #include <vector>
 
 #include "common/error.h"
-#include "spm/hierarchy.h"
-#include "spm/refine_info.h"
-#include "spm/split_codec.h"
 #include "protocol/position_grid.h"
 #include "protocol/split_bands.h"
 #include "protocol_fixtures.h"
+#include "spm/hierarchy.h"
+#include "spm/refine_info.h"
+#include "spm/split_codec.h"
 #include "spm/vertex_hierarchy.h"
 
 namespace pms::protocol {

@@ -9,9 +9,6 @@
 #include <vector>
 
 #include "common/bit_stream.h"
-#include "spm/hierarchy.h"
-#include "spm/split_codec.h"
-#include "spm/split_record.h"
 #include "protocol/model_messages.h"
 #include "protocol/packet_bits.h"
 #include "protocol/position_grid.h"
@@ -20,6 +17,9 @@
 #include "protocol/stream_context.h"
 #include "protocol/wire_internal.h"
 #include "protocol_fixtures.h"
+#include "spm/hierarchy.h"
+#include "spm/split_codec.h"
+#include "spm/split_record.h"
 #include "spm/vertex_hierarchy.h"
 
 namespace pms::protocol {
@@ -60,8 +60,8 @@ RecordStats check_records(const ModelData& model, uint32_t position_bits) {
     stats.bits += parts;
     ++stats.splits;
     const PacketBits today = packet_bits(split_record(model, node), context);
-    stats.today.topology += today.topology, stats.today.position += today.position, stats.today.refinement += today.refinement,
-        stats.today.attributes += today.attributes;
+    stats.today.topology += today.topology, stats.today.position += today.position,
+        stats.today.refinement += today.refinement, stats.today.attributes += today.attributes;
 
     const uint32_t slot = client.find(model.id(node));
     EXPECT_NE(slot, kNone);
@@ -91,7 +91,8 @@ RecordStats check_records(const ModelData& model, uint32_t position_bits) {
       for (int k = 0; k < 3; ++k) EXPECT_EQ(client.normal(slot)[k], sent[k]) << "normal of node " << n;
     }
     if (!model.colors.empty()) {
-      for (int k = 0; k < 4; ++k) EXPECT_EQ(client.color(slot)[k], model.colors[4 * size_t(n) + k]) << "color of node " << n;
+      for (int k = 0; k < 4; ++k)
+        EXPECT_EQ(client.color(slot)[k], model.colors[4 * size_t(n) + k]) << "color of node " << n;
     }
   }
   return stats;
@@ -99,16 +100,19 @@ RecordStats check_records(const ModelData& model, uint32_t position_bits) {
 
 void print(const char* name, const RecordStats& s) {
   const double n = double(s.splits);
-  std::printf("%s: %zu records, bits per split: topology %.2f, geometry %.2f, refinement %.2f, normal %.2f, "
-              "color %.2f, total %.2f; tables %.1f KB\n"
-              "  full VSPLITS packets: topology %.2f (v_s id included), position %.2f, refinement %.2f, attributes %.2f\n",
-              name, s.splits, double(s.bits.topology) / n, double(s.bits.geometry) / n, double(s.bits.refinement) / n,
-              double(s.bits.normal) / n, double(s.bits.color) / n, double(s.bits.total()) / n, double(s.table_bits) / 8192,
-              double(s.today.topology) / n, double(s.today.position) / n, double(s.today.refinement) / n,
-              double(s.today.attributes) / n);
+  std::printf(
+      "%s: %zu records, bits per split: topology %.2f, geometry %.2f, refinement %.2f, normal %.2f, "
+      "color %.2f, total %.2f; tables %.1f KB\n"
+      "  full VSPLITS packets: topology %.2f (v_s id included), position %.2f, refinement %.2f, attributes %.2f\n",
+      name, s.splits, double(s.bits.topology) / n, double(s.bits.geometry) / n, double(s.bits.refinement) / n,
+      double(s.bits.normal) / n, double(s.bits.color) / n, double(s.bits.total()) / n, double(s.table_bits) / 8192,
+      double(s.today.topology) / n, double(s.today.position) / n, double(s.today.refinement) / n,
+      double(s.today.attributes) / n);
 }
 
-uint64_t full_bits(const RecordStats& s) { return s.today.topology + s.today.position + s.today.refinement + s.today.attributes; }
+uint64_t full_bits(const RecordStats& s) {
+  return s.today.topology + s.today.position + s.today.refinement + s.today.attributes;
+}
 
 TEST(SplitRecords, TerrainRoundTripsThroughAClient) {
   const RecordStats s = check_records(test::terrain_model().model(), 16);

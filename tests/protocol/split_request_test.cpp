@@ -4,16 +4,16 @@
 #include <algorithm>
 #include <cstdio>
 
-#include "spm/hierarchy.h"
-#include "spm/vertex_id.h"
+#include "common/camera.h"
 #include "protocol/base64url.h"
 #include "protocol/message_types.h"
-#include "protocol_fixtures.h"
 #include "protocol/split_request.h"
+#include "protocol_fixtures.h"
 #include "spm/adapt.h"
-#include "common/camera.h"
+#include "spm/hierarchy.h"
 #include "spm/selective_mesh.h"
 #include "spm/vertex_hierarchy.h"
+#include "spm/vertex_id.h"
 
 namespace pms::test {
 namespace {
@@ -81,12 +81,12 @@ TEST(SplitRequest, TheEncoderRefusesWhatIsNotAnAntichain) {
 }
 
 // Bits per id of `rounds` sent as requests of at most `chunk` ids each, taken in the rounds' order.
-double bits_per_id(const std::vector<std::vector<VertexId>>& rounds, size_t chunk,
-                   const SplitRequestLimits& limits) {
+double bits_per_id(const std::vector<std::vector<VertexId>>& rounds, size_t chunk, const SplitRequestLimits& limits) {
   uint64_t ids = 0, bits = 0;
   for (const std::vector<VertexId>& round : rounds)
     for (size_t at = 0; at < round.size(); at += chunk) {
-      const SplitRequest request{0, {round.begin() + long(at), round.begin() + long(std::min(round.size(), at + chunk))}};
+      const SplitRequest request{0,
+                                 {round.begin() + long(at), round.begin() + long(std::min(round.size(), at + chunk))}};
       const std::vector<uint8_t> code = encode_split_request(request);
       EXPECT_EQ(decode_split_request(code, limits).ids, sorted(request.ids));
       ids += request.ids.size();
@@ -130,8 +130,10 @@ TEST(SplitRequest, BitsPerRequestedIdOnACloseViewOfBunny) {
   Rng rng(27);
   for (auto& round : rounds) std::shuffle(round.begin(), round.end(), rng);
   const double shuffled = bits_per_id(rounds, 64, limits);
-  std::printf("bunny close view: %zu ids in %zu rounds; bits per requested id: %.2f per round, %.2f in requests "
-              "of 64, %.2f in requests of 64 in random order\n", ids, rounds.size(), whole, in_order, shuffled);
+  std::printf(
+      "bunny close view: %zu ids in %zu rounds; bits per requested id: %.2f per round, %.2f in requests "
+      "of 64, %.2f in requests of 64 in random order\n",
+      ids, rounds.size(), whole, in_order, shuffled);
   EXPECT_LE(shuffled, 27.0);  // cheng-ooi §4.3's 27 bits per id, even without locality
   EXPECT_LE(in_order, shuffled);
   EXPECT_LE(whole, in_order);
@@ -166,7 +168,11 @@ TEST(SplitRequest, HostileCodesAreRejected) {
   expect_rejected([&] { decode_split_request(ones, limits); }, ErrorCode::bad_id, "deepest split");
   SplitRequestLimits none = limits;
   none.max_node_depth = -1;  // a model without splits
-  expect_rejected([&] { decode_split_request(encode_split_request({0, {{0, 1}}}), none); }, ErrorCode::bad_id, "depth 0");
+  expect_rejected(
+      [&] {
+        decode_split_request(encode_split_request({0, {{0, 1}}}), none);
+      },
+      ErrorCode::bad_id, "depth 0");
 }
 
 TEST(Base64url, RoundTripsAndIsStrict) {
@@ -179,7 +185,7 @@ TEST(Base64url, RoundTripsAndIsStrict) {
     EXPECT_EQ(protocol::base64url_decode(text), bytes);
   }
   EXPECT_EQ(protocol::base64url_encode(std::vector<uint8_t>{0xFB, 0xFF}), "-_8");
-  EXPECT_FALSE(protocol::base64url_decode("-_9"));   // non-zero bits after the last byte
+  EXPECT_FALSE(protocol::base64url_decode("-_9"));    // non-zero bits after the last byte
   EXPECT_FALSE(protocol::base64url_decode("AAAA="));  // padding
   EXPECT_FALSE(protocol::base64url_decode("AA+A"));   // not the URL alphabet
   EXPECT_FALSE(protocol::base64url_decode("AAAAA"));  // 1 mod 4

@@ -29,8 +29,8 @@ TEST(UrlSegment, DecodingTakesEitherCaseAndRawPathCharacters) {
 }
 
 TEST(UrlSegment, MalformedSegmentsAreRejected) {
-  for (const char* bad : {"%", "a%", "a%4", "%4g", "%g4", "a b", "a/b", "a?b", "a#b", "a\"b", "<x>", "%2F", "%2f",
-                          "%00", "\x80"})
+  for (const char* bad :
+       {"%", "a%", "a%4", "%4g", "%g4", "a b", "a/b", "a?b", "a#b", "a\"b", "<x>", "%2F", "%2f", "%00", "\x80"})
     EXPECT_FALSE(url_segment_decode(bad).has_value()) << bad;
 }
 

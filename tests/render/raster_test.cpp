@@ -5,9 +5,9 @@
 #include <random>
 
 #include "common/error.h"
-#include "spm/vertex_id.h"
 #include "render/render.h"
 #include "render_fixtures.h"
+#include "spm/vertex_id.h"
 
 namespace pms {
 namespace {
@@ -145,10 +145,8 @@ TEST(Raster, JitteredGridCoversEveryPixelOnce) {
   for (uint32_t j = 0; j < cells; ++j)
     for (uint32_t i = 0; i < cells; ++i) {
       const uint32_t a = j * (cells + 1) + i, b = a + 1, c = a + cells + 2, d = a + cells + 1;
-      if ((i + j) % 2)
-        indices.insert(indices.end(), {a, b, c, a, c, d});
-      else
-        indices.insert(indices.end(), {a, b, d, b, c, d});
+      if ((i + j) % 2) indices.insert(indices.end(), {a, b, c, a, c, d});
+      else indices.insert(indices.end(), {a, b, d, b, c, d});
     }
   const ViewParams view = square_view(n);
   const std::vector<int> counts = cover_counts(positions, indices, view);

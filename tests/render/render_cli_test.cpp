@@ -1,9 +1,9 @@
 // `pmstream render` and `pmstream compare` end to end (docs/cli.md): PNG size and content, the JSON
 // fields, .pms input rendering the finest mesh, and one-line errors naming the file.
 #include <gtest/gtest.h>
-#include <nlohmann/json.hpp>
 #include <png.h>
 #include <sys/wait.h>
+#include <nlohmann/json.hpp>
 
 #include <algorithm>
 #include <fstream>

@@ -6,9 +6,9 @@
 
 #include "common/error.h"
 #include "io/shapes.h"
-#include "spm/vertex_id.h"
 #include "render/render.h"
 #include "render_fixtures.h"
+#include "spm/vertex_id.h"
 
 namespace pms {
 namespace {

@@ -55,8 +55,8 @@ bool connection_gone(const boost::system::error_code& ec) {
 // ---- ServerProcess -------------------------------------------------------------------------------------
 
 ServerProcess::ServerProcess(const std::string& model_path, const std::vector<std::string>& flags) {
-  std::vector<std::string> args = {PMSTREAM_BINARY, "serve", model_path, "--host", "127.0.0.1", "--port", "0",
-                                   "--json"};
+  std::vector<std::string> args = {PMSTREAM_BINARY, "serve",  model_path, "--host",
+                                   "127.0.0.1",     "--port", "0",        "--json"};
   args.insert(args.end(), flags.begin(), flags.end());
   std::vector<char*> argv;
   for (std::string& a : args) argv.push_back(a.data());
@@ -280,7 +280,8 @@ bool Peer::read_until(const std::function<bool(const protocol::Frame&)>& done, C
 }
 
 bool Peer::wait_closed(Clock::time_point deadline) {
-  while (receive(deadline)) {}  // the frames that came before the end count (an ERROR, most of all)
+  while (receive(deadline)) {
+  }  // the frames that came before the end count (an ERROR, most of all)
   return closed_;
 }
 
@@ -288,7 +289,8 @@ bool Peer::drip(std::span<const uint8_t> bytes, milliseconds interval) {
   for (uint8_t byte : bytes) {
     if (send_some({&byte, 1}) != 1) return false;
     const Clock::time_point next = after(interval);
-    while (receive(next)) {}  // an ERROR may come meanwhile
+    while (receive(next)) {
+    }  // an ERROR may come meanwhile
     if (closed_) return false;
   }
   return true;
@@ -351,7 +353,7 @@ std::vector<uint8_t> open_with_front(const std::string& model, const FrontCode& 
   std::vector<uint8_t> frame(protocol::kFrameHeaderBytes);  // written once the payload's length is known
   append_le(frame, model.size(), 2);
   for (char c : model) frame.push_back(uint8_t(c));  // (a range insert here trips GCC 12's -Wstringop-overflow)
-  frame.push_back(1);  // flags: a resume front follows
+  frame.push_back(1);                                // flags: a resume front follows
   append_le(frame, front.trees, 4);
   const size_t start = frame.size();
   frame.resize(start + (front.bits.size() + 7) / 8, 0);

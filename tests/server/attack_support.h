@@ -4,22 +4,22 @@
 // would refuse, and a good client that flies a path and keeps each frame's latency.
 // Every wait has a deadline: a server that hangs fails the test instead of hanging it.
 #pragma once
-#include <utility>  // before asio with C++20
+#include <sys/types.h>
 #include <boost/asio.hpp>
 #include <chrono>
 #include <cstdint>
 #include <functional>
 #include <initializer_list>
+#include <nlohmann/json.hpp>
 #include <optional>
 #include <span>
 #include <string>
-#include <sys/types.h>
+#include <utility>  // before asio with C++20
 #include <vector>
-#include <nlohmann/json.hpp>
 
+#include "common/camera.h"
 #include "protocol/framing.h"
 #include "protocol/message_types.h"
-#include "common/camera.h"
 #include "streaming_fixture.h"
 
 namespace pms::test {
@@ -55,9 +55,9 @@ class ServerProcess {
   double wait_for_idle(double idle, milliseconds within);
 
   struct Exit {
-    double seconds = 0;     // SIGTERM to exit
-    bool exited = false;    // by itself, within the patience given (else killed)
-    int exit_code = -1;     // when it exited normally
+    double seconds = 0;                     // SIGTERM to exit
+    bool exited = false;                    // by itself, within the patience given (else killed)
+    int exit_code = -1;                     // when it exited normally
     std::optional<nlohmann::json> stopped;  // its "stopped" line
   };
   // SIGTERM, then waits up to `patience` (longer than the deadline under test, to say by how much it

@@ -27,12 +27,12 @@
 #include "attack_support.h"
 #include "client/client_session.h"
 #include "io/shapes.h"
-#include "spm/hierarchy.h"
-#include "spm/split_record.h"
 #include "protocol/client_messages.h"
 #include "protocol/framing.h"
 #include "protocol/message_types.h"
 #include "protocol/server_messages.h"
+#include "spm/hierarchy.h"
+#include "spm/split_record.h"
 #include "test_support.h"
 
 namespace pms {
@@ -193,19 +193,19 @@ class Attack : public ::testing::Test {
     EXPECT_LE(exit.seconds, 1.0) << "SIGTERM to exit";
     EXPECT_EQ(exit.exit_code, 0);
     EXPECT_TRUE(exit.stopped.has_value()) << "no \"stopped\" line with the totals";
-    std::printf("[ attack   ] %s: p99 quiet %.1f ms (p50 %.1f, %zu answers, %.1f s, server CPU %.2f s), attacked %.1f ms "
-                "(p50 %.1f, %zu, %.1f s, server CPU %.2f s); CPU after %.1f %%; sessions after %llu; SIGTERM %.3f s; "
-                "timed out %llu, protocol errors %llu, refused %llu, longest turn %llu us%s%s\n",
-                attack, quiet_p99, percentile(quiet_.latency_ms, 50), quiet_.latency_ms.size(), quiet_.seconds, quiet_cpu_,
-                attacked_p99, percentile(attacked_.latency_ms, 50), attacked_.latency_ms.size(), attacked_.seconds,
-                attacked_cpu_, 100 * cpu,
-                (unsigned long long)sessions, exit.seconds,
-                (unsigned long long)stats.at("sessions_timed_out").get<uint64_t>(),
-                (unsigned long long)stats.at("protocol_errors").get<uint64_t>(),
-                (unsigned long long)stats.at("sessions_refused").get<uint64_t>(),
-                (unsigned long long)stats.value("longest_turn_us", uint64_t(0)),
-                test::kSanitized ? " (sanitizer build: no quiet flight, the p99 bound is the release run's)" : "",
-                pairs.c_str());
+    std::printf(
+        "[ attack   ] %s: p99 quiet %.1f ms (p50 %.1f, %zu answers, %.1f s, server CPU %.2f s), attacked %.1f ms "
+        "(p50 %.1f, %zu, %.1f s, server CPU %.2f s); CPU after %.1f %%; sessions after %llu; SIGTERM %.3f s; "
+        "timed out %llu, protocol errors %llu, refused %llu, longest turn %llu us%s%s\n",
+        attack, quiet_p99, percentile(quiet_.latency_ms, 50), quiet_.latency_ms.size(), quiet_.seconds, quiet_cpu_,
+        attacked_p99, percentile(attacked_.latency_ms, 50), attacked_.latency_ms.size(), attacked_.seconds,
+        attacked_cpu_, 100 * cpu, (unsigned long long)sessions, exit.seconds,
+        (unsigned long long)stats.at("sessions_timed_out").get<uint64_t>(),
+        (unsigned long long)stats.at("protocol_errors").get<uint64_t>(),
+        (unsigned long long)stats.at("sessions_refused").get<uint64_t>(),
+        (unsigned long long)stats.value("longest_turn_us", uint64_t(0)),
+        test::kSanitized ? " (sanitizer build: no quiet flight, the p99 bound is the release run's)" : "",
+        pairs.c_str());
   }
 
   static milliseconds remaining(Clock::time_point deadline) {
@@ -264,7 +264,8 @@ std::vector<BadFront> bad_fronts() {
       {"a real leaf marked split", open_with_front("terrain", front(roots).chain(leaf_depth + 1).leaves(roots - 1)),
        ErrorCode::bad_id},
       {"leaves below the model's depth",
-       open_with_front("terrain", front(roots).leaves(roots - 1).chain(std::min(max_depth + 8, 63))), ErrorCode::bad_id},
+       open_with_front("terrain", front(roots).leaves(roots - 1).chain(std::min(max_depth + 8, 63))),
+       ErrorCode::bad_id},
       {"a split at depth 63", open_with_front("terrain", front(roots).chain(64).leaves(roots - 1)), ErrorCode::bad_id},
       {"no trees", open_with_front("terrain", front(0)), ErrorCode::bad_message},
       {"more trees than bits", open_with_front("terrain", front(0xFFFFFFFFu).leaves(roots)), ErrorCode::bad_message},
@@ -277,12 +278,15 @@ std::vector<BadFront> bad_fronts() {
 // HELLO, the OPEN, a VIEW; then reads until the server closes. A good front must see its VIEW answered.
 void resume_with(uint16_t port, const BadFront& front) {
   Peer peer(port);
-  const std::vector<uint8_t> bytes = joined({hello_frame(), front.open, view_frame(good_path().front(), kTolerance, 1)});
+  const std::vector<uint8_t> bytes =
+      joined({hello_frame(), front.open, view_frame(good_path().front(), kTolerance, 1)});
   ASSERT_TRUE(peer.send(bytes, after(kDeadline))) << front.what;
   if (!front.expected) {
-    const bool answered = peer.read_until([](const protocol::Frame& frame) {
-      return frame.type == protocol::MessageType::vsplits && (frame.payload[4] & 1);  // the flags byte: final
-    }, after(milliseconds(5000)));
+    const bool answered = peer.read_until(
+        [](const protocol::Frame& frame) {
+          return frame.type == protocol::MessageType::vsplits && (frame.payload[4] & 1);  // the flags byte: final
+        },
+        after(milliseconds(5000)));
     EXPECT_TRUE(answered) << front.what << ": the VIEW after a good resume got no final VSPLITS";
     EXPECT_TRUE(peer.errors().empty()) << front.what;
     return;
@@ -314,31 +318,34 @@ TEST_F(Attack, ClientsThatNeverReadAreClosedByTheWriteTimeout) {
   start();
   const std::vector<Camera> views = orbit_path(terrain().hierarchy, 64, 1.7f);
   std::atomic<int> silent{0}, pushy{0};
-  fly_during(4, [&](int i) {
-    bool stalled = false;
-    do {
-      // A small window: the server's answer stalls after a few kilobytes.
-      std::unique_ptr<Peer> peer = opened_peer(port(), 4096, false);
-      ASSERT_TRUE(peer->send(view_frame(close_view(), 0.25f, 1), after(kDeadline)));
-      if (!std::exchange(stalled, true)) ready();  // its first answer stalls within milliseconds
-      if (i % 2 == 0) {
-        // It says no more either. Once the server gives up on it, what it had sent still drains, then ends;
-        // a server still holding the session would stream on, and close only at the idle timeout.
-        std::this_thread::sleep_for(2 * kDeadline);
-        EXPECT_TRUE(peer->wait_closed(after(milliseconds(800)))) << "a silent non-reader was not closed";
-        ++silent;
-      } else {
-        // It keeps sending VIEWs, which must not count as activity: the server stops reading, and closes.
-        const Clock::time_point deadline = after(milliseconds(10000));
-        for (uint32_t frame = 2; Clock::now() < deadline; ++frame) {
-          if (!peer->send(view_frame(views[frame % views.size()], 0.25f, frame), after(milliseconds(5000)))) break;
-          std::this_thread::sleep_for(kPace);
-        }
-        EXPECT_TRUE(peer->closed()) << "a non-reader sending VIEWs was not closed";
-        ++pushy;
-      }
-    } while (!landed());
-  }, 4);
+  fly_during(
+      4,
+      [&](int i) {
+        bool stalled = false;
+        do {
+          // A small window: the server's answer stalls after a few kilobytes.
+          std::unique_ptr<Peer> peer = opened_peer(port(), 4096, false);
+          ASSERT_TRUE(peer->send(view_frame(close_view(), 0.25f, 1), after(kDeadline)));
+          if (!std::exchange(stalled, true)) ready();  // its first answer stalls within milliseconds
+          if (i % 2 == 0) {
+            // It says no more either. Once the server gives up on it, what it had sent still drains, then ends;
+            // a server still holding the session would stream on, and close only at the idle timeout.
+            std::this_thread::sleep_for(2 * kDeadline);
+            EXPECT_TRUE(peer->wait_closed(after(milliseconds(800)))) << "a silent non-reader was not closed";
+            ++silent;
+          } else {
+            // It keeps sending VIEWs, which must not count as activity: the server stops reading, and closes.
+            const Clock::time_point deadline = after(milliseconds(10000));
+            for (uint32_t frame = 2; Clock::now() < deadline; ++frame) {
+              if (!peer->send(view_frame(views[frame % views.size()], 0.25f, frame), after(milliseconds(5000)))) break;
+              std::this_thread::sleep_for(kPace);
+            }
+            EXPECT_TRUE(peer->closed()) << "a non-reader sending VIEWs was not closed";
+            ++pushy;
+          }
+        } while (!landed());
+      },
+      4);
   const uint64_t timed_out = server_->stats().at("sessions_timed_out").get<uint64_t>();
   EXPECT_GE(timed_out, uint64_t(silent + pushy)) << "every non-reader ends by a deadline";
   expect_unhurt("never-read");
@@ -378,7 +385,8 @@ TEST_F(Attack, SlowDripClientsAreClosedByTheFrameAndHandshakeTimeouts) {
         EXPECT_TRUE(peer.send(hello_frame(), after(kDeadline)));
         for (Clock::time_point next = start + kDrip; !peer.closed() && seconds_since(start) < 3; next += kDrip) {
           if (!peer.send(list_frame(), after(kDeadline))) break;
-          while (peer.receive(next)) {}  // its CATALOGUE, and in the end the ERROR
+          while (peer.receive(next)) {
+          }  // its CATALOGUE, and in the end the ERROR
         }
         expect_closed_by_a_deadline(peer, start, "LIST without OPEN");
       }
@@ -429,29 +437,34 @@ TEST_F(Attack, HundredsOfIdleConnectionsAreClosedByTheHandshakeTimeout) {
   constexpr int kIdle = 300;
   start(kIdle + 100);
   std::atomic<int> evicted{0};
-  fly_during(1, [&](int) {
-    struct Idle {
-      std::unique_ptr<Peer> peer;
-      Clock::time_point since;
-    };
-    std::vector<Idle> idle;
-    for (int i = 0; i < kIdle; ++i) idle.push_back({std::make_unique<Peer>(port()), Clock::now()});
-    ready();
-    auto evict = [&](Idle& connection, Clock::time_point deadline) {
-      if (!connection.peer->wait_closed(deadline)) return false;
-      EXPECT_GE(seconds_since(connection.since), 0.95) << "an idle connection was closed before the handshake timeout";
-      EXPECT_EQ(connection.peer->errors(), Errors{ErrorCode::timeout});
-      ++evicted;
-      return true;
-    };
-    while (!landed()) {
-      for (Idle& connection : idle)
-        if (evict(connection, Clock::now())) connection = {std::make_unique<Peer>(port()), Clock::now()};
-      std::this_thread::sleep_for(milliseconds(50));
-    }
-    for (Idle& connection : idle)
-      EXPECT_TRUE(evict(connection, connection.since + kDeadline + milliseconds(2000))) << "an idle connection outstayed";
-  }, 1);
+  fly_during(
+      1,
+      [&](int) {
+        struct Idle {
+          std::unique_ptr<Peer> peer;
+          Clock::time_point since;
+        };
+        std::vector<Idle> idle;
+        for (int i = 0; i < kIdle; ++i) idle.push_back({std::make_unique<Peer>(port()), Clock::now()});
+        ready();
+        auto evict = [&](Idle& connection, Clock::time_point deadline) {
+          if (!connection.peer->wait_closed(deadline)) return false;
+          EXPECT_GE(seconds_since(connection.since), 0.95)
+              << "an idle connection was closed before the handshake timeout";
+          EXPECT_EQ(connection.peer->errors(), Errors{ErrorCode::timeout});
+          ++evicted;
+          return true;
+        };
+        while (!landed()) {
+          for (Idle& connection : idle)
+            if (evict(connection, Clock::now())) connection = {std::make_unique<Peer>(port()), Clock::now()};
+          std::this_thread::sleep_for(milliseconds(50));
+        }
+        for (Idle& connection : idle)
+          EXPECT_TRUE(evict(connection, connection.since + kDeadline + milliseconds(2000)))
+              << "an idle connection outstayed";
+      },
+      1);
   EXPECT_GE(evicted, kIdle);
   EXPECT_EQ(server_->stats().at("sessions_refused").get<uint64_t>(), 0u);
   expect_unhurt("idle connections");
@@ -490,10 +503,13 @@ void flood_views(uint16_t port, int index) {
   Peer peer(port, index == 0 ? 0 : 4096);
   const Clock::time_point deadline = after(milliseconds(30000));
   EXPECT_TRUE(peer.send_reading(flood, on_frame, deadline, milliseconds(index == 0 ? 0 : 10)));
-  if (last_final < kViews) peer.read_until([&](const protocol::Frame& frame) {
-    on_frame(frame);
-    return last_final == kViews;
-  }, deadline);
+  if (last_final < kViews)
+    peer.read_until(
+        [&](const protocol::Frame& frame) {
+          on_frame(frame);
+          return last_final == kViews;
+        },
+        deadline);
   EXPECT_EQ(last_final, kViews) << "flood " << index << ": the last VIEW's answer never ended";
   EXPECT_TRUE(peer.errors().empty());
   ASSERT_TRUE(session.has_model());
@@ -527,10 +543,13 @@ TEST_F(Attack, AListFloodIsBoundedByBackPressureAndTheWriteTimeout) {
       const Clock::time_point started = Clock::now();
       const Clock::time_point deadline = after(milliseconds(1000 * kLists / kRate + 5000));
       EXPECT_TRUE(peer->send_reading(repeated(list_frame(), kLists), count, deadline));
-      if (catalogues < kLists) peer->read_until([&](const protocol::Frame& frame) {
-        count(frame);
-        return catalogues == kLists;
-      }, deadline);
+      if (catalogues < kLists)
+        peer->read_until(
+            [&](const protocol::Frame& frame) {
+              count(frame);
+              return catalogues == kLists;
+            },
+            deadline);
       EXPECT_EQ(catalogues, kLists);
       // A burst of kRate (less HELLO and OPEN), then kRate a second.
       EXPECT_GE(seconds_since(started), 0.9 * double(kLists - kRate) / double(kRate)) << "faster than the rate";
@@ -568,9 +587,9 @@ TEST_F(Attack, ClientsThatVanishMidAnswerLeaveNothingBehind) {
       std::unique_ptr<Peer> peer = opened_peer(port(), 0, false);
       ASSERT_TRUE(peer->send(view_frame(close_view(), 0.25f, 1), after(kDeadline)));
       if (round % 3 != 0) {  // else gone before any answer
-        const bool answering = peer->read_until([](const protocol::Frame& frame) {
-          return frame.type == protocol::MessageType::vsplits;
-        }, after(milliseconds(5000)));
+        const bool answering =
+            peer->read_until([](const protocol::Frame& frame) { return frame.type == protocol::MessageType::vsplits; },
+                             after(milliseconds(5000)));
         EXPECT_TRUE(answering) << "no VSPLITS for a close view";
       }
       if (round % 3 == 2) peer->abort();  // else closed with the answer unread

@@ -4,15 +4,15 @@
 // attempts a stalled server still ends in one, in bounded time. Deadlines here are short (300 ms) and
 // every bound has two seconds of slack for a loaded machine.
 #include <gtest/gtest.h>
-#include <utility>  // before asio with C++20
-#include <boost/asio.hpp>
 #include <array>
+#include <boost/asio.hpp>
 #include <chrono>
 #include <deque>
 #include <functional>
 #include <memory>
 #include <string>
 #include <thread>
+#include <utility>  // before asio with C++20
 #include <vector>
 
 #include "builder/build.h"
@@ -20,8 +20,6 @@
 #include "client/streaming_client.h"
 #include "client/transport.h"
 #include "io/shapes.h"
-#include "spm/hierarchy.h"
-#include "spm/pms_file.h"
 #include "protocol/client_messages.h"
 #include "protocol/framing.h"
 #include "protocol/message_types.h"
@@ -29,6 +27,8 @@
 #include "server/catalogue.h"
 #include "server/limits.h"
 #include "server/tcp_server.h"
+#include "spm/hierarchy.h"
+#include "spm/pms_file.h"
 #include "test_support.h"
 
 namespace pms {
@@ -140,7 +140,8 @@ client::ClientOptions answer_within(milliseconds timeout) {
 
 TEST(ClientDeadline, ASilentServerIsAConnectionErrorWithinTheAnswerTimeout) {
   RawPeer peer(silent);
-  const Outcome o = connection_error_of([&] { client::StreamingClient("127.0.0.1", peer.port(), answer_within(kDeadline)); });
+  const Outcome o =
+      connection_error_of([&] { client::StreamingClient("127.0.0.1", peer.port(), answer_within(kDeadline)); });
   EXPECT_EQ(o.what, "server: no answer within 300 ms");
   EXPECT_GE(o.took, kDeadline);
   EXPECT_LT(o.took, kDeadline + kSlack);

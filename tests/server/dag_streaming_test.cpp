@@ -10,37 +10,37 @@
 #include <cstring>
 #include <memory>
 #include <optional>
-#include <thread>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "client/local_transport.h"
 #include "client/streaming_client.h"
 #include "client/transport.h"
-#include "io/shapes.h"
-#include "spm/hierarchy.h"
-#include "spm/split_record.h"
-#include "protocol/client_messages.h"
-#include "protocol/message_types.h"
-#include "dag/dag.h"
 #include "dag/compact.h"
 #include "dag/cut.h"
+#include "dag/dag.h"
 #include "dag/traversal.h"
-#include "spm/selective_mesh.h"
-#include "spm/vertex_hierarchy.h"
+#include "io/shapes.h"
+#include "protocol/client_messages.h"
+#include "protocol/message_types.h"
 #include "server/catalogue.h"
 #include "server/dag_mode.h"
 #include "server/limits.h"
 #include "server/session.h"
 #include "server/tcp_server.h"
+#include "spm/hierarchy.h"
+#include "spm/selective_mesh.h"
+#include "spm/split_record.h"
+#include "spm/vertex_hierarchy.h"
 #include "streaming_fixture.h"
 
 namespace pms {
 namespace {
 
 using protocol::StreamMode;
-using test::Fixture;
 using test::faces_by_id;
+using test::Fixture;
 using test::make_fixture;
 using test::orbit_path;
 
@@ -153,7 +153,8 @@ TEST(DagStreaming, PriorityWithLargeNConvergesToLocalRefinement) {
   }
   ASSERT_LT(frames, 50) << "no convergence";
   EXPECT_GT(frames, 0);
-  EXPECT_GT(p.client->session().mesh().face_count(), f.catalogue->find(f.name)->dag->base_faces()) << "a view with detail";
+  EXPECT_GT(p.client->session().mesh().face_count(), f.catalogue->find(f.name)->dag->base_faces())
+      << "a view with detail";
   EXPECT_EQ(faces_by_id(p.client->session().mesh()), test::local_faces(f.snapped, camera, 1.0f));
 }
 
@@ -271,7 +272,8 @@ TEST(DagStreaming, HostileResumesGetErrorAndOthersAreServed) {
   EXPECT_EQ(resume(front_splitting(model, model.id(leaf))), ErrorCode::bad_id) << "a split of a model leaf";
   EXPECT_EQ(resume(front_splitting(model, model.id(dag.model_node(dependent)))), ErrorCode::bad_id)
       << "a split whose dependency is collapsed: no cut";
-  std::vector<uint8_t> trailing = protocol::encode(protocol::Open{f.name, front_splitting(model, {0, 1}), StreamMode::dag});
+  std::vector<uint8_t> trailing =
+      protocol::encode(protocol::Open{f.name, front_splitting(model, {0, 1}), StreamMode::dag});
   trailing.push_back(0);
   const uint32_t length = uint32_t(trailing.size() - protocol::kFrameHeaderBytes);
   std::memcpy(trailing.data(), &length, 4);
@@ -305,7 +307,8 @@ TEST(DagStreaming, HostileResumesGetErrorAndOthersAreServed) {
     frame.payload.assign(message.begin() + protocol::kFrameHeaderBytes, message.end());
     session.receive(std::move(frame));
   }
-  while (session.pump()) {}
+  while (session.pump()) {
+  }
   EXPECT_EQ(session.error(), std::nullopt) << session.error_text();
   EXPECT_TRUE(dag_mode(session).opened());
   EXPECT_EQ(dag_mode(session).cut().split_count(), cut.split_count()) << "a real cut's front resumes as that cut";

@@ -12,8 +12,6 @@
 #include "builder/build.h"
 #include "client/streaming_client.h"
 #include "io/shapes.h"
-#include "spm/hierarchy.h"
-#include "spm/vertex_id.h"
 #include "protocol/client_messages.h"
 #include "protocol/framing.h"
 #include "protocol/message_types.h"
@@ -21,6 +19,8 @@
 #include "server/limits.h"
 #include "server/session.h"
 #include "server/tcp_server.h"
+#include "spm/hierarchy.h"
+#include "spm/vertex_id.h"
 #include "streaming_fixture.h"
 #include "test_support.h"
 

@@ -4,20 +4,20 @@
 #include <atomic>
 #include <chrono>
 #include <memory>
-#include <thread>
 #include <nlohmann/json.hpp>
+#include <thread>
 
 #include "http_test_client.h"
 #include "io/shapes.h"
-#include "spm/hierarchy.h"
 #include "protocol/base64url.h"
 #include "protocol/message_types.h"
 #include "protocol/server_messages.h"
 #include "protocol/split_bands.h"
 #include "protocol/split_request.h"
-#include "spm/vertex_hierarchy.h"
 #include "server/http_server.h"
 #include "server/limits.h"
+#include "spm/hierarchy.h"
+#include "spm/vertex_hierarchy.h"
 #include "streaming_fixture.h"
 
 namespace pms::test {
@@ -60,11 +60,13 @@ std::vector<VertexId> split_ids(const std::vector<uint8_t>& body, const SplitReq
   const std::vector<uint8_t>& frame = *served().base_frame;
   const protocol::Base base = protocol::decode_base(std::span(frame).subspan(protocol::kFrameHeaderBytes));
   VertexHierarchy h;
-  for (uint32_t r = 0; r < base.root_count(); ++r) h.add_root(VertexId{r, 1}, &base.positions[3 * size_t(r)], base.refine[r]);
+  for (uint32_t r = 0; r < base.root_count(); ++r)
+    h.add_root(VertexId{r, 1}, &base.positions[3 * size_t(r)], base.refine[r]);
   const uint32_t before = h.size();
   protocol::read_split_bands(body, request, served().file->split_codec(), served().context.grid, h, 1u << 20);
   std::vector<VertexId> ids;
-  for (uint32_t slot = before; slot < h.size(); slot += 2) ids.push_back(h.id(h.parent(slot)));  // two children per split
+  for (uint32_t slot = before; slot < h.size(); slot += 2)
+    ids.push_back(h.id(h.parent(slot)));  // two children per split
   return ids;
 }
 
@@ -87,8 +89,7 @@ void expect_cacheable(const HttpReply& reply) {
   for (const auto& [name, value] : reply.headers) names.push_back(name);
   if (reply.status == 304)  // the headers a 200 would carry that RFC 9110 §15.4.5 asks for
     EXPECT_EQ(names, (std::vector<std::string>{"cache-control", "etag"}));
-  else
-    EXPECT_EQ(names, (std::vector<std::string>{"cache-control", "content-length", "content-type", "etag"}));
+  else EXPECT_EQ(names, (std::vector<std::string>{"cache-control", "content-length", "content-type", "etag"}));
 }
 
 TEST(Http, CatalogueAndBaseAreCacheableAndTheSameForEveryClient) {
@@ -122,8 +123,9 @@ TEST(Http, TwoServersOfOneFileAnswerAlike) {
   HttpServer second(server::Catalogue::open({terrain().path}), HttpLimits{}, "127.0.0.1", 0);
   second.start();
   HttpTestClient a(first.port()), b(second.port());
-  for (const std::string& url : {std::string("/models"), std::string("/models/terrain/base"), splits_url(some_roots(7, 2)),
-                                 std::string("/models/terrain/blocks/") + std::to_string(some_roots(1).ids[0].tree) + "/1/3"}) {
+  for (const std::string& url :
+       {std::string("/models"), std::string("/models/terrain/base"), splits_url(some_roots(7, 2)),
+        std::string("/models/terrain/blocks/") + std::to_string(some_roots(1).ids[0].tree) + "/1/3"}) {
     const HttpReply x = a.get(url), y = b.get(url);
     ASSERT_EQ(x.status, 200) << url << ": " << x.text();
     EXPECT_EQ(x.headers, y.headers) << url;
@@ -186,7 +188,8 @@ TEST(Http, ADepthBringsDescendantsBreadthFirstAndBlocksTileTheTrees) {
 TEST(Http, KeepAliveServesManyRequestsOnOneConnection) {
   Server server;
   HttpTestClient client(server.port());
-  for (int i = 0; i < 10; ++i) ASSERT_EQ(client.get(i % 2 ? "/models" : splits_url(some_roots(size_t(i + 1)))).status, 200);
+  for (int i = 0; i < 10; ++i)
+    ASSERT_EQ(client.get(i % 2 ? "/models" : splits_url(some_roots(size_t(i + 1)))).status, 200);
   // Pipelined: two requests in one write, two answers in order.
   client.send("GET /models HTTP/1.1\r\nHost: x\r\n\r\nGET /models/terrain/base HTTP/1.1\r\nHost: x\r\n\r\n");
   EXPECT_EQ(client.read().status, 200);
@@ -255,7 +258,7 @@ TEST(Http, HostileRequestsGet4xxWhileAGoodClientIsServed) {
   std::vector<uint8_t> code = protocol::encode_split_request(some_roots(3));
   code.pop_back();
   EXPECT_EQ(bad.post("/models/terrain/splits", code).status, 400);  // truncated
-  EXPECT_EQ(bad.get("/models/terrain/splits/AA+A").status, 400);   // not base64url
+  EXPECT_EQ(bad.get("/models/terrain/splits/AA+A").status, 400);    // not base64url
   const SplitRequest too_many = some_roots(5);
   ASSERT_EQ(too_many.ids.size(), 5u);
   EXPECT_EQ(bad.post("/models/terrain/splits", protocol::encode_split_request(too_many)).status, 413);

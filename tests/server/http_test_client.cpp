@@ -1,14 +1,14 @@
 // The Beast test client (http_test_client.h).
 #include "http_test_client.h"
 
-#include <utility>
+#include <sys/socket.h>
+#include <sys/time.h>
 #include <boost/asio.hpp>
 #include <boost/beast/core.hpp>
 #include <boost/beast/http.hpp>
-#include <sys/socket.h>
-#include <sys/time.h>
 #include <cctype>
 #include <stdexcept>
+#include <utility>
 
 namespace pms::test {
 
@@ -47,7 +47,8 @@ HttpReply reply_of(ResponseParser& parser) {
   return reply;
 }
 
-HttpReply send_request(tcp::socket& socket, beast::flat_buffer& buffer, http::request<http::vector_body<uint8_t>>& request) {
+HttpReply send_request(tcp::socket& socket, beast::flat_buffer& buffer,
+                       http::request<http::vector_body<uint8_t>>& request) {
   request.set(http::field::host, "127.0.0.1");
   request.prepare_payload();
   http::write(socket, request);

@@ -8,6 +8,7 @@
 #include "builder/build.h"
 #include "client/multilevel_client.h"
 #include "common/error.h"
+#include "http_test_client.h"
 #include "io/shapes.h"
 #include "multilevel/build.h"
 #include "multilevel/codec.h"
@@ -15,7 +16,6 @@
 #include "multilevel/mesh.h"
 #include "server/catalogue.h"
 #include "server/http_server.h"
-#include "http_test_client.h"
 #include "test_support.h"
 
 namespace pms {
@@ -31,7 +31,8 @@ const MultilevelModel& sphere_model() {
     // With texture coordinates (a planar projection), so that both forms carry a per-vertex attribute.
     Mesh mesh = make_sphere(40, 60);
     for (size_t v = 0; v < mesh.vertex_count(); ++v)
-      mesh.texcoords.insert(mesh.texcoords.end(), {0.5f + 0.5f * mesh.positions[3 * v], 0.5f + 0.5f * mesh.positions[3 * v + 1]});
+      mesh.texcoords.insert(mesh.texcoords.end(),
+                            {0.5f + 0.5f * mesh.positions[3 * v], 0.5f + 0.5f * mesh.positions[3 * v + 1]});
     const BuildResult built = build_progressive_mesh(mesh);
     MultilevelModel m;
     m.path = (test::temp_dir() / "ball.pml").string();

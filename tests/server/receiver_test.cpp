@@ -3,14 +3,14 @@
 // frame budget carries work between frames (cancelling what a new view no longer wants, prefetching along
 // the path) and still ends on local refinement's mesh, and a server that stalls or closes mid-answer is a
 // clear error within the deadline.
-#include <utility>  // before asio with C++20 (docs/architecture.md, "Stack")
-#include <boost/asio.hpp>
 #include <gtest/gtest.h>
 #include <algorithm>
 #include <atomic>
+#include <boost/asio.hpp>
 #include <chrono>
 #include <string>
 #include <thread>
+#include <utility>  // before asio with C++20 (docs/architecture.md, "Stack")
 
 #include "client/http_connection.h"
 #include "client/receiver_client.h"
@@ -27,8 +27,8 @@
 namespace pms {
 namespace {
 
-using test::Fixture;
 using test::faces_by_id;
+using test::Fixture;
 using test::local_faces;
 using test::make_fixture;
 using test::orbit_path;

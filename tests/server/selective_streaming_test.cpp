@@ -7,12 +7,12 @@
 
 #include "builder/build.h"
 #include "io/shapes.h"
-#include "spm/hierarchy.h"
-#include "spm/split_record.h"
-#include "spm/vertex_id.h"
-#include "spm/selective_mesh.h"
-#include "spm/vertex_hierarchy.h"
 #include "server/selective_streaming.h"
+#include "spm/hierarchy.h"
+#include "spm/selective_mesh.h"
+#include "spm/split_record.h"
+#include "spm/vertex_hierarchy.h"
+#include "spm/vertex_id.h"
 
 namespace pms {
 namespace {
@@ -88,7 +88,8 @@ TEST(SelectiveStreaming, BatchesApplyInOrderAndTheFrontMatchesTheServer) {
       ASSERT_TRUE(selective_streaming(model, dependencies, tags, importance, SIZE_MAX, batch));
       // Skipping the partial-order checks that cannot fire changes what a split costs, never the answer.
       batch_from_leaves.clear();
-      ASSERT_TRUE(selective_streaming(model, DependencyFilter(), tags_from_leaves, importance, SIZE_MAX, batch_from_leaves));
+      ASSERT_TRUE(
+          selective_streaming(model, DependencyFilter(), tags_from_leaves, importance, SIZE_MAX, batch_from_leaves));
       ASSERT_EQ(batch, batch_from_leaves);
       deliver(model, batch, client);
       EXPECT_FALSE(batch.empty()) << "view " << view << " sent nothing";

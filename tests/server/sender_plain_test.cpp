@@ -15,23 +15,23 @@
 #include "common/error.h"
 #include "io/mesh.h"
 #include "io/shapes.h"
-#include "spm/hierarchy.h"
-#include "spm/split_record.h"
-#include "spm/vertex_id.h"
 #include "protocol/client_messages.h"
 #include "protocol/message_types.h"
 #include "protocol/packet_bits.h"
 #include "protocol/server_messages.h"
 #include "protocol/stream_context.h"
 #include "protocol/wire_internal.h"
-#include "spm/selective_mesh.h"
-#include "spm/vertex_hierarchy.h"
 #include "server/catalogue.h"
 #include "server/limits.h"
 #include "server/plain_packets.h"
 #include "server/selective_streaming.h"
 #include "server/session.h"
 #include "server/tcp_server.h"
+#include "spm/hierarchy.h"
+#include "spm/selective_mesh.h"
+#include "spm/split_record.h"
+#include "spm/vertex_hierarchy.h"
+#include "spm/vertex_id.h"
 #include "streaming_fixture.h"
 #include "test_support.h"
 
@@ -39,8 +39,8 @@ namespace pms {
 namespace {
 
 using protocol::StreamMode;
-using test::Fixture;
 using test::faces_by_id;
+using test::Fixture;
 using test::local_faces;
 using test::make_fixture;
 using test::orbit_path;
@@ -95,7 +95,8 @@ TEST(SenderPlain, ClientMeshIsTheServersViewOfItAlongAPath) {
     const client::FrameReport r = p.client->frame(path[i]);
     EXPECT_TRUE(r.requested) << "a client that does not refine asks every frame";
     if (i == 0) {
-      EXPECT_EQ(faces_by_id(session.mesh()), local_faces(f.snapped, path[0], 1.0f)) << "the first view from the base mesh";
+      EXPECT_EQ(faces_by_id(session.mesh()), local_faces(f.snapped, path[0], 1.0f))
+          << "the first view from the base mesh";
     }
     // It never coarsens, and every split it holds is made: its front is its hierarchy's leaves ...
     EXPECT_GE(r.faces, faces);
@@ -135,7 +136,7 @@ TEST(SenderPlain, SameSplitsAsSenderDrivenForOneView) {
 struct PacketCost {
   uint64_t splits = 0;
   uint64_t plain_bits = 0, vi_bits = 0, sender_bits = 0;  // the same splits coded three ways
-  double bytes_per_packet = 0;                              // VSPLITS frames as received, per packet
+  double bytes_per_packet = 0;                            // VSPLITS frames as received, per packet
 };
 
 // One close view in `mode`; for the splits it brought, what their packets cost as received and what the
@@ -170,11 +171,12 @@ void expect_plain_costs_what_view_independent_does(const Fixture& f, const Camer
   const PacketCost plain = packet_cost(f, close, StreamMode::sender_plain);
   const PacketCost vi = packet_cost(f, close, StreamMode::view_independent);
   const PacketCost sender = packet_cost(f, close, StreamMode::sender_driven);
-  std::printf("%s close view: bytes/packet plain %.2f (%llu splits), vi %.2f (%llu), sender %.2f (%llu); "
-              "plain splits coded as vi %.2f, as sender %.2f\n",
-              f.name.c_str(), plain.bytes_per_packet, (unsigned long long)plain.splits, vi.bytes_per_packet,
-              (unsigned long long)vi.splits, sender.bytes_per_packet, (unsigned long long)sender.splits,
-              double(plain.vi_bits) / 8 / double(plain.splits), double(plain.sender_bits) / 8 / double(plain.splits));
+  std::printf(
+      "%s close view: bytes/packet plain %.2f (%llu splits), vi %.2f (%llu), sender %.2f (%llu); "
+      "plain splits coded as vi %.2f, as sender %.2f\n",
+      f.name.c_str(), plain.bytes_per_packet, (unsigned long long)plain.splits, vi.bytes_per_packet,
+      (unsigned long long)vi.splits, sender.bytes_per_packet, (unsigned long long)sender.splits,
+      double(plain.vi_bits) / 8 / double(plain.splits), double(plain.sender_bits) / 8 / double(plain.splits));
   ASSERT_GT(plain.splits, 100u);
   // Same fields as a view-independent packet, and an actual cut vertex is an ancestor-or-self of the
   // fundamental one, so its id is never longer: never more bits for the same splits.
@@ -228,16 +230,18 @@ TEST(SenderPlain, PlainBatchEncoderRefusesCutsThatDoNotFitTheSplits) {
   protocol::StreamContext wire = f.catalogue->find(f.name)->context;
   wire.has_refinement = false;
   const uint32_t node = model.split_order[0];
-  const auto side = [&](uint32_t cut) { return cut == kNone ? kNone : active_ancestor(model, ActiveTags(model.root_count), cut); };
+  const auto side = [&](uint32_t cut) {
+    return cut == kNone ? kNone : active_ancestor(model, ActiveTags(model.root_count), cut);
+  };
   const ActualCuts actual{side(model.cut_left[node]), side(model.cut_right[node])};
   const std::vector<uint32_t> nodes{node};
   const std::vector<uint8_t> frame = server::encode_plain_batch(model, wire, 7, true, nodes, std::vector{actual});
-  const protocol::VSplits back =
-      protocol::decode_vsplits(std::span(frame).subspan(protocol::kFrameHeaderBytes), wire);
+  const protocol::VSplits back = protocol::decode_vsplits(std::span(frame).subspan(protocol::kFrameHeaderBytes), wire);
   ASSERT_EQ(back.splits.size(), 1u);
   EXPECT_EQ(back.frame, 7u);
   EXPECT_EQ(back.splits[0].vs, model.id(node));
-  EXPECT_EQ(back.splits[0].cut_l, actual.left == kNone ? kNoVertex : model.id(actual.left)) << "a root: the base mesh's";
+  EXPECT_EQ(back.splits[0].cut_l, actual.left == kNone ? kNoVertex : model.id(actual.left))
+      << "a root: the base mesh's";
   EXPECT_THROW(server::encode_plain_batch(model, wire, 7, true, nodes, {}), Error) << "no cuts for the node";
   ActualCuts other_side = actual;
   other_side.left = actual.left == kNone ? 0 : kNone;

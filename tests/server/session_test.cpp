@@ -8,9 +8,6 @@
 #include "builder/build.h"
 #include "client/client_session.h"
 #include "io/shapes.h"
-#include "spm/hierarchy.h"
-#include "spm/pms_file.h"
-#include "spm/vertex_id.h"
 #include "protocol/client_messages.h"
 #include "protocol/dispatch.h"
 #include "protocol/framing.h"
@@ -19,9 +16,12 @@
 #include "protocol/server_messages.h"
 #include "protocol/stream_context.h"
 #include "server/catalogue.h"
-#include "server/limits.h"
 #include "server/dag_mode.h"
+#include "server/limits.h"
 #include "server/session.h"
+#include "spm/hierarchy.h"
+#include "spm/pms_file.h"
+#include "spm/vertex_id.h"
 #include "test_support.h"
 
 namespace pms {

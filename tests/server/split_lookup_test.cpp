@@ -8,10 +8,10 @@
 
 #include "builder/build.h"
 #include "io/shapes.h"
-#include "spm/hierarchy.h"
 #include "protocol/message_types.h"
 #include "protocol/split_request.h"
 #include "server/split_lookup.h"
+#include "spm/hierarchy.h"
 
 namespace pms {
 namespace {
@@ -22,7 +22,9 @@ using protocol::SplitRequest;
 
 class SplitLookup : public ::testing::Test {
  protected:
-  static void SetUpTestSuite() { built_ = new Hierarchy(build_progressive_mesh(make_sphere(40, 60), BuildOptions{}).hierarchy); }
+  static void SetUpTestSuite() {
+    built_ = new Hierarchy(build_progressive_mesh(make_sphere(40, 60), BuildOptions{}).hierarchy);
+  }
   static void TearDownTestSuite() { delete built_; }
 
   const ModelData model = model_of(*built_);
@@ -35,7 +37,8 @@ class SplitLookup : public ::testing::Test {
       const uint32_t n = pick(random);
       if (model.is_leaf(n)) continue;
       const VertexId id = model.id(n);
-      if (std::any_of(ids.begin(), ids.end(), [&](VertexId o) { return is_ancestor_or_self(o, id) || is_ancestor_or_self(id, o); }))
+      if (std::any_of(ids.begin(), ids.end(),
+                      [&](VertexId o) { return is_ancestor_or_self(o, id) || is_ancestor_or_self(id, o); }))
         continue;
       ids.push_back(id);
     }
@@ -92,7 +95,8 @@ TEST_F(SplitLookup, AnIdTheModelLacksOrALeafIsABadIdWhereverItComes) {
   for (const VertexId bad : {leaf_id, below_leaf, VertexId{model.root_count, 1}}) {
     for (size_t at : {size_t(0), size_t(5), size_t(20)}) {
       SplitRequest request{0, random_antichain(random, 20)};
-      std::erase_if(request.ids, [&](VertexId id) { return is_ancestor_or_self(id, bad) || is_ancestor_or_self(bad, id); });
+      std::erase_if(request.ids,
+                    [&](VertexId id) { return is_ancestor_or_self(id, bad) || is_ancestor_or_self(bad, id); });
       request.ids.insert(request.ids.begin() + std::min(at, request.ids.size()), bad);
       EXPECT_EQ(error_of(model, request), ErrorCode::bad_id) << to_string(bad) << " at " << at;
     }

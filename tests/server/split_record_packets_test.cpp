@@ -21,14 +21,14 @@
 #include "common/error.h"
 #include "io/mesh.h"
 #include "io/shapes.h"
-#include "spm/hierarchy.h"
-#include "spm/vertex_id.h"
 #include "protocol/framing.h"
 #include "protocol/message_types.h"
 #include "protocol/server_messages.h"
 #include "protocol/stream_context.h"
 #include "server/catalogue.h"
 #include "server/tcp_server.h"
+#include "spm/hierarchy.h"
+#include "spm/vertex_id.h"
 #include "streaming_fixture.h"
 #include "test_support.h"
 
@@ -91,11 +91,12 @@ void fly_and_compare(const Fixture& f, const std::vector<Camera>& path) {
   }
   ASSERT_GT(priced.splits, 0u);
   EXPECT_LT(priced.vsplits_bytes + priced.codec_bytes, priced.v3_bytes);
-  std::printf("[ records  ] %s: %llu splits, VSPLITS %llu bytes (%.1f bits/split) + CODEC %llu; as version 3: %llu "
-              "bytes (%.1f bits/split)\n",
-              f.name.c_str(), (unsigned long long)priced.splits, (unsigned long long)priced.vsplits_bytes,
-              8.0 * double(priced.vsplits_bytes) / double(priced.splits), (unsigned long long)priced.codec_bytes,
-              (unsigned long long)priced.v3_bytes, 8.0 * double(priced.v3_bytes) / double(priced.splits));
+  std::printf(
+      "[ records  ] %s: %llu splits, VSPLITS %llu bytes (%.1f bits/split) + CODEC %llu; as version 3: %llu "
+      "bytes (%.1f bits/split)\n",
+      f.name.c_str(), (unsigned long long)priced.splits, (unsigned long long)priced.vsplits_bytes,
+      8.0 * double(priced.vsplits_bytes) / double(priced.splits), (unsigned long long)priced.codec_bytes,
+      (unsigned long long)priced.v3_bytes, 8.0 * double(priced.v3_bytes) / double(priced.splits));
 }
 
 const Fixture& terrain() {
@@ -226,11 +227,13 @@ TEST(SenderDrivenRecords, HostileRecordsFailTheClientWithAClearError) {
     const std::string e = client_error(frame_of(model.packets.encode(1, true, std::vector<uint32_t>{child})));
     EXPECT_NE(e.find("is not a vertex the receiver holds"), std::string::npos) << e;
   }
-  const std::string twice = client_error(frame_of(model.packets.encode(1, true, std::vector<uint32_t>{roots[0], roots[0]})));
+  const std::string twice =
+      client_error(frame_of(model.packets.encode(1, true, std::vector<uint32_t>{roots[0], roots[0]})));
   EXPECT_NE(twice.find("split a second time"), std::string::npos) << twice;
 
   // Code words the tables lack and values off the grid are among the refusals of single flipped bits.
-  const Flips flips = flip_every_bit(model, good, [](const protocol::VSplits& batch) { EXPECT_GT(batch.splits.size(), 0u); });
+  const Flips flips =
+      flip_every_bit(model, good, [](const protocol::VSplits& batch) { EXPECT_GT(batch.splits.size(), 0u); });
   const size_t record_errors = errors_naming(flips, ": record: ");
   EXPECT_GT(record_errors, 0u) << "no flipped bit made a record SplitCodec::decode refuses";
   std::printf("[ records  ] %zu bit flips: %zu refused by the record decoder, %zu still decode\n",
@@ -245,7 +248,9 @@ TEST(SenderDrivenRecords, HostileAttributesFailTheClientWithAClearError) {
   const Flips flips = flip_every_bit(model, good, [](const protocol::VSplits& batch) {
     for (const SplitRecord& s : batch.splits) {
       ASSERT_TRUE(s.has_normal && s.has_color);
-      EXPECT_NEAR(std::sqrt(s.normal_t[0] * s.normal_t[0] + s.normal_t[1] * s.normal_t[1] + s.normal_t[2] * s.normal_t[2]), 1.0, 1e-5);
+      EXPECT_NEAR(
+          std::sqrt(s.normal_t[0] * s.normal_t[0] + s.normal_t[1] * s.normal_t[1] + s.normal_t[2] * s.normal_t[2]), 1.0,
+          1e-5);
     }
   });
   EXPECT_GT(errors_naming(flips, ": record: normal") + errors_naming(flips, ": record: color"), 0u)

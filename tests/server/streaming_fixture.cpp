@@ -1,29 +1,29 @@
 // Helpers the server tests share (streaming_fixture.h).
 #include "streaming_fixture.h"
 
-#include <utility>  // before asio with C++20
-#include <boost/asio.hpp>
 #include <algorithm>
 #include <array>
+#include <boost/asio.hpp>
 #include <cmath>
 #include <span>
+#include <utility>  // before asio with C++20
 #include <utility>
 
 #include "builder/build.h"
+#include "client/local_transport.h"
 #include "io/shapes.h"
-#include "spm/hierarchy.h"
-#include "spm/octahedral_normal.h"
-#include "spm/pms_file.h"
-#include "spm/vertex_id.h"
 #include "protocol/framing.h"
 #include "protocol/message_types.h"
 #include "protocol/position_grid.h"
 #include "protocol/server_messages.h"
+#include "server/catalogue.h"
 #include "spm/adapt.h"
+#include "spm/hierarchy.h"
+#include "spm/octahedral_normal.h"
+#include "spm/pms_file.h"
 #include "spm/selective_mesh.h"
 #include "spm/vertex_hierarchy.h"
-#include "client/local_transport.h"
-#include "server/catalogue.h"
+#include "spm/vertex_id.h"
 #include "test_support.h"
 
 namespace pms::test {
@@ -131,7 +131,8 @@ Vertices vertices_by_id(SelectiveMesh& mesh) {
 namespace {
 
 // `read` of the mesh local refinement of the same model makes for one view.
-template <class Read> auto refine_locally(const Hierarchy& snapped, const Camera& camera, float tolerance, Read read) {
+template <class Read>
+auto refine_locally(const Hierarchy& snapped, const Camera& camera, float tolerance, Read read) {
   const ModelData model = model_of(snapped);
   VertexHierarchy hierarchy = VertexHierarchy::from_model(model);
   SelectiveMesh mesh(hierarchy, model.base_faces);

@@ -7,17 +7,17 @@
 #include <string>
 #include <vector>
 
+#include "client/streaming_client.h"
+#include "common/camera.h"
 #include "io/mesh.h"
-#include "spm/hierarchy.h"
-#include "spm/vertex_id.h"
 #include "protocol/message_types.h"
 #include "protocol/server_messages.h"
-#include "common/camera.h"
-#include "spm/selective_mesh.h"
-#include "client/streaming_client.h"
 #include "server/catalogue.h"
 #include "server/limits.h"
 #include "server/session.h"
+#include "spm/hierarchy.h"
+#include "spm/selective_mesh.h"
+#include "spm/vertex_id.h"
 
 namespace pms::test {
 

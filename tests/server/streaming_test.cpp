@@ -3,17 +3,17 @@
 // unbroken one does, many clients at once all succeed, and hostile input only ends its own session.
 // The view-independent baseline (kim-lee-kobbelt §8 Fig. 9): PM order, prefix by prefix.
 #include <gtest/gtest.h>
-#include <utility>  // before asio with C++20
-#include <boost/asio.hpp>
 #include <algorithm>
-#include <atomic>
 #include <array>
+#include <atomic>
+#include <boost/asio.hpp>
 #include <chrono>
 #include <cmath>
 #include <filesystem>
 #include <map>
 #include <optional>
 #include <thread>
+#include <utility>  // before asio with C++20
 
 #include "builder/build.h"
 #include "client/link.h"
@@ -21,30 +21,30 @@
 #include "client/transport.h"
 #include "io/mesh.h"
 #include "io/shapes.h"
-#include "spm/hierarchy.h"
-#include "spm/refine_info.h"
-#include "spm/split_record.h"
-#include "spm/vertex_id.h"
 #include "protocol/client_messages.h"
 #include "protocol/framing.h"
 #include "protocol/message_types.h"
 #include "protocol/model_messages.h"
 #include "protocol/server_messages.h"
 #include "protocol/stream_context.h"
-#include "spm/adapt.h"
-#include "spm/selective_mesh.h"
-#include "spm/stream_order.h"
 #include "server/catalogue.h"
 #include "server/limits.h"
 #include "server/tcp_server.h"
+#include "spm/adapt.h"
+#include "spm/hierarchy.h"
+#include "spm/refine_info.h"
+#include "spm/selective_mesh.h"
+#include "spm/split_record.h"
+#include "spm/stream_order.h"
+#include "spm/vertex_id.h"
 #include "streaming_fixture.h"
 #include "test_support.h"
 
 namespace pms {
 namespace {
 
-using test::Fixture;
 using test::faces_by_id;
+using test::Fixture;
 using test::local_faces;
 using test::make_fixture;
 using test::orbit_path;
@@ -214,7 +214,8 @@ TEST(Streaming, ViewIndependentPacketsComeInPmOrderWithoutRefinementInfo) {
   link.send(protocol::encode(protocol::Hello{protocol::kProtocolVersion, "vi"}));
   expect(protocol::MessageType::hello_ok);
   link.send(protocol::encode(protocol::Open{"terrain", {}, protocol::StreamMode::view_independent}));
-  protocol::StreamContext context = protocol::stream_context(protocol::decode_base(expect(protocol::MessageType::base).payload));
+  protocol::StreamContext context =
+      protocol::stream_context(protocol::decode_base(expect(protocol::MessageType::base).payload));
   context.has_refinement = false;
   uint64_t next = 0;
   const std::vector<Camera> path = orbit_path(f.hierarchy, 6, 2.1f);
@@ -251,7 +252,6 @@ TEST(Streaming, ViewIndependentNeedsAtLeastTheBytesOfSenderDriven) {
   // Every split the view-dependent client needed is in the vi client's prefix.
   EXPECT_GE(vi.session().splits_received(), sender.session().splits_received());
 }
-
 
 TEST(Streaming, HostileInputGetsAnErrorWhileAGoodSessionGoesOn) {
   const Fixture& f = terrain();
@@ -306,9 +306,9 @@ std::vector<VertexId> raw_answer(uint16_t port, const Camera& camera, float tole
   socket.open(asio::ip::tcp::v4());
   socket.set_option(asio::socket_base::receive_buffer_size(int(chunk)));  // before connect: a small window
   socket.connect({asio::ip::make_address("127.0.0.1"), port});
-  for (const auto& m : {protocol::encode(protocol::Hello{protocol::kProtocolVersion, "raw"}),
-                        protocol::encode(protocol::Open{"terrain", {}}),
-                        protocol::encode(protocol::View{camera, tolerance, 1})})
+  for (const auto& m :
+       {protocol::encode(protocol::Hello{protocol::kProtocolVersion, "raw"}),
+        protocol::encode(protocol::Open{"terrain", {}}), protocol::encode(protocol::View{camera, tolerance, 1})})
     asio::write(socket, asio::buffer(m));
   protocol::FrameReader reader;
   client::ClientSession session;  // decodes split records against the hierarchy they make

@@ -7,13 +7,13 @@
 #include <cmath>
 #include <random>
 
-#include "spm/hierarchy.h"
+#include "fixtures/view_models.h"
 #include "spm/adapt.h"
 #include "spm/criteria.h"
+#include "spm/hierarchy.h"
 #include "spm/selective_mesh.h"
 #include "spm/vertex_hierarchy.h"
 #include "test_support.h"
-#include "fixtures/view_models.h"
 
 namespace pms {
 namespace {
@@ -278,7 +278,8 @@ void expect_visible_faces_kept(const BuiltModel& model, const Camera& camera) {
     n[1] = ab[2] * ac[0] - ab[0] * ac[2];
     n[2] = ab[0] * ac[1] - ab[1] * ac[0];
     for (int k = 0; k < 3; ++k) e[k] = view.eye[k] - a[k];
-    const float nl = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]), el = std::sqrt(e[0] * e[0] + e[1] * e[1] + e[2] * e[2]);
+    const float nl = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]),
+                el = std::sqrt(e[0] * e[0] + e[1] * e[1] + e[2] * e[2]);
     if (!(n[0] * e[0] + n[1] * e[1] + n[2] * e[2] > 1e-3f * nl * el)) continue;  // back-facing or edge-on
     bool inside = true;
     for (const float* corner : {a, b, c})
@@ -288,7 +289,8 @@ void expect_visible_faces_kept(const BuiltModel& model, const Camera& camera) {
     ++visible;
     std::array<uint32_t, 3> face{f[0], f[1], f[2]};
     std::rotate(face.begin(), std::min_element(face.begin(), face.end()), face.end());
-    ASSERT_TRUE(std::binary_search(kept.begin(), kept.end(), face)) << model.name << ": visible input face " << i / 3 << " missing";
+    ASSERT_TRUE(std::binary_search(kept.begin(), kept.end(), face))
+        << model.name << ": visible input face " << i / 3 << " missing";
   }
   EXPECT_GT(visible, model.input.face_count() / 4) << model.name;
   EXPECT_LT(mesh.face_count(), model.input.face_count()) << model.name << ": back faces should stay coarse";

@@ -8,9 +8,9 @@
 #include "builder/build.h"
 #include "common/error.h"
 #include "io/shapes.h"
+#include "spm/criteria.h"
 #include "spm/hierarchy.h"
 #include "spm/refine_info.h"
-#include "spm/criteria.h"
 
 namespace pms {
 namespace {
@@ -52,9 +52,9 @@ NodeCriteria with_cone(NodeCriteria n, const float axis[3], float angle) {
 TEST(Criteria, SphereOutsideTheFrustumIsNotRefined) {
   const ViewCriteria view = make_criteria(test_view(), 1);
   EXPECT_FALSE(outside_frustum(view, node_at(0, 0, 0, 0.1f)));
-  EXPECT_TRUE(outside_frustum(view, node_at(100, 0, 0, 1)));   // far to the right
-  EXPECT_TRUE(outside_frustum(view, node_at(0, 0, 10, 1)));    // behind the eye
-  EXPECT_TRUE(outside_frustum(view, node_at(0, -50, 0, 1)));   // below
+  EXPECT_TRUE(outside_frustum(view, node_at(100, 0, 0, 1)));    // far to the right
+  EXPECT_TRUE(outside_frustum(view, node_at(0, 0, 10, 1)));     // behind the eye
+  EXPECT_TRUE(outside_frustum(view, node_at(0, -50, 0, 1)));    // below
   EXPECT_FALSE(outside_frustum(view, node_at(100, 0, 0, 99)));  // a big sphere reaching into view
   // The half-width of the view at the origin is 5 tan(22.5°) * 4/3; a sphere just past it but touching.
   const float edge = 5 * std::tan(22.5f * kPi / 180) * 4.0f / 3.0f;
@@ -73,7 +73,7 @@ TEST(Criteria, BackFacingConeIsNotRefined) {
   EXPECT_FALSE(qrefine(view, with_cone(base, away, 0.2f)));
   EXPECT_FALSE(back_facing(view, with_cone(base, toward, 0.2f)));
   EXPECT_TRUE(qrefine(view, with_cone(base, toward, 0.2f)));
-  EXPECT_FALSE(back_facing(view, with_cone(base, side, 0.01f)));  // silhouette
+  EXPECT_FALSE(back_facing(view, with_cone(base, side, 0.01f)));    // silhouette
   EXPECT_FALSE(back_facing(view, with_cone(base, away, kPi / 2)));  // a half-space of normals
   EXPECT_FALSE(back_facing(view, with_cone(base, away, kPi)));
   // Hoppe's test without the radius: the axis points away from the eye (a·d > 0 with α = 0), but the
@@ -158,7 +158,8 @@ TEST(Criteria, ScreenErrorThresholdIsMonotoneInDistanceAndTolerance) {
   std::mt19937 rng(3);
   std::uniform_real_distribution<float> unit(-1, 1), positive(0, 1);
   for (int trial = 0; trial < 2000; ++trial) {
-    const NodeCriteria node = node_at(unit(rng), unit(rng), unit(rng) * 20, 0.01f, 0.02f * positive(rng), 0.05f * positive(rng));
+    const NodeCriteria node =
+        node_at(unit(rng), unit(rng), unit(rng) * 20, 0.01f, 0.02f * positive(rng), 0.05f * positive(rng));
     const float a = 3 * positive(rng), b = a + 3 * positive(rng);
     if (screen_error_exceeds(make_criteria(params, b), node)) {
       ASSERT_TRUE(screen_error_exceeds(make_criteria(params, a), node));

@@ -4,12 +4,12 @@
 #include <gtest/gtest.h>
 #include <cmath>
 
-#include "spm/hierarchy.h"
-#include "spm/vertex_id.h"
+#include "fixtures/view_models.h"
 #include "spm/geomorph.h"
+#include "spm/hierarchy.h"
 #include "spm/selective_mesh.h"
 #include "spm/vertex_hierarchy.h"
-#include "fixtures/view_models.h"
+#include "spm/vertex_id.h"
 
 namespace pms {
 namespace {
@@ -70,7 +70,8 @@ TEST(Geomorph, SplitChildrenGlideFromTheParent) {
   MeshArrays arrays;
   f.mesh.extract(arrays);
   f.morphs.apply(f.h, arrays);
-  for (size_t i = 0; i < arrays.slots.size(); ++i) expect_exactly(&arrays.positions[3 * i], f.h.position(arrays.slots[i]));
+  for (size_t i = 0; i < arrays.slots.size(); ++i)
+    expect_exactly(&arrays.positions[3 * i], f.h.position(arrays.slots[i]));
 }
 
 TEST(Geomorph, CollapseWaitsUntilTheChildrenArrive) {
@@ -122,7 +123,8 @@ TEST(Geomorph, InterruptedMorphsContinueFromWhereTheyAre) {
   EXPECT_FALSE(f.morphs.collapsing(t));
   EXPECT_FALSE(f.morphs.collapse_ready(f.h, s));
   f.morphs.advance(f.mesh);
-  const float back[3] = {at[0] + (pt[0] - at[0]) / kFrames, at[1] + (pt[1] - at[1]) / kFrames, at[2] + (pt[2] - at[2]) / kFrames};
+  const float back[3] = {at[0] + (pt[0] - at[0]) / kFrames, at[1] + (pt[1] - at[1]) / kFrames,
+                         at[2] + (pt[2] - at[2]) / kFrames};
   expect_at(f.morphs.shown(f.h, t), back, 1e-6f);
   for (uint32_t i = 1; i < kFrames; ++i) f.morphs.advance(f.mesh);
   expect_exactly(f.morphs.shown(f.h, t), pt);
@@ -150,7 +152,7 @@ TEST(Geomorph, SplitWhileMovingStartsFromTheShownPlace) {
     for (uint32_t i = 0; i < kFrames; ++i) f.morphs.advance(f.mesh);
     expect_exactly(f.morphs.shown(f.h, g), f.h.position(g));
     expect_exactly(f.morphs.shown(f.h, g + 1), f.h.position(g + 1));  // = v_s's place, reached from the shown one
-    expect_exactly(f.morphs.shown(f.h, c), shown);  // frozen where its children came from
+    expect_exactly(f.morphs.shown(f.h, c), shown);                    // frozen where its children came from
     return;
   }
   GTEST_SKIP() << "no child of the split root splits alone";
@@ -167,7 +169,8 @@ TEST(Geomorph, TurningOffLandsEverything) {
   MeshArrays arrays;
   f.mesh.extract(arrays);
   f.morphs.apply(f.h, arrays);
-  for (size_t i = 0; i < arrays.slots.size(); ++i) expect_exactly(&arrays.positions[3 * i], f.h.position(arrays.slots[i]));
+  for (size_t i = 0; i < arrays.slots.size(); ++i)
+    expect_exactly(&arrays.positions[3 * i], f.h.position(arrays.slots[i]));
 }
 
 }  // namespace

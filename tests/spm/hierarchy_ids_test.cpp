@@ -3,9 +3,9 @@
 #include <gtest/gtest.h>
 
 #include "common/error.h"
+#include "pm_fixtures.h"
 #include "spm/hierarchy.h"
 #include "spm/vertex_id.h"
-#include "pm_fixtures.h"
 
 namespace pms {
 namespace {

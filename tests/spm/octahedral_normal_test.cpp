@@ -72,7 +72,8 @@ TEST(OctahedralNormal, StepsFoldBackToTheirEndAndCrossEdgesShort) {
     ASSERT_TRUE(octahedral_unstep(from, d, back));
     ASSERT_EQ(back[0], to[0]);
     ASSERT_EQ(back[1], to[1]);
-    const int64_t direct = std::abs(int64_t(int16_t(to[0])) - int16_t(from[0])) + std::abs(int64_t(int16_t(to[1])) - int16_t(from[1]));
+    const int64_t direct =
+        std::abs(int64_t(int16_t(to[0])) - int16_t(from[0])) + std::abs(int64_t(int16_t(to[1])) - int16_t(from[1]));
     crossed += std::abs(d[0]) + std::abs(d[1]) < direct;
   }
   EXPECT_GT(crossed, 0) << "some nearby normals lie across an edge of the square";
@@ -81,7 +82,8 @@ TEST(OctahedralNormal, StepsFoldBackToTheirEndAndCrossEdgesShort) {
 TEST(OctahedralNormal, StepsOffTheSquareAndItsCopiesAreRefused) {
   const uint16_t from[2] = {bits(kMax - 10), bits(kMax - 10)};
   uint16_t to[2];
-  for (const auto& [dx, dy] : {std::pair<int64_t, int64_t>{20, 20}, {3 * kMax, 0}, {0, -4 * kMax}, {int64_t(1) << 40, 0}})
+  for (const auto& [dx, dy] :
+       {std::pair<int64_t, int64_t>{20, 20}, {3 * kMax, 0}, {0, -4 * kMax}, {int64_t(1) << 40, 0}})
     EXPECT_FALSE(octahedral_unstep(from, std::array<int64_t, 2>{dx, dy}.data(), to)) << dx << ", " << dy;
   EXPECT_TRUE(octahedral_unstep(from, std::array<int64_t, 2>{20, 0}.data(), to));  // over the right edge, mirrored
   EXPECT_EQ(int16_t(to[0]), kMax - 10);

@@ -42,8 +42,7 @@ Hierarchy make_small_hierarchy(bool attributes) {
   h.parent = {kNone, kNone, kNone, 0, 0, 1, 1, 4, 4};
   h.first_child = {3, 5, kNone, kNone, 7, kNone, kNone, kNone, kNone};
   // v_u (second child) keeps its parent's position; v_t brings a new one.
-  h.position = {0, 0, 0,  1, 0, 0,  0, 1, 0,  -0.5f, 0, 0.25f,  0, 0, 0,
-                1, -0.5f, 0,  1, 0, 0,  0.25f, 0.25f, 0.5f,  0, 0, 0};
+  h.position = {0, 0, 0, 1, 0, 0, 0, 1, 0, -0.5f, 0, 0.25f, 0, 0, 0, 1, -0.5f, 0, 1, 0, 0, 0.25f, 0.25f, 0.5f, 0, 0, 0};
   h.cut_left = {2, 2, kNone, kNone, 3, kNone, kNone, kNone, kNone};
   h.cut_right = {5, kNone, kNone, kNone, 2, kNone, kNone, kNone, kNone};
   h.leaf_vertex = {kNone, kNone, 0, 1, kNone, 2, 3, 4, 5};

@@ -10,11 +10,11 @@
 
 #include "common/bit_stream.h"
 #include "common/error.h"
+#include "pm_fixtures.h"
 #include "spm/hierarchy.h"
 #include "spm/pms_file.h"
 #include "spm/split_codec.h"
 #include "spm/vertex_id.h"
-#include "pm_fixtures.h"
 #include "test_support.h"
 
 namespace pms {

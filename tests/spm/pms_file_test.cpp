@@ -6,10 +6,10 @@
 #include <fstream>
 
 #include "common/error.h"
+#include "pm_fixtures.h"
 #include "spm/hierarchy.h"
 #include "spm/pms_file.h"
 #include "spm/vertex_id.h"
-#include "pm_fixtures.h"
 #include "test_support.h"
 
 namespace pms {

@@ -12,9 +12,9 @@
 
 #include "spm/hierarchy.h"
 #include "spm/refine_info.h"
-#include "spm/vertex_id.h"
 #include "spm/selective_mesh.h"
 #include "spm/vertex_hierarchy.h"
+#include "spm/vertex_id.h"
 
 namespace pms::test {
 namespace {
@@ -99,7 +99,8 @@ struct Collapser {
 
   explicit Collapser(const TestMesh& m) : mesh(m) {
     const uint32_t n = m.vertex_count();
-    for (size_t i = 0; i < m.indices.size(); i += 3) current.push_back({m.indices[i], m.indices[i + 1], m.indices[i + 2]});
+    for (size_t i = 0; i < m.indices.size(); i += 3)
+      current.push_back({m.indices[i], m.indices[i + 1], m.indices[i + 2]});
     original = current;
     alive_vertex.assign(n, 1);
     alive_count = n;
@@ -214,11 +215,11 @@ TestMesh make_octahedron() {
 TestMesh make_icosphere(int subdivisions) {
   TestMesh m;
   const float p = (1.0f + std::sqrt(5.0f)) / 2;
-  const float v[12][3] = {{-1, p, 0}, {1, p, 0}, {-1, -p, 0}, {1, -p, 0}, {0, -1, p}, {0, 1, p},
-                          {0, -1, -p}, {0, 1, -p}, {p, 0, -1}, {p, 0, 1}, {-p, 0, -1}, {-p, 0, 1}};
+  const float v[12][3] = {{-1, p, 0},  {1, p, 0},  {-1, -p, 0}, {1, -p, 0}, {0, -1, p},  {0, 1, p},
+                          {0, -1, -p}, {0, 1, -p}, {p, 0, -1},  {p, 0, 1},  {-p, 0, -1}, {-p, 0, 1}};
   for (const auto& a : v) add_vertex(m, a[0], a[1], a[2]);
-  m.indices = {0, 11, 5, 0, 5, 1,  0, 1, 7,  0, 7, 10, 0, 10, 11, 1, 5, 9, 5, 11, 4, 11, 10, 2, 10, 7, 6, 7, 1, 8,
-               3, 9, 4,  3, 4, 2,  3, 2, 6,  3, 6, 8,  3, 8, 9,    4, 9, 5, 2, 4, 11, 6, 2, 10, 8, 6, 7, 9, 8, 1};
+  m.indices = {0, 11, 5, 0, 5, 1, 0, 1, 7, 0, 7, 10, 0, 10, 11, 1, 5, 9, 5, 11, 4,  11, 10, 2,  10, 7, 6, 7, 1, 8,
+               3, 9,  4, 3, 4, 2, 3, 2, 6, 3, 6, 8,  3, 8,  9,  4, 9, 5, 2, 4,  11, 6,  2,  10, 8,  6, 7, 9, 8, 1};
   for (int level = 0; level < subdivisions; ++level) {
     std::map<std::pair<uint32_t, uint32_t>, uint32_t> midpoint;
     auto mid = [&](uint32_t a, uint32_t b) {
@@ -226,7 +227,8 @@ TestMesh make_icosphere(int subdivisions) {
       auto it = midpoint.find(key);
       if (it != midpoint.end()) return it->second;
       const uint32_t index = m.vertex_count();
-      add_vertex(m, (m.positions[3 * a] + m.positions[3 * b]) / 2, (m.positions[3 * a + 1] + m.positions[3 * b + 1]) / 2,
+      add_vertex(m, (m.positions[3 * a] + m.positions[3 * b]) / 2,
+                 (m.positions[3 * a + 1] + m.positions[3 * b + 1]) / 2,
                  (m.positions[3 * a + 2] + m.positions[3 * b + 2]) / 2);
       midpoint[key] = index;
       return index;
@@ -389,7 +391,8 @@ Faces canonical(Faces faces) {
 
 Faces canonical_input(const TestMesh& mesh) {
   Faces faces;
-  for (size_t i = 0; i < mesh.indices.size(); i += 3) faces.push_back({mesh.indices[i], mesh.indices[i + 1], mesh.indices[i + 2]});
+  for (size_t i = 0; i < mesh.indices.size(); i += 3)
+    faces.push_back({mesh.indices[i], mesh.indices[i + 1], mesh.indices[i + 2]});
   return canonical(faces);
 }
 

@@ -9,9 +9,9 @@
 #include <vector>
 
 #include "spm/hierarchy.h"
-#include "spm/vertex_id.h"
 #include "spm/selective_mesh.h"
 #include "spm/vertex_hierarchy.h"
+#include "spm/vertex_id.h"
 
 namespace pms::test {
 
@@ -22,11 +22,11 @@ struct TestMesh {
 };
 
 TestMesh make_octahedron();
-TestMesh make_icosphere(int subdivisions);        // closed, genus 0
-TestMesh make_open_grid(int nx, int ny);          // one boundary loop
-TestMesh make_torus_mesh(int rings, int segments);  // closed, genus 1
+TestMesh make_icosphere(int subdivisions);             // closed, genus 0
+TestMesh make_open_grid(int nx, int ny);               // one boundary loop
+TestMesh make_torus_mesh(int rings, int segments);     // closed, genus 1
 TestMesh make_open_cylinder(int rings, int segments);  // two boundary loops
-TestMesh make_bipyramid(int ring);                 // closed; the two apexes have `ring` faces each
+TestMesh make_bipyramid(int ring);                     // closed; the two apexes have `ring` faces each
 
 // A complete progressive mesh of `input` made of random valid half-edge collapses (each checked by
 // simulating it and auditing the result), packed breadth-first like the builder's output.

@@ -7,15 +7,14 @@
 #include <string>
 
 #include "common/error.h"
-#include "spm/hierarchy.h"
-#include "spm/refine_info.h"
-#include "spm/split_record.h"
-#include "spm/vertex_id.h"
 #include "error_of.h"
 #include "reference_pm.h"
+#include "spm/hierarchy.h"
+#include "spm/refine_info.h"
 #include "spm/selective_mesh.h"
+#include "spm/split_record.h"
 #include "spm/vertex_hierarchy.h"
-#include "error_of.h"
+#include "spm/vertex_id.h"
 #include "test_support.h"
 
 namespace pms {
@@ -352,7 +351,8 @@ TEST(SelectiveMesh, RejectsARepeatedDirectedEdgeAtAnyFanLength) {
     EXPECT_EQ(open_fan.face_count(), spokes) << spokes;
     faces.insert(faces.end(), {0, spokes / 2, spokes + 1});  // 0 -> spokes/2 again
     const std::string message = test::error_of([&] { SelectiveMesh mesh(h, faces); });
-    EXPECT_NE(message.find("root <0,1>: edge used twice in the same direction"), std::string::npos) << spokes << ": " << message;
+    EXPECT_NE(message.find("root <0,1>: edge used twice in the same direction"), std::string::npos)
+        << spokes << ": " << message;
   }
 }
 
@@ -367,7 +367,8 @@ TEST(SelectiveMesh, RejectsInconsistentSplits) {
   std::vector<uint8_t> neighbour(h.root_count(), 0);
   for (size_t i = 0; i < view.base_faces.size(); i += 3)
     for (int k = 0; k < 3; ++k)
-      if (view.base_faces[i + k] == 0) neighbour[view.base_faces[i + (k + 1) % 3]] = neighbour[view.base_faces[i + (k + 2) % 3]] = 1;
+      if (view.base_faces[i + k] == 0)
+        neighbour[view.base_faces[i + (k + 1) % 3]] = neighbour[view.base_faces[i + (k + 2) % 3]] = 1;
   std::vector<uint32_t> far;
   uint32_t near = kNone;
   for (uint32_t r = 1; r < h.root_count(); ++r) {

@@ -14,10 +14,10 @@
 
 #include "common/bit_stream.h"
 #include "common/error.h"
+#include "pm_fixtures.h"
 #include "spm/hierarchy.h"
 #include "spm/octahedral_normal.h"
 #include "spm/split_codec.h"
-#include "pm_fixtures.h"
 
 namespace pms {
 namespace {

@@ -4,12 +4,12 @@
 #include <algorithm>
 
 #include "common/error.h"
+#include "reference_pm.h"
 #include "spm/hierarchy.h"
 #include "spm/refine_info.h"
 #include "spm/split_record.h"
-#include "spm/vertex_id.h"
-#include "reference_pm.h"
 #include "spm/vertex_hierarchy.h"
+#include "spm/vertex_id.h"
 
 namespace pms {
 namespace {
@@ -78,13 +78,13 @@ TEST(VertexHierarchy, SplitAttachesChildrenAsLeaves) {
 
 TEST(VertexHierarchy, RejectsBadPackets) {
   VertexHierarchy h = three_roots();
-  EXPECT_THROW(h.add_split(split_of({0, 2}, {1, 1}, kNoVertex)), Error);      // unknown node
+  EXPECT_THROW(h.add_split(split_of({0, 2}, {1, 1}, kNoVertex)), Error);     // unknown node
   EXPECT_THROW(h.add_split(split_of({0, 1}, kNoVertex, kNoVertex)), Error);  // no cut vertex
   EXPECT_THROW(h.add_split(split_of({0, 1}, {0, 5}, kNoVertex)), Error);     // cut inside v_s's subtree
   EXPECT_THROW(h.add_split(split_of({0, 1}, {9, 1}, kNoVertex)), Error);     // cut in an unknown tree
-  EXPECT_EQ(h.size(), 3u);                                                    // nothing half-added
+  EXPECT_EQ(h.size(), 3u);                                                   // nothing half-added
   h.add_split(split_of({0, 1}, {1, 1}, kNoVertex));
-  EXPECT_THROW(h.add_split(split_of({0, 1}, {1, 1}, kNoVertex)), Error);     // split twice
+  EXPECT_THROW(h.add_split(split_of({0, 1}, {1, 1}, kNoVertex)), Error);  // split twice
 
   // Roots must be <root_count, 1>.
   EXPECT_THROW(h.add_root({5, 1}, kOrigin, info(0)), Error);

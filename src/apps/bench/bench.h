@@ -14,8 +14,8 @@ struct BenchOptions {
   bool quick = false;               // the small end of every series, for a smoke run
   std::vector<std::string> models;  // short names ("bunny"); empty: each group's default list
   std::filesystem::path out_dir;
-  std::string command_line;         // as typed, for the report
-  uint32_t soak_clients = 100;      // the soak group's load (--soak-clients, --soak-minutes)
+  std::string command_line;     // as typed, for the report
+  uint32_t soak_clients = 100;  // the soak group's load (--soak-clients, --soak-minutes)
   uint32_t soak_minutes = 10;
 };
 

@@ -47,8 +47,8 @@ constexpr PaperRow kPaperTable1[] = {{"bunny", 62, 34'772, 6, 16},
                                      {"Buddha", 65, 545'557, 7, 25}};
 
 // What `pmstream build --json` must print for the bench to use it (docs/cli.md, "build").
-constexpr const char* kBuildFields[] = {"seconds",      "load_seconds",  "build_seconds",  "peak_rss_mb",
-                                        "output_bytes", "base_vertices", "vsplits",        "tree_id_bits",
+constexpr const char* kBuildFields[] = {"seconds",      "load_seconds",  "build_seconds", "peak_rss_mb",
+                                        "output_bytes", "base_vertices", "vsplits",       "tree_id_bits",
                                         "node_id_bits", "input_faces",   "input_vertices"};
 
 struct OurBuild {
@@ -67,9 +67,9 @@ struct OpenMeshBuild {
 struct ModelResult {
   std::string name;
   fs::path file;
-  std::string error;  // the input could not be prepared: nothing ran
-  OurBuild ours;      // the median run
-  std::optional<OpenMeshBuild> openmesh;  // the median run; absent when the tools are not installed
+  std::string error;                                   // the input could not be prepared: nothing ran
+  OurBuild ours;                                       // the median run
+  std::optional<OpenMeshBuild> openmesh;               // the median run; absent when the tools are not installed
   std::vector<double> ours_seconds, openmesh_seconds;  // every run's wall time (OpenMesh: both tools)
 };
 
@@ -358,7 +358,8 @@ json model_json(const ModelResult& r) {
   if (r.openmesh) {
     const OpenMeshBuild& om = *r.openmesh;
     // The analyzer runs only on a .pm that parsed.
-    json o = {{"mkbalancedpm", child_json(om.mkbalancedpm)}, {"analyzer", om.pm ? child_json(om.analyzer) : json(nullptr)}};
+    json o = {{"mkbalancedpm", child_json(om.mkbalancedpm)},
+              {"analyzer", om.pm ? child_json(om.analyzer) : json(nullptr)}};
     if (!om.error.empty()) o["error"] = om.error;
     if (om.pm)
       o["pm"] = {{"base_vertices", om.pm->base_vertices},
@@ -433,9 +434,9 @@ std::string run_models(const BenchContext& context, json& out) {
   for (const std::string& name : names) files.push_back(find_model(context.models_dir, name));
 
   const bool have_openmesh = !find_program(kMkBalancedPm).empty() && !find_program(kAnalyzer).empty();
-  out["openmesh_tools"] = have_openmesh ? json{{"mkbalancedpm", find_program(kMkBalancedPm)},
-                                               {"analyzer", find_program(kAnalyzer)}}
-                                        : json(nullptr);
+  out["openmesh_tools"] =
+      have_openmesh ? json{{"mkbalancedpm", find_program(kMkBalancedPm)}, {"analyzer", find_program(kAnalyzer)}}
+                    : json(nullptr);
   if (!have_openmesh) {
     const std::string note = std::string(kMkBalancedPm) + " / " + kAnalyzer +
                              " not found (Debian package libopenmesh-apps): the OpenMesh columns are empty.";
@@ -457,21 +458,26 @@ std::string run_models(const BenchContext& context, json& out) {
   Table e1 = e1_table();
   for (const ModelResult& r : results) e1.add_row(e1_row(r));
   for (const PaperRow& paper : kPaperTable1) {
-    const bool run = std::any_of(results.begin(), results.end(), [&](const ModelResult& r) { return paper_row(r.name) == &paper; });
+    const bool run =
+        std::any_of(results.begin(), results.end(), [&](const ModelResult& r) { return paper_row(r.name) == &paper; });
     if (!run) e1.add_row(e1_paper_only_row(paper, have_model(context.models_dir, paper.model)));
   }
   print("\nE1 hierarchy statistics beside kim-lee-kobbelt Table 1\n\n" + e1.markdown());
   out["paper_table1"] = paper_json();
 
-  section += "Each build runs as its own process on the same decompressed file; seconds are wall time and peak MB "
-             "is the build's own (VmHWM, as `build --json` reports it; OpenMesh's tools: their ru_maxrss from wait4, "
-             "which also counts pages inherited from the bench at fork), of the median of " + std::to_string(runs(context)) +
-             " runs (ours and OpenMesh's in turn; every run's time is in build.json). \"ours s\" is the whole "
-             "`pmstream build` (load, clean, build, write); \"ours build s\" excludes loading. OpenMesh s = mkbalancedpm + Analyzer (the analyzer adds "
-             "the view-dependent refinement information, which our build includes). speedup = OpenMesh s / ours s.\n\n";
+  section +=
+      "Each build runs as its own process on the same decompressed file; seconds are wall time and peak MB "
+      "is the build's own (VmHWM, as `build --json` reports it; OpenMesh's tools: their ru_maxrss from wait4, "
+      "which also counts pages inherited from the bench at fork), of the median of " +
+      std::to_string(runs(context)) +
+      " runs (ours and OpenMesh's in turn; every run's time is in build.json). \"ours s\" is the whole "
+      "`pmstream build` (load, clean, build, write); \"ours build s\" excludes loading. OpenMesh s = mkbalancedpm + "
+      "Analyzer (the analyzer adds "
+      "the view-dependent refinement information, which our build includes). speedup = OpenMesh s / ours s.\n\n";
   section += e12.markdown() + "\n";
-  section += "E1: base #v, #details (vertex splits) and the bits of a <tree-id, node-id> (tree-id bits = "
-             "ceil(log2 base #v), node-id bits = height of the hierarchy, the implicit leading 1 not counted).\n\n";
+  section +=
+      "E1: base #v, #details (vertex splits) and the bits of a <tree-id, node-id> (tree-id bits = "
+      "ceil(log2 base #v), node-id bits = height of the hierarchy, the implicit leading 1 not counted).\n\n";
   section += e1.markdown() + "\n";
   const std::string notes = model_notes(results);
   if (!notes.empty()) section += notes + "\n";
@@ -528,12 +534,17 @@ std::vector<std::string> scaling_row(const OurBuild& build, const FirstRow& n0) 
   const double faces = double(count(build.stats, "input_faces"));
   const double seconds = build.run.wall_seconds;
   const double per_face = seconds / faces;
-  return {thousands(uint64_t(faces)), fixed(seconds, 2), fixed(number(build.stats, "build_seconds"), 2),
-          fixed(build.run.peak_rss_mb, 0), fixed(per_face * 1e6, 2), fixed(per_face / n0.seconds_per_face, 2),
+  return {thousands(uint64_t(faces)),
+          fixed(seconds, 2),
+          fixed(number(build.stats, "build_seconds"), 2),
+          fixed(build.run.peak_rss_mb, 0),
+          fixed(per_face * 1e6, 2),
+          fixed(per_face / n0.seconds_per_face, 2),
           fixed(std::log2(faces) / std::log2(n0.faces), 2)};
 }
 
-std::string scaling_section(const BenchContext& context, const Table& table, const std::string& notes, const Plot& plot) {
+std::string scaling_section(const BenchContext& context, const Table& table, const std::string& notes,
+                            const Plot& plot) {
   std::string section = "### Scaling: procedural terrain\n\n";
   section += "`pmstream build terrain:FACES` in a child process, median of " + std::to_string(runs(context)) +
              " runs; seconds are wall time (terrain generation "

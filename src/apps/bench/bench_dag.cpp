@@ -23,9 +23,9 @@
 #include "apps/resource_usage.h"
 #include "client/streaming_client.h"
 #include "common/error.h"
-#include "protocol/client_messages.h"
 #include "dag/compact.h"
 #include "dag/traversal.h"
+#include "protocol/client_messages.h"
 #include "server/dag_mode.h"
 #include "server/session_mode.h"
 
@@ -75,7 +75,7 @@ double shared_percent(const std::vector<IdFace>& faces, const std::vector<IdFace
 struct TraversalRun {
   struct First {
     double ms = 0, evaluated = 0, ops = 0, down_bytes = 0;
-  } first;  // the first view's converged answer
+  } first;                                                   // the first view's converged answer
   std::vector<double> frame_ms, evaluated, ops, down_bytes;  // frames 1..
   std::vector<double> load_ms, store_ms;                     // frames 1..: the compact cut to dense and back
   std::vector<double> triangles, front_share;                // every frame
@@ -119,7 +119,8 @@ TraversalRun run_traversal(const BenchModel& m, const std::vector<Camera>& route
     Stopwatch clock;
     traverser.set_view(view.criteria);
     // As the DAG mode answers a session's first view: converged (docs/internals.md, "The DAG mode").
-    const DagFrameStats stats = i == 0 ? traverser.converge(manage, ops, protocol::kMaxDagOps) : traverser.manage(manage, ops);
+    const DagFrameStats stats =
+        i == 0 ? traverser.converge(manage, ops, protocol::kMaxDagOps) : traverser.manage(manage, ops);
     const double ms = 1000 * clock.seconds();
     const uint64_t triangles = cut.triangles();
     const double front_share = double(cut.fc_size() + cut.fs_size()) / double(std::max<uint64_t>(triangles, 1));
@@ -131,7 +132,8 @@ TraversalRun run_traversal(const BenchModel& m, const std::vector<Camera>& route
     const server::DagSessionMode& mode = dag_mode_of(local);
     if (mode.cut().split_count() != compact.split_count() || mode.cut().triangles() != triangles ||
         client.session().mesh().face_count() != triangles)
-      fail("bench dag", "frame " + std::to_string(i) + ": the session's cut or the client's mesh is not the traverser's");
+      fail("bench dag",
+           "frame " + std::to_string(i) + ": the session's cut or the client's mesh is not the traverser's");
     if (i == 0) {
       run.first = {ms, double(stats.evaluated), double(ops.size()), double(report.down_bytes)};
     } else {
@@ -174,12 +176,14 @@ std::vector<double> all_frames(size_t count, size_t first = 0) {
 
 std::string plots(const BenchContext& context, const TraversalRun (&runs)[3]) {
   Plot time{"DAG traversal time per frame", "frame", "ms (log)", "", false, true, {}};
-  Plot accuracy{"Correct triangles against priority, every 5 frames", "frame", "% of priority's triangles", "", false, false, {}};
+  Plot accuracy{
+      "Correct triangles against priority, every 5 frames", "frame", "% of priority's triangles", "", false, false, {}};
   Plot fronts{"Fronts against the mesh", "frame", "(Fc + Fs) / triangles", "triangles", false, false, {}};
   for (int t = 0; t < 3; ++t) {
     const std::vector<double> frames = all_frames(runs[t].triangles.size());
     time.series.push_back({kTraversalNames[t], all_frames(runs[t].frame_ms.size(), 1), runs[t].frame_ms});
-    if (t > 0) accuracy.series.push_back({kTraversalNames[t], sample_frames(runs[t].accuracy.size()), runs[t].accuracy});
+    if (t > 0)
+      accuracy.series.push_back({kTraversalNames[t], sample_frames(runs[t].accuracy.size()), runs[t].accuracy});
     fronts.series.push_back({kTraversalNames[t], frames, runs[t].front_share});
     fronts.series.push_back({std::string(kTraversalNames[t]) + " triangles", frames, runs[t].triangles, true});
   }
@@ -189,8 +193,11 @@ std::string plots(const BenchContext& context, const TraversalRun (&runs)[3]) {
 }
 
 json run_json(const TraversalRun& run, uint32_t nodes) {
-  return {{"first_view", {{"ms", run.first.ms}, {"evaluated", run.first.evaluated}, {"ops", run.first.ops},
-                          {"down_bytes", run.first.down_bytes}}},
+  return {{"first_view",
+           {{"ms", run.first.ms},
+            {"evaluated", run.first.evaluated},
+            {"ops", run.first.ops},
+            {"down_bytes", run.first.down_bytes}}},
           {"frame_ms", run.frame_ms},
           {"load_ms", run.load_ms},
           {"store_ms", run.store_ms},
@@ -231,47 +238,70 @@ void run_dag_group(BenchContext& context) {
     }
   // Frame 0 is every traversal's converged first view, the same mesh: left out of the average.
   const auto route_mean = [](const std::vector<double>& samples) {
-    return mean(std::vector<double>(samples.begin() + std::min<ptrdiff_t>(1, ptrdiff_t(samples.size())), samples.end()));
+    return mean(
+        std::vector<double>(samples.begin() + std::min<ptrdiff_t>(1, ptrdiff_t(samples.size())), samples.end()));
   };
 
-  Table table({{"traversal", false}, {"first view ms", true}, {"first view ops", true}, {"median ms", true},
-               {"p99 ms", true}, {"load + store ms", true}, {"evaluated / frame", true},
-               {"ops / frame", true}, {"max triangles", true}, {"(Fc + Fs) / triangles", true}, {"accuracy %", true}, {"precision %", true},
-               {"session B / node", true}, {"session KB", true}, {"cut KB", true}, {"thread scratch KB", true},
+  Table table({{"traversal", false},
+               {"first view ms", true},
+               {"first view ops", true},
+               {"median ms", true},
+               {"p99 ms", true},
+               {"load + store ms", true},
+               {"evaluated / frame", true},
+               {"ops / frame", true},
+               {"max triangles", true},
+               {"(Fc + Fs) / triangles", true},
+               {"accuracy %", true},
+               {"precision %", true},
+               {"session B / node", true},
+               {"session KB", true},
+               {"cut KB", true},
+               {"thread scratch KB", true},
                {"bytes down / frame", true}});
-  json out = {{"command", context.options.command_line}, {"machine", machine_json()}, {"model", name},
-              {"frames", route.size()}, {"nodes", nodes}, {"tolerance_px", tolerance}, {"max_ops", kMaxOps},
-              {"budget", kBudget}, {"dag_bytes", m.served->dag->memory_bytes()}};
+  json out = {{"command", context.options.command_line},
+              {"machine", machine_json()},
+              {"model", name},
+              {"frames", route.size()},
+              {"nodes", nodes},
+              {"tolerance_px", tolerance},
+              {"max_ops", kMaxOps},
+              {"budget", kBudget},
+              {"dag_bytes", m.served->dag->memory_bytes()}};
   for (int t = 0; t < 3; ++t) {
     const TraversalRun& run = runs[t];
     table.add_row({kTraversalNames[t], fixed(run.first.ms, 1), thousands(uint64_t(run.first.ops)),
                    fixed(percentile(run.frame_ms, 0.5), 3), fixed(percentile(run.frame_ms, 0.99), 3),
                    fixed(percentile(run.load_ms, 0.5), 3) + " + " + fixed(percentile(run.store_ms, 0.5), 3),
-                   thousands(uint64_t(mean(run.evaluated))), thousands(uint64_t(mean(run.ops))), thousands(run.max_triangles),
-                   fixed(percentile(run.front_share, 0.5), 2), t == 0 ? "—" : fixed(route_mean(run.accuracy), 1), t == 0 ? "—" : fixed(route_mean(run.precision), 1),
-                   fixed(double(run.max_session_bytes) / nodes, 3), fixed(double(run.max_session_bytes) / 1e3, 1),
-                   fixed(double(run.max_cut_bytes) / 1e3, 1), fixed(double(run.max_scratch_bytes) / 1e3, 1),
-                   thousands(uint64_t(mean(run.down_bytes)))});
+                   thousands(uint64_t(mean(run.evaluated))), thousands(uint64_t(mean(run.ops))),
+                   thousands(run.max_triangles), fixed(percentile(run.front_share, 0.5), 2),
+                   t == 0 ? "—" : fixed(route_mean(run.accuracy), 1),
+                   t == 0 ? "—" : fixed(route_mean(run.precision), 1), fixed(double(run.max_session_bytes) / nodes, 3),
+                   fixed(double(run.max_session_bytes) / 1e3, 1), fixed(double(run.max_cut_bytes) / 1e3, 1),
+                   fixed(double(run.max_scratch_bytes) / 1e3, 1), thousands(uint64_t(mean(run.down_bytes)))});
     out[kTraversalNames[t]] = run_json(run, nodes);
   }
-  const std::string settings = name + ", " + std::to_string(route.size()) + "-frame scan route, τ = " + fixed(tolerance, 3) +
+  const std::string settings = name + ", " + std::to_string(route.size()) +
+                               "-frame scan route, τ = " + fixed(tolerance, 3) +
                                " px (0.1 % of the height), N = " + std::to_string(kMaxOps) + ", BUDGET " +
                                thousands(kBudget) + " triangles, " + thousands(nodes) + " DAG nodes";
   print_now("\nE9: DAG traversals, " + settings +
             " (targets: constant-time ≤ 0.1 ms, priority ≤ 2 ms median; accuracy linear ≥ 80 %, constant-time ≥ 70 %; "
-            "session ≤ 0.1 B / node)\n" + table.markdown());
-  section += "### Traversals along the route (" + settings + ")\n\n" + table.markdown() +
-             "\nFirst view: the converged answer to the session's first view (the same for every traversal). ms: "
-             "MANAGE-TRAVERSAL alone on a bare cut, fed the same views as the session, frames 1 on; load + store: the "
-             "medians of decoding the compact cut into the thread's dense one and encoding it back (each turn of a session "
-             "does both). Accuracy: the share "
-             "of priority's triangles (by vertex ids) the client's mesh also has, every 5 frames from frame 5, averaged; "
-             "precision: the share of the client's own triangles that priority's mesh has, averaged alike. "
-             "Session: the "
-             "DAG mode's `state_bytes()` at its largest along the route; cut: `CompactDagCut::memory_bytes()` (what a "
-             "session keeps between turns); thread scratch: the dense cut and the traversals' heaps and stack one I/O "
-             "thread keeps (shared by the sessions of a thread, not per session), run so far. Bytes down: "
-             "DAG_OPS frames as received, mean per frame. docs/internals.md, \"E9\", says what each figure is.\n\n";
+            "session ≤ 0.1 B / node)\n" +
+            table.markdown());
+  section +=
+      "### Traversals along the route (" + settings + ")\n\n" + table.markdown() +
+      "\nFirst view: the converged answer to the session's first view (the same for every traversal). ms: "
+      "MANAGE-TRAVERSAL alone on a bare cut, fed the same views as the session, frames 1 on; load + store: the "
+      "medians of decoding the compact cut into the thread's dense one and encoding it back (each turn of a session "
+      "does both). Accuracy: the share "
+      "of priority's triangles (by vertex ids) the client's mesh also has, every 5 frames from frame 5, averaged; "
+      "precision: the share of the client's own triangles that priority's mesh has, averaged alike. "
+      "Session: the "
+      "DAG mode's `state_bytes()` at its largest along the route; cut: `CompactDagCut::memory_bytes()` (what a "
+      "session keeps between turns); thread scratch: the dense cut and the traversals' heaps and stack one I/O "
+      "thread keeps (shared by the sessions of a thread, not per session), run so far. Bytes down: "
+      "DAG_OPS frames as received, mean per frame. docs/internals.md, \"E9\", says what each figure is.\n\n";
   section += plots(context, runs);
   write_text_file(context.options.out_dir / "dag.json", out.dump(2) + "\n");
   context.report += section;

@@ -23,7 +23,8 @@ struct BenchModel {
 
 // `deviation` as `pmstream build --deviation` takes it. A .pms an earlier group of this run built is
 // reused (the temp dir lives as long as the run).
-BenchModel prepare_model(const BenchContext& context, const std::string& model, const std::string& deviation = "estimate");
+BenchModel prepare_model(const BenchContext& context, const std::string& model,
+                         const std::string& deviation = "estimate");
 
 std::vector<Camera> path_of(const BenchModel& m, PathKind kind, uint32_t frames);
 

@@ -23,7 +23,9 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-double ms_since(Clock::time_point start) { return std::chrono::duration<double, std::milli>(Clock::now() - start).count(); }
+double ms_since(Clock::time_point start) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+}
 
 // The fastest of `repeats` runs of fn (the machine is shared: the fastest is the least disturbed).
 template <typename Fn>
@@ -84,13 +86,32 @@ void run_multilevel_group(BenchContext& context) {
   const std::string section = "E10: progressive multilevel meshes";
   if (skipped_without_models(context, section)) return;
   std::vector<std::string> models = context.options.models;
-  if (models.empty()) models = context.options.quick ? std::vector<std::string>{"bunny"} : std::vector<std::string>{"bunny", "dragon"};
+  if (models.empty())
+    models = context.options.quick ? std::vector<std::string>{"bunny"} : std::vector<std::string>{"bunny", "dragon"};
   const int repeats = context.options.quick ? 3 : 5;
-  Table table({{"model", false}, {"levels"}, {"vertices"}, {"triangles"}, {"multilevel B"}, {"plain B"}, {"ratio"},
-               {"switch max ms"}, {"to finest ms"}, {"geomorph max ms"}, {"first picture B"}, {"first picture triangles"},
+  Table table({{"model", false},
+               {"levels"},
+               {"vertices"},
+               {"triangles"},
+               {"multilevel B"},
+               {"plain B"},
+               {"ratio"},
+               {"switch max ms"},
+               {"to finest ms"},
+               {"geomorph max ms"},
+               {"first picture B"},
+               {"first picture triangles"},
                {"all levels B"}});
-  Table sizes({{"model", false}, {"compressed B"}, {"bits / vertex"}, {"bits / triangle"}, {"first picture B"},
-               {"binary B"}, {"binary gzip B"}, {"ASCII B"}, {"ASCII gzip B"}, {"meshopt v + i B"}});
+  Table sizes({{"model", false},
+               {"compressed B"},
+               {"bits / vertex"},
+               {"bits / triangle"},
+               {"first picture B"},
+               {"binary B"},
+               {"binary gzip B"},
+               {"ASCII B"},
+               {"ASCII gzip B"},
+               {"meshopt v + i B"}});
   std::printf("\n## %s\n\n%s\n", section.c_str(), table.header().c_str());
   nlohmann::json rows = nlohmann::json::array();
   std::vector<std::string> size_rows;
@@ -111,42 +132,65 @@ void run_multilevel_group(BenchContext& context) {
     for (size_t i = 0; i < parts.levels.size(); ++i) {
       bytes += parts.levels[i].size();
       const uint32_t level = m.level_count() - 1 - uint32_t(i);
-      per_level.push_back({{"level", level}, {"bytes", parts.levels[i].size()}, {"cumulative_bytes", bytes},
-                           {"lod_triangles", m.triangle_count[level]}, {"lod_vertices", m.vertex_count[level]}});
+      per_level.push_back({{"level", level},
+                           {"bytes", parts.levels[i].size()},
+                           {"cumulative_bytes", bytes},
+                           {"lod_triangles", m.triangle_count[level]},
+                           {"lod_vertices", m.vertex_count[level]}});
     }
     const uint64_t first = parts.head.size() + parts.levels.front().size();
     const uint64_t ml = multilevel_bytes(m), plain = plain_bytes(m);
-    std::printf("%s\n", table.add_row({name, thousands(m.level_count()), thousands(m.vertices()), thousands(m.faces()),
-                                       thousands(ml), thousands(plain), fixed(double(ml) / double(plain), 3),
-                                       fixed(times.switch_max_ms, 2), fixed(times.switch_to_finest_ms, 2),
-                                       fixed(times.geomorph_max_ms, 3), thousands(first),
-                                       thousands(m.triangle_count.back()), thousands(bytes)})
+    std::printf("%s\n", table
+                            .add_row({name, thousands(m.level_count()), thousands(m.vertices()), thousands(m.faces()),
+                                      thousands(ml), thousands(plain), fixed(double(ml) / double(plain), 3),
+                                      fixed(times.switch_max_ms, 2), fixed(times.switch_to_finest_ms, 2),
+                                      fixed(times.geomorph_max_ms, 3), thousands(first),
+                                      thousands(m.triangle_count.back()), thousands(bytes)})
                             .c_str());
     nlohmann::json levels_compressed;
     const MultilevelSizes z = multilevel_sizes(m, kDefaultPositionBits, levels_compressed);
-    const uint64_t first_z = multilevel_compressed_parts(m).head.size() + levels_compressed[0]["compressed_bytes"].get<uint64_t>();
+    const uint64_t first_z =
+        multilevel_compressed_parts(m).head.size() + levels_compressed[0]["compressed_bytes"].get<uint64_t>();
     size_rows.push_back(sizes.add_row({name, thousands(z.compressed), fixed(double(z.vertex_bits) / m.vertices(), 2),
                                        fixed(double(z.triangle_bits) / m.faces(), 2), thousands(first_z),
                                        thousands(z.binary), thousands(z.binary_gzip), thousands(z.ascii),
                                        thousands(z.ascii_gzip), thousands(z.meshopt_vertex + z.meshopt_index)}));
-    rows.push_back({{"model", name}, {"levels", m.level_count()}, {"vertices", m.vertices()}, {"triangles", m.faces()},
-                    {"representatives", m.stored_representatives()}, {"multilevel_bytes", ml}, {"plain_bytes", plain},
-                    {"memory_ratio", double(ml) / double(plain)}, {"switch_max_ms", times.switch_max_ms},
-                    {"switch_to_finest_ms", times.switch_to_finest_ms}, {"geomorph_max_ms", times.geomorph_max_ms},
-                    {"first_picture_bytes", first}, {"levels_bytes", per_level}, {"build_seconds", build.wall_seconds},
-                    {"compressed", {{"position_bits", kDefaultPositionBits}, {"bytes", z.compressed},
-                                    {"first_picture_bytes", first_z}, {"vertex_bits", z.vertex_bits},
-                                    {"triangle_bits", z.triangle_bits}, {"binary_bytes", z.binary},
-                                    {"binary_gzip_bytes", z.binary_gzip}, {"ascii_bytes", z.ascii},
-                                    {"ascii_gzip_bytes", z.ascii_gzip}, {"meshopt_vertex_bytes", z.meshopt_vertex},
-                                    {"meshopt_index_bytes", z.meshopt_index}, {"levels", levels_compressed}}}});
+    rows.push_back({{"model", name},
+                    {"levels", m.level_count()},
+                    {"vertices", m.vertices()},
+                    {"triangles", m.faces()},
+                    {"representatives", m.stored_representatives()},
+                    {"multilevel_bytes", ml},
+                    {"plain_bytes", plain},
+                    {"memory_ratio", double(ml) / double(plain)},
+                    {"switch_max_ms", times.switch_max_ms},
+                    {"switch_to_finest_ms", times.switch_to_finest_ms},
+                    {"geomorph_max_ms", times.geomorph_max_ms},
+                    {"first_picture_bytes", first},
+                    {"levels_bytes", per_level},
+                    {"build_seconds", build.wall_seconds},
+                    {"compressed",
+                     {{"position_bits", kDefaultPositionBits},
+                      {"bytes", z.compressed},
+                      {"first_picture_bytes", first_z},
+                      {"vertex_bits", z.vertex_bits},
+                      {"triangle_bits", z.triangle_bits},
+                      {"binary_bytes", z.binary},
+                      {"binary_gzip_bytes", z.binary_gzip},
+                      {"ascii_bytes", z.ascii},
+                      {"ascii_gzip_bytes", z.ascii_gzip},
+                      {"meshopt_vertex_bytes", z.meshopt_vertex},
+                      {"meshopt_index_bytes", z.meshopt_index},
+                      {"levels", levels_compressed}}}});
   }
   std::printf("\nTransmission, every level on its own (positions on a %u-bit grid):\n\n%s\n", kDefaultPositionBits,
               sizes.header().c_str());
   for (const std::string& row : size_rows) std::printf("%s\n", row.c_str());
-  context.report += "\n## " + section + "\n\nTargets: memory ≤ 1.1× the plain indexed mesh, a switch between any "
+  context.report += "\n## " + section +
+                    "\n\nTargets: memory ≤ 1.1× the plain indexed mesh, a switch between any "
                     "two LODs ≤ 10 ms, a geomorph frame ≤ 5 ms on one core. Switch: the fastest of " +
-                    std::to_string(repeats) + " jumps to each level from the far end (a jump's cost depends only on "
+                    std::to_string(repeats) +
+                    " jumps to each level from the far end (a jump's cost depends only on "
                     "its target), the maximum over the levels. Bytes: HTTP bodies (head + levels), headers aside.\n\n" +
                     table.markdown() +
                     "\nTransmission: every level on its own, summed; the compressed form's bits per vertex (positions) "

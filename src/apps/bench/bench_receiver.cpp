@@ -18,9 +18,9 @@
 #include "apps/bench/single_rate_codecs.h"
 #include "apps/bench/split_record_bits.h"
 #include "apps/camera_path.h"
+#include "apps/refine_pipeline.h"
 #include "client/receiver_client.h"
 #include "client/streaming_client.h"
-#include "apps/refine_pipeline.h"
 #include "common/bit_stream.h"
 #include "common/error.h"
 #include "io/mesh.h"
@@ -51,7 +51,7 @@ double per(uint64_t bits, uint64_t count) { return count ? double(bits) / double
 struct WholeModel {
   uint64_t vertices = 0, splits = 0;
   uint64_t base_bytes = 0, table_bytes = 0, record_bits = 0;  // the compact records (.pms SRTB / SREC)
-  uint64_t wire_body_bytes = 0;  // the HTTP bodies of every split
+  uint64_t wire_body_bytes = 0;                               // the HTTP bodies of every split
   SingleRateSizes single;
   uint64_t draco_coarse = 0;
   std::string draco_coarse_error;
@@ -91,9 +91,16 @@ WholeModel measure_whole_model(const BenchModel& m) {
 }
 
 Table whole_model_table() {
-  return Table({{"model", false}, {"vertices", true}, {"records + base + tables", true}, {"bits / split", true},
-                {"HTTP bodies", true}, {"meshopt", true}, {"+ gzip -9", true}, {"+ zstd -19", true},
-                {"Draco", true}, {"Draco 14 bits", true}});
+  return Table({{"model", false},
+                {"vertices", true},
+                {"records + base + tables", true},
+                {"bits / split", true},
+                {"HTTP bodies", true},
+                {"meshopt", true},
+                {"+ gzip -9", true},
+                {"+ zstd -19", true},
+                {"Draco", true},
+                {"Draco 14 bits", true}});
 }
 
 std::vector<std::string> whole_model_row(const std::string& name, const WholeModel& w) {
@@ -112,12 +119,18 @@ std::vector<std::string> whole_model_row(const std::string& name, const WholeMod
 }
 
 json whole_model_record(const WholeModel& w) {
-  return {{"vertices", w.vertices},          {"splits", w.splits},
-          {"base_bytes", w.base_bytes},      {"table_bytes", w.table_bytes},
-          {"record_bits", w.record_bits},    {"wire_body_bytes", w.wire_body_bytes},
-          {"meshopt_index_bytes", w.single.meshopt_index}, {"meshopt_vertex_bytes", w.single.meshopt_vertex},
-          {"meshopt_gzip_bytes", w.single.meshopt_gzip},   {"meshopt_zstd_bytes", w.single.meshopt_zstd},
-          {"draco_bytes", w.single.draco},   {"draco_14_bytes", w.draco_coarse}};
+  return {{"vertices", w.vertices},
+          {"splits", w.splits},
+          {"base_bytes", w.base_bytes},
+          {"table_bytes", w.table_bytes},
+          {"record_bits", w.record_bits},
+          {"wire_body_bytes", w.wire_body_bytes},
+          {"meshopt_index_bytes", w.single.meshopt_index},
+          {"meshopt_vertex_bytes", w.single.meshopt_vertex},
+          {"meshopt_gzip_bytes", w.single.meshopt_gzip},
+          {"meshopt_zstd_bytes", w.single.meshopt_zstd},
+          {"draco_bytes", w.single.draco},
+          {"draco_14_bytes", w.draco_coarse}};
 }
 
 // ---- E7: server CPU and bytes out per split --------------------------------------------------------------
@@ -207,8 +220,15 @@ ServerCost receiver_cost(const BenchContext& context, const BenchModel& m, const
 }
 
 Table e7_table() {
-  return Table({{"model", false}, {"mode", false}, {"splits served", true}, {"requests", true}, {"server CPU s", true},
-                {"µs / split", true}, {"bytes out", true}, {"bytes out / split", true}, {"CPU vs sender", true},
+  return Table({{"model", false},
+                {"mode", false},
+                {"splits served", true},
+                {"requests", true},
+                {"server CPU s", true},
+                {"µs / split", true},
+                {"bytes out", true},
+                {"bytes out / split", true},
+                {"CPU vs sender", true},
                 {"bytes vs sender", true}});
 }
 
@@ -235,22 +255,31 @@ void add_e7_rows(BenchContext& context, const std::string& name, const ServerCos
     const bool baseline = std::string(mode) == "sender";
     print(table.add_row({name, mode, thousands(c.splits), baseline ? "" : thousands(c.requests), fixed(c.cpu_s, 3),
                          fixed(us, 2), thousands(c.bytes_out), fixed(bytes, 1),
-                         baseline ? "" : ratio_change(us, sender_us), baseline ? "" : ratio_change(bytes, sender_bytes)}));
+                         baseline ? "" : ratio_change(us, sender_us),
+                         baseline ? "" : ratio_change(bytes, sender_bytes)}));
   }
 }
 
 json cost_record(const ServerCost& c) {
-  return {{"splits", c.splits},         {"requests", c.requests},
-          {"cpu_s", c.cpu_s},           {"bytes_out", c.bytes_out},
-          {"requested_ids", c.requested_ids}, {"request_code_bytes", c.request_code_bytes},
-          {"client_bytes_up", c.bytes_up}, {"error", c.error}};
+  return {{"splits", c.splits},
+          {"requests", c.requests},
+          {"cpu_s", c.cpu_s},
+          {"bytes_out", c.bytes_out},
+          {"requested_ids", c.requested_ids},
+          {"request_code_bytes", c.request_code_bytes},
+          {"client_bytes_up", c.bytes_up},
+          {"error", c.error}};
 }
 
 // ---- up: bits per requested id, the E7 flights ----------------------------------------------------------
 
 Table up_table() {
-  return Table({{"model", false}, {"split GETs", true}, {"ids asked", true}, {"ids / GET", true},
-                {"code bits / id", true}, {"HTTP bytes up / id", true}});
+  return Table({{"model", false},
+                {"split GETs", true},
+                {"ids asked", true},
+                {"ids / GET", true},
+                {"code bits / id", true},
+                {"HTTP bytes up / id", true}});
 }
 
 std::vector<std::string> up_row(const std::string& name, const ServerCost& c) {
@@ -281,9 +310,17 @@ SplitParts measure_split_parts(const BenchModel& m) {
 }
 
 Table parts_table() {
-  return Table({{"model", false}, {"splits", false}, {"count", true}, {"topology", true}, {"geometry", true},
-                {"refinement info", true}, {"normal + color", true}, {"records", true}, {"framing", true},
-                {"base + tables", true}, {"all", true}});
+  return Table({{"model", false},
+                {"splits", false},
+                {"count", true},
+                {"topology", true},
+                {"geometry", true},
+                {"refinement info", true},
+                {"normal + color", true},
+                {"records", true},
+                {"framing", true},
+                {"base + tables", true},
+                {"all", true}});
 }
 
 // A row each; the whole model's also gets what else the receiver-driven routes send for every split: the
@@ -292,9 +329,17 @@ void add_parts_rows(const std::string& name, const SplitParts& parts, const Whol
   for (const RecordBitsReport* r : {&parts.whole, &parts.close}) {
     const RecordBits& b = r->bits;
     const auto bits = [r](uint64_t total) { return fixed(r->per_split(total), 2); };
-    std::vector<std::string> row = {name, r == &parts.whole ? "whole model" : "E5 close view", thousands(r->splits),
-                                    bits(b.topology), bits(b.geometry), bits(b.refinement), bits(b.attributes()),
-                                    bits(b.total()), "", "", ""};
+    std::vector<std::string> row = {name,
+                                    r == &parts.whole ? "whole model" : "E5 close view",
+                                    thousands(r->splits),
+                                    bits(b.topology),
+                                    bits(b.geometry),
+                                    bits(b.refinement),
+                                    bits(b.attributes()),
+                                    bits(b.total()),
+                                    "",
+                                    "",
+                                    ""};
     if (r == &parts.whole) {
       row[8] = bits(8 * w.wire_body_bytes - w.record_bits);
       row[9] = bits(8 * (w.base_bytes + w.table_bytes));
@@ -305,8 +350,12 @@ void add_parts_rows(const std::string& name, const SplitParts& parts, const Whol
 }
 
 json parts_record(const RecordBitsReport& r) {
-  return {{"splits", r.splits},           {"topology_bits", r.bits.topology}, {"geometry_bits", r.bits.geometry},
-          {"refinement_bits", r.bits.refinement}, {"normal_bits", r.bits.normal}, {"color_bits", r.bits.color}};
+  return {{"splits", r.splits},
+          {"topology_bits", r.bits.topology},
+          {"geometry_bits", r.bits.geometry},
+          {"refinement_bits", r.bits.refinement},
+          {"normal_bits", r.bits.normal},
+          {"color_bits", r.bits.color}};
 }
 
 }  // namespace
@@ -345,36 +394,41 @@ void run_receiver_group(BenchContext& context) {
     const ServerCost sender = sender_cost(context, m, path), receiver = receiver_cost(context, m, path);
     add_e7_rows(context, m.name, sender, receiver, e7);
     receivers.push_back(receiver);
-    out["models"][i]["e7"] = {{"frames", path.size()}, {"sender", cost_record(sender)}, {"receiver", cost_record(receiver)}};
+    out["models"][i]["e7"] = {
+        {"frames", path.size()}, {"sender", cost_record(sender)}, {"receiver", cost_record(receiver)}};
   }
   print("\nUp: bits per requested id, the receiver-driven E7 flights\n" + up.header());
   for (size_t i = 0; i < models.size(); ++i) print(up.add_row(up_row(models[i].name, receivers[i])));
   const std::string quality = e6_e8_sections(context, models, out["models"]);
 
-  section += "### The whole model, bits per vertex\n\n" + whole.markdown() +
-             "\nEvery split of the model at the default 16-bit grid. \"records + base + tables\" = BASE (as `GET "
-             "/models/{m}/base` sends it), the model's code tables and every compact split record (docs/protocol.md, "
-             "\"Split records\"; stored in the .pms), with no HTTP framing; \"bits / split\" is the same total per split, "
-             "issue 19's ≤ 40 target. \"HTTP bodies\" = BASE plus the bodies the receiver-driven routes send for "
-             "every split (each tree as one band: the records with their presence bits). meshoptimizer 0.18: vertex cache then vertex fetch order, its index codec and its vertex codec on "
-             "x, y, z, 0 as 16-bit lanes; gzip -9 and zstd -19 of those two streams; Draco 1.5 edgebreaker at speed 0 "
-             "(`-cl 10`) with its own position quantization at 16 and at 14 bits. Every stream is decoded again and "
-             "checked. The single-rate codecs have no levels of detail, no random access and no refinement info.\n\n";
-  section += "### Down: bits per split by part\n\n" + parts.markdown() +
-             "\nBits per split, the records as stored in the .pms (docs/protocol.md, \"Split records\"): topology = the "
-             "cut vertices, geometry = v_t's position, refinement info = the children's, normal + color = v_t's "
-             "attributes where the model has them. \"whole model\" is every split; \"E5 close view\" the splits local "
-             "refinement makes from the base mesh for the sender group's E5 close view at τ = 1 px (E6's mid view). "
-             "For the whole model: framing = the receiver-driven bands' presence bits and byte padding (each tree as "
-             "one band), base + tables = BASE and the code tables, all = everything a client downloads to hold every "
-             "split, HTTP heads aside. Issue 19's targets: all ≤ 40 on dragon, topology + geometry ≤ 34, the close "
-             "view's refinement info ≤ 24.\n\n";
-  section += "### E7: server CPU and bytes out per split served\n\n" + e7.markdown() +
-             "\nOne `pmstream serve` child per row (TCP for sender-driven, `--http-port` for receiver-driven), one "
-             "client in this process flying the same orbit at τ = 1 px. Server CPU is the child's user + system time "
-             "over the flight (its counters read by SIGUSR1 before and after, so loading the model is not counted); "
-             "bytes out are the server's own count (TCP payload, or HTTP headers and bodies). Issue 19's targets: "
-             "CPU per split ≥ 30 % and bytes out ≥ 40 % below the sender-driven mode's (cheng-ooi: −24 % and −40 %).\n\n";
+  section +=
+      "### The whole model, bits per vertex\n\n" + whole.markdown() +
+      "\nEvery split of the model at the default 16-bit grid. \"records + base + tables\" = BASE (as `GET "
+      "/models/{m}/base` sends it), the model's code tables and every compact split record (docs/protocol.md, "
+      "\"Split records\"; stored in the .pms), with no HTTP framing; \"bits / split\" is the same total per split, "
+      "issue 19's ≤ 40 target. \"HTTP bodies\" = BASE plus the bodies the receiver-driven routes send for "
+      "every split (each tree as one band: the records with their presence bits). meshoptimizer 0.18: vertex cache "
+      "then vertex fetch order, its index codec and its vertex codec on "
+      "x, y, z, 0 as 16-bit lanes; gzip -9 and zstd -19 of those two streams; Draco 1.5 edgebreaker at speed 0 "
+      "(`-cl 10`) with its own position quantization at 16 and at 14 bits. Every stream is decoded again and "
+      "checked. The single-rate codecs have no levels of detail, no random access and no refinement info.\n\n";
+  section +=
+      "### Down: bits per split by part\n\n" + parts.markdown() +
+      "\nBits per split, the records as stored in the .pms (docs/protocol.md, \"Split records\"): topology = the "
+      "cut vertices, geometry = v_t's position, refinement info = the children's, normal + color = v_t's "
+      "attributes where the model has them. \"whole model\" is every split; \"E5 close view\" the splits local "
+      "refinement makes from the base mesh for the sender group's E5 close view at τ = 1 px (E6's mid view). "
+      "For the whole model: framing = the receiver-driven bands' presence bits and byte padding (each tree as "
+      "one band), base + tables = BASE and the code tables, all = everything a client downloads to hold every "
+      "split, HTTP heads aside. Issue 19's targets: all ≤ 40 on dragon, topology + geometry ≤ 34, the close "
+      "view's refinement info ≤ 24.\n\n";
+  section +=
+      "### E7: server CPU and bytes out per split served\n\n" + e7.markdown() +
+      "\nOne `pmstream serve` child per row (TCP for sender-driven, `--http-port` for receiver-driven), one "
+      "client in this process flying the same orbit at τ = 1 px. Server CPU is the child's user + system time "
+      "over the flight (its counters read by SIGUSR1 before and after, so loading the model is not counted); "
+      "bytes out are the server's own count (TCP payload, or HTTP headers and bodies). Issue 19's targets: "
+      "CPU per split ≥ 30 % and bytes out ≥ 40 % below the sender-driven mode's (cheng-ooi: −24 % and −40 %).\n\n";
   section += "### Up: bits per requested id\n\n" + up.markdown() +
              "\nThe receiver-driven client of the E7 flights: split GETs sent, the ids they named (each with its "
              "descendant depth, docs/protocol.md \"Receiver-driven client\"), the bits of their id sets' codes (docs/"

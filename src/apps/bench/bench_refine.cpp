@@ -10,20 +10,20 @@
 #include "apps/bench/bench.h"
 #include "apps/bench/bench_refine.h"
 #include "apps/bench/child_process.h"
-#include "apps/bench/report.h"
 #include "apps/bench/image_quality.h"
+#include "apps/bench/report.h"
 #include "apps/camera_path.h"
 #include "apps/percentile.h"
 #include "apps/resource_usage.h"
 #include "common/error.h"
+#include "render/render.h"
+#include "spm/adapt.h"
 #include "spm/hierarchy.h"
 #include "spm/pms_file.h"
-#include "spm/split_record.h"
-#include "spm/adapt.h"
 #include "spm/selective_mesh.h"
+#include "spm/split_record.h"
 #include "spm/stream_order.h"
 #include "spm/vertex_hierarchy.h"
-#include "render/render.h"
 
 namespace pms::app {
 namespace fs = std::filesystem;
@@ -98,7 +98,8 @@ double engine_ops_per_second(const ModelData& model, uint64_t& ops) {
   }
   const double seconds = clock.seconds();
   ops = 2 * slots.size();
-  if (mesh.face_count() != model.base_faces.size() / 3) fail("bench refine", "collapsing everything did not give the base");
+  if (mesh.face_count() != model.base_faces.size() / 3)
+    fail("bench refine", "collapsing everything did not give the base");
   return double(ops) / seconds;
 }
 
@@ -162,14 +163,21 @@ std::string adaptation_section(const ModelData& model, const std::string& name, 
   const PathRun run = run_path(model, scan, 1.0f);
   uint64_t engine_ops = 0;
   const double engine_rate = engine_ops_per_second(model, engine_ops);
-  Table adapt({{"model", false}, {"frames", true}, {"median ms", true}, {"p99 ms", true}, {"loop ops/s", true},
-               {"engine ops/s", true}, {"faces (median)", true}});
+  Table adapt({{"model", false},
+               {"frames", true},
+               {"median ms", true},
+               {"p99 ms", true},
+               {"loop ops/s", true},
+               {"engine ops/s", true},
+               {"faces (median)", true}});
   adapt.add_row({name, std::to_string(scan.size()), fixed(percentile(run.frame_ms, 0.5), 3),
                  fixed(percentile(run.frame_ms, 0.99), 3),
-                 thousands(uint64_t(double(run.ops) / std::max(run.adapt_seconds, 1e-9))), thousands(uint64_t(engine_rate)),
-                 thousands(uint64_t(percentile(run.faces, 0.5)))});
-  out["adapt"] = {{"frames", scan.size()}, {"frame_ms", run.frame_ms}, {"ops", run.ops}, {"adapt_seconds", run.adapt_seconds},
-                  {"engine_ops", engine_ops}, {"engine_ops_per_second", engine_rate}, {"faces", run.faces}};
+                 thousands(uint64_t(double(run.ops) / std::max(run.adapt_seconds, 1e-9))),
+                 thousands(uint64_t(engine_rate)), thousands(uint64_t(percentile(run.faces, 0.5)))});
+  out["adapt"] = {{"frames", scan.size()},    {"frame_ms", run.frame_ms},
+                  {"ops", run.ops},           {"adapt_seconds", run.adapt_seconds},
+                  {"engine_ops", engine_ops}, {"engine_ops_per_second", engine_rate},
+                  {"faces", run.faces}};
   print_now("\nAdaptation along a scan path at τ = 1 px (targets: median ≤ 4 ms, ≥ 3 M ops/s)\n" + adapt.markdown());
   return "### Adaptation along a " + std::to_string(scan.size()) + "-frame scan path, τ = 1 px (" + name + ")\n\n" +
          adapt.markdown() + "\nEngine ops/s: every vsplit in PM order, then every ecol in reverse, one core.\n\n";
@@ -183,8 +191,9 @@ std::string renderer_section(const ModelData& model, const MeshArrays& full, con
     renderer.render(as_render(full), make_view(camera, model.bbox_min, model.bbox_max), image);
   const double triangles_per_second = double(kRenderRepeats) * double(full.indices.size() / 3) / render_clock.seconds();
   out["render_triangles_per_second"] = triangles_per_second;
-  print_now("\nRenderer: " + thousands(uint64_t(triangles_per_second)) + " triangles/s (" + thousands(full.indices.size() / 3) +
-        " faces, " + std::to_string(camera.width) + "x" + std::to_string(camera.height) + ")\n");
+  print_now("\nRenderer: " + thousands(uint64_t(triangles_per_second)) + " triangles/s (" +
+            thousands(full.indices.size() / 3) + " faces, " + std::to_string(camera.width) + "x" +
+            std::to_string(camera.height) + ")\n");
   return "Renderer: " + thousands(uint64_t(triangles_per_second)) + " triangles/s on the full mesh.\n\n";
 }
 
@@ -200,7 +209,8 @@ ViewQuality view_quality(const ModelData& model, const ModelData& bounded, const
   Image reference;
   renderer.render(as_render(full), view, reference);
   const auto against_full = [&](const MeshArrays& mesh, const char* what) {
-    return quality_of(mesh, view, reference, renderer, out_dir / (std::string("refine-") + vp.label + "-" + what + "-diff.png"));
+    return quality_of(mesh, view, reference, renderer,
+                      out_dir / (std::string("refine-") + vp.label + "-" + what + "-diff.png"));
   };
   ViewQuality q;
   q.tau0 = against_full(refine_for_view(model, vp.camera, 0.0f).mesh, "tau0");
@@ -212,27 +222,55 @@ ViewQuality view_quality(const ModelData& model, const ModelData& bounded, const
 }
 
 Table quality_table() {
-  return Table({{"view", false}, {"full faces", true}, {"τ=0 faces", true}, {"τ=0 %", true}, {"τ=0 PSNR", true},
-                {"τ=0 err px", true}, {"τ=0 err %", true}, {"τ=1 faces", true}, {"τ=1 %", true}, {"τ=1 PSNR", true},
-                {"τ=1 err px", true}, {"VI PSNR", true}, {"VI err px", true}});
+  return Table({{"view", false},
+                {"full faces", true},
+                {"τ=0 faces", true},
+                {"τ=0 %", true},
+                {"τ=0 PSNR", true},
+                {"τ=0 err px", true},
+                {"τ=0 err %", true},
+                {"τ=1 faces", true},
+                {"τ=1 %", true},
+                {"τ=1 PSNR", true},
+                {"τ=1 err px", true},
+                {"VI PSNR", true},
+                {"VI err px", true}});
 }
 
 std::vector<std::string> quality_row(const char* label, double full_faces, const ViewQuality& q) {
-  return {label, thousands(uint64_t(full_faces)), thousands(q.tau0.faces), face_share(q.tau0.faces, full_faces),
-          psnr_text(q.tau0.metrics.psnr), thousands(q.tau0.metrics.error_pixels), fixed(100 * q.tau0.metrics.error_fraction, 3),
-          thousands(q.tau1.faces), face_share(q.tau1.faces, full_faces), psnr_text(q.tau1.metrics.psnr),
-          thousands(q.tau1.metrics.error_pixels), psnr_text(q.vi.metrics.psnr), thousands(q.vi.metrics.error_pixels)};
+  return {label,
+          thousands(uint64_t(full_faces)),
+          thousands(q.tau0.faces),
+          face_share(q.tau0.faces, full_faces),
+          psnr_text(q.tau0.metrics.psnr),
+          thousands(q.tau0.metrics.error_pixels),
+          fixed(100 * q.tau0.metrics.error_fraction, 3),
+          thousands(q.tau1.faces),
+          face_share(q.tau1.faces, full_faces),
+          psnr_text(q.tau1.metrics.psnr),
+          thousands(q.tau1.metrics.error_pixels),
+          psnr_text(q.vi.metrics.psnr),
+          thousands(q.vi.metrics.error_pixels)};
 }
 
 Table bound_table() {
-  return Table({{"view", false}, {"τ=1 faces", true}, {"τ=1 %", true}, {"τ=1 PSNR", true}, {"τ=1 err px", true},
-                {"VI PSNR", true}, {"VI err px", true}});
+  return Table({{"view", false},
+                {"τ=1 faces", true},
+                {"τ=1 %", true},
+                {"τ=1 PSNR", true},
+                {"τ=1 err px", true},
+                {"VI PSNR", true},
+                {"VI err px", true}});
 }
 
 std::vector<std::string> bound_row(const char* label, double full_faces, const ViewQuality& q) {
-  return {label, thousands(q.bound_tau1.faces), face_share(q.bound_tau1.faces, full_faces),
-          psnr_text(q.bound_tau1.metrics.psnr), thousands(q.bound_tau1.metrics.error_pixels),
-          psnr_text(q.bound_vi.metrics.psnr), thousands(q.bound_vi.metrics.error_pixels)};
+  return {label,
+          thousands(q.bound_tau1.faces),
+          face_share(q.bound_tau1.faces, full_faces),
+          psnr_text(q.bound_tau1.metrics.psnr),
+          thousands(q.bound_tau1.metrics.error_pixels),
+          psnr_text(q.bound_vi.metrics.psnr),
+          thousands(q.bound_vi.metrics.error_pixels)};
 }
 
 json quality_json(const Quality& q) {
@@ -253,7 +291,8 @@ json view_quality_json(const char* label, double full_faces, const ViewQuality& 
 // (build --deviation bound): more faces for τ = 1 px, and how that compares with the view-independent mesh
 // of that size.
 std::string quality_sections(const BenchContext& context, const std::string& name, const ModelData& model,
-                             const MeshArrays& full, const std::vector<Viewpoint>& views, Renderer& renderer, json& out) {
+                             const MeshArrays& full, const std::vector<Viewpoint>& views, Renderer& renderer,
+                             json& out) {
   Table quality = quality_table();
   json per_view = json::array();
   const auto bounded_file = build_pms(context, name, "bound");
@@ -267,11 +306,15 @@ std::string quality_sections(const BenchContext& context, const std::string& nam
     per_view.push_back(view_quality_json(vp.label, full_faces, q));
   }
   out["quality"] = per_view;
-  print_now("\nImage quality against the full mesh (targets: τ=0 err ≤ 0.2 %, PSNR ≥ 35 dB, ≤ 60 % faces close; τ=1 ≤ 30 % faces "
-        "close, better than VI at mid and close)\n" +
-        quality.markdown());
-  print_now("\nThe same views, model built with --deviation bound (a bound on the surface below each node instead of Hoppe's "
-        "estimate)\n" + bound.markdown());
+  print_now(
+      "\nImage quality against the full mesh (targets: τ=0 err ≤ 0.2 %, PSNR ≥ 35 dB, ≤ 60 % faces close; τ=1 ≤ 30 % "
+      "faces "
+      "close, better than VI at mid and close)\n" +
+      quality.markdown());
+  print_now(
+      "\nThe same views, model built with --deviation bound (a bound on the surface below each node instead of Hoppe's "
+      "estimate)\n" +
+      bound.markdown());
   return "### Image quality against the full mesh\n\n" + quality.markdown() +
          "\nVI = the first K splits in stream order with at least the τ = 1 px mesh's face count. "
          "refine-VIEW-{tau0,tau1,vi}-diff.png mark the pixels that differ in red.\n\n" +

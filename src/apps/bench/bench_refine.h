@@ -4,8 +4,8 @@
 #include <string>
 
 #include "apps/bench/bench.h"
-#include "spm/hierarchy.h"
 #include "common/camera.h"
+#include "spm/hierarchy.h"
 #include "spm/vertex_hierarchy.h"
 
 namespace pms::app {

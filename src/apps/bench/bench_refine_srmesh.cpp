@@ -27,13 +27,15 @@ struct SrMeshRow {
   uint32_t faces;
   double steady_ms, orbit_ms, from_base_ms;
 };
-constexpr SrMeshRow kSrMeshBunny[] = {
-    {1.5f, 9913, 0.088, 0.103, 1.06}, {3, 5439, 0.035, 0.038, 0.47}, {10, 1525, 0.011, 0.010, 0.13}, {50, 213, 0.001, 0.001, 0.021}};
+constexpr SrMeshRow kSrMeshBunny[] = {{1.5f, 9913, 0.088, 0.103, 1.06},
+                                      {3, 5439, 0.035, 0.038, 0.47},
+                                      {10, 1525, 0.011, 0.010, 0.13},
+                                      {50, 213, 0.001, 0.001, 0.021}};
 
 constexpr float kTolerance = 1;
 constexpr float kCoarsenTolerance = 1e9f;  // no node's error is that visible: converging goes back to the base
 constexpr float kOrbitStepDeg = 0.25f;
-constexpr uint32_t kOrbitSteps = 20;  // 0° → 5°, then back
+constexpr uint32_t kOrbitSteps = 20;   // 0° → 5°, then back
 constexpr uint32_t kSteadyBatch = 20;  // adapts per steady sample: one is too short for the clock
 
 struct DistanceRun {
@@ -51,7 +53,8 @@ void coarsen(SelectiveRefinement& refinement, const ModelData& model) {
   refinement.set_options(tolerance(kCoarsenTolerance));
   refinement.converge();
   refinement.set_options(tolerance(kTolerance));
-  if (refinement.mesh().face_count() != model.base_faces.size() / 3) fail("bench refine", "coarsening did not reach the base");
+  if (refinement.mesh().face_count() != model.base_faces.size() / 3)
+    fail("bench refine", "coarsening did not reach the base");
 }
 
 // From the base mesh to the view's target in one adapt (every split is known, so the split-only walk
@@ -117,7 +120,8 @@ DistanceRun run_distance(const ModelData& model, const VertexHierarchy& h, float
     double seconds = 0;
     for (uint32_t step = 1; step <= 2 * kOrbitSteps; ++step) {
       const uint32_t at = step <= kOrbitSteps ? step : 2 * kOrbitSteps - step;
-      const ViewParams turned = make_view(srmesh_camera(model, distance, float(at) * kOrbitStepDeg), model.bbox_min, model.bbox_max);
+      const ViewParams turned =
+          make_view(srmesh_camera(model, distance, float(at) * kOrbitStepDeg), model.bbox_min, model.bbox_max);
       Stopwatch clock;
       refinement.set_view(turned);
       const FrameStats stats = refinement.adapt();
@@ -151,8 +155,8 @@ std::string spread_text(const std::vector<double>& samples) {
 Table spread_table(const std::vector<DistanceRun>& runs) {
   Table table({{"d", true}, {"steady ms", true}, {"orbit ms", true}, {"from base ms", true}, {"fresh ms", true}});
   for (const DistanceRun& run : runs)
-    table.add_row({fixed(run.distance, 1), spread_text(run.steady_ms), spread_text(run.orbit_ms), spread_text(run.base_ms),
-                   spread_text(run.fresh_ms)});
+    table.add_row({fixed(run.distance, 1), spread_text(run.steady_ms), spread_text(run.orbit_ms),
+                   spread_text(run.base_ms), spread_text(run.fresh_ms)});
   return table;
 }
 
@@ -160,8 +164,10 @@ Table spread_table(const std::vector<DistanceRun>& runs) {
 // meshes alive hold the recycled blocks): what a viewer opening a model pays, page faults included.
 std::string cold_line(const std::vector<DistanceRun>& runs) {
   if (runs.empty() || runs[0].fresh_ms.empty()) return "";
-  return "The first fresh mesh of the run (d = " + fixed(runs[0].distance, 1) + ") took " + ms_text(runs[0].fresh_ms[0]) +
-         " ms: its arrays were memory new to the process (page faults); the other fresh samples reuse a freed mesh's pages.\n";
+  return "The first fresh mesh of the run (d = " + fixed(runs[0].distance, 1) + ") took " +
+         ms_text(runs[0].fresh_ms[0]) +
+         " ms: its arrays were memory new to the process (page faults); the other fresh samples reuse a freed mesh's "
+         "pages.\n";
 }
 
 std::string base_cell(const DistanceRun& run) {
@@ -169,11 +175,17 @@ std::string base_cell(const DistanceRun& run) {
 }
 
 json run_json(const DistanceRun& run) {
-  return {{"distance", run.distance},       {"faces", run.faces},
-          {"steady_ms", run.steady_ms},     {"unchanged_ms", run.unchanged_ms}, {"orbit_ms", run.orbit_ms},
-          {"from_base_ms", run.base_ms},    {"fresh_ms", run.fresh_ms},
-          {"steady_evaluated", run.steady_evaluated}, {"orbit_evaluated_per_step", run.orbit_evaluated},
-          {"orbit_ops_per_step", run.orbit_ops},      {"from_base_splits", run.base_splits},
+  return {{"distance", run.distance},
+          {"faces", run.faces},
+          {"steady_ms", run.steady_ms},
+          {"unchanged_ms", run.unchanged_ms},
+          {"orbit_ms", run.orbit_ms},
+          {"from_base_ms", run.base_ms},
+          {"fresh_ms", run.fresh_ms},
+          {"steady_evaluated", run.steady_evaluated},
+          {"orbit_evaluated_per_step", run.orbit_evaluated},
+          {"orbit_ops_per_step", run.orbit_ops},
+          {"from_base_splits", run.base_splits},
           {"from_base_evaluated", run.base_evaluated}};
 }
 
@@ -187,8 +199,13 @@ std::vector<DistanceRun> run_model(const ModelData& model, const std::string& na
 
 // The work behind the timings: qrefine evaluations and operations (counts do not depend on the load).
 Table counts_table(const std::vector<DistanceRun>& runs) {
-  Table table({{"d", true}, {"steady evaluated", true}, {"unchanged frame ms", true}, {"orbit evaluated/step", true},
-               {"orbit ops/step", true}, {"from base splits", true}, {"from base evaluated", true}});
+  Table table({{"d", true},
+               {"steady evaluated", true},
+               {"unchanged frame ms", true},
+               {"orbit evaluated/step", true},
+               {"orbit ops/step", true},
+               {"from base splits", true},
+               {"from base evaluated", true}});
   for (const DistanceRun& run : runs)
     table.add_row({fixed(run.distance, 1), thousands(run.steady_evaluated), ms_text(median(run.unchanged_ms)),
                    fixed(run.orbit_evaluated, 0), fixed(run.orbit_ops, 1), thousands(run.base_splits),
@@ -222,8 +239,15 @@ std::string srmesh_comparison_section(const BenchContext& context, json& out) {
   const uint32_t repeats = context.options.quick ? 3 : 9;
   const BenchModel bunny = prepare_model(context, "bunny");
   const std::vector<DistanceRun> bunny_runs = run_model(bunny.served->model(), "bunny", repeats);
-  Table table({{"d", true}, {"faces Hoppe", true}, {"faces pmstream", true}, {"steady ms Hoppe", true}, {"pmstream", true},
-               {"orbit ms Hoppe", true}, {"pmstream", true}, {"from base ms Hoppe", true}, {"pmstream", true}});
+  Table table({{"d", true},
+               {"faces Hoppe", true},
+               {"faces pmstream", true},
+               {"steady ms Hoppe", true},
+               {"pmstream", true},
+               {"orbit ms Hoppe", true},
+               {"pmstream", true},
+               {"from base ms Hoppe", true},
+               {"pmstream", true}});
   for (size_t i = 0; i < bunny_runs.size(); ++i) {
     const SrMeshRow& hoppe = kSrMeshBunny[i];
     const DistanceRun& run = bunny_runs[i];
@@ -235,12 +259,15 @@ std::string srmesh_comparison_section(const BenchContext& context, json& out) {
   const Table bunny_spread = spread_table(bunny_runs);
   json& o = out["srmesh"];
   for (const DistanceRun& run : bunny_runs) o["bunny"].push_back(run_json(run));
-  std::string section = "### Against Hoppe's SrMesh, bunny, τ = 1 px, 1920×1080, 60° (median of " + std::to_string(repeats) +
+  std::string section = "### Against Hoppe's SrMesh, bunny, τ = 1 px, 1920×1080, 60° (median of " +
+                        std::to_string(repeats) +
                         " runs; Hoppe's columns measured with his code on this machine type)\n\n" + table.markdown() +
                         "\nThe spread of those runs (fastest–slowest):\n\n" + bunny_spread.markdown() + "\n" +
                         cold_line(bunny_runs) + "\nThe work behind it:\n\n" + bunny_counts.markdown() + "\n";
-  print_now("\nAgainst Hoppe's SrMesh, bunny (targets: faces, steady, orbit, from base ≤ Hoppe's; fresh ≤ 1.5× Hoppe's from base)\n" +
-            table.markdown() + bunny_spread.markdown() + cold_line(bunny_runs) + bunny_counts.markdown());
+  print_now(
+      "\nAgainst Hoppe's SrMesh, bunny (targets: faces, steady, orbit, from base ≤ Hoppe's; fresh ≤ 1.5× Hoppe's from "
+      "base)\n" +
+      table.markdown() + bunny_spread.markdown() + cold_line(bunny_runs) + bunny_counts.markdown());
 
   if (context.options.quick) return section;
   const BenchModel dragon = prepare_model(context, "dragon");
@@ -253,7 +280,8 @@ std::string srmesh_comparison_section(const BenchContext& context, json& out) {
   }
   const Table dragon_counts = counts_table(dragon_runs);
   print_now("\nThe same cameras on dragon\n" + dragon_table.markdown() + dragon_counts.markdown());
-  return section + "### The same cameras on dragon\n\n" + dragon_table.markdown() + "\n" + dragon_counts.markdown() + "\n";
+  return section + "### The same cameras on dragon\n\n" + dragon_table.markdown() + "\n" + dragon_counts.markdown() +
+         "\n";
 }
 
 }  // namespace pms::app

@@ -13,20 +13,20 @@
 
 #include "apps/bench/bench.h"
 #include "apps/bench/bench_model.h"
-#include "client/load_client.h"
 #include "apps/bench/report.h"
 #include "apps/bench/serve_child.h"
 #include "apps/bench/split_record_bits.h"
 #include "apps/camera_path.h"
 #include "apps/percentile.h"
 #include "apps/resource_usage.h"
+#include "client/load_client.h"
 #include "client/streaming_client.h"
-#include "common/error.h"
 #include "common/bit_stream.h"
-#include "spm/hierarchy.h"
-#include "spm/split_codec.h"
+#include "common/error.h"
 #include "protocol/client_messages.h"
 #include "protocol/packet_bits.h"
+#include "spm/hierarchy.h"
+#include "spm/split_codec.h"
 
 namespace pms::app {
 namespace fs = std::filesystem;
@@ -141,7 +141,8 @@ Laps run_laps(const BenchModel& m, const std::vector<Camera>& path) {
 struct E5 {
   uint64_t vd_bytes = 0, vd_faces = 0;
   uint64_t vi_bytes = 0, vi_splits = 0, vi_faces = 0;
-  uint64_t plain_bytes = 0;  // the same splits as VD, as plain vsplits (kim-lee-kobbelt §6.3, stream --mode sender-plain)
+  uint64_t plain_bytes =
+      0;  // the same splits as VD, as plain vsplits (kim-lee-kobbelt §6.3, stream --mode sender-plain)
 };
 
 Camera close_view(const BenchModel& m) { return app::close_view(m.served->model()); }
@@ -186,9 +187,9 @@ struct E11 {
   uint64_t session_buffer_bytes = 0;  // the same without the tags
   double p50 = 0, p99 = 0;
   double first_p50 = 0, first_p99 = 0, later_p99 = 0;  // a client's first VIEW (from the base mesh) and the rest
-  std::string error;         // the first client's failure
-  std::string server_error;  // the server's figures could not be read: the row has none
-  bool ran = false;          // the clients ran (the server started)
+  std::string error;                                   // the first client's failure
+  std::string server_error;                            // the server's figures could not be read: the row has none
+  bool ran = false;                                    // the clients ran (the server started)
 };
 
 // Each client flies its own part of one orbit, a VIEW per frame, as fast as the answers come.
@@ -252,7 +253,8 @@ E11 run_e11(const BenchContext& context, const BenchModel& m, uint32_t clients) 
   e.clients = clients;
   std::optional<ServeChild> server;
   try {
-    server.emplace(context.self_exe, std::vector<std::string>{m.pms.string(), "--max-sessions", std::to_string(clients + 16)});
+    server.emplace(context.self_exe,
+                   std::vector<std::string>{m.pms.string(), "--max-sessions", std::to_string(clients + 16)});
   } catch (const Error& err) {
     e.server_error = err.what();
     return e;
@@ -267,10 +269,19 @@ E11 run_e11(const BenchContext& context, const BenchModel& m, uint32_t clients) 
 }
 
 Table e11_table() {
-  return Table({{"clients", true}, {"failed", true}, {"server CPU s", true}, {"server peak RSS MB", true},
-                {"peak session KB", true}, {"without tags KB", true},
-                {"bytes out", true}, {"latency p50 ms", true}, {"p99 ms", true}, {"first VIEW p50 ms", true},
-                {"first p99 ms", true}, {"later p99 ms", true}, {"wall s", true}});
+  return Table({{"clients", true},
+                {"failed", true},
+                {"server CPU s", true},
+                {"server peak RSS MB", true},
+                {"peak session KB", true},
+                {"without tags KB", true},
+                {"bytes out", true},
+                {"latency p50 ms", true},
+                {"p99 ms", true},
+                {"first VIEW p50 ms", true},
+                {"first p99 ms", true},
+                {"later p99 ms", true},
+                {"wall s", true}});
 }
 
 // Without the server's own report its cells say so: a 0 there would read as a measurement.
@@ -278,21 +289,37 @@ std::vector<std::string> e11_row(const E11& e) {
   const bool server = e.server_error.empty();
   const auto from_server = [&](const std::string& cell) { return server ? cell : std::string("no report"); };
   const auto from_clients = [&](const std::string& cell) { return e.ran ? cell : std::string("not run"); };
-  return {std::to_string(e.clients), from_clients(std::to_string(e.failed)), from_server(fixed(e.server_cpu, 2)),
-          from_server(fixed(e.server_rss_mb, 0)), from_server(fixed(double(e.session_state_bytes) / 1024, 1)),
-          from_server(fixed(double(e.session_buffer_bytes) / 1024, 1)), from_server(thousands(e.bytes_out)),
-          from_clients(fixed(e.p50, 2)), from_clients(fixed(e.p99, 2)), from_clients(fixed(e.first_p50, 2)),
-          from_clients(fixed(e.first_p99, 2)), from_clients(fixed(e.later_p99, 2)), from_clients(fixed(e.seconds, 1))};
+  return {std::to_string(e.clients),
+          from_clients(std::to_string(e.failed)),
+          from_server(fixed(e.server_cpu, 2)),
+          from_server(fixed(e.server_rss_mb, 0)),
+          from_server(fixed(double(e.session_state_bytes) / 1024, 1)),
+          from_server(fixed(double(e.session_buffer_bytes) / 1024, 1)),
+          from_server(thousands(e.bytes_out)),
+          from_clients(fixed(e.p50, 2)),
+          from_clients(fixed(e.p99, 2)),
+          from_clients(fixed(e.first_p50, 2)),
+          from_clients(fixed(e.first_p99, 2)),
+          from_clients(fixed(e.later_p99, 2)),
+          from_clients(fixed(e.seconds, 1))};
 }
 
 json e11_record(const E11& e) {
-  json row = {{"clients", e.clients}, {"failed", e.failed}, {"error", e.error}, {"p50_ms", e.p50}, {"p99_ms", e.p99},
-              {"first_view_p50_ms", e.first_p50}, {"first_view_p99_ms", e.first_p99},
-              {"later_views_p99_ms", e.later_p99}, {"seconds", e.seconds}};
+  json row = {{"clients", e.clients},
+              {"failed", e.failed},
+              {"error", e.error},
+              {"p50_ms", e.p50},
+              {"p99_ms", e.p99},
+              {"first_view_p50_ms", e.first_p50},
+              {"first_view_p99_ms", e.first_p99},
+              {"later_views_p99_ms", e.later_p99},
+              {"seconds", e.seconds}};
   if (e.server_error.empty()) {
-    row.update({{"server_cpu_seconds", e.server_cpu}, {"server_peak_rss_mb", e.server_rss_mb},
+    row.update({{"server_cpu_seconds", e.server_cpu},
+                {"server_peak_rss_mb", e.server_rss_mb},
                 {"peak_session_state_bytes", e.session_state_bytes},
-                {"peak_session_bytes_without_tags", e.session_buffer_bytes}, {"bytes_out", e.bytes_out}});
+                {"peak_session_bytes_without_tags", e.session_buffer_bytes},
+                {"bytes_out", e.bytes_out}});
   } else {
     row["server_error"] = e.server_error;
   }
@@ -325,19 +352,40 @@ std::string e11_section(BenchContext& context, const BenchModel& big, bool quick
 // ---- E2–E5 per model ------------------------------------------------------------------------------------
 
 Table e2_table() {
-  return Table({{"model", false}, {"topology bits", true}, {"paper (Table 2)", true}, {"position bits", true},
-                {"refinement bits", true}, {"normal + color bits", true}, {"bytes/packet (wire)", true}});
+  return Table({{"model", false},
+                {"topology bits", true},
+                {"paper (Table 2)", true},
+                {"position bits", true},
+                {"refinement bits", true},
+                {"normal + color bits", true},
+                {"bytes/packet (wire)", true}});
 }
 
 Table e34_table() {
-  return Table({{"model", false}, {"frames", true}, {"lap 1 down B", true}, {"lap 1 up B", true}, {"lap 2 down B", true},
-                {"lap 2 up B", true}, {"tags / front (mean)", true}, {"(max)", true}, {"peak tags B", true},
-                {"peak front B", true}, {"front / nodes", true}, {"window / nodes", true}});
+  return Table({{"model", false},
+                {"frames", true},
+                {"lap 1 down B", true},
+                {"lap 1 up B", true},
+                {"lap 2 down B", true},
+                {"lap 2 up B", true},
+                {"tags / front (mean)", true},
+                {"(max)", true},
+                {"peak tags B", true},
+                {"peak front B", true},
+                {"front / nodes", true},
+                {"window / nodes", true}});
 }
 
 Table e5_table() {
-  return Table({{"model", false}, {"VD bytes", true}, {"VD faces", true}, {"VI bytes", true}, {"VI splits", true},
-                {"VD / VI", true}, {"paper VD / VI", true}, {"VD plain bytes", true}, {"plain / VD", true}});
+  return Table({{"model", false},
+                {"VD bytes", true},
+                {"VD faces", true},
+                {"VI bytes", true},
+                {"VI splits", true},
+                {"VD / VI", true},
+                {"paper VD / VI", true},
+                {"VD plain bytes", true},
+                {"plain / VD", true}});
 }
 
 // E2 and E3/E4 on one model: a row in each table and their entries in the model's record.
@@ -353,10 +401,15 @@ void run_e2_to_e4(const BenchModel& m, bool quick, Table& e2, Table& e34, json& 
                fixed(100 * laps.max_ratio, 1) + " %", thousands(laps.max_tag_bytes), thousands(laps.max_front_bytes),
                percent_of(laps.max_front_nodes, m.served->model().node_count()),
                percent_of(laps.max_window_nodes, m.served->model().node_count())});
-  record["e2"] = {{"topology_bits", bits.topology}, {"position_bits", bits.position},
-                  {"refinement_bits", bits.refinement}, {"attribute_bits", bits.attributes}, {"wire_bytes_per_packet", wire}};
-  record["e3_e4"] = {{"lap_down", {laps.lap_down[0], laps.lap_down[1]}}, {"lap_up", {laps.lap_up[0], laps.lap_up[1]}},
-                     {"tags_over_front_mean", laps.mean_ratio}, {"tags_over_front_max", laps.max_ratio},
+  record["e2"] = {{"topology_bits", bits.topology},
+                  {"position_bits", bits.position},
+                  {"refinement_bits", bits.refinement},
+                  {"attribute_bits", bits.attributes},
+                  {"wire_bytes_per_packet", wire}};
+  record["e3_e4"] = {{"lap_down", {laps.lap_down[0], laps.lap_down[1]}},
+                     {"lap_up", {laps.lap_up[0], laps.lap_up[1]}},
+                     {"tags_over_front_mean", laps.mean_ratio},
+                     {"tags_over_front_max", laps.max_ratio},
                      {"frames", laps.frames}};
 }
 
@@ -373,34 +426,42 @@ void run_e5_pair(const BenchContext& context, const BenchModel& m, Table& e5, js
                 fixed(double(e.vd_bytes) / double(std::max<uint64_t>(1, e.vi_bytes)), 2), paper,
                 thousands(e.plain_bytes), fixed(double(e.plain_bytes) / double(std::max<uint64_t>(1, e.vd_bytes)), 2)});
   for (const auto& [key, e] : {std::pair{"e5", vd}, std::pair{"e5_bound", vb}})
-    record[key] = {{"vd_bytes", e.vd_bytes}, {"vd_faces", e.vd_faces}, {"vi_bytes", e.vi_bytes}, {"vi_splits", e.vi_splits},
+    record[key] = {{"vd_bytes", e.vd_bytes},
+                   {"vd_faces", e.vd_faces},
+                   {"vi_bytes", e.vi_bytes},
+                   {"vi_splits", e.vi_splits},
                    {"vd_plain_bytes", e.plain_bytes}};
 }
 
 // Prints the three tables and returns their part of the report.
 std::string e2_to_e5_sections(const Table& e2, const Table& e34, const Table& e5) {
   print("\nE2: bits per vsplit packet (kim-lee-kobbelt Table 2: 96 topology bits)\n" + e2.markdown());
-  print("\nE3/E4: two laps of an orbit at τ = 1 px (Fig 6: tags ≈ 10 % of a stored front; Fig 7: lap 2 = 0)\n" + e34.markdown());
+  print("\nE3/E4: two laps of an orbit at τ = 1 px (Fig 6: tags ≈ 10 % of a stored front; Fig 7: lap 2 = 0)\n" +
+        e34.markdown());
   print("\nE5: bytes to satisfy τ = 1 px from a close view (Fig 9)\n" + e5.markdown());
-  std::string section = "### E2: bits per vsplit packet\n\n" + e2.markdown() +
-                        "\nTopology = v_s's id and the record's v̂_l, v̂_r (split records, docs/protocol.md \"VSPLITS\"). "
-                        "Position = the record's geometry; normal + color = v_t's, for a model that has them. Whole split "
-                        "order; the wire column is E3's first lap, frame headers included.\n\n";
-  section += "### E3/E4: two laps of one orbit path, τ = 1 px\n\n" + e34.markdown() +
-             "\nA stored front costs " + fixed(kFrontEntryBytes, 0) + " bytes per active node (one 64-bit id). The tags cost "
+  std::string section =
+      "### E2: bits per vsplit packet\n\n" + e2.markdown() +
+      "\nTopology = v_s's id and the record's v̂_l, v̂_r (split records, docs/protocol.md \"VSPLITS\"). "
+      "Position = the record's geometry; normal + color = v_t's, for a model that has them. Whole split "
+      "order; the wire column is E3's first lap, frame headers included.\n\n";
+  section += "### E3/E4: two laps of one orbit path, τ = 1 px\n\n" + e34.markdown() + "\nA stored front costs " +
+             fixed(kFrontEntryBytes, 0) +
+             " bytes per active node (one 64-bit id). The tags cost "
              "a bit per node of the window, which spans from the coarsest active node to the finest, so tags / front "
              "≈ window / (64 × front): at most 10 % needs a front of at least a sixth of the window (peak columns, "
              "as a share of the hierarchy's nodes). A front that mixes unrefined coarse nodes with leaves spans "
              "most nodes in any parents-first order: PM order instead of breadth-first shrank the window by a third at "
              "most on bunny and dragon. Within a level, sibling pairs come largest parent deviation first, which "
              "ends the window sooner (docs/internals.md).\n\n";
-  section += "### E5: bytes to satisfy τ = 1 px from a close view\n\n" + e5.markdown() +
-             "\nVI = a view-independent session (`stream --mode vi`) to the same view: the base mesh plus the plain "
-             "PM-order prefix (packets without refinement info) up to the last split the view needs, bytes down until "
-             "that VIEW's final batch. \"VD plain\" = the same view in `stream --mode sender-plain` (kim-lee-kobbelt §6.3, "
-             "Fig. 10 middle column): the VD splits with the client's actual cut vertices and no refinement info. \"bound\" rows: the model built with `--deviation bound` (a bound on the input "
-             "surface below each node, whose chain over-refines a close view) instead of the default, Hoppe 1997's "
-             "sampled estimate (the criteria the paper uses).\n\n";
+  section +=
+      "### E5: bytes to satisfy τ = 1 px from a close view\n\n" + e5.markdown() +
+      "\nVI = a view-independent session (`stream --mode vi`) to the same view: the base mesh plus the plain "
+      "PM-order prefix (packets without refinement info) up to the last split the view needs, bytes down until "
+      "that VIEW's final batch. \"VD plain\" = the same view in `stream --mode sender-plain` (kim-lee-kobbelt §6.3, "
+      "Fig. 10 middle column): the VD splits with the client's actual cut vertices and no refinement info. \"bound\" "
+      "rows: the model built with `--deviation bound` (a bound on the input "
+      "surface below each node, whose chain over-refines a close view) instead of the default, Hoppe 1997's "
+      "sampled estimate (the criteria the paper uses).\n\n";
   return section;
 }
 
@@ -408,7 +469,8 @@ std::string e2_to_e5_sections(const Table& e2, const Table& e34, const Table& e5
 
 void run_sender_group(BenchContext& context) {
   json out = {{"command", context.options.command_line}, {"machine", machine_json()}, {"models", json::array()}};
-  std::string section = "## sender: E2 packet bits, E3 server memory, E4 two laps, E5 bytes to satisfy τ, E11 many clients\n\n";
+  std::string section =
+      "## sender: E2 packet bits, E3 server memory, E4 two laps, E5 bytes to satisfy τ, E11 many clients\n\n";
   if (skipped_without_models(context, section)) return;
   const bool quick = context.options.quick;
   std::vector<std::string> names = context.options.models.empty() ? kDefaultModels : context.options.models;

@@ -62,8 +62,7 @@ fs::path find_model(const fs::path& models_dir, const std::string& name) {
   for (const auto& entry : fs::directory_iterator(models_dir, error)) {
     const std::string file = entry.path().filename().string();
     const size_t dot = file.find('.');
-    if (!entry.is_regular_file() || dot == 0 || dot == std::string::npos || entry.path().extension() == ".md")
-      continue;
+    if (!entry.is_regular_file() || dot == 0 || dot == std::string::npos || entry.path().extension() == ".md") continue;
     const std::string stem = file.substr(0, dot);
     if (stem == name) matches.push_back(entry.path());
     names.push_back(stem);
@@ -81,7 +80,7 @@ nlohmann::json machine_json() {
   cpu_set_t cpus;
   CPU_ZERO(&cpus);
   const int nproc = sched_getaffinity(0, sizeof cpus, &cpus) == 0 ? CPU_COUNT(&cpus) : 0;  // what `nproc` prints
-  const std::string mem = proc_field("/proc/meminfo", "MemTotal");  // "16330040 kB"
+  const std::string mem = proc_field("/proc/meminfo", "MemTotal");                         // "16330040 kB"
   utsname system{};
   uname(&system);
   return {{"nproc", nproc},
@@ -93,8 +92,8 @@ nlohmann::json machine_json() {
 std::string machine_description() {
   const nlohmann::json m = machine_json();
   const std::string cpu = m["cpu_model"].get<std::string>();
-  return std::to_string(m["nproc"].get<int>()) + " CPUs (nproc), " + (cpu.empty() ? "unknown CPU model" : cpu) +
-         ", " + fixed(m["mem_total_gib"].get<double>(), 1) + " GiB RAM, " + m["kernel"].get<std::string>();
+  return std::to_string(m["nproc"].get<int>()) + " CPUs (nproc), " + (cpu.empty() ? "unknown CPU model" : cpu) + ", " +
+         fixed(m["mem_total_gib"].get<double>(), 1) + " GiB RAM, " + m["kernel"].get<std::string>();
 }
 
 void write_text_file(const fs::path& path, const std::string& text) {

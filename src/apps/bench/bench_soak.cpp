@@ -79,7 +79,8 @@ SoakRun run_soak(const BenchContext& context, const BenchModel& m, uint32_t clie
   SoakRun run;
   std::optional<ServeChild> server;
   try {
-    server.emplace(context.self_exe, std::vector<std::string>{m.pms.string(), "--max-sessions", std::to_string(clients + 16)});
+    server.emplace(context.self_exe,
+                   std::vector<std::string>{m.pms.string(), "--max-sessions", std::to_string(clients + 16)});
     run.samples.push_back({0, server->stats()});  // the model mapped, no session yet
   } catch (const Error& e) {
     run.server_error = e.what();
@@ -107,7 +108,8 @@ SoakRun run_soak(const BenchContext& context, const BenchModel& m, uint32_t clie
     }
     const ServeStats& s = run.samples.back().stats;
     std::fprintf(stderr, "bench: soak %u:%02u of %u:00, %llu sessions, server RSS %.1f MB\n", k * kSampleSeconds / 60,
-                 k * kSampleSeconds % 60, minutes, (unsigned long long)s.sessions_active, double(s.rss_bytes) / 1048576);
+                 k * kSampleSeconds % 60, minutes, (unsigned long long)s.sessions_active,
+                 double(s.rss_bytes) / 1048576);
   }
   sampled.set_value();
   for (std::thread& t : threads) t.join();
@@ -133,11 +135,11 @@ struct MinuteTotals {
 struct SoakFigures {
   std::vector<MinuteTotals> minutes;
   uint64_t failures = 0, server_faults = 0, min_frames = 0, splits_received = 0;
-  const Sample* first = nullptr;  // the sample at the end of minute 1
-  const Sample* last = nullptr;   // the last sample, at the end of the soak
+  const Sample* first = nullptr;                // the sample at the end of minute 1
+  const Sample* last = nullptr;                 // the last sample, at the end of the soak
   std::optional<double> rss_growth, p99_ratio;  // both need a minute after the first
   // Minute 1 also holds every client's first session, so the last minute is compared with minute 2 too.
-  std::optional<double> p99_ratio_to_second;   // needs a third minute
+  std::optional<double> p99_ratio_to_second;  // needs a third minute
   double p99_first = 0, p99_second = 0, p99_last = 0;
   bool no_failures = false;
 };
@@ -178,7 +180,8 @@ SoakFigures summarize(const SoakRun& run, uint32_t minutes) {
   f.p99_first = percentile(f.minutes.front().view_ms, 0.99);
   f.p99_last = percentile(f.minutes.back().view_ms, 0.99);
   if (minutes >= 2 && f.first && f.last && f.first->stats.rss_bytes > 0)
-    f.rss_growth = (double(f.last->stats.rss_bytes) - double(f.first->stats.rss_bytes)) / double(f.first->stats.rss_bytes);
+    f.rss_growth =
+        (double(f.last->stats.rss_bytes) - double(f.first->stats.rss_bytes)) / double(f.first->stats.rss_bytes);
   if (minutes >= 2 && f.p99_first > 0) f.p99_ratio = f.p99_last / f.p99_first;
   if (minutes >= 3) f.p99_second = percentile(f.minutes[1].view_ms, 0.99);
   if (minutes >= 3 && f.p99_second > 0) f.p99_ratio_to_second = f.p99_last / f.p99_second;
@@ -198,9 +201,18 @@ json as_json(const std::optional<double>& value) { return value ? json(*value) :
 json as_json(const std::optional<bool>& value) { return value ? json(*value) : json(); }
 
 Table minute_table(const SoakRun& run, const SoakFigures& f, json& rows) {
-  Table table({{"minute", true}, {"VIEWs", true}, {"p50 ms", true}, {"p99 ms", true}, {"OPEN p99 ms", true},
-               {"new sessions", true}, {"resumes", true}, {"failed", true}, {"vsplits", true},
-               {"sessions active", true}, {"server RSS MB", true}, {"server CPU s", true}});
+  Table table({{"minute", true},
+               {"VIEWs", true},
+               {"p50 ms", true},
+               {"p99 ms", true},
+               {"OPEN p99 ms", true},
+               {"new sessions", true},
+               {"resumes", true},
+               {"failed", true},
+               {"vsplits", true},
+               {"sessions active", true},
+               {"server RSS MB", true},
+               {"server CPU s", true}});
   for (uint32_t m = 1; m <= f.minutes.size(); ++m) {
     const MinuteTotals& t = f.minutes[m - 1];
     const Sample* end = sample_at_minute(run, m);
@@ -211,10 +223,16 @@ Table minute_table(const SoakRun& run, const SoakFigures& f, json& rows) {
                    thousands(t.resumes), thousands(t.failures), thousands(t.splits),
                    end ? thousands(end->stats.sessions_active) : none, end ? fixed(mb(end->stats.rss_bytes), 1) : none,
                    end && begin ? fixed(end->stats.cpu_s - begin->stats.cpu_s, 2) : none});
-    json row = {{"minute", m}, {"views", t.view_ms.size()}, {"p50_ms", percentile(t.view_ms, 0.5)},
-                {"p99_ms", percentile(t.view_ms, 0.99)}, {"open_p99_ms", percentile(t.open_ms, 0.99)},
-                {"new_sessions", t.fresh}, {"resumes", t.resumes}, {"reconnects", t.reconnects},
-                {"failures", t.failures}, {"splits", t.splits}};
+    json row = {{"minute", m},
+                {"views", t.view_ms.size()},
+                {"p50_ms", percentile(t.view_ms, 0.5)},
+                {"p99_ms", percentile(t.view_ms, 0.99)},
+                {"open_p99_ms", percentile(t.open_ms, 0.99)},
+                {"new_sessions", t.fresh},
+                {"resumes", t.resumes},
+                {"reconnects", t.reconnects},
+                {"failures", t.failures},
+                {"splits", t.splits}};
     if (end) row.update({{"sessions_active", end->stats.sessions_active}, {"rss_bytes", end->stats.rss_bytes}});
     rows.push_back(row);
   }
@@ -230,12 +248,14 @@ std::string counted_faults(const SoakRun& run) {
 
 std::string rss_of(const Sample* s) { return s ? fixed(mb(s->stats.rss_bytes), 1) + " MB" : "no report"; }
 
-std::string summary(const SoakRun& run, const SoakFigures& f, const std::string& model, uint32_t clients, uint32_t minutes) {
+std::string summary(const SoakRun& run, const SoakFigures& f, const std::string& model, uint32_t clients,
+                    uint32_t minutes) {
   const std::string na = "n/a (needs 2+ minutes)";
   std::string text = "- " + std::to_string(clients) + " protocol clients × " + std::to_string(minutes) + " min on " +
                      model + ", τ = " + fixed(kTolerance, 0) + " px, " + fixed(kSoakFramesPerSecond, 0) +
                      " VIEWs per second each (orbits and scans, each from its own phase), a dropped connection every "
-                     "30–90 s, then a resume or a new session (even odds); seed " + std::to_string(kSeed) + ".\n";
+                     "30–90 s, then a resume or a new session (even odds); seed " +
+                     std::to_string(kSeed) + ".\n";
   text += "- failed sessions: " + std::to_string(f.failures) + " seen by clients; the server counted " +
           counted_faults(run) + "; fewest frames of a client: " + std::to_string(f.min_frames) + ".\n";
   if (run.stopped)
@@ -246,17 +266,21 @@ std::string summary(const SoakRun& run, const SoakFigures& f, const std::string&
             thousands(run.stopped->longest_turn_us) + " µs.\n";
   text += "- server RSS at the end of minute 1: " + rss_of(f.first) + ", at the end: " + rss_of(f.last) + ", growth " +
           (f.rss_growth ? fixed(100 * *f.rss_growth, 2) + " %" : na) + ".\n";
-  text += "- p99 latency, last minute / first: " + fixed(f.p99_last, 2) + " / " + fixed(f.p99_first, 2) + " ms = " +
-          (f.p99_ratio ? fixed(*f.p99_ratio, 2) : na) + "; last / minute 2 (minute 1 also holds every client's " +
+  text += "- p99 latency, last minute / first: " + fixed(f.p99_last, 2) + " / " + fixed(f.p99_first, 2) +
+          " ms = " + (f.p99_ratio ? fixed(*f.p99_ratio, 2) : na) +
+          "; last / minute 2 (minute 1 also holds every client's " +
           "first session): " + (f.p99_ratio_to_second ? fixed(*f.p99_ratio_to_second, 2) : "n/a (needs 3+ minutes)") +
           ".\n";
-  text += "- target (requirement 8, stated for 100 clients × 10 min on dragon): RSS growth after the first minute "
-          "≤ 1 %: " + met(within(f.rss_growth, kTargetRssGrowth)) + "; 0 failed sessions: " + met(f.no_failures) +
-          "; p99 in the last minute ≤ 1.5× the first: " + met(within(f.p99_ratio, kTargetP99Ratio)) + ".\n";
+  text +=
+      "- target (requirement 8, stated for 100 clients × 10 min on dragon): RSS growth after the first minute "
+      "≤ 1 %: " +
+      met(within(f.rss_growth, kTargetRssGrowth)) + "; 0 failed sessions: " + met(f.no_failures) +
+      "; p99 in the last minute ≤ 1.5× the first: " + met(within(f.p99_ratio, kTargetP99Ratio)) + ".\n";
   if (!run.server_error.empty()) text += "- **no server report**: " + run.server_error + "\n";
   const size_t log_lines = size_t(std::count(run.server_log.begin(), run.server_log.end(), '\n'));
   text += "- server log (stderr): " + std::to_string(log_lines) + " lines" +
-          (log_lines ? ", the first: `" + run.server_log.substr(0, run.server_log.find('\n')) + "`" : std::string()) + ".\n";
+          (log_lines ? ", the first: `" + run.server_log.substr(0, run.server_log.find('\n')) + "`" : std::string()) +
+          ".\n";
   for (uint32_t i = 0; i < run.clients.size(); ++i)
     for (const std::string& failure : run.clients[i].failures)
       text += "- client " + std::to_string(i) + " failed at " + failure + "\n";
@@ -292,8 +316,12 @@ json soak_json(const BenchContext& context, const SoakRun& run, const SoakFigure
       failures += s.failures;
       splits += s.splits;
     }
-    clients.push_back({{"client", i}, {"path", run.paths[i]}, {"frames", run.clients[i].frames},
-                       {"failures", failures}, {"splits", splits}, {"failure_texts", run.clients[i].failures}});
+    clients.push_back({{"client", i},
+                       {"path", run.paths[i]},
+                       {"frames", run.clients[i].frames},
+                       {"failures", failures},
+                       {"splits", splits},
+                       {"failure_texts", run.clients[i].failures}});
   }
   return {{"command", context.options.command_line},
           {"machine", machine_json()},
@@ -337,9 +365,9 @@ void run_soak_group(BenchContext& context) {
   const SoakFigures figures = summarize(run, minutes);
   json minute_rows = json::array();
   const Table table = minute_table(run, figures, minute_rows);
-  const std::string text = table.markdown() + "\n" + summary(run, figures, name, clients, minutes) + "\n" +
-                           plot_rss(run, context.options.out_dir, "soak: " + std::to_string(clients) + " clients on " + name) +
-                           "\n\n";
+  const std::string text =
+      table.markdown() + "\n" + summary(run, figures, name, clients, minutes) + "\n" +
+      plot_rss(run, context.options.out_dir, "soak: " + std::to_string(clients) + " clients on " + name) + "\n\n";
   std::printf("\nsoak: %u clients × %u min on %s\n%s", clients, minutes, name.c_str(), text.c_str());
   std::fflush(stdout);
   write_text_file(context.options.out_dir / "soak.json",

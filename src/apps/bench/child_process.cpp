@@ -119,14 +119,11 @@ bool drain(Fd& out, Fd& err, ChildResult& result, const ChildOptions& options, c
 
 std::string ChildResult::failure() const {
   char what[96];
-  if (timed_out)
-    std::snprintf(what, sizeof what, "timed out after %.0f s", wall_seconds);
+  if (timed_out) std::snprintf(what, sizeof what, "timed out after %.0f s", wall_seconds);
   else if (term_signal != 0)
     std::snprintf(what, sizeof what, "killed by signal %d (%s)", term_signal, strsignal(term_signal));
-  else if (exit_code != 0)
-    std::snprintf(what, sizeof what, "exit code %d", exit_code);
-  else
-    return "";
+  else if (exit_code != 0) std::snprintf(what, sizeof what, "exit code %d", exit_code);
+  else return "";
   // The last non-empty line of stderr is where our CLI and most tools say why.
   const size_t end = err.find_last_not_of("\r\n");
   if (end == std::string::npos) return what;

@@ -3,18 +3,18 @@
 // build alone. Caveat: Linux keeps the pre-exec high-water mark, so a child's ru_maxrss is at least
 // what it inherited from this process at fork; the bench stays small to keep that floor low.
 #pragma once
+#include <sys/types.h>
 #include <cstddef>
 #include <functional>
 #include <string>
 #include <string_view>
-#include <sys/types.h>
 #include <vector>
 
 namespace pms::app {
 
 struct ChildOptions {
-  double timeout_seconds = 0;              // 0: no limit; else SIGKILL once this much wall time has passed
-  std::string stdout_path;                 // when set, stdout goes to this file instead of being captured
+  double timeout_seconds = 0;                    // 0: no limit; else SIGKILL once this much wall time has passed
+  std::string stdout_path;                       // when set, stdout goes to this file instead of being captured
   size_t max_captured_bytes = size_t(16) << 20;  // per stream; the rest is read and dropped
   // Called in the parent once the child runs, with its pid: a long-running child (a server) can be
   // signalled from another thread while run_child waits for it.
@@ -31,7 +31,7 @@ struct ChildResult {
   std::string out, err;     // captured stdout (unless redirected) and stderr
   double wall_seconds = 0;  // fork to reap
   double user_seconds = 0, system_seconds = 0;
-  double peak_rss_mb = 0;   // ru_maxrss
+  double peak_rss_mb = 0;  // ru_maxrss
 
   bool ok() const { return !timed_out && term_signal == 0 && exit_code == 0; }
   // "exit code 2", "killed by signal 11 (Segmentation fault)", "timed out after 60 s", plus the last

@@ -85,7 +85,8 @@ std::string plot_png(const Plot& plot, const std::filesystem::path& png_path) {
   return "";
 }
 
-std::string plot_markdown(const std::filesystem::path& dir, const Plot& plot, const std::string& png, const std::string& alt) {
+std::string plot_markdown(const std::filesystem::path& dir, const Plot& plot, const std::string& png,
+                          const std::string& alt) {
   const std::string skipped = plot_png(plot, dir / png);
   if (skipped.empty()) return "![" + alt + "](" + png + ")\n\n";
   std::fprintf(stderr, "bench: %s\n", skipped.c_str());

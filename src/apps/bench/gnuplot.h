@@ -28,6 +28,7 @@ std::string plot_png(const Plot& plot, const std::filesystem::path& png_path);
 
 // Draws `plot` into dir/png and returns report.md's line for it: the image, or why there is none (also told
 // on stderr).
-std::string plot_markdown(const std::filesystem::path& dir, const Plot& plot, const std::string& png, const std::string& alt);
+std::string plot_markdown(const std::filesystem::path& dir, const Plot& plot, const std::string& png,
+                          const std::string& alt);
 
 }  // namespace pms::app

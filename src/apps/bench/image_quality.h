@@ -5,10 +5,10 @@
 #include <string>
 #include <vector>
 
-#include "spm/hierarchy.h"
 #include "common/camera.h"
-#include "spm/selective_mesh.h"
 #include "render/render.h"
+#include "spm/hierarchy.h"
+#include "spm/selective_mesh.h"
 
 namespace pms::app {
 

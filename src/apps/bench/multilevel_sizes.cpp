@@ -28,7 +28,8 @@ std::vector<std::vector<uint8_t>> ascii_levels(const MultilevelMesh& m) {
     else if (text[i] == '\n') comment = false;
     else if (text[i] == '{' && !comment) batches.push_back(i);
   }
-  if (batches.size() != 2 * size_t(m.level_count())) fail("bench", "the ASCII form does not have two batches per level");
+  if (batches.size() != 2 * size_t(m.level_count()))
+    fail("bench", "the ASCII form does not have two batches per level");
   std::vector<std::vector<uint8_t>> out;
   for (size_t l = 0; l < m.level_count(); ++l) {
     const size_t begin = l == 0 ? 0 : batches[2 * l], end = l + 1 < m.level_count() ? batches[2 * l + 2] : text.size();
@@ -52,14 +53,16 @@ MeshoptLevel meshopt_level(const MultilevelMesh& m, const PositionGrid& grid, ui
     quantize_position(grid, p, q);
     lanes.insert(lanes.end(), {uint16_t(q[0]), uint16_t(q[1]), uint16_t(q[2]), 0});
   }
-  const std::vector<uint32_t> indices(m.triangles.begin() + 3 * size_t(t_begin), m.triangles.begin() + 3 * size_t(t_end));
+  const std::vector<uint32_t> indices(m.triangles.begin() + 3 * size_t(t_begin),
+                                      m.triangles.begin() + 3 * size_t(t_end));
   MeshoptLevel out;
   std::vector<uint8_t> bytes(meshopt_encodeVertexBufferBound(lanes.size() / 4, 8));
   out.vertex = meshopt_encodeVertexBuffer(bytes.data(), bytes.size(), lanes.data(), lanes.size() / 4, 8);
   bytes.assign(meshopt_encodeIndexSequenceBound(indices.size(), m.vertices()), 0);
   out.index = meshopt_encodeIndexSequence(bytes.data(), bytes.size(), indices.data(), indices.size());
   std::vector<uint32_t> back(indices.size());
-  if (meshopt_decodeIndexSequence(back.data(), back.size(), sizeof(uint32_t), bytes.data(), out.index) != 0 || back != indices)
+  if (meshopt_decodeIndexSequence(back.data(), back.size(), sizeof(uint32_t), bytes.data(), out.index) != 0 ||
+      back != indices)
     fail("meshoptimizer", "a level's index sequence does not round-trip");
   return out;
 }
@@ -84,15 +87,23 @@ MultilevelSizes multilevel_sizes(const MultilevelMesh& m, uint32_t position_bits
     const uint64_t triangle_bits = b.total() - vertex_bits;
     const MeshoptLevel mo = position_bits <= 16 ? meshopt_level(m, grid, level) : MeshoptLevel{};
     const uint64_t binary_gzip = gzip9(binary.levels[i]).size(), ascii_gzip = gzip9(ascii[i]).size();
-    per_level.push_back({{"level", level}, {"vertices", vertices}, {"triangles", triangles},
+    per_level.push_back({{"level", level},
+                         {"vertices", vertices},
+                         {"triangles", triangles},
                          {"compressed_bytes", compressed.levels[i].size()},
-                         {"compressed_bits", {{"header", b.header}, {"representatives", b.representatives},
-                                              {"vertices", b.vertices}, {"triangles", b.triangles}}},
+                         {"compressed_bits",
+                          {{"header", b.header},
+                           {"representatives", b.representatives},
+                           {"vertices", b.vertices},
+                           {"triangles", b.triangles}}},
                          {"bits_per_vertex", vertices ? double(vertex_bits) / vertices : 0.0},
                          {"bits_per_triangle", triangles ? double(triangle_bits) / triangles : 0.0},
-                         {"binary_bytes", binary.levels[i].size()}, {"binary_gzip_bytes", binary_gzip},
-                         {"ascii_bytes", ascii[i].size()}, {"ascii_gzip_bytes", ascii_gzip},
-                         {"meshopt_vertex_bytes", mo.vertex}, {"meshopt_index_bytes", mo.index}});
+                         {"binary_bytes", binary.levels[i].size()},
+                         {"binary_gzip_bytes", binary_gzip},
+                         {"ascii_bytes", ascii[i].size()},
+                         {"ascii_gzip_bytes", ascii_gzip},
+                         {"meshopt_vertex_bytes", mo.vertex},
+                         {"meshopt_index_bytes", mo.index}});
     total.compressed += compressed.levels[i].size();
     total.binary += binary.levels[i].size();
     total.binary_gzip += binary_gzip;

@@ -13,8 +13,8 @@ namespace pms::app {
 // Bytes over every level (each level on its own, as it travels), and the compressed form's bits by part.
 struct MultilevelSizes {
   uint64_t compressed = 0, binary = 0, binary_gzip = 0, ascii = 0, ascii_gzip = 0;
-  uint64_t vertex_bits = 0, triangle_bits = 0;      // compressed: positions and attributes; connectivity + representatives
-  uint64_t meshopt_vertex = 0, meshopt_index = 0;   // meshoptimizer's vertex and index-sequence codecs, per level
+  uint64_t vertex_bits = 0, triangle_bits = 0;  // compressed: positions and attributes; connectivity + representatives
+  uint64_t meshopt_vertex = 0, meshopt_index = 0;  // meshoptimizer's vertex and index-sequence codecs, per level
 };
 
 // `per_level` gets one object per level, coarsest first.

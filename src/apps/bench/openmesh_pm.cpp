@@ -31,8 +31,8 @@ std::vector<uint8_t> check_base_faces(const uint8_t* faces, const OpenMeshPmStat
     for (int corner = 0; corner < 3; ++corner) {
       const uint32_t v = load_u32(faces + f * kFaceBytes + corner * 4);
       if (v >= s.base_vertices)
-        fail(name, "base face " + n(f) + " uses vertex " + n(v) + " but there are " + n(s.base_vertices) +
-                       " base vertices");
+        fail(name,
+             "base face " + n(f) + " uses vertex " + n(v) + " but there are " + n(s.base_vertices) + " base vertices");
       used[v] = 1;
     }
   }
@@ -52,8 +52,8 @@ OpenMeshPmStats parse_openmesh_pm(std::span<const uint8_t> bytes, const std::str
   s.details = load_u32(bytes.data() + 16);
 
   // The counts must describe exactly this many bytes, checked before anything is allocated.
-  const uint64_t expected = kHeaderBytes + s.base_vertices * kPositionBytes + s.base_faces * kFaceBytes +
-                            s.details * kDetailBytes;
+  const uint64_t expected =
+      kHeaderBytes + s.base_vertices * kPositionBytes + s.base_faces * kFaceBytes + s.details * kDetailBytes;
   if (expected != bytes.size())
     fail(name, "header says " + n(s.base_vertices) + " base vertices, " + n(s.base_faces) + " base faces and " +
                    n(s.details) + " details (" + n(expected) + " bytes) but the file has " + n(bytes.size()) +
@@ -77,8 +77,8 @@ OpenMeshPmStats parse_openmesh_pm(std::span<const uint8_t> bytes, const std::str
       fail(name, "detail " + n(i) + " splits vertex " + n(v1) + " but only " + n(existing) + " vertices exist yet");
     for (const uint32_t v : {vl, vr})
       if (v != kAbsent && v >= existing)
-        fail(name, "detail " + n(i) + " names neighbour vertex " + n(v) + " but only " + n(existing) +
-                       " vertices exist yet");
+        fail(name,
+             "detail " + n(i) + " names neighbour vertex " + n(v) + " but only " + n(existing) + " vertices exist yet");
     depth[existing] = depth[v1] = depth[v1] + 1;
     s.max_depth = std::max(s.max_depth, depth[v1]);
     if (v1 < s.base_vertices) used[v1] = 1;

@@ -18,9 +18,9 @@ struct OpenMeshPmStats {
   uint32_t base_vertices = 0;           // OpenMesh keeps vertices no face uses: they stay roots
   uint32_t isolated_base_vertices = 0;  // roots in no base face and never split (unused input vertices)
   uint32_t base_faces = 0;
-  uint32_t details = 0;                 // vertex splits
-  uint32_t max_depth = 0;               // height of the vertex hierarchy = node-id bits
-  uint32_t tree_id_bits = 0;            // ceil(log2(base_vertices)), as for ours
+  uint32_t details = 0;       // vertex splits
+  uint32_t max_depth = 0;     // height of the vertex hierarchy = node-id bits
+  uint32_t tree_id_bits = 0;  // ceil(log2(base_vertices)), as for ours
 };
 
 // `name` is used in errors. Throws pms::Error for a bad magic, a size that does not match the

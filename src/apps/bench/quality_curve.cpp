@@ -68,9 +68,10 @@ QualityCurve session_curve(const BenchModel& m, protocol::StreamMode mode, const
   // each split as it comes.
   CurveSampler sampler(target, renderer, mode == protocol::StreamMode::sender_driven);
   client::StreamingClient* self = nullptr;
-  auto transport = std::make_unique<ProbedTransport>(in_process_session(m).transport, [&](const client::LinkCounters& c) {
-    if (self != nullptr) sampler.during_view(self->session(), c.bytes_down, c.payload_down());
-  });
+  auto transport =
+      std::make_unique<ProbedTransport>(in_process_session(m).transport, [&](const client::LinkCounters& c) {
+        if (self != nullptr) sampler.during_view(self->session(), c.bytes_down, c.payload_down());
+      });
   client::ClientOptions options{tolerance_px};
   options.mode = mode;
   client::StreamingClient client(std::move(transport), options);
@@ -94,7 +95,8 @@ QualityCurve receiver_curve(uint16_t http_port, const std::string& model, const 
   client::ReceiverOptions options;
   options.tolerance = tolerance_px;
   options.on_attached = [&] {
-    if (self != nullptr) sampler.during_view(self->session(), self->counters().bytes_down, self->counters().payload_down);
+    if (self != nullptr)
+      sampler.during_view(self->session(), self->counters().bytes_down, self->counters().payload_down);
   };
   client::ReceiverClient client(client::HttpUrl{"127.0.0.1", http_port, ""}, options);
   client.open(model);

@@ -9,10 +9,10 @@
 #include <vector>
 
 #include "apps/bench/bench_model.h"
-#include "protocol/stream_mode.h"
 #include "common/camera.h"
-#include "spm/selective_mesh.h"
+#include "protocol/stream_mode.h"
 #include "render/render.h"
+#include "spm/selective_mesh.h"
 
 namespace pms::app {
 
@@ -20,7 +20,7 @@ struct CurveSample {
   uint64_t bytes = 0;    // received so far as counted on the wire: whole frames, or HTTP with its headers
   uint64_t payload = 0;  // the same without the framing (frame headers, HTTP status lines and headers)
   uint64_t faces = 0;
-  double psnr = 0;       // against the full model's image (+infinity when identical)
+  double psnr = 0;  // against the full model's image (+infinity when identical)
   uint64_t error_pixels = 0;
 };
 

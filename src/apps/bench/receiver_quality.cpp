@@ -27,7 +27,7 @@ constexpr double kPsnrSteps[] = {20, 25, 30, 35};
 
 struct CurveMode {
   const char* name;
-  bool receiver;                  // over HTTP; else an in-process session in `mode`
+  bool receiver;  // over HTTP; else an in-process session in `mode`
   protocol::StreamMode mode;
 };
 constexpr CurveMode kModes[] = {{"sender-driven", false, protocol::StreamMode::sender_driven},
@@ -55,7 +55,8 @@ QualityCurve run_mode(const CurveMode& mode, const BenchModel& m, uint16_t http_
   return session_curve(m, mode.mode, camera, kTolerance, target, renderer);
 }
 
-ViewRun run_view(const BenchModel& m, const MeshArrays& full, const Viewpoint& vp, uint16_t http_port, Renderer& renderer) {
+ViewRun run_view(const BenchModel& m, const MeshArrays& full, const Viewpoint& vp, uint16_t http_port,
+                 Renderer& renderer) {
   const ModelData& model = m.served->model();
   const QualityTarget target = quality_target(model, full, vp.camera, renderer);
   ViewRun run;
@@ -90,7 +91,12 @@ PlotSeries capped_series(const char* title, const std::vector<CurveSample>& samp
 std::string plot_view(const BenchContext& context, const std::string& model, const ViewRun& run) {
   Plot plot{"E6 " + model + ", " + run.viewpoint.label + " view: PSNR against bytes received (τ = 0 px, cut at " +
                 fixed(kPsnrCap, 0) + " dB)",
-            "bytes received (log)", "PSNR dB", "", true, false, {}};
+            "bytes received (log)",
+            "PSNR dB",
+            "",
+            true,
+            false,
+            {}};
   for (size_t i = 0; i < kModeCount; ++i) plot.series.push_back(capped_series(kModes[i].name, run.curves[i].samples));
   return plot_markdown(context.options.out_dir, plot, "receiver-e6-" + model + "-" + run.viewpoint.label + ".png",
                        "E6 " + model + " " + run.viewpoint.label);
@@ -101,7 +107,8 @@ constexpr size_t kE6Columns = 4 + std::size(kPsnrSteps) + 6;
 Table e6_table() {
   std::vector<Column> columns = {{"model", false}, {"view", false}, {"mode", false}, {"base B", true}};
   for (double step : kPsnrSteps) columns.push_back({"to " + fixed(step, 0) + " dB", true});
-  for (const char* title : {"final B", "payload B", "final PSNR", "faces", "splits", "GETs"}) columns.push_back({title, true});
+  for (const char* title : {"final B", "payload B", "final PSNR", "faces", "splits", "GETs"})
+    columns.push_back({title, true});
   return Table(columns);
 }
 
@@ -124,39 +131,74 @@ std::vector<std::string> e6_row(const std::string& model, const ViewRun& run, si
 }
 
 Table order_table() {
-  return Table({{"model", false}, {"view", false}, {"receiver ≥ VI everywhere", false}, {"byte counts", true},
-                {"above", true}, {"equal", true}, {"below", true}, {"first below at B", true}, {"worst deficit dB", true}});
+  return Table({{"model", false},
+                {"view", false},
+                {"receiver ≥ VI everywhere", false},
+                {"byte counts", true},
+                {"above", true},
+                {"equal", true},
+                {"below", true},
+                {"first below at B", true},
+                {"worst deficit dB", true}});
 }
 
 std::vector<std::string> order_row(const std::string& model, const ViewRun& run) {
   const CurveOrder& o = run.receiver_vs_vi;
-  return {model, run.viewpoint.label, o.not_below() ? "yes" : "no", thousands(o.compared), thousands(o.above),
-          thousands(o.equal), thousands(o.below), o.below ? thousands(o.first_below_bytes) : "",
+  return {model,
+          run.viewpoint.label,
+          o.not_below() ? "yes" : "no",
+          thousands(o.compared),
+          thousands(o.above),
+          thousands(o.equal),
+          thousands(o.below),
+          o.below ? thousands(o.first_below_bytes) : "",
           o.below ? fixed(o.worst_deficit, 2) : ""};
 }
 
 Table e8_table() {
-  return Table({{"model", false}, {"view", false}, {"full faces", true}, {"faces", true}, {"faces %", true},
-                {"splits fetched", true}, {"of", true}, {"fetched %", true}, {"PSNR", true}, {"err px", true},
-                {"err %", true}, {"local τ=0 faces", true}, {"local PSNR", true}});
+  return Table({{"model", false},
+                {"view", false},
+                {"full faces", true},
+                {"faces", true},
+                {"faces %", true},
+                {"splits fetched", true},
+                {"of", true},
+                {"fetched %", true},
+                {"PSNR", true},
+                {"err px", true},
+                {"err %", true},
+                {"local τ=0 faces", true},
+                {"local PSNR", true}});
 }
 
-std::vector<std::string> e8_row(const std::string& model, uint64_t full_faces, uint64_t total_splits, const ViewRun& run,
-                                uint64_t pixels) {
+std::vector<std::string> e8_row(const std::string& model, uint64_t full_faces, uint64_t total_splits,
+                                const ViewRun& run, uint64_t pixels) {
   const QualityCurve& c = run.curves[kReceiver];
-  if (c.samples.empty()) return {model, run.viewpoint.label, thousands(full_faces), "failed", "", "", "", "", "", "", "", "", ""};
+  if (c.samples.empty())
+    return {model, run.viewpoint.label, thousands(full_faces), "failed", "", "", "", "", "", "", "", "", ""};
   const CurveSample& last = c.samples.back();
-  return {model, run.viewpoint.label, thousands(full_faces), thousands(last.faces),
-          fixed(100.0 * double(last.faces) / double(full_faces), 1), thousands(c.splits), thousands(total_splits),
-          fixed(100.0 * double(c.splits) / double(total_splits), 1), psnr_text(last.psnr), thousands(last.error_pixels),
-          fixed(100.0 * double(last.error_pixels) / double(pixels), 3), thousands(run.local.faces),
+  return {model,
+          run.viewpoint.label,
+          thousands(full_faces),
+          thousands(last.faces),
+          fixed(100.0 * double(last.faces) / double(full_faces), 1),
+          thousands(c.splits),
+          thousands(total_splits),
+          fixed(100.0 * double(c.splits) / double(total_splits), 1),
+          psnr_text(last.psnr),
+          thousands(last.error_pixels),
+          fixed(100.0 * double(last.error_pixels) / double(pixels), 3),
+          thousands(run.local.faces),
           psnr_text(run.local.metrics.psnr)};
 }
 
 json samples_json(const QualityCurve& c) {
   json samples = json::array();
   for (const CurveSample& s : c.samples)
-    samples.push_back({{"bytes", s.bytes}, {"payload", s.payload}, {"faces", s.faces}, {"psnr", psnr_json(s.psnr)},
+    samples.push_back({{"bytes", s.bytes},
+                       {"payload", s.payload},
+                       {"faces", s.faces},
+                       {"psnr", psnr_json(s.psnr)},
                        {"error_pixels", s.error_pixels}});
   return samples;
 }
@@ -165,19 +207,26 @@ json view_json(const ViewRun& run) {
   json modes = json::object();
   for (size_t i = 0; i < kModeCount; ++i) {
     const QualityCurve& c = run.curves[i];
-    modes[kModes[i].name] = {{"samples", samples_json(c)}, {"splits", c.splits}, {"requests", c.requests},
-                             {"bytes", c.bytes}, {"payload", c.payload}, {"error", run.errors[i]}};
+    modes[kModes[i].name] = {{"samples", samples_json(c)}, {"splits", c.splits},   {"requests", c.requests},
+                             {"bytes", c.bytes},           {"payload", c.payload}, {"error", run.errors[i]}};
   }
   const CurveOrder& o = run.receiver_vs_vi;
   return {{"view", run.viewpoint.label},
           {"tolerance_px", kTolerance},
           {"psnr_cap", kPsnrCap},
           {"modes", modes},
-          {"local", {{"faces", run.local.faces}, {"psnr", psnr_json(run.local.metrics.psnr)},
-                     {"error_pixels", run.local.metrics.error_pixels}}},
+          {"local",
+           {{"faces", run.local.faces},
+            {"psnr", psnr_json(run.local.metrics.psnr)},
+            {"error_pixels", run.local.metrics.error_pixels}}},
           {"receiver_not_below_vi", o.not_below()},
-          {"receiver_vs_vi", {{"compared", o.compared}, {"above", o.above}, {"equal", o.equal}, {"below", o.below},
-                              {"first_below_bytes", o.first_below_bytes}, {"worst_deficit_db", o.worst_deficit}}}};
+          {"receiver_vs_vi",
+           {{"compared", o.compared},
+            {"above", o.above},
+            {"equal", o.equal},
+            {"below", o.below},
+            {"first_below_bytes", o.first_below_bytes},
+            {"worst_deficit_db", o.worst_deficit}}}};
 }
 
 void print(const std::string& text) {
@@ -215,28 +264,37 @@ std::string e6_e8_sections(BenchContext& context, const std::vector<BenchModel>&
     server.stop();
     records[k]["e6"] = views;
   }
-  print("\nE6 target: on the close view the receiver-driven curve lies above the view-independent one\n" + order.markdown());
-  print("\nE8: the receiver-driven client fetching only visible splits (τ = 0 px), against the full model\n" + e8.markdown());
-  std::string section = "### E6: PSNR against bytes received, four modes toward one view\n\n" + e6.markdown() +
+  print("\nE6 target: on the close view the receiver-driven curve lies above the view-independent one\n" +
+        order.markdown());
+  print("\nE8: the receiver-driven client fetching only visible splits (τ = 0 px), against the full model\n" +
+        e8.markdown());
+  std::string section =
+      "### E6: PSNR against bytes received, four modes toward one view\n\n" + e6.markdown() +
       "\nEach row: a fresh client from the base mesh streaming toward one view at τ = 0 px (one frame at that camera), "
       "its mesh rendered with the project's renderer against the full model's image there at geometrically spaced "
-      "byte counts (every ×" + fixed(kCurveSampleGrowth, 2) + "). Bytes are what the client received as counted on "
+      "byte counts (every ×" +
+      fixed(kCurveSampleGrowth, 2) +
+      "). Bytes are what the client received as counted on "
       "the wire: whole frames of the TCP protocol for sender-driven, sender-plain (kim-lee-kobbelt §6.3) and "
       "view-independent (an in-process session); for receiver-driven, HTTP responses with their status lines and "
       "headers (GET /models, the base, the code tables, the split GETs) from a `serve --http-port` child on "
       "loopback; payload B = the same without framing. \"to N dB\" = bytes at the first sample at or above N dB; "
       "— = never. Views: far and close are the zoom path's ends, mid the sender group's E5 close view (the refine "
       "group's quality table uses the same three). Same .pms and 16-bit grid for every mode.\n\n";
-  section += "### E6 target: receiver-driven against view-independent\n\n" + order.markdown() +
-             "\nAt every byte count where either curve has a sample and both clients hold a mesh, the PSNR each shows then "
-             "(its last sample's, capped at " + fixed(kPsnrCap, 0) + " dB); issue 19's target is the close view's row. Both "
-             "show the base mesh until their first splits arrive, so \"equal\" counts the start too.\n\n";
+  section +=
+      "### E6 target: receiver-driven against view-independent\n\n" + order.markdown() +
+      "\nAt every byte count where either curve has a sample and both clients hold a mesh, the PSNR each shows then "
+      "(its last sample's, capped at " +
+      fixed(kPsnrCap, 0) +
+      " dB); issue 19's target is the close view's row. Both "
+      "show the base mesh until their first splits arrive, so \"equal\" counts the start too.\n\n";
   section += plots;
-  section += "### E8: only visible splits fetched (cheng-ooi Table 2)\n\n" + e8.markdown() +
-             "\nThe receiver-driven client of E6 at its end (τ = 0 px: qrefine with frustum and back-face culling only), "
-             "its mesh against the full model's image; splits fetched = the splits it received, of the model's total. "
-             "Local τ = 0: refinement of the whole model in this process for the same view (the refine group's τ = 0 "
-             "column).\n\n";
+  section +=
+      "### E8: only visible splits fetched (cheng-ooi Table 2)\n\n" + e8.markdown() +
+      "\nThe receiver-driven client of E6 at its end (τ = 0 px: qrefine with frustum and back-face culling only), "
+      "its mesh against the full model's image; splits fetched = the splits it received, of the model's total. "
+      "Local τ = 0: refinement of the whole model in this process for the same view (the refine group's τ = 0 "
+      "column).\n\n";
   return section;
 }
 

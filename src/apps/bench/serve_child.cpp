@@ -16,8 +16,8 @@ uint64_t counter(const json& line, const char* name) {
   const auto it = line.find(name);
   // A parsed count is unsigned; one built in code may be a signed integer: either, if not negative.
   if (it == line.end() || !it->is_number_integer() || (!it->is_number_unsigned() && it->get<int64_t>() < 0))
-    fail("serve", std::string("the \"") + line.value("event", "?") + "\" line has no counter " + name + ": " +
-                      line.dump());
+    fail("serve",
+         std::string("the \"") + line.value("event", "?") + "\" line has no counter " + name + ": " + line.dump());
   return it->get<uint64_t>();
 }
 

@@ -62,8 +62,8 @@ class ServeChild {
   std::string partial_;            // stdout after the last newline
   std::deque<std::string> lines_;  // complete lines not read yet
   bool exited_ = false;
-  ChildResult run_;                // written by thread_ before exited_ is set
-  std::string start_error_;        // run_child could not start the program
+  ChildResult run_;          // written by thread_ before exited_ is set
+  std::string start_error_;  // run_child could not start the program
   nlohmann::json listening_;
   uint16_t port_ = 0;
 };

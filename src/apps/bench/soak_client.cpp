@@ -4,8 +4,8 @@
 #include <random>
 #include <thread>
 
-#include "client/load_client.h"
 #include "apps/bench/report.h"
+#include "client/load_client.h"
 #include "common/error.h"
 
 namespace pms::app {
@@ -59,7 +59,8 @@ SoakClientLog run_soak_client(const SoakClientPlan& plan, uint32_t minutes) {
   options.answer_timeout = kAnswerTimeout;
   options.model = plan.data;
   client::LoadClient client("127.0.0.1", plan.port, plan.model, options);
-  const auto period = std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(1 / kSoakFramesPerSecond));
+  const auto period =
+      std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(1 / kSoakFramesPerSecond));
   Clock::time_point next_frame = plan.start;
   Clock::time_point next_drop = plan.start + first_drop_delay();
   bool resume = false;

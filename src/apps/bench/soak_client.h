@@ -8,8 +8,8 @@
 #include <string>
 #include <vector>
 
-#include "spm/hierarchy.h"
 #include "common/camera.h"
+#include "spm/hierarchy.h"
 
 namespace pms::app {
 
@@ -18,7 +18,7 @@ constexpr double kSoakFramesPerSecond = 4;
 
 // A camera path flown in a loop from `phase`: an orbit goes round, a scan goes up and comes back down.
 struct SoakPath {
-  std::string name;                     // "orbit" or "scan", and "reversed"
+  std::string name;  // "orbit" or "scan", and "reversed"
   const std::vector<Camera>* cameras = nullptr;
   bool ping_pong = false;
   bool reversed = false;
@@ -42,9 +42,9 @@ struct SoakClientLog {
 struct SoakClientPlan {
   uint16_t port = 0;
   std::string model;
-  const ModelData* data = nullptr;      // the model served, for the leaves a resume sends
+  const ModelData* data = nullptr;  // the model served, for the leaves a resume sends
   SoakPath path;
-  uint64_t seed = 0;                    // reconnect times and resume-or-new draws
+  uint64_t seed = 0;                                 // reconnect times and resume-or-new draws
   std::chrono::steady_clock::time_point start, end;  // the client's first frame; no VIEW is sent after end
   std::chrono::steady_clock::time_point t0;          // the soak's start, minute 1 begins here
   float tolerance = 1;

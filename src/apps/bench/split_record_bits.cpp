@@ -2,11 +2,11 @@
 
 #include "apps/camera_path.h"
 #include "common/bit_stream.h"
-#include "spm/split_record.h"
 #include "protocol/model_messages.h"
 #include "protocol/packet_bits.h"
 #include "spm/adapt.h"
 #include "spm/selective_mesh.h"
+#include "spm/split_record.h"
 #include "spm/vertex_hierarchy.h"
 
 namespace pms::app {
@@ -17,7 +17,8 @@ RecordBitsReport record_bits(const ModelData& model, const SplitCodec& codec, st
   BitWriter tables;
   codec.serialize(tables);
   report.table_bits = tables.size();
-  const protocol::StreamContext context = protocol::stream_context(protocol::make_base(model, "model", codec.position_bits()));
+  const protocol::StreamContext context =
+      protocol::stream_context(protocol::make_base(model, "model", codec.position_bits()));
   for (uint32_t node : nodes) {
     BitWriter w;
     RecordBits bits;

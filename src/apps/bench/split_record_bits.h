@@ -5,17 +5,17 @@
 #include <span>
 #include <vector>
 
+#include "common/camera.h"
 #include "spm/hierarchy.h"
 #include "spm/split_codec.h"
-#include "common/camera.h"
 
 namespace pms::app {
 
 struct RecordBitsReport {
   size_t splits = 0;
-  RecordBits bits;           // the records' bits by part, summed
+  RecordBits bits;                 // the records' bits by part, summed
   uint64_t packet_refinement = 0;  // the same splits' info_t + info_u in today's VSPLITS packets, summed
-  uint64_t table_bits = 0;   // the model's code tables, serialized
+  uint64_t table_bits = 0;         // the model's code tables, serialized
   double per_split(uint64_t total) const { return splits ? double(total) / double(splits) : 0; }
 };
 
