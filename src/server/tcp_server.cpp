@@ -4,6 +4,8 @@
 // only ever touched by one thread at a time.
 // Every peer is presumed hostile: a connection's turn on a thread is bounded in time (turn_us), its
 // memory by the frame limit and the send queue, and every wait by a deadline (docs/operating.md).
+#include <utility>  // before asio with C++20 (docs/architecture.md, "Stack")
+
 #include <linux/sockios.h>
 #include <sys/ioctl.h>
 #include <array>
@@ -12,7 +14,6 @@
 #include <mutex>
 #include <set>
 #include <thread>
-#include <utility>  // before asio with C++20 (docs/architecture.md, "Stack")
 
 #include "common/error.h"
 #include "protocol/framing.h"

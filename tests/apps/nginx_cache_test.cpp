@@ -3,12 +3,13 @@
 // (`pmstream stream --mode receiver`) flying bunny through it. A second client on the same path is served
 // by the cache alone; ten clients on overlapping stretches of one orbit report the hit rate of each fetch
 // policy (docs/protocol.md, "Receiver-driven client").
+#include <utility>  // before asio with C++20 (docs/architecture.md, "Stack")
+
 #include <gtest/gtest.h>
 #include <pwd.h>
 #include <signal.h>
 #include <unistd.h>
 #include <boost/asio.hpp>
-#include <utility>  // before asio with C++20 (docs/architecture.md, "Stack")
 
 #include <algorithm>
 #include <atomic>

@@ -1,13 +1,14 @@
 // The server benches' plumbing against a real `pmstream serve --json`: its counters agree with what a
 // LoadClient received, a resume re-sends nothing, and a server that does not report is an error that
 // says why (E11 and the soak read the server only through ServeChild).
+#include <utility>  // before asio with C++20
+
 #include <gtest/gtest.h>
 #include <boost/asio.hpp>
 #include <fstream>
 #include <functional>
 #include <nlohmann/json.hpp>
 #include <string>
-#include <utility>  // before asio with C++20
 
 #include "apps/bench/serve_child.h"
 #include "apps/camera_path.h"
