@@ -2,11 +2,12 @@
 // connect, the reads into a FrameReader, the writes of queued frames one after another, and the deadlines
 // on all three (asio's chat_client shape, with the timeouts of its timeouts/ examples). The caller's
 // threads only touch what the mutex guards and hand frames over with asio::post.
+#include <utility>  // before asio with C++20 (docs/architecture.md, "Stack")
+
 #include <array>
 #include <boost/asio.hpp>
 #include <functional>
 #include <thread>
-#include <utility>  // before asio with C++20 (docs/architecture.md, "Stack")
 
 #include "client/link.h"
 #include "client/transport.h"

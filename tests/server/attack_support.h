@@ -4,6 +4,8 @@
 // would refuse, and a good client that flies a path and keeps each frame's latency.
 // Every wait has a deadline: a server that hangs fails the test instead of hanging it.
 #pragma once
+#include <utility>  // before asio with C++20
+
 #include <sys/types.h>
 #include <boost/asio.hpp>
 #include <chrono>
@@ -14,7 +16,6 @@
 #include <optional>
 #include <span>
 #include <string>
-#include <utility>  // before asio with C++20
 #include <vector>
 
 #include "common/camera.h"

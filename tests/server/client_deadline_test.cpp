@@ -3,6 +3,8 @@
 // mid-answer is a ConnectionError with its reason within the deadline, never a hang; with reconnect
 // attempts a stalled server still ends in one, in bounded time. Deadlines here are short (300 ms) and
 // every bound has two seconds of slack for a loaded machine.
+#include <utility>  // before asio with C++20
+
 #include <gtest/gtest.h>
 #include <array>
 #include <boost/asio.hpp>
@@ -12,7 +14,6 @@
 #include <memory>
 #include <string>
 #include <thread>
-#include <utility>  // before asio with C++20
 #include <vector>
 
 #include "builder/build.h"

@@ -3,6 +3,8 @@
 // frame budget carries work between frames (cancelling what a new view no longer wants, prefetching along
 // the path) and still ends on local refinement's mesh, and a server that stalls or closes mid-answer is a
 // clear error within the deadline.
+#include <utility>  // before asio with C++20 (docs/architecture.md, "Stack")
+
 #include <gtest/gtest.h>
 #include <algorithm>
 #include <atomic>
@@ -10,7 +12,6 @@
 #include <chrono>
 #include <string>
 #include <thread>
-#include <utility>  // before asio with C++20 (docs/architecture.md, "Stack")
 
 #include "client/http_connection.h"
 #include "client/receiver_client.h"
@@ -257,7 +258,7 @@ TEST(Receiver, AModelWithNormalsAndColorsEndsOnLocalRefinementsValues) {
   const Fixture& f = test::attributed_terrain();
   ASSERT_FALSE(f.hierarchy.normals.empty());
   ASSERT_FALSE(f.hierarchy.colors.empty());
-  ASSERT_TRUE(f.catalogue->find(f.name)->codec->has_normals());
+  ASSERT_TRUE(f.catalogue->find(f.name)->tables->records().codec->has_normals());
   Server server(f.catalogue);
   client::ReceiverClient client(server.url());
   client.open(f.name);

@@ -1,12 +1,13 @@
 // Helpers the server tests share (streaming_fixture.h).
 #include "streaming_fixture.h"
 
+#include <utility>  // before asio with C++20
+
 #include <algorithm>
 #include <array>
 #include <boost/asio.hpp>
 #include <cmath>
 #include <span>
-#include <utility>  // before asio with C++20
 #include <utility>
 
 #include "builder/build.h"

@@ -2,6 +2,8 @@
 // equals local refinement of the same view, a second lap costs nothing, a resumed session ends where an
 // unbroken one does, many clients at once all succeed, and hostile input only ends its own session.
 // The view-independent baseline (kim-lee-kobbelt §8 Fig. 9): PM order, prefix by prefix.
+#include <utility>  // before asio with C++20
+
 #include <gtest/gtest.h>
 #include <algorithm>
 #include <array>
@@ -13,7 +15,6 @@
 #include <map>
 #include <optional>
 #include <thread>
-#include <utility>  // before asio with C++20
 
 #include "builder/build.h"
 #include "client/link.h"
