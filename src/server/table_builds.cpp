@@ -1,6 +1,8 @@
 // Table builds on worker threads, never on an I/O thread (table_builds.h).
 #include "server/table_builds.h"
 
+#include <malloc.h>
+
 #include <algorithm>
 
 #include "common/error.h"
@@ -113,6 +115,9 @@ void TableBuilds::run(const Job& job) {
     tables.failures_[index_of(job.mode)] = e.what();
     settled = State::failed;
   }
+  // A build's scratch (a derivation refines the whole model) is freed, but glibc keeps it mapped: give it
+  // back, so the memory a server reports is its tables'.
+  malloc_trim(0);
   std::lock_guard<std::mutex> lock(mutex_);
   if (settled == State::failed) stats_.failed++;
   tables.set_state(job.mode, settled);
