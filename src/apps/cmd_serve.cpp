@@ -30,6 +30,9 @@ struct ServeArgs {
   bool json = false;
   server::ServerLimits limits;
   server::HttpLimits http;
+  std::string preload;         // mode names, or "all"
+  bool preload_given = false;  // else every table is built when first asked for
+  uint32_t max_table_builds = server::TableOptions{}.max_builds;
 };
 
 uint64_t rss_bytes() {
@@ -79,6 +82,31 @@ nlohmann::json stats_json(const char* event, const server::ServerStats& s, const
           {"cpu_s", cpu_seconds()}};
 }
 
+// The tables built so far, per model and mode, and the builders' counters (docs/operating.md, "Tables").
+void add_table_stats(nlohmann::json& line, const server::Catalogue& catalogue) {
+  using State = server::ModelTables::State;
+  static constexpr const char* kStates[] = {"absent", "queued", "building", "ready", "failed"};
+  nlohmann::json tables = nlohmann::json::array();
+  for (const auto& model : catalogue.models())
+    for (size_t m = 0; m < server::kServedModeCount; ++m) {
+      const server::ServedMode mode = server::served_mode_at(m);
+      const State state = model->tables->state(mode);
+      if (state == State::absent) continue;
+      tables.push_back({{"model", model->name},
+                        {"mode", server::served_mode_name(mode)},
+                        {"state", kStates[size_t(state)]},
+                        {"bytes", model->tables->bytes(mode)}});
+    }
+  const server::TableBuildStats& s = catalogue.table_builds().stats();
+  line["table_bytes"] = catalogue.table_bytes();
+  line["tables"] = tables;
+  line["table_builds_started"] = s.started.load();
+  line["table_builds_failed"] = s.failed.load();
+  line["table_builds_running"] = s.running.load();
+  line["table_builds_peak"] = s.peak_running.load();
+  line["table_waits"] = s.waits.load();
+}
+
 void add_http_stats(nlohmann::json& line, const server::HttpStats& s) {
   line["http"] = {{"connections_opened", s.connections_opened.load()},
                   {"connections_active", s.connections_active.load()},
@@ -111,14 +139,16 @@ void print_totals(const server::ServerStats& s) {
   std::fflush(stdout);
 }
 
-void print_stats(const char* event, const ServeArgs& args, const server::TcpServer& tcp, const server::HttpServer* http,
-                 const Stopwatch& uptime) {
+void print_stats(const char* event, const ServeArgs& args, const server::Catalogue& catalogue,
+                 const server::TcpServer& tcp, const server::HttpServer* http, const Stopwatch& uptime) {
   if (args.json) {
     nlohmann::json line = stats_json(event, tcp.stats(), uptime);
+    add_table_stats(line, catalogue);
     if (http) add_http_stats(line, http->stats());
     print_line(line.dump());
   } else {
     print_totals(tcp.stats());
+    std::printf("tables: %llu bytes built\n", (unsigned long long)catalogue.table_bytes());
     if (http) {
       const server::HttpStats& s = http->stats();
       std::printf(
@@ -144,7 +174,11 @@ void run_serve(ServeArgs args) {
   pthread_sigmask(SIG_BLOCK, &signals, nullptr);
 
   const Stopwatch uptime;
-  const auto catalogue = server::Catalogue::open(args.paths, args.limits.position_bits);
+  server::TableOptions tables;
+  if (args.preload_given) tables.preload = server::parse_modes(args.preload, "--preload");
+  else tables.preload.reset();
+  tables.max_builds = args.max_table_builds;
+  const auto catalogue = server::Catalogue::open(args.paths, args.limits.position_bits, tables);
   server::TcpServer tcp(catalogue, args.limits, args.host, args.port);
   std::unique_ptr<server::HttpServer> http;
   if (args.http_port_given) {
@@ -163,6 +197,8 @@ void run_serve(ServeArgs args) {
                         {"vsplits", model->info.vsplits}});
     nlohmann::json line{{"event", "listening"}, {"host", args.host}, {"port", tcp.port()}, {"models", models}};
     if (http) line["http_port"] = http->port();
+    line["rss_bytes"] = rss_bytes();
+    add_table_stats(line, *catalogue);
     print_line(line.dump());
   } else {
     for (const auto& model : catalogue->models())
@@ -177,11 +213,11 @@ void run_serve(ServeArgs args) {
     int received = 0;
     sigwait(&signals, &received);
     if (received != SIGUSR1) break;
-    print_stats("stats", args, tcp, http.get(), uptime);
+    print_stats("stats", args, *catalogue, tcp, http.get(), uptime);
   }
   if (http) http->stop();
   tcp.stop();
-  print_stats("stopped", args, tcp, http.get(), uptime);
+  print_stats("stopped", args, *catalogue, tcp, http.get(), uptime);
 }
 
 void add_limit(CliCommand& cmd, const char* name, uint32_t& value, const char* help) {
@@ -245,8 +281,16 @@ void add_serve_command(CliCommand& app) {
       .range(1u, protocol::kMaxPacketsPerMessage)
       .show_default();
   add_limit(cmd, "--position-bits", limits.position_bits, "Bits per coordinate on the wire (1-24, or 32)");
-  cmd.on_run([args, http_port] {
+  const CliOption preload =
+      cmd.option("--preload", args->preload,
+                 "Build these modes' tables before listening: all, or a comma list of sender, sender-plain, vi, dag, "
+                 "receiver, multilevel (default: each when a client first asks for it)");
+  cmd.option("--max-table-builds", args->max_table_builds, "Table builds running at once; more wait in a queue")
+      .range(1u, 64u)
+      .show_default();
+  cmd.on_run([args, http_port, preload] {
     args->http_port_given = http_port.given();
+    args->preload_given = preload.given();
     run_serve(*args);
   });
 }

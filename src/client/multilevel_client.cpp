@@ -34,9 +34,22 @@ nlohmann::json catalogue_models(HttpConnection& http) {
   return std::move(json["models"]);
 }
 
-bool is_multilevel(const nlohmann::json& entry) {
-  return entry.is_object() && entry.value("kind", "") == "multilevel" && entry.contains("name") &&
-         entry["name"].is_string();
+bool is_kind(const nlohmann::json& entry, const char* kind) {
+  return entry.is_object() && entry.value("kind", "") == kind && entry.contains("name") && entry["name"].is_string();
+}
+
+bool is_multilevel(const nlohmann::json& entry) { return is_kind(entry, "multilevel"); }
+
+// A progressive (.pms) model's levels are derived by the server when first asked for: its multilevel entry
+// is a resource of its own, answered once they are.
+nlohmann::json derived_entry(HttpConnection& http, const std::string& model) {
+  const std::string target = protocol::model_path(model) + "/multilevel";
+  const HttpAnswer answer = http.get(target);
+  if (answer.status != 200) refused(target, answer);
+  nlohmann::json entry = nlohmann::json::parse(answer.body.begin(), answer.body.end(), nullptr, false);
+  if (!is_multilevel(entry) || entry["name"].get<std::string>() != model)
+    fail("GET " + target, "not the multilevel entry of model '" + model + "'");
+  return entry;
 }
 
 // `count` finite numbers, coarsest first in the catalogue, returned per level (0 finest).
@@ -81,8 +94,10 @@ std::vector<std::string> MultilevelClient::list() {
 }
 
 void MultilevelClient::read_entry(const std::string& model) {
-  for (const nlohmann::json& entry : catalogue_models(http_)) {
-    if (!is_multilevel(entry) || entry["name"].get<std::string>() != model) continue;
+  for (nlohmann::json entry : catalogue_models(http_)) {
+    const bool progressive = is_kind(entry, "progressive");
+    if ((!is_multilevel(entry) && !progressive) || entry["name"].get<std::string>() != model) continue;
+    if (progressive) entry = derived_entry(http_, model);
     const uint32_t levels = entry.value("levels", 0u);
     if (levels == 0 || levels > options_.limits.max_levels)
       fail("GET /models", "model '" + model + "' has " + std::to_string(levels) + " levels");
@@ -99,7 +114,7 @@ void MultilevelClient::read_entry(const std::string& model) {
     radius_ = radius->get<float>();
     return;
   }
-  fail("GET /models", "no multilevel model named '" + model + "'");
+  fail("GET /models", "no model named '" + model + "'");
 }
 
 void MultilevelClient::open(const std::string& model) {

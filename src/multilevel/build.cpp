@@ -140,7 +140,9 @@ std::vector<uint32_t> counts_per_level(const std::vector<uint32_t>& level, uint3
 
 }  // namespace
 
-std::vector<EdgeCollapse> collapses_of(const Hierarchy& h) {
+std::vector<EdgeCollapse> collapses_of(const Hierarchy& hierarchy) { return collapses_of(model_of(hierarchy)); }
+
+std::vector<EdgeCollapse> collapses_of(const ModelData& h) {
   const size_t n = h.node_count();
   std::vector<uint32_t> leaf(n, kNone);
   for (size_t i = n; i-- > 0;)  // children come after their parent

@@ -21,6 +21,8 @@ struct EdgeCollapse {
 // The builder's collapses in the order it made them (the reverse of split_order), in the numbering of
 // the mesh it was given (Hierarchy::leaf_vertex): a node stands for the leaf its v_u children lead to.
 std::vector<EdgeCollapse> collapses_of(const Hierarchy& hierarchy);
+// The same over a model's arrays (e.g. a mapped .pms: the server derives a model's levels from it).
+std::vector<EdgeCollapse> collapses_of(const ModelData& model);
 
 // Per input vertex and triangle, the level the paper assigns (0 = finest): a collapse gets 1 + the highest
 // level in its edge's star, which its two endpoints take; its blue vertex and the triangles it removes keep

@@ -1,22 +1,16 @@
-// The models a server offers: opened once, memory-mapped, shared read-only by every session.
+// The models a server offers: opened once, memory-mapped, shared read-only by every session; each mode's
+// tables built by the catalogue's TableBuilds.
 #include <algorithm>
 #include <filesystem>
 
-#include "common/bit_stream.h"
 #include "common/error.h"
 #include "protocol/message_types.h"
 #include "protocol/model_messages.h"
-#include "protocol/packet_table.h"
-#include "protocol/position_grid.h"
 #include "protocol/server_messages.h"
 #include "protocol/stream_context.h"
 #include "server/catalogue.h"
 #include "server/limits.h"
-#include "spm/hierarchy.h"
 #include "spm/pms_file.h"
-#include "spm/refine_info.h"
-#include "spm/split_codec.h"
-#include "spm/vertex_id.h"
 
 namespace pms::server {
 namespace {
@@ -44,50 +38,6 @@ std::vector<std::string> model_files(const std::vector<std::string>& paths) {
   return files;
 }
 
-// qrefine's inputs per node on the positions the clients will hold (snapped to the wire grid).
-std::vector<NodeCriteria> decode_criteria(const ModelData& model, const protocol::PositionGrid& grid) {
-  std::vector<NodeCriteria> criteria(model.node_count());
-  for (size_t n = 0; n < criteria.size(); ++n) {
-    float p[3];
-    protocol::snap_position(grid, &model.position[3 * n], p);
-    criteria[n] = node_criteria(p, dequantize_refine(model.refine[n], model.scale));
-  }
-  return criteria;
-}
-
-// Every node's position as the clients hold it, for the DAG's ERROR-EVALUATE.
-std::vector<float> snapped_positions(const ModelData& model, const protocol::PositionGrid& grid) {
-  std::vector<float> positions(3 * size_t(model.node_count()));
-  for (size_t n = 0; n < model.node_count(); ++n)
-    protocol::snap_position(grid, &model.position[3 * n], &positions[3 * n]);
-  return positions;
-}
-
-// The .pms holds records at the grid it was built for; a server started with other position bits codes
-// its own once.
-void attach_records(ServedModel& model) {
-  const PmsFile& file = *model.file;
-  const uint32_t bits = model.context.grid.bits;
-  const SplitCodec* codec = &file.split_codec();
-  if (!file.split_offsets().empty() && codec->position_bits() == bits) {
-    model.records = {file.split_records(), file.split_offsets()};
-  } else {
-    model.own_records = encode_records(file.model(), bits);
-    model.records = {model.own_records.records, model.own_records.offsets};
-  }
-  if (!model.own_records.tables.empty()) {
-    model.codec_tables = std::make_shared<const std::vector<uint8_t>>(model.own_records.tables);
-  } else {
-    BitWriter w;
-    codec->serialize(w);
-    model.codec_tables = std::make_shared<const std::vector<uint8_t>>(w.bytes());
-  }
-  BitReader tables(*model.codec_tables, "split tables");
-  model.codec = std::make_shared<const SplitCodec>(SplitCodec::deserialize(tables));
-  model.codec_frame =
-      std::make_shared<const std::vector<uint8_t>>(protocol::encode(protocol::Codec{*model.codec_tables, {}}));
-}
-
 std::unique_ptr<ServedModel> open_model(const std::string& path, uint32_t position_bits) {
   auto model = std::make_unique<ServedModel>();
   model->path = path;
@@ -98,24 +48,16 @@ std::unique_ptr<ServedModel> open_model(const std::string& path, uint32_t positi
   const protocol::Base base = protocol::make_base(data, model->name, position_bits);
   model->context = protocol::stream_context(base);
   model->base_frame = std::make_shared<const std::vector<uint8_t>>(protocol::encode(base));
-  model->criteria = decode_criteria(data, model->context.grid);
-  model->split_rank.assign(data.node_count(), kNone);
-  for (uint32_t i = 0; i < data.split_order.size(); ++i) model->split_rank[data.split_order[i]] = i;
-  model->dependencies = DependencyFilter(data);
-  model->dag = std::make_unique<const Dag>(data, snapped_positions(data, model->context.grid));
-  attach_records(*model);
-  // The sender-driven packets: v_s's id and its stored record (docs/protocol.md, "VSPLITS").
-  protocol::StreamContext sender = model->context;
-  sender.has_refinement = true;
-  sender.records = model->codec;
-  model->packets = protocol::PacketTable(data, sender, model->records);
+  model->tables = std::make_unique<ModelTables>();
   return model;
 }
 
 }  // namespace
 
-std::shared_ptr<const Catalogue> Catalogue::open(const std::vector<std::string>& paths, uint32_t position_bits) {
+std::shared_ptr<const Catalogue> Catalogue::open(const std::vector<std::string>& paths, uint32_t position_bits,
+                                                 const TableOptions& tables) {
   auto catalogue = std::make_shared<Catalogue>();
+  catalogue->builds_ = std::make_unique<TableBuilds>(tables.max_builds);
   const auto check_unique = [&](const std::string& file, const std::string& name) {
     if (catalogue->find(name) || catalogue->find_multilevel(name))
       fail(file, "a model named '" + name + "' is already served");
@@ -136,6 +78,9 @@ std::shared_ptr<const Catalogue> Catalogue::open(const std::vector<std::string>&
   protocol::Catalogue message;
   for (const auto& model : catalogue->models_) message.models.push_back(model->info);
   catalogue->catalogue_frame_ = std::make_shared<const std::vector<uint8_t>>(protocol::encode(message));
+  std::vector<const ServedModel*> models;
+  for (const auto& model : catalogue->models_) models.push_back(model.get());
+  catalogue->builds_->build_all(models, tables.preload);
   return catalogue;
 }
 
@@ -167,6 +112,12 @@ const ServedMultilevel* Catalogue::find_multilevel(const std::string& name) cons
   for (const auto& model : multilevel_)
     if (model->name == name) return model.get();
   return nullptr;
+}
+
+uint64_t Catalogue::table_bytes() const {
+  uint64_t total = 0;
+  for (const auto& model : models_) total += model->tables->total_bytes();
+  return total;
 }
 
 uint64_t Catalogue::mapped_bytes() const {

@@ -54,7 +54,7 @@ DagSessionMode::~DagSessionMode() = default;
 void DagSessionMode::pump_resume(uint64_t& work) {
   Resume& r = *resume_;
   const ModelData& model = context_.served.model();
-  const Dag& dag = *context_.served.dag;
+  const Dag& dag = context_.served.tables->dag();
   r.leaves.clear();
   const bool decoded = r.decoder.next(context_.limits.slice_work, r.leaves);
   work += r.leaves.size();
@@ -103,7 +103,7 @@ void DagSessionMode::stop() {
 
 void DagSessionMode::traverse(uint64_t& work) {
   pending_ = false;
-  LoadedDagCut loaded(*context_.served.dag, cut_);  // O(split nodes × degree) each way
+  LoadedDagCut loaded(context_.served.tables->dag(), cut_);  // O(split nodes × degree) each way
   DagTraverser traverser(loaded.cut());
   traverser.set_view(view_.criteria);
   ops_.clear();
@@ -123,7 +123,7 @@ void DagSessionMode::traverse(uint64_t& work) {
 // The next batch_splits operations of the answer; the last batch (possibly empty) is final.
 void DagSessionMode::emit_batch(uint64_t& work) {
   const ModelData& model = context_.served.model();
-  const Dag& dag = *context_.served.dag;
+  const Dag& dag = context_.served.tables->dag();
   const size_t end = std::min(ops_.size(), sent_ + context_.limits.batch_splits);
   protocol::DagOps message;
   message.frame = answer_frame_;

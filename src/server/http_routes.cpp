@@ -140,7 +140,7 @@ HttpAnswer splits_answer(const ServedModel& model, const HttpLimits& limits, con
 // The code tables every record of the model is coded with.
 HttpAnswer codec_answer(const ServedModel& model, const HttpRequest& request) {
   HttpAnswer answer = fresh(request, etag_of(model, {"/codec"}), "application/octet-stream");
-  if (answer.status == 200) answer.shared = model.codec_tables;
+  if (answer.status == 200) answer.shared = model.tables->records().codec_tables;
   return answer;
 }
 
@@ -176,12 +176,35 @@ HttpAnswer block_answer(const ServedModel& model, const HttpLimits& limits, cons
                        etag_of(model, {"/blocks/", at[0], "/", at[1], "/", at[2]}));
 }
 
+// Nothing when `mode`'s tables of the model are built; a 503 to wait on while they are being built (the
+// transport waits, the client sees it only past the request deadline), a 500 when their build failed.
+std::optional<HttpAnswer> tables_pending(const ServedModel& model, ServedMode mode) {
+  const ModelTables::State state = model.tables->state(mode);
+  if (state == ModelTables::State::ready) return std::nullopt;
+  const std::string tables = "model '" + model.name + "': its " + served_mode_name(mode) + " tables ";
+  if (state == ModelTables::State::failed)
+    return error_answer(500, tables + "could not be built: " + model.tables->failure(mode));
+  HttpAnswer answer = error_answer(503, tables + "are being built; try again");
+  answer.waits_for = &model;
+  answer.waits_for_mode = mode;
+  return answer;
+}
+
+// A .pms model's multilevel resources are those of a .pml model (multilevel_routes.h), its levels derived.
+bool multilevel_resource(std::span<const std::string_view> s) {
+  return s[2] == "head" || s[2] == "levels" || s[2] == "compressed" || s[2] == "multilevel";
+}
+
 HttpAnswer model_route(const Catalogue& catalogue, const HttpLimits& limits, const HttpRequest& request,
                        std::span<const std::string_view> s) {
   const std::optional<std::string> name = protocol::url_segment_decode(s[1]);
   if (!name) return error_answer(400, "the model name in the URL is not a path segment (RFC 3986: escape it as %XX)");
   if (const ServedMultilevel* multilevel = catalogue.find_multilevel(*name))
     return multilevel_route(*multilevel, request, s);
+  if (const ServedModel* progressive = catalogue.find(*name); progressive && multilevel_resource(s)) {
+    if (auto pending = tables_pending(*progressive, ServedMode::multilevel)) return std::move(*pending);
+    return multilevel_route(progressive->tables->multilevel(), request, s);
+  }
   const bool get = request.method == "GET" || request.method == "HEAD";
   const bool post_route = s.size() == 3 && s[2] == "splits";
   const bool get_route = (s.size() == 3 && (s[2] == "base" || s[2] == "codec")) ||
@@ -192,6 +215,7 @@ HttpAnswer model_route(const Catalogue& catalogue, const HttpLimits& limits, con
   const ServedModel* model = catalogue.find(*name);
   if (!model) return error_answer(404, "no model named '" + *name + "'");
   if (s[2] == "base") return base_answer(*model, request);
+  if (auto pending = tables_pending(*model, ServedMode::receiver)) return std::move(*pending);
   if (s[2] == "codec") return codec_answer(*model, request);
   if (s[2] == "blocks") return block_answer(*model, limits, request, s.subspan(3));
   if (post_route)

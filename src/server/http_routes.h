@@ -33,6 +33,10 @@ struct HttpAnswer {
   std::shared_ptr<const std::vector<uint8_t>> shared;
   size_t shared_offset = 0;
   std::vector<uint8_t> owned;
+  // Set with a 503 when the resource needs tables of the model that are not built yet: the transport
+  // waits for them (under the request deadline) and routes the request again, or sends the 503 then.
+  const ServedModel* waits_for = nullptr;
+  ServedMode waits_for_mode = ServedMode::receiver;
 
   std::span<const uint8_t> body() const {
     return shared ? std::span<const uint8_t>(*shared).subspan(shared_offset) : std::span<const uint8_t>(owned);

@@ -85,14 +85,19 @@ class Deadline {
 
 class HttpConnection : public std::enable_shared_from_this<HttpConnection> {
  public:
-  HttpConnection(tcp::socket socket, const Catalogue& catalogue, const HttpLimits& limits, HttpStats& stats)
+  HttpConnection(tcp::socket socket, const Catalogue& catalogue, const HttpLimits& limits, HttpStats& stats,
+                 const void* server)
       : socket_(std::move(socket)),
         deadline_(socket_.get_executor()),
         buffer_(size_t(limits.max_header_bytes) + limits.max_body_bytes + kReadChunk),
         catalogue_(catalogue),
         limits_(limits),
-        stats_(stats) {}
-  ~HttpConnection() { stats_.connections_active--; }
+        stats_(stats),
+        server_(server) {}
+  ~HttpConnection() {
+    catalogue_.table_builds().forget_owner(this);
+    stats_.connections_active--;
+  }
 
   void start() {
     boost::system::error_code ignored;
@@ -105,6 +110,7 @@ class HttpConnection : public std::enable_shared_from_this<HttpConnection> {
  private:
   void set_deadline(uint32_t ms) {
     deadline_.set(ms, [self = shared_from_this()] {
+      if (self->waiting_) return self->stop_waiting();
       self->stats_.connections_timed_out++;  // a peer that sends too slowly would not read an answer either
       self->close();
     });
@@ -113,7 +119,7 @@ class HttpConnection : public std::enable_shared_from_this<HttpConnection> {
   // Answers the whole requests in the buffer, then reads more, unless an answer is still being written.
   void serve() {
     for (int answered = 0; !closed_;) {
-      if (writing_) return;
+      if (writing_ || waiting_) return;
       if (answered == kAnswersPerTurn)
         return asio::post(socket_.get_executor(), [self = shared_from_this()] { self->serve(); });
       if (!parser_) {
@@ -164,15 +170,56 @@ class HttpConnection : public std::enable_shared_from_this<HttpConnection> {
   }
 
   void answer() {
-    const auto& request = parser_->get();
     stats_.requests++;
+    route_request();
+  }
+
+  // The request in the parser, routed; one whose tables are being built waits for them (wait_for_tables).
+  void route_request() {
     HttpAnswer answer;
     try {
-      answer = answer_request(catalogue_, limits_, request);
+      answer = answer_request(catalogue_, limits_, parser_->get());
     } catch (const std::exception& e) {  // out of memory for an answer: this request's fault only
       log_line(std::string("internal error: ") + e.what());
       answer = error_answer(500, "internal error");
     }
+    if (answer.waits_for) return wait_for_tables(std::move(answer));
+    finish_request(std::move(answer));
+  }
+
+  // One request at a time per connection, under the request deadline: the connection stops reading and
+  // routes it again when a builder wakes it (on_tables_settled), or answers the 503 at the deadline.
+  void wait_for_tables(HttpAnswer answer) {
+    const asio::any_io_executor executor = socket_.get_executor();
+    TableWaiter waiter{this, server_, [weak = weak_from_this(), executor] {
+                         asio::post(executor, [weak] {
+                           if (const auto self = weak.lock()) self->on_tables_settled();
+                         });
+                       }};
+    if (catalogue_.table_builds().request(*answer.waits_for, answer.waits_for_mode, std::move(waiter)))
+      return route_request();  // built meanwhile
+    waiting_ = true;
+    pending_answer_ = std::move(answer);
+    set_deadline(limits_.request_timeout_ms);
+  }
+
+  void on_tables_settled() {
+    if (closed_ || !waiting_) return;
+    waiting_ = false;
+    route_request();
+    serve();
+  }
+
+  // The request deadline passed while its tables were being built: the 503 (Retry-After) goes out.
+  void stop_waiting() {
+    waiting_ = false;
+    catalogue_.table_builds().forget_owner(this);
+    finish_request(std::move(pending_answer_));
+    serve();
+  }
+
+  void finish_request(HttpAnswer answer) {
+    const auto& request = parser_->get();
     const bool head = request.method() == http::verb::head;
     const bool keep_alive = request.keep_alive();
     const unsigned version = request.version();
@@ -238,6 +285,7 @@ class HttpConnection : public std::enable_shared_from_this<HttpConnection> {
   void close() {
     if (closed_) return;
     closed_ = true;
+    if (std::exchange(waiting_, false)) catalogue_.table_builds().forget_owner(this);
     deadline_.cancel();
     boost::system::error_code ignored;
     socket_.shutdown(tcp::socket::shutdown_send, ignored);
@@ -255,9 +303,12 @@ class HttpConnection : public std::enable_shared_from_this<HttpConnection> {
   std::span<const uint8_t> body_;
   size_t written_ = 0;
   bool writing_ = false, keep_alive_ = false, closed_ = false;
+  bool waiting_ = false;       // for the tables the request in the parser needs
+  HttpAnswer pending_answer_;  // its 503, sent if the request deadline passes first
   const Catalogue& catalogue_;
   const HttpLimits& limits_;
   HttpStats& stats_;
+  const void* server_;  // the TableBuilds group of this server's connections
 };
 
 // The answer to a connection over the limit, written once without waiting: it fits any socket buffer.
@@ -320,7 +371,7 @@ struct HttpServer::Impl {
       stats.connections_active++;  // the connection's destructor takes it back
       stats.connections_opened++;
       const asio::any_io_executor executor = socket.get_executor();
-      auto connection = std::make_shared<HttpConnection>(std::move(socket), *catalogue, limits, stats);
+      auto connection = std::make_shared<HttpConnection>(std::move(socket), *catalogue, limits, stats, this);
       // Started on its own thread, where all its handlers run.
       asio::post(executor, [connection] { connection->start(); });
     } catch (const std::exception& e) {
@@ -365,6 +416,8 @@ void HttpServer::stop() {
     if (impl_->stopped) return;
     impl_->stopped = true;
   }
+  // No table build may post to a loop once it is stopped and destroyed.
+  impl_->catalogue->table_builds().forget_group(impl_.get());
   for (const auto& io : impl_->contexts) io->stop();
   for (std::thread& t : impl_->threads)
     if (t.joinable()) t.join();

@@ -2,6 +2,9 @@
 // bytes cut once at start (served_multilevel.h), answered without a copy.
 #include "server/multilevel_routes.h"
 
+#define XXH_INLINE_ALL
+#include <xxhash.h>
+
 #include <nlohmann/json.hpp>
 #include <vector>
 
@@ -23,6 +26,15 @@ nlohmann::json coarsest_first(const std::vector<T>& per_level) {
   return nlohmann::json(std::vector<T>(per_level.rbegin(), per_level.rend()));
 }
 
+// The model's catalogue entry alone: what a client of a model whose GET /models entry is "progressive"
+// reads to stream its derived levels.
+HttpAnswer entry_answer(const ServedMultilevel& model, const HttpRequest& request) {
+  const std::string text = multilevel_entry(model).dump() + "\n";
+  HttpAnswer answer = fresh(request, etag_text(XXH64(text.data(), text.size(), 0)), "application/json");
+  if (answer.status == 200) answer.owned.assign(text.begin(), text.end());
+  return answer;
+}
+
 }  // namespace
 
 HttpAnswer multilevel_route(const ServedMultilevel& model, const HttpRequest& request,
@@ -32,11 +44,13 @@ HttpAnswer multilevel_route(const ServedMultilevel& model, const HttpRequest& re
   std::vector<std::string_view> s(segments.begin(), segments.end());
   if (compressed) s.erase(s.begin() + 2);
   const bool head = s.size() == 3 && s[2] == "head", level = s.size() == 4 && s[2] == "levels";
-  if (!head && !level)
+  const bool entry = !compressed && s.size() == 3 && s[2] == "multilevel";
+  if (!head && !level && !entry)
     return error_answer(404, "model '" + model.name +
-                                 "' is a multilevel mesh: its resources are /head and /levels/LEVEL, "
+                                 "' as a multilevel mesh: its resources are /multilevel, /head and /levels/LEVEL, "
                                  "and /compressed/head and /compressed/levels/LEVEL");
   if (request.method != "GET" && request.method != "HEAD") return method_not_allowed("GET, HEAD");
+  if (entry) return entry_answer(model, request);
   if (head)
     return compressed ? shared_answer(request, model.compressed_head_etag, model.compressed_head)
                       : shared_answer(request, model.head_etag, model.head);

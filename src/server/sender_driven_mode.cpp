@@ -37,7 +37,7 @@ struct SenderDrivenMode::Resume {
 SenderDrivenMode::SenderDrivenMode(const protocol::OpenHeader& open, protocol::Frame& open_frame,
                                    const ModeContext& context)
     : context_(context),
-      importance_(view_.importance(context.served.criteria)),
+      importance_(view_.importance(context.served.tables->selective().criteria)),
       plain_(open.mode == protocol::StreamMode::sender_plain),
       plain_wire_(context.served.context) {
   plain_wire_.has_refinement = false;
@@ -105,14 +105,14 @@ void SenderDrivenMode::pump_resume(uint64_t& work) {
 // the plain option.
 void SenderDrivenMode::queue_base() {
   context_.outbox.push_back(context_.served.base_frame);
-  if (!plain_) context_.outbox.push_back(context_.served.codec_frame);
+  if (!plain_) context_.outbox.push_back(context_.served.tables->records().codec_frame);
 }
 
 // A VIEW's answer: splits accumulate across slices into batches of batch_splits. Splits of an earlier
 // VIEW still in the batch go out with the new one's frame number (the client applies every batch).
 void SenderDrivenMode::pump_answer(uint64_t& work) {
   if (std::exchange(view_.restart, false))
-    streamer_.start(context_.served.model(), context_.served.dependencies, tags_, importance_);
+    streamer_.start(context_.served.model(), context_.served.tables->selective().dependencies, tags_, importance_);
   const size_t limit = context_.limits.batch_splits;
   const size_t room = batch_.size() < limit ? limit - batch_.size() : 0;
   const bool served = streamer_.step(room, context_.limits.slice_work, batch_, work, plain_ ? &batch_cuts_ : nullptr);
@@ -133,7 +133,7 @@ void SenderDrivenMode::emit_batch(size_t count, bool final) {
                                       std::span(batch_cuts_).first(count)));
     batch_cuts_.erase(batch_cuts_.begin(), batch_cuts_.begin() + ptrdiff_t(count));
   } else {
-    context_.queue(context_.served.packets.encode(view_.frame, final, nodes));
+    context_.queue(context_.served.tables->packets().encode(view_.frame, final, nodes));
   }
   splits_sent_ += count;
   batch_.erase(batch_.begin(), batch_.begin() + ptrdiff_t(count));

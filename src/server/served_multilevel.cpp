@@ -57,11 +57,22 @@ void bounding_sphere(const MultilevelMesh& mesh, ServedMultilevel& out) {
 
 }  // namespace
 
+uint64_t ServedMultilevel::memory_bytes() const {
+  uint64_t total = head->size() + compressed_head->size();
+  for (const auto& level : levels) total += level->size();
+  for (const auto& level : compressed_levels) total += level->size();
+  return total;
+}
+
 std::unique_ptr<ServedMultilevel> open_multilevel(const std::string& path) {
-  const MultilevelMesh mesh = read_multilevel(path);
+  return serve_multilevel(read_multilevel(path), std::filesystem::path(path).stem().string(), path);
+}
+
+std::unique_ptr<ServedMultilevel> serve_multilevel(const MultilevelMesh& mesh, const std::string& name,
+                                                   const std::string& path) {
   auto out = std::make_unique<ServedMultilevel>();
   out->path = path;
-  out->name = std::filesystem::path(path).stem().string();
+  out->name = name;
   out->dimension = mesh.dimension;
   out->normals = !mesh.normals.empty();
   out->colors = !mesh.colors.empty();

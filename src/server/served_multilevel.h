@@ -1,13 +1,15 @@
 // A multilevel mesh (gueziec et al. 1999) as the HTTP server offers it: the binary form cut into its HEAD
 // and one resource per level, coarsest first, each with its strong ETag, and the same in the compressed
-// form; built once at start
-// (docs/protocol.md, "Multilevel over HTTP").
+// form; built once, at start for a .pml file, on first request for one derived from a .pms
+// (derived_multilevel.h; docs/protocol.md, "Multilevel over HTTP").
 #pragma once
 #include <array>
 #include <cstdint>
 #include <memory>
 #include <string>
 #include <vector>
+
+#include "multilevel/mesh.h"
 
 namespace pms::server {
 
@@ -33,9 +35,13 @@ struct ServedMultilevel {
   std::array<float, 3> center{};    // bounding sphere of every vertex (the box's centre)
   float radius = 0;
   uint32_t level_count() const { return uint32_t(levels.size()); }
+  uint64_t memory_bytes() const;  // the resources' bytes
 };
 
 // Reads either form (multilevel/file.h); pms::Error naming the file.
 std::unique_ptr<ServedMultilevel> open_multilevel(const std::string& path);
+// `mesh` cut into its resources under /models/{name}.
+std::unique_ptr<ServedMultilevel> serve_multilevel(const MultilevelMesh& mesh, const std::string& name,
+                                                   const std::string& path);
 
 }  // namespace pms::server

@@ -19,7 +19,25 @@ using protocol::ProtocolError;
 Session::Session(std::shared_ptr<const Catalogue> catalogue, const ServerLimits& limits)
     : catalogue_(std::move(catalogue)), limits_(limits) {}
 
-Session::~Session() = default;
+Session::~Session() { stop_waiting(); }
+
+void Session::wake_with(const void* group, std::function<void()> wake) { waiter_ = {this, group, std::move(wake)}; }
+
+void Session::stop_waiting() {
+  if (waiting_) catalogue_->table_builds().forget_owner(this);
+  waiting_.reset();
+}
+
+bool Session::has_work() const {
+  if (closing_) return false;
+  if (waiting_) return tables_settled();
+  return mode_ && mode_->has_work();
+}
+
+bool Session::tables_settled() const {
+  const auto state = model_->tables->state(served_mode_of(waiting_->header.mode));
+  return state == ModelTables::State::ready || state == ModelTables::State::failed;
+}
 
 void Session::queue(std::vector<uint8_t> frame) {
   outbox_.push_back(std::make_shared<const std::vector<uint8_t>>(std::move(frame)));
@@ -28,6 +46,7 @@ void Session::queue(std::vector<uint8_t> frame) {
 void Session::abort_with(ErrorCode code, const std::string& text) {
   if (closing_) return;
   if (mode_) mode_->stop();
+  stop_waiting();
   error_ = code;
   error_text_ = text;
   // The ERROR text is the peer's to read, never over its frame limit.
@@ -74,10 +93,12 @@ void Session::handle(protocol::Frame& frame) {
     outbox_.push_back(catalogue_->catalogue_frame());
   } else if (std::holds_alternative<protocol::Close>(message)) {
     if (mode_) mode_->stop();
+    stop_waiting();
     closing_ = true;
   } else if (std::holds_alternative<protocol::Hello>(message)) {
     on_hello(std::get<protocol::Hello>(message));
   } else {
+    if (waiting_) throw ProtocolError(ErrorCode::out_of_order, protocol::to_string(frame.type) + " before BASE");
     if (!mode_) throw ProtocolError(ErrorCode::out_of_order, protocol::to_string(frame.type) + " before OPEN");
     mode_->receive(message);
   }
@@ -101,15 +122,40 @@ void Session::on_open(const protocol::OpenHeader& m, protocol::Frame& frame) {
   if (model_) throw ProtocolError(ErrorCode::out_of_order, "OPEN: a model is already open in this session");
   const ServedModel* model = catalogue_->find(m.model);
   if (!model) throw ProtocolError(ErrorCode::unknown_model, "OPEN: no model named '" + m.model + "'");
-  mode_ = open_session_mode(m, frame, ModeContext{*model, limits_, outbox_});
   model_ = model;
   mode_kind_ = m.mode;
+  TableBuilds& builds = catalogue_->table_builds();
+  if (builds.request(*model, served_mode_of(m.mode), waiter_)) return open_mode(m, frame);
+  waiting_ = WaitingOpen{m, std::move(frame)};
+  if (!waiter_.wake) {
+    builds.wait(*model, served_mode_of(m.mode));
+    finish_open();
+  }
+}
+
+void Session::open_mode(const protocol::OpenHeader& m, protocol::Frame& frame) {
+  mode_ = open_session_mode(m, frame, ModeContext{*model_, limits_, outbox_});
+}
+
+// The tables an OPEN waited for have settled: BASE (the mode opens), or the build's failure as ERROR.
+void Session::finish_open() {
+  WaitingOpen open = std::move(*waiting_);
+  waiting_.reset();
+  const ServedMode mode = served_mode_of(open.header.mode);
+  if (!model_->tables->ready(mode))
+    throw ProtocolError(ErrorCode::internal, std::string("OPEN: the model's ") + served_mode_name(mode) +
+                                                 " tables could not be built: " + model_->tables->failure(mode));
+  open_mode(open.header, open.frame);
 }
 
 bool Session::pump() {
   last_work_ = 0;
   if (!has_work()) return false;
   try {
+    if (waiting_) {
+      finish_open();
+      return true;
+    }
     mode_->pump(last_work_);
   } catch (const ProtocolError& e) {
     abort_with(e.code, e.what());

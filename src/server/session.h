@@ -5,6 +5,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <deque>
+#include <functional>
 #include <memory>
 #include <optional>
 #include <string>
@@ -16,20 +17,31 @@
 #include "server/catalogue.h"
 #include "server/limits.h"
 #include "server/session_mode.h"
+#include "server/table_builds.h"
 
 namespace pms::server {
 
 // The transport feeds the frames it reads, sends what is queued, and calls pump() while has_work() and
-// its send queue has room. No call does more than a bounded amount of work whatever the peer sends:
-// receive() only decodes and records (O(frame bytes)); the work a message asks for (a VIEW's answer, a
-// resume front) is done by pump(), one slice of at most limits.slice_work units at a time, so a transport
-// can share a thread among sessions.
+// its send queue has room. An OPEN whose mode's tables are not built yet (model_tables.h) waits for them
+// without a thread: the session asks the catalogue's TableBuilds, whose worker calls the transport's wake
+// (wake_with) when they are ready or failed; has_work() is then true, and the next pump() sends BASE or the
+// ERROR. A session without a wake (in process: tests, the bench) waits for the build on its own thread. No call does
+// more than a bounded amount of work whatever the peer sends: receive() only decodes and records (O(frame bytes)); the
+// work a message asks for (a VIEW's answer, a resume front) is done by pump(), one slice of at most limits.slice_work
+// units at a time, so a transport can share a thread among sessions.
 class Session {
  public:
   Session(std::shared_ptr<const Catalogue> catalogue, const ServerLimits& limits);
   ~Session();
   Session(const Session&) = delete;
   Session& operator=(const Session&) = delete;
+
+  // How a transport is told that the tables an OPEN waits for have settled: `wake` runs on a builder's
+  // thread and must only post a turn to the session's own thread (table_builds.h). `group` is the
+  // transport's, for TableBuilds::forget_group when it stops.
+  void wake_with(const void* group, std::function<void()> wake);
+  // The OPEN waits for its mode's tables.
+  bool waiting_for_tables() const { return waiting_.has_value(); }
 
   // One complete frame from the client (taken, not copied: a resume front keeps its payload).
   // Protocol errors queue an ERROR and mark the session closing.
@@ -38,7 +50,7 @@ class Session {
   void abort_with(protocol::ErrorCode code, const std::string& text);
   // One slice of the pending work; queues what it completes. False when there was nothing to do.
   bool pump();
-  bool has_work() const { return !closing_ && mode_ && mode_->has_work(); }
+  bool has_work() const;
   // Work units (nodes evaluated, split or resumed) the last receive() or pump() call did.
   uint64_t last_work() const { return last_work_; }
 
@@ -65,6 +77,10 @@ class Session {
   void handle(protocol::Frame& frame);
   void on_hello(const protocol::Hello& m);
   void on_open(const protocol::OpenHeader& m, protocol::Frame& frame);
+  void open_mode(const protocol::OpenHeader& m, protocol::Frame& frame);
+  bool tables_settled() const;
+  void finish_open();
+  void stop_waiting();
   void queue(std::vector<uint8_t> frame);
   void fault(const char* what);
 
@@ -76,6 +92,13 @@ class Session {
   const ServedModel* model_ = nullptr;
   protocol::StreamMode mode_kind_ = protocol::StreamMode::sender_driven;
   std::unique_ptr<SessionMode> mode_;
+  // An OPEN waiting for its tables: the header and the frame (a resume front's payload).
+  struct WaitingOpen {
+    protocol::OpenHeader header;
+    protocol::Frame frame;
+  };
+  std::optional<WaitingOpen> waiting_;
+  TableWaiter waiter_;
   uint64_t last_work_ = 0;
   std::deque<Buffer> outbox_;
 };

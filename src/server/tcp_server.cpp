@@ -51,7 +51,7 @@ class Registry;
 class Connection : public std::enable_shared_from_this<Connection> {
  public:
   Connection(tcp::socket socket, std::shared_ptr<const Catalogue> catalogue, const ServerLimits& limits,
-             ServerStats& stats, Registry& registry, uint64_t id)
+             ServerStats& stats, Registry& registry, uint64_t id, const void* server)
       : socket_(std::move(socket)),
         timer_(socket_.get_executor()),
         throttle_(socket_.get_executor()),
@@ -60,7 +60,8 @@ class Connection : public std::enable_shared_from_this<Connection> {
         limits_(limits),
         stats_(stats),
         registry_(registry),
-        id_(id) {}
+        id_(id),
+        server_(server) {}
 
   void start();
   // Closes from any thread (server stop).
@@ -152,6 +153,7 @@ class Connection : public std::enable_shared_from_this<Connection> {
   ServerStats& stats_;
   Registry& registry_;
   uint64_t id_;
+  const void* server_;  // the TableBuilds group of this server's sessions
   std::string peer_;
   Clock::time_point connected_, last_activity_, frame_started_, close_by_;
   WriteDeadline write_deadline_;
@@ -196,6 +198,11 @@ void Connection::start() {
   peer_ = ec ? "unknown peer" : peer.address().to_string() + ":" + std::to_string(peer.port());
   connected_ = last_activity_ = refilled_ = Clock::now();
   tokens_ = limits_.max_message_rate;
+  // An OPEN waiting for its tables gets its turn back when they are built; meanwhile the handshake
+  // deadline runs on.
+  session_.wake_with(server_, [weak = weak_from_this()] {
+    if (const auto self = weak.lock()) asio::post(self->socket_.get_executor(), [self] { self->serve(); });
+  });
   arm_timer();
   read();
 }
@@ -595,7 +602,8 @@ struct TcpServer::Impl {
   void admit(tcp::socket socket) {
     if (registry.size() >= limits.max_sessions) return refuse(socket);
     try {
-      auto connection = std::make_shared<Connection>(std::move(socket), catalogue, limits, stats, registry, ++next_id);
+      auto connection =
+          std::make_shared<Connection>(std::move(socket), catalogue, limits, stats, registry, ++next_id, this);
       registry.add(connection);
       stats.sessions_opened++;
       stats.sessions_active++;
@@ -662,6 +670,8 @@ void TcpServer::stop() {
   for (const auto& c : impl_->registry.all()) c->shutdown();
   // Let the closes run (each handler is at most one turn), then end the loop.
   for (int i = 0; i < 100 && impl_->registry.size() > 0; ++i) std::this_thread::sleep_for(milliseconds(5));
+  // No table build may post to the loop once it is stopped and destroyed.
+  impl_->catalogue->table_builds().forget_group(impl_.get());
   impl_->io.stop();
   for (std::thread& t : impl_->threads)
     if (t.joinable()) t.join();

@@ -32,7 +32,9 @@ struct ViewIndependentMode::Prefix {
 };
 
 ViewIndependentMode::ViewIndependentMode(const protocol::OpenHeader& open, const ModeContext& context)
-    : context_(context), wire_(context.served.context), importance_(view_.importance(context.served.criteria)) {
+    : context_(context),
+      wire_(context.served.context),
+      importance_(view_.importance(context.served.tables->selective().criteria)) {
   if (open.resume)
     throw ProtocolError(ErrorCode::bad_message,
                         "OPEN: resume: a view-independent session cannot resume (sender-driven only)");
@@ -63,7 +65,7 @@ void ViewIndependentMode::pump(uint64_t& work) {
     p.front = tags_;
     p.end = sent_;
     p.wanted_any = false;
-    p.walk.start(context_.served.model(), context_.served.dependencies, p.front, importance_);
+    p.walk.start(context_.served.model(), context_.served.tables->selective().dependencies, p.front, importance_);
   }
   Prefix& p = *prefix_;
   switch (p.phase) {
@@ -85,7 +87,7 @@ void ViewIndependentMode::walk(Prefix& p, uint64_t& work) {
     p.furthest = p.end;
   }
   for (uint32_t node : p.wanted)
-    p.furthest = std::max<uint64_t>(p.furthest, uint64_t(context_.served.split_rank[node]) + 1);
+    p.furthest = std::max<uint64_t>(p.furthest, uint64_t(context_.served.tables->split_rank()[node]) + 1);
   if (!served) return;
   p.walk.stop();
   p.phase = p.wanted_any ? Prefix::Phase::advancing : Prefix::Phase::streaming;
@@ -105,7 +107,7 @@ void ViewIndependentMode::advance(Prefix& p, uint64_t& work) {
   p.end = p.furthest;
   p.wanted_any = false;
   p.phase = Prefix::Phase::walking;
-  p.walk.start(model, context_.served.dependencies, p.front, importance_);
+  p.walk.start(model, context_.served.tables->selective().dependencies, p.front, importance_);
 }
 
 // split_order[sent_, end) in PM order; the last (possibly empty) batch is final.

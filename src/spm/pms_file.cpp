@@ -115,6 +115,9 @@ std::unique_ptr<PmsFile> PmsFile::open(const std::string& path) {
     file->data_ = file->owned_.data();
   }
   file->parse(path);
+  // Validation read every page once; a server holds a model's pages only as its modes come to read them
+  // again (they fault back in from the page cache), not the whole file from the start.
+  if (file->mapped_) ::madvise(const_cast<uint8_t*>(file->data_), file->size_, MADV_DONTNEED);
   return file;
 }
 

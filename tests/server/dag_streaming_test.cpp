@@ -66,7 +66,7 @@ const server::DagSessionMode& dag_mode(const server::Session& session) {
 const server::DagSessionMode& dag_mode(const test::InProcess& p) { return dag_mode(*p.session); }
 // The same as a dense cut (the session keeps the compact form between turns).
 DagCut session_cut(const Fixture& f, const server::Session& session) {
-  return dag_mode(session).cut().dense(*f.catalogue->find(f.name)->dag);
+  return dag_mode(session).cut().dense(f.catalogue->find(f.name)->tables->dag());
 }
 DagCut session_cut(const Fixture& f, const test::InProcess& p) { return session_cut(f, *p.session); }
 
@@ -153,7 +153,7 @@ TEST(DagStreaming, PriorityWithLargeNConvergesToLocalRefinement) {
   }
   ASSERT_LT(frames, 50) << "no convergence";
   EXPECT_GT(frames, 0);
-  EXPECT_GT(p.client->session().mesh().face_count(), f.catalogue->find(f.name)->dag->base_faces())
+  EXPECT_GT(p.client->session().mesh().face_count(), f.catalogue->find(f.name)->tables->dag().base_faces())
       << "a view with detail";
   EXPECT_EQ(faces_by_id(p.client->session().mesh()), test::local_faces(f.snapped, camera, 1.0f));
 }
@@ -185,7 +185,7 @@ TEST(DagStreaming, StateIsTheCompactCut) {
   test::InProcess p = in_process(f, dag_options(DagTraversal::priority, 0, 300, 1.0f));
   for (const Camera& c : orbit_path(f.hierarchy, 6, 0.0f)) p.client->frame(c);
   const CompactDagCut& cut = dag_mode(p).cut();
-  const size_t nodes = f.catalogue->find(f.name)->dag->size();
+  const size_t nodes = f.catalogue->find(f.name)->tables->dag().size();
   const uint32_t roots = f.catalogue->find(f.name)->model().root_count;
   EXPECT_GT(cut.split_count(), 100u);
   EXPECT_LE(cut.code_bits(), 2 * uint64_t(cut.split_count()) + roots);
@@ -252,7 +252,7 @@ std::vector<VertexId> front_splitting(const ModelData& model, VertexId v) {
 TEST(DagStreaming, HostileResumesGetErrorAndOthersAreServed) {
   const Fixture& f = terrain();
   const ModelData& model = f.catalogue->find(f.name)->model();
-  const Dag& dag = *f.catalogue->find(f.name)->dag;
+  const Dag& dag = f.catalogue->find(f.name)->tables->dag();
   server::TcpServer tcp(f.catalogue, server::ServerLimits{}, "127.0.0.1", 0);
   tcp.start();
   using protocol::ErrorCode;

@@ -258,7 +258,7 @@ TEST(Receiver, AModelWithNormalsAndColorsEndsOnLocalRefinementsValues) {
   const Fixture& f = test::attributed_terrain();
   ASSERT_FALSE(f.hierarchy.normals.empty());
   ASSERT_FALSE(f.hierarchy.colors.empty());
-  ASSERT_TRUE(f.catalogue->find(f.name)->codec->has_normals());
+  ASSERT_TRUE(f.catalogue->find(f.name)->tables->records().codec->has_normals());
   Server server(f.catalogue);
   client::ReceiverClient client(server.url());
   client.open(f.name);

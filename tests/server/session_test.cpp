@@ -310,7 +310,7 @@ TEST(Session, DagAnswersAreBoundedSlices) {
   request.view = {close_camera(h), 8.0f, 1};
   request.traversal = DagTraversal::constant_time;
   request.max_ops = 500;
-  const size_t nodes = terrain().catalogue->find("terrain")->dag->size();
+  const size_t nodes = terrain().catalogue->find("terrain")->tables->dag().size();
   for (int view = 0; view < 2; ++view) {
     SCOPED_TRACE(view);
     session.receive(frame_of(protocol::encode(request)));

@@ -164,7 +164,7 @@ std::string client_error(const protocol::Frame& vsplits) {
   const Fixture& f = terrain();
   const server::ServedModel& model = *f.catalogue->find("terrain");
   std::deque<protocol::Frame> script{frame_of(protocol::encode(protocol::HelloOk{})), frame_of(*model.base_frame),
-                                     frame_of(*model.codec_frame), vsplits};
+                                     frame_of(*model.tables->records().codec_frame), vsplits};
   client::StreamingClient client(std::make_unique<ScriptedServer>(std::move(script)), client::ClientOptions{1.0f});
   client.open("terrain");
   try {
@@ -188,7 +188,7 @@ Flips flip_every_bit(const server::ServedModel& model, const protocol::Frame& go
                      const std::function<void(const protocol::VSplits&)>& check) {
   client::ClientSession session;
   session.on_base(protocol::decode_base(frame_of(*model.base_frame).payload));
-  session.on_codec(protocol::decode_codec(frame_of(*model.codec_frame).payload, session.context()));
+  session.on_codec(protocol::decode_codec(frame_of(*model.tables->records().codec_frame).payload, session.context()));
   Flips flips;
   for (size_t bit = 8 * 9; bit < 8 * good.payload.size(); ++bit) {
     std::vector<uint8_t> flipped = good.payload;
@@ -214,7 +214,7 @@ TEST(SenderDrivenRecords, HostileRecordsFailTheClientWithAClearError) {
   const server::ServedModel& model = *terrain().catalogue->find("terrain");
   const std::vector<uint32_t> roots = root_splits(model, 4);
   ASSERT_EQ(roots.size(), 4u);
-  const protocol::Frame good = frame_of(model.packets.encode(1, true, roots));
+  const protocol::Frame good = frame_of(model.tables->packets().encode(1, true, roots));
 
   // Truncated: the last record loses its tail.
   protocol::Frame truncated = good;
@@ -224,11 +224,11 @@ TEST(SenderDrivenRecords, HostileRecordsFailTheClientWithAClearError) {
   // A split of a node the client does not hold (a root's child before the root's split), one split twice.
   const uint32_t child = model.model().first_child[roots[0]];
   if (!model.model().is_leaf(child)) {
-    const std::string e = client_error(frame_of(model.packets.encode(1, true, std::vector<uint32_t>{child})));
+    const std::string e = client_error(frame_of(model.tables->packets().encode(1, true, std::vector<uint32_t>{child})));
     EXPECT_NE(e.find("is not a vertex the receiver holds"), std::string::npos) << e;
   }
   const std::string twice =
-      client_error(frame_of(model.packets.encode(1, true, std::vector<uint32_t>{roots[0], roots[0]})));
+      client_error(frame_of(model.tables->packets().encode(1, true, std::vector<uint32_t>{roots[0], roots[0]})));
   EXPECT_NE(twice.find("split a second time"), std::string::npos) << twice;
 
   // Code words the tables lack and values off the grid are among the refusals of single flipped bits.
@@ -244,7 +244,7 @@ TEST(SenderDrivenRecords, HostileRecordsFailTheClientWithAClearError) {
 // square or an edge point's mirror image, a code word the tables lack) or decodes to a unit normal.
 TEST(SenderDrivenRecords, HostileAttributesFailTheClientWithAClearError) {
   const server::ServedModel& model = *test::attributed_terrain().catalogue->find("attributed");
-  const protocol::Frame good = frame_of(model.packets.encode(1, true, root_splits(model, 4)));
+  const protocol::Frame good = frame_of(model.tables->packets().encode(1, true, root_splits(model, 4)));
   const Flips flips = flip_every_bit(model, good, [](const protocol::VSplits& batch) {
     for (const SplitRecord& s : batch.splits) {
       ASSERT_TRUE(s.has_normal && s.has_color);
@@ -265,7 +265,7 @@ TEST(SenderDrivenRecords, ACodecThatDoesNotFitTheBaseIsRefused) {
   protocol::StreamContext other = session.context();
   other.root_count += 1;
   other.tree_id_bits = 32;
-  const protocol::Frame codec = frame_of(*model.codec_frame);
+  const protocol::Frame codec = frame_of(*model.tables->records().codec_frame);
   try {
     protocol::decode_codec(codec.payload, other);
     ADD_FAILURE() << "tables for another root count were accepted";
@@ -285,8 +285,10 @@ TEST(SenderDrivenRecords, ACodecThatDoesNotFitTheBaseIsRefused) {
   const server::ServedModel& with = *test::attributed_terrain().catalogue->find("attributed");
   client::ClientSession attributed_session;
   attributed_session.on_base(protocol::decode_base(frame_of(*with.base_frame).payload));
-  EXPECT_NO_THROW(protocol::decode_codec(frame_of(*with.codec_frame).payload, attributed_session.context()));
-  EXPECT_THROW(protocol::decode_codec(frame_of(*with.codec_frame).payload, session.context()), protocol::ProtocolError);
+  EXPECT_NO_THROW(
+      protocol::decode_codec(frame_of(*with.tables->records().codec_frame).payload, attributed_session.context()));
+  EXPECT_THROW(protocol::decode_codec(frame_of(*with.tables->records().codec_frame).payload, session.context()),
+               protocol::ProtocolError);
 }
 
 }  // namespace

@@ -102,7 +102,7 @@ TraversalRun run_traversal(const BenchModel& m, const std::vector<Camera>& route
   client::StreamingClient client(std::move(local.transport), options);
   client.open(m.name);
 
-  const Dag& dag = *m.served->dag;
+  const Dag& dag = m.served->tables->dag();
   CompactDagCut compact;
   const DagManageOptions manage{traversal, DagMode::budget, kMaxOps, kBudget};
   server::LatestView view;
@@ -223,7 +223,7 @@ void run_dag_group(BenchContext& context) {
   const std::string name = context.options.models.empty() ? (quick ? "bunny" : "dragon") : context.options.models[0];
   const BenchModel m = prepare_model(context, name);
   const std::vector<Camera> route = path_of(m, PathKind::scan, quick ? kQuickFrames : kFrames);
-  const uint32_t nodes = m.served->dag->size();
+  const uint32_t nodes = m.served->tables->dag().size();
   const float tolerance = kToleranceOfHeight * float(route[0].height);
 
   TraversalRun runs[3];
@@ -267,7 +267,7 @@ void run_dag_group(BenchContext& context) {
               {"tolerance_px", tolerance},
               {"max_ops", kMaxOps},
               {"budget", kBudget},
-              {"dag_bytes", m.served->dag->memory_bytes()}};
+              {"dag_bytes", m.served->tables->dag().memory_bytes()}};
   for (int t = 0; t < 3; ++t) {
     const TraversalRun& run = runs[t];
     table.add_row({kTraversalNames[t], fixed(run.first.ms, 1), thousands(uint64_t(run.first.ops)),

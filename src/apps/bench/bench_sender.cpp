@@ -66,7 +66,7 @@ E2 packet_bits_of(const BenchModel& m) {
   uint64_t n = 0;
   // A packet is v_s's id and its split record (docs/protocol.md, "VSPLITS"): topology = the id and the
   // record's cut vertices, position = its geometry, attributes = v_t's normal and color.
-  const SplitCodec& codec = *m.served->codec;
+  const SplitCodec& codec = *m.served->tables->records().codec;
   const std::vector<uint32_t> q = grid_positions(model, m.served->context.grid.bits);
   for (uint32_t node : model.split_order) {
     BitWriter w;
