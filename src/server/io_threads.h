@@ -1,8 +1,9 @@
 // What the TCP and HTTP servers share about sockets and threads: binding the listening socket, and
 // the pool of threads that run one io_context.
 #pragma once
-#include <boost/asio.hpp>
 #include <utility>  // before asio with C++20 (docs/architecture.md, "Stack")
+
+#include <boost/asio.hpp>
 
 #include <cstdint>
 #include <functional>
