@@ -1,12 +1,13 @@
 // The receiver-driven client's HTTP transport (http_connection.h), in the shape of Beast's client examples
 // with tcp_stream's timeouts: each step is one asynchronous operation run to completion on the
 // connection's own io_context, so a deadline passed is an error like any other.
+#include <utility>  // before asio with C++20 (docs/architecture.md, "Stack")
+
 #include <boost/asio.hpp>
 #include <boost/beast/core.hpp>
 #include <boost/beast/http.hpp>
 #include <deque>
 #include <optional>
-#include <utility>  // before asio with C++20 (docs/architecture.md, "Stack")
 
 #include "client/http_connection.h"
 #include "client/transport.h"

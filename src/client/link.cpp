@@ -3,10 +3,11 @@
 // on all three (asio's chat_client shape, with the timeouts of its timeouts/ examples). The caller's
 // threads only touch what the mutex guards and hand frames over with asio::post.
 #include <array>
+#include <utility>  // before asio with C++20 (docs/architecture.md, "Stack")
+
 #include <boost/asio.hpp>
 #include <functional>
 #include <thread>
-#include <utility>  // before asio with C++20 (docs/architecture.md, "Stack")
 
 #include "client/link.h"
 #include "client/transport.h"

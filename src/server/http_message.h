@@ -2,12 +2,13 @@
 // request Beast could not parse, and an answer's status line and headers. Beast is slow to compile: only
 // this file's .cpp, http_server.cpp and the fuzz target include this header (docs/architecture.md, "Stack").
 #pragma once
+#include <utility>  // before asio with C++20 (docs/architecture.md, "Stack")
+
 #include <boost/beast/core.hpp>
 #include <boost/beast/http.hpp>
 #include <cstdint>
 #include <string>
 #include <string_view>
-#include <utility>  // before asio with C++20 (docs/architecture.md, "Stack")
 #include <vector>
 
 #include "server/catalogue.h"

@@ -13,8 +13,9 @@
 // request_timeout_ms for the rest of it, and write_timeout_ms for each piece of the answer to be taken.
 #include "server/http_server.h"
 
-#include <boost/asio.hpp>
 #include <utility>  // before asio with C++20 (docs/architecture.md, "Stack")
+
+#include <boost/asio.hpp>
 
 #include <array>
 #include <atomic>

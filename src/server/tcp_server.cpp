@@ -7,12 +7,13 @@
 #include <linux/sockios.h>
 #include <sys/ioctl.h>
 #include <array>
+#include <utility>  // before asio with C++20 (docs/architecture.md, "Stack")
+
 #include <boost/asio.hpp>
 #include <cstdio>
 #include <mutex>
 #include <set>
 #include <thread>
-#include <utility>  // before asio with C++20 (docs/architecture.md, "Stack")
 
 #include "common/error.h"
 #include "protocol/framing.h"

@@ -5,6 +5,8 @@
 // every bound has two seconds of slack for a loaded machine.
 #include <gtest/gtest.h>
 #include <array>
+#include <utility>  // before asio with C++20 (docs/architecture.md, "Stack")
+
 #include <boost/asio.hpp>
 #include <chrono>
 #include <deque>
@@ -12,7 +14,6 @@
 #include <memory>
 #include <string>
 #include <thread>
-#include <utility>  // before asio with C++20
 #include <vector>
 
 #include "builder/build.h"
