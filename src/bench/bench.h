@@ -1,6 +1,6 @@
-// `pmstream bench`: the experiments of docs/architecture.md ("Experiments"), in groups. Each group prints its tables to
-// stdout as they fill (progress lines go to stderr), appends a section to report.md and writes its
-// own GROUP.json and plots into the output directory.
+// pmstream-bench: the experiments of docs/architecture.md ("Experiments"), in groups. Each group prints its tables
+// to stdout as they fill (progress lines go to stderr), writes its report's sections into the context and its
+// own GROUP.json and plots into the output directory; the run makes the report GROUP.md of them.
 #pragma once
 #include <filesystem>
 #include <nlohmann/json.hpp>
@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-namespace pms::app {
+namespace pms::bench {
 
 struct BenchOptions {
   bool quick = false;               // the small end of every series, for a smoke run
@@ -23,10 +23,10 @@ struct BenchContext {
   BenchOptions options;
   std::filesystem::path models_dir;  // ../shared/models; empty when not found (real-model parts skipped)
   std::filesystem::path temp_dir;    // scratch for this run, removed afterwards
-  std::string self_exe;              // this binary, run as a child for our own builds
-  std::string report;                // report.md so far; groups append their sections
+  std::string pmstream_exe;          // the pmstream binary, run as a child for our builds and servers
+  std::string report;                // the running group's report so far; it appends its sections
   // One line per figure that could not be measured (a server that did not report): the report says so
-  // where the figure would be, and the bench exits non-zero once report.md is written.
+  // where the figure would be, and the bench exits non-zero once the reports are written.
   std::vector<std::string> failures;
 };
 
@@ -76,4 +76,4 @@ nlohmann::json machine_json();
 // Writes `text` to `path`, pms::Error naming the file when it cannot.
 void write_text_file(const std::filesystem::path& path, const std::string& text);
 
-}  // namespace pms::app
+}  // namespace pms::bench

@@ -10,16 +10,18 @@
 #include <cstdio>
 #include <optional>
 
-#include "apps/bench/bench.h"
-#include "apps/bench/child_process.h"
-#include "apps/bench/gnuplot.h"
-#include "apps/bench/openmesh_pm.h"
-#include "apps/bench/report.h"
 #include "apps/resource_usage.h"
+#include "bench/bench.h"
+#include "bench/child_process.h"
+#include "bench/gnuplot.h"
+#include "bench/openmesh_pm.h"
+#include "bench/report.h"
 #include "common/error.h"
 #include "protocol/packet_bits.h"
 
-namespace pms::app {
+namespace pms::bench {
+using app::peak_rss_mb;
+using app::Stopwatch;
 namespace fs = std::filesystem;
 using nlohmann::json;
 namespace {
@@ -115,7 +117,7 @@ ChildOptions step_options() {
 
 OurBuild run_our_build(const BenchContext& context, const std::string& input, const fs::path& output) {
   OurBuild build;
-  build.run = run_child({context.self_exe, "build", input, "-o", output.string(), "--json"}, step_options());
+  build.run = run_child({context.pmstream_exe, "build", input, "-o", output.string(), "--json"}, step_options());
   if (!build.run.ok()) {
     build.error = "pmstream build " + input + ": " + build.run.failure();
     return build;
@@ -608,4 +610,4 @@ void run_build_group(BenchContext& context) {
   context.report += section;
 }
 
-}  // namespace pms::app
+}  // namespace pms::bench

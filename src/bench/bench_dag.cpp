@@ -13,14 +13,14 @@
 #include <array>
 #include <cstdio>
 
-#include "apps/bench/bench.h"
-#include "apps/bench/bench_model.h"
-#include "apps/bench/bench_refine.h"
-#include "apps/bench/gnuplot.h"
-#include "apps/bench/report.h"
 #include "apps/camera_path.h"
 #include "apps/percentile.h"
 #include "apps/resource_usage.h"
+#include "bench/bench.h"
+#include "bench/bench_model.h"
+#include "bench/bench_refine.h"
+#include "bench/gnuplot.h"
+#include "bench/report.h"
 #include "client/streaming_client.h"
 #include "common/error.h"
 #include "dag/compact.h"
@@ -29,7 +29,10 @@
 #include "server/dag_mode.h"
 #include "server/session_mode.h"
 
-namespace pms::app {
+namespace pms::bench {
+using app::PathKind;
+using app::percentile;
+using app::Stopwatch;
 namespace {
 
 using nlohmann::json;
@@ -307,4 +310,4 @@ void run_dag_group(BenchContext& context) {
   context.report += section;
 }
 
-}  // namespace pms::app
+}  // namespace pms::bench

@@ -1,16 +1,19 @@
-#include "apps/bench/bench_model.h"
+#include "bench/bench_model.h"
 
 #include <cstdio>
 #include <deque>
 #include <utility>
 
-#include "apps/bench/child_process.h"
+#include "bench/child_process.h"
 #include "common/error.h"
 #include "server/catalogue.h"
 #include "server/limits.h"
 #include "server/session.h"
 
-namespace pms::app {
+namespace pms::bench {
+using app::make_camera_path;
+using app::PathKind;
+using app::PathOptions;
 namespace fs = std::filesystem;
 
 BenchModel prepare_model(const BenchContext& context, const std::string& model, const std::string& deviation) {
@@ -20,8 +23,8 @@ BenchModel prepare_model(const BenchContext& context, const std::string& model, 
   m.pms = context.temp_dir / (name + ".pms");
   if (!fs::exists(m.pms)) {
     std::fprintf(stderr, "bench: building %s ... ", name.c_str());
-    const ChildResult run = run_child({context.self_exe, "build", find_model(context.models_dir, model).string(), "-o",
-                                       m.pms.string(), "--deviation", deviation, "--json"});
+    const ChildResult run = run_child({context.pmstream_exe, "build", find_model(context.models_dir, model).string(),
+                                       "-o", m.pms.string(), "--deviation", deviation, "--json"});
     if (!run.ok()) fail(name, "pmstream build: " + run.failure());
     std::fprintf(stderr, "%.2f s\n", run.wall_seconds);
   }
@@ -52,4 +55,4 @@ InProcessSession in_process_session(const BenchModel& m) {
   return {session, std::make_unique<client::LocalTransport>(std::move(endpoint), limits.max_client_message)};
 }
 
-}  // namespace pms::app
+}  // namespace pms::bench

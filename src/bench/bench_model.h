@@ -6,13 +6,13 @@
 #include <string>
 #include <vector>
 
-#include "apps/bench/bench.h"
 #include "apps/camera_path.h"
+#include "bench/bench.h"
 #include "client/local_transport.h"
 #include "server/catalogue.h"
 #include "server/session.h"
 
-namespace pms::app {
+namespace pms::bench {
 
 struct BenchModel {
   std::string name;  // the model's short name, "-bound" appended for --deviation bound
@@ -26,7 +26,7 @@ struct BenchModel {
 BenchModel prepare_model(const BenchContext& context, const std::string& model,
                          const std::string& deviation = "estimate");
 
-std::vector<Camera> path_of(const BenchModel& m, PathKind kind, uint32_t frames);
+std::vector<Camera> path_of(const BenchModel& m, app::PathKind kind, uint32_t frames);
 
 // A server Session of the model's catalogue in this process, and a client transport to it: the same
 // frames as over TCP, with the session's own state (its active tags) readable between frames.
@@ -36,4 +36,4 @@ struct InProcessSession {
 };
 InProcessSession in_process_session(const BenchModel& m);
 
-}  // namespace pms::app
+}  // namespace pms::bench

@@ -8,17 +8,17 @@
 #include <cstdio>
 #include <nlohmann/json.hpp>
 
-#include "apps/bench/bench.h"
-#include "apps/bench/child_process.h"
-#include "apps/bench/multilevel_sizes.h"
-#include "apps/bench/report.h"
+#include "bench/bench.h"
+#include "bench/child_process.h"
+#include "bench/multilevel_sizes.h"
+#include "bench/report.h"
 #include "common/error.h"
 #include "multilevel/codec.h"
 #include "multilevel/file.h"
 #include "multilevel/loader.h"
 #include "multilevel/mesh.h"
 
-namespace pms::app {
+namespace pms::bench {
 namespace {
 
 using Clock = std::chrono::steady_clock;
@@ -118,7 +118,8 @@ void run_multilevel_group(BenchContext& context) {
   for (const std::string& name : models) {
     const std::string input = find_model(context.models_dir, name).string();
     const std::string output = (context.temp_dir / (name + ".pml")).string();
-    const ChildResult build = run_child({context.self_exe, "multilevel", "build", input, "-o", output, "--json"}, {});
+    const ChildResult build =
+        run_child({context.pmstream_exe, "multilevel", "build", input, "-o", output, "--json"}, {});
     if (!build.ok()) {
       context.failures.push_back("multilevel " + name + ": build " + build.failure());
       continue;
@@ -202,4 +203,4 @@ void run_multilevel_group(BenchContext& context) {
                   nlohmann::json{{"machine", machine_json()}, {"models", rows}}.dump(2) + "\n");
 }
 
-}  // namespace pms::app
+}  // namespace pms::bench

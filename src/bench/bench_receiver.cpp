@@ -10,15 +10,15 @@
 #include <optional>
 #include <thread>
 
-#include "apps/bench/bench.h"
-#include "apps/bench/bench_model.h"
-#include "apps/bench/receiver_quality.h"
-#include "apps/bench/report.h"
-#include "apps/bench/serve_child.h"
-#include "apps/bench/single_rate_codecs.h"
-#include "apps/bench/split_record_bits.h"
 #include "apps/camera_path.h"
 #include "apps/refine_pipeline.h"
+#include "bench/bench.h"
+#include "bench/bench_model.h"
+#include "bench/receiver_quality.h"
+#include "bench/report.h"
+#include "bench/serve_child.h"
+#include "bench/single_rate_codecs.h"
+#include "bench/split_record_bits.h"
 #include "client/receiver_client.h"
 #include "client/streaming_client.h"
 #include "common/bit_stream.h"
@@ -27,7 +27,9 @@
 #include "protocol/message_types.h"
 #include "server/split_records_body.h"
 
-namespace pms::app {
+namespace pms::bench {
+using app::PathKind;
+using app::refine_first_splits;
 using nlohmann::json;
 namespace {
 
@@ -176,7 +178,7 @@ ServerCost server_cost(const BenchContext& context, const BenchModel& m, bool ht
   try {
     std::vector<std::string> args = {m.pms.string()};
     if (http) args.insert(args.end(), {"--http-port", "0"});
-    ServeChild server(context.self_exe, args);
+    ServeChild server(context.pmstream_exe, args);
     const uint16_t port = http ? server.listening().at("http_port").get<uint16_t>() : server.port();
     const Counters before = read(server.stats());
     flight(port);
@@ -440,4 +442,4 @@ void run_receiver_group(BenchContext& context) {
   context.report += section;
 }
 
-}  // namespace pms::app
+}  // namespace pms::bench

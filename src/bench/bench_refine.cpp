@@ -7,14 +7,14 @@
 #include <algorithm>
 #include <cstdio>
 
-#include "apps/bench/bench.h"
-#include "apps/bench/bench_refine.h"
-#include "apps/bench/child_process.h"
-#include "apps/bench/image_quality.h"
-#include "apps/bench/report.h"
 #include "apps/camera_path.h"
 #include "apps/percentile.h"
 #include "apps/resource_usage.h"
+#include "bench/bench.h"
+#include "bench/bench_refine.h"
+#include "bench/child_process.h"
+#include "bench/image_quality.h"
+#include "bench/report.h"
 #include "common/error.h"
 #include "render/render.h"
 #include "spm/adapt.h"
@@ -25,7 +25,12 @@
 #include "spm/stream_order.h"
 #include "spm/vertex_hierarchy.h"
 
-namespace pms::app {
+namespace pms::bench {
+using app::make_camera_path;
+using app::PathKind;
+using app::PathOptions;
+using app::percentile;
+using app::Stopwatch;
 namespace fs = std::filesystem;
 using nlohmann::json;
 
@@ -147,8 +152,8 @@ std::string face_share(uint64_t faces, double full_faces) { return fixed(100 * d
 std::unique_ptr<PmsFile> build_pms(const BenchContext& context, const std::string& name, const std::string& deviation) {
   const fs::path pms = context.temp_dir / (name + "-" + deviation + ".pms");
   std::fprintf(stderr, "bench: building %s (deviation %s) ... ", name.c_str(), deviation.c_str());
-  const ChildResult built = run_child({context.self_exe, "build", find_model(context.models_dir, name).string(), "-o",
-                                       pms.string(), "--deviation", deviation});
+  const ChildResult built = run_child({context.pmstream_exe, "build", find_model(context.models_dir, name).string(),
+                                       "-o", pms.string(), "--deviation", deviation});
   if (!built.ok()) fail(name, "pmstream build: " + built.failure());
   std::fprintf(stderr, "%.2f s\n", built.wall_seconds);
   return PmsFile::open(pms.string());
@@ -347,4 +352,4 @@ void run_refine_group(BenchContext& context) {
   context.report += section;
 }
 
-}  // namespace pms::app
+}  // namespace pms::bench

@@ -3,12 +3,12 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
-#include "apps/bench/bench.h"
+#include "bench/bench.h"
 #include "common/camera.h"
 #include "spm/hierarchy.h"
 #include "spm/vertex_hierarchy.h"
 
-namespace pms::app {
+namespace pms::bench {
 
 // Writes `text` to stdout at once: tables show as they fill.
 void print_now(const std::string& text);
@@ -24,4 +24,4 @@ Camera srmesh_camera(const ModelData& model, float distance, float angle_deg);
 // code), and the same timings on dragon. Appends to `out` under "srmesh".
 std::string srmesh_comparison_section(const BenchContext& context, nlohmann::json& out);
 
-}  // namespace pms::app
+}  // namespace pms::bench

@@ -7,16 +7,18 @@
 #include <cstdio>
 #include <memory>
 
-#include "apps/bench/bench_model.h"
-#include "apps/bench/bench_refine.h"
-#include "apps/bench/report.h"
 #include "apps/percentile.h"
 #include "apps/resource_usage.h"
+#include "bench/bench_model.h"
+#include "bench/bench_refine.h"
+#include "bench/report.h"
 #include "common/error.h"
 #include "spm/adapt.h"
 #include "spm/selective_mesh.h"
 
-namespace pms::app {
+namespace pms::bench {
+using app::percentile;
+using app::Stopwatch;
 using nlohmann::json;
 namespace {
 
@@ -284,4 +286,4 @@ std::string srmesh_comparison_section(const BenchContext& context, json& out) {
          "\n";
 }
 
-}  // namespace pms::app
+}  // namespace pms::bench

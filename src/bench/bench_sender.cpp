@@ -11,14 +11,14 @@
 #include <optional>
 #include <thread>
 
-#include "apps/bench/bench.h"
-#include "apps/bench/bench_model.h"
-#include "apps/bench/report.h"
-#include "apps/bench/serve_child.h"
-#include "apps/bench/split_record_bits.h"
 #include "apps/camera_path.h"
 #include "apps/percentile.h"
 #include "apps/resource_usage.h"
+#include "bench/bench.h"
+#include "bench/bench_model.h"
+#include "bench/report.h"
+#include "bench/serve_child.h"
+#include "bench/split_record_bits.h"
 #include "client/load_client.h"
 #include "client/streaming_client.h"
 #include "common/bit_stream.h"
@@ -28,7 +28,10 @@
 #include "spm/hierarchy.h"
 #include "spm/split_codec.h"
 
-namespace pms::app {
+namespace pms::bench {
+using app::PathKind;
+using app::percentile;
+using app::Stopwatch;
 namespace fs = std::filesystem;
 using nlohmann::json;
 namespace {
@@ -145,7 +148,7 @@ struct E5 {
       0;  // the same splits as VD, as plain vsplits (kim-lee-kobbelt §6.3, stream --mode sender-plain)
 };
 
-Camera close_view(const BenchModel& m) { return app::close_view(m.served->model()); }
+Camera close_view(const BenchModel& m) { return bench::close_view(m.served->model()); }
 
 struct OneView {
   uint64_t bytes_down = 0, splits = 0, faces = 0;
@@ -253,7 +256,7 @@ E11 run_e11(const BenchContext& context, const BenchModel& m, uint32_t clients) 
   e.clients = clients;
   std::optional<ServeChild> server;
   try {
-    server.emplace(context.self_exe,
+    server.emplace(context.pmstream_exe,
                    std::vector<std::string>{m.pms.string(), "--max-sessions", std::to_string(clients + 16)});
   } catch (const Error& err) {
     e.server_error = err.what();
@@ -492,4 +495,4 @@ void run_sender_group(BenchContext& context) {
   context.report += section;
 }
 
-}  // namespace pms::app
+}  // namespace pms::bench

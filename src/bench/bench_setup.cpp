@@ -6,11 +6,11 @@
 #include <cstdlib>
 #include <fstream>
 
-#include "apps/bench/bench.h"
-#include "apps/bench/report.h"
+#include "bench/bench.h"
+#include "bench/report.h"
 #include "common/error.h"
 
-namespace pms::app {
+namespace pms::bench {
 namespace fs = std::filesystem;
 namespace {
 
@@ -109,4 +109,4 @@ bool skipped_without_models(BenchContext& context, const std::string& section) {
   return true;
 }
 
-}  // namespace pms::app
+}  // namespace pms::bench

@@ -11,16 +11,18 @@
 #include <optional>
 #include <thread>
 
-#include "apps/bench/bench.h"
-#include "apps/bench/bench_model.h"
-#include "apps/bench/gnuplot.h"
-#include "apps/bench/report.h"
-#include "apps/bench/serve_child.h"
-#include "apps/bench/soak_client.h"
 #include "apps/percentile.h"
+#include "bench/bench.h"
+#include "bench/bench_model.h"
+#include "bench/gnuplot.h"
+#include "bench/report.h"
+#include "bench/serve_child.h"
+#include "bench/soak_client.h"
 #include "common/error.h"
 
-namespace pms::app {
+namespace pms::bench {
+using app::PathKind;
+using app::percentile;
 namespace fs = std::filesystem;
 using nlohmann::json;
 using Clock = std::chrono::steady_clock;
@@ -79,7 +81,7 @@ SoakRun run_soak(const BenchContext& context, const BenchModel& m, uint32_t clie
   SoakRun run;
   std::optional<ServeChild> server;
   try {
-    server.emplace(context.self_exe,
+    server.emplace(context.pmstream_exe,
                    std::vector<std::string>{m.pms.string(), "--max-sessions", std::to_string(clients + 16)});
     run.samples.push_back({0, server->stats()});  // the model mapped, no session yet
   } catch (const Error& e) {
@@ -375,4 +377,4 @@ void run_soak_group(BenchContext& context) {
   context.report += section + text;
 }
 
-}  // namespace pms::app
+}  // namespace pms::bench

@@ -1,4 +1,4 @@
-#include "apps/bench/child_process.h"
+#include "bench/child_process.h"
 
 #include <fcntl.h>
 #include <poll.h>
@@ -19,7 +19,8 @@
 #include "apps/resource_usage.h"
 #include "common/error.h"
 
-namespace pms::app {
+namespace pms::bench {
+using app::Stopwatch;
 namespace {
 
 // A file descriptor closed when it goes out of scope, so no error path leaks one.
@@ -213,4 +214,4 @@ ChildResult run_child(const std::vector<std::string>& argv, const ChildOptions& 
   return result;
 }
 
-}  // namespace pms::app
+}  // namespace pms::bench

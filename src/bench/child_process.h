@@ -10,7 +10,7 @@
 #include <string_view>
 #include <vector>
 
-namespace pms::app {
+namespace pms::bench {
 
 struct ChildOptions {
   double timeout_seconds = 0;                    // 0: no limit; else SIGKILL once this much wall time has passed
@@ -47,4 +47,4 @@ std::string find_program(const std::string& name);
 // Throws pms::Error when the program cannot be started; a child that fails is reported in the result.
 ChildResult run_child(const std::vector<std::string>& argv, const ChildOptions& options = {});
 
-}  // namespace pms::app
+}  // namespace pms::bench

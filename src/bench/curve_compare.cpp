@@ -1,8 +1,8 @@
-#include "apps/bench/curve_compare.h"
+#include "bench/curve_compare.h"
 
 #include <algorithm>
 
-namespace pms::app {
+namespace pms::bench {
 
 std::optional<uint64_t> bytes_to_reach(const std::vector<CurveSample>& samples, double psnr) {
   for (const CurveSample& s : samples)
@@ -40,4 +40,4 @@ CurveOrder compare_curves(const std::vector<CurveSample>& upper, const std::vect
   return order;
 }
 
-}  // namespace pms::app
+}  // namespace pms::bench

@@ -6,9 +6,9 @@
 #include <optional>
 #include <vector>
 
-#include "apps/bench/quality_curve.h"
+#include "bench/quality_curve.h"
 
-namespace pms::app {
+namespace pms::bench {
 
 // The bytes of the first sample at or above `psnr`; nothing when the curve never gets there.
 std::optional<uint64_t> bytes_to_reach(const std::vector<CurveSample>& samples, double psnr);
@@ -28,4 +28,4 @@ struct CurveOrder {
 // are capped at `cap` first (cheng-ooi's curves stop there), so two curves that both passed it are equal.
 CurveOrder compare_curves(const std::vector<CurveSample>& upper, const std::vector<CurveSample>& lower, double cap);
 
-}  // namespace pms::app
+}  // namespace pms::bench

@@ -1,12 +1,12 @@
-#include "apps/bench/gnuplot.h"
+#include "bench/gnuplot.h"
 
 #include <cstdio>
 #include <fstream>
 
-#include "apps/bench/child_process.h"
+#include "bench/child_process.h"
 #include "common/error.h"
 
-namespace pms::app {
+namespace pms::bench {
 namespace {
 
 constexpr double kGnuplotTimeoutSeconds = 60;
@@ -93,4 +93,4 @@ std::string plot_markdown(const std::filesystem::path& dir, const Plot& plot, co
   return "No plot " + png + ": " + skipped + ".\n\n";
 }
 
-}  // namespace pms::app
+}  // namespace pms::bench

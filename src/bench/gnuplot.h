@@ -5,7 +5,7 @@
 #include <string>
 #include <vector>
 
-namespace pms::app {
+namespace pms::bench {
 
 struct PlotSeries {
   std::string title;
@@ -31,4 +31,4 @@ std::string plot_png(const Plot& plot, const std::filesystem::path& png_path);
 std::string plot_markdown(const std::filesystem::path& dir, const Plot& plot, const std::string& png,
                           const std::string& alt);
 
-}  // namespace pms::app
+}  // namespace pms::bench

@@ -1,12 +1,15 @@
-#include "apps/bench/image_quality.h"
+#include "bench/image_quality.h"
 
 #include <cmath>
 
-#include "apps/bench/report.h"
-#include "apps/bench/split_record_bits.h"
 #include "apps/camera_path.h"
+#include "bench/report.h"
+#include "bench/split_record_bits.h"
 
-namespace pms::app {
+namespace pms::bench {
+using app::make_camera_path;
+using app::PathKind;
+using app::PathOptions;
 
 std::vector<Viewpoint> quality_viewpoints(const ModelData& model) {
   PathOptions options;
@@ -20,4 +23,4 @@ RenderMesh as_render(const MeshArrays& mesh) { return {mesh.positions, mesh.indi
 std::string psnr_text(double psnr) { return std::isinf(psnr) ? "inf" : fixed(psnr, 2); }
 double psnr_json(double psnr) { return std::isinf(psnr) ? kPsnrIdenticalJson : psnr; }
 
-}  // namespace pms::app
+}  // namespace pms::bench

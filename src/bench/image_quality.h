@@ -10,7 +10,7 @@
 #include "spm/hierarchy.h"
 #include "spm/selective_mesh.h"
 
-namespace pms::app {
+namespace pms::bench {
 
 struct Viewpoint {
   const char* label;  // "far", "mid", "close"
@@ -27,4 +27,4 @@ RenderMesh as_render(const MeshArrays& mesh);
 std::string psnr_text(double psnr);
 double psnr_json(double psnr);
 
-}  // namespace pms::app
+}  // namespace pms::bench

@@ -1,7 +1,7 @@
 // E10's transmission sizes (multilevel_sizes.h). The ASCII form is cut at its batches ('{' outside a
 // comment), two per level; meshoptimizer gets each level's own vertices (4 x u16 lanes on the grid) and
 // its triangles as an index sequence (its triangle codec may rotate corners, which the structure keeps).
-#include "apps/bench/multilevel_sizes.h"
+#include "bench/multilevel_sizes.h"
 
 #include <meshoptimizer.h>
 
@@ -9,13 +9,13 @@
 #include <string>
 #include <vector>
 
-#include "apps/bench/single_rate_codecs.h"
+#include "bench/single_rate_codecs.h"
 #include "common/error.h"
 #include "multilevel/codec.h"
 #include "multilevel/file.h"
 #include "multilevel/loader.h"
 
-namespace pms::app {
+namespace pms::bench {
 namespace {
 
 // Each level's text, coarsest first; the file's leading comment goes with the first.
@@ -117,4 +117,4 @@ MultilevelSizes multilevel_sizes(const MultilevelMesh& m, uint32_t position_bits
   return total;
 }
 
-}  // namespace pms::app
+}  // namespace pms::bench

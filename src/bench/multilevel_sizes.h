@@ -8,7 +8,7 @@
 
 #include "multilevel/mesh.h"
 
-namespace pms::app {
+namespace pms::bench {
 
 // Bytes over every level (each level on its own, as it travels), and the compressed form's bits by part.
 struct MultilevelSizes {
@@ -20,4 +20,4 @@ struct MultilevelSizes {
 // `per_level` gets one object per level, coarsest first.
 MultilevelSizes multilevel_sizes(const MultilevelMesh& mesh, uint32_t position_bits, nlohmann::json& per_level);
 
-}  // namespace pms::app
+}  // namespace pms::bench

@@ -1,4 +1,4 @@
-#include "apps/bench/openmesh_pm.h"
+#include "bench/openmesh_pm.h"
 
 #include <algorithm>
 #include <cstring>
@@ -8,7 +8,7 @@
 #include "common/error.h"
 #include "spm/hierarchy.h"
 
-namespace pms::app {
+namespace pms::bench {
 namespace {
 
 constexpr char kMagic[8] = {'P', 'r', 'o', 'g', 'M', 'e', 's', 'h'};
@@ -99,4 +99,4 @@ OpenMeshPmStats read_openmesh_pm(const std::string& path) {
   return parse_openmesh_pm(bytes, path);
 }
 
-}  // namespace pms::app
+}  // namespace pms::bench

@@ -12,7 +12,7 @@
 
 #include "spm/hierarchy.h"
 
-namespace pms::app {
+namespace pms::bench {
 
 struct OpenMeshPmStats {
   uint32_t base_vertices = 0;           // OpenMesh keeps vertices no face uses: they stay roots
@@ -28,4 +28,4 @@ struct OpenMeshPmStats {
 OpenMeshPmStats parse_openmesh_pm(std::span<const uint8_t> bytes, const std::string& name);
 OpenMeshPmStats read_openmesh_pm(const std::string& path);
 
-}  // namespace pms::app
+}  // namespace pms::bench

@@ -7,7 +7,7 @@
 
 #include "client/transport.h"
 
-namespace pms::app {
+namespace pms::bench {
 
 class ProbedTransport : public client::Transport {
  public:
@@ -27,4 +27,4 @@ class ProbedTransport : public client::Transport {
   Probe probe_;
 };
 
-}  // namespace pms::app
+}  // namespace pms::bench

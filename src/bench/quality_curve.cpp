@@ -1,12 +1,12 @@
-#include "apps/bench/quality_curve.h"
+#include "bench/quality_curve.h"
 
-#include "apps/bench/image_quality.h"
-#include "apps/bench/probed_transport.h"
+#include "bench/image_quality.h"
+#include "bench/probed_transport.h"
 #include "client/receiver_client.h"
 #include "client/streaming_client.h"
 #include "common/error.h"
 
-namespace pms::app {
+namespace pms::bench {
 namespace {
 
 // Collects a curve's samples from a client's session as the bytes it has received grow.
@@ -113,4 +113,4 @@ QualityCurve receiver_curve(uint16_t http_port, const std::string& model, const 
   return curve;
 }
 
-}  // namespace pms::app
+}  // namespace pms::bench

@@ -8,13 +8,13 @@
 #include <string>
 #include <vector>
 
-#include "apps/bench/bench_model.h"
+#include "bench/bench_model.h"
 #include "common/camera.h"
 #include "protocol/stream_mode.h"
 #include "render/render.h"
 #include "spm/selective_mesh.h"
 
-namespace pms::app {
+namespace pms::bench {
 
 struct CurveSample {
   uint64_t bytes = 0;    // received so far as counted on the wire: whole frames, or HTTP with its headers
@@ -51,4 +51,4 @@ QualityCurve session_curve(const BenchModel& m, protocol::StreamMode mode, const
 QualityCurve receiver_curve(uint16_t http_port, const std::string& model, const Camera& camera, float tolerance_px,
                             const QualityTarget& target, Renderer& renderer);
 
-}  // namespace pms::app
+}  // namespace pms::bench

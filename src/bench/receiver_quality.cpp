@@ -1,20 +1,20 @@
-#include "apps/bench/receiver_quality.h"
+#include "bench/receiver_quality.h"
 
 #include <algorithm>
 #include <cstdio>
 #include <iterator>
 #include <optional>
 
-#include "apps/bench/curve_compare.h"
-#include "apps/bench/gnuplot.h"
-#include "apps/bench/image_quality.h"
-#include "apps/bench/quality_curve.h"
-#include "apps/bench/report.h"
-#include "apps/bench/serve_child.h"
+#include "bench/curve_compare.h"
+#include "bench/gnuplot.h"
+#include "bench/image_quality.h"
+#include "bench/quality_curve.h"
+#include "bench/report.h"
+#include "bench/serve_child.h"
 #include "spm/adapt.h"
 #include "spm/stream_order.h"
 
-namespace pms::app {
+namespace pms::bench {
 using nlohmann::json;
 namespace {
 
@@ -245,7 +245,7 @@ std::string e6_e8_sections(BenchContext& context, const std::vector<BenchModel>&
     const ModelData& model = m.served->model();
     const MeshArrays full = refine_in_stream_order(model, model.split_order.size());
     Renderer renderer;
-    ServeChild server(context.self_exe, {m.pms.string(), "--http-port", "0"});
+    ServeChild server(context.pmstream_exe, {m.pms.string(), "--http-port", "0"});
     const uint16_t http_port = server.listening().at("http_port").get<uint16_t>();
     json views = json::array();
     for (const Viewpoint& vp : quality_viewpoints(model)) {
@@ -298,4 +298,4 @@ std::string e6_e8_sections(BenchContext& context, const std::vector<BenchModel>&
   return section;
 }
 
-}  // namespace pms::app
+}  // namespace pms::bench

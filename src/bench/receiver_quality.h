@@ -7,13 +7,13 @@
 #include <string>
 #include <vector>
 
-#include "apps/bench/bench.h"
-#include "apps/bench/bench_model.h"
+#include "bench/bench.h"
+#include "bench/bench_model.h"
 
-namespace pms::app {
+namespace pms::bench {
 
 // Runs E6 and E8 on every model, adds each model's samples to `records[i]` (the group's JSON record of
 // models[i]) and returns the report's sections. A client that fails is a failure of the run (context.failures).
 std::string e6_e8_sections(BenchContext& context, const std::vector<BenchModel>& models, nlohmann::json& records);
 
-}  // namespace pms::app
+}  // namespace pms::bench

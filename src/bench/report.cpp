@@ -1,4 +1,4 @@
-#include "apps/bench/report.h"
+#include "bench/report.h"
 
 #include <algorithm>
 #include <cstdio>
@@ -6,7 +6,7 @@
 #include "common/error.h"
 #include "protocol/packet_bits.h"
 
-namespace pms::app {
+namespace pms::bench {
 namespace {
 
 // Columns line up on screen only if padding counts characters, not UTF-8 bytes ("µs").
@@ -111,4 +111,4 @@ std::string id_bits(uint32_t tree, uint32_t node) {
   return text;
 }
 
-}  // namespace pms::app
+}  // namespace pms::bench

@@ -8,7 +8,7 @@
 
 #include "protocol/packet_bits.h"
 
-namespace pms::app {
+namespace pms::bench {
 
 struct Column {
   std::string title;
@@ -40,4 +40,4 @@ std::string thousands(uint64_t value);              // 34772 -> "34,772"
 std::string fixed(double value, int decimals);      // fixed(1.234, 2) -> "1.23"
 std::string id_bits(uint32_t tree, uint32_t node);  // "<6, 16>", as in kim-lee-kobbelt Table 1
 
-}  // namespace pms::app
+}  // namespace pms::bench

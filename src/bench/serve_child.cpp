@@ -1,4 +1,4 @@
-#include "apps/bench/serve_child.h"
+#include "bench/serve_child.h"
 
 #include <signal.h>
 
@@ -8,7 +8,7 @@
 
 #include "common/error.h"
 
-namespace pms::app {
+namespace pms::bench {
 using nlohmann::json;
 namespace {
 
@@ -54,8 +54,8 @@ ServeStats parse_serve_stats(const json& line) {
   return s;
 }
 
-ServeChild::ServeChild(const std::string& self_exe, const std::vector<std::string>& args, double start_timeout_s) {
-  std::vector<std::string> argv = {self_exe, "serve"};
+ServeChild::ServeChild(const std::string& pmstream_exe, const std::vector<std::string>& args, double start_timeout_s) {
+  std::vector<std::string> argv = {pmstream_exe, "serve"};
   argv.insert(argv.end(), args.begin(), args.end());
   for (const char* arg : {"--json", "--host", "127.0.0.1", "--port", "0"}) argv.push_back(arg);
   thread_ = std::thread([this, argv] {
@@ -144,4 +144,4 @@ ServeStats ServeChild::stop(double timeout_s) {
   return stopped;
 }
 
-}  // namespace pms::app
+}  // namespace pms::bench

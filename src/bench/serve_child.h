@@ -15,9 +15,9 @@
 #include <thread>
 #include <vector>
 
-#include "apps/bench/child_process.h"
+#include "bench/child_process.h"
 
-namespace pms::app {
+namespace pms::bench {
 
 // One "stats" or "stopped" line.
 struct ServeStats {
@@ -35,9 +35,9 @@ ServeStats parse_serve_stats(const nlohmann::json& line);
 
 class ServeChild {
  public:
-  // Runs `self_exe serve ARGS... --json --host 127.0.0.1 --port 0` and waits for its "listening" line
+  // Runs `pmstream_exe serve ARGS... --json --host 127.0.0.1 --port 0` and waits for its "listening" line
   // (the port the kernel picked is in it, so nothing has to guess a free one).
-  ServeChild(const std::string& self_exe, const std::vector<std::string>& args, double start_timeout_s = 120);
+  ServeChild(const std::string& pmstream_exe, const std::vector<std::string>& args, double start_timeout_s = 120);
   ~ServeChild();  // a server still running is killed (SIGKILL)
   ServeChild(const ServeChild&) = delete;
   ServeChild& operator=(const ServeChild&) = delete;
@@ -68,4 +68,4 @@ class ServeChild {
   uint16_t port_ = 0;
 };
 
-}  // namespace pms::app
+}  // namespace pms::bench

@@ -1,4 +1,4 @@
-#include "apps/bench/single_rate_codecs.h"
+#include "bench/single_rate_codecs.h"
 
 #include <draco/compression/decode.h>
 #include <draco/compression/encode.h>
@@ -12,7 +12,7 @@
 
 #include "common/error.h"
 
-namespace pms::app {
+namespace pms::bench {
 namespace {
 
 // x, y, z and a zero lane: meshoptimizer's vertex codec takes strides that are multiples of 4.
@@ -146,4 +146,4 @@ SingleRateSizes single_rate_codecs(const Mesh& mesh, const PositionGrid& grid) {
   return sizes;
 }
 
-}  // namespace pms::app
+}  // namespace pms::bench

@@ -10,7 +10,7 @@
 #include "io/mesh.h"
 #include "spm/position_grid.h"
 
-namespace pms::app {
+namespace pms::bench {
 
 struct SingleRateSizes {
   uint64_t vertices = 0, faces = 0;
@@ -31,4 +31,4 @@ SingleRateSizes single_rate_codecs(const Mesh& mesh, const PositionGrid& grid);
 // zlib's gzip stream at level 9 (what `gzip -9` writes, header and trailer included).
 std::vector<uint8_t> gzip9(const std::vector<uint8_t>& in);
 
-}  // namespace pms::app
+}  // namespace pms::bench

@@ -1,14 +1,14 @@
-#include "apps/bench/soak_client.h"
+#include "bench/soak_client.h"
 
 #include <algorithm>
 #include <random>
 #include <thread>
 
-#include "apps/bench/report.h"
+#include "bench/report.h"
 #include "client/load_client.h"
 #include "common/error.h"
 
-namespace pms::app {
+namespace pms::bench {
 namespace {
 
 using Clock = std::chrono::steady_clock;
@@ -107,4 +107,4 @@ SoakClientLog run_soak_client(const SoakClientPlan& plan, uint32_t minutes) {
   return log;
 }
 
-}  // namespace pms::app
+}  // namespace pms::bench

@@ -11,7 +11,7 @@
 #include "common/camera.h"
 #include "spm/hierarchy.h"
 
-namespace pms::app {
+namespace pms::bench {
 
 // Frames per second each client asks for: a steady load, well under what the server can answer.
 constexpr double kSoakFramesPerSecond = 4;
@@ -56,4 +56,4 @@ struct SoakClientPlan {
 // Runs one client until plan.end; failures are counted, not thrown (the client reconnects and goes on).
 SoakClientLog run_soak_client(const SoakClientPlan& plan, uint32_t minutes);
 
-}  // namespace pms::app
+}  // namespace pms::bench

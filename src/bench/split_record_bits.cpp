@@ -1,4 +1,4 @@
-#include "apps/bench/split_record_bits.h"
+#include "bench/split_record_bits.h"
 
 #include "apps/camera_path.h"
 #include "common/bit_stream.h"
@@ -9,7 +9,10 @@
 #include "spm/split_record.h"
 #include "spm/vertex_hierarchy.h"
 
-namespace pms::app {
+namespace pms::bench {
+using app::make_camera_path;
+using app::PathKind;
+using app::PathOptions;
 
 RecordBitsReport record_bits(const ModelData& model, const SplitCodec& codec, std::span<const uint32_t> positions,
                              std::span<const uint32_t> nodes) {
@@ -52,4 +55,4 @@ std::vector<uint32_t> splits_for_view(const ModelData& model, const Camera& came
   return nodes;
 }
 
-}  // namespace pms::app
+}  // namespace pms::bench

@@ -9,7 +9,7 @@
 #include "spm/hierarchy.h"
 #include "spm/split_codec.h"
 
-namespace pms::app {
+namespace pms::bench {
 
 struct RecordBitsReport {
   size_t splits = 0;
@@ -29,4 +29,4 @@ Camera close_view(const ModelData& model);
 // The internal nodes local refinement splits for `camera` at `tolerance_px`, from the base mesh.
 std::vector<uint32_t> splits_for_view(const ModelData& model, const Camera& camera, float tolerance_px);
 
-}  // namespace pms::app
+}  // namespace pms::bench

@@ -8,11 +8,11 @@
 #include <fstream>
 #include <optional>
 
-#include "apps/bench/bench.h"
-#include "apps/bench/child_process.h"
-#include "apps/bench/gnuplot.h"
-#include "apps/bench/openmesh_pm.h"
-#include "apps/bench/report.h"
+#include "bench/bench.h"
+#include "bench/child_process.h"
+#include "bench/gnuplot.h"
+#include "bench/openmesh_pm.h"
+#include "bench/report.h"
 #include "common/error.h"
 #include "protocol/packet_bits.h"
 #include "test_support.h"
@@ -20,7 +20,7 @@
 // The bench sources are part of the pmstream executable, not of a library this test links, so the
 // ones under test are compiled into this test directly.
 
-namespace pms::app {
+namespace pms::bench {
 namespace {
 
 // ---------------------------------------------------------------------------------------------
@@ -427,4 +427,4 @@ TEST(BenchCommand, RejectsUnknownGroupsAndMissingSharedDir) {
 }
 
 }  // namespace
-}  // namespace pms::app
+}  // namespace pms::bench

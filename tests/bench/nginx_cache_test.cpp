@@ -22,9 +22,9 @@
 #include <thread>
 #include <vector>
 
-#include "apps/bench/child_process.h"
-#include "apps/bench/serve_child.h"
 #include "apps/camera_json.h"
+#include "bench/child_process.h"
+#include "bench/serve_child.h"
 #include "common/error.h"
 #include "test_support.h"
 
@@ -32,9 +32,9 @@ namespace pms {
 namespace {
 
 namespace fs = std::filesystem;
-using app::ChildOptions;
-using app::ChildResult;
-using app::ServeChild;
+using bench::ChildOptions;
+using bench::ChildResult;
+using bench::ServeChild;
 
 std::string slurp(const fs::path& path) {
   std::ifstream in(path, std::ios::binary);
@@ -87,9 +87,9 @@ class Nginx {
     std::ofstream(dir_ / "nginx.conf") << conf;
     exited_ = false;
     thread_ = std::thread([this, program] {
-      run_ = app::run_child({program, "-p", dir_.string(), "-c", (dir_ / "nginx.conf").string(), "-e",
-                             (dir_ / "error.log").string(), "-g", "daemon off;"},
-                            options_);
+      run_ = bench::run_child({program, "-p", dir_.string(), "-c", (dir_ / "nginx.conf").string(), "-e",
+                               (dir_ / "error.log").string(), "-g", "daemon off;"},
+                              options_);
       exited_ = true;
     });
     const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(10);
@@ -141,8 +141,8 @@ uint64_t origin_requests(ServeChild& origin) { return origin.stats().line["http"
 class NginxCache : public ::testing::Test {
  protected:
   void SetUp() override {
-    nginx_ = app::find_program("nginx");
-    if (nginx_.empty()) nginx_ = app::find_program("/usr/sbin/nginx");
+    nginx_ = bench::find_program("nginx");
+    if (nginx_.empty()) nginx_ = bench::find_program("/usr/sbin/nginx");
     if (nginx_.empty()) GTEST_SKIP() << "nginx is not installed (scripts/setup.sh installs Debian's nginx-light)";
     const fs::path model = test::shared_model("bunny.ply.xz");
     if (model.empty()) GTEST_SKIP() << "../shared/models/bunny.ply.xz not found: this test needs the shared meshes";

@@ -9,7 +9,7 @@
 #include <cstdlib>
 #include <vector>
 
-#include "apps/bench/split_record_bits.h"
+#include "bench/split_record_bits.h"
 #include "builder/build.h"
 #include "io/mesh.h"
 #include "record_bits_model.h"
@@ -18,7 +18,7 @@
 #include "spm/split_codec.h"
 #include "test_support.h"
 
-namespace pms::app {
+namespace pms::bench {
 namespace {
 
 // The ancestor of `leaf` active when the split at `time` (its index in the split order) happens.
@@ -72,4 +72,4 @@ void measure(const char* name, const ModelData& model) {
 TEST(PmOrderCuts, TopologyBitsAgainstFundamentalCuts) { PMS_MEASURE_RECORD_BITS_MODEL(measure); }
 
 }  // namespace
-}  // namespace pms::app
+}  // namespace pms::bench

@@ -6,18 +6,18 @@
 
 #include <cmath>
 
-#include "apps/bench/bench_model.h"
-#include "apps/bench/curve_compare.h"
-#include "apps/bench/image_quality.h"
-#include "apps/bench/quality_curve.h"
-#include "apps/bench/serve_child.h"
+#include "bench/bench_model.h"
+#include "bench/curve_compare.h"
+#include "bench/image_quality.h"
+#include "bench/quality_curve.h"
+#include "bench/serve_child.h"
 #include "client/receiver_client.h"
 #include "client/streaming_client.h"
 #include "spm/adapt.h"
 #include "spm/stream_order.h"
 #include "test_support.h"
 
-namespace pms::app {
+namespace pms::bench {
 namespace {
 
 std::vector<CurveSample> curve(std::initializer_list<std::pair<uint64_t, double>> points) {
@@ -85,7 +85,7 @@ Bunny bunny() {
   Bunny b;
   b.context.models_dir = test::shared_models_dir();
   b.context.temp_dir = test::temp_dir();
-  b.context.self_exe = PMSTREAM_BINARY;
+  b.context.pmstream_exe = PMSTREAM_BINARY;
   b.m = prepare_model(b.context, "bunny");
   const ModelData& model = b.m.served->model();
   b.full = refine_in_stream_order(model, model.split_order.size());
@@ -152,4 +152,4 @@ TEST(QualityCurve, ReceiverDrivenOnBunnyEndsAtLocalRefinement) {
 }
 
 }  // namespace
-}  // namespace pms::app
+}  // namespace pms::bench

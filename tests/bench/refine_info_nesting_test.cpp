@@ -19,14 +19,14 @@
 #include <string>
 #include <vector>
 
-#include "apps/bench/bench_refine.h"
-#include "apps/bench/split_record_bits.h"
+#include "bench/bench_refine.h"
+#include "bench/split_record_bits.h"
 #include "common/prefix_code.h"
 #include "record_bits_model.h"
 #include "spm/adapt.h"
 #include "spm/split_codec.h"
 
-namespace pms::app {
+namespace pms::bench {
 namespace {
 
 constexpr double kConeUnit = std::numbers::pi / 2 / (kConeSteps + 1);  // one step of RefineInfo::cone_angle
@@ -387,4 +387,4 @@ TEST(RefineInfoNesting, CloseViewSplitsAgainstRefinementBits) {
 TEST(RefineInfoNesting, AsTheBuilderNestsIt) { PMS_MEASURE_RECORD_BITS_MODEL(report_stored); }
 
 }  // namespace
-}  // namespace pms::app
+}  // namespace pms::bench

@@ -9,14 +9,17 @@
 #include <string>
 #include <utility>  // before asio with C++20
 
-#include "apps/bench/serve_child.h"
 #include "apps/camera_path.h"
+#include "bench/serve_child.h"
 #include "client/load_client.h"
 #include "common/error.h"
 #include "spm/pms_file.h"
 #include "test_support.h"
 
-namespace pms::app {
+namespace pms::bench {
+using app::make_camera_path;
+using app::PathKind;
+using app::PathOptions;
 namespace {
 
 using nlohmann::json;
@@ -210,4 +213,4 @@ TEST(ServeChild, ALineThatIsNotJsonIsAnError) {
 }
 
 }  // namespace
-}  // namespace pms::app
+}  // namespace pms::bench

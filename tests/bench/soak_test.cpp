@@ -6,10 +6,10 @@
 #include <filesystem>
 #include <fstream>
 
-#include "apps/bench/child_process.h"
+#include "bench/child_process.h"
 #include "test_support.h"
 
-namespace pms::app {
+namespace pms::bench {
 namespace {
 
 using nlohmann::json;
@@ -61,4 +61,4 @@ TEST(SoakBench, OneMinuteOfTenClientsOnDragon) {
 }
 
 }  // namespace
-}  // namespace pms::app
+}  // namespace pms::bench

@@ -6,7 +6,7 @@
 #include <cstdio>
 #include <cstdlib>
 
-#include "apps/bench/split_record_bits.h"
+#include "bench/split_record_bits.h"
 #include "builder/build.h"
 #include "io/mesh.h"
 #include "spm/hierarchy.h"
@@ -14,7 +14,7 @@
 #include "spm/split_codec.h"
 #include "test_support.h"
 
-namespace pms::app {
+namespace pms::bench {
 namespace {
 
 constexpr uint32_t kBits = 16;
@@ -60,4 +60,4 @@ TEST(SplitRecordBits, FileGivenInTheEnvironment) {
 }
 
 }  // namespace
-}  // namespace pms::app
+}  // namespace pms::bench
