@@ -17,9 +17,6 @@
 #include "protocol/packet_bits.h"
 #include "test_support.h"
 
-// The bench sources are part of the pmstream executable, not of a library this test links, so the
-// ones under test are compiled into this test directly.
-
 namespace pms::bench {
 namespace {
 
@@ -411,19 +408,44 @@ TEST(BenchSetup, MachineDescription) {
 
 // The bench's argument errors, through the real binary (cheap: they fail before any work).
 TEST(BenchCommand, RejectsUnknownGroupsAndMissingSharedDir) {
-  if (!std::filesystem::exists(PMSTREAM_BINARY)) GTEST_SKIP() << PMSTREAM_BINARY << " not built";
   const auto out = test::temp_dir() / "out";
-  const ChildResult unknown = run_child({PMSTREAM_BINARY, "bench", "--only", "build,nope", "--out", out.string()});
+  const ChildResult unknown = run_child({PMSTREAM_BENCH_BINARY, "--only", "build,nope", "--out", out.string()});
   EXPECT_EQ(unknown.exit_code, 1);
-  EXPECT_NE(unknown.err.find(
-                "unknown experiment group 'nope' (known: build, refine, sender, receiver, multilevel, soak, dag)"),
+  EXPECT_NE(unknown.err.find("pmstream-bench: error: --only: unknown experiment group 'nope' (known: build, refine, "
+                             "sender, receiver, multilevel, soak, dag)"),
             std::string::npos)
       << unknown.err;
   EXPECT_FALSE(std::filesystem::exists(out));  // refused before creating anything
   const ChildResult shared =
-      run_child({PMSTREAM_BINARY, "bench", "--shared", (test::temp_dir() / "none").string(), "--out", out.string()});
+      run_child({PMSTREAM_BENCH_BINARY, "--shared", (test::temp_dir() / "none").string(), "--out", out.string()});
   EXPECT_EQ(shared.exit_code, 1);
   EXPECT_NE(shared.err.find("no models/ directory"), std::string::npos) << shared.err;
+}
+
+// Builds and servers are pmstream's: a bench that cannot find it stops before it starts, saying where it looked.
+TEST(BenchCommand, RefusesToRunWithoutPmstream) {
+  const auto out = test::temp_dir() / "out";
+  const std::string missing = (test::temp_dir() / "no-pmstream").string();
+  const ChildResult run =
+      run_child({PMSTREAM_BENCH_BINARY, "--pmstream", missing, "--only", "build", "--out", out.string()});
+  EXPECT_EQ(run.exit_code, 1);
+  EXPECT_NE(run.err.find(missing + ": no pmstream binary here (--pmstream)"), std::string::npos) << run.err;
+  EXPECT_FALSE(std::filesystem::exists(out));
+  // A copy of pmstream-bench alone in a directory has no pmstream beside it.
+  const auto alone = test::temp_dir();
+  std::filesystem::copy_file(PMSTREAM_BENCH_BINARY, alone / "pmstream-bench");
+  const ChildResult lonely = run_child({(alone / "pmstream-bench").string(), "--only", "build", "--out", out.string()});
+  EXPECT_EQ(lonely.exit_code, 1);
+  EXPECT_NE(lonely.err.find((alone / "pmstream").string() + ": no pmstream binary here beside pmstream-bench"),
+            std::string::npos)
+      << lonely.err;
+}
+
+// The command no longer exists in pmstream: it says so instead of running anything.
+TEST(BenchCommand, IsNotAPmstreamCommand) {
+  const ChildResult run = run_child({PMSTREAM_BINARY, "bench", "--quick"});
+  EXPECT_NE(run.exit_code, 0);
+  EXPECT_NE(run.err.find("pmstream: error: unknown command 'bench'"), std::string::npos) << run.err;
 }
 
 }  // namespace

@@ -1,4 +1,4 @@
-// Requirement 8's CI run: `bench --only soak` for one minute with 10 clients on dragon, checked from its
+// Requirement 8's CI run: `pmstream-bench --only soak` for one minute with 10 clients on dragon, checked from its
 // soak.json. It is labelled slow (CMakeLists.txt), so the ASan run leaves it out.
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
@@ -19,11 +19,10 @@ TEST(SoakBench, OneMinuteOfTenClientsOnDragon) {
   if (test::shared_models_dir().empty())
     GTEST_SKIP() << "../shared/models not found: the soak runs on the shared dragon scan";
   const auto out = test::temp_dir();
-  const test::CliRun run = test::run_pmstream(
-      "bench --only soak --soak-minutes 1 --soak-clients 10 --models dragon "
-      "--shared " +
-      test::shared_models_dir().parent_path().string() + " --out " + out.string());
-  ASSERT_EQ(run.exit_code, 0) << run.err;
+  const ChildResult run =
+      run_child({PMSTREAM_BENCH_BINARY, "--only", "soak", "--soak-minutes", "1", "--soak-clients", "10", "--models",
+                 "dragon", "--shared", test::shared_models_dir().parent_path().string(), "--out", out.string()});
+  ASSERT_TRUE(run.ok()) << run.failure();
   std::ifstream in(out / "soak.json");
   ASSERT_TRUE(in) << "no soak.json";
   const json soak = json::parse(in);
