@@ -11,6 +11,7 @@ declare -A rank=(
   [render]=4 [protocol]=4
   [server]=5 [client]=5
   [apps]=6
+  [bench]=7
 )
 
 violations=0

@@ -1,9 +1,9 @@
 #!/usr/bin/env bash
 # One entry point for a fresh Debian 12 machine: installs what is missing, builds, then
-#   setup.sh demo   -> runs `pmstream demo`
+#   setup.sh demo   -> builds build/pmstream alone and runs `pmstream demo`
 #   setup.sh test   -> runs the test suite (the layering check, a release build and its tests, then one clang
 #                      build with ASan+UBSan: the tests again and short runs of every fuzz target)
-#   setup.sh build  -> only builds (build/pmstream)
+#   setup.sh build  -> only builds (build/pmstream, build/pmstream-bench and the tests)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -40,10 +40,13 @@ install_packages() {
   exit 1
 }
 
+# The targets configure_and_build builds; empty: all of them.
+targets=()
+
 configure_and_build() {  # dir, extra cmake args...
   local dir=$1; shift
   cmake -S . -B "$dir" -G Ninja -DCMAKE_BUILD_TYPE=Release -DPMSTREAM_WERROR=ON "$@" >/dev/null
-  cmake --build "$dir" -j "$jobs"
+  cmake --build "$dir" -j "$jobs" ${targets[@]+--target "${targets[@]}"}
 }
 
 # Every libFuzzer target in $1 for PMSTREAM_FUZZ_SECONDS (10) each, $jobs at a time (each is single-threaded);
@@ -75,6 +78,7 @@ case "$mode" in
     configure_and_build build
     ;;
   demo)
+    targets=(pmstream)  # neither the bench nor the tests
     configure_and_build build
     ./build/pmstream demo "$@"
     ;;

@@ -1,19 +1,11 @@
 #include "apps/build_pipeline.h"
 
-#include <climits>
-#include <cstdint>
 #include <cstdlib>
 #include <filesystem>
-#if defined(__GLIBC__)
-#include <malloc.h>
-#include <sys/mman.h>
-#include <unistd.h>
-#endif
 #include <string_view>
 
 #include "apps/resource_usage.h"
 #include "common/error.h"
-#include "common/huge_pages.h"
 #include "io/shapes.h"
 #include "spm/pms_file.h"
 
@@ -80,33 +72,6 @@ bool parse_terrain_spec(const std::string& spec, uint64_t& faces) {
   return true;
 }
 
-// A build goes through phases (load, clean, simplify, pack, write) that each allocate and free arrays
-// from kilobytes to hundreds of MB. Under a hypervisor a 4 KiB page fault costs several microseconds:
-// a bunny build touched ~17 MB in 4,200 of them, a fifth of its time. So:
-// - blocks below 2 MiB stay on glibc's heap, which is never trimmed (each phase reuses what the last
-//   one freed), is grown by its pad at once, and asks for 2 MiB pages on that pad;
-// - blocks of 2 MiB and more get their own mapping, returned when freed; the binary's operator new
-//   puts them on 2 MiB pages (large_allocations.cpp), so mapping them afresh costs little;
-// - every thread allocates from the one arena: glibc would give each worker thread an arena of its
-//   own, fresh memory faulted in page by page, while the main arena holds what earlier phases freed
-//   (the split records' fit took nearly all its page faults on its second thread).
-// Bunny: ~4,200 -> ~900 faults, ~15 % faster; 8 M-face terrain ~30 % faster at the same peak memory.
-void tune_memory_for_build() {
-#if defined(__GLIBC__)
-  mallopt(M_MMAP_THRESHOLD, int(kHugePage));
-  mallopt(M_TRIM_THRESHOLD, INT_MAX);
-  mallopt(M_TOP_PAD, 64 << 20);
-  mallopt(M_ARENA_MAX, 1);
-#if defined(MADV_HUGEPAGE)
-  void* probe = std::malloc(kHugePage / 2);  // more than the heap's spare top: glibc grows it by this + the pad
-  const uintptr_t begin = (reinterpret_cast<uintptr_t>(probe) + kHugePage - 1) & ~(kHugePage - 1);
-  const uintptr_t end = reinterpret_cast<uintptr_t>(sbrk(0)) & ~(kHugePage - 1);
-  std::free(probe);  // stays in the heap: it is never trimmed
-  if (probe && end > begin) madvise(reinterpret_cast<void*>(begin), end - begin, MADV_HUGEPAGE);  // advice only
-#endif
-#endif
-}
-
 }  // namespace
 
 Mesh load_input(const std::string& in_path, const ProgressFn& progress) {
@@ -115,8 +80,9 @@ Mesh load_input(const std::string& in_path, const ProgressFn& progress) {
   return load_mesh(in_path, progress);
 }
 
-BuildRun build_file(const std::string& in_path, const std::string& out_path, const BuildOptions& options) {
-  tune_memory_for_build();
+BuildRun build_file(const std::string& in_path, const std::string& out_path, const BuildOptions& options,
+                    AfterBuild after) {
+  const BuildMemoryTuning tuning(after);
   Stopwatch load_time;
   Mesh mesh = load_input(in_path, options.progress);
   const double load_seconds = load_time.seconds();

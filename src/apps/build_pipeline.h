@@ -3,6 +3,7 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
+#include "apps/build_memory.h"
 #include "builder/build.h"
 #include "io/mesh.h"
 #include "spm/pms_file.h"
@@ -26,8 +27,9 @@ std::string describe(const CleanReport& report);
 BuildRun build_mesh(Mesh mesh, const std::string& input_name, const std::string& out_path, const BuildOptions& options);
 // A mesh file (any supported format, .gz/.xz), or "terrain:FACES" for the built-in terrain.
 Mesh load_input(const std::string& in_path, const ProgressFn& progress);
-// Loads IN (see load_input) then as above.
-BuildRun build_file(const std::string& in_path, const std::string& out_path, const BuildOptions& options);
+// Loads IN (see load_input) then as above, with the builder's memory tuning on until it returns.
+BuildRun build_file(const std::string& in_path, const std::string& out_path, const BuildOptions& options,
+                    AfterBuild after = AfterBuild::kExit);
 
 // The `build --json` object (docs/cli.md, "build").
 nlohmann::json build_json(const BuildRun& run, double seconds, double peak_rss_mb);

@@ -76,22 +76,52 @@ CliOption CliCommand::flag(const std::string& names, bool& value, const std::str
 
 void CliCommand::on_run(std::function<void()> run) { app_->callback(std::move(run)); }
 
-int run_cli(int argc, char** argv, const std::string& description, const std::string& version,
-            std::span<void (*const)(CliCommand&)> commands) {
-  CLI::App app{description};
-  app.require_subcommand(1);
-  app.set_version_flag("--version", version);
-  CliCommand root(&app);
-  for (auto add : commands) add(root);
+namespace {
+
+CLI::App& program_app(CLI::App& app, const CliProgram& program) {
+  app.description(program.description);
+  app.set_version_flag("--version", program.version);
+  if (!program.footer.empty()) app.footer(program.footer);
+  return app;
+}
+
+int parse_and_run(CLI::App& app, int argc, char** argv, const CliProgram& program) {
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
     return app.exit(e);
   } catch (const std::exception& e) {
-    std::fprintf(stderr, "pmstream: error: %s\n", e.what());
+    std::fprintf(stderr, "%s: error: %s\n", program.name.c_str(), e.what());
     return 1;
   }
   return 0;
+}
+
+}  // namespace
+
+int run_cli(int argc, char** argv, const CliProgram& program, std::span<void (*const)(CliCommand&)> commands) {
+  CLI::App app;
+  program_app(app, program).require_subcommand(1);
+  CliCommand root(&app);
+  for (auto add : commands) add(root);
+  // A word where the command belongs that names none: say so, rather than CLI11's "A subcommand is required".
+  if (argc > 1 && argv[1][0] != '-') {
+    try {
+      app.get_subcommand(argv[1]);
+    } catch (const CLI::OptionNotFound&) {
+      std::fprintf(stderr, "%s: error: unknown command '%s' (%s --help lists them)\n", program.name.c_str(), argv[1],
+                   program.name.c_str());
+      return static_cast<int>(CLI::ExitCodes::ExtrasError);
+    }
+  }
+  return parse_and_run(app, argc, argv, program);
+}
+
+int run_cli(int argc, char** argv, const CliProgram& program, void (*add)(CliCommand&)) {
+  CLI::App app;
+  CliCommand root(&program_app(app, program));
+  add(root);
+  return parse_and_run(app, argc, argv, program);
 }
 
 }  // namespace pms::app

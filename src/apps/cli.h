@@ -35,6 +35,14 @@ class CliOption {
   CLI::Option* option_;
 };
 
+// What --help, --version and error lines say about the program.
+struct CliProgram {
+  std::string name;         // error lines read "NAME: error: ..."
+  std::string description;  // --help's first line
+  std::string version;      // --version
+  std::string footer = {};  // --help's last lines
+};
+
 // A command or subcommand. Names as CLI11 takes them: "-o,--output" for an option, "input" for a
 // positional argument.
 class CliCommand {
@@ -50,14 +58,16 @@ class CliCommand {
   void on_run(std::function<void()> run);
 
  private:
-  friend int run_cli(int, char**, const std::string&, const std::string&, std::span<void (*const)(CliCommand&)>);
+  friend int run_cli(int, char**, const CliProgram&, std::span<void (*const)(CliCommand&)>);
+  friend int run_cli(int, char**, const CliProgram&, void (*)(CliCommand&));
   explicit CliCommand(CLI::App* app) : app_(app) {}
   CLI::App* app_;
 };
 
 // Registers the commands, parses argv, runs the chosen command. Returns the process's exit status: CLI11's
-// for usage errors and --help, 1 with "pmstream: error: ..." for an exception from a command.
-int run_cli(int argc, char** argv, const std::string& description, const std::string& version,
-            std::span<void (*const)(CliCommand&)> commands);
+// for usage errors and --help, 1 with "NAME: error: ..." for an exception from a command.
+int run_cli(int argc, char** argv, const CliProgram& program, std::span<void (*const)(CliCommand&)> commands);
+// The same for a program that is one command: `add` registers its options and its run on the program itself.
+int run_cli(int argc, char** argv, const CliProgram& program, void (*add)(CliCommand&));
 
 }  // namespace pms::app

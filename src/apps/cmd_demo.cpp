@@ -71,7 +71,9 @@ std::string prepare_model(const DemoArgs& args) {
     ProgressBar bar(true);
     BuildOptions options;
     options.progress = bar.callback();
-    const BuildRun run = build_file(own ? args.model : input_name, pms_path, options);
+    // The server and client of the flight run in this process next: the build tunes malloc only as far as
+    // it can undo (apps/build_memory.h).
+    const BuildRun run = build_file(own ? args.model : input_name, pms_path, options, AfterBuild::kServe);
     bar.finish();
     std::printf("  built in %.2f s (load %.2f, clean %.2f, hierarchy %.2f, write %.2f), peak RSS %.0f MB\n",
                 clock.seconds(), run.load_seconds, run.clean_seconds, run.build_seconds - run.write_seconds,

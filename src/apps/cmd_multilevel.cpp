@@ -103,6 +103,7 @@ LevelSource multilevel_of(Mesh mesh, const MultilevelBuildArgs& args, const Prog
     out.operations = clusterings.size();
     return out;
   }
+  const BuildMemoryTuning tuning(AfterBuild::kExit);  // a builder's process from here (apps/build_memory.h)
   out.clean_report = describe(clean_mesh(mesh));
   BuildOptions options;
   options.base_vertices = args.base_vertices;

@@ -9,7 +9,6 @@ void add_info_command(CliCommand& app);
 void add_refine_command(CliCommand& app);
 void add_path_command(CliCommand& app);
 void add_demo_command(CliCommand& app);
-void add_bench_command(CliCommand& app);
 void add_render_command(CliCommand& app);
 void add_compare_command(CliCommand& app);
 void add_serve_command(CliCommand& app);

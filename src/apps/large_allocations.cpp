@@ -1,16 +1,21 @@
-// The pmstream binary's operator new: blocks of 2 MiB and more are aligned to 2 MiB and asked for
-// transparent huge pages. glibc hands blocks from 32 MiB up straight to mmap, on 4 KiB pages, so
-// every std::vector of the 8 M-face build (candidates, info, forests: hundreds of MB read in cost
-// order, i.e. at random) missed the TLB on nearly every read; under a hypervisor each miss is a
-// nested page walk and each first touch a fault of several microseconds. With this, that build is
-// about 30 % faster. Arrays the code knows are big already ask for themselves (common/huge_pages.h);
-// this covers the rest, from every layer, without changing their types.
+// The pmstream binary's operator new: while a build runs (apps/build_pipeline.h, BuildMemoryTuning),
+// blocks of 2 MiB and more are aligned to 2 MiB and asked for transparent huge pages. glibc hands blocks
+// from 32 MiB up straight to mmap, on 4 KiB pages, so every std::vector of a large build (candidates,
+// info, forests: hundreds of MB read in cost order, i.e. at random) missed the TLB on nearly every read;
+// under a hypervisor each miss is a nested page walk and each first touch a fault of several
+// microseconds. Arrays the code knows are big already ask for themselves (common/huge_pages.h); this
+// covers the rest, from every layer, without changing their types.
+//
+// An operator new is the whole program's, so it is switched at run time: `serve`, `stream` and a demo's
+// server and client get malloc's blocks as they are, since a session's buffers come and go and a 2 MiB
+// page for each would only raise the server's resident size.
 //
 // Linked into the executable only (tests and fuzzers keep the standard operators), and left out
 // under sanitizers, which bring their own.
 #include <cstdlib>
 #include <new>
 
+#include "apps/build_memory.h"
 #include "common/huge_pages.h"
 
 #if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
@@ -26,7 +31,7 @@
 namespace {
 
 void* allocate(size_t bytes) {
-  if (bytes < pms::kHugePage) return std::malloc(bytes == 0 ? 1 : bytes);
+  if (bytes < pms::kHugePage || !pms::app::large_blocks_on_huge_pages()) return std::malloc(bytes == 0 ? 1 : bytes);
   return pms::allocate_on_huge_pages(bytes);
 }
 

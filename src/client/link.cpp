@@ -5,6 +5,8 @@
 #include <utility>  // before asio with C++20 (docs/architecture.md, "Stack")
 
 #include <array>
+#include <utility>  // before asio with C++20 (docs/architecture.md, "Stack")
+
 #include <boost/asio.hpp>
 #include <functional>
 #include <thread>

@@ -9,6 +9,8 @@
 #include <linux/sockios.h>
 #include <sys/ioctl.h>
 #include <array>
+#include <utility>  // before asio with C++20 (docs/architecture.md, "Stack")
+
 #include <boost/asio.hpp>
 #include <cstdio>
 #include <mutex>

@@ -7,6 +7,8 @@
 
 #include <gtest/gtest.h>
 #include <array>
+#include <utility>  // before asio with C++20 (docs/architecture.md, "Stack")
+
 #include <boost/asio.hpp>
 #include <chrono>
 #include <deque>

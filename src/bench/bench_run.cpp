@@ -1,0 +1,116 @@
+#include "bench/bench_run.h"
+
+#include <stdlib.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <filesystem>
+
+#include "bench/bench.h"
+#include "bench/group_reports.h"
+#include "bench/pmstream_binary.h"
+#include "common/error.h"
+
+namespace pms::bench {
+namespace fs = std::filesystem;
+
+// The experiment groups (docs/architecture.md, "Experiments"): a new group is one function and one line here.
+constexpr BenchGroup kGroups[] = {
+    {"build", "E12 build time and memory, E1 hierarchy statistics, terrain scaling", run_build_group},
+    {"refine", "adaptation time and ops/s on a scan path, renderer speed, image quality at far/mid/close",
+     run_refine_group},
+    {"sender", "E2 packet bits, E3 server memory, E4 two laps, E5 bytes to satisfy tolerance, E11 many clients",
+     run_sender_group},
+    {"receiver",
+     "whole-model bits per vertex against meshoptimizer, gzip, zstd and Draco; E7 server CPU and bytes per split; "
+     "E6 PSNR against bytes received; E8 visible splits only",
+     run_receiver_group},
+    {"multilevel", "E10 multilevel memory against a plain mesh, LOD switch and geomorph times, bytes per level loaded",
+     run_multilevel_group},
+    {"soak", "many clients resuming and reconnecting for minutes: server RSS over time, failures, latency per minute",
+     run_soak_group},
+    {"dag", "E9 DAG traversals: time per frame, accuracy against priority, fronts, session memory, bytes down",
+     run_dag_group},
+};
+
+std::span<const BenchGroup> bench_groups() { return kGroups; }
+
+std::string group_names() {
+  std::string names;
+  for (const BenchGroup& g : bench_groups()) names += (names.empty() ? "" : ", ") + std::string(g.name);
+  return names;
+}
+
+namespace {
+
+// Checked before anything runs, so a typo costs nothing.
+std::vector<const BenchGroup*> select_groups(const std::vector<std::string>& only) {
+  std::vector<const BenchGroup*> selected;
+  if (only.empty()) {
+    for (const BenchGroup& g : bench_groups()) selected.push_back(&g);
+    return selected;
+  }
+  for (const std::string& name : only) {
+    const auto g = std::find_if(bench_groups().begin(), bench_groups().end(),
+                                [&](const BenchGroup& group) { return name == group.name; });
+    if (g == bench_groups().end())
+      fail("--only", "unknown experiment group '" + name + "' (known: " + group_names() + ")");
+    if (std::find(selected.begin(), selected.end(), &*g) == selected.end()) selected.push_back(&*g);
+  }
+  return selected;
+}
+
+// Scratch space for decompressed meshes and build outputs, removed however the run ends.
+class TempDir {
+ public:
+  TempDir() {
+    std::string pattern = (fs::temp_directory_path() / "pmstream-bench-XXXXXX").string();
+    if (!mkdtemp(pattern.data())) fail(pattern, "cannot create a temporary directory");
+    path_ = pattern;
+  }
+  ~TempDir() {
+    std::error_code ignored;
+    fs::remove_all(path_, ignored);
+  }
+  TempDir(const TempDir&) = delete;
+  TempDir& operator=(const TempDir&) = delete;
+  const fs::path& path() const { return path_; }
+
+ private:
+  fs::path path_;
+};
+
+}  // namespace
+
+void run_bench(const BenchArgs& args) {
+  const std::vector<const BenchGroup*> groups = select_groups(args.only);
+  BenchContext context;
+  context.pmstream_exe = locate_pmstream(args.pmstream);
+  context.options = {args.quick, args.models, args.out, "", args.soak_clients, args.soak_minutes};
+  std::error_code error;
+  fs::create_directories(context.options.out_dir, error);
+  if (error) fail(args.out, "cannot create the output directory: " + error.message());
+  const fs::path exe = fs::read_symlink("/proc/self/exe", error);
+  const fs::path shared = locate_shared_dir(args.shared, error ? fs::path() : exe.parent_path());
+  if (!shared.empty()) context.models_dir = shared / "models";
+  const TempDir temp;
+  context.temp_dir = temp.path();
+  const RunHeader run = current_run(context);
+  context.options.command_line = run.command_line;
+
+  for (const BenchGroup* group : groups) {
+    std::fprintf(stderr, "bench: group %s (%s)\n", group->name, group->experiments);
+    context.report.clear();
+    group->run(context);
+    write_group_report(context.options.out_dir, run, *group, context.report);
+    std::printf("\nbench: wrote %s\n", (context.options.out_dir / (std::string(group->name) + ".md")).string().c_str());
+  }
+  write_report_index(context.options.out_dir);
+  if (!context.failures.empty()) {
+    std::string list;
+    for (const std::string& f : context.failures) list += (list.empty() ? "" : "; ") + f;
+    fail("bench", std::to_string(context.failures.size()) + " figure(s) could not be measured: " + list);
+  }
+}
+
+}  // namespace pms::bench

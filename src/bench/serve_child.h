@@ -1,0 +1,71 @@
+// `pmstream serve --json` as a child process, read a line at a time: the benches' only view of a
+// server's counters (docs/operating.md lists them). A line that is missing, unparsable or lacks a
+// counter is a pms::Error naming what was expected, never a silent 0.
+#pragma once
+#include <sys/types.h>
+
+#include <atomic>
+#include <condition_variable>
+#include <cstdint>
+#include <deque>
+#include <mutex>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <string_view>
+#include <thread>
+#include <vector>
+
+#include "bench/child_process.h"
+
+namespace pms::bench {
+
+// One "stats" or "stopped" line.
+struct ServeStats {
+  double uptime_s = 0, cpu_s = 0;
+  uint64_t sessions_opened = 0, sessions_active = 0, sessions_refused = 0, sessions_timed_out = 0;
+  uint64_t sessions_failed = 0, protocol_errors = 0, accept_failures = 0, longest_turn_us = 0;
+  uint64_t bytes_in = 0, bytes_out = 0, splits_sent = 0, errors_sent = 0;
+  uint64_t peak_state_bytes = 0, peak_buffer_bytes = 0;
+  uint64_t rss_bytes = 0, peak_rss_bytes = 0;
+  nlohmann::json line;  // as printed
+};
+
+// pms::Error naming the first counter that is absent or not a number.
+ServeStats parse_serve_stats(const nlohmann::json& line);
+
+class ServeChild {
+ public:
+  // Runs `pmstream_exe serve ARGS... --json --host 127.0.0.1 --port 0` and waits for its "listening" line
+  // (the port the kernel picked is in it, so nothing has to guess a free one).
+  ServeChild(const std::string& pmstream_exe, const std::vector<std::string>& args, double start_timeout_s = 120);
+  ~ServeChild();  // a server still running is killed (SIGKILL)
+  ServeChild(const ServeChild&) = delete;
+  ServeChild& operator=(const ServeChild&) = delete;
+
+  uint16_t port() const { return port_; }
+  const nlohmann::json& listening() const { return listening_; }
+  // SIGUSR1, then the "stats" line it prints.
+  ServeStats stats(double timeout_s = 30);
+  // SIGTERM, then the "stopped" line; the server must then exit with status 0.
+  ServeStats stop(double timeout_s = 30);
+  // What it wrote to stderr (one line per session fault); read it only after stop() returned.
+  const std::string& log() const { return run_.err; }
+
+ private:
+  nlohmann::json next_line(const std::string& event, double timeout_s);
+  void send_signal(int number, const char* name);
+
+  std::thread thread_;
+  std::atomic<pid_t> pid_{0};
+  std::mutex mutex_;
+  std::condition_variable changed_;
+  std::string partial_;            // stdout after the last newline
+  std::deque<std::string> lines_;  // complete lines not read yet
+  bool exited_ = false;
+  ChildResult run_;          // written by thread_ before exited_ is set
+  std::string start_error_;  // run_child could not start the program
+  nlohmann::json listening_;
+  uint16_t port_ = 0;
+};
+
+}  // namespace pms::bench
