@@ -8,7 +8,6 @@
 #include <boost/asio.hpp>
 #include <cmath>
 #include <span>
-#include <utility>
 
 #include "builder/build.h"
 #include "client/local_transport.h"
