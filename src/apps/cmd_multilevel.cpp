@@ -1,7 +1,10 @@
-// pmstream multilevel build IN -o OUT [--levels L] [--cluster grid:N,...|FILE.json] [--ascii] [--base-vertices N]
-// [--json] pmstream multilevel info FILE [--json] pmstream multilevel level FILE --level X -o OUT.ply pmstream
-// multilevel level FILE (--region x0,y0,z0,x1,y1,z1 | --sphere x,y,z,r | --camera CAM.json [--pixels P]) [--level X] -o
-// OUT.ply Progressive multilevel meshes (gueziec et al. 1999; docs/multilevel-format.md, docs/cli.md).
+// pmstream multilevel build IN -o OUT.pml [--levels L] [--cluster grid:N,...|FILE.json] [--ascii]
+//                            [--base-vertices N] [--json]
+// pmstream multilevel info FILE [--json]
+// pmstream multilevel level FILE --level X -o OUT.ply
+// pmstream multilevel level FILE (--region x0,y0,z0,x1,y1,z1 | --sphere x,y,z,r) [--level X] -o OUT.ply
+// pmstream multilevel level FILE --camera CAM.json [--pixels P] -o OUT.ply
+// Progressive multilevel meshes (gueziec et al. 1999; docs/multilevel-format.md, docs/cli.md).
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
