@@ -7,6 +7,7 @@
 #include <initializer_list>
 #include <span>
 #include <string>
+#include <vector>
 
 namespace CLI {
 class App;
@@ -27,7 +28,10 @@ class CliOption {
   CliOption delimiter(char separator);  // a list option split on this too
   CliOption expected(int values);       // a list option takes exactly this many
   CliOption excludes(CliOption other);
-  bool given() const;  // after parsing: did the command line name it?
+  // An output path: its extension (any case) must be one of `extensions` (".ply"), which hold `format`.
+  CliOption writes(std::initializer_list<const char*> extensions, const std::string& format);
+  bool given() const;        // after parsing: did the command line name it?
+  std::string name() const;  // "--output" for "-o,--output"
 
  private:
   friend class CliCommand;
@@ -43,14 +47,31 @@ struct CliProgram {
   std::string footer = {};  // --help's last lines
 };
 
+
+// The check behind CliOption::writes, for outputs whose format an option decides: fails naming `option`
+// unless `path` ends in one of `extensions` (any case).
+void require_extension(const std::string& option, const std::string& path,
+                       std::initializer_list<const char*> extensions, const std::string& format);
+
+// An option only some variants of a command use (stream's modes, refine's --camera, ...).
+struct VariantOption {
+  CliOption option;
+  std::vector<std::string> variants;  // the variants that use it
+};
+
+// Fails naming the first option of `table` that was given although `variant` does not use it, and the
+// variant as the command line chose it (`chosen`, e.g. "--mode sender").
+void refuse_unused_options(std::span<const VariantOption> table, const std::string& variant, const std::string& chosen);
+
 // A command or subcommand. Names as CLI11 takes them: "-o,--output" for an option, "input" for a
 // positional argument.
 class CliCommand {
  public:
   CliCommand subcommand(const std::string& name, const std::string& description);
   void require_subcommand();  // exactly one
-  // T: std::string, bool, uint16_t, uint32_t, uint64_t, int, double, std::vector<std::string>,
-  // std::vector<double> (cli.cpp instantiates these).
+  // T: std::string, uint16_t, uint32_t, uint64_t, int, float, double, std::vector<std::string>,
+  // std::vector<float> (cli.cpp instantiates these). A number must be the whole text, finite, and fit T:
+  // an empty value, trailing characters, NaN or infinity are usage errors naming the option.
   template <class T>
   CliOption option(const std::string& names, T& value, const std::string& help);
   CliOption flag(const std::string& names, bool& value, const std::string& help);
@@ -65,7 +86,8 @@ class CliCommand {
 };
 
 // Registers the commands, parses argv, runs the chosen command. Returns the process's exit status: CLI11's
-// for usage errors and --help, 1 with "NAME: error: ..." for an exception from a command.
+// for usage errors (one line, "NAME: error: ...") and --help, 1 with "NAME: error: ..." for an exception from
+// a command. `NAME help --json` (hidden) prints every command with its options, for docs/cli.md's test.
 int run_cli(int argc, char** argv, const CliProgram& program, std::span<void (*const)(CliCommand&)> commands);
 // The same for a program that is one command: `add` registers its options and its run on the program itself.
 int run_cli(int argc, char** argv, const CliProgram& program, void (*add)(CliCommand&));

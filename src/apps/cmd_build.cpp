@@ -55,7 +55,7 @@ void add_build_command(CliCommand& app) {
   auto args = std::make_shared<BuildArgs>();
   CliCommand cmd = app.subcommand("build", "Build a view-dependent progressive mesh (.pms) from a mesh file");
   cmd.option("input", args->input, "Input mesh (PLY, OBJ, OFF, STL, glTF/GLB; may end in .gz or .xz)").required();
-  cmd.option("-o,--output", args->output, "Output .pms file").required();
+  cmd.option("-o,--output", args->output, "Output .pms file").required().writes({".pms"}, "a .pms model");
   cmd.flag("--greedy", args->greedy, "Classic one-at-a-time PM order (view-independent baseline)");
   cmd.option("--base-vertices", args->base_vertices,
              "Stop when the base mesh has this many vertices (0: as coarse as the mesh allows)")

@@ -85,6 +85,8 @@ std::string prepare_model(const DemoArgs& args) {
 }
 
 void run_demo(const DemoArgs& args) {
+  if (args.rebuild && fs::path(args.model).extension() == ".pms")
+    fail("--rebuild", "not used with a .pms --model (it is streamed as it is, nothing is built)");
   fs::create_directories(args.out_dir);
   const std::string pms_path = prepare_model(args);
   const auto file = PmsFile::open(pms_path);

@@ -1,7 +1,10 @@
-// pmstream multilevel build IN -o OUT [--levels L] [--cluster grid:N,...|FILE.json] [--ascii] [--base-vertices N]
-// [--json] pmstream multilevel info FILE [--json] pmstream multilevel level FILE --level X -o OUT.ply pmstream
-// multilevel level FILE (--region x0,y0,z0,x1,y1,z1 | --sphere x,y,z,r | --camera CAM.json [--pixels P]) [--level X] -o
-// OUT.ply Progressive multilevel meshes (gueziec et al. 1999; docs/multilevel-format.md, docs/cli.md).
+// pmstream multilevel build IN -o OUT.pml [--levels L] [--cluster grid:N,...|FILE.json] [--ascii]
+//                            [--base-vertices N] [--json]
+// pmstream multilevel info FILE [--json]
+// pmstream multilevel level FILE --level X -o OUT.ply
+// pmstream multilevel level FILE (--region x0,y0,z0,x1,y1,z1 | --sphere x,y,z,r) [--level X] -o OUT.ply
+// pmstream multilevel level FILE --camera CAM.json [--pixels P] -o OUT.ply
+// Progressive multilevel meshes (gueziec et al. 1999; docs/multilevel-format.md, docs/cli.md).
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -119,7 +122,12 @@ LevelSource multilevel_of(Mesh mesh, const MultilevelBuildArgs& args, const Prog
   return out;
 }
 
-void run_multilevel_build(const MultilevelBuildArgs& args) {
+void run_multilevel_build(const MultilevelBuildArgs& args, bool base_vertices_given) {
+  // Both forms read back by their magic whatever the name; serve finds the models by ".pml".
+  if (args.ascii) require_extension("--output", args.output, {".pml", ".txt"}, "the ASCII multilevel form");
+  else require_extension("--output", args.output, {".pml"}, "the binary multilevel form (--ascii for the ASCII one)");
+  if (base_vertices_given && !args.cluster.empty())
+    fail("--base-vertices", "not used with --cluster (the clusterings give the levels, not the builder)");
   Stopwatch total;
   ProgressBar bar(!args.json);
   Stopwatch load_time;
@@ -367,15 +375,16 @@ void add_multilevel_command(CliCommand& app) {
   build.option("input", b->input, "Input mesh (PLY, OBJ, OFF, STL, glTF/GLB; .gz/.xz), or terrain:FACES").required();
   build.option("-o,--output", b->output, "Output file (binary unless --ascii)").required();
   build.option("--levels", b->levels, "Merge consecutive levels down to this many (0: every level)").show_default();
-  build
-      .option("--base-vertices", b->base_vertices, "Collapse until this many vertices are left (0: as far as possible)")
-      .show_default();
+  const CliOption base_vertices = build
+                                      .option("--base-vertices", b->base_vertices,
+                                              "Collapse until this many vertices are left (0: as far as possible)")
+                                      .show_default();
   build.option("--cluster", b->cluster,
                "Levels from vertex clusterings instead of collapses: grid:N,... (N^3 cells each, finest first) or a "
                "JSON clustering file; the mesh is not cleaned, non-manifold results allowed");
   build.flag("--ascii", b->ascii, "Write the paper's ASCII form (Fig. 6) instead of the binary one");
   build.flag("--json", b->json, "Print one JSON object with the statistics");
-  build.on_run([b] { run_multilevel_build(*b); });
+  build.on_run([b, base_vertices] { run_multilevel_build(*b, base_vertices.given()); });
 
   auto info_path = std::make_shared<std::string>();
   auto info_json = std::make_shared<bool>(false);
@@ -389,9 +398,12 @@ void add_multilevel_command(CliCommand& app) {
   CliCommand level =
       cmd.subcommand("level", "Write the LOD at a level (fractional: a geomorph) or a local refinement as PLY");
   level.option("file", l->input, "Multilevel file (ASCII or binary)").required();
-  level.option("--level", l->level,
-               "Level, 0 = finest; e.g. 2.5 is halfway from level 3 to level 2; with --region or --sphere, the "
-               "level inside it (default 0)");
+  const CliOption level_option =
+      level
+          .option("--level", l->level,
+                  "Level, 0 = finest; e.g. 2.5 is halfway from level 3 to level 2; with --region or --sphere, the "
+                  "level inside it (default 0)")
+          .non_negative();
   auto region = level.option("--region", l->region, "Refine the box x0,y0,z0,x1,y1,z1; the rest stays coarse")
                     .delimiter(',')
                     .expected(6);
@@ -399,12 +411,25 @@ void add_multilevel_command(CliCommand& app) {
                     .delimiter(',')
                     .expected(4)
                     .excludes(region);
-  level.option("--camera", l->camera, "Refine for the view of CAM.json (screen-size rule)")
-      .excludes(region)
-      .excludes(sphere);
-  level.option("--pixels", l->pixels, "With --camera: split collapses wider than this many pixels").show_default();
-  level.option("-o,--output", l->output, "Output .ply").required();
-  level.on_run([l] { run_multilevel_level(*l); });
+  const CliOption camera = level.option("--camera", l->camera, "Refine for the view of CAM.json (screen-size rule)")
+                               .excludes(region)
+                               .excludes(sphere);
+  const CliOption pixels =
+      level.option("--pixels", l->pixels, "With --camera: split collapses wider than this many pixels")
+          .non_negative()
+          .show_default();
+  level.option("-o,--output", l->output, "Output .ply").required().writes({".ply"}, "PLY");
+  // --level is the LOD, or the level inside a box or ball; a view picks its own levels.
+  auto by_target = std::make_shared<std::vector<VariantOption>>(
+      std::vector<VariantOption>{{level_option, {"--level", "--region", "--sphere"}}, {pixels, {"--camera"}}});
+  level.on_run([l, by_target, region, sphere, camera] {
+    const char* target = camera.given()   ? "--camera"
+                         : sphere.given() ? "--sphere"
+                         : region.given() ? "--region"
+                                          : "--level";
+    refuse_unused_options(*by_target, target, target == std::string("--level") ? "--level alone" : target);
+    run_multilevel_level(*l);
+  });
 }
 
 }  // namespace pms::app

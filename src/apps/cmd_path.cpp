@@ -31,12 +31,13 @@ void add_path_command(CliCommand& app) {
   CliCommand cmd = app.subcommand("path", "Write a scripted camera path (PATH.json) around a .pms model");
   cmd.option("kind", args->kind,
              "orbit (circle around the model), scan (close, bottom to top) or zoom (far to close-up)")
-      .required();
+      .required()
+      .one_of({"orbit", "scan", "zoom"});
   cmd.option("--model", args->model, ".pms file the path is made for").required();
-  cmd.option("--frames", args->options.frames, "Number of cameras").required();
-  cmd.option("-o,--output", args->output, "Output PATH.json").required();
-  cmd.option("--width", args->options.width, "Viewport width in pixels (default 800)");
-  cmd.option("--height", args->options.height, "Viewport height in pixels (default 600)");
+  cmd.option("--frames", args->options.frames, "Number of cameras").required().range(1, 1000000);
+  cmd.option("-o,--output", args->output, "Output PATH.json").required().writes({".json"}, "JSON");
+  cmd.option("--width", args->options.width, "Viewport width in pixels (default 800)").range(1, 16384);
+  cmd.option("--height", args->options.height, "Viewport height in pixels (default 600)").range(1, 16384);
   cmd.option("--fovy", args->options.fovy_deg, "Vertical field of view in degrees (default 45)");
   cmd.on_run([args] { run_path(*args); });
 }

@@ -1,5 +1,4 @@
 // pmstream refine FILE.pms (--full | --splits K | --camera CAM.json [--tolerance PX]) -o OUT.ply [--json]
-#include <cmath>
 #include <cstdio>
 #include <limits>
 
@@ -25,8 +24,7 @@ void run_refine(const RefineArgs& args, bool splits_given, bool tolerance_given)
   const bool camera_given = !args.camera.empty();
   if (int(args.full) + int(splits_given) + int(camera_given) != 1)
     fail("", "give exactly one of --full, --splits K and --camera CAM.json");
-  if (tolerance_given && !camera_given) fail("", "--tolerance goes with --camera");
-  if (!(args.tolerance >= 0) || !std::isfinite(args.tolerance)) fail("", "--tolerance must be a number >= 0 (pixels)");
+  if (tolerance_given && !camera_given) fail("--tolerance", "not used without --camera (it is the view's tolerance)");
   Stopwatch clock;
   const Camera camera = camera_given ? load_camera(args.camera) : Camera{};
   const auto file = PmsFile::open(args.input);
@@ -67,8 +65,9 @@ void add_refine_command(CliCommand& app) {
   cmd.option("--camera", args->camera,
              "Refine for the view in CAM.json (Hoppe 1997 criteria: frustum, back faces, screen-space error)");
   CliOption tolerance =
-      cmd.option("--tolerance", args->tolerance, "Screen-space error tolerance in pixels with --camera (default 1)");
-  cmd.option("-o,--output", args->output, "Output .ply file").required();
+      cmd.option("--tolerance", args->tolerance, "Screen-space error tolerance in pixels with --camera (default 1)")
+          .non_negative();
+  cmd.option("-o,--output", args->output, "Output .ply file").required().writes({".ply"}, "PLY");
   cmd.flag("--json", args->json, "Print one JSON object");
   cmd.on_run([args, splits, tolerance] { run_refine(*args, splits.given(), tolerance.given()); });
 }

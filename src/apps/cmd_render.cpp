@@ -38,7 +38,7 @@ void add_render_command(CliCommand& app) {
   CliCommand cmd = app.subcommand("render", "Render a mesh or a .pms model (its finest mesh) to PNG");
   cmd.option("input", args->input, "Mesh file, terrain:FACES, or .pms model").required();
   add_camera_options(cmd, args->view);
-  cmd.option("-o,--output", args->output, "Output .png file").required();
+  cmd.option("-o,--output", args->output, "Output .png file").required().writes({".png"}, "PNG");
   cmd.on_run([args] { run_render(*args); });
 }
 

@@ -6,6 +6,7 @@
 //                 [--laps K] [--reconnect N] [--timeout-ms N] [--connect-timeout-ms N] [--save-mesh OUT.ply]
 //                 [--snapshots DIR] [--json]
 // The headless viewer: follows a camera path, streaming what each frame needs, and reports per frame.
+// An option the chosen mode does not use is an error (ModeOptions), never silently ignored.
 #include <cstdio>
 #include <filesystem>
 #include <nlohmann/json.hpp>
@@ -293,6 +294,23 @@ protocol::DagView dag_request(const StreamArgs& args) {
   return request;
 }
 
+// The options only some modes use, by the modes that use them; the rest apply to every mode.
+struct ModeOptions {
+  std::vector<VariantOption> by_mode;   // against --mode
+  std::vector<VariantOption> by_fetch;  // --mode receiver: against --fetch
+  CliOption tolerance, budget;          // --mode multilevel: the screen-size rule or a triangle budget
+};
+
+void refuse_unused(const StreamArgs& args, const ModeOptions& options) {
+  if (args.mode != "receiver" && args.mode != "multilevel" && !protocol::mode_named(args.mode))
+    fail("--mode", "'" + args.mode + "': this build streams in the modes " + protocol::mode_names() +
+                       ", receiver and multilevel");
+  refuse_unused_options(options.by_mode, args.mode, "--mode " + args.mode);
+  if (args.mode == "receiver") refuse_unused_options(options.by_fetch, args.fetch, "--fetch " + args.fetch);
+  if (args.mode == "multilevel" && options.budget.given() && options.tolerance.given())
+    fail("--tolerance", "not used with --mode multilevel --budget (the budget picks the level)");
+}
+
 void run_stream(const StreamArgs& args) {
   if (args.mode == "receiver") return run_receiver(args);
   if (args.mode == "multilevel") return run_multilevel(args);
@@ -356,12 +374,15 @@ void add_stream_command(CliCommand& app) {
          "over HTTP), multilevel (levels of a multilevel mesh over HTTP, coarsest first) or dag (a thin client driven "
          "by the server's DAG traversal); docs/cli.md")
       .show_default();
-  cmd.option("--tolerance", args->tolerance, "Screen-space error tolerance in pixels").non_negative().show_default();
+  const CliOption tolerance = cmd.option("--tolerance", args->tolerance, "Screen-space error tolerance in pixels")
+                                  .non_negative()
+                                  .show_default();
   cmd.option("--laps", args->laps, "Times the path is flown").range(1u, 1000u).show_default();
-  cmd.option("--reconnect", args->reconnect,
-             "On a lost connection, reconnect and resume the session up to N times (0.5 s apart, doubling)")
-      .range(0u, 100u)
-      .show_default();
+  const CliOption reconnect =
+      cmd.option("--reconnect", args->reconnect,
+                 "On a lost connection, reconnect and resume the session up to N times (0.5 s apart, doubling)")
+          .range(0u, 100u)
+          .show_default();
   cmd.option("--timeout-ms", args->timeout_ms,
              "A server silent this long while an answer is due, or stuck mid-message, is lost")
       .range(1u, 3600000u)
@@ -369,57 +390,94 @@ void add_stream_command(CliCommand& app) {
   cmd.option("--connect-timeout-ms", args->connect_timeout_ms, "Give up a connection attempt after this long")
       .range(1u, 3600000u)
       .show_default();
-  cmd.option("--in-flight", args->in_flight, "receiver, multilevel: HTTP requests sent ahead of the answer being read")
-      .range(1u, 64u)
-      .show_default();
-  cmd.option("--fetch", args->fetch,
-             "receiver: lists (GET the ids it lacks) or blocks (GET the fixed subtree bands holding them, "
-             "shared by clients behind a cache); docs/protocol.md")
-      .one_of({"lists", "blocks"})
-      .show_default();
-  cmd.option("--ids-per-request", args->ids_per_request, "receiver, lists: split ids in one GET")
-      .range(1u, 1024u)
-      .show_default();
-  cmd.option("--descendant-depth", args->descendant_depth,
-             "receiver, lists: at most this many levels below a leaf many times τ off come in its GET "
-             "(0: the ids alone)")
-      .range(0u, 8u)
-      .show_default();
-  cmd.option("--block-depth", args->block_depth, "receiver, blocks: levels below a block's root")
-      .range(0u, 8u)
-      .show_default();
-  cmd.option("--frame-budget-ms", args->frame_budget_ms,
-             "receiver: end a frame after this long (checked between answers; 0 = until the view is satisfied); "
-             "what is left carries to the next frame")
-      .range(0u, 3600000u)
-      .show_default();
-  cmd.option("--frame-answers", args->frame_answers,
-             "receiver: end a frame after this many answers (0 = until the view is satisfied); what is left "
-             "carries to the next frame")
-      .range(0u, 1000000u)
-      .show_default();
-  cmd.flag("--prefetch", args->prefetch,
-           "receiver: with the view's wants all sent, fill the pipe with what the camera extrapolated from the last "
-           "two frames would want");
-  cmd.option("--geomorph-frames", args->morph_frames, "Blend splits and collapses over N frames (0 = off)")
-      .show_default();
-  cmd.option("--max-ops", args->max_ops, "vsplits + ecols per frame (0 = no cap; dag: N, 0 = 300)")
-      .range(0u, protocol::kMaxDagOps)
-      .show_default();
-  cmd.option("--traversal", args->traversal, "dag: priority, linear or constant")
-      .one_of({"priority", "linear", "constant"})
-      .show_default();
-  cmd.option("--budget", args->budget,
+  const CliOption in_flight = cmd.option("--in-flight", args->in_flight,
+                                         "receiver, multilevel: HTTP requests sent ahead of the answer being read")
+                                  .range(1u, 64u)
+                                  .show_default();
+  const CliOption fetch =
+      cmd.option("--fetch", args->fetch,
+                 "receiver: lists (GET the ids it lacks) or blocks (GET the fixed subtree bands holding them, "
+                 "shared by clients behind a cache); docs/protocol.md")
+          .one_of({"lists", "blocks"})
+          .show_default();
+  const CliOption ids_per_request =
+      cmd.option("--ids-per-request", args->ids_per_request, "receiver, lists: split ids in one GET")
+          .range(1u, 1024u)
+          .show_default();
+  const CliOption descendant_depth =
+      cmd.option("--descendant-depth", args->descendant_depth,
+                 "receiver, lists: at most this many levels below a leaf many times τ off come in its GET "
+                 "(0: the ids alone)")
+          .range(0u, 8u)
+          .show_default();
+  const CliOption block_depth =
+      cmd.option("--block-depth", args->block_depth, "receiver, blocks: levels below a block's root")
+          .range(0u, 8u)
+          .show_default();
+  const CliOption frame_budget_ms =
+      cmd.option("--frame-budget-ms", args->frame_budget_ms,
+                 "receiver: end a frame after this long (checked between answers; 0 = until the view is satisfied); "
+                 "what is left carries to the next frame")
+          .range(0u, 3600000u)
+          .show_default();
+  const CliOption frame_answers =
+      cmd.option("--frame-answers", args->frame_answers,
+                 "receiver: end a frame after this many answers (0 = until the view is satisfied); what is left "
+                 "carries to the next frame")
+          .range(0u, 1000000u)
+          .show_default();
+  const CliOption prefetch = cmd.flag(
+      "--prefetch", args->prefetch,
+      "receiver: with the view's wants all sent, fill the pipe with what the camera extrapolated from the last "
+      "two frames would want");
+  const CliOption geomorph_frames =
+      cmd.option("--geomorph-frames", args->morph_frames, "Blend splits and collapses over N frames (0 = off)")
+          .show_default();
+  const CliOption max_ops =
+      cmd.option("--max-ops", args->max_ops, "vsplits + ecols per frame (0 = no cap; dag: N, 0 = 300)")
+          .range(0u, protocol::kMaxDagOps)
+          .show_default();
+  const CliOption traversal = cmd.option("--traversal", args->traversal, "dag: priority, linear or constant")
+                                  .one_of({"priority", "linear", "constant"})
+                                  .show_default();
+  const CliOption budget =
+      cmd.option(
+             "--budget", args->budget,
              "dag: BUDGET mode with this many triangles (0 = FREE mode); multilevel: the finest LOD of at most this "
              "many triangles (0 = the screen-size rule with --tolerance)")
-      .range(uint64_t(0), protocol::kMaxDagBudget)
-      .show_default();
-  cmd.option("--save-mesh", args->save_mesh, "Write the client's mesh after the last frame (PLY)");
+          .range(uint64_t(0), protocol::kMaxDagBudget)
+          .show_default();
+  cmd.option("--save-mesh", args->save_mesh, "Write the client's mesh after the last frame (PLY)")
+      .writes({".ply"}, "PLY");
   cmd.option("--snapshots", args->snapshots, "Write a PNG per frame into this directory");
-  cmd.flag("--plain-levels", args->plain_levels,
-           "multilevel: fetch the binary form's levels (exact float positions) instead of the compressed ones");
+  const CliOption plain_levels =
+      cmd.flag("--plain-levels", args->plain_levels,
+               "multilevel: fetch the binary form's levels (exact float positions) instead of the compressed ones");
   cmd.flag("--json", args->json, "Print one JSON object");
-  cmd.on_run([args] { run_stream(*args); });
+  const std::vector<std::string> tcp = {"sender", "sender-plain", "vi", "dag"};
+  const auto modes = std::make_shared<ModeOptions>(
+      ModeOptions{{{reconnect, tcp},
+                   {in_flight, {"receiver", "multilevel"}},
+                   {fetch, {"receiver"}},
+                   {ids_per_request, {"receiver"}},
+                   {descendant_depth, {"receiver"}},
+                   {block_depth, {"receiver"}},
+                   {frame_budget_ms, {"receiver"}},
+                   {frame_answers, {"receiver"}},
+                   {prefetch, {"receiver"}},
+                   // sender-plain, vi and dag apply what comes as it comes: no adaptation to blend or cap
+                   {geomorph_frames, {"sender", "receiver", "multilevel"}},
+                   {max_ops, {"sender", "receiver", "dag"}},
+                   {traversal, {"dag"}},
+                   {budget, {"dag", "multilevel"}},
+                   {plain_levels, {"multilevel"}}},
+                  {{ids_per_request, {"lists"}}, {descendant_depth, {"lists"}}, {block_depth, {"blocks"}}},
+                  tolerance,
+                  budget});
+  cmd.on_run([args, modes] {
+    refuse_unused(*args, *modes);
+    run_stream(*args);
+  });
 }
 
 }  // namespace pms::app

@@ -148,7 +148,8 @@ TEST(MultilevelCli, GridClusteringInput) {
   ASSERT_EQ(info.exit_code, 0) << info.err;
   const auto j = nlohmann::json::parse(info.out);
   EXPECT_LT(j["per_level"][0]["triangles"].get<uint64_t>(), j["per_level"][1]["triangles"].get<uint64_t>());
-  const test::CliRun bad = test::run_pmstream("multilevel build " + ply + " -o " + out + " --cluster grid:4,12");
+  const test::CliRun bad =
+      test::run_pmstream("multilevel build " + ply + " -o " + out + " --cluster grid:4,12 --ascii");
   EXPECT_NE(bad.exit_code, 0);
   EXPECT_NE(bad.err.find("grid sizes must decrease"), std::string::npos) << bad.err;
 }
@@ -187,7 +188,8 @@ TEST(MultilevelCli, ClusteringFileInput) {
     std::ofstream bad(json);
     bad << R"({"clusterings": [{"cluster": [0, "x"], "positions": []}]})";
   }
-  const test::CliRun refused = test::run_pmstream("multilevel build " + ply + " -o " + out + " --cluster " + json);
+  const test::CliRun refused =
+      test::run_pmstream("multilevel build " + ply + " -o " + out + " --cluster " + json + " --ascii");
   EXPECT_NE(refused.exit_code, 0);
   EXPECT_NE(refused.err.find(json + ": not a clustering file"), std::string::npos) << refused.err;
 }
