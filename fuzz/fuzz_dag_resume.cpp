@@ -1,4 +1,4 @@
-// libFuzzer target for a DAG session's resume (issue 16): the input is the front code of an OPEN with the DAG
+// libFuzzer target for a DAG session's resume: the input is the front code of an OPEN with the DAG
 // and resume bits (the first byte picks the tree count the OPEN announces: the model's, or another), sent to a
 // real Session serving a real model. The session must end with a peer's ERROR (never internal) or resume with
 // a cut that passes DagCut::check, within bounded work per pump; a resumed session then answers a DAG_VIEW.

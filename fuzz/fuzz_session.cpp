@@ -1,11 +1,11 @@
-// libFuzzer target for server::Session (issue 14, requirement 6): the input is a program of client messages,
+// libFuzzer target for server::Session: the input is a program of client messages,
 // well-formed and not, and transport events (pump, read the outbox, a deadline, reconnect), run against a real
 // Session serving a real model, without sockets. The harness keeps the transport's rules (tcp_server.cpp: a
 // frame over max_client_message ends the stream; no frame is handled and no slice pumped while more than
 // send_queue_bytes wait), and after every call checks the bounds a hostile peer must not break: the work of
 // one call, the session's memory, the outbox, no ERROR internal. Each session's outcome is checked against
 // what it was sent (session_client.h): the right ERROR or none, every request answered, no split sent twice,
-// also to a client that reconnected and resumed from its leaves. The DAG mode (issue 16) is a mode like the
+// also to a client that reconnected and resumed from its leaves. The DAG mode is a mode like the
 // others: OPEN and resume it (the client's mesh as the front), DAG_VIEWs with every traversal, FREE and BUDGET,
 // budgets and N at and over their bounds, wild views and repeated frame numbers, among VIEWs and the rest; the
 // simulated client mirrors the session's cut and applies every DAG_OPS operation to it (legal, within the

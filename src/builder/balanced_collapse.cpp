@@ -31,7 +31,7 @@ struct RoundRule {
 constexpr RoundRule kEarlyRounds{0.25, 1.0};
 // The last rounds above the base build the nodes far views use: smaller rounds keep their order near the
 // greedy one, and a mild height weight stops the survivors of the few big components from chaining a
-// level per round. docs/internals.md ("Builder") has the measurements.
+// level per round. docs/internals.md ("Builder") says why.
 constexpr RoundRule kLateRounds{0.10, 1.5};
 // The late rounds start below this many times the base size (2,048 live vertices for the default 64).
 constexpr uint32_t kLateRoundsBelowBase = 32;
@@ -111,7 +111,7 @@ class CandidateCollector {
   size_t collect(const CollapseMesh& mesh, const CollapseRecorder& recorder, const HeightWeights& weight,
                  double epsilon, std::vector<Entry>& out) {
     const uint32_t n = mesh.vertex_count();
-    // A thread (~50 us to start) costs more than a small round's candidates.
+    // Starting a thread costs more than collecting a small round's candidates.
     const unsigned threads = n < kParallelVertices ? 1u : unsigned(marks_.size());
     std::vector<size_t> found(threads);
     const auto run = [&](unsigned i) {

@@ -62,7 +62,7 @@ void CollapseRecorder::end_round() {
           refinement_.compute(c.s, c.t_node, c.u_node, corners, samples);
         });
   };
-  // A thread costs more than a few hundred records (~3 us each).
+  // Starting a thread costs more than computing a few hundred records.
   const size_t count = computing_round_.collapses.size();
   if (count < 2 * CapturedRound::kChunk) compute(0, count);
   else computing_.start(count, CapturedRound::kChunk, compute);

@@ -1,4 +1,4 @@
-// Nested refinement info (issue 19): Hoppe 1997 §4's bounds, rounded up onto the lattices of
+// Nested refinement info: Hoppe 1997 §4's bounds, rounded up onto the lattices of
 // spm/nested_info.h below each node's parent. A parent's bounds hold its children's (refinement_info.cpp:
 // r(v_s) >= r(v_u), r(v_t) + |p_t - p_s|; the merged cone holds both cones; (mu, delta) of v_s is at least
 // each child's re-expressed on v_s's axis), so the parent's own value is always an entry that holds the

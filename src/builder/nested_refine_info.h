@@ -1,4 +1,4 @@
-// Nested refinement info (issue 19; spm/nested_info.h): once the forest is built, each node's bounds are
+// Nested refinement info (spm/nested_info.h): once the forest is built, each node's bounds are
 // rounded up, top down, to an entry of the lattice below its parent's final bounds, so that a split record
 // codes a child's info as a few entry numbers. Its cone axis first moves to the coarser grid of own axes
 // (kAxisSnapBits), with its cone widened and (mu, delta) re-expressed about the moved axis. Every value only

@@ -1,8 +1,7 @@
 // Storage for big arrays read at random, backed by transparent huge pages: the builder's collapse loop
 // visits vertices in cost order over hundreds of MB, the refinement engine's operations touch records
 // and faces megabytes apart. With 4 KiB pages nearly every such read also misses the TLB (a nested page
-// walk under a hypervisor). 2 MiB pages cut the 8 M-face terrain's build time by about a fifth and
-// raised the engine's operations per second by 8-15 %. Linux only asks (madvise, before the first
+// walk under a hypervisor), so these arrays go on 2 MiB pages. Linux only asks (madvise, before the first
 // write: THP "madvise" mode gives huge pages at fault time); elsewhere this is a plain allocator.
 #pragma once
 #include <cstddef>
@@ -81,7 +80,7 @@ struct HugePageAllocator {
 template <class T>
 using BigVector = std::vector<T, HugePageAllocator<T>>;
 // The refinement engine's per-mesh arrays: a mesh made after another one freed its arrays gets their
-// pages back instead of faulting in new ones (docs/internals.md, "Against SrMesh; fresh meshes").
+// pages back instead of faulting in new ones (docs/internals.md, "Fresh meshes and memory").
 template <class T>
 using RecycledVector = std::vector<T, HugePageAllocator<T, true>>;
 

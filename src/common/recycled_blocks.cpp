@@ -1,7 +1,7 @@
 // Freed huge-page blocks kept for the next request of the same size and kind. glibc maps a block of
-// several MB afresh for every request and unmaps it when freed, so a fresh mesh faulted in (and the
-// kernel cleared) new 2 MiB pages for its arrays each time, even right after an identical mesh was
-// freed. Kept here, the next mesh over the same hierarchy finds them mapped and warm. Bounded: a few
+// several MB afresh for every request and unmaps it when freed, so without this cache a fresh mesh faults
+// in (and the kernel clears) new 2 MiB pages for its arrays each time, even right after an identical mesh
+// was freed. Kept here, the next mesh over the same hierarchy finds them mapped and warm. Bounded: a few
 // blocks and kKeptBytes in all, the oldest freed first, so a process holds at most that much it does
 // not use.
 #include <cstdlib>

@@ -1,4 +1,4 @@
-// Cleaning before the build: the builder needs an oriented 2-manifold with boundary (docs/internals.md).
+// Cleaning before the build: the builder needs an oriented 2-manifold with boundary (docs/internals.md, "Builder").
 //  1. Weld bitwise-coincident vertices (-0 == +0) with a hash table; the first vertex's attributes win.
 //  2. Drop degenerate faces (repeated corner, or a cross product that is exactly zero) and duplicate
 //     faces (same corner set in any order or orientation; the first one stays).

@@ -73,7 +73,7 @@ Mesh import_bytes(const std::string& name, std::span<const uint8_t> bytes, const
   std::vector<uint8_t> inflated;
   double parse_start = 0.0;
   if (codec != Compression::none) {
-    // Decompression dominates: xz takes about 7x as long as parsing the ascii scans it holds.
+    // Decompression takes most of a compressed input's load (xz more than parsing the text it holds).
     parse_start = 0.8;
     inflated = decompress(name, codec, bytes, sub_progress(progress, 0.0, parse_start));
     bytes = inflated;

@@ -203,7 +203,7 @@ std::string format_multilevel_ascii(const MultilevelMesh& m) {
   out += str(m.level_count());
   out += "-level progressive mesh\n";
   // The paper's form states a representative only after a triangle that needs it: the ones no triangle
-  // states (only geomorphs use them, multilevel_mesh.h) have no place in it.
+  // states (only geomorphs use them, multilevel/mesh.h) have no place in it.
   const uint64_t left_out = geomorph_representative_count(m);
   if (left_out) out += "#(without the " + str(left_out) + " representatives only geomorphs use)\n";
   std::vector<uint8_t> stated(m.vertices(), 0);

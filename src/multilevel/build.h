@@ -47,13 +47,13 @@ enum class MultilevelRepresentatives {
   discrete,
   // Also those a geomorph needs so that at t = 0 it is LOD k + 1 exactly: the chain continues through
   // vertices of level k until one of level > k (the paper's "more representatives ... than those required
-  // strictly for discrete levels"). No triangle states them: multilevel_mesh.h, geomorph_representatives.
+  // strictly for discrete levels"). No triangle states them: multilevel/mesh.h, geomorph_representatives.
   geomorph,
 };
 
 // Sorts the mesh by decreasing level and keeps the representatives `kind` asks for. Each representative is
 // the vertex's parent, after merging possibly of its own level. Within a level, vertices are numbered so
-// that replaying their collapses from the last vertex to the first (multilevel_dag.h) keeps the order
+// that replaying their collapses from the last vertex to the first (multilevel/dag.h) keeps the order
 // `earlier` gives, children before parents, otherwise in input order (unmerged levels keep input order:
 // their collapses are independent).
 MultilevelMesh assemble_multilevel(const Mesh& mesh, const CollapseLevels& levels, MultilevelRepresentatives kind);
@@ -63,7 +63,8 @@ void merge_levels(CollapseLevels& levels, uint32_t level_count);
 
 // The whole path: levels from the collapses, then assembled; `level_count` > 0 merges consecutive levels
 // down to that many (merge_level_map). Geomorph representatives by default: they make every geomorph's
-// ends its two LODs, for up to 2.5% of the binary file (dragon merged to 8 levels; docs/internals.md).
+// ends its two LODs, for up to 2.5% of the binary file (dragon merged to 8 levels; docs/internals.md, "Geomorph
+// representatives").
 MultilevelMesh build_multilevel(const Mesh& mesh, std::span<const EdgeCollapse> collapses, uint32_t level_count = 0,
                                 MultilevelRepresentatives kind = MultilevelRepresentatives::geomorph);
 

@@ -1,4 +1,4 @@
-// Compressed multilevel levels (multilevel_codec.h; docs/multilevel-format.md, "Compressed levels").
+// Compressed multilevel levels (multilevel/codec.h; docs/multilevel-format.md, "Compressed levels").
 // A level states its representatives first, so that each of its vertices is predicted from the vertex it
 // stands at in coarser LODs (the paper's forest: the vertex it collapsed onto, a neighbour), or, with none
 // known yet, from the vertex before it. Corners go against a move-to-front list of the last corners

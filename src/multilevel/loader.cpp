@@ -1,4 +1,4 @@
-// Progressive loading of a multilevel mesh (multilevel_loader.h): the paper's addLevel on the binary
+// Progressive loading of a multilevel mesh (multilevel/loader.h): the paper's addLevel on the binary
 // form's records, with every check a level needs before its LOD is used.
 #include "multilevel/loader.h"
 

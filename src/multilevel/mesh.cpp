@@ -210,7 +210,7 @@ void MultilevelLod::connect(uint32_t level) {
   if (level == connected_) return;
   const MultilevelMesh& m = mesh_;
   // Up to every vertex the representatives cover: while levels are loading, the loaded triangles name
-  // vertices of levels still to come (multilevel_loader.h).
+  // vertices of levels still to come (multilevel/loader.h).
   const uint32_t n_l = m.vertex_count[level], n = uint32_t(m.representative.size());
   connected_ = level;
   vertex_count_ = n_l;

@@ -1,8 +1,8 @@
 // The multilevel mesh's representatives, one per vertex, in as few bytes as the vertex count allows: 3
 // while every index and the "none" mark fit in 24 bits, else 4. With collapses nearly every vertex has one,
-// so this is what keeps the structure within 1.1x the plain indexed mesh (docs/internals.md, E10): 12n +
-// 12t + 3n against 12n + 12t. A read is one unaligned 4-byte load and a mask (one byte of padding at the
-// end keeps the last load inside the array).
+// so this is what keeps the structure within 1.1x the plain indexed mesh (docs/internals.md, "Memory" under
+// "Progressive multilevel meshes"): 12n + 12t + 3n against 12n + 12t. A read is one unaligned 4-byte load and a mask
+// (one byte of padding at the end keeps the last load inside the array).
 #pragma once
 #include <cstddef>
 #include <cstdint>

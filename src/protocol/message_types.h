@@ -11,10 +11,10 @@
 
 namespace pms::protocol {
 
-// 5: every model's sender-driven session gets CODEC, whose records carry v_t's normal and color. 4: a
-// sender-driven session of a model without normals and colors gets CODEC after BASE, and its VSPLITS
-// packets are v_s's id and the compact split record (issue 19). 3: a node with mu = delta = 0 sends its refinement info
-// as one flag bit (2 sent 43 or 65 bits for every node, 1 sent 6 x u16).
+// Version 6: a sender-driven session gets CODEC after BASE, and its VSPLITS packets are v_s's id and the
+// compact split record (v_t's normal and color included); in the full packets (view-independent, plain,
+// DAG_OPS) a node with mu = delta = 0 sends its refinement info as one flag bit. A server answers any other
+// version with unsupported_version: each one codes the packets differently.
 constexpr uint16_t kProtocolVersion = 6;
 constexpr char kMagic[4] = {'P', 'M', 'S', 'T'};
 constexpr size_t kFrameHeaderBytes = 5;                 // u32 payload length + u8 type

@@ -1,4 +1,4 @@
-// PacketTable: a model's vsplit packets encoded once (protocol.h), for the server's hot path.
+// PacketTable: a model's vsplit packets encoded once (packet_table.h), for the server's hot path.
 #include <algorithm>
 #include <exception>
 #include <mutex>

@@ -44,7 +44,7 @@ struct Base {
   std::string model;
   float bbox_min[3] = {0, 0, 0};
   float bbox_max[3] = {0, 0, 0};
-  float scale = 1;  // refinement info is relative to it (pm.h)
+  float scale = 1;  // refinement info is relative to it (spm/refine_info.h)
   uint32_t tree_id_bits = 1;
   uint32_t node_id_bits = 0;
   uint32_t position_bits = kDefaultPositionBits;

@@ -7,7 +7,7 @@
 // has refinement info: not in a view-independent session). The whole batch is one bit stream padded once at the end:
 // packets are not byte-aligned (docs/protocol.md has the measurements that chose this). DAG_OPS (StreamMode::dag) is
 // the same packets after a list of collapse ids in the same id code. In a session with split records
-// (StreamContext::records, issue 19) a packet is v_s's id and then the compact split record (spm/split_codec.h) coded
+// (StreamContext::records) a packet is v_s's id and then the compact split record (spm/split_codec.h) coded
 // against what the receiver holds about v_s.
 #include <algorithm>
 #include <bit>

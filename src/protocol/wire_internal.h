@@ -101,7 +101,7 @@ class Reader {
   uint64_t item_index_ = 0;
 };
 
-// RefineInfo at its stored precision (pm.h): a flag bit, set when mu = delta = 0 (nothing follows: the
+// RefineInfo at its stored precision (spm/refine_info.h): a flag bit, set when mu = delta = 0 (nothing follows: the
 // info decodes as as_sent() says); otherwise 3 lengths of kLengthBits, the cone angle, and the cone axis
 // only when there is a cone: 1, 66 or 44 bits (docs/protocol.md). The writer throws for values the
 // quantizer never produces, the reader rejects them (the .pms reader does the same).

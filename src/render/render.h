@@ -1,7 +1,7 @@
 // The render layer: a deterministic software rasterizer (depth + smooth Lambert, triangle-id buffer),
 // PNG output and the image metrics of cheng-ooi 2008 Table 2 (PSNR, error pixels). The images of the
 // experiments come from here, so the same mesh and view give the same bytes on every run, whatever the
-// thread count. Conventions (fill rule, shading, metric definitions) are in docs/internals.md.
+// thread count. Conventions (fill rule, shading, metric definitions) are in docs/internals.md, "Renderer".
 #pragma once
 #include <cstdint>
 #include <memory>

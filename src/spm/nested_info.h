@@ -1,7 +1,7 @@
-// Nested refinement info (issue 19; docs/internals.md, "Refinement info"): a child's radius, mu, delta and
+// Nested refinement info (docs/internals.md, "Refinement info"): a child's radius, mu, delta and
 // cone angle are entries of a lattice below its parent's, rounded up (a parent's bounds hold its children's,
 // so the parent's own value is always an entry that holds the child's). The builder stores the entries
-// (builder/nested_refine_info.h) and the split records code the entry numbers (pm/split_codec), so every
+// (builder/nested_refine_info.h) and the split records code the entry numbers (spm/split_codec.h), so every
 // mode evaluates the same values. Values no entry holds (above the parent's, far below it) stay exact.
 // The steps were measured against selectivity (tests/apps/refine_info_nesting_test.cpp): mu carries far
 // views' faces, delta close views', the radius and the angle little of either.

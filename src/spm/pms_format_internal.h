@@ -1,4 +1,4 @@
-// On-disk layout of .pms version 6, shared by the writer and the reader (docs/pms-format.md).
+// On-disk layout of .pms files, shared by the writer and the reader (docs/pms-format.md).
 // Sections are used in place (spans into the mapping), so the layout is the host's: little-endian.
 #pragma once
 #include <array>
@@ -18,10 +18,7 @@ namespace pms::format {
 static_assert(std::endian::native == std::endian::little, ".pms sections are little-endian and mapped in place");
 
 constexpr char kMagic[8] = {'P', 'M', 'S', 'T', 'R', 'E', 'A', 'M'};
-// Version 5 nests each child's refinement info in its parent's (spm/nested_info.h) and codes the records' info
-// as lattice entries; version 4 predicts v_t in v_s's tangent plane (the split tables carry the grid's step ratios);
-// version 3 added the compressed split records (SRTB, SROF, SREC); version 2 stored refinement info at the precision
-// the wire carries (version 1 had finer RINF).
+// The reader refuses any other version: a section's layout or its records' coding changes with the version.
 constexpr uint32_t kVersion = 7;
 constexpr uint64_t kAlignment = 64;  // every section starts here, so spans into a mapping are aligned
 

@@ -1,5 +1,5 @@
 // How the engine's per-slot arrays (SelectiveMesh records, the adaptation loop's slots; slot_array.h)
-// grow. Touching a new page is what costs (docs/internals.md, "Against SrMesh; fresh meshes"): while the
+// grow. Touching a new page is what costs (docs/internals.md, "Fresh meshes and memory"): while the
 // known range is small the arrays double on the ordinary heap (blocks a later mesh reuses); past that
 // the whole known range is taken at once (address space, on huge pages), so growing copies nothing more
 // and memory is touched only where slots are written.

@@ -1,4 +1,4 @@
-// Split records coded against the client's own hierarchy (issue 19; cheng-ooi 2008 §4.3 codes dx, dy, dz
+// Split records coded against the client's own hierarchy (cheng-ooi 2008 §4.3 codes dx, dy, dz
 // against v_s with Huffman codes and the cut neighbours after Kim et al. 2006; docs/pms-format.md has the
 // record format field by field and the measured bits).
 //

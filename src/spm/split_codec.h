@@ -1,4 +1,4 @@
-// Compressed split records (issue 19; docs/pms-format.md "Split records"): one vertex split coded against
+// Compressed split records (docs/pms-format.md "Split records"): one vertex split coded against
 // what every client that can ask for it already holds about v_s, with static prefix codes per model.
 // A record decodes on its own, so a server can hand out any set of them in any order and an HTTP cache
 // can keep each one: the same bytes for every client.

@@ -145,7 +145,8 @@ void expect_local_refinement_works(const MultilevelMesh& m, bool manifold) {
 
 TEST(MultilevelLocal, EdgeCollapseBuild) { expect_local_refinement_works(collapse_build(0), true); }
 // Merged levels too: a merged level numbers its vertices coarsest original level first and keeps parents of
-// its own level as representatives, so the replay makes the builder's collapses (docs/internals.md).
+// its own level as representatives, so the replay makes the builder's collapses (docs/internals.md, "Local
+// refinement").
 TEST(MultilevelLocal, EdgeCollapseBuildMergedLevels) {
   for (uint32_t levels : {3u, 6u}) {
     SCOPED_TRACE(std::to_string(levels) + " levels");

@@ -255,7 +255,7 @@ TEST(Multilevel, MergedLevelsAreLevelsOfTheUnmergedMesh) {
         build_multilevel(model.input, collapses, L, MultilevelRepresentatives::discrete).stored_representatives(),
         build_multilevel(model.input, collapses, 0, MultilevelRepresentatives::discrete).stored_representatives());
     EXPECT_LE(merged.stored_representatives(), merged.vertices() - merged.vertex_count.back());
-    // Parents of a vertex's own merged level stay its representatives (multilevel_build.h).
+    // Parents of a vertex's own merged level stay its representatives (multilevel/build.h).
     uint32_t own_level = 0;
     for (uint32_t l = 0; l + 1 < L; ++l)
       for (uint32_t v = merged.vertex_count[l + 1]; v < merged.vertex_count[l]; ++v)

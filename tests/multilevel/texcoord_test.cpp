@@ -188,7 +188,7 @@ TEST(MultilevelTexcoords, CompressedRoundTripIsOnTheirGrid) {
       ASSERT_LE(std::abs(got.texcoords[i] - m.texcoords[i]), position_error_bound(grid, int(i % 2)))
           << bits << " bits, " << i;
   }
-  // Without texture coordinates the compressed form is what it was: a 64-byte head and the same levels.
+  // Without texture coordinates the compressed form carries none: a 64-byte head and the same levels.
   MultilevelMesh plain = m;
   plain.texcoords.clear();
   const MultilevelParts without = multilevel_compressed_parts(plain), with = multilevel_compressed_parts(m);

@@ -1,6 +1,6 @@
 // Real models through the codecs: BASE and every vsplit packet of a built sphere (with normals and
 // colors), terrain and the bunny are encoded in batches, cut into random chunks, framed, decoded, and
-// fed to the refine layer's client hierarchy, which must refine to the full input. Also the packet
+// fed to the client's hierarchy (spm/vertex_hierarchy.h), which must refine to the full input. Also the packet
 // sizes the bench (E2, kim-lee-kobbelt Table 2) reports: topology bits per packet <= 96.
 #include <gtest/gtest.h>
 #include <cmath>

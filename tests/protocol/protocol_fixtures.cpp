@@ -110,7 +110,7 @@ std::string random_name(Rng& rng, size_t max_size) {
 }
 
 RefineInfo random_refine(Rng& rng) {
-  // Lengths 0 .. +inf at the stored precision; a cone with any in-range axis, or none (pm.h).
+  // Lengths 0 .. +inf at the stored precision; a cone with any in-range axis, or none (spm/refine_info.h).
   std::uniform_int_distribution<int> length(0, 0x7C00 >> kLengthDroppedBits), axis(-kAxisSteps, kAxisSteps),
       angle(0, kConeSteps + 1);
   RefineInfo info{};

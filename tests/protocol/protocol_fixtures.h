@@ -42,7 +42,7 @@ double angle_between(const float* a, const float* b);
 using Rng = std::mt19937_64;
 float random_float(Rng& rng, float lo, float hi);
 std::string random_name(Rng& rng, size_t max_size);
-RefineInfo random_refine(Rng& rng);  // any canonical value (pm.h is_canonical)
+RefineInfo random_refine(Rng& rng);  // any canonical value (spm/refine_info.h, is_canonical)
 protocol::StreamContext random_context(Rng& rng);
 // A vsplit packet the context can carry: v_s above the deepest level, cut leaves outside its subtree.
 SplitRecord random_split(Rng& rng, const protocol::StreamContext& context);

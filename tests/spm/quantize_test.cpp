@@ -1,5 +1,5 @@
 // Quantized refinement info must stay conservative: every decoded bound contains the exact one
-// (pm.h RefineInfo), and stays tight enough to be useful.
+// (spm/refine_info.h, RefineInfo), and stays tight enough to be useful.
 #include <gtest/gtest.h>
 #include <cmath>
 #include <numbers>
@@ -11,7 +11,7 @@ namespace pms {
 namespace {
 
 constexpr double kPi = std::numbers::pi;
-// Precision of the stored info (pm.h): lengths keep 6 of the half's 10 mantissa bits, the axis is an
+// Precision of the stored info (spm/refine_info.h): lengths keep 6 of the half's 10 mantissa bits, the axis is an
 // 11-bit octahedral code (error under 2 of its steps), the cone angle has (pi/2) / 1023 steps.
 constexpr double kLengthStep = 0x1p-6;
 constexpr double kAxisError = 2.0 / kAxisSteps;

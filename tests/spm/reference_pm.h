@@ -1,5 +1,5 @@
 // Test-only: small meshes and a slow reference half-edge collapser that produces complete hierarchies
-// (roots, splits, fundamental cut leaves by the dual-view rule of docs/internals.md), so the refine layer
+// (roots, splits, fundamental cut leaves by the dual-view rule of docs/internals.md), so the refinement engine
 // can be tested without the builder. Integration tests against build_progressive_mesh live elsewhere.
 #pragma once
 #include <array>
