@@ -26,7 +26,7 @@ std::string gnuplot_script(const Plot& plot, const std::filesystem::path& png_pa
 // success, else why there is no PNG (gnuplot not installed, or it failed) for the report to print.
 std::string plot_png(const Plot& plot, const std::filesystem::path& png_path);
 
-// Draws `plot` into dir/png and returns report.md's line for it: the image, or why there is none (also told
+// Draws `plot` into dir/png and returns the report's line for it: the image, or why there is none (also told
 // on stderr).
 std::string plot_markdown(const std::filesystem::path& dir, const Plot& plot, const std::string& png,
                           const std::string& alt);

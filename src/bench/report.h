@@ -1,5 +1,5 @@
 // Markdown tables for the bench: printed to stdout a row at a time as results arrive, and written
-// whole into report.md. A cell we have no value for is an empty string.
+// whole into the group's report. A cell we have no value for is an empty string.
 #pragma once
 #include <cstddef>
 #include <cstdint>

@@ -1,4 +1,4 @@
-// E6's curves (apps/bench/quality_curve.h, curve_compare.h): how curves are read against each other, and on
+// E6's curves (bench/quality_curve.h, curve_compare.h): how curves are read against each other, and on
 // the bunny, every mode's real client streaming toward one view: bytes grow at every sample, the last sample is
 // the client's own final mesh and byte counts, sampling does not change what the client fetches, and the
 // receiver-driven end (E8) is local refinement's mesh.
