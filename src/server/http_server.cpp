@@ -2,7 +2,7 @@
 // connection owning its socket, buffer and parser; shared_from_this at the connection boundary only). A
 // connection holds no state between requests but its buffer: every answer comes from the routes over the
 // catalogue. What a request costs the server is mostly system calls and wake-ups, not the routes
-// (docs/internals.md, "Receiver-driven bench"), so:
+// (docs/internals.md, "The HTTP server"), so:
 // - each I/O thread runs an io_context of its own and a connection lives on one of them: no strand, no
 //   lock handed between threads, no other thread woken per request;
 // - an answer is written at once with one gather write (headers, body) on the non-blocking socket, and

@@ -16,7 +16,7 @@ struct ServerLimits {
   size_t send_queue_bytes = 64u << 10;                         // back-pressure: no new batch while more than this waits
   size_t send_burst_bytes = 1u << 20;     // sent at once by one handler before other sessions get a turn
   uint32_t batch_splits = 1024;           // vsplit packets per VSPLITS message
-  uint32_t slice_work = 2048;             // nodes evaluated or split per Session::pump() call (~0.15 ms)
+  uint32_t slice_work = 2048;             // nodes evaluated or split per Session::pump() call
   uint32_t turn_us = 1000;                // one session's turn on an I/O thread before others get theirs
   uint32_t max_message_rate = 500;        // messages a session may send per second (bursts of as many); 0 = any
   uint32_t idle_timeout_ms = 120000;      // no message in and no answer byte out for this long: closed

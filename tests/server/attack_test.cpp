@@ -8,8 +8,8 @@
 // a sanitizer) so each attack meets them within the test.
 //
 // The p99 of 200 answers is their second slowest, and the virtual machines these tests run on stall a process
-// for 20-35 ms a few times a minute: one stall in either flight moves the ratio by 5x, with no attack at all
-// (a quiet flight's p99 ranged 4.6-35 ms over eight runs of one test). So a pair that misses the bound is
+// a few times a minute: one stall in either flight moves the ratio far more than an attack does, with no
+// attack at all. So a pair that misses the bound is
 // flown twice more, quiet then attacked, and the bound holds when the median of the pairs' ratios is within
 // it: an attack that really slows the server misses it in every pair.
 #include <gtest/gtest.h>
@@ -43,7 +43,7 @@ using protocol::ErrorCode;
 using Errors = std::vector<ErrorCode>;
 
 constexpr float kTolerance = 0.1f;
-// A sanitizer build runs the flight ~5x slower: a third of the path still lasts longer there than the whole
+// A sanitizer build runs the flight much slower: a third of the path still lasts longer there than the whole
 // path does in the release build, so every attack meets the same deadlines within the flight.
 constexpr int kPathFrames = kSanitized ? 60 : 200;
 constexpr uint32_t kMaxClientMessage = 4u << 20;  // the server's default, announced in HELLO_OK
