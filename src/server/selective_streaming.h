@@ -9,26 +9,10 @@
 #include <vector>
 
 #include "server/active_tags.h"
+#include "spm/dependency_filter.h"
 #include "spm/hierarchy.h"
 
 namespace pms {
-
-// Which splits SelStreamVSplit's partial-order check can ever stop (kim-lee-kobbelt §5.3): v_s waits when
-// ActiveAncestor(v̂_l) = ActiveAncestor(v̂_r). Both climbs miss the cache at every level of a large model,
-// yet the answer is known for most splits from the hierarchy alone. When v̂_l and v̂_r lie in different
-// trees, or their deepest common ancestor w is a strict ancestor of v_s, w is split whenever v_s is active,
-// so the two active ancestors lie below w on different branches and differ. Only the rest are checked
-// (dragon: 6 % of splits). One bit per node, built once per model and shared by its sessions.
-class DependencyFilter {
- public:
-  DependencyFilter() = default;  // nothing known: every split is checked
-  explicit DependencyFilter(const ModelData& model);
-  bool may_wait(uint32_t node) const { return bits_.empty() || ((bits_[node / 64] >> (node % 64)) & 1); }
-  size_t memory_bytes() const { return bits_.capacity() * sizeof(uint64_t); }
-
- private:
-  std::vector<uint64_t> bits_;
-};
 
 // importance(node) > 0 when qrefine(node) holds for the view; larger = more visible error.
 using Importance = std::function<float(uint32_t node)>;

@@ -58,8 +58,7 @@ const milliseconds kPace(5);
 constexpr double kMaxP99Ratio = 3;  // attacked / quiet
 
 const Fixture& terrain() {
-  static const Fixture f = make_fixture(make_terrain(200000, 7), "terrain");
-  return f;
+  return test::terrain_fixture(200000, 7);
 }
 
 // At 800 x 600 and a quarter pixel many answers take milliseconds rather than tenths of one, and the flight

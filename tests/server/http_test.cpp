@@ -28,14 +28,11 @@ using server::HttpLimits;
 using server::HttpServer;
 
 const Fixture& terrain() {
-  static const Fixture f = make_fixture(make_terrain(20000, 3), "terrain");
-  return f;
+  return terrain_fixture(20000, 3);
 }
 
-struct Server {
-  explicit Server(const HttpLimits& limits = {}) : http(terrain().catalogue, limits, "127.0.0.1", 0) { http.start(); }
-  uint16_t port() const { return http.port(); }
-  HttpServer http;
+struct Server : LoopbackHttpServer {
+  explicit Server(const HttpLimits& limits = {}) : LoopbackHttpServer(terrain().catalogue, limits) {}
 };
 
 const server::ServedModel& served() { return *terrain().catalogue->find("terrain"); }

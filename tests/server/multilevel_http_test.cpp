@@ -15,6 +15,7 @@
 #include "multilevel/file.h"
 #include "multilevel/mesh.h"
 #include "server/catalogue.h"
+#include "streaming_fixture.h"
 #include "server/http_server.h"
 #include "test_support.h"
 
@@ -43,10 +44,8 @@ const MultilevelModel& sphere_model() {
   return model;
 }
 
-struct Server {
-  Server() : http(server::Catalogue::open({sphere_model().path}), {}, "127.0.0.1", 0) { http.start(); }
-  client::HttpUrl url() const { return client::HttpUrl{"127.0.0.1", http.port(), ""}; }
-  server::HttpServer http;
+struct Server : test::LoopbackHttpServer {
+  Server() : LoopbackHttpServer(server::Catalogue::open({sphere_model().path})) {}
 };
 
 Camera far_camera() {

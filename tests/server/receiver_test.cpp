@@ -35,18 +35,10 @@ using test::make_fixture;
 using test::orbit_path;
 
 const Fixture& terrain() {
-  static const Fixture f = make_fixture(make_terrain(30000, 5), "terrain");
-  return f;
+  return test::terrain_fixture(30000, 5);
 }
 
-struct Server {
-  explicit Server(std::shared_ptr<const server::Catalogue> catalogue, const server::HttpLimits& limits = {})
-      : http(std::move(catalogue), limits, "127.0.0.1", 0) {
-    http.start();
-  }
-  client::HttpUrl url() const { return client::HttpUrl{"127.0.0.1", http.port(), ""}; }
-  server::HttpServer http;
-};
+using Server = test::LoopbackHttpServer;
 
 TEST(Receiver, MeshEqualsLocalRefinementAndASecondLapAsksForNothing) {
   const Fixture& f = terrain();

@@ -46,8 +46,7 @@ using test::make_fixture;
 using test::orbit_path;
 
 const Fixture& terrain() {
-  static const Fixture f = make_fixture(make_terrain(30000, 7), "terrain");
-  return f;
+  return test::terrain_fixture(30000, 7);
 }
 
 client::ClientOptions options_for(StreamMode mode, float tolerance = 1.0f) {

@@ -100,8 +100,7 @@ void fly_and_compare(const Fixture& f, const std::vector<Camera>& path) {
 }
 
 const Fixture& terrain() {
-  static const Fixture f = test::make_fixture(make_terrain(60000, 5), "terrain");
-  return f;
+  return test::terrain_fixture(60000, 5);
 }
 
 TEST(SenderDrivenRecords, TerrainFlightGivesLocalRefinementsMeshesForFewerBytes) {

@@ -7,6 +7,8 @@
 #include <array>
 #include <boost/asio.hpp>
 #include <cmath>
+#include <map>
+#include <mutex>
 #include <span>
 
 #include "builder/build.h"
@@ -46,6 +48,15 @@ Fixture make_fixture(const Mesh& mesh, const std::string& name) {
     decode_normal(q, &f.snapped.normals[3 * n]);
   }
   return f;
+}
+
+const Fixture& terrain_fixture(uint64_t faces, uint32_t seed) {
+  static std::mutex mutex;
+  static std::map<std::pair<uint64_t, uint32_t>, std::unique_ptr<const Fixture>> built;
+  const std::lock_guard lock(mutex);
+  auto& fixture = built[{faces, seed}];
+  if (!fixture) fixture = std::make_unique<const Fixture>(make_fixture(make_terrain(faces, seed), "terrain"));
+  return *fixture;
 }
 
 const Fixture& attributed_terrain() {

@@ -2,19 +2,23 @@
 // a client should end with (local refinement of the same view, on the positions the wire carries).
 #pragma once
 #include <array>
+#include <cstdint>
 #include <memory>
 #include <optional>
 #include <string>
 #include <vector>
 
+#include "client/http_connection.h"
 #include "client/streaming_client.h"
 #include "common/camera.h"
 #include "io/mesh.h"
 #include "protocol/message_types.h"
 #include "protocol/server_messages.h"
 #include "server/catalogue.h"
+#include "server/http_server.h"
 #include "server/limits.h"
 #include "server/session.h"
+#include "server/tcp_server.h"
 #include "spm/hierarchy.h"
 #include "spm/selective_mesh.h"
 #include "spm/vertex_id.h"
@@ -34,8 +38,33 @@ struct Fixture {
 // Builds `mesh` and writes it to NAME.pms in a fresh temp_dir().
 Fixture make_fixture(const Mesh& mesh, const std::string& name);
 
+// make_terrain(faces, seed) built, written and served as "terrain", once per test program and size: the test
+// files that fly over the same terrain share one build.
+const Fixture& terrain_fixture(uint64_t faces, uint32_t seed);
+
 // A terrain with smooth per-vertex normals and colors, so both travel in the split records; made once.
 const Fixture& attributed_terrain();
+
+// The servers a test runs on a free loopback port: started when made, stopped when destroyed.
+struct LoopbackTcpServer {
+  explicit LoopbackTcpServer(std::shared_ptr<const server::Catalogue> catalogue, server::ServerLimits limits = {},
+                             uint16_t port = 0)
+      : tcp(std::move(catalogue), limits, "127.0.0.1", port) {
+    tcp.start();
+  }
+  uint16_t port() const { return tcp.port(); }
+  server::TcpServer tcp;
+};
+
+struct LoopbackHttpServer {
+  explicit LoopbackHttpServer(std::shared_ptr<const server::Catalogue> catalogue, const server::HttpLimits& limits = {})
+      : http(std::move(catalogue), limits, "127.0.0.1", 0) {
+    http.start();
+  }
+  uint16_t port() const { return http.port(); }
+  client::HttpUrl url() const { return client::HttpUrl{"127.0.0.1", http.port(), ""}; }
+  server::HttpServer http;
+};
 
 // Frames circling the model and closing in on it, so later frames need detail earlier ones did not.
 std::vector<Camera> orbit_path(const Hierarchy& h, int frames, float phase);

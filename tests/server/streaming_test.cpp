@@ -51,18 +51,10 @@ using test::make_fixture;
 using test::orbit_path;
 using test::send_raw;
 
-struct Server {
-  explicit Server(std::shared_ptr<const server::Catalogue> catalogue, server::ServerLimits limits = {},
-                  uint16_t port = 0)
-      : tcp(std::move(catalogue), limits, "127.0.0.1", port) {
-    tcp.start();
-  }
-  server::TcpServer tcp;
-};
+using Server = test::LoopbackTcpServer;
 
 const Fixture& terrain() {
-  static const Fixture f = make_fixture(make_terrain(60000, 5), "terrain");
-  return f;
+  return test::terrain_fixture(60000, 5);
 }
 
 TEST(Streaming, ClientMeshEqualsLocalRefinementAndASecondLapIsFree) {
