@@ -220,8 +220,8 @@ void run_serve(ServeArgs args) {
   print_stats("stopped", args, *catalogue, tcp, http.get(), uptime);
 }
 
-void add_limit(CliCommand& cmd, const char* name, uint32_t& value, const char* help) {
-  cmd.option(name, value, help).show_default();
+CliOption add_limit(CliCommand& cmd, const char* name, uint32_t& value, const char* help) {
+  return cmd.option(name, value, help).show_default();
 }
 
 }  // namespace
@@ -239,22 +239,27 @@ void add_serve_command(CliCommand& app) {
       cmd.option("--http-port", args->http_port,
                  "Also serve the receiver-driven mode over HTTP on this port (0: any free port, printed at start)");
   server::HttpLimits& http = args->http;
-  add_limit(cmd, "--http-max-connections", http.max_connections, "Concurrent HTTP connections; more get 503");
-  add_limit(cmd, "--http-idle-timeout-ms", http.idle_timeout_ms,
-            "Close a keep-alive HTTP connection that begins no request for this long");
-  add_limit(cmd, "--http-request-timeout-ms", http.request_timeout_ms,
-            "An HTTP request, once begun, must arrive whole within this");
-  add_limit(cmd, "--http-write-timeout-ms", http.write_timeout_ms,
-            "Close an HTTP peer that takes no answer byte for this long");
-  add_limit(cmd, "--http-max-url-bytes", http.max_target_bytes,
-            "Longest request URL (414 over it; POST takes longer codes)");
-  add_limit(cmd, "--http-max-header-bytes", http.max_header_bytes, "Request line and headers together (431 over it)");
-  add_limit(cmd, "--http-max-body-bytes", http.max_body_bytes, "A POSTed request code (413 over it)");
-  add_limit(cmd, "--http-max-request-ids", http.max_request_ids, "Ids one request code may name (413 over it)");
-  add_limit(cmd, "--http-max-request-depth", http.max_request_depth,
-            "Descendant depth one request may ask for (400 over it)");
-  add_limit(cmd, "--http-max-response-splits", http.max_response_splits,
-            "Split records one answer may carry, descendants included (413 over it)");
+  // The HTTP limits, which only a server with --http-port uses.
+  std::vector<VariantOption> http_only;
+  const auto add_http_limit = [&](const char* name, uint32_t& value, const char* help) {
+    http_only.push_back({add_limit(cmd, name, value, help), {"--http-port"}});
+  };
+  add_http_limit("--http-max-connections", http.max_connections, "Concurrent HTTP connections; more get 503");
+  add_http_limit("--http-idle-timeout-ms", http.idle_timeout_ms,
+                 "Close a keep-alive HTTP connection that begins no request for this long");
+  add_http_limit("--http-request-timeout-ms", http.request_timeout_ms,
+                 "An HTTP request, once begun, must arrive whole within this");
+  add_http_limit("--http-write-timeout-ms", http.write_timeout_ms,
+                 "Close an HTTP peer that takes no answer byte for this long");
+  add_http_limit("--http-max-url-bytes", http.max_target_bytes,
+                 "Longest request URL (414 over it; POST takes longer codes)");
+  add_http_limit("--http-max-header-bytes", http.max_header_bytes, "Request line and headers together (431 over it)");
+  add_http_limit("--http-max-body-bytes", http.max_body_bytes, "A POSTed request code (413 over it)");
+  add_http_limit("--http-max-request-ids", http.max_request_ids, "Ids one request code may name (413 over it)");
+  add_http_limit("--http-max-request-depth", http.max_request_depth,
+                 "Descendant depth one request may ask for (400 over it)");
+  add_http_limit("--http-max-response-splits", http.max_response_splits,
+                 "Split records one answer may carry, descendants included (413 over it)");
   cmd.flag("--json", args->json, "Print one JSON object per line: listening, stats (SIGUSR1), stopped");
   add_limit(cmd, "--max-sessions", limits.max_sessions, "Concurrent sessions; more are refused (server_full)");
   add_limit(cmd, "--threads", limits.threads, "I/O threads (0 = one per core)");
@@ -288,8 +293,9 @@ void add_serve_command(CliCommand& app) {
   cmd.option("--max-table-builds", args->max_table_builds, "Table builds running at once; more wait in a queue")
       .range(1u, 64u)
       .show_default();
-  cmd.on_run([args, http_port, preload] {
+  cmd.on_run([args, http_port, preload, http_only] {
     args->http_port_given = http_port.given();
+    if (!args->http_port_given) refuse_unused_options(http_only, "", "serve without --http-port");
     args->preload_given = preload.given();
     run_serve(*args);
   });

@@ -100,6 +100,8 @@ TEST(CliRefusals, OptionsOutsideTheirVariants) {
       {"multilevel level m.pml --level 1 --pixels 2 -o o.ply", {"--pixels", "--level alone"}},
       {"multilevel build terrain:100 -o o.pml --cluster grid:8,4 --base-vertices 10", {"--base-vertices", "--cluster"}},
       {"demo --model m.pms --rebuild", {"--rebuild", ".pms"}},
+      {"serve m.pms --http-max-connections 5", {"--http-max-connections", "--http-port"}},
+      {"serve m.pms --port 0 --http-request-timeout-ms 100", {"--http-request-timeout-ms", "--http-port"}},
   });
 }
 
