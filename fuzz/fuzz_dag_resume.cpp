@@ -84,7 +84,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   session.receive(frame_of(protocol::encode(protocol::Hello{protocol::kProtocolVersion, "fuzz"})));
   session.receive(std::move(open));
   // A slice of leaves, at most 63 split bits above each, and the load of the cut at the end.
-  const uint64_t work_bound = 64 * s.limits.slice_work + 2 * uint64_t(model.dag->size());
+  const uint64_t work_bound = 64 * s.limits.slice_work + 2 * uint64_t(model.tables->dag().size());
   for (int pumps = 0; session.pump(); ++pumps) {
     check(pumps < 100000, "the resume does not end");
     check(session.last_work() <= work_bound, "a pump did " + std::to_string(session.last_work()) + " units");
@@ -94,13 +94,14 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   const auto& mode = dynamic_cast<const server::DagSessionMode&>(*session.session_mode());
   check(mode.opened(), "neither resumed nor refused");
   std::string why;
-  check(mode.cut().dense(*model.dag).check(&why), "the resumed cut: " + why);
-  check(mode.state_bytes() < sizeof(server::DagSessionMode) + model.dag->size() / 4 + 64, "the state after a resume");
+  check(mode.cut().dense(model.tables->dag()).check(&why), "the resumed cut: " + why);
+  check(mode.state_bytes() < sizeof(server::DagSessionMode) + model.tables->dag().size() / 4 + 64,
+        "the state after a resume");
   protocol::DagView view;
   view.view.frame = 1;
   session.receive(frame_of(protocol::encode(view)));
   for (int pumps = 0; session.pump(); ++pumps) check(pumps < 100000, "the answer does not end");
   check(!session.error(), "a DAG_VIEW after a resume: " + session.error_text());
-  check(mode.cut().dense(*model.dag).check(&why), "the cut after a DAG_VIEW: " + why);
+  check(mode.cut().dense(model.tables->dag()).check(&why), "the cut after a DAG_VIEW: " + why);
   return 0;
 }

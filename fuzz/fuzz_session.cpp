@@ -100,7 +100,7 @@ Fixture make_fixture(const BuildOptions& options) {
   // mode"): nodes evaluated, operations made and the cut's load and store, a few units per node at most
   // (Session.DagAnswersAreBoundedSlices: 8 per node for the converged first answer). A resume's last turn
   // loads the cut: a slice of leaves and every split node.
-  f.dag_work_bound = 8 * uint64_t(f.served->dag->size()) + f.limits.slice_work;
+  f.dag_work_bound = 8 * uint64_t(f.served->tables->dag().size()) + f.limits.slice_work;
   // A window over every node, one bit each, and what growing it may leave unused (doubling at worst).
   f.tags_bound = 2 * (model.node_count() / 8 + 8 * sizeof(uint64_t)) + 64;
   // The tags, a resume's second set and a VIEW prefix's copy; a pending resume frame; the ranking,
@@ -254,7 +254,7 @@ Camera wild_camera(Input& in) {
 // One connection: a session, what it was sent, and the client's frames the transport has not handed over.
 struct Connection {
   explicit Connection(const Fixture& f)
-      : session(f.catalogue, f.limits), expect(f.served->model(), *f.served->dag, f.served->name) {}
+      : session(f.catalogue, f.limits), expect(f.served->model(), f.served->tables->dag(), f.served->name) {}
   server::Session session;
   Expectation expect;
   std::deque<Frame> inbound;
@@ -266,7 +266,7 @@ class Harness {
   explicit Harness(const Fixture& f)
       : f_(f),
         model_(f.served->model()),
-        dag_(*f.served->dag),
+        dag_(f.served->tables->dag()),
         client_(model_, dag_, f.limits),
         c_(std::make_unique<Connection>(f)) {}
 
