@@ -53,7 +53,8 @@ const Fixture& fixture() {
   return f;
 }
 
-void check_answer(const HttpAnswer& answer, bool parsed) {
+void check_answer(HttpAnswer answer, bool parsed) {
+  finish_body(answer);
   const int s = answer.status;
   check(s == 200 || s == 304 || (s >= 400 && s < 500));
   check(parsed || s >= 400);

@@ -30,6 +30,7 @@ struct ServeArgs {
   bool json = false;
   server::ServerLimits limits;
   server::HttpLimits http;
+  std::vector<std::string> trusted_proxies;  // --trusted-proxy, parsed into http.trusted_proxies
   std::string preload;         // mode names, or "all"
   bool preload_given = false;  // else every table is built when first asked for
   uint32_t max_table_builds = server::TableOptions{}.max_builds;
@@ -107,11 +108,19 @@ void add_table_stats(nlohmann::json& line, const server::Catalogue& catalogue) {
   line["table_waits"] = s.waits.load();
 }
 
-void add_http_stats(nlohmann::json& line, const server::HttpStats& s) {
+void add_http_stats(nlohmann::json& line, const server::HttpServer& http, const server::HttpLimits& limits) {
+  const server::HttpStats& s = http.stats();
   line["http"] = {{"connections_opened", s.connections_opened.load()},
                   {"connections_active", s.connections_active.load()},
                   {"connections_refused", s.connections_refused.load()},
+                  {"connections_refused_per_address", s.connections_refused_per_address.load()},
                   {"connections_timed_out", s.connections_timed_out.load()},
+                  {"connections_reset", s.connections_reset.load()},
+                  {"addresses_tracked", http.tracked_addresses()},
+                  {"budget_waits", s.budget_waits.load()},
+                  {"sliced_answers", s.sliced_answers.load()},
+                  {"longest_turn_us", s.longest_turn_us.load()},
+                  {"socket_buffer_bound_bytes", server::http_socket_buffer_bound(limits)},
                   {"requests", s.requests.load()},
                   {"not_modified", s.not_modified.load()},
                   {"client_errors", s.client_errors.load()},
@@ -144,7 +153,7 @@ void print_stats(const char* event, const ServeArgs& args, const server::Catalog
   if (args.json) {
     nlohmann::json line = stats_json(event, tcp.stats(), uptime);
     add_table_stats(line, catalogue);
-    if (http) add_http_stats(line, http->stats());
+    if (http) add_http_stats(line, *http, args.http);
     print_line(line.dump());
   } else {
     print_totals(tcp.stats());
@@ -260,6 +269,24 @@ void add_serve_command(CliCommand& app) {
                  "Descendant depth one request may ask for (400 over it)");
   add_http_limit("--http-max-response-splits", http.max_response_splits,
                  "Split records one answer may carry, descendants included (413 over it)");
+  add_http_limit("--http-max-connections-per-address", http.max_connections_per_address,
+                 "Concurrent HTTP connections from one client address; more get 503 (0 = no limit)");
+  add_http_limit("--http-address-budget", http.address_budget,
+                 "Work units a second one client address may take, bursts of as many; more wait, unread (0 = no "
+                 "limit; a unit is about one split record encoded)");
+  add_http_limit("--http-connection-budget", http.connection_budget,
+                 "Work units a second one HTTP connection may take, bursts of as many; more wait, unread (0 = no "
+                 "limit)");
+  add_http_limit("--http-turn-us", http.turn_us,
+                 "One HTTP connection's turn on an I/O thread, in microseconds; a larger answer is built over turns");
+  add_http_limit("--http-send-buffer-bytes", http.send_buffer_bytes,
+                 "Kernel send buffer asked per HTTP connection (SO_SNDBUF; Linux holds twice this)");
+  add_http_limit("--http-receive-buffer-bytes", http.receive_buffer_bytes,
+                 "Kernel receive buffer asked per HTTP connection (SO_RCVBUF; Linux holds twice this)");
+  http_only.push_back({cmd.option("--trusted-proxy", args->trusted_proxies,
+                                  "Peers (addresses or CIDR ranges) whose X-Forwarded-For names the client the "
+                                  "per-address limits apply to, e.g. the nginx cache in front"),
+                       {"--http-port"}});
   cmd.flag("--json", args->json, "Print one JSON object per line: listening, stats (SIGUSR1), stopped");
   add_limit(cmd, "--max-sessions", limits.max_sessions, "Concurrent sessions; more are refused (server_full)");
   add_limit(cmd, "--threads", limits.threads, "I/O threads (0 = one per core)");
@@ -296,6 +323,7 @@ void add_serve_command(CliCommand& app) {
   cmd.on_run([args, http_port, preload, http_only] {
     args->http_port_given = http_port.given();
     if (!args->http_port_given) refuse_unused_options(http_only, "", "serve without --http-port");
+    args->http.trusted_proxies = server::AddressRanges::parse(args->trusted_proxies, "--trusted-proxy");
     args->preload_given = preload.given();
     run_serve(*args);
   });

@@ -131,7 +131,7 @@ HttpAnswer splits_answer(const ServedModel& model, const HttpLimits& limits, con
   HttpAnswer answer = fresh(request, etag, "application/octet-stream");
   answer.split_resource = true;
   if (answer.status == 200) {
-    answer.owned = split_records_body(model, split_request, nodes);
+    answer.builder = std::make_shared<SplitRecordsWriter>(model, split_request, nodes);
     answer.splits = nodes.size();
   }
   return answer;
@@ -257,6 +257,13 @@ HttpAnswer method_not_allowed(const char* allow) {
   HttpAnswer answer = error_answer(405, std::string("this resource takes ") + allow);
   answer.allow = allow;
   return answer;
+}
+
+void finish_body(HttpAnswer& answer) {
+  if (!answer.builder) return;
+  answer.builder->build(std::chrono::steady_clock::time_point::max());
+  answer.owned = answer.builder->take();
+  answer.builder.reset();
 }
 
 HttpAnswer error_answer(int status, const std::string& text) {

@@ -2,6 +2,7 @@
 // function of the catalogue and one request, with no I/O, no Beast and no per-client state, so any number
 // of server processes answer a URL with the same bytes. docs/protocol.md, "Receiver-driven over HTTP".
 #pragma once
+#include <chrono>
 #include <cstdint>
 #include <memory>
 #include <span>
@@ -21,6 +22,16 @@ struct HttpRequest {
   std::string_view if_none_match;  // the header's value; empty when absent
 };
 
+// A body built a piece at a time by the transport, so that one large answer does not hold an I/O thread
+// past its turn (docs/operating.md, "HTTP").
+class BodyBuilder {
+ public:
+  virtual ~BodyBuilder() = default;
+  // Builds on until the body is done (true) or `until` has passed (false: call again).
+  virtual bool build(std::chrono::steady_clock::time_point until) = 0;
+  virtual std::vector<uint8_t> take() = 0;
+};
+
 struct HttpAnswer {
   int status = 200;
   std::string_view content_type = "text/plain; charset=utf-8";  // a literal
@@ -33,6 +44,8 @@ struct HttpAnswer {
   std::shared_ptr<const std::vector<uint8_t>> shared;
   size_t shared_offset = 0;
   std::vector<uint8_t> owned;
+  // Set when `owned` is still to be built (a 200 of split records): body() is empty until finish_body().
+  std::shared_ptr<BodyBuilder> builder;
   // Set with a 503 when the resource needs tables of the model that are not built yet: the transport
   // waits for them (under the request deadline) and routes the request again, or sends the 503 then.
   const ServedModel* waits_for = nullptr;
@@ -45,6 +58,9 @@ struct HttpAnswer {
 
 // The answer to one request: 200, 304 (If-None-Match matched), or a 4xx with a short text body.
 HttpAnswer route(const Catalogue& catalogue, const HttpLimits& limits, const HttpRequest& request);
+
+// Builds `answer`'s body to the end, in one go, if it has a builder.
+void finish_body(HttpAnswer& answer);
 
 // A 4xx or 5xx with `text` (and a newline) as its body.
 HttpAnswer error_answer(int status, const std::string& text);

@@ -11,8 +11,9 @@
 
 namespace pms::server {
 
-// `threads` I/O threads of its own, one strand per connection; keep-alive; every read, write and idle
-// wait under a deadline; at most max_connections at once (more get 503).
+// `threads` I/O threads of its own, each connection on one of them; keep-alive; every read, write and idle
+// wait under a deadline; at most max_connections at once and max_connections_per_address from one client
+// (more get 503); each connection's turns and each client's work bounded (http_connection.h).
 class HttpServer {
  public:
   HttpServer(std::shared_ptr<const Catalogue> catalogue, const HttpLimits& limits, const std::string& host,
@@ -25,6 +26,7 @@ class HttpServer {
   void start();           // runs the I/O threads in the background
   void stop();            // closes every connection and joins the threads
   const HttpStats& stats() const;
+  size_t tracked_addresses() const;  // client addresses with a connection or a budget debt now
 
  private:
   struct Impl;

@@ -1,5 +1,8 @@
 #include "server/io_threads.h"
 
+#include <linux/sockios.h>
+#include <sys/ioctl.h>
+
 #include <algorithm>
 #include <exception>
 
@@ -19,6 +22,12 @@ void listen_on(boost::asio::ip::tcp::acceptor& acceptor, const std::string& host
   if (!ec) acceptor.bind(endpoint, ec);
   if (!ec) acceptor.listen(asio::socket_base::max_listen_connections, ec);
   if (ec) fail(host + ":" + std::to_string(port), (what.empty() ? "" : what + ": ") + "cannot listen: " + ec.message());
+}
+
+uint64_t unsent_bytes(boost::asio::ip::tcp::socket& socket) {
+  int unsent = 0;
+  if (::ioctl(socket.native_handle(), SIOCOUTQ, &unsent) != 0) return 0;
+  return uint64_t(std::max(unsent, 0));
 }
 
 unsigned io_thread_count(unsigned count) { return count ? count : std::max(1u, std::thread::hardware_concurrency()); }

@@ -1,5 +1,5 @@
-// What the TCP and HTTP servers share about sockets and threads: binding the listening socket, and
-// the pool of threads that run one io_context.
+// What the TCP and HTTP servers share about sockets and threads: binding the listening socket, what the
+// kernel still holds of a connection's answers, and the pool of threads that run one io_context.
 #pragma once
 #include <utility>  // before asio with C++20 (docs/architecture.md, "Stack")
 
@@ -17,6 +17,10 @@ namespace pms::server {
 // unless empty) when host is not an IP address or the port cannot be had.
 void listen_on(boost::asio::ip::tcp::acceptor& acceptor, const std::string& host, uint16_t port,
                const std::string& what);
+
+// Bytes written to `socket` that the peer has not acknowledged yet (SIOCOUTQ): what the kernel still holds
+// for it. A write that succeeded only moved bytes there; a peer that never reads leaves them.
+uint64_t unsent_bytes(boost::asio::ip::tcp::socket& socket);
 
 // The threads `count` asks for: itself, or one per core for 0.
 unsigned io_thread_count(unsigned count);

@@ -5,6 +5,7 @@
 
 #include "protocol/message_types.h"
 #include "protocol/position_grid.h"
+#include "server/client_address.h"
 
 namespace pms::server {
 
@@ -31,6 +32,12 @@ struct ServerLimits {
 // Every bound the HTTP transport (receiver-driven mode) puts on a peer (docs/operating.md, "HTTP").
 struct HttpLimits {
   uint32_t max_connections = 1000;       // more are answered 503 and closed
+  uint32_t max_connections_per_address = 32;  // one client address's at once (a trusted proxy's: any)
+  uint32_t address_budget = 1000000;     // work units a second per client address (burst: as many); 0 = any
+  uint32_t connection_budget = 500000;   // work units a second per connection (burst: as many); 0 = any
+  uint32_t turn_us = 1000;               // one connection's turn on an I/O thread before others get theirs
+  uint32_t send_buffer_bytes = 128u << 10;    // SO_SNDBUF asked per connection (Linux doubles it)
+  uint32_t receive_buffer_bytes = 32u << 10;  // SO_RCVBUF asked per connection (Linux doubles it)
   uint32_t max_target_bytes = 4096;      // the request line's URL: 414 over it (larger codes are POSTed)
   uint32_t max_header_bytes = 8192;      // request line and headers: 431 over it
   uint32_t max_body_bytes = 16384;       // a POSTed request code: 413 over it
@@ -41,6 +48,14 @@ struct HttpLimits {
   uint32_t request_timeout_ms = 10000;   // a request, once begun, must arrive whole within this
   uint32_t write_timeout_ms = 10000;     // answer bytes waiting and none taken for this long: closed
   uint32_t threads = 0;                  // I/O threads; 0 = one per core
+  // Peers whose X-Forwarded-For names the client the per-address limits apply to (--trusted-proxy).
+  AddressRanges trusted_proxies;
 };
+
+// The most the kernel holds for the HTTP connections' socket buffers: Linux doubles what SO_SNDBUF and
+// SO_RCVBUF ask for (its bookkeeping), for each of max_connections (docs/operating.md, "HTTP").
+inline uint64_t http_socket_buffer_bound(const HttpLimits& limits) {
+  return uint64_t(limits.max_connections) * 2 * (uint64_t(limits.send_buffer_bytes) + limits.receive_buffer_bytes);
+}
 
 }  // namespace pms::server

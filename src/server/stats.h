@@ -20,10 +20,22 @@ struct ServerStats {
 // The HTTP transport's counters (docs/operating.md, "The JSON lines").
 struct HttpStats {
   std::atomic<uint64_t> connections_opened{0}, connections_active{0}, connections_refused{0};
+  std::atomic<uint64_t> connections_refused_per_address{0};  // over --http-max-connections-per-address
+  std::atomic<uint64_t> connections_reset{0};  // closed at a deadline with a reset, their unsent bytes dropped
   std::atomic<uint64_t> connections_timed_out{0};                        // closed by a deadline (idle, request, write)
   std::atomic<uint64_t> requests{0}, not_modified{0}, client_errors{0};  // 4xx answers
   std::atomic<uint64_t> bytes_in{0}, bytes_out{0}, splits_served{0};
   std::atomic<uint64_t> split_requests{0};  // 200s and 304s of the split resources (splits, blocks)
+  std::atomic<uint64_t> budget_waits{0};    // times a connection was not read until its budgets refilled
+  std::atomic<uint64_t> sliced_answers{0};  // answers whose body took more than one turn to build
+  std::atomic<uint64_t> longest_turn_us{0};  // the longest one connection held an I/O thread in one go
 };
+
+// Raises `target` to `value` if it is larger, from any thread.
+inline void update_max(std::atomic<uint64_t>& target, uint64_t value) {
+  uint64_t seen = target.load(std::memory_order_relaxed);
+  while (value > seen && !target.compare_exchange_weak(seen, value, std::memory_order_relaxed)) {
+  }
+}
 
 }  // namespace pms::server

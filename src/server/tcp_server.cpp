@@ -6,8 +6,6 @@
 // memory by the frame limit and the send queue, and every wait by a deadline (docs/operating.md).
 #include <utility>  // before asio with C++20 (docs/architecture.md, "Stack")
 
-#include <linux/sockios.h>
-#include <sys/ioctl.h>
 #include <array>
 #include <utility>  // before asio with C++20 (docs/architecture.md, "Stack")
 
@@ -36,12 +34,6 @@ using asio::ip::tcp;
 using protocol::ErrorCode;
 using Clock = std::chrono::steady_clock;
 using std::chrono::milliseconds;
-
-void update_max(std::atomic<uint64_t>& target, uint64_t value) {
-  uint64_t seen = target.load(std::memory_order_relaxed);
-  while (value > seen && !target.compare_exchange_weak(seen, value, std::memory_order_relaxed)) {
-  }
-}
 
 // What a peer must take per write deadline for it to count as reading (or all it was sent, if less).
 constexpr uint64_t kMinProgressBytes = 1024;
@@ -296,9 +288,7 @@ void Connection::start_write_deadline() {
 }
 
 uint64_t Connection::bytes_taken() const {
-  int unsent = 0;
-  if (::ioctl(const_cast<tcp::socket&>(socket_).native_handle(), SIOCOUTQ, &unsent) != 0) unsent = 0;
-  return written_ - std::min<uint64_t>(written_, uint64_t(std::max(unsent, 0)));
+  return written_ - std::min<uint64_t>(written_, unsent_bytes(const_cast<tcp::socket&>(socket_)));
 }
 
 void Connection::serve() {
