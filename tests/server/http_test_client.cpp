@@ -23,8 +23,13 @@ struct HttpTestClient::Impl {
   beast::flat_buffer buffer;
 };
 
-HttpTestClient::HttpTestClient(uint16_t port, int timeout_ms) : impl_(std::make_unique<Impl>()) {
-  impl_->socket.connect(tcp::endpoint(asio::ip::make_address("127.0.0.1"), port));
+HttpTestClient::HttpTestClient(uint16_t port, int timeout_ms, const std::string& from, int receive_buffer)
+    : impl_(std::make_unique<Impl>()) {
+  const auto loopback = asio::ip::make_address("127.0.0.1");
+  impl_->socket.open(tcp::v4());
+  if (receive_buffer > 0) impl_->socket.set_option(asio::socket_base::receive_buffer_size(receive_buffer));
+  impl_->socket.bind(tcp::endpoint(asio::ip::make_address(from), 0));
+  impl_->socket.connect(tcp::endpoint(loopback, port));
   timeval tv{timeout_ms / 1000, (timeout_ms % 1000) * 1000};
   ::setsockopt(impl_->socket.native_handle(), SOL_SOCKET, SO_RCVTIMEO, &tv, sizeof tv);
 }

@@ -22,7 +22,10 @@ struct HttpReply {
 
 class HttpTestClient {
  public:
-  explicit HttpTestClient(uint16_t port, int timeout_ms = 5000);  // reads wait at most timeout_ms
+  // Reads wait at most timeout_ms. `from`: the loopback address to connect from (127.0.0.0/8 is all the
+  // machine's), so tests can be several clients; `receive_buffer` > 0: SO_RCVBUF, set before connecting.
+  explicit HttpTestClient(uint16_t port, int timeout_ms = 5000, const std::string& from = "127.0.0.1",
+                          int receive_buffer = 0);
   ~HttpTestClient();
 
   HttpReply get(const std::string& target, const std::map<std::string, std::string>& headers = {});
