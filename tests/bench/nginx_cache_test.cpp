@@ -139,6 +139,13 @@ Flight fly(const std::string& server, const fs::path& path, const std::string& f
 uint64_t origin_split_requests(ServeChild& origin) { return origin.stats().line["http"]["split_requests"]; }
 uint64_t origin_requests(ServeChild& origin) { return origin.stats().line["http"]["requests"]; }
 
+// The origin behind the cache. The cache is one address with many connections: trusted, it is not capped
+// as one client would be, and each viewer behind it is charged its own budget (the configuration sends
+// X-Forwarded-For).
+std::vector<std::string> origin_flags(const fs::path& model) {
+  return {model.string(), "--http-port", "0", "--trusted-proxy", "127.0.0.1"};
+}
+
 class NginxCache : public ::testing::Test {
  protected:
   void SetUp() override {
@@ -151,8 +158,7 @@ class NginxCache : public ::testing::Test {
     pms_ = dir_ / "bunny.pms";
     const test::CliRun build = test::run_pmstream("build " + model.string() + " -o " + pms_.string());
     ASSERT_EQ(build.exit_code, 0) << build.err;
-    origin_ =
-        std::make_unique<ServeChild>(PMSTREAM_BINARY, std::vector<std::string>{pms_.string(), "--http-port", "0"});
+    origin_ = std::make_unique<ServeChild>(PMSTREAM_BINARY, origin_flags(pms_));
     origin_port_ = origin_->listening()["http_port"].get<uint16_t>();
   }
 
@@ -246,7 +252,7 @@ TEST_F(NginxCache, MultilevelLevelsComeFromTheCacheTheSecondTime) {
   const test::CliRun build = test::run_pmstream("multilevel build " + test::shared_model("bunny.ply.xz").string() +
                                                 " -o " + pml.string() + " --levels 8");
   ASSERT_EQ(build.exit_code, 0) << build.err;
-  ServeChild origin(PMSTREAM_BINARY, std::vector<std::string>{pml.string(), "--http-port", "0"});
+  ServeChild origin(PMSTREAM_BINARY, origin_flags(pml));
   Nginx nginx(nginx_, origin.listening()["http_port"].get<uint16_t>());
   const fs::path path = make_path("zoom", 10);
   const auto fly_levels = [&](const std::string& name) {
