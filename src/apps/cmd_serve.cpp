@@ -126,12 +126,13 @@ void print_line(const std::string& line) {
   std::fflush(stdout);
 }
 
-void print_totals(const server::ServerStats& s) {
+// `event` starts the line: "stats" for the totals so far (SIGUSR1), "stopped" for the last ones.
+void print_totals(const char* event, const server::ServerStats& s) {
   std::printf(
-      "stopped: %llu sessions (%llu refused, %llu timed out, %llu failed), %llu protocol errors, "
+      "%s: %llu sessions (%llu refused, %llu timed out, %llu failed), %llu protocol errors, "
       "%llu bytes in, %llu bytes out, %llu vsplits sent, "
       "peak session state %llu bytes (%llu without its active tags), peak RSS %.0f MB\n",
-      (unsigned long long)s.sessions_opened.load(), (unsigned long long)s.sessions_refused.load(),
+      event, (unsigned long long)s.sessions_opened.load(), (unsigned long long)s.sessions_refused.load(),
       (unsigned long long)s.sessions_timed_out.load(), (unsigned long long)s.sessions_failed.load(),
       (unsigned long long)s.protocol_errors.load(), (unsigned long long)s.bytes_in.load(),
       (unsigned long long)s.bytes_out.load(), (unsigned long long)s.splits_sent.load(),
@@ -147,7 +148,7 @@ void print_stats(const char* event, const ServeArgs& args, const server::Catalog
     if (http) add_http_stats(line, http->stats());
     print_line(line.dump());
   } else {
-    print_totals(tcp.stats());
+    print_totals(event, tcp.stats());
     std::printf("tables: %llu bytes built\n", (unsigned long long)catalogue.table_bytes());
     if (http) {
       const server::HttpStats& s = http->stats();
