@@ -254,7 +254,8 @@ void add_serve_command(CliCommand& app) {
                  "Close an HTTP peer that takes no answer byte for this long");
   add_http_limit("--http-max-url-bytes", http.max_target_bytes,
                  "Longest request URL (414 over it; POST takes longer codes)");
-  add_http_limit("--http-max-header-bytes", http.max_header_bytes, "Request line and headers together (431 over it)");
+  add_http_limit("--http-max-header-bytes", http.max_header_bytes,
+                 "The request line (414 over it) and the header fields (431), each");
   add_http_limit("--http-max-body-bytes", http.max_body_bytes, "A POSTed request code (413 over it)");
   add_http_limit("--http-max-request-ids", http.max_request_ids, "Ids one request code may name (413 over it)");
   add_http_limit("--http-max-request-depth", http.max_request_depth,

@@ -32,7 +32,7 @@ struct ServerLimits {
 struct HttpLimits {
   uint32_t max_connections = 1000;       // more are answered 503 and closed
   uint32_t max_target_bytes = 4096;      // the request line's URL: 414 over it (larger codes are POSTed)
-  uint32_t max_header_bytes = 8192;      // request line and headers: 431 over it
+  uint32_t max_header_bytes = 8192;      // the request line (414 over it), and the fields (431)
   uint32_t max_body_bytes = 16384;       // a POSTed request code: 413 over it
   uint32_t max_request_ids = 4096;       // ids in one request code: 413 over it
   uint32_t max_request_depth = 8;        // a request's descendant depth: 400 over it
