@@ -2,8 +2,9 @@
 // through Beast's request parser under the server's limits, then the routes over a real catalogue, then
 // the response head, as many pipelined requests as the bytes hold. Input byte 0 picks the form: raw
 // HTTP bytes, or the rest as a request code sent as GET /models/terrain/splits/BASE64 and as POST (so the
-// fuzzer reaches the code paths without having to invent base64). Every answer must be a 2xx, 304 or 4xx
-// whose body stays within the limits' bound; nothing may crash, hang or throw.
+// fuzzer reaches the code paths without having to invent base64). Every answer must be a 2xx, 304, a
+// redirect with its Location, 4xx or 501 whose body stays within the limits' bound; nothing may crash,
+// hang or throw.
 #include <unistd.h>
 #include <cstddef>
 #include <cstdint>
@@ -56,8 +57,10 @@ const Fixture& fixture() {
 void check_answer(HttpAnswer answer, bool parsed) {
   finish_body(answer);
   const int s = answer.status;
-  check(s == 200 || s == 304 || (s >= 400 && s < 500));
+  const bool redirect = s == 301 || s == 308;
+  check(s == 200 || s == 304 || redirect || (s >= 400 && s < 500) || s == 501);
   check(parsed || s >= 400);
+  check(redirect == !answer.location.empty());
   check(answer.body().size() <= fixture().body_bound);
   std::string head;
   write_response_head(answer, true, 11, head);  // every answer has a head, ending with an empty line
@@ -81,9 +84,10 @@ void serve_bytes(std::string_view bytes) {
         ec = {};
         continue;
       }
-      if (ec) return check_answer(parse_error_answer(ec, bytes.substr(0, used)), false);
+      if (ec) return check_answer(parse_error_answer(ec, parser, bytes.substr(used), f.limits), false);
     }
     if (!parser.is_done()) return;
+    if (const auto refusal = refuse_header(parser)) return check_answer(refusal->answer, false);  // and close
     check_answer(answer_request(*f.catalogue, f.limits, parser.get()), true);
     bytes.remove_prefix(used);
   }

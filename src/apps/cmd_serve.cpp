@@ -135,12 +135,13 @@ void print_line(const std::string& line) {
   std::fflush(stdout);
 }
 
-void print_totals(const server::ServerStats& s) {
+// `event` starts the line: "stats" for the totals so far (SIGUSR1), "stopped" for the last ones.
+void print_totals(const char* event, const server::ServerStats& s) {
   std::printf(
-      "stopped: %llu sessions (%llu refused, %llu timed out, %llu failed), %llu protocol errors, "
+      "%s: %llu sessions (%llu refused, %llu timed out, %llu failed), %llu protocol errors, "
       "%llu bytes in, %llu bytes out, %llu vsplits sent, "
       "peak session state %llu bytes (%llu without its active tags), peak RSS %.0f MB\n",
-      (unsigned long long)s.sessions_opened.load(), (unsigned long long)s.sessions_refused.load(),
+      event, (unsigned long long)s.sessions_opened.load(), (unsigned long long)s.sessions_refused.load(),
       (unsigned long long)s.sessions_timed_out.load(), (unsigned long long)s.sessions_failed.load(),
       (unsigned long long)s.protocol_errors.load(), (unsigned long long)s.bytes_in.load(),
       (unsigned long long)s.bytes_out.load(), (unsigned long long)s.splits_sent.load(),
@@ -156,7 +157,7 @@ void print_stats(const char* event, const ServeArgs& args, const server::Catalog
     if (http) add_http_stats(line, *http, args.http);
     print_line(line.dump());
   } else {
-    print_totals(tcp.stats());
+    print_totals(event, tcp.stats());
     std::printf("tables: %llu bytes built\n", (unsigned long long)catalogue.table_bytes());
     if (http) {
       const server::HttpStats& s = http->stats();
@@ -262,7 +263,8 @@ void add_serve_command(CliCommand& app) {
                  "Close an HTTP peer that takes no answer byte for this long");
   add_http_limit("--http-max-url-bytes", http.max_target_bytes,
                  "Longest request URL (414 over it; POST takes longer codes)");
-  add_http_limit("--http-max-header-bytes", http.max_header_bytes, "Request line and headers together (431 over it)");
+  add_http_limit("--http-max-header-bytes", http.max_header_bytes,
+                 "The request line (414 over it) and the header fields (431), each");
   add_http_limit("--http-max-body-bytes", http.max_body_bytes, "A POSTed request code (413 over it)");
   add_http_limit("--http-max-request-ids", http.max_request_ids, "Ids one request code may name (413 over it)");
   add_http_limit("--http-max-request-depth", http.max_request_depth,

@@ -19,21 +19,48 @@ int hex_value(char c) {
   return -1;
 }
 
+// The byte "%XX" at `at` stands for; -1 when two hex digits do not follow.
+int escaped_byte(std::string_view text, size_t at) {
+  if (at + 2 >= text.size()) return -1;
+  const int high = hex_value(text[at + 1]), low = hex_value(text[at + 2]);
+  return high < 0 || low < 0 ? -1 : high << 4 | low;
+}
+
+void append_escaped(std::string& out, unsigned char c) {
+  static constexpr char kHex[] = "0123456789ABCDEF";
+  out += '%';
+  out += kHex[c >> 4];
+  out += kHex[c & 15];
+}
+
+// Calls `each(byte, escaped)` for every byte `text` stands for, each "%XX" decoded, until it returns false;
+// false too for a '%' without two hex digits or a raw byte no path segment may hold ('/' is one unless
+// `slashes`, for a whole path).
+template <class Each>
+bool for_each_byte(std::string_view text, bool slashes, Each each) {
+  for (size_t i = 0; i < text.size(); ++i) {
+    const auto c = static_cast<unsigned char>(text[i]);
+    if (c != '%') {
+      if (!raw_path_char(c) && !(slashes && c == '/')) return false;
+      if (!each(c, false)) return false;
+      continue;
+    }
+    const int decoded = escaped_byte(text, i);
+    if (decoded < 0 || !each(static_cast<unsigned char>(decoded), true)) return false;
+    i += 2;
+  }
+  return true;
+}
+
 }  // namespace
 
 std::string url_segment_encode(std::string_view name) {
-  static constexpr char kHex[] = "0123456789ABCDEF";
   std::string out;
   out.reserve(name.size());
   for (const char ch : name) {
     const auto c = static_cast<unsigned char>(ch);
-    if (unreserved(c)) {
-      out += ch;
-    } else {
-      out += '%';
-      out += kHex[c >> 4];
-      out += kHex[c & 15];
-    }
+    if (unreserved(c)) out += ch;
+    else append_escaped(out, c);
   }
   return out;
 }
@@ -41,22 +68,23 @@ std::string url_segment_encode(std::string_view name) {
 std::optional<std::string> url_segment_decode(std::string_view segment) {
   std::string out;
   out.reserve(segment.size());
-  for (size_t i = 0; i < segment.size(); ++i) {
-    const auto c = static_cast<unsigned char>(segment[i]);
-    if (c != '%') {
-      if (!raw_path_char(c)) return std::nullopt;
-      out += char(c);
-      continue;
-    }
-    if (i + 2 >= segment.size()) return std::nullopt;
-    const int high = hex_value(segment[i + 1]), low = hex_value(segment[i + 2]);
-    if (high < 0 || low < 0) return std::nullopt;
-    const char decoded = char(high << 4 | low);
-    if (decoded == '/' || decoded == '\0') return std::nullopt;
-    out += decoded;
-    i += 2;
-  }
-  return out;
+  const bool read = for_each_byte(segment, false, [&out](unsigned char c, bool escaped) {
+    if (escaped && (c == '/' || c == '\0')) return false;
+    out += char(c);
+    return true;
+  });
+  return read ? std::optional(std::move(out)) : std::nullopt;
+}
+
+std::optional<std::string> url_path_normalize(std::string_view path) {
+  std::string out;
+  out.reserve(path.size());
+  const bool read = for_each_byte(path, true, [&out](unsigned char c, bool escaped) {
+    if (escaped && !unreserved(c)) append_escaped(out, c);
+    else out += char(c);
+    return true;
+  });
+  return read ? std::optional(std::move(out)) : std::nullopt;
 }
 
 std::string model_path(std::string_view name) { return "/models/" + url_segment_encode(name); }

@@ -16,6 +16,11 @@ std::string url_segment_encode(std::string_view name);
 // digits, a byte no path segment may hold raw, or a decoded '/' or NUL (no name holds them).
 std::optional<std::string> url_segment_decode(std::string_view segment);
 
+// `path` in RFC 3986's normal form: escapes of unreserved characters decoded (§6.2.2.2), the hex of the
+// others in upper case (§6.2.2.1), so two spellings of one path compare equal; nothing for a '%' without
+// two hex digits or a byte no path may hold raw.
+std::optional<std::string> url_path_normalize(std::string_view path);
+
 // "/models/" and the encoded name: where every resource of the model starts.
 std::string model_path(std::string_view name);
 

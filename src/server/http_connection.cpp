@@ -192,7 +192,7 @@ class HttpConnection : public std::enable_shared_from_this<HttpConnection> {
       if (!parser_) {
         parser_.emplace();
         bound_parser(*parser_, limits_);
-        parser_->eager(true);
+        parser_->eager(false);  // the header alone: accept_header sees it before any byte of a body is taken
         request_bytes_ = 0;
       }
       beast::error_code ec;
@@ -200,6 +200,7 @@ class HttpConnection : public std::enable_shared_from_this<HttpConnection> {
       buffer_.consume(used);
       request_bytes_ += used;
       if (ec && ec != http::error::need_more) return refuse_request(ec);
+      if (parser_->is_header_done() && !parser_->eager() && !accept_header()) return;
       if (parser_->is_done()) {
         stats_.requests++;
         route_request(turn_end);
@@ -250,6 +251,27 @@ class HttpConnection : public std::enable_shared_from_this<HttpConnection> {
   }
 
   // ---- answering ----
+
+  // The header is in, its body not yet read: a request the server refuses on its header is answered and
+  // its connection closed before its body could be read as a next request; one whose client waits for
+  // "100 Continue" gets it unless the body has begun to come anyway (RFC 9110 §10.1.1).
+  bool accept_header() {
+    if (std::optional<HeaderRefusal> refusal = refuse_header(*parser_)) {
+      finish_request(std::move(refusal->answer), refusal->close);
+      return false;
+    }
+    parser_->eager(true);
+    if (expects_continue(*parser_) && buffer_.size() == 0) send_continue();
+    return true;
+  }
+
+  void send_continue() {
+    head_text_ = "HTTP/1.1 100 Continue\r\n\r\n";
+    body_ = {};
+    written_ = 0;
+    writing_ = interim_ = true;
+    write();
+  }
 
   // The request in the parser, routed; one whose tables are being built waits for them (wait_for_tables);
   // one whose body is large is built over turns (build_body).
@@ -313,10 +335,10 @@ class HttpConnection : public std::enable_shared_from_this<HttpConnection> {
     serve();
   }
 
-  void finish_request(HttpAnswer answer) {
+  void finish_request(HttpAnswer answer, bool close = false) {
     const auto& request = parser_->get();
     const bool head = request.method() == http::verb::head;
-    const bool keep_alive = request.keep_alive();
+    const bool keep_alive = request.keep_alive() && !close;
     const unsigned version = request.version();
     const ClientAddress client = client_of(request);
     parser_.reset();
@@ -361,7 +383,7 @@ class HttpConnection : public std::enable_shared_from_this<HttpConnection> {
   void refuse_request(const beast::error_code& ec) {
     const auto data = buffer_.data();
     const std::string_view buffered(static_cast<const char*>(data.data()), data.size());
-    respond(parse_error_answer(ec, buffered), false, false, 11);
+    respond(parse_error_answer(ec, *parser_, buffered, limits_), false, false, 11);
   }
 
   void respond(HttpAnswer answer, bool head, bool keep_alive, unsigned version) {
@@ -400,6 +422,7 @@ class HttpConnection : public std::enable_shared_from_this<HttpConnection> {
       if (ec) return close(false);
     }
     writing_ = false;
+    if (std::exchange(interim_, false)) return;  // the 100 Continue: the body comes next, under its deadline
     answer_ = {};
     if (!keep_alive_) return close(false);
     if (unsent_bytes(socket_) > 0) start_draining();
@@ -447,6 +470,7 @@ class HttpConnection : public std::enable_shared_from_this<HttpConnection> {
   size_t written_ = 0;
   uint64_t bytes_written_ = 0;  // to the socket, in the connection's life
   bool writing_ = false, keep_alive_ = false, closed_ = false;
+  bool interim_ = false;  // what is being written is a 100 Continue, the request's answer to come
   bool paused_ = false;   // over budget
   bool yielded_ = false;  // its turn is over, the next one posted
   bool waiting_ = false;  // for the tables the request in the parser needs

@@ -7,6 +7,7 @@
 #include <boost/beast/core.hpp>
 #include <boost/beast/http.hpp>
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -23,9 +24,25 @@ using HttpParser = http::request_parser<http::vector_body<uint8_t>>;
 // A parser bounded by the limits (request line and headers, body).
 void bound_parser(HttpParser& parser, const HttpLimits& limits);
 
-// The 4xx for a request the parser refused; `buffered` is what had arrived, to tell a URL that is too
-// long (414) from too many headers (431).
-HttpAnswer parse_error_answer(const boost::beast::error_code& ec, std::string_view buffered);
+// The 4xx for a request the parser refused. `buffered` is what the parser had not taken yet: with the
+// parser's state it tells a request line over the header limit (414) from header fields over it (431).
+HttpAnswer parse_error_answer(const boost::beast::error_code& ec, const HttpParser& parser, std::string_view buffered,
+                              const HttpLimits& limits);
+
+// A request refused on its header alone, before any byte of its body is read, and whether its connection
+// must close after the answer.
+struct HeaderRefusal {
+  HttpAnswer answer;
+  bool close = true;
+};
+
+// The refusal of a request whose header breaks RFC 9112's framing or Host rules or asks for an expectation
+// the server does not meet; nothing for one the server answers. The parser's header must be done.
+std::optional<HeaderRefusal> refuse_header(const HttpParser& parser);
+
+// Whether the client waits for "100 Continue" before it sends the body (RFC 9110 §10.1.1): an HTTP/1.1
+// request with a body and "Expect: 100-continue". The parser's header must be done.
+bool expects_continue(const HttpParser& parser);
 
 // The answer to a parsed request (the routes, with HEAD answered as GET).
 HttpAnswer answer_request(const Catalogue& catalogue, const HttpLimits& limits,

@@ -8,6 +8,7 @@
 #include <charconv>
 #include <cstdio>
 #include <nlohmann/json.hpp>
+#include <optional>
 
 #include "protocol/base64url.h"
 #include "protocol/message_types.h"
@@ -230,6 +231,36 @@ HttpAnswer model_route(const Catalogue& catalogue, const HttpLimits& limits, con
                        etag_of(*model, {"/splits/", s[3]}));
 }
 
+// The one spelling of `target` (RFC 3986 §6.2.2's normal form, and a model's name escaped as the clients
+// escape it: every byte outside the unreserved set, so "a!b" and "a%21b", which the routes take for one
+// name, are one URL); nothing when `target` is no path a client could be sent to.
+std::optional<std::string> canonical_target(std::string_view target) {
+  std::optional<std::string> path = protocol::url_path_normalize(target);
+  if (!path) return std::nullopt;
+  const Segments s = segments_of(*path);
+  if (s.count < 2 || s.at[0] != "models") return path;
+  if (const std::optional<std::string> name = protocol::url_segment_decode(s.at[1]))
+    path->replace(size_t(s.at[1].data() - path->data()), s.at[1].size(), protocol::url_segment_encode(*name));
+  return path;
+}
+
+// A URL spelled another way than its resource's canonical URL is sent there, not served: a second URL with
+// the same bytes would be a second cache entry, and a way around a cache's copy (a miss at the origin for
+// as many spellings as a client cares to write). The redirect is always correct, as both spellings name the
+// same resource (or the same absence of one); a 404 would break a hand-typed URL for nothing. 308 keeps a
+// POST a POST (RFC 9110 §15.4.9); no-store, as every answer but a 200 or 304: a cache that stored the
+// redirects would hold an entry per spelling, which is what the redirect is there to prevent.
+std::optional<HttpAnswer> redirect_to_canonical(const HttpLimits& limits, const HttpRequest& request) {
+  std::optional<std::string> canonical = canonical_target(request.target);
+  if (!canonical || *canonical == request.target) return std::nullopt;
+  if (canonical->size() > limits.max_target_bytes)  // escaping lengthened it: no GET could reach it
+    return error_answer(414, "the URL's canonical form is over " + std::to_string(limits.max_target_bytes) + " bytes");
+  const bool get = request.method == "GET" || request.method == "HEAD";
+  HttpAnswer answer = error_answer(get ? 301 : 308, "the URL of this resource is " + *canonical);
+  answer.location = std::move(*canonical);
+  return answer;
+}
+
 }  // namespace
 
 bool parse_decimal(std::string_view text, uint64_t& value) {
@@ -280,6 +311,7 @@ HttpAnswer route(const Catalogue& catalogue, const HttpLimits& limits, const Htt
                         "the URL is over " + std::to_string(limits.max_target_bytes) + " bytes; POST large requests");
   if (request.target.empty() || request.target[0] != '/' || request.target.find('?') != std::string_view::npos)
     return error_answer(400, "the URL must be a path without a query string");
+  if (std::optional<HttpAnswer> redirect = redirect_to_canonical(limits, request)) return std::move(*redirect);
   const Segments segments = segments_of(request.target);
   const std::span<const std::string_view> s = segments.all();
   try {

@@ -38,6 +38,7 @@ struct HttpAnswer {
   std::string etag;                                             // strong, quoted; empty for errors
   bool cacheable = false;                                       // immutable for a year; errors are not stored
   std::string allow;                                            // the methods a 405's resource takes
+  std::string location;                                         // a redirect's target: the canonical URL
   uint64_t splits = 0;                                          // split records in the body
   bool split_resource = false;  // an answer of /splits or /blocks (200 or 304): what a cache saves the origin
   // The body: bytes shared with the catalogue (BASE), from an offset, or its own.

@@ -39,7 +39,7 @@ struct HttpLimits {
   uint32_t send_buffer_bytes = 128u << 10;    // SO_SNDBUF asked per connection (Linux doubles it)
   uint32_t receive_buffer_bytes = 32u << 10;  // SO_RCVBUF asked per connection (Linux doubles it)
   uint32_t max_target_bytes = 4096;      // the request line's URL: 414 over it (larger codes are POSTed)
-  uint32_t max_header_bytes = 8192;      // request line and headers: 431 over it
+  uint32_t max_header_bytes = 8192;      // the request line (414 over it), and the fields (431)
   uint32_t max_body_bytes = 16384;       // a POSTed request code: 413 over it
   uint32_t max_request_ids = 4096;       // ids in one request code: 413 over it
   uint32_t max_request_depth = 8;        // a request's descendant depth: 400 over it

@@ -5,13 +5,17 @@
 #include <nlohmann/json.hpp>
 
 #include <array>
+#include <chrono>
 #include <cmath>
+#include <csignal>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
 #include <string>
+#include <vector>
 
+#include "child_process.h"
 #include "io/mesh.h"
 #include "io/shapes.h"
 #include "test_support.h"
@@ -110,6 +114,35 @@ TEST(Cli, ErrorsAreOneLineNamingTheFile) {
 
   const RunResult both = run("refine " + garbage + " -o " + (dir / "o.ply").string());
   EXPECT_NE(both.exit_code, 0);
+}
+
+// Text mode: SIGUSR1 prints the totals so far under "stats:" and the server runs on; only the stop prints
+// "stopped:". Every line is waited for under a deadline.
+TEST(Cli, ServeSigusr1PrintsStatsAndOnlyTheStopPrintsStopped) {
+  using std::chrono::seconds;
+  const std::string pms_path = (test::temp_dir() / "terrain.pms").string();
+  ASSERT_EQ(run("build terrain:2000 -o " + pms_path).exit_code, 0);
+  test::ChildProcess serve(PMSTREAM_BINARY,
+                           {"serve", pms_path, "--host", "127.0.0.1", "--port", "0", "--http-port", "0"});
+  // "serving terrain: ...", then a listening line per port: the signals are blocked by then.
+  for (const char* start : {"serving ", "listening on ", "listening on "})
+    ASSERT_EQ(serve.next_line(seconds(30)).rfind(start, 0), 0u) << start;
+  const auto lines_after = [&serve](int signal) {
+    serve.signal(signal);
+    std::vector<std::string> lines;
+    for (int i = 0; i < 3; ++i) lines.push_back(serve.next_line(seconds(30)));
+    return lines;
+  };
+  for (int round = 0; round < 2; ++round) {
+    const std::vector<std::string> stats = lines_after(SIGUSR1);
+    EXPECT_EQ(stats[0].rfind("stats: ", 0), 0u) << stats[0];
+    EXPECT_EQ(stats[1].rfind("tables: ", 0), 0u) << stats[1];
+    EXPECT_EQ(stats[2].rfind("http: ", 0), 0u) << stats[2];
+  }
+  const std::vector<std::string> stopped = lines_after(SIGTERM);
+  EXPECT_EQ(stopped[0].rfind("stopped: ", 0), 0u) << stopped[0];
+  EXPECT_EQ(stopped[2].rfind("http: ", 0), 0u) << stopped[2];
+  EXPECT_EQ(serve.wait(seconds(30)), 0);
 }
 
 }  // namespace

@@ -109,12 +109,13 @@ TEST(ServeChild, CountersAgreeWithWhatTheClientReceived) {
 }
 
 // One HTTP/1.1 request that asks the server to close after it; the whole answer as text.
-std::string http_exchange(uint16_t port, const std::string& target) {
+std::string http_exchange(uint16_t port, const std::string& target, const std::string& fields = "") {
   namespace asio = boost::asio;
   asio::io_context io;
   asio::ip::tcp::socket socket(io);
   socket.connect({asio::ip::make_address("127.0.0.1"), port});
-  asio::write(socket, asio::buffer("GET " + target + " HTTP/1.1\r\nHost: t\r\nConnection: close\r\n\r\n"));
+  asio::write(socket,
+              asio::buffer("GET " + target + " HTTP/1.1\r\nHost: t\r\nConnection: close\r\n" + fields + "\r\n"));
   std::string answer;
   boost::system::error_code ec;
   asio::read(socket, asio::dynamic_buffer(answer), ec);  // to the end of the stream
@@ -186,7 +187,7 @@ TEST(ServeChild, StreamReceiverWithAFrameBudgetReportsWhatItCarried) {
 }
 
 // The HTTP size limits are the command line's: a URL one byte over --http-max-url-bytes gets 414, one at
-// the limit is served; headers over --http-max-header-bytes get 431.
+// the limit is served; header fields over --http-max-header-bytes get 431, a request line over it 414.
 TEST(ServeChild, HttpSizeLimitsComeFromTheCommandLine) {
   const auto pms = small_model(test::temp_dir());
   ServeChild server(PMSTREAM_BINARY,
@@ -197,7 +198,8 @@ TEST(ServeChild, HttpSizeLimitsComeFromTheCommandLine) {
   EXPECT_EQ(http_exchange(http_port, at_limit).rfind("HTTP/1.1 404", 0), 0u);
   EXPECT_EQ(http_exchange(http_port, at_limit + "/").rfind("HTTP/1.1 414", 0), 0u);
   EXPECT_EQ(http_exchange(http_port, "/models/terrain/base").rfind("HTTP/1.1 200", 0), 0u);
-  EXPECT_EQ(http_exchange(http_port, "/models?" + std::string(200, 'x')).rfind("HTTP/1.1 431", 0), 0u);
+  EXPECT_EQ(http_exchange(http_port, "/models", "X: " + std::string(200, 'x') + "\r\n").rfind("HTTP/1.1 431", 0), 0u);
+  EXPECT_EQ(http_exchange(http_port, "/models?" + std::string(200, 'x')).rfind("HTTP/1.1 414", 0), 0u);
 }
 
 TEST(ServeChild, AServerThatDoesNotStartSaysWhy) {

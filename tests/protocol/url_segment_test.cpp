@@ -34,5 +34,19 @@ TEST(UrlSegment, MalformedSegmentsAreRejected) {
     EXPECT_FALSE(url_segment_decode(bad).has_value()) << bad;
 }
 
+// RFC 3986 §6.2.2: one spelling per path, so a server can tell a second spelling of a URL from the first.
+TEST(UrlSegment, APathsNormalFormDecodesUnreservedEscapesAndUpperCasesTheRest) {
+  EXPECT_EQ(url_path_normalize("/models/%62unny/base"), "/models/bunny/base");
+  EXPECT_EQ(url_path_normalize("/%6d%6F%64els/a%2db%2E%5F%7E%30"), "/models/a-b._~0");
+  EXPECT_EQ(url_path_normalize("/models/my%20bunny%2f%c3%bc"), "/models/my%20bunny%2F%C3%BC");
+  EXPECT_EQ(url_path_normalize("/models/a!b@c:d/splits/AZaz09-_"), "/models/a!b@c:d/splits/AZaz09-_");
+  EXPECT_EQ(url_path_normalize("/%25%36%32"), "/%2562");  // an escaped '%' stays one: "%2562" is not "%62" or "b"
+  EXPECT_EQ(url_path_normalize(""), "");
+  for (const std::string once : {"/models/%62unny/base", "/models/my%20bunny%2f%c3%bc", "/%25%36%32"})
+    EXPECT_EQ(url_path_normalize(*url_path_normalize(once)), url_path_normalize(once)) << once;
+  for (const char* bad : {"/%", "/a%4", "/%4g", "/a b", "/a\"b", "/<x>", "/a?b", "/\x80"})
+    EXPECT_FALSE(url_path_normalize(bad).has_value()) << bad;
+}
+
 }  // namespace
 }  // namespace pms::protocol

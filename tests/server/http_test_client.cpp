@@ -96,6 +96,19 @@ HttpReply HttpTestClient::raw(const std::string& bytes) {
   return read();
 }
 
+std::optional<std::string> HttpTestClient::rest_until_closed() {
+  const auto buffered = impl_->buffer.data();
+  std::string rest(static_cast<const char*>(buffered.data()), buffered.size());
+  impl_->buffer.consume(buffered.size());
+  char chunk[4096];
+  for (;;) {
+    boost::system::error_code ec;
+    rest.append(chunk, impl_->socket.read_some(asio::buffer(chunk), ec));
+    if (ec == asio::error::eof || ec == asio::error::connection_reset) return rest;
+    if (ec) return std::nullopt;  // the receive timeout: still open
+  }
+}
+
 bool HttpTestClient::closed_by_server() {
   char byte;
   boost::system::error_code ec;

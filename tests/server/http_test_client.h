@@ -4,6 +4,7 @@
 #include <cstdint>
 #include <map>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -37,6 +38,9 @@ class HttpTestClient {
   HttpReply read();
   // True when the server closes the connection within timeout_ms (reads return end of stream or reset).
   bool closed_by_server();
+  // The bytes the server sends after the responses read so far, up to its close; nothing when it does not
+  // close within timeout_ms of its last byte.
+  std::optional<std::string> rest_until_closed();
 
  private:
   struct Impl;
