@@ -20,6 +20,7 @@
 #include <cstdio>
 #include <optional>
 
+#include "server/drain_watch.h"
 #include "server/http_cost.h"
 #include "server/http_message.h"
 #include "server/http_routes.h"
@@ -84,6 +85,7 @@ class HttpConnection : public std::enable_shared_from_this<HttpConnection> {
         deadline_(socket_.get_executor()),
         pause_(socket_.get_executor()),
         buffer_(size_t(shared.limits.max_header_bytes) + shared.limits.max_body_bytes + kReadChunk),
+        drain_(shared.limits.write_timeout_ms),
         shared_(shared),
         limits_(shared.limits),
         stats_(shared.stats),
@@ -112,7 +114,7 @@ class HttpConnection : public std::enable_shared_from_this<HttpConnection> {
  private:
   // ---- deadlines ----
 
-  // The phase's deadline (idle, request or write), kept with the drain's (start_draining) on one timer.
+  // The phase's deadline (idle, request or write), kept with the drain watch's looks on one timer.
   void set_deadline(uint32_t ms) {
     phase_until_ = Clock::now() + milliseconds(ms);
     arm_deadline();
@@ -120,15 +122,14 @@ class HttpConnection : public std::enable_shared_from_this<HttpConnection> {
 
   void arm_deadline() {
     Clock::time_point at = phase_until_;
-    if (draining_) at = std::min(at, drain_progress_at_ + milliseconds(limits_.write_timeout_ms));
+    if (drain_.running()) at = std::min(at, drain_.next_look());
     deadline_.set(at, [self = shared_from_this()] { self->on_deadline(); });
   }
 
   void on_deadline() {
     if (closed_) return;
     const Clock::time_point now = Clock::now();
-    if (draining_) check_drain(now);
-    if (draining_ && now >= drain_progress_at_ + milliseconds(limits_.write_timeout_ms)) return time_out();
+    if (drain_.running() && drain_.stalled(now, bytes_taken(), bytes_written_, writing_)) return time_out();
     if (now < phase_until_) return arm_deadline();
     if (waiting_) return stop_waiting();
     if (paused_) return set_deadline(limits_.idle_timeout_ms);  // the server's wait, not the peer's silence
@@ -140,25 +141,6 @@ class HttpConnection : public std::enable_shared_from_this<HttpConnection> {
     stats_.connections_timed_out++;
     stats_.connections_reset++;
     close(true);
-  }
-
-  // An answer all written may still sit in the kernel: the peer must take it within the write deadline,
-  // as it must take each piece of an answer that did not fit.
-  void start_draining() {
-    if (draining_) return;
-    draining_ = true;
-    drain_taken_ = bytes_taken();
-    drain_progress_at_ = Clock::now();
-  }
-
-  void check_drain(Clock::time_point now) {
-    const uint64_t taken = bytes_taken();
-    if (taken == bytes_written_) {
-      draining_ = false;
-    } else if (taken > drain_taken_) {
-      drain_taken_ = taken;
-      drain_progress_at_ = now;
-    }
   }
 
   uint64_t bytes_taken() { return bytes_written_ - std::min(bytes_written_, unsent_bytes(socket_)); }
@@ -425,7 +407,9 @@ class HttpConnection : public std::enable_shared_from_this<HttpConnection> {
     if (std::exchange(interim_, false)) return;  // the 100 Continue: the body comes next, under its deadline
     answer_ = {};
     if (!keep_alive_) return close(false);
-    if (unsent_bytes(socket_) > 0) start_draining();
+    // An answer all written may still sit in the kernel: the peer must take it within the write deadline,
+    // as it must take each piece of an answer that did not fit.
+    if (unsent_bytes(socket_) > 0) drain_.start(Clock::now(), bytes_taken());
     set_deadline(limits_.idle_timeout_ms);
   }
 
@@ -475,11 +459,9 @@ class HttpConnection : public std::enable_shared_from_this<HttpConnection> {
   bool yielded_ = false;  // its turn is over, the next one posted
   bool waiting_ = false;  // for the tables the request in the parser needs
   HttpAnswer pending_answer_;  // its 503, sent if the request deadline passes first
-  // Deadlines: the phase's, and while the kernel holds answer bytes, the drain's.
+  // Deadlines: the phase's, and while the kernel holds answer bytes, the drain watch's.
   Clock::time_point phase_until_{};
-  bool draining_ = false;
-  uint64_t drain_taken_ = 0;
-  Clock::time_point drain_progress_at_{};
+  DrainWatch drain_;
   HttpServerShared& shared_;
   const HttpLimits& limits_;
   HttpStats& stats_;

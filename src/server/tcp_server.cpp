@@ -20,6 +20,7 @@
 #include "protocol/message_types.h"
 #include "protocol/server_messages.h"
 #include "server/catalogue.h"
+#include "server/drain_watch.h"
 #include "server/io_threads.h"
 #include "server/limits.h"
 #include "server/session.h"
@@ -34,9 +35,6 @@ using asio::ip::tcp;
 using protocol::ErrorCode;
 using Clock = std::chrono::steady_clock;
 using std::chrono::milliseconds;
-
-// What a peer must take per write deadline for it to count as reading (or all it was sent, if less).
-constexpr uint64_t kMinProgressBytes = 1024;
 
 void log_line(const std::string& line) { std::fprintf(stderr, "pmstream serve: %s\n", line.c_str()); }
 
@@ -75,15 +73,6 @@ class Connection : public std::enable_shared_from_this<Connection> {
     bool writable = false;  // async_wait for the socket to take more: it was full
     bool turn = false;      // a posted serve(): the turn ended with work left and others go first
     bool throttle = false;  // the token bucket's timer: no frame is handled until it fires
-  };
-
-  // Runs while answer bytes wait (here or in the kernel), and starts again each time the peer takes enough
-  // of them: a write succeeding is no sign of progress (see bytes_taken).
-  struct WriteDeadline {
-    bool running = false;
-    Clock::time_point since;    // bytes wait, and the peer has taken too few of them since
-    Clock::time_point checked;  // when the peer's progress was last looked at
-    uint64_t taken = 0;         // bytes the peer had taken then
   };
 
   bool closed() const { return phase_ == Phase::closed; }
@@ -126,7 +115,6 @@ class Connection : public std::enable_shared_from_this<Connection> {
   void arm_timer();
   void on_timer(const boost::system::error_code& ec);
   void on_close_deadline(Clock::time_point now);
-  bool peer_stopped_reading(Clock::time_point now);
   std::string missed_deadline(Clock::time_point now) const;
   void time_out(const std::string& why);
   void close();
@@ -150,7 +138,7 @@ class Connection : public std::enable_shared_from_this<Connection> {
   const void* server_;  // the TableBuilds group of this server's sessions
   std::string peer_;
   Clock::time_point connected_, last_activity_, frame_started_, close_by_;
-  WriteDeadline write_deadline_;
+  DrainWatch write_deadline_{limits_.write_timeout_ms};  // runs while answer bytes wait, here or in the kernel
   uint64_t written_ = 0;  // bytes into the socket
   Clock::time_point timer_at_ = Clock::time_point::max();
   size_t queued_bytes_ = 0;
@@ -280,10 +268,8 @@ void Connection::count_queued(size_t before) {
 }
 
 void Connection::start_write_deadline() {
-  if (write_deadline_.running) return;
-  write_deadline_.running = true;
-  write_deadline_.since = write_deadline_.checked = Clock::now();
-  write_deadline_.taken = bytes_taken();
+  if (write_deadline_.running()) return;
+  write_deadline_.start(Clock::now(), bytes_taken());
   arm_timer();
 }
 
@@ -453,11 +439,7 @@ Clock::time_point Connection::next_deadline() const {
   Clock::time_point at = last_activity_ + milliseconds(limits_.idle_timeout_ms);
   if (!session_.opened()) at = std::min(at, connected_ + milliseconds(limits_.handshake_timeout_ms));
   if (frame_clock_running()) at = std::min(at, frame_started_ + milliseconds(limits_.frame_timeout_ms));
-  // Progress is only seen when looked for, so look four times per deadline: a peer is then closed within
-  // 1.25 deadlines of the last bytes it took.
-  if (write_deadline_.running)
-    at = std::min({at, write_deadline_.since + milliseconds(limits_.write_timeout_ms),
-                   write_deadline_.checked + milliseconds(std::max<uint32_t>(1, limits_.write_timeout_ms / 4))});
+  if (write_deadline_.running()) at = std::min(at, write_deadline_.next_look());
   return at;
 }
 
@@ -477,7 +459,7 @@ void Connection::on_timer(const boost::system::error_code& ec) {
   timer_at_ = Clock::time_point::max();
   const Clock::time_point now = Clock::now();
   if (phase_ == Phase::draining) return on_close_deadline(now);
-  if (write_deadline_.running && peer_stopped_reading(now)) {
+  if (write_deadline_.running() && write_deadline_.stalled(now, bytes_taken(), written_, !session_.outbox().empty())) {
     timed_out_ = reset_ = true;
     return close();  // it does not read, so an ERROR would never arrive either
   }
@@ -491,20 +473,6 @@ void Connection::on_close_deadline(Clock::time_point now) {
   if (!delivered && now < close_by_) return arm_timer();
   reset_ = !delivered;  // its ERROR could not be delivered in time
   close();
-}
-
-// The peer reads: the wait starts again. A trickle does not count: a kernel that has merged its full
-// receive queue takes a few bytes now and then from a peer that never reads.
-bool Connection::peer_stopped_reading(Clock::time_point now) {
-  WriteDeadline& w = write_deadline_;
-  w.checked = now;
-  const uint64_t taken = bytes_taken();
-  if (taken >= w.taken + std::min<uint64_t>(kMinProgressBytes, written_ - w.taken)) {
-    w.taken = taken;
-    w.since = now;
-  }
-  if (session_.outbox().empty() && taken == written_) w.running = false;  // all of it is across
-  return w.running && now >= w.since + milliseconds(limits_.write_timeout_ms);
 }
 
 // The text of the ERROR for the first deadline an open session has missed; empty while it missed none.
