@@ -22,7 +22,7 @@ using std::chrono::milliseconds;
 
 constexpr uint64_t kTerrainFaces = 200000;
 constexpr uint32_t kFrames = 180, kQuickFrames = 60;
-constexpr float kTolerance = 1;  // pixels
+constexpr float kTolerance = 1;     // pixels
 const milliseconds kOutlast(3000);  // past the longest deadline, so that each class meets it
 
 std::string mb(uint64_t bytes) { return fixed(double(bytes) / 1e6, 1); }
@@ -50,6 +50,10 @@ std::string verdict(const AttackOutcome& o) {
   check(o.peak_total <= o.memory_bound, "memory");
   check(o.idle_after_s >= 0, "idle");
   check(o.sigterm_s <= 1, "SIGTERM");
+  for (size_t c = 0; c < o.classes.size(); ++c) {
+    check(o.tallies[c].late == 0, std::string(attack_class_name(o.classes[c])) + " late");
+    check(o.tallies[c].smuggled == 0, std::string(attack_class_name(o.classes[c])) + " answered");
+  }
   return missed.empty() ? "met" : "missed: " + missed;
 }
 
@@ -107,31 +111,45 @@ Table class_table() {
 }
 
 std::vector<std::string> class_row(AttackClass attack, const AttackTally& t) {
-  return {attack_class_name(attack), thousands(t.rounds),     thousands(t.answers), thousands(t.client_errors),
-          thousands(t.refused),      thousands(t.server_errors), thousands(t.closed), thousands(t.resets),
-          thousands(t.longest_close_ms), thousands(t.late),   thousands(t.smuggled)};
+  return {attack_class_name(attack),     thousands(t.rounds),        thousands(t.answers), thousands(t.client_errors),
+          thousands(t.refused),          thousands(t.server_errors), thousands(t.closed),  thousands(t.resets),
+          thousands(t.longest_close_ms), thousands(t.late),          thousands(t.smuggled)};
 }
 
 json outcome_json(const AttackOutcome& o) {
   json classes = json::array();
   for (size_t c = 0; c < o.classes.size(); ++c) {
     const AttackTally& t = o.tallies[c];
-    classes.push_back({{"class", attack_class_name(o.classes[c])}, {"rounds", t.rounds.load()},
-                       {"answers", t.answers.load()}, {"client_errors", t.client_errors.load()},
-                       {"refused", t.refused.load()}, {"server_errors", t.server_errors.load()},
-                       {"closed", t.closed.load()}, {"resets", t.resets.load()},
-                       {"longest_close_ms", t.longest_close_ms.load()}, {"late", t.late.load()},
+    classes.push_back({{"class", attack_class_name(o.classes[c])},
+                       {"rounds", t.rounds.load()},
+                       {"answers", t.answers.load()},
+                       {"client_errors", t.client_errors.load()},
+                       {"refused", t.refused.load()},
+                       {"server_errors", t.server_errors.load()},
+                       {"closed", t.closed.load()},
+                       {"resets", t.resets.load()},
+                       {"longest_close_ms", t.longest_close_ms.load()},
+                       {"late", t.late.load()},
                        {"smuggled", t.smuggled.load()}});
   }
-  return {{"group", o.group},           {"error", o.error},
-          {"quiet_p99_ms", p99(o.quiet.latency_ms)}, {"attacked_p99_ms", p99(o.attacked.latency_ms)},
-          {"median_ratio", o.median_ratio}, {"pairs", o.pairs},
-          {"answers", o.attacked.latency_ms.size()}, {"same_mesh", o.same_mesh},
-          {"server_cpu_s", o.attack_cpu_s}, {"quiet_rss_bytes", o.quiet_rss},
-          {"peak_rss_bytes", o.peak_rss}, {"peak_socket_bytes", o.peak_sockets},
-          {"peak_total_bytes", o.peak_total}, {"memory_bound_bytes", o.memory_bound},
-          {"idle_after_s", o.idle_after_s}, {"sigterm_s", o.sigterm_s},
-          {"http", o.http},             {"classes", classes},
+  return {{"group", o.group},
+          {"error", o.error},
+          {"quiet_p99_ms", p99(o.quiet.latency_ms)},
+          {"attacked_p99_ms", p99(o.attacked.latency_ms)},
+          {"median_ratio", o.median_ratio},
+          {"pairs", o.pairs},
+          {"answers", o.attacked.latency_ms.size()},
+          {"same_mesh", o.same_mesh},
+          {"server_cpu_s", o.attack_cpu_s},
+          {"quiet_rss_bytes", o.quiet_rss},
+          {"peak_rss_bytes", o.peak_rss},
+          {"peak_socket_bytes", o.peak_sockets},
+          {"peak_total_bytes", o.peak_total},
+          {"memory_bound_bytes", o.memory_bound},
+          {"idle_after_s", o.idle_after_s},
+          {"sigterm_s", o.sigterm_s},
+          {"http", o.http},
+          {"classes", classes},
           {"bounds", verdict(o)}};
 }
 
@@ -143,8 +161,9 @@ void run_attacks_group(BenchContext& context) {
   AttackSetup setup = attack_setup(context.pmstream_exe, model_pms(context, model),
                                    context.options.quick ? kQuickFrames : kFrames, kTolerance);
   setup.min_attack = std::max({setup.request_timeout, setup.write_timeout}) + kOutlast;
-  section += "Model " + model + "; the good client flies a " + std::to_string(setup.path.size()) +
-             "-frame orbit at " + fixed(kTolerance, 1) + " px; ten attackers per class on four addresses; the "
+  section += "Model " + model + "; the good client flies a " + std::to_string(setup.path.size()) + "-frame orbit at " +
+             fixed(kTolerance, 1) +
+             " px; ten attackers per class on four addresses; the "
              "server's default limits and deadlines, `--threads 2 --preload receiver`. The expensive request: " +
              setup.expensive_note + ".\n\n";
   Table groups = group_table(), classes = class_table();

@@ -103,10 +103,18 @@ class GroupRun {
  private:
   std::vector<std::string> server_args() const {
     auto ms = [](milliseconds m) { return std::to_string(m.count()); };
-    return {setup_.model_pms,           "--http-port",  "0",
-            "--threads",                "2",            "--preload",
-            "receiver",                 "--http-request-timeout-ms", ms(setup_.request_timeout),
-            "--http-write-timeout-ms",  ms(setup_.write_timeout),    "--http-idle-timeout-ms",
+    return {setup_.model_pms,
+            "--http-port",
+            "0",
+            "--threads",
+            "2",
+            "--preload",
+            "receiver",
+            "--http-request-timeout-ms",
+            ms(setup_.request_timeout),
+            "--http-write-timeout-ms",
+            ms(setup_.write_timeout),
+            "--http-idle-timeout-ms",
             ms(setup_.idle_timeout)};
   }
 

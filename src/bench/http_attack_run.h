@@ -45,11 +45,11 @@ struct AttackOutcome {
   AttackFlight quiet, attacked;     // the last pair flown
   double median_ratio = 0;          // of the attacked / quiet p99 ratios of the pairs flown
   size_t pairs = 0;
-  bool same_mesh = false;             // every attacked flight ended with the quiet flight's mesh
-  double attack_cpu_s = 0;            // the server's CPU during the (last) attack
-  uint64_t quiet_rss = 0;             // after the quiet flight
+  bool same_mesh = false;   // every attacked flight ended with the quiet flight's mesh
+  double attack_cpu_s = 0;  // the server's CPU during the (last) attack
+  uint64_t quiet_rss = 0;   // after the quiet flight
   uint64_t peak_rss = 0, peak_sockets = 0, peak_total = 0;
-  uint64_t memory_bound = 0;          // quiet_rss + the server's socket_buffer_bound_bytes
+  uint64_t memory_bound = 0;               // quiet_rss + the server's socket_buffer_bound_bytes
   double idle_after_s = -1, idle_use = 0;  // attack's end to a second under 10 % of a core; that second's use
   double sigterm_s = 0;
   nlohmann::json http;  // the server's http counters after the attack, less those before it

@@ -5,10 +5,10 @@
 #include "apps/camera_path.h"
 #include "bench/child_process.h"
 #include "common/error.h"
-#include "spm/pms_file.h"
 #include "protocol/base64url.h"
 #include "protocol/split_request.h"
 #include "protocol/url_segment.h"
+#include "spm/pms_file.h"
 
 namespace pms::bench {
 namespace {

@@ -173,7 +173,8 @@ void bombs(const AttackTarget& target, int index, uint64_t round, AttackTally& t
   if (!peer) return;
   constexpr size_t kBody = 100000;
   if (round % 3 == 0) peer->send(request("GET", "/" + std::string(5000, 'u')), after(kConnect));
-  if (round % 3 == 1) peer->send(request("GET", "/models", "X-Bomb: " + std::string(12000, 'h') + "\r\n"), after(kConnect));
+  if (round % 3 == 1)
+    peer->send(request("GET", "/models", "X-Bomb: " + std::string(12000, 'h') + "\r\n"), after(kConnect));
   if (round % 3 == 2)  // the server may close before it has taken the whole body
     peer->send(request("POST", target.model + "/splits", "Content-Length: " + std::to_string(kBody) + "\r\n") +
                    std::string(kBody, 'b'),
@@ -251,16 +252,26 @@ void connection_flood(const AttackTarget& target, int index, const std::atomic<b
 
 const char* attack_class_name(AttackClass attack) {
   switch (attack) {
-    case AttackClass::slowloris: return "slowloris";
-    case AttackClass::dripped_body: return "dripped body";
-    case AttackClass::slow_reader: return "slow reader";
-    case AttackClass::unread_pipeline: return "unread pipeline";
-    case AttackClass::malformed: return "malformed";
-    case AttackClass::bombs: return "URL/header/body bombs";
-    case AttackClass::expensive_pipeline: return "expensive pipeline";
-    case AttackClass::expensive_head: return "expensive HEAD";
-    case AttackClass::smuggling: return "smuggling";
-    case AttackClass::connection_flood: return "connection flood";
+    case AttackClass::slowloris:
+      return "slowloris";
+    case AttackClass::dripped_body:
+      return "dripped body";
+    case AttackClass::slow_reader:
+      return "slow reader";
+    case AttackClass::unread_pipeline:
+      return "unread pipeline";
+    case AttackClass::malformed:
+      return "malformed";
+    case AttackClass::bombs:
+      return "URL/header/body bombs";
+    case AttackClass::expensive_pipeline:
+      return "expensive pipeline";
+    case AttackClass::expensive_head:
+      return "expensive HEAD";
+    case AttackClass::smuggling:
+      return "smuggling";
+    case AttackClass::connection_flood:
+      return "connection flood";
   }
   return "?";
 }
@@ -282,16 +293,35 @@ void run_attacker(AttackClass attack, const AttackTarget& target, int index, con
   if (attack == AttackClass::connection_flood) return connection_flood(target, index, stop, tally);
   for (uint64_t round = uint64_t(index); !stop; ++round, std::this_thread::sleep_for(target.pace)) {
     switch (attack) {
-      case AttackClass::slowloris: slowloris(target, index, tally); break;
-      case AttackClass::dripped_body: dripped_body(target, index, tally); break;
-      case AttackClass::slow_reader: slow_reader(target, index, stop, tally); break;
-      case AttackClass::unread_pipeline: unread_pipeline(target, index, tally); break;
-      case AttackClass::malformed: malformed(target, index, round, tally); break;
-      case AttackClass::bombs: bombs(target, index, round, tally); break;
-      case AttackClass::expensive_pipeline: expensive(target, index, false, tally); break;
-      case AttackClass::expensive_head: expensive(target, index, true, tally); break;
-      case AttackClass::smuggling: smuggling(target, index, round, tally); break;
-      case AttackClass::connection_flood: break;
+      case AttackClass::slowloris:
+        slowloris(target, index, tally);
+        break;
+      case AttackClass::dripped_body:
+        dripped_body(target, index, tally);
+        break;
+      case AttackClass::slow_reader:
+        slow_reader(target, index, stop, tally);
+        break;
+      case AttackClass::unread_pipeline:
+        unread_pipeline(target, index, tally);
+        break;
+      case AttackClass::malformed:
+        malformed(target, index, round, tally);
+        break;
+      case AttackClass::bombs:
+        bombs(target, index, round, tally);
+        break;
+      case AttackClass::expensive_pipeline:
+        expensive(target, index, false, tally);
+        break;
+      case AttackClass::expensive_head:
+        expensive(target, index, true, tally);
+        break;
+      case AttackClass::smuggling:
+        smuggling(target, index, round, tally);
+        break;
+      case AttackClass::connection_flood:
+        break;
     }
   }
 }

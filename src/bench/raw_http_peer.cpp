@@ -78,8 +78,8 @@ void ResponseCounter::feed(std::string_view bytes) {
   }
 }
 
-RawHttpPeer::RawHttpPeer(const std::string& source, uint16_t port, AttackClock::time_point deadline,
-                         int receive_buffer, bool head)
+RawHttpPeer::RawHttpPeer(const std::string& source, uint16_t port, AttackClock::time_point deadline, int receive_buffer,
+                         bool head)
     : answers_(head) {
   fd_ = ::socket(AF_INET, SOCK_STREAM | SOCK_NONBLOCK | SOCK_CLOEXEC, 0);
   if (fd_ < 0) return;

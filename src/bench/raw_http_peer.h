@@ -20,7 +20,7 @@ class ResponseCounter {
   explicit ResponseCounter(bool head = false) : head_(head) {}
   void feed(std::string_view bytes);
   const std::vector<int>& statuses() const { return statuses_; }  // of the answers whole so far, in order
-  bool broken() const { return broken_; }                          // something that is not HTTP/1.x came
+  bool broken() const { return broken_; }                         // something that is not HTTP/1.x came
 
  private:
   bool head_;

@@ -1,6 +1,5 @@
 #include "bench/server_watch.h"
 
-
 #include <algorithm>
 #include <cstdlib>
 #include <deque>
@@ -29,7 +28,8 @@ uint64_t skmem_bytes(const std::string& fields) {
     const size_t digits = field.find_first_of("0123456789");
     if (digits == std::string::npos) continue;
     const std::string name = field.substr(0, digits);
-    if (name == "r" || name == "t" || name == "w" || name == "f") sum += std::strtoull(field.c_str() + digits, nullptr, 10);
+    if (name == "r" || name == "t" || name == "w" || name == "f")
+      sum += std::strtoull(field.c_str() + digits, nullptr, 10);
   }
   return sum;
 }
@@ -65,7 +65,8 @@ double seconds_to_idle(pid_t pid, double idle, milliseconds within, double& use)
     std::this_thread::sleep_for(milliseconds(100));  // the sampling period of a CPU reading, not a wait
     samples.emplace_back(Clock::now(), process_cpu_seconds(pid));
     // The newest sample at least a second older than this one starts the window.
-    while (samples.size() > 2 && samples.back().first - samples[1].first >= std::chrono::seconds(1)) samples.pop_front();
+    while (samples.size() > 2 && samples.back().first - samples[1].first >= std::chrono::seconds(1))
+      samples.pop_front();
     const double wall = std::chrono::duration<double>(samples.back().first - samples.front().first).count();
     if (wall < 1) continue;
     const double share = (samples.back().second - samples.front().second) / wall;

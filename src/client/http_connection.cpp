@@ -60,7 +60,7 @@ struct HttpConnection::Impl {
   beast::flat_buffer buffer;
   std::deque<std::string> pending;  // GETs sent (or to send again on a new connection) and not yet answered
   std::deque<std::chrono::steady_clock::time_point> sent_at;  // when each of `pending` was first handed over
-  size_t written = 0;               // of `pending`, those written on this connection
+  size_t written = 0;                                         // of `pending`, those written on this connection
   bool fresh = false;  // no answer yet on this connection: a close now is the server's answer, not an idle close
 
   std::string origin() const { return "http://" + url.host + ":" + std::to_string(url.port); }
