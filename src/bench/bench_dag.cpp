@@ -20,6 +20,7 @@
 #include "bench/bench_model.h"
 #include "bench/bench_refine.h"
 #include "bench/gnuplot.h"
+#include "bench/mesh_faces.h"
 #include "bench/report.h"
 #include "client/streaming_client.h"
 #include "common/error.h"
@@ -45,24 +46,6 @@ constexpr uint32_t kAccuracyEvery = 5;
 
 constexpr DagTraversal kTraversals[] = {DagTraversal::priority, DagTraversal::linear, DagTraversal::constant_time};
 constexpr const char* kTraversalNames[] = {"priority", "linear", "constant-time"};
-
-// A face as its three vertex ids, rotated to start at the smallest: equal faces of two meshes compare equal.
-using IdFace = std::array<uint64_t, 6>;
-
-std::vector<IdFace> faces_by_id(const SelectiveMesh& mesh) {
-  const VertexHierarchy& h = mesh.hierarchy();
-  std::vector<IdFace> faces;
-  faces.reserve(mesh.face_count());
-  for (uint32_t f = 0; f < mesh.face_capacity(); ++f) {
-    if (!mesh.face_alive(f)) continue;
-    std::array<std::array<uint64_t, 2>, 3> ids;
-    for (int k = 0; k < 3; ++k) ids[size_t(k)] = {h.id(mesh.face(f)[k]).tree, h.id(mesh.face(f)[k]).node};
-    std::rotate(ids.begin(), std::min_element(ids.begin(), ids.end()), ids.end());
-    faces.push_back({ids[0][0], ids[0][1], ids[1][0], ids[1][1], ids[2][0], ids[2][1]});
-  }
-  std::sort(faces.begin(), faces.end());
-  return faces;
-}
 
 // The share of `reference`'s faces that `faces` holds too, in percent (both sorted).
 double shared_percent(const std::vector<IdFace>& faces, const std::vector<IdFace>& reference) {

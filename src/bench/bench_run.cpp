@@ -31,6 +31,8 @@ constexpr BenchGroup kGroups[] = {
      run_soak_group},
     {"dag", "E9 DAG traversals: time per frame, accuracy against priority, fronts, session memory, bytes down",
      run_dag_group},
+    {"attacks", "the HTTP attack classes beside a good receiver-driven client: p99, memory, CPU after, SIGTERM",
+     run_attacks_group},
 };
 
 std::span<const BenchGroup> bench_groups() { return kGroups; }

@@ -43,6 +43,7 @@ class ServeChild {
   ServeChild& operator=(const ServeChild&) = delete;
 
   uint16_t port() const { return port_; }
+  pid_t pid() const { return pid_; }  // for /proc; 0 before it started
   const nlohmann::json& listening() const { return listening_; }
   // SIGUSR1, then the "stats" line it prints.
   ServeStats stats(double timeout_s = 30);

@@ -59,7 +59,8 @@ struct HttpConnection::Impl {
   std::optional<beast::tcp_stream> stream;
   beast::flat_buffer buffer;
   std::deque<std::string> pending;  // GETs sent (or to send again on a new connection) and not yet answered
-  size_t written = 0;               // of `pending`, those written on this connection
+  std::deque<std::chrono::steady_clock::time_point> sent_at;  // when each of `pending` was first handed over
+  size_t written = 0;                                         // of `pending`, those written on this connection
   bool fresh = false;  // no answer yet on this connection: a close now is the server's answer, not an idle close
 
   std::string origin() const { return "http://" + url.host + ":" + std::to_string(url.port); }
@@ -72,6 +73,7 @@ struct HttpConnection::Impl {
   [[noreturn]] void lost(const std::string& what) {
     stream.reset();
     pending.clear();
+    sent_at.clear();
     written = 0;
     throw ConnectionError(origin() + ": " + what);
   }
@@ -166,6 +168,7 @@ void HttpConnection::send(const std::string& target) {
   Impl& c = *impl_;
   if (c.pending.size() >= c.options.in_flight) fail("http", "more than in_flight GETs pending");
   c.pending.push_back(target);
+  c.sent_at.push_back(std::chrono::steady_clock::now());
   flush();
 }
 
@@ -211,6 +214,9 @@ HttpAnswer HttpConnection::receive() {
       c.lost(c.reason(ec, c.options.io_timeout) + " (" + c.pending.front() + ")");
     }
     c.fresh = false;
+    counters_.last_answer_ms =
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - c.sent_at.front()).count();
+    c.sent_at.pop_front();
     c.pending.pop_front();
     --c.written;
     if (!keep_alive) c.stream.reset();

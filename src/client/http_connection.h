@@ -25,6 +25,7 @@ struct HttpCounters {
   uint64_t bytes_up = 0, bytes_down = 0;  // on the wire: request and status lines, headers, bodies
   uint64_t payload_down = 0;              // the bodies of the answers alone
   uint64_t connections = 0;
+  double last_answer_ms = 0;  // the latest answer's latency: its GET handed to send() to its last byte read
 };
 
 struct HttpAnswer {

@@ -12,12 +12,11 @@
 #include <cmath>
 #include <cstring>
 #include <deque>
-#include <fstream>
-#include <sstream>
 #include <thread>
 
 #include "client/streaming_client.h"
 #include "common/error.h"
+#include "common/process_cpu.h"
 #include "protocol/client_messages.h"
 #include "protocol/framing.h"
 #include "protocol/message_types.h"
@@ -136,16 +135,8 @@ uint64_t ServerProcess::wait_for_sessions(uint64_t count, milliseconds within) {
 }
 
 double ServerProcess::cpu_seconds() const {
-  std::ifstream in("/proc/" + std::to_string(pid_) + "/stat");
-  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  const size_t name_end = text.rfind(')');  // the command name may hold spaces and parentheses
-  if (name_end == std::string::npos) fail("/proc/" + std::to_string(pid_) + "/stat", "unreadable");
-  std::istringstream fields(text.substr(name_end + 2));
-  std::string skip;
-  for (int field = 3; field < 14; ++field) fields >> skip;  // state ... cmajflt
-  unsigned long long user = 0, system = 0;
-  fields >> user >> system;
-  return double(user + system) / double(sysconf(_SC_CLK_TCK));
+  if (pid_ <= 0) fail("pmstream serve", "not running");
+  return process_cpu_seconds(pid_);
 }
 
 double ServerProcess::wait_for_idle(double idle, milliseconds within) {
