@@ -7,15 +7,6 @@
 
 namespace pms::app {
 
-Mesh to_mesh(MeshArrays&& arrays) {
-  Mesh out;
-  out.positions = std::move(arrays.positions);
-  out.normals = std::move(arrays.normals);
-  out.colors = std::move(arrays.colors);
-  out.indices = std::move(arrays.indices);
-  return out;
-}
-
 Mesh refine_first_splits(const ModelData& model, uint64_t k) { return to_mesh(refine_in_stream_order(model, k)); }
 
 Mesh refine_for_camera(const ModelData& model, const Camera& camera, float tolerance_px, uint64_t* vsplits) {

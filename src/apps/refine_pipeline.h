@@ -3,6 +3,7 @@
 #pragma once
 #include <cstdint>
 
+#include "client/viewer.h"
 #include "common/camera.h"
 #include "io/mesh.h"
 #include "spm/hierarchy.h"
@@ -10,8 +11,7 @@
 
 namespace pms::app {
 
-// The refine layer's flat arrays as io's Mesh (for the exporters).
-Mesh to_mesh(MeshArrays&& arrays);
+using client::to_mesh;  // the refine layer's flat arrays as io's Mesh (for the exporters)
 
 // refine_in_stream_order() as a Mesh (with normals/colors) for the exporters.
 Mesh refine_first_splits(const ModelData& model, uint64_t k);

@@ -1,0 +1,56 @@
+#include "client/multilevel_viewer.h"
+
+#include "common/error.h"
+
+namespace pms::client {
+
+MultilevelViewer::MultilevelViewer(const std::string& server, const MultilevelOptions& options, Pacing pacing,
+                                   const std::string& model)
+    : client_(parse_http_url(server), options), options_(options), pacing_(pacing) {
+  if (pacing_ != Pacing::lock_step) fail("viewer", "the multilevel mode runs in lock-step only in this build");
+  client_.open(model);
+}
+
+ViewerReport MultilevelViewer::frame(const Camera& camera) {
+  const MultilevelFrame r = client_.frame(camera);
+  ViewerReport report;
+  report.frame = r.report.frame;
+  report.faces = r.report.faces;
+  report.received = r.report.vsplits;  // levels
+  report.up_bytes = r.report.up_bytes;
+  report.down_bytes = r.report.down_bytes;
+  report.latency_ms = r.report.latency_ms;
+  report.satisfied = r.levels_loaded > r.wanted_level || r.levels_loaded == client_.loader().level_count();
+  report.details = {{"down_payload_bytes", r.payload_down}, {"wanted_level", r.wanted_level},
+                    {"level", r.level},                     {"levels_loaded", r.levels_loaded},
+                    {"lod_ms", r.lod_ms}};
+  return report;
+}
+
+nlohmann::json MultilevelViewer::totals() const {
+  nlohmann::json arrivals = nlohmann::json::array();
+  for (const LevelArrival& a : client_.arrivals())
+    arrivals.push_back({{"level", a.level},
+                        {"bytes", a.bytes},
+                        {"down_bytes", a.down_bytes},
+                        {"down_payload_bytes", a.payload_down},
+                        {"ms", a.ms}});
+  const HttpCounters& c = client_.counters();
+  nlohmann::json out = {{"total_down_payload_bytes", c.payload_down},
+                        {"http_requests", c.requests},
+                        {"http_connections", c.connections},
+                        {"rule", options_.budget ? "budget" : "screen"},
+                        {"form", options_.compressed ? "compressed" : "plain"},
+                        {"levels", client_.loader().level_count()},
+                        {"levels_received", client_.arrivals().size()},
+                        {"arrivals", arrivals}};
+  if (!client_.arrivals().empty()) {
+    const LevelArrival& first = client_.arrivals().front();
+    out["first_picture_ms"] = first.ms;
+    out["first_picture_bytes"] = first.down_bytes;
+    out["first_picture_payload_bytes"] = first.payload_down;
+  }
+  return out;
+}
+
+}  // namespace pms::client

@@ -1,0 +1,35 @@
+// The Viewer of the multilevel mode (gueziec et al. 1999): a MultilevelClient over HTTP. What it receives
+// is levels, not splits (received_unit()).
+#pragma once
+#include <string>
+
+#include "client/multilevel_client.h"
+#include "client/viewer.h"
+
+namespace pms::client {
+
+class MultilevelViewer : public Viewer {
+ public:
+  // `server` is http://HOST:PORT[/prefix]; pms::Error naming --server otherwise.
+  MultilevelViewer(const std::string& server, const MultilevelOptions& options, Pacing pacing,
+                   const std::string& model);
+
+  ViewerReport frame(const Camera& camera) override;
+  void settle(const Camera& camera) override { client_.settle(camera); }
+  Mesh mesh() const override { return client_.current_mesh(); }
+  ViewParams view_params(const Camera& camera) const override { return client_.view_params(camera); }
+  const char* received_unit() const override { return "levels"; }
+  uint64_t received_total() const override { return client_.arrivals().size(); }
+  uint64_t up_bytes() const override { return client_.counters().bytes_up; }
+  uint64_t down_bytes() const override { return client_.counters().bytes_down; }
+  nlohmann::json totals() const override;
+
+  MultilevelClient& client() { return client_; }
+
+ private:
+  MultilevelClient client_;
+  MultilevelOptions options_;
+  Pacing pacing_;
+};
+
+}  // namespace pms::client

@@ -1,0 +1,63 @@
+#include "client/receiver_viewer.h"
+
+#include "common/error.h"
+
+namespace pms::client {
+
+ReceiverViewer::ReceiverViewer(const std::string& server, const ReceiverOptions& options, Pacing pacing,
+                               const std::string& model)
+    : client_(parse_http_url(server), options), options_(options), pacing_(pacing) {
+  if (pacing_ != Pacing::lock_step) fail("viewer", "the receiver-driven mode runs in lock-step only in this build");
+  client_.open(model);
+}
+
+ViewerReport ReceiverViewer::frame(const Camera& camera) {
+  const ReceiverFrame r = client_.frame(camera);
+  unsatisfied_ += !r.satisfied;
+  ViewerReport report;
+  report.frame = r.report.frame;
+  report.faces = r.report.faces;
+  report.received = r.report.vsplits;
+  report.up_bytes = r.report.up_bytes;
+  report.down_bytes = r.report.down_bytes;
+  report.latency_ms = r.report.latency_ms;
+  report.in_flight = r.in_flight;
+  report.satisfied = r.satisfied;
+  report.details = {{"down_payload_bytes", r.payload_down}, {"split_requests", r.split_requests},
+                    {"cache_hits", r.cache_hits},           {"rounds", r.rounds},
+                    {"satisfied", r.satisfied},             {"queued", r.queued},
+                    {"in_flight", r.in_flight},             {"cancelled", r.cancelled},
+                    {"stale_arrivals", r.stale_arrivals},   {"prefetched", r.prefetched},
+                    {"prefetch_used", r.prefetch_used}};
+  return report;
+}
+
+Mesh ReceiverViewer::mesh() const { return current_mesh(client_.session().refinement()); }
+
+ViewParams ReceiverViewer::view_params(const Camera& camera) const { return client_.session().view_params(camera); }
+
+uint64_t ReceiverViewer::received_total() const { return client_.session().splits_received(); }
+
+nlohmann::json ReceiverViewer::totals() const {
+  const HttpCounters& c = client_.counters();
+  const ReceiverTotals& t = client_.totals();
+  return {{"total_down_payload_bytes", c.payload_down},
+          {"http_requests", c.requests},
+          {"split_requests", t.split_requests},
+          {"requested_ids", t.requested_ids},
+          {"request_code_bytes", t.request_code_bytes},
+          {"cache_hits", t.cache_hits},
+          {"frames_unsatisfied", unsatisfied_},
+          {"settle_frames", client_.settle_frames()},
+          {"cancelled", t.cancelled},
+          {"stale_arrivals", t.stale_arrivals},
+          {"prefetched", t.prefetched},
+          {"prefetch_used", t.prefetch_used},
+          {"http_connections", c.connections},
+          {"fetch", fetch_policy_name(options_.fetch)},
+          {"frame_budget_ms", options_.frame_budget_ms},
+          {"frame_answers", options_.frame_answers},
+          {"prefetch", options_.prefetch}};
+}
+
+}  // namespace pms::client

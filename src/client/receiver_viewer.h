@@ -1,0 +1,34 @@
+// The Viewer of the receiver-driven mode (cheng-ooi 2008): a ReceiverClient over HTTP.
+#pragma once
+#include <string>
+
+#include "client/receiver_client.h"
+#include "client/viewer.h"
+
+namespace pms::client {
+
+class ReceiverViewer : public Viewer {
+ public:
+  // `server` is http://HOST:PORT[/prefix]; pms::Error naming --server otherwise.
+  ReceiverViewer(const std::string& server, const ReceiverOptions& options, Pacing pacing, const std::string& model);
+
+  ViewerReport frame(const Camera& camera) override;
+  void settle(const Camera& camera) override { client_.settle(camera); }
+  Mesh mesh() const override;
+  ViewParams view_params(const Camera& camera) const override;
+  const char* received_unit() const override { return "vsplits"; }
+  uint64_t received_total() const override;
+  uint64_t up_bytes() const override { return client_.counters().bytes_up; }
+  uint64_t down_bytes() const override { return client_.counters().bytes_down; }
+  nlohmann::json totals() const override;
+
+  ReceiverClient& client() { return client_; }
+
+ private:
+  mutable ReceiverClient client_;
+  ReceiverOptions options_;
+  Pacing pacing_;
+  uint64_t unsatisfied_ = 0;  // frames that ended with the view wanting more
+};
+
+}  // namespace pms::client

@@ -1,0 +1,68 @@
+#include "client/session_viewer.h"
+
+#include "common/error.h"
+
+namespace pms::client {
+
+void split_host_port(const std::string& text, std::string& host, uint16_t& port, const std::string& where) {
+  const size_t colon = text.rfind(':');
+  if (colon == std::string::npos || colon == 0) fail(where, "'" + text + "' is not HOST:PORT");
+  host = text.substr(0, colon);
+  const std::string digits = text.substr(colon + 1);
+  unsigned long value = 0;
+  try {
+    size_t used = 0;
+    value = std::stoul(digits, &used);
+    if (used != digits.size()) value = 0;
+  } catch (const std::exception&) {
+    value = 0;
+  }
+  if (value == 0 || value > 65535) fail(where, "'" + text + "' has no valid port");
+  port = uint16_t(value);
+}
+
+namespace {
+
+std::unique_ptr<StreamingClient> connect(const std::string& server, const ClientOptions& options) {
+  std::string host;
+  uint16_t port = 0;
+  split_host_port(server, host, port, "--server");
+  return std::make_unique<StreamingClient>(host, port, options);
+}
+
+}  // namespace
+
+SessionViewer::SessionViewer(const std::string& server, const ClientOptions& options, Pacing pacing,
+                             const std::string& model)
+    : client_(connect(server, options)), pacing_(pacing) {
+  if (pacing_ != Pacing::lock_step) fail("viewer", "the session modes run in lock-step only in this build");
+  client_->open(model);
+}
+
+ViewerReport SessionViewer::frame(const Camera& camera) {
+  const FrameReport r = client_->frame(camera);
+  ViewerReport report;
+  report.frame = r.frame;
+  report.faces = r.faces;
+  report.received = r.vsplits;
+  report.up_bytes = r.up_bytes;
+  report.down_bytes = r.down_bytes;
+  report.latency_ms = r.latency_ms;
+  report.satisfied = true;  // lock-step: the VIEW's whole answer is applied
+  return report;
+}
+
+void SessionViewer::settle(const Camera& camera) { client_->settle(camera); }
+
+Mesh SessionViewer::mesh() const { return current_mesh(client_->session().refinement()); }
+
+ViewParams SessionViewer::view_params(const Camera& camera) const { return client_->session().view_params(camera); }
+
+uint64_t SessionViewer::received_total() const { return client_->session().splits_received(); }
+
+nlohmann::json SessionViewer::totals() const {
+  const LinkCounters c = client_->counters();
+  return {{"total_up_payload_bytes", c.payload_up()}, {"total_down_payload_bytes", c.payload_down()}};
+}
+
+}  // namespace pms::client

@@ -1,0 +1,36 @@
+// The Viewer of the session modes (sender, sender-plain, vi, dag): a StreamingClient over TCP, which
+// resumes its session on a new connection when one is lost (ClientOptions::reconnect_attempts).
+#pragma once
+#include <string>
+
+#include "client/streaming_client.h"
+#include "client/viewer.h"
+
+namespace pms::client {
+
+class SessionViewer : public Viewer {
+ public:
+  // `server` is HOST:PORT; pms::Error naming --server otherwise.
+  SessionViewer(const std::string& server, const ClientOptions& options, Pacing pacing, const std::string& model);
+
+  ViewerReport frame(const Camera& camera) override;
+  void settle(const Camera& camera) override;
+  Mesh mesh() const override;
+  ViewParams view_params(const Camera& camera) const override;
+  const char* received_unit() const override { return "vsplits"; }
+  uint64_t received_total() const override;
+  uint64_t up_bytes() const override { return client_->counters().bytes_up; }
+  uint64_t down_bytes() const override { return client_->counters().bytes_down; }
+  nlohmann::json totals() const override;
+
+  StreamingClient& client() { return *client_; }
+
+ private:
+  std::unique_ptr<StreamingClient> client_;
+  Pacing pacing_;
+};
+
+// HOST:PORT split; pms::Error naming `where` for anything else.
+void split_host_port(const std::string& text, std::string& host, uint16_t& port, const std::string& where);
+
+}  // namespace pms::client

@@ -1,0 +1,41 @@
+// The one place a viewer's mode is chosen by name: a new mode adds its line here and its own files.
+#include "client/viewer.h"
+
+#include "client/multilevel_viewer.h"
+#include "client/receiver_viewer.h"
+#include "client/session_viewer.h"
+#include "common/error.h"
+#include "protocol/stream_mode.h"
+
+namespace pms::client {
+
+Mesh to_mesh(MeshArrays&& arrays) {
+  Mesh out;
+  out.positions = std::move(arrays.positions);
+  out.normals = std::move(arrays.normals);
+  out.colors = std::move(arrays.colors);
+  out.indices = std::move(arrays.indices);
+  return out;
+}
+
+Mesh current_mesh(SelectiveRefinement& refinement) {
+  MeshArrays arrays;
+  refinement.extract(arrays);
+  return to_mesh(std::move(arrays));
+}
+
+std::string viewer_mode_names() { return protocol::mode_names() + ", receiver, multilevel"; }
+
+std::unique_ptr<Viewer> open_viewer(const ViewerOptions& options, const std::string& model) {
+  if (options.mode == "receiver")
+    return std::make_unique<ReceiverViewer>(options.server, options.receiver, options.pacing, model);
+  if (options.mode == "multilevel")
+    return std::make_unique<MultilevelViewer>(options.server, options.multilevel, options.pacing, model);
+  const std::optional<protocol::StreamMode> mode = protocol::mode_named(options.mode);
+  if (!mode) fail("--mode", "'" + options.mode + "': this build streams in the modes " + viewer_mode_names());
+  ClientOptions session = options.session;
+  session.mode = *mode;
+  return std::make_unique<SessionViewer>(options.server, session, options.pacing, model);
+}
+
+}  // namespace pms::client

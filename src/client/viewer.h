@@ -1,0 +1,81 @@
+// One viewer for every streaming mode (docs/architecture.md, "Viewer"): open a model in a mode with that
+// mode's options, then frame(camera) per displayed frame. The six modes (sender, sender-plain, vi, dag over
+// the TCP session protocol; receiver and multilevel over HTTP) sit behind this one interface, so the
+// headless viewer, the demo, the tests and the bench drive them alike.
+//
+// Two pacings:
+// - lock_step: frame() runs until the view is satisfied (what the mode's server sends for it has arrived
+//   and been applied), so every property the tests rely on holds after every frame: the mesh equals local
+//   refinement for sender and receiver, a second lap costs 0 bytes, the DAG cut is mirrored.
+// - free_running: frame() applies what has arrived, asks for what the view lacks, and returns without
+//   waiting for the network; settle() then waits until the last view is satisfied, and the same
+//   properties hold after it.
+#pragma once
+#include <cstdint>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "client/multilevel_client.h"
+#include "client/receiver_client.h"
+#include "client/streaming_client.h"
+#include "common/camera.h"
+#include "io/mesh.h"
+#include "spm/adapt.h"
+#include "spm/selective_mesh.h"
+
+namespace pms::client {
+
+enum class Pacing : uint8_t { lock_step, free_running };
+
+struct ViewerOptions {
+  std::string mode = "sender";  // sender, sender-plain, vi, dag, receiver, multilevel
+  // HOST:PORT of the TCP port (session modes), http://HOST:PORT[/prefix] of the HTTP port (the others).
+  std::string server;
+  Pacing pacing = Pacing::lock_step;
+  ClientOptions session;          // sender, sender-plain, vi, dag (its mode field is set from `mode`)
+  ReceiverOptions receiver;       // receiver
+  MultilevelOptions multilevel;   // multilevel
+};
+
+// One frame as the viewer saw it.
+struct ViewerReport {
+  uint32_t frame = 0;
+  uint64_t faces = 0;
+  uint64_t received = 0;  // splits this frame, or levels for multilevel (received_unit says which)
+  uint64_t up_bytes = 0, down_bytes = 0;  // this frame's traffic, on the wire
+  uint32_t in_flight = 0;  // requests sent and not yet answered at the frame's end
+  double latency_ms = 0;   // request -> last of its answer applied, for the last answer applied this frame
+  bool satisfied = true;   // the view wants nothing more that the server has
+  nlohmann::json details;  // the mode's own per-frame counters (docs/cli.md, "stream")
+};
+
+class Viewer {
+ public:
+  virtual ~Viewer() = default;
+  virtual ViewerReport frame(const Camera& camera) = 0;
+  // Holds `camera` until its view is satisfied and nothing is still in motion (geomorphs, answers in
+  // flight): the mesh is then what lock_step gives at that camera.
+  virtual void settle(const Camera& camera) = 0;
+  virtual Mesh mesh() const = 0;                                // as it is now
+  virtual ViewParams view_params(const Camera& camera) const = 0;  // the mode's view of `camera`
+  virtual const char* received_unit() const = 0;                // "vsplits" or "levels"
+  virtual uint64_t received_total() const = 0;
+  virtual uint64_t up_bytes() const = 0;    // in total, on the wire
+  virtual uint64_t down_bytes() const = 0;  // in total, on the wire
+  virtual nlohmann::json totals() const = 0;  // the mode's own totals (docs/cli.md, "stream")
+};
+
+// Connects and opens `model` on `options.server` in `options.mode`. pms::Error for an unknown mode (naming
+// --mode) or a server that cannot be reached or refuses the model.
+std::unique_ptr<Viewer> open_viewer(const ViewerOptions& options, const std::string& model);
+
+// A refined mesh's flat arrays as io's Mesh (what the exporters and the renderer take).
+Mesh to_mesh(MeshArrays&& arrays);
+// The mesh `refinement` holds now.
+Mesh current_mesh(SelectiveRefinement& refinement);
+
+// "sender, sender-plain, vi, dag, receiver, multilevel".
+std::string viewer_mode_names();
+
+}  // namespace pms::client
