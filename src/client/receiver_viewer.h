@@ -24,6 +24,9 @@ class ReceiverViewer : public Viewer {
 
   ReceiverClient& client() { return client_; }
 
+ protected:
+  const SelectiveRefinement* refinement() const override { return &client_.session().refinement(); }
+
  private:
   mutable ReceiverClient client_;
   ReceiverOptions options_;

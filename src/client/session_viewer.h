@@ -25,6 +25,9 @@ class SessionViewer : public Viewer {
 
   StreamingClient& client() { return *client_; }
 
+ protected:
+  const SelectiveRefinement* refinement() const override { return &client_->session().refinement(); }
+
  private:
   std::unique_ptr<StreamingClient> client_;
   Pacing pacing_;

@@ -24,6 +24,15 @@ Mesh current_mesh(SelectiveRefinement& refinement) {
   return to_mesh(std::move(arrays));
 }
 
+const MeshBuffers& Viewer::buffers() {
+  if (const SelectiveRefinement* shown = refinement()) {
+    update_buffers(*shown, buffers_);
+  } else {
+    update_buffers(mesh(), buffers_);
+  }
+  return buffers_;
+}
+
 std::string viewer_mode_names() { return protocol::mode_names() + ", receiver, multilevel"; }
 
 std::unique_ptr<Viewer> open_viewer(const ViewerOptions& options, const std::string& model) {

@@ -16,6 +16,7 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
+#include "client/mesh_buffers.h"
 #include "client/multilevel_client.h"
 #include "client/receiver_client.h"
 #include "client/streaming_client.h"
@@ -64,6 +65,18 @@ class Viewer {
   virtual uint64_t up_bytes() const = 0;    // in total, on the wire
   virtual uint64_t down_bytes() const = 0;  // in total, on the wire
   virtual nlohmann::json totals() const = 0;  // the mode's own totals (docs/cli.md, "stream")
+
+  // The mesh as a renderer's buffers (mesh_buffers.h), brought up to date now: what changed since the call
+  // before is in their changed ranges. Costs a read of every slot; a headless run never calls it.
+  const MeshBuffers& buffers();
+
+ protected:
+  // What the session modes and the receiver-driven mode show; null for a mode whose mesh() is numbered
+  // its own way (multilevel's LOD).
+  virtual const SelectiveRefinement* refinement() const { return nullptr; }
+
+ private:
+  MeshBuffers buffers_;
 };
 
 // Connects and opens `model` on `options.server` in `options.mode`. pms::Error for an unknown mode (naming

@@ -1,0 +1,136 @@
+#include "client/mesh_buffers.h"
+
+#include <cmath>
+#include <cstring>
+#include <span>
+
+namespace pms::client {
+namespace {
+
+// Collects the elements that changed into runs, merging runs closer than kMergeGap.
+class ChangeRuns {
+ public:
+  explicit ChangeRuns(std::vector<BufferRange>& out) : out_(out) { out_.clear(); }
+  void mark(uint32_t element) { mark_up_to(element, element + 1); }
+  // [first, end), after every element marked so far.
+  void mark_up_to(uint32_t first, uint32_t end) {
+    if (end <= first) return;
+    if (!out_.empty() && first < out_.back().first + out_.back().count + MeshBuffers::kMergeGap) {
+      out_.back().count = end - out_.back().first;
+    } else {
+      out_.push_back({first, end - first});
+    }
+  }
+
+ private:
+  std::vector<BufferRange>& out_;
+};
+
+// Stores `n` values of `value` at element `i` of `array` (n per element); true when they differ.
+template <class T>
+bool store(std::vector<T>& array, size_t i, size_t n, const T* value) {
+  T* at = &array[n * i];
+  if (std::memcmp(at, value, n * sizeof(T)) == 0) return false;
+  std::memcpy(at, value, n * sizeof(T));
+  return true;
+}
+
+// Area-weighted vertex normals of `indices` over `positions`, unit length (zero for a vertex no live
+// triangle uses).
+void face_normals(std::span<const float> positions, std::span<const uint32_t> indices, std::vector<float>& out) {
+  out.assign(positions.size(), 0.0f);
+  for (size_t t = 0; t + 2 < indices.size(); t += 3) {
+    const uint32_t a = indices[t], b = indices[t + 1], c = indices[t + 2];
+    if (a == b || b == c || a == c) continue;  // a free slot, or degenerate
+    const float* p = &positions[3 * size_t(a)];
+    const float* q = &positions[3 * size_t(b)];
+    const float* r = &positions[3 * size_t(c)];
+    const float u[3] = {q[0] - p[0], q[1] - p[1], q[2] - p[2]};
+    const float v[3] = {r[0] - p[0], r[1] - p[1], r[2] - p[2]};
+    const float n[3] = {u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]};
+    for (uint32_t corner : {a, b, c})
+      for (int k = 0; k < 3; ++k) out[3 * size_t(corner) + k] += n[k];
+  }
+  for (size_t i = 0; i + 2 < out.size(); i += 3) {
+    const float length = std::sqrt(out[i] * out[i] + out[i + 1] * out[i + 1] + out[i + 2] * out[i + 2]);
+    if (length > 0)
+      for (int k = 0; k < 3; ++k) out[i + k] /= length;
+  }
+}
+
+// The arrays' sizes before they grew: from there on everything counts as changed (a renderer reallocates
+// a buffer that grew, and uploads it whole).
+struct Grown {
+  uint32_t vertices, triangles;
+};
+
+Grown grow(MeshBuffers& buffers, size_t vertices, size_t triangles) {
+  const Grown before{buffers.vertex_count(), buffers.triangle_count()};
+  if (vertices > before.vertices) {
+    buffers.positions.resize(3 * vertices, 0.0f);
+    buffers.normals.resize(3 * vertices, 0.0f);
+    buffers.colors.resize(4 * vertices, 255);
+  }
+  if (triangles > before.triangles) buffers.indices.resize(3 * triangles, 0);
+  return before;
+}
+
+}  // namespace
+
+void update_buffers(const SelectiveRefinement& refinement, MeshBuffers& buffers) {
+  const SelectiveMesh& mesh = refinement.mesh();
+  const VertexHierarchy& h = mesh.hierarchy();
+  const Geomorphs& morphs = refinement.geomorphs();
+  const Grown grown = grow(buffers, h.size(), mesh.face_capacity());
+  ChangeRuns triangles(buffers.changed_triangles);
+  static constexpr uint32_t kFree[3] = {0, 0, 0};
+  for (uint32_t f = 0; f < grown.triangles; ++f)
+    if (store(buffers.indices, f, 3, mesh.face_alive(f) ? mesh.face(f) : kFree)) triangles.mark(f);
+  for (uint32_t f = grown.triangles; f < mesh.face_capacity(); ++f)
+    store(buffers.indices, f, 3, mesh.face_alive(f) ? mesh.face(f) : kFree);
+  triangles.mark_up_to(grown.triangles, mesh.face_capacity());
+  static constexpr uint8_t kWhite[4] = {255, 255, 255, 255};
+  std::vector<uint8_t>& dirty = buffers.dirty;
+  dirty.assign(h.size(), 0);
+  for (uint32_t v : mesh.active_vertices()) {
+    dirty[v] |= store(buffers.positions, v, 3, morphs.enabled() ? morphs.shown(h, v) : h.position(v));
+    dirty[v] |= store(buffers.colors, v, 4, h.has_colors() ? h.color(v) : kWhite);
+  }
+  // Without the model's normals, the faces' around each vertex, from the positions just stored (a
+  // vertex's normal changes with any face around it).
+  if (!h.has_normals()) face_normals(buffers.positions, buffers.indices, buffers.computed_normals);
+  for (uint32_t v : mesh.active_vertices())
+    dirty[v] |= store(buffers.normals, v, 3, h.has_normals() ? h.normal(v) : &buffers.computed_normals[3 * size_t(v)]);
+  ChangeRuns vertices(buffers.changed_vertices);
+  for (uint32_t v = 0; v < grown.vertices; ++v)
+    if (dirty[v]) vertices.mark(v);
+  vertices.mark_up_to(grown.vertices, h.size());
+  ++buffers.updates;
+}
+
+void update_buffers(const Mesh& mesh, MeshBuffers& buffers) {
+  const size_t vertex_count = mesh.positions.size() / 3, triangle_count = mesh.indices.size() / 3;
+  const Grown grown = grow(buffers, vertex_count, triangle_count);
+  ChangeRuns triangles(buffers.changed_triangles);
+  static constexpr uint32_t kFree[3] = {0, 0, 0};
+  for (size_t t = 0; t < buffers.indices.size() / 3; ++t)
+    if (store(buffers.indices, t, 3, t < triangle_count ? &mesh.indices[3 * t] : kFree) && t < grown.triangles)
+      triangles.mark(uint32_t(t));
+  triangles.mark_up_to(grown.triangles, uint32_t(triangle_count));
+  const bool has_normals = mesh.normals.size() == mesh.positions.size();
+  if (!has_normals) face_normals(mesh.positions, mesh.indices, buffers.computed_normals);
+  const std::vector<float>& normals = has_normals ? mesh.normals : buffers.computed_normals;
+  static constexpr uint8_t kWhite[4] = {255, 255, 255, 255};
+  const bool has_colors = mesh.colors.size() == 4 * vertex_count;
+  ChangeRuns vertices(buffers.changed_vertices);
+  for (size_t v = 0; v < vertex_count; ++v) {
+    bool changed = store(buffers.positions, v, 3, &mesh.positions[3 * v]);
+    changed |= store(buffers.normals, v, 3, &normals[3 * v]);
+    changed |= store(buffers.colors, v, 4, has_colors ? &mesh.colors[4 * v] : kWhite);
+    if (changed && v < grown.vertices) vertices.mark(uint32_t(v));
+  }
+  vertices.mark_up_to(grown.vertices, uint32_t(vertex_count));
+  ++buffers.updates;
+}
+
+}  // namespace pms::client
