@@ -2,8 +2,8 @@
 // succeeded only moved bytes into the kernel, so progress is what the peer acknowledged (written - unsent,
 // io_threads.h). The watch runs while bytes wait and starts again each time the peer has taken enough of
 // them. A trickle does not count: a kernel that has merged its full receive queue takes a few bytes now and
-// then from a peer that never reads. Progress is only seen when looked for, so the owner looks four times
-// per deadline (next_look): a peer is then closed within 1.25 deadlines of the last bytes it took.
+// then from a peer that never reads. Progress is only seen when looked for, so the owner looks kLooks times
+// per deadline (next_look): a peer is then closed within 1 + 1/kLooks deadlines of the last bytes it took.
 #pragma once
 #include <algorithm>
 #include <chrono>
@@ -17,6 +17,7 @@ class DrainWatch {
 
   // What a peer must take per deadline for it to count as reading (or all it was sent, if less).
   static constexpr uint64_t kMinProgressBytes = 1024;
+  static constexpr int kLooks = 8;
 
   explicit DrainWatch(uint32_t deadline_ms) : deadline_(std::chrono::milliseconds(deadline_ms)) {}
 
@@ -31,8 +32,8 @@ class DrainWatch {
   void stop() { running_ = false; }
   // When the owner must look next (only while running).
   Clock::time_point next_look() const {
-    const auto quarter = std::max<Clock::duration>(deadline_ / 4, std::chrono::milliseconds(1));
-    return std::min(since_ + deadline_, looked_ + quarter);
+    const auto between = std::max<Clock::duration>(deadline_ / kLooks, std::chrono::milliseconds(1));
+    return std::min(since_ + deadline_, looked_ + between);
   }
   // Looks at the peer's progress: `taken` of `written` acknowledged now. True when it has taken too little
   // for a whole deadline; the watch stops once everything is across and `more_to_send` is false.
