@@ -12,6 +12,7 @@
 #include <filesystem>
 #include <nlohmann/json.hpp>
 #include <optional>
+#include <thread>
 
 #include "apps/camera_json.h"
 #include "apps/commands.h"
@@ -43,6 +44,7 @@ struct StreamArgs {
   uint64_t budget = 0;
   bool json = false;
   bool plain_levels = false;  // multilevel mode
+  uint32_t fps = 0;           // 0: lock-step
 };
 
 void snapshot(const client::Viewer& viewer, const Camera& camera, const std::string& dir, size_t index,
@@ -54,13 +56,19 @@ void snapshot(const client::Viewer& viewer, const Camera& camera, const std::str
   save_png((std::filesystem::path(dir) / name).string(), image);
 }
 
-nlohmann::json frame_json(const client::Viewer& viewer, const client::ViewerReport& r, size_t index, uint32_t lap) {
-  nlohmann::json f = {{"frame", index},          {"lap", lap},
-                      {"up_bytes", r.up_bytes},  {"down_bytes", r.down_bytes},
-                      {"faces", r.faces},        {viewer.received_unit() == std::string("levels") ? "levels_received"
-                                                                                                   : "vsplits",
-                                                  r.received},
-                      {"latency_ms", r.latency_ms}};
+nlohmann::json frame_json(const client::Viewer& viewer, const client::ViewerReport& r, size_t index, uint32_t lap,
+                          double frame_ms) {
+  const bool levels = viewer.received_unit() == std::string("levels");
+  nlohmann::json f = {{"frame", index},
+                      {"lap", lap},
+                      {"up_bytes", r.up_bytes},
+                      {"down_bytes", r.down_bytes},
+                      {"faces", r.faces},
+                      {levels ? "levels_received" : "vsplits", r.received},
+                      {"latency_ms", r.latency_ms},
+                      {"in_flight", r.in_flight},
+                      {"satisfied", r.satisfied},
+                      {"frame_ms", frame_ms}};
   if (r.details.is_object()) f.update(r.details);
   return f;
 }
@@ -113,6 +121,7 @@ client::ViewerOptions viewer_options(const StreamArgs& args) {
   client::ViewerOptions options;
   options.mode = args.mode;
   options.server = args.server;
+  options.pacing = args.fps ? client::Pacing::free_running : client::Pacing::lock_step;
   client::ClientOptions& session = options.session;
   session.tolerance = args.tolerance;
   session.morph_frames = args.morph_frames;
@@ -145,8 +154,11 @@ client::ViewerOptions viewer_options(const StreamArgs& args) {
   return options;
 }
 
-// Flies the path lap after lap, then settles at the last camera; one JSON object or a summary line.
+// Flies the path lap after lap, then settles at the last camera; one JSON object or a summary line. With
+// --fps the frames are paced as on a display, each started on its tick whatever the network does (a frame
+// that overruns its tick delays the next, as a display would show it late).
 void run_stream(const StreamArgs& args) {
+  using FlightClock = std::chrono::steady_clock;
   const std::vector<Camera> path = load_path(args.path);
   if (!args.snapshots.empty()) std::filesystem::create_directories(args.snapshots);
   Stopwatch clock;
@@ -155,17 +167,27 @@ void run_stream(const StreamArgs& args) {
   Renderer renderer;
   Image image;
   size_t index = 0;
+  const FlightClock::time_point flight_start = FlightClock::now();
+  const auto tick = args.fps ? std::chrono::duration_cast<FlightClock::duration>(std::chrono::duration<double>(1.0 / args.fps))
+                             : FlightClock::duration::zero();
   for (uint32_t lap = 0; lap < args.laps; ++lap) {
     for (const Camera& camera : path) {
+      if (args.fps) std::this_thread::sleep_until(flight_start + tick * index);
+      const FlightClock::time_point begun = FlightClock::now();
       const client::ViewerReport report = viewer->frame(camera);
-      frames.push_back(frame_json(*viewer, report, index, lap));
+      const double frame_ms = std::chrono::duration<double, std::milli>(FlightClock::now() - begun).count();
+      frames.push_back(frame_json(*viewer, report, index, lap, frame_ms));
       if (!args.snapshots.empty()) snapshot(*viewer, camera, args.snapshots, index, renderer, image);
       progress(args, index, size_t(args.laps) * path.size(), report);
       ++index;
     }
   }
+  if (args.fps) std::this_thread::sleep_until(flight_start + tick * index);  // the last frame's tick runs out
+  const double flight_seconds = std::chrono::duration<double>(FlightClock::now() - flight_start).count();
   if (!args.json) std::fprintf(stderr, "\n");
+  const FlightClock::time_point settle_start = FlightClock::now();
   viewer->settle(path.back());
+  const double settle_seconds = std::chrono::duration<double>(FlightClock::now() - settle_start).count();
   const Mesh mesh = viewer->mesh();
   if (!args.save_mesh.empty()) save_ply(mesh, args.save_mesh);
 
@@ -174,6 +196,10 @@ void run_stream(const StreamArgs& args) {
                         {"total_up_bytes", viewer->up_bytes()},
                         {"total_down_bytes", viewer->down_bytes()},
                         {levels ? "levels_received" : "vsplits_received", viewer->received_total()},
+                        {"pacing", args.fps ? "free-running" : "lock-step"},
+                        {"fps", args.fps},
+                        {"flight_seconds", flight_seconds},
+                        {"settle_seconds", settle_seconds},
                         {"seconds", clock.seconds()}};
   out.update(viewer->totals());
   if (args.json) {
@@ -287,6 +313,12 @@ void add_stream_command(CliCommand& app) {
   const CliOption plain_levels =
       cmd.flag("--plain-levels", args->plain_levels,
                "multilevel: fetch the binary form's levels (exact float positions) instead of the compressed ones");
+  cmd.option("--fps", args->fps,
+             "Pace the frames at N a second as a display does, free-running: a frame never waits for the network "
+             "and the flight takes frames/N seconds; then settle at the last camera (0 = lock-step: each frame "
+             "waits until its view is satisfied)")
+      .range(0u, 1000u)
+      .show_default();
   cmd.flag("--json", args->json, "Print one JSON object");
   const std::vector<std::string> tcp = {"sender", "sender-plain", "vi", "dag"};
   const auto modes = std::make_shared<ModeOptions>(
