@@ -163,6 +163,7 @@ void run_stream(const StreamArgs& args) {
   if (!args.snapshots.empty()) std::filesystem::create_directories(args.snapshots);
   Stopwatch clock;
   const std::unique_ptr<client::Viewer> viewer = client::open_viewer(viewer_options(args), args.model);
+  const double open_ms = clock.seconds() * 1000;  // connected, and the base mesh in
   nlohmann::json frames = nlohmann::json::array();
   Renderer renderer;
   Image image;
@@ -196,6 +197,7 @@ void run_stream(const StreamArgs& args) {
                         {"total_up_bytes", viewer->up_bytes()},
                         {"total_down_bytes", viewer->down_bytes()},
                         {levels ? "levels_received" : "vsplits_received", viewer->received_total()},
+                        {"open_ms", open_ms},
                         {"pacing", args.fps ? "free-running" : "lock-step"},
                         {"fps", args.fps},
                         {"flight_seconds", flight_seconds},

@@ -33,6 +33,10 @@ constexpr BenchGroup kGroups[] = {
      run_dag_group},
     {"attacks", "the HTTP attack classes beside a good receiver-driven client: p99, memory, CPU after, SIGTERM",
      run_attacks_group},
+    {"viewer",
+     "every mode's Viewer free-running at 30 fps over 0 and 50 ms round trips: frame() time, flight and settle "
+     "seconds, first picture, settled mesh against lock-step",
+     run_viewer_group},
 };
 
 std::span<const BenchGroup> bench_groups() { return kGroups; }

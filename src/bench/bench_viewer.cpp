@@ -1,0 +1,182 @@
+// The "viewer" group (docs/architecture.md, "Viewer"): every mode's Viewer free-running at 30 fps, as
+// `pmstream stream --fps 30` children, through a relay that delays each direction (delay_proxy.h) for
+// round trips of 0 and 50 ms, on dragon's scan and orbit paths. Per run: the time frame() takes on the
+// calling thread (median, p99), the flight's seconds, frames until a view is satisfied, the time to the
+// first picture, bytes, and whether the settled mesh is the one the mode gives in lock-step at the last
+// camera (a lock-step run over the undelayed link, compared triangle by triangle).
+#include <algorithm>
+#include <array>
+#include <cstdio>
+#include <optional>
+
+#include "apps/camera_json.h"
+#include "apps/percentile.h"
+#include "bench/bench.h"
+#include "bench/bench_model.h"
+#include "bench/bench_refine.h"
+#include "bench/child_process.h"
+#include "bench/delay_proxy.h"
+#include "bench/report.h"
+#include "bench/serve_child.h"
+#include "io/mesh.h"
+
+namespace pms::bench {
+namespace {
+
+using nlohmann::json;
+using app::percentile;
+
+constexpr uint32_t kFrames = 90;  // three seconds at 30 fps
+constexpr uint32_t kFps = 30;
+constexpr std::array<uint32_t, 2> kRoundTripsMs = {0, 50};
+constexpr std::array<const char*, 6> kModes = {"sender", "sender-plain", "vi", "dag", "receiver", "multilevel"};
+
+bool over_http(const std::string& mode) { return mode == "receiver" || mode == "multilevel"; }
+
+using Triangle = std::array<float, 9>;
+
+// The mesh's triangles as corner positions, each rotated to its smallest corner, sorted: equal for the
+// same mesh whatever order its vertices were written in.
+std::vector<Triangle> triangles_of(const Mesh& mesh) {
+  std::vector<Triangle> out;
+  for (size_t t = 0; t + 2 < mesh.indices.size(); t += 3) {
+    std::array<std::array<float, 3>, 3> corners;
+    for (int k = 0; k < 3; ++k)
+      for (int c = 0; c < 3; ++c) corners[k][c] = mesh.positions[3 * size_t(mesh.indices[t + k]) + c];
+    std::rotate(corners.begin(), std::min_element(corners.begin(), corners.end()), corners.end());
+    Triangle triangle;
+    for (int k = 0; k < 3; ++k) std::copy(corners[k].begin(), corners[k].end(), triangle.begin() + 3 * k);
+    out.push_back(triangle);
+  }
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+struct Run {
+  std::string error;
+  json out;  // stream --json
+  std::vector<Triangle> settled;
+};
+
+Run stream(const BenchContext& context, const std::string& mode, const std::string& server, const std::string& model,
+           const std::filesystem::path& path, uint32_t fps, const std::filesystem::path& mesh) {
+  std::vector<std::string> argv = {context.pmstream_exe, "stream",     "--server",    server, "--mode",
+                                   mode,                 "--model",    model,         "--path", path.string(),
+                                   "--json",             "--save-mesh", mesh.string()};
+  if (fps) argv.insert(argv.end(), {"--fps", std::to_string(fps)});
+  ChildOptions options;
+  options.timeout_seconds = 600;
+  const ChildResult result = run_child(argv, options);
+  Run run;
+  if (!result.ok()) {
+    run.error = result.failure();
+    return run;
+  }
+  run.out = json::parse(result.out);
+  run.settled = triangles_of(load_mesh(mesh.string()));
+  return run;
+}
+
+// For each frame, the frames until one whose view was satisfied (0 when it was itself); their mean.
+double frames_to_satisfied(const json& frames) {
+  double total = 0;
+  size_t next_satisfied = frames.size();
+  for (size_t i = frames.size(); i-- > 0;) {
+    if (frames[i].value("satisfied", true)) next_satisfied = i;
+    total += double(next_satisfied - i);
+  }
+  return frames.empty() ? 0 : total / double(frames.size());
+}
+
+std::vector<double> frame_ms(const json& frames) {
+  std::vector<double> out;
+  for (const json& f : frames) out.push_back(f.value("frame_ms", 0.0));
+  return out;
+}
+
+Table viewer_table() {
+  return Table({{"path", false},
+                {"mode", false},
+                {"RTT ms"},
+                {"frame() median ms"},
+                {"frame() p99 ms"},
+                {"p99 / 0 ms p99"},
+                {"flight s"},
+                {"settle s"},
+                {"frames to satisfied"},
+                {"first picture ms"},
+                {"bytes down"},
+                {"settled = lock-step", false}});
+}
+
+}  // namespace
+
+void run_viewer_group(BenchContext& context) {
+  std::string section = "## viewer: every mode free-running at 30 fps over a delaying link\n\n";
+  if (skipped_without_models(context, section)) return;
+  const std::string model = context.options.quick ? "bunny" : "dragon";
+  const BenchModel m = prepare_model(context, model);
+  ServeChild server(context.pmstream_exe, {m.pms.string(), "--http-port", "0", "--preload", "all"});
+  const uint16_t tcp_port = server.port(), http_port = server.listening()["http_port"].get<uint16_t>();
+  section += "Model " + model + ", " + std::to_string(kFrames) + " frames at " + std::to_string(kFps) +
+             " fps (`pmstream stream --fps " + std::to_string(kFps) +
+             "`), τ = 1 px, the server's defaults with every table preloaded; each round trip is a relay holding "
+             "each direction's bytes for half of it. \"settled = lock-step\": the mesh after settling at the last "
+             "camera, triangle by triangle, against a lock-step run of the same mode and path.\n\n";
+  Table table = viewer_table();
+  print_now("\n" + section + table.header());
+  json out = json::array();
+  for (const app::PathKind kind : {app::PathKind::scan, app::PathKind::orbit}) {
+    const char* kind_name = kind == app::PathKind::scan ? "scan" : "orbit";
+    const std::filesystem::path path = context.temp_dir / (model + "-viewer-" + kind_name + ".json");
+    app::save_path(path.string(), path_of(m, kind, kFrames));
+    for (const std::string mode : kModes) {
+      const auto address = [&](uint16_t port) {
+        return over_http(mode) ? "http://127.0.0.1:" + std::to_string(port) : "127.0.0.1:" + std::to_string(port);
+      };
+      const uint16_t port = over_http(mode) ? http_port : tcp_port;
+      std::fprintf(stderr, "bench: viewer, %s, %s\n", kind_name, mode.c_str());
+      const Run lock_step = stream(context, mode, address(port), model, path, 0, context.temp_dir / "lock-step.ply");
+      double p99_at_zero = 0;
+      for (const uint32_t rtt : kRoundTripsMs) {
+        std::optional<DelayProxy> relay;
+        if (rtt) relay.emplace(port, std::chrono::milliseconds(rtt / 2));
+        const Run run = stream(context, mode, address(relay ? relay->port() : port), model, path, kFps,
+                               context.temp_dir / "free.ply");
+        if (!run.error.empty() || !lock_step.error.empty()) {
+          const std::string why = run.error.empty() ? "lock-step: " + lock_step.error : run.error;
+          context.failures.push_back(std::string("viewer ") + kind_name + " " + mode + ": " + why);
+          print_now(table.add_row({kind_name, mode, std::to_string(rtt), "failed", "", "", "", "", "", "", "", why}));
+          continue;
+        }
+        const std::vector<double> times = frame_ms(run.out["frames"]);
+        const double p99 = percentile(times, 0.99);
+        if (rtt == 0) p99_at_zero = p99;
+        const bool same = run.settled == lock_step.settled;
+        print_now(table.add_row({kind_name, mode, std::to_string(rtt), fixed(percentile(times, 0.5), 2),
+                                 fixed(p99, 2), p99_at_zero > 0 ? fixed(p99 / p99_at_zero, 2) : std::string(),
+                                 fixed(run.out.value("flight_seconds", 0.0), 2),
+                                 fixed(run.out.value("settle_seconds", 0.0), 2),
+                                 fixed(frames_to_satisfied(run.out["frames"]), 1),
+                                 fixed(run.out.value("open_ms", 0.0), 1),
+                                 thousands(run.out.value("total_down_bytes", uint64_t(0))), same ? "yes" : "no"}));
+        out.push_back({{"path", kind_name},
+                       {"mode", mode},
+                       {"rtt_ms", rtt},
+                       {"frame_ms_median", percentile(times, 0.5)},
+                       {"frame_ms_p99", p99},
+                       {"flight_seconds", run.out.value("flight_seconds", 0.0)},
+                       {"settle_seconds", run.out.value("settle_seconds", 0.0)},
+                       {"frames_to_satisfied", frames_to_satisfied(run.out["frames"])},
+                       {"open_ms", run.out.value("open_ms", 0.0)},
+                       {"down_bytes", run.out.value("total_down_bytes", uint64_t(0))},
+                       {"settled_equals_lock_step", same}});
+      }
+    }
+  }
+  section += table.markdown() + "\n";
+  write_text_file(context.options.out_dir / "viewer.json", json{{"model", model}, {"runs", out}}.dump(2) + "\n");
+  context.report += section;
+}
+
+}  // namespace pms::bench
