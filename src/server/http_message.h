@@ -1,6 +1,7 @@
 // Between Beast's HTTP parser and the routes (http_routes.h): the parser's bounds, the answer to a
 // request Beast could not parse, and an answer's status line and headers. Beast is slow to compile: only
-// this file's .cpp, http_server.cpp and the fuzz target include this header (docs/architecture.md, "Stack").
+// this file's .cpp, http_connection.cpp, http_server.cpp and the fuzz targets include this header
+// (docs/architecture.md, "Stack").
 #pragma once
 #include <utility>  // before asio with C++20 (docs/architecture.md, "Stack")
 
