@@ -33,29 +33,10 @@ constexpr std::array<const char*, 6> kModes = {"sender", "sender-plain", "vi", "
 
 bool over_http(const std::string& mode) { return mode == "receiver" || mode == "multilevel"; }
 
-using Triangle = std::array<float, 9>;
-
-// The mesh's triangles as corner positions, each rotated to its smallest corner, sorted: equal for the
-// same mesh whatever order its vertices were written in.
-std::vector<Triangle> triangles_of(const Mesh& mesh) {
-  std::vector<Triangle> out;
-  for (size_t t = 0; t + 2 < mesh.indices.size(); t += 3) {
-    std::array<std::array<float, 3>, 3> corners;
-    for (int k = 0; k < 3; ++k)
-      for (int c = 0; c < 3; ++c) corners[k][c] = mesh.positions[3 * size_t(mesh.indices[t + k]) + c];
-    std::rotate(corners.begin(), std::min_element(corners.begin(), corners.end()), corners.end());
-    Triangle triangle;
-    for (int k = 0; k < 3; ++k) std::copy(corners[k].begin(), corners[k].end(), triangle.begin() + 3 * k);
-    out.push_back(triangle);
-  }
-  std::sort(out.begin(), out.end());
-  return out;
-}
-
 struct Run {
   std::string error;
   json out;  // stream --json
-  std::vector<Triangle> settled;
+  std::vector<PositionedTriangle> settled;
 };
 
 Run stream(const BenchContext& context, const std::string& mode, const std::string& server, const std::string& model,
@@ -73,7 +54,8 @@ Run stream(const BenchContext& context, const std::string& mode, const std::stri
     return run;
   }
   run.out = json::parse(result.out);
-  run.settled = triangles_of(load_mesh(mesh.string()));
+  const Mesh settled = load_mesh(mesh.string());
+  run.settled = positioned_triangles(settled.positions, settled.indices);
   return run;
 }
 

@@ -1,6 +1,8 @@
 // In-memory triangle mesh shared by importers, cleaning, the builder and exporters.
 // Flat arrays (meshoptimizer style): one allocation per attribute, triangles as index triples.
 #pragma once
+#include <array>
+#include <span>
 #include <cstddef>
 #include <cstdint>
 #include <string>
@@ -53,5 +55,12 @@ void save_ply(const Mesh& mesh, const std::string& path, bool binary = true);
 // and cuts non-manifold edges/vertices so the result is an oriented 2-manifold (boundaries allowed) whose
 // closed components face outward.
 CleanReport clean_mesh(Mesh& mesh);
+
+// The triangles of `indices` over `positions` as their corners' positions, each rotated to start at its
+// smallest corner, sorted; triangles with a repeated corner (a renderer's free slot) are left out. Two
+// meshes draw the same triangles exactly when these are equal, however their vertices are numbered.
+using PositionedTriangle = std::array<float, 9>;
+std::vector<PositionedTriangle> positioned_triangles(std::span<const float> positions,
+                                                     std::span<const uint32_t> indices);
 
 }  // namespace pms

@@ -14,25 +14,6 @@
 namespace pms::client {
 namespace {
 
-using Triangle = std::array<float, 9>;
-
-// The live triangles as corner positions, each rotated to start at its smallest corner, sorted.
-std::vector<Triangle> triangles_of(std::span<const float> positions, std::span<const uint32_t> indices) {
-  std::vector<Triangle> out;
-  for (size_t t = 0; t + 2 < indices.size(); t += 3) {
-    if (indices[t] == indices[t + 1]) continue;  // a free slot
-    std::array<std::array<float, 3>, 3> corners;
-    for (int k = 0; k < 3; ++k)
-      for (int c = 0; c < 3; ++c) corners[k][c] = positions[3 * size_t(indices[t + k]) + c];
-    std::rotate(corners.begin(), std::min_element(corners.begin(), corners.end()), corners.end());
-    Triangle triangle;
-    for (int k = 0; k < 3; ++k) std::copy(corners[k].begin(), corners[k].end(), triangle.begin() + 3 * k);
-    out.push_back(triangle);
-  }
-  std::sort(out.begin(), out.end());
-  return out;
-}
-
 // Every element of `after` that differs from `before` (or is new) lies in one of `ranges`, which are
 // increasing and disjoint.
 template <class T>
@@ -80,8 +61,8 @@ TEST(MeshBuffers, DrawTheExtractedMeshAndReportWhatChanged) {
         expect_covered(before.indices, buffers.indices, 3, buffers.changed_triangles);
         MeshArrays extracted;
         r.refinement.extract(extracted);
-        ASSERT_EQ(triangles_of(buffers.positions, buffers.indices),
-                  triangles_of(extracted.positions, extracted.indices))
+        ASSERT_EQ(positioned_triangles(buffers.positions, buffers.indices),
+                  positioned_triangles(extracted.positions, extracted.indices))
             << "distance " << distance << ", frame " << frame << ", morph frames " << morph_frames;
       }
       // Nothing moved: nothing to upload.
