@@ -63,13 +63,13 @@ class FreeRunningSession {
   ClientSession& session_;
   ClientMode& mode_;
   protocol::DagView request_;
-  std::deque<Sent> sent_;          // requests whose final batch has not come, oldest first
-  uint32_t requests_ = 0;          // the last request's number
-  uint32_t frames_ = 0;            // displayed frames
-  std::optional<Camera> asked_;    // the camera of the last request
-  uint32_t rounds_ = 0;            // requests at asked_
+  std::deque<Sent> sent_;           // requests whose final batch has not come, oldest first
+  uint32_t requests_ = 0;           // the last request's number
+  uint32_t frames_ = 0;             // displayed frames
+  std::optional<Camera> asked_;     // the camera of the last request
+  uint32_t rounds_ = 0;             // requests at asked_
   uint64_t answer_operations_ = 0;  // splits and collapses received since the last request
-  bool lacks_ = false;             // the last adapt: the view misses packets
+  bool lacks_ = false;              // the last adapt: the view misses packets
   bool opening_ = false, codec_due_ = false;
   // Since the last displayed frame.
   uint64_t splits_ = 0;

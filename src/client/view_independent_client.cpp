@@ -2,7 +2,8 @@
 
 namespace pms::client {
 
-void ViewIndependentClient::frame(const Camera& camera, ClientSession& session, ViewRequests& server, FrameReport& report) {
+void ViewIndependentClient::frame(const Camera& camera, ClientSession& session, ViewRequests& server,
+                                  FrameReport& report) {
   report.vsplits = server.request_view(
       camera, [this, &session](const protocol::VSplits& batch) { on_batch(batch, session); }, report);
 }

@@ -17,6 +17,7 @@
 #include "protocol/client_messages.h"
 #include "protocol/framing.h"
 #include "protocol/stream_mode.h"
+#include "server/limits.h"
 #include "streaming_fixture.h"
 
 namespace pms {
@@ -137,11 +138,59 @@ void expect_settled_equals_lock_step(StreamMode mode) {
 TEST(FreeRunning, SenderNeverWaitsAndSettlesToLocalRefinement) {
   expect_settled_equals_lock_step(StreamMode::sender_driven);
 }
-TEST(FreeRunning, SenderPlainNeverWaitsAndSettlesWhereLockStepAsksNothing) { expect_settled_equals_lock_step(StreamMode::sender_plain); }
+TEST(FreeRunning, SenderPlainNeverWaitsAndSettlesWhereLockStepAsksNothing) {
+  expect_settled_equals_lock_step(StreamMode::sender_plain);
+}
 TEST(FreeRunning, ViewIndependentNeverWaitsAndSettlesWhereLockStepAsksNothing) {
   expect_settled_equals_lock_step(StreamMode::view_independent);
 }
 TEST(FreeRunning, DagNeverWaitsAndSettlesToLockStepsFixedPoint) { expect_settled_equals_lock_step(StreamMode::dag); }
+
+// A lost connection, free-running: frames go on with the mesh held and nothing in flight, each makes at
+// most one reconnect attempt and only once the backoff's delay has passed (no frame sleeps it away), and
+// the resumed session ends where an unbroken one does.
+TEST(FreeRunning, ALostConnectionIsResumedByLaterFramesThatNeverSleep) {
+  const Fixture& f = terrain();
+  auto server = std::make_unique<Server>(f.catalogue);
+  const uint16_t port = server->port();
+  const std::vector<Camera> path = orbit_path(f.hierarchy, 10, 1.1f);
+  const size_t half = path.size() / 2;
+  client::ClientOptions options{kTolerance};
+  options.reconnect_attempts = 8;
+  options.reconnect_delay = std::chrono::milliseconds(200);
+  std::vector<uint32_t> attempts;
+  std::vector<std::string> reasons;
+  options.on_reconnect = [&](const std::string& reason, uint32_t attempt) {
+    reasons.push_back(reason);
+    attempts.push_back(attempt);
+  };
+  client::SessionViewer viewer("127.0.0.1:" + std::to_string(port), options, client::Pacing::free_running, "terrain");
+  for (size_t i = 0; i < half; ++i) viewer.frame(path[i]);
+  viewer.settle(path[half - 1]);
+
+  server.reset();
+  size_t frames_between = 0;  // frames after the loss that made no attempt
+  const Clock::time_point deadline = Clock::now() + std::chrono::seconds(30);
+  while (attempts.size() < 2 && Clock::now() < deadline) {
+    const size_t before = attempts.size();
+    const client::ViewerReport r = viewer.frame(path[half]);
+    ASSERT_LE(attempts.size(), before + 1) << "one attempt a frame at most";
+    if (attempts.empty()) continue;
+    frames_between += attempts.size() == before;
+    EXPECT_EQ(r.in_flight, 0u) << "what was in flight went with the connection";
+    EXPECT_FALSE(r.satisfied);
+  }
+  ASSERT_EQ(attempts, (std::vector<uint32_t>{1, 2}));
+  EXPECT_GT(frames_between, 0u) << "the backoff passes over frames, not inside one";
+  EXPECT_TRUE(reasons[0].find("server: connection lost") != std::string::npos) << reasons[0];
+  EXPECT_TRUE(reasons[1].find("cannot connect") != std::string::npos) << reasons[1];
+
+  server = std::make_unique<Server>(f.catalogue, server::ServerLimits{}, port);
+  for (size_t i = half; i < path.size(); ++i) viewer.frame(path[i]);
+  viewer.settle(path.back());
+  EXPECT_GE(attempts.size(), 3u);
+  EXPECT_EQ(faces_by_id(viewer.client().session().mesh()), local_faces(f.snapped, path.back(), kTolerance));
+}
 
 }  // namespace
 }  // namespace pms
