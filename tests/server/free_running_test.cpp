@@ -25,7 +25,6 @@ namespace {
 
 using protocol::StreamMode;
 using test::faces_by_id;
-using test::Fixture;
 using test::local_faces;
 using test::orbit_path;
 using Server = test::LoopbackTcpServer;
@@ -33,7 +32,7 @@ using Clock = std::chrono::steady_clock;
 
 constexpr float kTolerance = 1.0f;
 
-const Fixture& terrain() { return test::terrain_fixture(30000, 7); }
+const test::Fixture& terrain() { return test::terrain_fixture(30000, 7); }
 
 client::ClientOptions options_for(StreamMode mode) {
   client::ClientOptions options{kTolerance};
@@ -78,7 +77,7 @@ client::StreamingClient& lock_step(client::StreamingClient& client, const std::v
 
 void expect_settled_equals_lock_step(StreamMode mode) {
   SCOPED_TRACE(protocol::mode_name(mode));
-  const Fixture& f = terrain();
+  const test::Fixture& f = terrain();
   Server server(f.catalogue);
   const std::vector<Camera> path = orbit_path(f.hierarchy, 12, 0.3f);
   auto held = std::make_unique<HeldLink>(server.port());
@@ -150,7 +149,7 @@ TEST(FreeRunning, DagNeverWaitsAndSettlesToLockStepsFixedPoint) { expect_settled
 // most one reconnect attempt and only once the backoff's delay has passed (no frame sleeps it away), and
 // the resumed session ends where an unbroken one does.
 TEST(FreeRunning, ALostConnectionIsResumedByLaterFramesThatNeverSleep) {
-  const Fixture& f = terrain();
+  const test::Fixture& f = terrain();
   auto server = std::make_unique<Server>(f.catalogue);
   const uint16_t port = server->port();
   const std::vector<Camera> path = orbit_path(f.hierarchy, 10, 1.1f);
