@@ -26,6 +26,10 @@ struct FrameReport {
   uint64_t faces = 0;
   bool requested = false;  // a VIEW was sent
   double latency_ms = 0;   // VIEW sent -> last split of its answer applied (0 if none)
+  // Free-running only (lock-step has none in flight and is always satisfied at a frame's end): requests
+  // sent whose final batch has not come, and whether the last one's has and the view lacks nothing.
+  uint32_t in_flight = 0;
+  bool satisfied = true;
 };
 
 // Called with each batch of an answer after the session attached it to the hierarchy.
@@ -57,6 +61,28 @@ class ClientMode {
   virtual void frame(const Camera& camera, ClientSession& session, ViewRequests& server, FrameReport& report) = 0;
   // After the last camera: finish what is still in motion (geomorphs).
   virtual void settle(ClientSession& session) = 0;
+
+  // ---- Free-running (free_running_session.h): the same mode, driven by what arrives; nothing waits ----
+  // A VSPLITS batch the session has just attached: a mode that applies splits as they come makes them.
+  virtual void on_batch(const protocol::VSplits& batch, ClientSession& session) {
+    (void)batch;
+    (void)session;
+  }
+  // Adapts the mesh to `camera` with what is held; whether the view lacks splits the hierarchy does not
+  // have. A mode that cannot tell says false and asks at every new camera instead (asks_every_view).
+  virtual bool adapt(const Camera& camera, ClientSession& session) {
+    (void)camera;
+    (void)session;
+    return false;
+  }
+  virtual bool asks_every_view() const { return true; }
+  // Requests at one camera at most, the first included: more only when an answer was cut short (it
+  // brought something and the mode still wants more), as the blocking frame re-asks.
+  virtual uint32_t rounds_per_view() const { return 1; }
+  // The request for `request.view` (its camera, tolerance and frame filled in): VIEW, or DAG_VIEW.
+  virtual std::vector<uint8_t> encode_request(const protocol::DagView& request) const {
+    return protocol::encode(request.view);
+  }
 };
 
 std::unique_ptr<ClientMode> make_client_mode(protocol::StreamMode mode);

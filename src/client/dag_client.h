@@ -17,6 +17,18 @@ class DagClient : public ClientMode {
   std::vector<VertexId> resume_front(const ClientSession& session) const override { return session.mesh_vertices(); }
   void frame(const Camera& camera, ClientSession& session, ViewRequests& server, FrameReport& report) override;
   void settle(ClientSession&) override {}
+
+  // Free-running: DAG_OPS are applied as they arrive (free_running_session.cpp). An answer with operations
+  // was N-limited management (zheng-chan §5), so at a camera that stays, the next DAG_VIEW goes on where it
+  // stopped, as the next frame of lock-step does; one without operations is the traversal's fixed point.
+  uint32_t rounds_per_view() const override { return kRounds; }
+  std::vector<uint8_t> encode_request(const protocol::DagView& request) const override {
+    return protocol::encode(request);
+  }
+
+ private:
+  // A bound on a traversal that never settles (a budget it keeps trading faces under), not a target.
+  static constexpr uint32_t kRounds = 64;
 };
 
 }  // namespace pms::client

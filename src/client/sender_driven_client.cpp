@@ -3,24 +3,36 @@
 #include "spm/adapt.h"
 
 namespace pms::client {
+namespace {
+
+// Adapts to the view set with what the hierarchy holds; true when the front needs packets it lacks.
+bool adapt_with_held(SelectiveRefinement& refinement) {
+  FrameStats stats = refinement.adapt();
+  // Without a cap one adapt() reaches the view's mesh for what is known; extra passes only finish
+  // collapses that waited for a geomorph. Bounded, whatever the loop does.
+  for (int pass = 0; pass < 64 && !stats.capped && stats.ops() > 0 && refinement.missing().empty(); ++pass)
+    stats = refinement.adapt();
+  return !refinement.missing().empty();
+}
+
+}  // namespace
 
 void SenderDrivenClient::frame(const Camera& camera, ClientSession& session, ViewRequests& server,
                                FrameReport& report) {
   SelectiveRefinement& refinement = session.refinement();
   refinement.set_view(session.view_params(camera));
-  // The server answers a VIEW with every split the view wants over its front, so one request per frame
-  // normally suffices; a second only if the answer was cut short.
-  for (int round = 0; round < 4; ++round) {
-    FrameStats stats = refinement.adapt();
-    // Without a cap one adapt() reaches the view's mesh for what is known; extra passes only finish
-    // collapses that waited for a geomorph. Bounded, whatever the loop does.
-    for (int pass = 0; pass < 64 && !stats.capped && stats.ops() > 0 && refinement.missing().empty(); ++pass)
-      stats = refinement.adapt();
-    if (refinement.missing().empty()) break;
+  for (uint32_t round = 0; round < kRounds; ++round) {
+    if (!adapt_with_held(refinement)) break;
     const size_t received = server.request_view(camera, {}, report);  // attaching them is all it takes
     report.vsplits += received;
     if (received == 0) break;  // the server has nothing more for this view
   }
+}
+
+bool SenderDrivenClient::adapt(const Camera& camera, ClientSession& session) {
+  SelectiveRefinement& refinement = session.refinement();
+  refinement.set_view(session.view_params(camera));
+  return adapt_with_held(refinement);
 }
 
 void SenderDrivenClient::settle(ClientSession& session) { session.refinement().converge(); }

@@ -11,6 +11,16 @@ class SenderDrivenClient : public ClientMode {
   void prepare(ClientSession& session) const override { session.refinement_info = true; }
   void frame(const Camera& camera, ClientSession& session, ViewRequests& server, FrameReport& report) override;
   void settle(ClientSession& session) override;
+
+  // Free-running: batches are only attached; adapt() says whether qrefine misses packets.
+  bool adapt(const Camera& camera, ClientSession& session) override;
+  bool asks_every_view() const override { return false; }
+  uint32_t rounds_per_view() const override { return kRounds; }
+
+ private:
+  // The server answers a VIEW with every split the view wants over its front, so one request per view
+  // normally suffices; more only if an answer was cut short.
+  static constexpr uint32_t kRounds = 4;
 };
 
 }  // namespace pms::client

@@ -8,22 +8,50 @@
 namespace pms::client {
 
 ServerConnection::ServerConnection(std::unique_ptr<Transport> transport, const std::string& client_name,
-                                   std::chrono::milliseconds answer_timeout)
+                                   std::chrono::milliseconds answer_timeout, Greeting greeting)
     : transport_(std::move(transport)), answer_timeout_(answer_timeout) {
   transport_->send(protocol::encode(protocol::Hello{protocol::kProtocolVersion, client_name}));
-  hello_ok_ = protocol::decode_hello_ok(expect(protocol::MessageType::hello_ok).payload);
+  if (greeting == Greeting::await) (void)take(receive_answer());  // anything but HELLO_OK fails there
+}
+
+protocol::Frame ServerConnection::receive_answer() {
+  std::optional<protocol::Frame> frame = transport_->receive(answer_timeout_);
+  if (!frame) throw ConnectionError("server: no answer within " + std::to_string(answer_timeout_.count()) + " ms");
+  return std::move(*frame);
+}
+
+std::optional<protocol::Frame> ServerConnection::take(protocol::Frame frame) {
+  if (frame.type == protocol::MessageType::error) {
+    const protocol::ErrorMessage e = protocol::decode_error(frame.payload);
+    fail("server", protocol::to_string(e.code) + ": " + e.text);
+  }
+  if (greeted_) return frame;
+  if (frame.type != protocol::MessageType::hello_ok)
+    fail("server", "expected " + protocol::to_string(protocol::MessageType::hello_ok) + ", got " +
+                       protocol::to_string(frame.type));
+  hello_ok_ = protocol::decode_hello_ok(frame.payload);
+  greeted_ = true;
+  return std::nullopt;
+}
+
+protocol::Frame ServerConnection::next() {
+  for (;;)
+    if (std::optional<protocol::Frame> frame = take(receive_answer())) return std::move(*frame);
+}
+
+std::optional<protocol::Frame> ServerConnection::poll() {
+  for (;;) {
+    std::optional<protocol::Frame> frame = transport_->receive(std::chrono::milliseconds(0));
+    if (!frame) return std::nullopt;
+    if ((frame = take(std::move(*frame)))) return frame;
+  }
 }
 
 protocol::Frame ServerConnection::expect(protocol::MessageType type) {
-  std::optional<protocol::Frame> frame = transport_->receive(answer_timeout_);
-  if (!frame) throw ConnectionError("server: no answer within " + std::to_string(answer_timeout_.count()) + " ms");
-  if (frame->type == protocol::MessageType::error) {
-    const protocol::ErrorMessage e = protocol::decode_error(frame->payload);
-    fail("server", protocol::to_string(e.code) + ": " + e.text);
-  }
-  if (frame->type != type)
-    fail("server", "expected " + protocol::to_string(type) + ", got " + protocol::to_string(frame->type));
-  return std::move(*frame);
+  protocol::Frame frame = next();
+  if (frame.type != type)
+    fail("server", "expected " + protocol::to_string(type) + ", got " + protocol::to_string(frame.type));
+  return frame;
 }
 
 protocol::Catalogue ServerConnection::list() {
@@ -32,9 +60,11 @@ protocol::Catalogue ServerConnection::list() {
 }
 
 protocol::Base ServerConnection::open(const protocol::Open& open) {
-  transport_->send(protocol::encode(open));
+  send_open(open);
   return protocol::decode_base(expect(protocol::MessageType::base).payload);
 }
+
+void ServerConnection::send_open(const protocol::Open& open) { transport_->send(protocol::encode(open)); }
 
 void ServerConnection::send_view(const Camera& camera, float tolerance, uint32_t frame) {
   transport_->send(protocol::encode(protocol::View{camera, tolerance, frame}));

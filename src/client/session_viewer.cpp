@@ -23,36 +23,40 @@ void split_host_port(const std::string& text, std::string& host, uint16_t& port,
 
 namespace {
 
-std::unique_ptr<StreamingClient> connect(const std::string& server, const ClientOptions& options) {
+// HELLO and OPEN together: the first picture (BASE) one round trip after connecting.
+std::unique_ptr<StreamingClient> connect(const std::string& server, const ClientOptions& options,
+                                         const std::string& model) {
   std::string host;
   uint16_t port = 0;
   split_host_port(server, host, port, "--server");
-  return std::make_unique<StreamingClient>(host, port, options);
+  return std::make_unique<StreamingClient>(host, port, options, model);
 }
 
 }  // namespace
 
 SessionViewer::SessionViewer(const std::string& server, const ClientOptions& options, Pacing pacing,
                              const std::string& model)
-    : client_(connect(server, options)), pacing_(pacing) {
-  if (pacing_ != Pacing::lock_step) fail("viewer", "the session modes run in lock-step only in this build");
-  client_->open(model);
-}
+    : client_(connect(server, options, model)), pacing_(pacing) {}
 
 ViewerReport SessionViewer::frame(const Camera& camera) {
-  const FrameReport r = client_->frame(camera);
+  const bool lock_step = pacing_ == Pacing::lock_step;
+  const FrameReport r = lock_step ? client_->frame(camera) : client_->frame_free_running(camera);
   ViewerReport report;
   report.frame = r.frame;
   report.faces = r.faces;
   report.received = r.vsplits;
   report.up_bytes = r.up_bytes;
   report.down_bytes = r.down_bytes;
+  report.in_flight = r.in_flight;
   report.latency_ms = r.latency_ms;
-  report.satisfied = true;  // lock-step: the VIEW's whole answer is applied
+  report.satisfied = r.satisfied;  // lock-step: always, the VIEW's whole answer is applied
   return report;
 }
 
-void SessionViewer::settle(const Camera& camera) { client_->settle(camera); }
+void SessionViewer::settle(const Camera& camera) {
+  if (pacing_ == Pacing::lock_step) return client_->settle(camera);
+  client_->settle_free_running(camera);
+}
 
 Mesh SessionViewer::mesh() const { return current_mesh(client_->session().refinement()); }
 

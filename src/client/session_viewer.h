@@ -1,5 +1,7 @@
 // The Viewer of the session modes (sender, sender-plain, vi, dag): a StreamingClient over TCP, which
-// resumes its session on a new connection when one is lost (ClientOptions::reconnect_attempts).
+// resumes its session on a new connection when one is lost (ClientOptions::reconnect_attempts). Lock-step
+// frames are the blocking StreamingClient::frame; free-running ones StreamingClient::frame_free_running,
+// which never waits for the network (free_running_session.h).
 #pragma once
 #include <string>
 

@@ -30,6 +30,12 @@ void add(LinkCounters& total, const LinkCounters& more) {
   total.frames_down += more.frames_down;
 }
 
+// Before reconnect attempt `attempt` (from 1): reconnect_delay, then twice that, and so on, capped at 8 s.
+std::chrono::milliseconds backoff(const ClientOptions& options, uint32_t attempt) {
+  const auto delay = options.reconnect_delay * (1 << std::min<uint32_t>(attempt - 1, 10));
+  return std::min<std::chrono::milliseconds>(delay, std::chrono::seconds(8));
+}
+
 // Every connection, the first and each reconnect, gets the client's deadlines; the answer timeout is
 // also how long a frame may take once it has begun to arrive.
 std::unique_ptr<Link> open_link(const std::string& host, uint16_t port, const ClientOptions& options) {
@@ -50,30 +56,50 @@ StreamingClient::StreamingClient(const std::string& host, uint16_t port, const C
 
 StreamingClient::StreamingClient(std::unique_ptr<Transport> transport, const ClientOptions& options)
     : options_(options) {
-  session_.adapt_options.tolerance = options.tolerance;
-  session_.adapt_options.morph_frames = options.morph_frames;
-  session_.adapt_options.max_ops = options.max_ops;
-  mode_ = make_client_mode(options.mode);
-  mode_->prepare(session_);
+  prepare();
   greet(std::move(transport));
+}
+
+StreamingClient::StreamingClient(const std::string& host, uint16_t port, const ClientOptions& options,
+                                 const std::string& model)
+    : options_(options), host_(host), port_(port) {
+  prepare();
+  greet(open_link(host, port, options), Greeting::pipelined);
+  open(model);
 }
 
 StreamingClient::~StreamingClient() = default;
 
-void StreamingClient::greet(std::unique_ptr<Transport> transport) {
-  if (server_) {
-    add(past_, server_->counters());
-    server_.reset();
-  }
-  server_ = std::make_unique<ServerConnection>(std::move(transport), options_.name, options_.answer_timeout);
+void StreamingClient::prepare() {
+  session_.adapt_options.tolerance = options_.tolerance;
+  session_.adapt_options.morph_frames = options_.morph_frames;
+  session_.adapt_options.max_ops = options_.max_ops;
+  mode_ = make_client_mode(options_.mode);
+  mode_->prepare(session_);
+}
+
+void StreamingClient::close_connection() {
+  if (!server_) return;
+  add(past_, server_->counters());
+  server_.reset();
+}
+
+void StreamingClient::greet(std::unique_ptr<Transport> transport, Greeting greeting) {
+  close_connection();
+  server_ = std::make_unique<ServerConnection>(std::move(transport), options_.name, options_.answer_timeout, greeting);
 }
 
 protocol::Catalogue StreamingClient::list() { return server_->list(); }
 
+protocol::Open StreamingClient::open_message() const {
+  protocol::Open message{model_, {}, mode_->wire_mode()};
+  if (session_.has_model()) message.resume = mode_->resume_front(session_);
+  return message;
+}
+
 void StreamingClient::open(const std::string& model) {
   model_ = model;
-  protocol::Open message{model, {}, mode_->wire_mode()};
-  if (session_.has_model()) message.resume = mode_->resume_front(session_);
+  const protocol::Open message = open_message();
   session_.on_base(server_->open(message));
   if (protocol::carries_split_records(message.mode)) session_.on_codec(server_->next_codec(session_.context()));
 }
@@ -85,7 +111,7 @@ void StreamingClient::resume(const std::string& host, uint16_t port) {
 
 void StreamingClient::resume(std::unique_ptr<Transport> transport) {
   if (!session_.has_model()) fail("resume", "no session to resume: open a model first");
-  greet(std::move(transport));
+  greet(std::move(transport), Greeting::pipelined);
   open(model_);
 }
 
@@ -141,8 +167,7 @@ void StreamingClient::reconnect(std::string reason, uint32_t& attempts) {
     if (attempts >= options_.reconnect_attempts) throw ConnectionError(reason);
     ++attempts;
     if (options_.on_reconnect) options_.on_reconnect(reason, attempts);
-    const auto delay = options_.reconnect_delay * (1 << std::min<uint32_t>(attempts - 1, 10));
-    std::this_thread::sleep_for(std::min<std::chrono::milliseconds>(delay, std::chrono::seconds(8)));
+    std::this_thread::sleep_for(backoff(options_, attempts));
     try {
       resume(host_, port_);
       return;
@@ -167,6 +192,93 @@ FrameReport StreamingClient::frame_once(const Camera& camera) {
 
 void StreamingClient::settle(const Camera& camera) {
   frame(camera);
+  mode_->settle(session_);
+}
+
+// ---- free-running ----
+
+FreeRunningSession& StreamingClient::free_running() {
+  if (!free_) {
+    protocol::DagView request = options_.dag;
+    request.view.tolerance = options_.tolerance;
+    free_ = std::make_unique<FreeRunningSession>(session_, *mode_, request);
+  }
+  return *free_;
+}
+
+FrameReport StreamingClient::frame_free_running(const Camera& camera) {
+  if (!session_.has_model()) fail("stream", "no model open");
+  FreeRunningSession& core = free_running();
+  const LinkCounters before = counters();
+  if (!server_ && Clock::now() >= resume_due_) try_resume();
+  take_arrived();
+  FrameReport report;
+  const std::vector<uint8_t> request = core.frame(camera, Clock::now(), report);
+  if (!request.empty()) {  // the core asks only while a session is open, so server_ is there
+    try {
+      server_->send(request);
+    } catch (const ConnectionError& e) {
+      lost(e.what());
+    }
+  }
+  const LinkCounters after = counters();
+  report.up_bytes = after.bytes_up - before.bytes_up;
+  report.down_bytes = after.bytes_down - before.bytes_down;
+  report.in_flight = core.in_flight();  // again: a send that found the connection gone
+  report.satisfied = core.satisfied();
+  return report;
+}
+
+void StreamingClient::take_arrived() {
+  if (!server_) return;
+  try {
+    while (std::optional<protocol::Frame> frame = server_->poll()) free_->on_frame(*frame, Clock::now());
+  } catch (const ConnectionError& e) {
+    return lost(e.what());  // what arrived before the loss is applied: the Link hands it over first
+  }
+  if (!free_->opening()) attempts_ = 0;
+}
+
+// With the attempts used up, the reason is the frame's error; otherwise the next attempt is due after the
+// backoff, and frames go on with the mesh held meanwhile.
+void StreamingClient::lost(std::string reason) {
+  if (host_.empty() || attempts_ >= options_.reconnect_attempts) throw ConnectionError(reason);
+  close_connection();
+  free_->restart();
+  lost_reason_ = std::move(reason);
+  resume_due_ = Clock::now() + backoff(options_, attempts_ + 1);
+}
+
+// HELLO and OPEN (the front held) go out together; BASE and CODEC are taken by later frames as they come.
+void StreamingClient::try_resume() {
+  ++attempts_;
+  if (options_.on_reconnect) options_.on_reconnect(lost_reason_, attempts_);
+  try {
+    greet(open_link(host_, port_, options_), Greeting::pipelined);
+    server_->send_open(open_message());
+  } catch (const ConnectionError& e) {
+    lost(e.what());
+  }
+}
+
+void StreamingClient::await_answers() {
+  try {
+    while (server_ && (free_->in_flight() > 0 || free_->opening())) free_->on_frame(server_->next(), Clock::now());
+  } catch (const ConnectionError& e) {
+    lost(e.what());
+  }
+}
+
+void StreamingClient::settle_free_running(const Camera& camera) {
+  for (;;) {
+    const FrameReport report = frame_free_running(camera);
+    if (!server_) {  // settling may wait: the backoff's delay, then the attempt
+      std::this_thread::sleep_until(resume_due_);
+      continue;
+    }
+    if (!report.requested && report.in_flight == 0 && !free_->opening()) break;
+    await_answers();
+  }
   mode_->settle(session_);
 }
 

@@ -9,6 +9,7 @@
 
 #include "client/client_mode.h"
 #include "client/client_session.h"
+#include "client/free_running_session.h"
 #include "client/server_connection.h"
 #include "client/transport.h"
 #include "common/camera.h"
@@ -43,6 +44,9 @@ class StreamingClient : private ViewRequests {
  public:
   // Connects over TCP and says HELLO.
   StreamingClient(const std::string& host, uint16_t port, const ClientOptions& options = {});
+  // Connects over TCP and opens `model`: HELLO and OPEN go out together, so BASE comes one round trip
+  // after connecting (the server takes OPEN right behind HELLO).
+  StreamingClient(const std::string& host, uint16_t port, const ClientOptions& options, const std::string& model);
   // Over any transport (already connected); says HELLO.
   StreamingClient(std::unique_ptr<Transport> transport, const ClientOptions& options = {});
   ~StreamingClient() override;
@@ -51,7 +55,8 @@ class StreamingClient : private ViewRequests {
   // OPEN; with `resume` (the leaves of a hierarchy held from an earlier session) the server rebuilds its
   // tags from them. Waits for BASE.
   void open(const std::string& model);
-  // Reconnects after a lost connection and resumes the session with the hierarchy held.
+  // Reconnects after a lost connection and resumes the session with the hierarchy held (HELLO and OPEN
+  // pipelined).
   void resume(const std::string& host, uint16_t port);
   void resume(std::unique_ptr<Transport> transport);
 
@@ -61,6 +66,15 @@ class StreamingClient : private ViewRequests {
   // Frames at the last camera until nothing changes and nothing moves (geomorphs).
   void settle(const Camera& camera);
 
+  // Free-running (free_running_session.h): applies what has arrived, adapts, sends a request if the view
+  // wants one, and returns without waiting for the network. A lost connection is resumed on a later frame
+  // once the backoff's delay has passed (ClientOptions::reconnect_attempts), never by sleeping here; the
+  // attempt itself connects under connect_timeout, the one wait left (Link connects before it returns).
+  FrameReport frame_free_running(const Camera& camera);
+  // Free-running frames at `camera`, each followed by waiting for its answers (every wait under
+  // answer_timeout), until one asks for nothing more; then the mode's settle (geomorphs).
+  void settle_free_running(const Camera& camera);
+
   ClientSession& session() { return session_; }
   LinkCounters counters() const;  // over every connection this client made
 
@@ -69,7 +83,16 @@ class StreamingClient : private ViewRequests {
   void reconnect(std::string reason, uint32_t& attempts);
   size_t request_view(const Camera& camera, const BatchHandler& on_batch, FrameReport& report) override;
   size_t request_dag_view(const Camera& camera, FrameReport& report) override;
-  void greet(std::unique_ptr<Transport> transport);
+  void prepare();
+  void greet(std::unique_ptr<Transport> transport, Greeting greeting = Greeting::await);
+  void close_connection();  // its counters kept
+  protocol::Open open_message() const;
+  FreeRunningSession& free_running();
+  // Free-running: what has arrived, taken without waiting; a lost connection and its next attempt.
+  void take_arrived();
+  void await_answers();
+  void lost(std::string reason);
+  void try_resume();
 
   ClientOptions options_;
   std::unique_ptr<ClientMode> mode_;
@@ -80,6 +103,11 @@ class StreamingClient : private ViewRequests {
   std::string host_;  // empty: the transport was given, there is nothing to reconnect to
   uint16_t port_ = 0;
   uint32_t frame_ = 0;
+  // Free-running.
+  std::unique_ptr<FreeRunningSession> free_;
+  uint32_t attempts_ = 0;  // reconnects since the last session that got its BASE
+  std::string lost_reason_;
+  std::chrono::steady_clock::time_point resume_due_;  // while server_ is null
 };
 
 }  // namespace pms::client

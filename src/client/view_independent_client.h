@@ -12,6 +12,8 @@ class ViewIndependentClient : public ClientMode {
   protocol::StreamMode wire_mode() const override { return protocol::StreamMode::view_independent; }
   void prepare(ClientSession& session) const override { session.refinement_info = false; }
   void frame(const Camera& camera, ClientSession& session, ViewRequests& server, FrameReport& report) override;
+  // Every split as it arrives, in lock-step and free-running alike.
+  void on_batch(const protocol::VSplits& batch, ClientSession& session) override;
   void settle(ClientSession&) override {}
 };
 

@@ -1,7 +1,8 @@
 // The client's deadlines (issue 14, requirement 5) against raw Boost.Asio peers on loopback: a server that
 // never takes the connection, never answers, stops reading, stops halfway through a frame or closes
 // mid-answer is a ConnectionError with its reason within the deadline, never a hang; with reconnect
-// attempts a stalled server still ends in one, in bounded time. Deadlines here are short (300 ms) and
+// attempts a stalled server still ends in one, in bounded time. HELLO and OPEN go out together, so a peer
+// that answers only once it has both answers within the deadline. Deadlines here are short (300 ms) and
 // every bound has two seconds of slack for a loaded machine.
 #include <utility>  // before asio with C++20
 
@@ -14,6 +15,7 @@
 #include <deque>
 #include <functional>
 #include <memory>
+#include <mutex>
 #include <string>
 #include <thread>
 #include <vector>
@@ -247,6 +249,35 @@ TEST(ClientDeadline, AServerThatClosesMidAnswerIsAConnectionErrorWithTheReason) 
   const Outcome o = connection_error_of([&] { client::StreamingClient("127.0.0.1", peer.port()); });
   EXPECT_EQ(o.what, "server: connection lost: the server closed the connection mid-frame");
   EXPECT_LT(o.took, kSlack);
+}
+
+// HELLO and OPEN go out together, so BASE comes one round trip after connecting: a peer that answers
+// nothing before it has read both still gets both, and its answer comes back within the deadline.
+TEST(ClientDeadline, HelloAndOpenArePipelined) {
+  std::mutex mutex;
+  std::vector<protocol::MessageType> read;  // by the peer, before it answers
+  RawPeer peer([&](tcp::socket& socket) {
+    protocol::FrameReader reader;  // one for both: they may come in one read
+    protocol::Frame frame;
+    std::array<uint8_t, 4096> buffer;
+    for (int k = 0; k < 2; ++k) {
+      while (!reader.next(frame)) reader.feed(buffer.data(), socket.read_some(asio::buffer(buffer)));
+      const std::lock_guard lock(mutex);
+      read.push_back(frame.type);
+    }
+    const protocol::ErrorMessage refusal{protocol::ErrorCode::unknown_model, "answered after HELLO and OPEN"};
+    asio::write(socket, asio::buffer(protocol::encode(refusal)));
+  });
+  try {
+    client::StreamingClient("127.0.0.1", peer.port(), answer_within(kDeadline), "terrain");
+    ADD_FAILURE() << "no error";
+  } catch (const client::ConnectionError& e) {
+    ADD_FAILURE() << "the client waited for HELLO_OK before OPEN: " << e.what();
+  } catch (const Error& e) {
+    EXPECT_TRUE(contains(e.what(), "answered after HELLO and OPEN")) << e.what();
+  }
+  const std::lock_guard lock(mutex);
+  EXPECT_EQ(read, (std::vector<protocol::MessageType>{protocol::MessageType::hello, protocol::MessageType::open}));
 }
 
 TEST(ClientDeadline, CloseDoesNotWaitForAServerThatStoppedReading) {

@@ -1,0 +1,111 @@
+#include "client/free_running_session.h"
+
+#include "common/error.h"
+#include "protocol/message_types.h"
+#include "protocol/model_messages.h"
+#include "protocol/server_messages.h"
+
+namespace pms::client {
+namespace {
+
+bool same(const float (&a)[3], const float (&b)[3]) { return a[0] == b[0] && a[1] == b[1] && a[2] == b[2]; }
+
+bool same_camera(const Camera& a, const Camera& b) {
+  return same(a.eye, b.eye) && same(a.target, b.target) && same(a.up, b.up) && a.fovy_deg == b.fovy_deg &&
+         a.width == b.width && a.height == b.height;
+}
+
+}  // namespace
+
+FreeRunningSession::FreeRunningSession(ClientSession& session, ClientMode& mode, const protocol::DagView& request)
+    : session_(session), mode_(mode), request_(request) {}
+
+void FreeRunningSession::on_frame(const protocol::Frame& frame, Clock::time_point now) {
+  switch (frame.type) {
+    case protocol::MessageType::base:
+      return on_base(frame);
+    case protocol::MessageType::codec:
+      if (!codec_due_) fail("server", "CODEC without a BASE before it");
+      session_.on_codec(protocol::decode_codec(frame.payload, session_.context()));
+      codec_due_ = opening_ = false;
+      return;
+    case protocol::MessageType::vsplits: {
+      const protocol::VSplits batch = protocol::decode_vsplits(frame.payload, session_.context());
+      session_.on_vsplits(batch);
+      mode_.on_batch(batch, session_);
+      return received(batch.splits.size(), batch.splits.size(), batch.frame, batch.final, now);
+    }
+    case protocol::MessageType::dag_ops: {
+      const protocol::DagOps ops = protocol::decode_dag_ops(frame.payload, session_.context());
+      const size_t splits = session_.apply_dag_ops(ops);
+      return received(splits, splits + ops.collapses.size(), ops.frame, ops.final, now);
+    }
+    default:
+      fail("server", "unexpected " + protocol::to_string(frame.type) + " in a streaming session");
+  }
+}
+
+void FreeRunningSession::on_base(const protocol::Frame& frame) {
+  session_.on_base(protocol::decode_base(frame.payload));  // a resumed session's: the model held
+  codec_due_ = protocol::carries_split_records(mode_.wire_mode());
+  opening_ = codec_due_;
+}
+
+void FreeRunningSession::received(uint64_t splits, uint64_t operations, uint32_t number, bool final,
+                                  Clock::time_point now) {
+  splits_ += splits;
+  answer_operations_ += operations;
+  if (!final) return;
+  // The server answers only the newest of the requests that came while it was busy: a final batch closes
+  // every earlier one too.
+  while (!sent_.empty() && sent_.front().number <= number) {
+    if (sent_.front().number == number)
+      latency_ms_ = std::chrono::duration<double, std::milli>(now - sent_.front().at).count();
+    sent_.pop_front();
+  }
+}
+
+bool FreeRunningSession::wants_request(const Camera& camera) const {
+  if (opening_ || !(lacks_ || mode_.asks_every_view())) return false;
+  if (!asked_ || !same_camera(*asked_, camera)) return true;
+  return sent_.empty() && answer_operations_ > 0 && rounds_ < mode_.rounds_per_view();
+}
+
+std::vector<uint8_t> FreeRunningSession::request(const Camera& camera, Clock::time_point now) {
+  if (!asked_ || !same_camera(*asked_, camera)) rounds_ = 0;
+  asked_ = camera;
+  ++rounds_;
+  answer_operations_ = 0;
+  protocol::DagView request = request_;
+  request.view.camera = camera;
+  request.view.frame = ++requests_;
+  sent_.push_back({requests_, now});
+  return mode_.encode_request(request);
+}
+
+std::vector<uint8_t> FreeRunningSession::frame(const Camera& camera, Clock::time_point now, FrameReport& report) {
+  report.frame = ++frames_;
+  lacks_ = mode_.adapt(camera, session_);
+  std::vector<uint8_t> out;
+  if (wants_request(camera)) out = request(camera, now);
+  report.requested = !out.empty();
+  report.vsplits = splits_;
+  report.latency_ms = latency_ms_;
+  report.in_flight = in_flight();
+  report.satisfied = satisfied();
+  report.faces = session_.mesh().face_count();
+  splits_ = 0;
+  latency_ms_ = 0;
+  return out;
+}
+
+void FreeRunningSession::restart() {
+  sent_.clear();
+  asked_.reset();
+  rounds_ = 0;
+  answer_operations_ = 0;
+  opening_ = true;
+  codec_due_ = false;
+}
+
+}  // namespace pms::client
