@@ -94,6 +94,15 @@ TEST(ReceiverFree, GetsInFlightWhenTheConnectionClosesAreSentAgain) {
   EXPECT_EQ(viewer.client().counters().connections, 2u);
 }
 
+// A viewer closed with GETs on the wire and answers held: nothing waits for them, nothing is left behind.
+TEST(ReceiverFree, AViewerClosedWithAnswersOutstandingEndsAtOnce) {
+  const Fixture& f = terrain();
+  for (int round = 0; round < 2; ++round) {
+    Held held(16);
+    ASSERT_GT(held.frame_answered_late(orbit_path(f.hierarchy, 10, 0.3f).back()).in_flight, 0u);
+  }
+}
+
 // Both views' wants are ranked while every answer is held: the second frame's ranking drops the ids queued
 // for the first view that it does not want, unsent. The GETs already written are answered and attached
 // (HTTP/1.1 cannot take them back), and the settled mesh is the second view's.
