@@ -1,12 +1,14 @@
 // The receiver-driven client's HTTP/1.1 transport on Boost.Beast: one keep-alive connection with several
 // GETs pipelined on it (answers come in request order, RFC 9112 §9.3.2), every connect, write and read under
 // a deadline, every answer bounded, and bytes counted on the wire (headers included) and as payload apart.
-// Synchronous for its caller: each call runs the connection's io_context until its work is done.
+// Two ways to drive it: synchronously (each call runs the connection's io_context until its work is done),
+// or without ever waiting (post / poll / take: the free-running viewer's frame).
 #pragma once
 #include <chrono>
 #include <cstdint>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -25,13 +27,15 @@ struct HttpCounters {
   uint64_t bytes_up = 0, bytes_down = 0;  // on the wire: request and status lines, headers, bodies
   uint64_t payload_down = 0;              // the bodies of the answers alone
   uint64_t connections = 0;
-  double last_answer_ms = 0;  // the latest answer's latency: its GET handed to send() to its last byte read
+  double last_answer_ms =
+      0;  // the latest answer's latency: its GET handed to send() (or written) to its last byte read
 };
 
 struct HttpAnswer {
   int status = 0;
   std::vector<uint8_t> body;
   std::string cache_status;  // X-Cache-Status of a caching proxy in between (nginx: HIT, MISS, ...); else empty
+  std::chrono::steady_clock::time_point sent_at;  // its GET handed to send(), or written for post()
 };
 
 // "http://HOST[:PORT][/prefix]": where a receiver-driven client finds the server's routes.
@@ -66,7 +70,18 @@ class HttpConnection {
   void send(const std::string& target);
   HttpAnswer receive();
   size_t pending() const;
-  size_t room() const;  // GETs send() may still write: options.in_flight - pending()
+  size_t room() const;  // GETs send() or post() may still hand over: options.in_flight - pending()
+
+  // The same pipeline for a caller that must never wait (the free-running viewer's frame): post() hands a
+  // GET over and returns, connecting in the background if need be; poll() makes the progress the socket
+  // allows at once (asio's poll: connect, writes, reads) and take() gives the answers fully arrived, in
+  // request order. wait() blocks (under the deadlines) until one has arrived, for a caller that settles.
+  // The same limits, deadlines and reconnect as send()/receive(); a lost connection is thrown by the next
+  // poll() or wait(). The blocking calls refuse to run while this side has work outstanding.
+  void post(const std::string& target);
+  void poll();
+  std::optional<HttpAnswer> take();
+  void wait();
 
   const HttpCounters& counters() const { return counters_; }
 

@@ -1,5 +1,5 @@
 // The multilevel client (multilevel_client.h): levels fetched coarsest first, pipelined, each added on
-// arrival; a LOD rule per frame over what the catalogue says of each level.
+// arrival; a LOD rule per frame over what the model's entry says of each level.
 #include "client/multilevel_client.h"
 
 #include <algorithm>
@@ -40,18 +40,6 @@ bool is_kind(const nlohmann::json& entry, const char* kind) {
 
 bool is_multilevel(const nlohmann::json& entry) { return is_kind(entry, "multilevel"); }
 
-// A progressive (.pms) model's levels are derived by the server when first asked for: its multilevel entry
-// is a resource of its own, answered once they are.
-nlohmann::json derived_entry(HttpConnection& http, const std::string& model) {
-  const std::string target = protocol::model_path(model) + "/multilevel";
-  const HttpAnswer answer = http.get(target);
-  if (answer.status != 200) refused(target, answer);
-  nlohmann::json entry = nlohmann::json::parse(answer.body.begin(), answer.body.end(), nullptr, false);
-  if (!is_multilevel(entry) || entry["name"].get<std::string>() != model)
-    fail("GET " + target, "not the multilevel entry of model '" + model + "'");
-  return entry;
-}
-
 // `count` finite numbers, coarsest first in the catalogue, returned per level (0 finest).
 template <typename T>
 std::vector<T> per_level(const nlohmann::json& entry, const char* key, uint32_t count) {
@@ -81,6 +69,10 @@ std::string level_target(const std::string& prefix, uint32_t level) {
   return target;
 }
 
+// The coarsest level by a name that needs no level count (docs/protocol.md, "Multilevel over HTTP"), so
+// it can go in the same round trip as the entry that says the count.
+std::string coarsest_target(const std::string& prefix) { return prefix + "levels/coarsest"; }
+
 }  // namespace
 
 MultilevelClient::MultilevelClient(const HttpUrl& server, const MultilevelOptions& options)
@@ -93,42 +85,51 @@ std::vector<std::string> MultilevelClient::list() {
   return names;
 }
 
-void MultilevelClient::read_entry(const std::string& model) {
-  for (nlohmann::json entry : catalogue_models(http_)) {
-    const bool progressive = is_kind(entry, "progressive");
-    if ((!is_multilevel(entry) && !progressive) || entry["name"].get<std::string>() != model) continue;
-    if (progressive) entry = derived_entry(http_, model);
-    const uint32_t levels = entry.value("levels", 0u);
-    if (levels == 0 || levels > options_.limits.max_levels)
-      fail("GET /models", "model '" + model + "' has " + std::to_string(levels) + " levels");
-    lod_triangles_ = per_level<uint32_t>(entry, "lod_triangles", levels);
-    level_errors_ = per_level<float>(entry, "level_errors", levels);
-    const auto center = entry.find("center");
-    const auto radius = entry.find("radius");
-    const auto finite = [](const nlohmann::json& x) { return x.is_number() && std::isfinite(x.get<double>()); };
-    if (center == entry.end() || !center->is_array() || center->size() != 3 ||
-        !std::all_of(center->begin(), center->end(), finite) || radius == entry.end() || !finite(*radius) ||
-        radius->get<double>() < 0)
-      fail("GET /models", "model '" + model + "' has no valid bounding sphere");
-    for (int k = 0; k < 3; ++k) center_[k] = (*center)[k].get<float>();
-    radius_ = radius->get<float>();
-    return;
-  }
-  fail("GET /models", "no model named '" + model + "'");
+// GET /models/{m}/multilevel: the model's entry, the object GET /models lists for a .pml model and the one
+// the server derives for a .pms model's levels (its GET /models entry says "progressive").
+void MultilevelClient::read_entry(const std::string& model, const std::string& target, const HttpAnswer& answer) {
+  if (answer.status != 200) refused(target, answer);
+  const nlohmann::json entry = nlohmann::json::parse(answer.body.begin(), answer.body.end(), nullptr, false);
+  if (!is_multilevel(entry) || entry["name"].get<std::string>() != model)
+    fail("GET " + target, "not the multilevel entry of model '" + model + "'");
+  const uint32_t levels = entry.value("levels", 0u);
+  if (levels == 0 || levels > options_.limits.max_levels)
+    fail("GET " + target, "model '" + model + "' has " + std::to_string(levels) + " levels");
+  lod_triangles_ = per_level<uint32_t>(entry, "lod_triangles", levels);
+  level_errors_ = per_level<float>(entry, "level_errors", levels);
+  const auto center = entry.find("center");
+  const auto radius = entry.find("radius");
+  const auto finite = [](const nlohmann::json& x) { return x.is_number() && std::isfinite(x.get<double>()); };
+  if (center == entry.end() || !center->is_array() || center->size() != 3 ||
+      !std::all_of(center->begin(), center->end(), finite) || radius == entry.end() || !finite(*radius) ||
+      radius->get<double>() < 0)
+    fail("GET " + target, "model '" + model + "' has no valid bounding sphere");
+  for (int k = 0; k < 3; ++k) center_[k] = (*center)[k].get<float>();
+  radius_ = radius->get<float>();
 }
 
 void MultilevelClient::open(const std::string& model) {
   if (loader_) fail("open", "this client already holds '" + model_ + "'");
   opened_ = Clock::now();
-  read_entry(model);
-  const std::string target = model_prefix(model, options_.compressed) + "head";
-  const HttpAnswer head = http_.get(target);
+  const std::string prefix = model_prefix(model, options_.compressed);
+  const std::string target = prefix + "head";
+  std::vector<std::string> targets = {protocol::model_path(model) + "/multilevel", target};
+  if (options_.free_running) targets.push_back(coarsest_target(prefix));
+  std::vector<HttpAnswer> answers(targets.size());
+  http_.get_all(targets, [&](size_t index, HttpAnswer&& answer) { answers[index] = std::move(answer); });
+  read_entry(model, targets[0], answers[0]);
+  const HttpAnswer& head = answers[1];
   if (head.status != 200) refused(target, head);
   loader_.emplace("GET " + target, head.body, options_.limits,
                   options_.compressed ? MultilevelForm::compressed : MultilevelForm::plain);
   if (loader_->level_count() != lod_triangles_.size()) fail("GET " + target, "its level count is not the catalogue's");
   lod_.emplace(loader_->mesh());
   model_ = model;
+  if (answers.size() > 2) {
+    add(targets[2], answers[2]);
+    lod_.emplace(loader_->mesh());
+  }
+  requested_ = loader_->finest_loaded();
 }
 
 // A LOD l shows what is within error e_l; seen from a distance z, e_l covers e_l / (z * pixel_angle)
@@ -167,15 +168,43 @@ uint32_t MultilevelClient::load_to(uint32_t level) {
   for (uint32_t l = loader_->finest_loaded(); l-- > level;) targets.push_back(level_target(prefix, l));
   uint32_t added = 0;
   http_.get_all(targets, [&](size_t index, HttpAnswer&& answer) {
-    if (answer.status != 200) refused(targets[index], answer);
-    const uint32_t l = loader_->next_level();
-    loader_->add_level("GET " + targets[index], answer.body);
-    const HttpCounters& c = http_.counters();
-    arrivals_.push_back({l, answer.body.size(), c.bytes_down, c.payload_down, ms_since(opened_)});
+    add(targets[index], answer);
     ++added;
   });
   lod_.emplace(loader_->mesh());  // the structure grew: nothing cached of it is kept
   return added;
+}
+
+// The event "a level arrived" (the next one, coarsest first): added and its arrival kept, no I/O.
+void MultilevelClient::add(const std::string& target, const HttpAnswer& answer) {
+  if (answer.status != 200) refused(target, answer);
+  const uint32_t l = loader_->next_level();
+  loader_->add_level("GET " + target, answer.body);
+  const HttpCounters& c = http_.counters();
+  arrivals_.push_back({l, answer.body.size(), c.bytes_down, c.payload_down, ms_since(opened_)});
+}
+
+// Free-running: every level fully arrived, added without waiting for one. Returns how many.
+uint32_t MultilevelClient::add_arrived(MultilevelFrame& out) {
+  uint32_t added = 0;
+  while (const std::optional<HttpAnswer> answer = http_.take()) {
+    add(posted_.front(), *answer);
+    posted_.pop_front();
+    out.report.latency_ms = ms_since(answer->sent_at);
+    ++added;
+  }
+  if (added > 0) lod_.emplace(loader_->mesh());
+  return added;
+}
+
+// Free-running: the levels not yet asked for down to `level`, coarsest first, as many as the pipe takes;
+// the rest wait for a later frame, which asks only for what its own rule wants.
+void MultilevelClient::request_to(uint32_t level) {
+  const std::string prefix = model_prefix(model_, options_.compressed);
+  while (requested_ > level && http_.room() > 0) {
+    posted_.push_back(level_target(prefix, --requested_));
+    http_.post(posted_.back());
+  }
 }
 
 void MultilevelClient::show(float level, MultilevelFrame& out) {
@@ -186,25 +215,38 @@ void MultilevelClient::show(float level, MultilevelFrame& out) {
   shown_ = level;
 }
 
-MultilevelFrame MultilevelClient::frame(const Camera& camera) {
-  if (!loader_) fail("stream", "no model open");
-  MultilevelFrame out;
-  out.report.frame = ++frame_;
-  const HttpCounters before = http_.counters();
-  out.wanted_level = wanted_level(camera);
-  const auto start = Clock::now();
-  out.report.vsplits = load_to(out.wanted_level);
-  if (out.report.vsplits > 0) {
-    out.report.requested = true;
-    out.report.latency_ms = ms_since(start);
-  }
-  const float target = float(std::max(out.wanted_level, loader_->finest_loaded()));
+// The wanted level, or the finest loaded if coarser; a geomorph's step towards it.
+void MultilevelClient::step_to(uint32_t wanted, MultilevelFrame& out) {
+  const float target = float(std::max(wanted, loader_->finest_loaded()));
   float level = target;
   if (options_.morph_frames > 0 && shown_ >= 0) {
     const float step = 1.0f / float(options_.morph_frames);
     level = shown_ < target ? std::min(target, shown_ + step) : std::max(target, shown_ - step);
   }
   show(level, out);
+}
+
+MultilevelFrame MultilevelClient::frame(const Camera& camera) {
+  if (!loader_) fail("stream", "no model open");
+  MultilevelFrame out;
+  out.report.frame = ++frame_;
+  const HttpCounters before = http_.counters();
+  out.wanted_level = wanted_level(camera);
+  if (options_.free_running) {
+    http_.poll();
+    out.report.vsplits = add_arrived(out);
+    request_to(out.wanted_level);
+    http_.poll();  // the GETs just handed over start on their way
+    out.report.requested = !posted_.empty();
+  } else {
+    const auto start = Clock::now();
+    out.report.vsplits = load_to(out.wanted_level);
+    if (out.report.vsplits > 0) {
+      out.report.requested = true;
+      out.report.latency_ms = ms_since(start);
+    }
+  }
+  step_to(out.wanted_level, out);
   const HttpCounters& after = http_.counters();
   out.report.up_bytes = after.bytes_up - before.bytes_up;
   out.report.down_bytes = after.bytes_down - before.bytes_down;
@@ -212,13 +254,27 @@ MultilevelFrame MultilevelClient::frame(const Camera& camera) {
   out.report.faces = lod_->indices().size() / 3;
   out.level = lod_->level();
   out.levels_loaded = loader_->levels_loaded();
+  out.in_flight = uint32_t(posted_.size());
   return out;
+}
+
+// Waits for the levels down to `wanted` and for every GET still on the wire (a finer level an earlier
+// camera asked for is added too, as lock-step would have loaded it).
+void MultilevelClient::settle_free(uint32_t wanted) {
+  MultilevelFrame ignored;
+  for (;;) {
+    request_to(wanted);
+    if (posted_.empty()) return;
+    http_.wait();
+    add_arrived(ignored);
+  }
 }
 
 void MultilevelClient::settle(const Camera& camera) {
   if (!loader_) fail("stream", "no model open");
   const uint32_t wanted = wanted_level(camera);
-  load_to(wanted);
+  if (options_.free_running) settle_free(wanted);
+  else load_to(wanted);
   MultilevelFrame ignored;
   show(float(std::max(wanted, loader_->finest_loaded())), ignored);
 }

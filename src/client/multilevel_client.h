@@ -1,12 +1,14 @@
 // The multilevel client (gueziec et al. 1999, progressive loading; docs/protocol.md, "Multilevel over
-// HTTP"): GET /models, the model's head, then its levels coarsest first (compressed unless asked otherwise),
-// each added to the structure as it
-// arrives (MultilevelLoader::add_level) and usable at once; every frame picks a LOD by a triangle budget or
-// a screen-size rule and switches to it with setLevel (a geomorph over --geomorph-frames). No session, like
-// the receiver-driven client: a driver of its own over HttpConnection.
+// HTTP"): the model's entry and head in one round trip, then its levels coarsest first (compressed unless
+// asked otherwise), each added to the structure as it arrives (MultilevelLoader::add_level) and usable at
+// once; every frame picks a LOD by a triangle budget or a screen-size rule among the levels loaded and
+// switches to it with setLevel (a geomorph over --geomorph-frames). Free-running, the levels load in the
+// background and no frame waits for one. No session, like the receiver-driven client: a driver of its own
+// over HttpConnection.
 #pragma once
 #include <chrono>
 #include <cstdint>
+#include <deque>
 #include <optional>
 #include <string>
 #include <vector>
@@ -27,6 +29,10 @@ struct MultilevelOptions {
   bool compressed = true;     // the compressed levels (positions on the server's grid), or the binary form's
   HttpOptions http;
   MultilevelLimits limits;  // what the head may announce
+  // frame() never waits for a level: open() brings the coarsest with the head, and each frame adds the
+  // levels fully arrived, asks (pipelined, coarsest first) for those the rule wants, and shows the finest
+  // loaded within the rule. settle() waits for the last camera's level: then the mesh is lock-step's.
+  bool free_running = false;
 };
 
 // When a level became usable: counted from the start of open().
@@ -44,15 +50,17 @@ struct MultilevelFrame {
   uint32_t wanted_level = 0;  // what the rule asks for
   float level = 0;            // what is shown (fractional during a geomorph)
   uint32_t levels_loaded = 0;
-  double lod_ms = 0;  // setLevel for this frame
+  uint32_t in_flight = 0;  // level GETs sent and not yet added (free-running)
+  double lod_ms = 0;       // setLevel for this frame
 };
 
 class MultilevelClient {
  public:
   MultilevelClient(const HttpUrl& server, const MultilevelOptions& options = {});
 
-  std::vector<std::string> list();      // GET /models: the multilevel models' names
-  void open(const std::string& model);  // GET /models (its entry), GET /models/{m}/head
+  std::vector<std::string> list();  // GET /models: the multilevel models' names
+  // GET /models/{m}/multilevel and /models/{m}/head pipelined, and free-running the coarsest level too.
+  void open(const std::string& model);
 
   MultilevelFrame frame(const Camera& camera);
   void settle(const Camera& camera);  // the last camera's LOD loaded and reached, no geomorph left
@@ -67,9 +75,14 @@ class MultilevelClient {
   const HttpCounters& counters() const { return http_.counters(); }
 
  private:
-  void read_entry(const std::string& model);
+  void read_entry(const std::string& model, const std::string& target, const HttpAnswer& answer);
+  void add(const std::string& target, const HttpAnswer& answer);
   uint32_t load_to(uint32_t level);
+  uint32_t add_arrived(MultilevelFrame& out);
+  void request_to(uint32_t level);
+  void settle_free(uint32_t wanted);
   void show(float level, MultilevelFrame& out);
+  void step_to(uint32_t wanted, MultilevelFrame& out);
 
   MultilevelOptions options_;
   HttpConnection http_;
@@ -81,6 +94,8 @@ class MultilevelClient {
   std::optional<MultilevelLoader> loader_;
   std::optional<MultilevelLod> lod_;
   std::vector<LevelArrival> arrivals_;
+  std::deque<std::string> posted_;  // free-running: level GETs on the wire, coarsest first
+  uint32_t requested_ = 0;          // free-running: the finest level asked for (loaded or on the wire)
   float shown_ = -1;
   uint32_t frame_ = 0;
 };

@@ -1,13 +1,19 @@
 #include "client/multilevel_viewer.h"
 
-#include "common/error.h"
-
 namespace pms::client {
+namespace {
+
+// Free-running: the levels load in the background and no frame waits (MultilevelOptions::free_running).
+MultilevelOptions paced(MultilevelOptions options, Pacing pacing) {
+  options.free_running = pacing == Pacing::free_running;
+  return options;
+}
+
+}  // namespace
 
 MultilevelViewer::MultilevelViewer(const std::string& server, const MultilevelOptions& options, Pacing pacing,
                                    const std::string& model)
-    : client_(parse_http_url(server), options), options_(options), pacing_(pacing) {
-  if (pacing_ != Pacing::lock_step) fail("viewer", "the multilevel mode runs in lock-step only in this build");
+    : client_(parse_http_url(server), paced(options, pacing)), options_(paced(options, pacing)) {
   client_.open(model);
 }
 
@@ -20,9 +26,12 @@ ViewerReport MultilevelViewer::frame(const Camera& camera) {
   report.up_bytes = r.report.up_bytes;
   report.down_bytes = r.report.down_bytes;
   report.latency_ms = r.report.latency_ms;
-  report.satisfied = r.levels_loaded > r.wanted_level || r.levels_loaded == client_.loader().level_count();
-  report.details = {{"down_payload_bytes", r.payload_down}, {"wanted_level", r.wanted_level},
-                    {"level", r.level},                     {"levels_loaded", r.levels_loaded},
+  report.in_flight = r.in_flight;
+  report.satisfied = client_.loader().finest_loaded() <= r.wanted_level;
+  report.details = {{"down_payload_bytes", r.payload_down},
+                    {"wanted_level", r.wanted_level},
+                    {"level", r.level},
+                    {"levels_loaded", r.levels_loaded},
                     {"lod_ms", r.lod_ms}};
   return report;
 }

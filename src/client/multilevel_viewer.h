@@ -1,5 +1,6 @@
-// The Viewer of the multilevel mode (gueziec et al. 1999): a MultilevelClient over HTTP. What it receives
-// is levels, not splits (received_unit()).
+// The Viewer of the multilevel mode (gueziec et al. 1999): a MultilevelClient over HTTP, free-running
+// (MultilevelOptions::free_running) or in lock-step as the pacing says. What it receives is levels, not
+// splits (received_unit()).
 #pragma once
 #include <string>
 
@@ -29,7 +30,6 @@ class MultilevelViewer : public Viewer {
  private:
   MultilevelClient client_;
   MultilevelOptions options_;
-  Pacing pacing_;
 };
 
 }  // namespace pms::client

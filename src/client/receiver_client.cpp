@@ -36,6 +36,16 @@ std::string answer_text(const HttpAnswer& answer) {
   fail("GET " + target, "HTTP " + std::to_string(answer.status) + ": " + answer_text(answer));
 }
 
+// GET /models's answer: the array of models, checked to be one.
+nlohmann::json models_of(const HttpAnswer& answer) {
+  const std::string target = "/models";
+  if (answer.status != 200) refused(target, answer);
+  nlohmann::json json = nlohmann::json::parse(answer.body.begin(), answer.body.end(), nullptr, false);
+  if (json.is_discarded() || !json.is_object() || !json.contains("models") || !json["models"].is_array())
+    fail("GET " + target, "not the catalogue's JSON");
+  return std::move(json["models"]);
+}
+
 // Frames without a cap reach the view's mesh for what is known in one adapt(); the extra passes only
 // finish collapses that waited for a geomorph (as the sender-driven client does).
 void adapt_for_view(SelectiveRefinement& refinement) {
@@ -78,16 +88,7 @@ ReceiverClient::ReceiverClient(const HttpUrl& server, const ReceiverOptions& opt
   session_.refinement_info = true;  // the records carry the children's refinement info: the client refines
 }
 
-// GET /models: the array of models, checked to be one.
-nlohmann::json ReceiverClient::catalogue() {
-  const std::string target = "/models";
-  const HttpAnswer answer = http_.get(target);
-  if (answer.status != 200) refused(target, answer);
-  nlohmann::json json = nlohmann::json::parse(answer.body.begin(), answer.body.end(), nullptr, false);
-  if (json.is_discarded() || !json.is_object() || !json.contains("models") || !json["models"].is_array())
-    fail("GET " + target, "not the catalogue's JSON");
-  return std::move(json["models"]);
-}
+nlohmann::json ReceiverClient::catalogue() { return models_of(http_.get("/models")); }
 
 std::vector<std::string> ReceiverClient::list() {
   std::vector<std::string> names;
@@ -99,21 +100,25 @@ std::vector<std::string> ReceiverClient::list() {
 
 void ReceiverClient::open(const std::string& model) {
   if (session_.has_model()) fail("open", "this client already holds '" + model_ + "'");
+  // The base, the catalogue and the code tables are named by the model alone: one round trip for the three.
   const std::string target = protocol::model_path(model) + "/base";
-  const HttpAnswer answer = http_.get(target);
+  const std::string tables = protocol::model_path(model) + "/codec";
+  const std::vector<std::string> targets = {target, "/models", tables};
+  std::vector<HttpAnswer> answers(targets.size());
+  http_.get_all(targets, [&](size_t index, HttpAnswer&& answer) { answers[index] = std::move(answer); });
+  const HttpAnswer& answer = answers[0];
   if (answer.status != 200) refused(target, answer);
   session_.on_base(protocol::decode_base(answer.body));
   model_ = model;
   // The body format of the answers (docs/protocol.md, "Receiver-driven over HTTP"): compact split records.
   constexpr uint32_t kRecordsFormat = 4;
   uint32_t records_format = 0;
-  for (const nlohmann::json& entry : catalogue())
+  for (const nlohmann::json& entry : models_of(answers[1]))
     if (entry.is_object() && entry.value("name", "") == model) records_format = entry.value("records_format", 0u);
   if (records_format != kRecordsFormat)
     fail("GET /models", "records format " + std::to_string(records_format) + " is not one this client reads (" +
                             std::to_string(kRecordsFormat) + ")");
-  const std::string tables = protocol::model_path(model) + "/codec";
-  const HttpAnswer codec = http_.get(tables);
+  const HttpAnswer& codec = answers[2];
   if (codec.status != 200) refused(tables, codec);
   BitReader r(codec.body, "GET " + tables);
   codec_ = SplitCodec::deserialize(r);
@@ -305,7 +310,8 @@ bool ReceiverClient::over_budget(uint32_t answers, std::chrono::steady_clock::ti
 }
 
 void ReceiverClient::send(Request&& request) {
-  http_.send(request.target);
+  if (options_.free_running) http_.post(request.target);
+  else http_.send(request.target);
   ++totals_.split_requests;
   totals_.requested_ids += request.request.ids.size();
   totals_.request_code_bytes += request.code_bytes;
@@ -325,8 +331,17 @@ void ReceiverClient::fill_pipe() {
 }
 
 // Reads the oldest answer due and attaches its splits. Returns the splits attached.
-size_t ReceiverClient::receive_one(ReceiverFrame& out) {
-  const HttpAnswer answer = http_.receive();
+size_t ReceiverClient::receive_one(ReceiverFrame& out) { return attach(http_.receive(), out); }
+
+// Every answer that has fully arrived, without waiting for one. Returns the splits attached.
+size_t ReceiverClient::attach_arrived(ReceiverFrame& out) {
+  size_t attached = 0;
+  while (const std::optional<HttpAnswer> answer = http_.take()) attached += attach(*answer, out);
+  return attached;
+}
+
+// The event "an answer arrived" (the oldest GET on the wire's): its splits attached, no I/O. Returns how many.
+size_t ReceiverClient::attach(const HttpAnswer& answer, ReceiverFrame& out) {
   const Request sent = std::move(wire_.front());
   wire_.pop_front();
   if (answer.status != 200) refused(sent.target, answer);
@@ -334,6 +349,9 @@ size_t ReceiverClient::receive_one(ReceiverFrame& out) {
   totals_.stale_arrivals += sent.stale;
   const size_t attached = session_.on_split_bands(answer.body, sent.request, codec_);
   out.report.vsplits += attached;
+  ++out.answers;
+  out.report.latency_ms =
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - answer.sent_at).count();
   if (options_.on_attached) options_.on_attached();
   return attached;
 }
@@ -431,21 +449,44 @@ uint32_t ReceiverClient::count_prefetch_used() {
   return count;
 }
 
-ReceiverFrame ReceiverClient::frame(const Camera& camera) { return run(camera, false); }
+ReceiverFrame ReceiverClient::frame(const Camera& camera) {
+  return options_.free_running ? run_free(camera, false) : run(camera, false);
+}
+
+ReceiverFrame ReceiverClient::begin(const Camera& camera) {
+  if (!session_.has_model()) fail("stream", "no model open");
+  ReceiverFrame out;
+  out.report.frame = ++frame_;
+  if (cameras_.size() == 2) cameras_.erase(cameras_.begin());
+  cameras_.push_back(camera);
+  session_.refinement().set_view(session_.view_params(camera));
+  return out;
+}
+
+void ReceiverClient::finish(ReceiverFrame& out, const HttpCounters& before, const ReceiverTotals& totals_before) {
+  out.prefetch_used = count_prefetch_used();
+  const HttpCounters& after = http_.counters();
+  out.report.up_bytes = after.bytes_up - before.bytes_up;
+  out.report.down_bytes = after.bytes_down - before.bytes_down;
+  out.payload_down = after.payload_down - before.payload_down;
+  out.split_requests = uint32_t(totals_.split_requests - totals_before.split_requests);
+  out.cache_hits = uint32_t(totals_.cache_hits - totals_before.cache_hits);
+  out.cancelled = uint32_t(totals_.cancelled - totals_before.cancelled);
+  out.stale_arrivals = uint32_t(totals_.stale_arrivals - totals_before.stale_arrivals);
+  out.prefetched = uint32_t(totals_.prefetched - totals_before.prefetched);
+  out.queued = uint32_t(queued_ids());
+  out.in_flight = uint32_t(wire_.size());
+  out.report.faces = session_.mesh().face_count();
+}
 
 // Rounds of adapt -> rank -> GET -> attach until the view wants nothing more or the budget is spent;
 // prefetch only in a path's frames, not while settling. A round ends when the answers to what it asked for are in; a
 // frame's first round re-ranks what the last frame left queued.
 ReceiverFrame ReceiverClient::run(const Camera& camera, bool settling) {
-  if (!session_.has_model()) fail("stream", "no model open");
-  ReceiverFrame out;
-  out.report.frame = ++frame_;
   const HttpCounters before = http_.counters();
   const ReceiverTotals totals_before = totals_;
   const auto start = std::chrono::steady_clock::now();
-  if (cameras_.size() == 2) cameras_.erase(cameras_.begin());
-  cameras_.push_back(camera);
-  session_.refinement().set_view(session_.view_params(camera));
+  ReceiverFrame out = begin(camera);
   const bool may_prefetch = options_.prefetch && !settling;  // nothing follows the settling
   bool prefetched = false;
   bool wants = rerank(camera);
@@ -478,26 +519,59 @@ ReceiverFrame ReceiverClient::run(const Camera& camera, bool settling) {
 
   if (may_prefetch && !prefetched && !wants) prefetch();
   out.satisfied = !wants;
-  out.prefetch_used = count_prefetch_used();
   out.report.requested = out.rounds > 0;
   if (out.report.requested)
     out.report.latency_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
-  const HttpCounters& after = http_.counters();
-  out.report.up_bytes = after.bytes_up - before.bytes_up;
-  out.report.down_bytes = after.bytes_down - before.bytes_down;
-  out.payload_down = after.payload_down - before.payload_down;
-  out.split_requests = uint32_t(totals_.split_requests - totals_before.split_requests);
-  out.cache_hits = uint32_t(totals_.cache_hits - totals_before.cache_hits);
-  out.cancelled = uint32_t(totals_.cancelled - totals_before.cancelled);
-  out.stale_arrivals = uint32_t(totals_.stale_arrivals - totals_before.stale_arrivals);
-  out.prefetched = uint32_t(totals_.prefetched - totals_before.prefetched);
-  out.queued = uint32_t(queued_ids());
-  out.in_flight = uint32_t(wire_.size());
-  out.report.faces = session_.mesh().face_count();
+  finish(out, before, totals_before);
+  return out;
+}
+
+// One frame that never waits: what the connection can do at once is done, every answer fully arrived is
+// attached, the view is adapted to and ranked anew (queued ids it no longer wants are dropped unsent), the
+// pipe gets what fits and, with room left, the predicted view's splits. The latency reported is the last
+// answer attached's, from its GET written.
+ReceiverFrame ReceiverClient::run_free(const Camera& camera, bool settling) {
+  const HttpCounters before = http_.counters();
+  const ReceiverTotals totals_before = totals_;
+  ReceiverFrame out = begin(camera);
+  http_.poll();
+  attach_arrived(out);
+  const bool wants = rerank(camera);
+  out.rounds = wants;
+  fill_pipe();
+  if (options_.prefetch && !settling && queue_.empty()) prefetch();
+  http_.poll();  // the GETs just handed over start on their way
+  out.satisfied = !wants;
+  out.report.requested = wants;
+  finish(out, before, totals_before);
   return out;
 }
 
 void ReceiverClient::settle(const Camera& camera) {
+  if (options_.free_running) settle_free(camera);
+  else settle_locked(camera);
+}
+
+// Free-running frames at the held camera, waiting for an answer between them, until its view is
+// satisfied (or an answer brings nothing: a server with no more); then what is still on the wire is read
+// and the refinement converges, as in lock-step.
+void ReceiverClient::settle_free(const Camera& camera) {
+  settle_frames_ = 0;
+  for (;;) {
+    const ReceiverFrame r = run_free(camera, true);
+    ++settle_frames_;
+    if (r.satisfied || wire_.empty() || (r.answers > 0 && r.report.vsplits == 0)) break;
+    http_.wait();
+  }
+  ReceiverFrame rest;
+  while (!wire_.empty()) {
+    http_.wait();
+    attach_arrived(rest);
+  }
+  session_.refinement().converge();
+}
+
+void ReceiverClient::settle_locked(const Camera& camera) {
   // Each frame reads an answer or sends nothing more: a frame that brought nothing and left nothing in
   // flight will not be followed by one that does.
   settle_frames_ = 0;

@@ -53,6 +53,10 @@ struct ReceiverOptions {
   // When the view's wants are all sent and the pipe has room, GET (one pipe-full a frame) the splits the
   // camera extrapolated from the last two frames' would want.
   bool prefetch = false;
+  // frame() never waits for the network (the free-running viewer): it attaches the answers that have fully
+  // arrived, re-ranks, hands the pipe what fits and returns; the frame budget does not apply. settle() then
+  // waits for what the last view wants, and the mesh is local refinement's for it, as in lock-step.
+  bool free_running = false;
   // Called after each answer's splits are attached, before the next answer is read (a progress display's
   // hook; the bench's E6 samples the mesh there). It may adapt the session's mesh; it must not fetch.
   std::function<void()> on_attached = {};
@@ -70,6 +74,7 @@ struct ReceiverFrame {
   uint32_t prefetch_used = 0;   // prefetched ids whose splits the mesh has made by this frame's end
   uint32_t queued = 0;          // ids left queued at the frame's end
   uint32_t in_flight = 0;       // GETs left on the wire at the frame's end
+  uint32_t answers = 0;         // answers attached this frame
   bool satisfied = true;        // the view wants nothing more: local refinement's mesh for it
 };
 
@@ -115,7 +120,12 @@ class ReceiverClient {
     uint32_t stale = 0;              // of its ids, those the last ranking no longer wants (not prefetched ones)
   };
   nlohmann::json catalogue();
+  ReceiverFrame begin(const Camera& camera);
+  void finish(ReceiverFrame& out, const HttpCounters& before, const ReceiverTotals& totals_before);
   ReceiverFrame run(const Camera& camera, bool settling);
+  ReceiverFrame run_free(const Camera& camera, bool settling);
+  void settle_locked(const Camera& camera);
+  void settle_free(const Camera& camera);
   // A leaf to ask for and the descendant depth to ask for it with (lists).
   struct Wanted {
     VertexId id;
@@ -136,6 +146,8 @@ class ReceiverClient {
   void fill_pipe();
   void send(Request&& request);
   size_t receive_one(ReceiverFrame& out);
+  size_t attach(const HttpAnswer& answer, ReceiverFrame& out);
+  size_t attach_arrived(ReceiverFrame& out);
   std::vector<uint32_t> leaves_wanted(const ViewParams& view);
   void prefetch();
   uint32_t count_prefetch_used();

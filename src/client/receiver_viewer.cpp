@@ -1,13 +1,19 @@
 #include "client/receiver_viewer.h"
 
-#include "common/error.h"
-
 namespace pms::client {
+namespace {
+
+// Free-running: each frame attaches what has arrived and returns (ReceiverOptions::free_running).
+ReceiverOptions paced(ReceiverOptions options, Pacing pacing) {
+  options.free_running = pacing == Pacing::free_running;
+  return options;
+}
+
+}  // namespace
 
 ReceiverViewer::ReceiverViewer(const std::string& server, const ReceiverOptions& options, Pacing pacing,
                                const std::string& model)
-    : client_(parse_http_url(server), options), options_(options), pacing_(pacing) {
-  if (pacing_ != Pacing::lock_step) fail("viewer", "the receiver-driven mode runs in lock-step only in this build");
+    : client_(parse_http_url(server), paced(options, pacing)), options_(paced(options, pacing)) {
   client_.open(model);
 }
 
@@ -23,11 +29,16 @@ ViewerReport ReceiverViewer::frame(const Camera& camera) {
   report.latency_ms = r.report.latency_ms;
   report.in_flight = r.in_flight;
   report.satisfied = r.satisfied;
-  report.details = {{"down_payload_bytes", r.payload_down}, {"split_requests", r.split_requests},
-                    {"cache_hits", r.cache_hits},           {"rounds", r.rounds},
-                    {"satisfied", r.satisfied},             {"queued", r.queued},
-                    {"in_flight", r.in_flight},             {"cancelled", r.cancelled},
-                    {"stale_arrivals", r.stale_arrivals},   {"prefetched", r.prefetched},
+  report.details = {{"down_payload_bytes", r.payload_down},
+                    {"split_requests", r.split_requests},
+                    {"cache_hits", r.cache_hits},
+                    {"rounds", r.rounds},
+                    {"satisfied", r.satisfied},
+                    {"queued", r.queued},
+                    {"in_flight", r.in_flight},
+                    {"cancelled", r.cancelled},
+                    {"stale_arrivals", r.stale_arrivals},
+                    {"prefetched", r.prefetched},
                     {"prefetch_used", r.prefetch_used}};
   return report;
 }

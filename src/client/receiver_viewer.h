@@ -1,4 +1,5 @@
-// The Viewer of the receiver-driven mode (cheng-ooi 2008): a ReceiverClient over HTTP.
+// The Viewer of the receiver-driven mode (cheng-ooi 2008): a ReceiverClient over HTTP, its frames
+// free-running (ReceiverOptions::free_running) or in lock-step as the pacing says.
 #pragma once
 #include <string>
 
@@ -30,7 +31,6 @@ class ReceiverViewer : public Viewer {
  private:
   mutable ReceiverClient client_;
   ReceiverOptions options_;
-  Pacing pacing_;
   uint64_t unsatisfied_ = 0;  // frames that ended with the view wanting more
 };
 

@@ -54,8 +54,10 @@ HttpAnswer multilevel_route(const ServedMultilevel& model, const HttpRequest& re
   if (head)
     return compressed ? shared_answer(request, model.compressed_head_etag, model.compressed_head)
                       : shared_answer(request, model.head_etag, model.head);
-  uint64_t l = 0;
-  if (!parse_decimal(s[3], l)) return error_answer(400, "a level is /models/M/levels/LEVEL in plain decimal");
+  // "coarsest" names level count - 1 for a client that does not know the count yet (docs/protocol.md).
+  uint64_t l = model.level_count() - 1;
+  if (s[3] != "coarsest" && !parse_decimal(s[3], l))
+    return error_answer(400, "a level is /models/M/levels/LEVEL in plain decimal, or /levels/coarsest");
   if (l >= model.level_count())
     return error_answer(404, "model '" + model.name + "' has levels 0 to " + std::to_string(model.level_count() - 1));
   return compressed ? shared_answer(request, model.compressed_level_etags[l], model.compressed_levels[l])
