@@ -76,6 +76,9 @@ class ClientMode {
     return false;
   }
   virtual bool asks_every_view() const { return true; }
+  // Whether one answer may stop short of the view by design (the DAG mode's N operations): settling in
+  // lock-step then asks again, up to rounds_per_view() times, until an answer changes nothing.
+  virtual bool answers_are_capped() const { return false; }
   // Requests at one camera at most, the first included: more only when an answer was cut short (it
   // brought something and the mode still wants more), as the blocking frame re-asks.
   virtual uint32_t rounds_per_view() const { return 1; }

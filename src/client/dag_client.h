@@ -22,6 +22,7 @@ class DagClient : public ClientMode {
   // was N-limited management (zheng-chan §5), so at a camera that stays, the next DAG_VIEW goes on where it
   // stopped, as the next frame of lock-step does; one without operations is the traversal's fixed point.
   uint32_t rounds_per_view() const override { return kRounds; }
+  bool answers_are_capped() const override { return true; }
   std::vector<uint8_t> encode_request(const protocol::DagView& request) const override {
     return protocol::encode(request);
   }

@@ -192,6 +192,11 @@ FrameReport StreamingClient::frame_once(const Camera& camera) {
 
 void StreamingClient::settle(const Camera& camera) {
   frame(camera);
+  for (uint32_t round = 1; mode_->answers_are_capped() && round < mode_->rounds_per_view(); ++round) {
+    const uint64_t before = session_.mesh().changes();
+    frame(camera);
+    if (session_.mesh().changes() == before) break;
+  }
   mode_->settle(session_);
 }
 
