@@ -6,6 +6,7 @@
 // camera (a lock-step run over the undelayed link, compared triangle by triangle).
 #include <algorithm>
 #include <array>
+#include <cmath>
 #include <cstdio>
 #include <optional>
 
@@ -65,15 +66,15 @@ Run stream(const BenchContext& context, const std::string& mode, const std::stri
   return run;
 }
 
-// For each frame, the frames until one whose view was satisfied (0 when it was itself); their mean.
-double frames_to_satisfied(const json& frames) {
-  double total = 0;
-  size_t next_satisfied = frames.size();
-  for (size_t i = frames.size(); i-- > 0;) {
-    if (frames[i].value("satisfied", true)) next_satisfied = i;
-    total += double(next_satisfied - i);
+// How many frames a view waits for its answer: the median over the frames that applied an answer of its
+// latency (request sent to answer applied) in frame periods, rounded up; 0 when none was needed.
+double frames_to_satisfied(const json& frames, uint32_t fps) {
+  std::vector<double> frames_waited;
+  for (const json& f : frames) {
+    const double latency_ms = f.value("latency_ms", 0.0);
+    if (latency_ms > 0) frames_waited.push_back(std::ceil(latency_ms * fps / 1000));
   }
-  return frames.empty() ? 0 : total / double(frames.size());
+  return frames_waited.empty() ? 0 : percentile(frames_waited, 0.5);
 }
 
 std::vector<double> frame_ms(const json& frames) {
@@ -146,7 +147,7 @@ void run_viewer_group(BenchContext& context) {
                                  fixed(p99, 2), p99_at_zero > 0 ? fixed(p99 / p99_at_zero, 2) : std::string(),
                                  fixed(run.out.value("flight_seconds", 0.0), 2),
                                  fixed(run.out.value("settle_seconds", 0.0), 2),
-                                 fixed(frames_to_satisfied(run.out["frames"]), 1),
+                                 fixed(frames_to_satisfied(run.out["frames"], kFps), 1),
                                  fixed(run.out.value("open_ms", 0.0), 1),
                                  thousands(run.out.value("total_down_bytes", uint64_t(0))), same_cell}));
         out.push_back({{"path", kind_name},
@@ -156,7 +157,7 @@ void run_viewer_group(BenchContext& context) {
                        {"frame_ms_p99", p99},
                        {"flight_seconds", run.out.value("flight_seconds", 0.0)},
                        {"settle_seconds", run.out.value("settle_seconds", 0.0)},
-                       {"frames_to_satisfied", frames_to_satisfied(run.out["frames"])},
+                       {"frames_to_satisfied", frames_to_satisfied(run.out["frames"], kFps)},
                        {"open_ms", run.out.value("open_ms", 0.0)},
                        {"down_bytes", run.out.value("total_down_bytes", uint64_t(0))},
                        {"settled_equals_lock_step", settles_to_lock_step(mode) ? json(same) : json()}});
