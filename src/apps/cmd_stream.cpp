@@ -33,7 +33,7 @@ namespace {
 struct StreamArgs {
   std::string server, model, path, mode = "sender", save_mesh, snapshots;
   float tolerance = 1;
-  uint32_t laps = 1, morph_frames = 0, max_ops = 0, reconnect = 0;
+  uint32_t laps = 1, morph_frames = client::kDefaultGeomorphFrames, max_ops = 0, reconnect = 0;
   uint32_t timeout_ms = 30000, connect_timeout_ms = 5000;
   uint32_t in_flight = 4, ids_per_request = 64, block_depth = client::ReceiverOptions{}.block_depth;  // receiver
   uint32_t descendant_depth = client::ReceiverOptions{}.descendant_depth;

@@ -12,7 +12,7 @@
 #include "apps/camera_path.h"
 #include "apps/percentile.h"
 #include "apps/resource_usage.h"
-#include "client/streaming_client.h"
+#include "client/viewer.h"
 #include "client/transport.h"
 #include "common/error.h"
 #include "protocol/client_messages.h"
@@ -60,25 +60,30 @@ std::vector<Camera> flight_path(const ModelData& model, uint32_t frames) {
   return path;
 }
 
-void snapshot(client::StreamingClient& client, const Camera& camera, const std::string& path, Renderer& renderer,
+void snapshot(const client::Viewer& viewer, const Camera& camera, const std::string& path, Renderer& renderer,
               Image& image) {
-  MeshArrays mesh;
-  client.session().refinement().extract(mesh);
-  renderer.render({mesh.positions, mesh.indices, mesh.colors}, client.session().view_params(camera), image);
+  const Mesh mesh = viewer.mesh();
+  renderer.render({mesh.positions, mesh.indices, mesh.colors}, viewer.view_params(camera), image);
   save_png(path, image);
+}
+
+// A lock-step viewer of `mode` on the in-process server.
+std::unique_ptr<client::Viewer> open_demo_viewer(uint16_t port, const std::string& model_name, const char* mode,
+                                                 float tolerance) {
+  client::ViewerOptions options;
+  options.mode = mode;
+  options.server = "127.0.0.1:" + std::to_string(port);
+  options.session.tolerance = tolerance;
+  return client::open_viewer(options, model_name);
 }
 
 // kim-lee-kobbelt §8's baseline: the same flight in view-independent mode, where the server sends the plain
 // PM order until each view is satisfied. Returns its bytes down.
 uint64_t view_independent_bytes(uint16_t port, const std::string& model_name, const std::vector<Camera>& path,
                                 float tolerance) {
-  client::ClientOptions options;
-  options.tolerance = tolerance;
-  options.mode = protocol::StreamMode::view_independent;
-  client::StreamingClient client("127.0.0.1", port, options);
-  client.open(model_name);
-  for (const Camera& camera : path) client.frame(camera);
-  return client.counters().bytes_down;
+  const std::unique_ptr<client::Viewer> viewer = open_demo_viewer(port, model_name, "vi", tolerance);
+  for (const Camera& camera : path) viewer->frame(camera);
+  return viewer->down_bytes();
 }
 
 struct Flight {
@@ -88,17 +93,16 @@ struct Flight {
 };
 
 // A live line on a terminal; a line per snapshot interval in a log.
-void print_progress(client::StreamingClient& client, const client::FrameReport& r, size_t frame, size_t frames,
+void print_progress(const client::Viewer& viewer, const client::ViewerReport& r, size_t frame, size_t frames,
                     bool interactive) {
-  const client::LinkCounters c = client.counters();
   std::printf("%sflight:    frame %3zu/%zu  faces %7llu  vsplits %8llu  down %9llu B  up %7llu B%s",
               interactive ? "\r" : "", frame + 1, frames, (unsigned long long)r.faces,
-              (unsigned long long)client.session().splits_received(), (unsigned long long)c.bytes_down,
-              (unsigned long long)c.bytes_up, interactive ? "" : "\n");
+              (unsigned long long)viewer.received_total(), (unsigned long long)viewer.down_bytes(),
+              (unsigned long long)viewer.up_bytes(), interactive ? "" : "\n");
   std::fflush(stdout);
 }
 
-Flight fly(client::StreamingClient& client, const std::vector<Camera>& path, const FlightOptions& options,
+Flight fly(client::Viewer& viewer, const std::vector<Camera>& path, const FlightOptions& options,
            const std::string& snapshots) {
   Renderer renderer;
   Image image;
@@ -106,18 +110,18 @@ Flight fly(client::StreamingClient& client, const std::vector<Camera>& path, con
   Stopwatch clock;
   const bool interactive = isatty(fileno(stdout));
   for (size_t i = 0; i < path.size(); ++i) {
-    const client::FrameReport r = client.frame(path[i]);
+    const client::ViewerReport r = viewer.frame(path[i]);
     flight.face_sum += r.faces;
-    if (r.requested) {
+    if (r.latency_ms > 0) {  // it sent a VIEW
       flight.latencies.push_back(r.latency_ms);
       ++flight.requests;
     }
     const bool snapshot_frame = options.snapshot_every && (i % options.snapshot_every == 0 || i + 1 == path.size());
-    if (interactive || snapshot_frame) print_progress(client, r, i, path.size(), interactive);
+    if (interactive || snapshot_frame) print_progress(viewer, r, i, path.size(), interactive);
     if (snapshot_frame) {
       char name[64];
       std::snprintf(name, sizeof name, "/frame_%04zu.png", i);
-      snapshot(client, path[i], snapshots + name, renderer, image);
+      snapshot(viewer, path[i], snapshots + name, renderer, image);
     }
   }
   flight.seconds = clock.seconds();
@@ -125,10 +129,10 @@ Flight fly(client::StreamingClient& client, const std::vector<Camera>& path, con
   return flight;
 }
 
-std::string summary_table(client::StreamingClient& client, const Flight& flight, size_t frames, uint64_t base_bytes,
+std::string summary_table(const client::Viewer& viewer, const Flight& flight, size_t frames, uint64_t base_bytes,
                           uint64_t all_splits, uint64_t vi_bytes) {
-  const client::LinkCounters c = client.counters();
-  const double share = all_splits ? double(client.session().splits_received()) / double(all_splits) : 0;
+  const double share = all_splits ? double(viewer.received_total()) / double(all_splits) : 0;
+  const uint64_t faces = viewer.mesh().indices.size() / 3;
   char table[2048];
   std::snprintf(
       table, sizeof table,
@@ -137,11 +141,11 @@ std::string summary_table(client::StreamingClient& client, const Flight& flight,
       "|---|---|---|---|---|---|---|---|\n"
       "| %zu | %llu / %.0f | %llu (%.1f %% of %llu) | %llu (base %llu) | %llu | %llu | %.2f / %.2f ms | %llu (%.2fx) "
       "|\n",
-      frames, (unsigned long long)client.session().mesh().face_count(), double(flight.face_sum) / double(frames),
-      (unsigned long long)client.session().splits_received(), 100 * share, (unsigned long long)all_splits,
-      (unsigned long long)c.bytes_down, (unsigned long long)base_bytes, (unsigned long long)c.bytes_up,
+      frames, (unsigned long long)faces, double(flight.face_sum) / double(frames),
+      (unsigned long long)viewer.received_total(), 100 * share, (unsigned long long)all_splits,
+      (unsigned long long)viewer.down_bytes(), (unsigned long long)base_bytes, (unsigned long long)viewer.up_bytes(),
       (unsigned long long)flight.requests, percentile(flight.latencies, 0.5), percentile(flight.latencies, 0.99),
-      (unsigned long long)vi_bytes, double(vi_bytes) / double(std::max<uint64_t>(c.bytes_down, 1)));
+      (unsigned long long)vi_bytes, double(vi_bytes) / double(std::max<uint64_t>(viewer.down_bytes(), 1)));
   return table;
 }
 
@@ -168,14 +172,11 @@ void run_demo_flight(const std::string& pms_path, const std::string& model_name,
   std::printf("server:    %s on 127.0.0.1:%u (TCP, sender-driven)\n", model_name.c_str(), unsigned(tcp.port()));
 
   const std::vector<Camera> path = flight_path(served.model(), options.frames);
-  client::ClientOptions client_options;
-  client_options.tolerance = options.tolerance;
-  client::StreamingClient client("127.0.0.1", tcp.port(), client_options);
-  client.open(model_name);
-  const uint64_t base_bytes = client.counters().bytes_down;
+  const std::unique_ptr<client::Viewer> viewer = open_demo_viewer(tcp.port(), model_name, "sender", options.tolerance);
+  const uint64_t base_bytes = viewer->down_bytes();
   const std::string snapshots = options.out_dir + "/snapshots";
   if (options.snapshot_every) std::filesystem::create_directories(snapshots);
-  const Flight flight = fly(client, path, options, snapshots);
+  const Flight flight = fly(*viewer, path, options, snapshots);
 
   std::printf("baseline:  the same flight, view-independent (plain PM order) ...");
   std::fflush(stdout);
@@ -184,10 +185,10 @@ void run_demo_flight(const std::string& pms_path, const std::string& model_name,
   tcp.stop();
 
   const uint64_t all_splits = served.info.vsplits;
-  const std::string table = summary_table(client, flight, path.size(), base_bytes, all_splits, vi_bytes);
+  const std::string table = summary_table(*viewer, flight, path.size(), base_bytes, all_splits, vi_bytes);
   std::printf("\n%s\n", table.c_str());
   std::printf("streamed in %.2f s; every vsplit crossed the wire at most once (%llu of the model's %llu were needed)\n",
-              flight.seconds, (unsigned long long)client.session().splits_received(), (unsigned long long)all_splits);
+              flight.seconds, (unsigned long long)viewer->received_total(), (unsigned long long)all_splits);
   const std::string report = options.out_dir + "/report.md";
   write_report(report, model_name, path.size(), options.tolerance, table);
   std::printf("wrote:     %s, %s/\n", report.c_str(), snapshots.c_str());

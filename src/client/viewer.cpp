@@ -44,6 +44,8 @@ std::unique_ptr<Viewer> open_viewer(const ViewerOptions& options, const std::str
   if (!mode) fail("--mode", "'" + options.mode + "': this build streams in the modes " + viewer_mode_names());
   ClientOptions session = options.session;
   session.mode = *mode;
+  // The other session modes make splits as they come (or as the server's cut says): nothing to blend.
+  if (*mode != protocol::StreamMode::sender_driven) session.morph_frames = 0;
   return std::make_unique<SessionViewer>(options.server, session, options.pacing, model);
 }
 

@@ -29,7 +29,14 @@ namespace pms::client {
 
 enum class Pacing : uint8_t { lock_step, free_running };
 
+// Frames a split or a collapse (a LOD switch for multilevel) is blended over by default in the modes that
+// have geomorphs (sender, receiver, multilevel): on, so that a viewer does not pop, and short, so that
+// what arrives shows within a quarter of a second at 30 fps.
+constexpr uint32_t kDefaultGeomorphFrames = 8;
+
 struct ViewerOptions {
+  ViewerOptions() { session.morph_frames = receiver.morph_frames = multilevel.morph_frames = kDefaultGeomorphFrames; }
+
   std::string mode = "sender";  // sender, sender-plain, vi, dag, receiver, multilevel
   // HOST:PORT of the TCP port (session modes), http://HOST:PORT[/prefix] of the HTTP port (the others).
   std::string server;
