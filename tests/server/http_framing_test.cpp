@@ -190,7 +190,8 @@ TEST(HttpFraming, ARequestLineOverTheLimitGets414AndHeaderFieldsOverIt431) {
 TEST(HttpFraming, AUrlSpelledAnotherWayIsRedirectedToTheCanonicalOne) {
   Server server;
   HttpTestClient client(server.port());
-  const std::string code = protocol::base64url_encode(std::vector<uint8_t>(a_code().begin(), a_code().end()));
+  const std::string raw_code = a_code();
+  const std::string code = protocol::base64url_encode(std::vector<uint8_t>(raw_code.begin(), raw_code.end()));
   const struct {
     std::string url, canonical;
   } cases[] = {{"/models/%74errain/base", "/models/terrain/base"},
@@ -214,7 +215,7 @@ TEST(HttpFraming, AUrlSpelledAnotherWayIsRedirectedToTheCanonicalOne) {
   for (const char* canonical : {"/models", "/models/terrain/base"}) EXPECT_EQ(client.get(canonical).status, 200);
   EXPECT_EQ(client.get("/models/a%2Cb/base").status, 404);  // the redirect's target: no such model, no loop
   const HttpReply post =
-      client.post("/models/%74errain/splits", std::vector<uint8_t>(a_code().begin(), a_code().end()));
+      client.post("/models/%74errain/splits", std::vector<uint8_t>(raw_code.begin(), raw_code.end()));
   EXPECT_EQ(post.status, 308);  // a POST is sent on as a POST
   EXPECT_EQ(post.header("location"), "/models/terrain/splits");
   EXPECT_EQ(client.get("/models/terrain%/base").status, 400);  // no path: nothing to redirect to
