@@ -197,6 +197,7 @@ AttackOutcome run_attack_group(const AttackSetup& setup, const AttackGroup& grou
   target.request_timeout = setup.request_timeout;
   target.write_timeout = setup.write_timeout;
   target.idle_timeout = setup.idle_timeout;
+  target.slack = setup.slack;
   return GroupRun(setup, std::move(target), group).run();
 }
 

@@ -24,6 +24,7 @@ struct AttackSetup {
   std::string expensive_note;  // how many ids, the depth, the splits and the URL's length
   // The server's deadlines (--http-*-timeout-ms), also what the attackers expect of it.
   std::chrono::milliseconds request_timeout{10000}, write_timeout{10000}, idle_timeout{30000};
+  std::chrono::milliseconds slack{1500};  // AttackTarget::slack
   int attackers_per_class = 10;
   std::chrono::milliseconds min_attack{0};  // an attack lasts this at least, and until the flight lands
   bool compare_p99 = true;                  // fly pairs again while the ratio is over kMaxP99Ratio

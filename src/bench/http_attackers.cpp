@@ -16,7 +16,6 @@ namespace {
 
 using std::chrono::milliseconds;
 
-constexpr milliseconds kSlack(1500);
 constexpr milliseconds kConnect(2000);
 // The answers a server owes a bomb or a malformed request come without waiting for any deadline.
 constexpr milliseconds kPromptly(1000);
@@ -53,14 +52,15 @@ void tally_answers(const RawHttpPeer& peer, AttackTally& tally) {
 }
 
 // A round the server must end within `deadline` of its start.
-void tally_end(const RawHttpPeer& peer, AttackClock::time_point start, milliseconds deadline, AttackTally& tally) {
+// `allowed`: the deadline the round had, with the target's slack.
+void tally_end(const RawHttpPeer& peer, AttackClock::time_point start, milliseconds allowed, AttackTally& tally) {
   tally_answers(peer, tally);
   if (peer.ended()) {
     tally.closed++;
     if (peer.reset()) tally.resets++;
     raise_to(tally.longest_close_ms, ms_since(start));
   }
-  if (!peer.ended() || ms_since(start) > uint64_t((deadline + kSlack).count())) tally.late++;
+  if (!peer.ended() || ms_since(start) > uint64_t(allowed.count())) tally.late++;
 }
 
 // Connects from the attacker's address; nothing when the server would not take the connection.
@@ -84,12 +84,12 @@ void drip_round(const AttackTarget& target, int index, AttackTally& tally, const
   if (!peer) return;
   const milliseconds interval = std::max(milliseconds(10), target.request_timeout / 20);
   peer->send(opening, after(kConnect));
-  const auto give_up = start + target.request_timeout + 2 * kSlack;
+  const auto give_up = start + target.request_timeout + 2 * target.slack;
   for (size_t i = 0; !peer->ended() && AttackClock::now() < give_up; ++i) {
     peer->send(std::string_view(&drip[i % drip.size()], 1), after(interval));
     peer->read(after(interval));  // the pace of the drip: nothing comes until the server ends it
   }
-  tally_end(*peer, start, target.request_timeout, tally);
+  tally_end(*peer, start, target.request_timeout + target.slack, tally);
 }
 
 void slowloris(const AttackTarget& target, int index, AttackTally& tally) {
@@ -128,8 +128,8 @@ void unread_pipeline(const AttackTarget& target, int index, AttackTally& tally) 
   std::string requests;
   for (uint32_t i = 0; i < target.unread_count; ++i) requests += request("GET", target.unread);
   peer->send(requests, after(kConnect));
-  peer->wait_ended_unread(start + target.idle_timeout + 2 * kSlack);
-  tally_end(*peer, start, target.write_timeout, tally);
+  peer->wait_ended_unread(start + target.idle_timeout + 2 * target.slack);
+  tally_end(*peer, start, target.write_timeout + target.slack, tally);
 }
 
 // ---- parsing, pipelining and expensive requests ----
@@ -161,7 +161,7 @@ void malformed(const AttackTarget& target, int index, uint64_t round, AttackTall
   const auto peer = connect(target, index, tally);
   if (!peer) return;
   peer->send(requests[round % requests.size()], after(kConnect));
-  if (!peer->read_answers(1, after(kPromptly + kSlack))) tally.late++;
+  if (!peer->read_answers(1, after(kPromptly + target.slack))) tally.late++;
   tally_answers(*peer, tally);
   raise_to(tally.longest_close_ms, ms_since(start));
 }
@@ -179,7 +179,7 @@ void bombs(const AttackTarget& target, int index, uint64_t round, AttackTally& t
     peer->send(request("POST", target.model + "/splits", "Content-Length: " + std::to_string(kBody) + "\r\n") +
                    std::string(kBody, 'b'),
                after(kPromptly));
-  if (!peer->read_answers(1, after(kPromptly + kSlack))) tally.late++;
+  if (!peer->read_answers(1, after(kPromptly + target.slack))) tally.late++;
   tally_answers(*peer, tally);
   raise_to(tally.longest_close_ms, ms_since(start));
 }
@@ -195,7 +195,7 @@ void expensive(const AttackTarget& target, int index, bool head, AttackTally& ta
   peer->send(requests, after(kConnect));
   // Budgets slow these down by design; the write deadline bounds any one answer.
   // A connection refused over the per-address cap ends at once, with its 503.
-  if (!peer->read_answers(kDepth, after(kDepth * (target.write_timeout + kSlack))) && !peer->ended()) tally.late++;
+  if (!peer->read_answers(kDepth, after(kDepth * (target.write_timeout + target.slack))) && !peer->ended()) tally.late++;
   tally_answers(*peer, tally);
   raise_to(tally.longest_close_ms, ms_since(start));
 }
@@ -215,11 +215,11 @@ void smuggling(const AttackTarget& target, int index, uint64_t round, AttackTall
   const auto peer = connect(target, index, tally);
   if (!peer) return;
   peer->send(variants[round % std::size(variants)], after(kConnect));
-  peer->wait_closed(after(kPromptly + kSlack));
+  peer->wait_closed(after(kPromptly + target.slack));
   const auto& statuses = peer->answers().statuses();
   if (statuses.size() > 1) tally.smuggled += statuses.size() - 1;
   if (!statuses.empty() && statuses[0] < 400) tally.smuggled++;  // the framing itself was taken
-  tally_end(*peer, start, kPromptly, tally);
+  tally_end(*peer, start, kPromptly + target.slack, tally);
 }
 
 // ---- connection floods ----

@@ -29,6 +29,7 @@ class HttpAttacks : public ::testing::Test {
       made.idle_timeout = milliseconds(test::kSanitized ? 10000 : 3000);
       made.min_attack = milliseconds(3000);
       made.compare_p99 = !test::kSanitized;
+      if (test::kSanitized) made.slack = milliseconds(6000);
       return made;
     }();
     return s;
