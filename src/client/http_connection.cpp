@@ -1,4 +1,4 @@
-// The receiver-driven client's HTTP transport (http_connection.h), in the shape of Beast's client examples
+// The HTTP clients' native transport (http_connection.h), in the shape of Beast's client examples
 // with tcp_stream's timeouts: each step is one asynchronous operation run to completion on the
 // connection's own io_context, so a deadline passed is an error like any other.
 #include <utility>  // before asio with C++20 (docs/architecture.md, "Stack")
@@ -20,35 +20,6 @@ namespace beast = boost::beast;
 namespace http = beast::http;
 using asio::ip::tcp;
 using boost::system::error_code;
-
-HttpUrl parse_http_url(const std::string& text, const std::string& where) {
-  const std::string scheme = "http://";
-  if (text.compare(0, scheme.size(), scheme) != 0) fail(where, "'" + text + "' is not http://HOST[:PORT][/prefix]");
-  HttpUrl url;
-  const std::string rest = text.substr(scheme.size());
-  const size_t slash = rest.find('/');
-  const std::string authority = rest.substr(0, slash);
-  if (slash != std::string::npos) url.prefix = rest.substr(slash);
-  while (!url.prefix.empty() && url.prefix.back() == '/') url.prefix.pop_back();
-  if (url.prefix.find_first_of("?#") != std::string::npos) fail(where, "'" + text + "': no query or fragment");
-  const size_t colon = authority.rfind(':');
-  url.host = authority.substr(0, colon);
-  if (url.host.empty()) fail(where, "'" + text + "' names no host");
-  if (colon != std::string::npos) {
-    const std::string port = authority.substr(colon + 1);
-    unsigned long value = 0;
-    try {
-      size_t used = 0;
-      value = std::stoul(port, &used);
-      if (used != port.size()) value = 0;
-    } catch (const std::exception&) {
-      value = 0;
-    }
-    if (value == 0 || value > 65535) fail(where, "'" + text + "' has no valid port");
-    url.port = uint16_t(value);
-  }
-  return url;
-}
 
 namespace {
 
@@ -368,15 +339,6 @@ HttpAnswer HttpConnection::receive() {
 size_t HttpConnection::pending() const { return impl_->pending.size(); }
 size_t HttpConnection::room() const { return impl_->options.in_flight - impl_->pending.size(); }
 
-void HttpConnection::get_all(const std::vector<std::string>& targets, const OnAnswer& on_answer) {
-  if (pending() != 0) fail("http", "get_all() with GETs of another caller pending");
-  size_t sent = 0;
-  for (size_t answered = 0; answered < targets.size(); ++answered) {
-    while (sent < targets.size() && room() > 0) send(targets[sent++]);
-    on_answer(answered, receive());
-  }
-}
-
 void HttpConnection::post(const std::string& target) {
   Impl& c = *impl_;
   if (c.pending.size() >= c.options.in_flight) fail("http", "more than in_flight GETs pending");
@@ -410,12 +372,6 @@ void HttpConnection::wait() {
     c.io.restart();
     if (c.io.run_one() == 0) fail("http", "wait() with nothing in motion");
   }
-}
-
-HttpAnswer HttpConnection::get(const std::string& target) {
-  HttpAnswer out;
-  get_all({target}, [&](size_t, HttpAnswer&& answer) { out = std::move(answer); });
-  return out;
 }
 
 }  // namespace pms::client

@@ -24,7 +24,7 @@ double ms_since(Clock::time_point start) {
   fail("GET " + target, "HTTP " + std::to_string(answer.status) + ": " + text);
 }
 
-nlohmann::json catalogue_models(HttpConnection& http) {
+nlohmann::json catalogue_models(HttpTransport& http) {
   const std::string target = "/models";
   const HttpAnswer answer = http.get(target);
   if (answer.status != 200) refused(target, answer);
@@ -75,12 +75,14 @@ std::string coarsest_target(const std::string& prefix) { return prefix + "levels
 
 }  // namespace
 
-MultilevelClient::MultilevelClient(const HttpUrl& server, const MultilevelOptions& options)
-    : options_(options), http_(server, options.http) {}
+MultilevelClient::MultilevelClient(std::unique_ptr<HttpTransport> http, const MultilevelOptions& options)
+    : options_(options), http_(std::move(http)) {
+  if (!http_) fail("multilevel", "no transport");
+}
 
 std::vector<std::string> MultilevelClient::list() {
   std::vector<std::string> names;
-  for (const nlohmann::json& entry : catalogue_models(http_))
+  for (const nlohmann::json& entry : catalogue_models(*http_))
     if (is_multilevel(entry)) names.push_back(entry["name"].get<std::string>());
   return names;
 }
@@ -116,7 +118,7 @@ void MultilevelClient::open(const std::string& model) {
   std::vector<std::string> targets = {protocol::model_path(model) + "/multilevel", target};
   if (options_.free_running) targets.push_back(coarsest_target(prefix));
   std::vector<HttpAnswer> answers(targets.size());
-  http_.get_all(targets, [&](size_t index, HttpAnswer&& answer) { answers[index] = std::move(answer); });
+  http_->get_all(targets, [&](size_t index, HttpAnswer&& answer) { answers[index] = std::move(answer); });
   read_entry(model, targets[0], answers[0]);
   const HttpAnswer& head = answers[1];
   if (head.status != 200) refused(target, head);
@@ -167,7 +169,7 @@ uint32_t MultilevelClient::load_to(uint32_t level) {
   const std::string prefix = model_prefix(model_, options_.compressed);
   for (uint32_t l = loader_->finest_loaded(); l-- > level;) targets.push_back(level_target(prefix, l));
   uint32_t added = 0;
-  http_.get_all(targets, [&](size_t index, HttpAnswer&& answer) {
+  http_->get_all(targets, [&](size_t index, HttpAnswer&& answer) {
     add(targets[index], answer);
     ++added;
   });
@@ -180,14 +182,14 @@ void MultilevelClient::add(const std::string& target, const HttpAnswer& answer) 
   if (answer.status != 200) refused(target, answer);
   const uint32_t l = loader_->next_level();
   loader_->add_level("GET " + target, answer.body);
-  const HttpCounters& c = http_.counters();
+  const HttpCounters& c = http_->counters();
   arrivals_.push_back({l, answer.body.size(), c.bytes_down, c.payload_down, ms_since(opened_)});
 }
 
 // Free-running: every level fully arrived, added without waiting for one. Returns how many.
 uint32_t MultilevelClient::add_arrived(MultilevelFrame& out) {
   uint32_t added = 0;
-  while (const std::optional<HttpAnswer> answer = http_.take()) {
+  while (const std::optional<HttpAnswer> answer = http_->take()) {
     add(posted_.front(), *answer);
     posted_.pop_front();
     out.report.latency_ms = ms_since(answer->sent_at);
@@ -201,9 +203,9 @@ uint32_t MultilevelClient::add_arrived(MultilevelFrame& out) {
 // the rest wait for a later frame, which asks only for what its own rule wants.
 void MultilevelClient::request_to(uint32_t level) {
   const std::string prefix = model_prefix(model_, options_.compressed);
-  while (requested_ > level && http_.room() > 0) {
+  while (requested_ > level && http_->room() > 0) {
     posted_.push_back(level_target(prefix, --requested_));
-    http_.post(posted_.back());
+    http_->post(posted_.back());
   }
 }
 
@@ -230,13 +232,13 @@ MultilevelFrame MultilevelClient::frame(const Camera& camera) {
   if (!loader_) fail("stream", "no model open");
   MultilevelFrame out;
   out.report.frame = ++frame_;
-  const HttpCounters before = http_.counters();
+  const HttpCounters before = http_->counters();
   out.wanted_level = wanted_level(camera);
   if (options_.free_running) {
-    http_.poll();
+    http_->poll();
     out.report.vsplits = add_arrived(out);
     request_to(out.wanted_level);
-    http_.poll();  // the GETs just handed over start on their way
+    http_->poll();  // the GETs just handed over start on their way
     out.report.requested = !posted_.empty();
   } else {
     const auto start = Clock::now();
@@ -247,7 +249,7 @@ MultilevelFrame MultilevelClient::frame(const Camera& camera) {
     }
   }
   step_to(out.wanted_level, out);
-  const HttpCounters& after = http_.counters();
+  const HttpCounters& after = http_->counters();
   out.report.up_bytes = after.bytes_up - before.bytes_up;
   out.report.down_bytes = after.bytes_down - before.bytes_down;
   out.payload_down = after.payload_down - before.payload_down;
@@ -265,7 +267,7 @@ void MultilevelClient::settle_free(uint32_t wanted) {
   for (;;) {
     request_to(wanted);
     if (posted_.empty()) return;
-    http_.wait();
+    http_->wait();
     add_arrived(ignored);
   }
 }

@@ -4,17 +4,18 @@
 // once; every frame picks a LOD by a triangle budget or a screen-size rule among the levels loaded and
 // switches to it with setLevel (a geomorph over --geomorph-frames). Free-running, the levels load in the
 // background and no frame waits for one. No session, like the receiver-driven client: a driver of its own
-// over HttpConnection.
+// over an HttpTransport, with no I/O of its own (answers in, targets out).
 #pragma once
 #include <chrono>
 #include <cstdint>
 #include <deque>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
 
 #include "client/client_mode.h"
-#include "client/http_connection.h"
+#include "client/http_transport.h"
 #include "common/camera.h"
 #include "io/mesh.h"
 #include "multilevel/loader.h"
@@ -27,7 +28,7 @@ struct MultilevelOptions {
   float tolerance = 1;        // screen-size rule: the coarsest LOD whose error covers at most this many pixels
   uint32_t morph_frames = 0;  // a LOD switch moves 1 / N level per frame (a geomorph); 0 = at once
   bool compressed = true;     // the compressed levels (positions on the server's grid), or the binary form's
-  HttpOptions http;
+  HttpOptions http;  // the HttpConnection made from a URL
   MultilevelLimits limits;  // what the head may announce
   // frame() never waits for a level: open() brings the coarsest with the head, and each frame adds the
   // levels fully arrived, asks (pipelined, coarsest first) for those the rule wants, and shows the finest
@@ -56,6 +57,9 @@ struct MultilevelFrame {
 
 class MultilevelClient {
  public:
+  // Over `http` (the native HttpConnection, the browser's fetch, a test's).
+  MultilevelClient(std::unique_ptr<HttpTransport> http, const MultilevelOptions& options = {});
+  // Over an HttpConnection to `server` with options.http (native builds: native_http_clients.cpp).
   MultilevelClient(const HttpUrl& server, const MultilevelOptions& options = {});
 
   std::vector<std::string> list();  // GET /models: the multilevel models' names
@@ -72,7 +76,7 @@ class MultilevelClient {
   const MultilevelLod& lod() const { return *lod_; }
   Mesh current_mesh() const { return lod_mesh(mesh(), *lod_); }
   const std::vector<LevelArrival>& arrivals() const { return arrivals_; }
-  const HttpCounters& counters() const { return http_.counters(); }
+  const HttpCounters& counters() const { return http_->counters(); }
 
  private:
   void read_entry(const std::string& model, const std::string& target, const HttpAnswer& answer);
@@ -85,7 +89,7 @@ class MultilevelClient {
   void step_to(uint32_t wanted, MultilevelFrame& out);
 
   MultilevelOptions options_;
-  HttpConnection http_;
+  std::unique_ptr<HttpTransport> http_;
   std::string model_;
   std::chrono::steady_clock::time_point opened_;
   std::vector<uint32_t> lod_triangles_;  // per level (0 finest), from the catalogue

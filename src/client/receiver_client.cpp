@@ -76,8 +76,10 @@ FetchPolicy fetch_policy_named(const std::string& name, const std::string& where
   fail(where, "'" + name + "' is not a fetch policy (lists or blocks)");
 }
 
-ReceiverClient::ReceiverClient(const HttpUrl& server, const ReceiverOptions& options)
-    : options_(options), http_(server, options.http), importance_(RenderOptions{1}) {
+ReceiverClient::ReceiverClient(std::unique_ptr<HttpTransport> http, std::unique_ptr<ImportanceSource> importance,
+                               const ReceiverOptions& options)
+    : options_(options), http_(std::move(http)), importance_(std::move(importance)) {
+  if (!http_ || !importance_) fail("receiver", "no transport or no importance source");
   if (options.ids_per_request == 0) fail("receiver", "ids_per_request must be at least 1");
   if (options.block_depth > 8) fail("receiver", "block_depth must be at most 8 (the server's request depth limit)");
   if (options.descendant_depth > 8)
@@ -88,7 +90,7 @@ ReceiverClient::ReceiverClient(const HttpUrl& server, const ReceiverOptions& opt
   session_.refinement_info = true;  // the records carry the children's refinement info: the client refines
 }
 
-nlohmann::json ReceiverClient::catalogue() { return models_of(http_.get("/models")); }
+nlohmann::json ReceiverClient::catalogue() { return models_of(http_->get("/models")); }
 
 std::vector<std::string> ReceiverClient::list() {
   std::vector<std::string> names;
@@ -105,7 +107,7 @@ void ReceiverClient::open(const std::string& model) {
   const std::string tables = protocol::model_path(model) + "/codec";
   const std::vector<std::string> targets = {target, "/models", tables};
   std::vector<HttpAnswer> answers(targets.size());
-  http_.get_all(targets, [&](size_t index, HttpAnswer&& answer) { answers[index] = std::move(answer); });
+  http_->get_all(targets, [&](size_t index, HttpAnswer&& answer) { answers[index] = std::move(answer); });
   const HttpAnswer& answer = answers[0];
   if (answer.status != 200) refused(target, answer);
   session_.on_base(protocol::decode_base(answer.body));
@@ -139,7 +141,7 @@ std::vector<ReceiverClient::Wanted> ReceiverClient::ranked(std::span<const uint3
   std::sort(sorted.begin(), sorted.end());
   sorted.erase(std::unique(sorted.begin(), sorted.end()), sorted.end());
   const auto wanted = [&sorted](uint32_t slot) { return std::binary_search(sorted.begin(), sorted.end(), slot); };
-  const std::vector<VertexArea>& by_area = importance_.rank(session_.mesh(), view, wanted);
+  const std::vector<VertexArea>& by_area = importance_->rank(session_.mesh(), view, wanted);
   VertexHierarchy& hierarchy = session_.hierarchy();
   const ViewCriteria criteria = make_criteria(view, options_.tolerance);
   const float pixel_angle2 = make_criteria(view, 1).kappa2;
@@ -310,8 +312,8 @@ bool ReceiverClient::over_budget(uint32_t answers, std::chrono::steady_clock::ti
 }
 
 void ReceiverClient::send(Request&& request) {
-  if (options_.free_running) http_.post(request.target);
-  else http_.send(request.target);
+  if (options_.free_running) http_->post(request.target);
+  else http_->send(request.target);
   ++totals_.split_requests;
   totals_.requested_ids += request.request.ids.size();
   totals_.request_code_bytes += request.code_bytes;
@@ -321,7 +323,7 @@ void ReceiverClient::send(Request&& request) {
 // The queue's head onto the wire while the pipe has room. A list shorter than a full GET waits while an
 // answer is due: that answer's splits are ranked with it, and fill it, instead of paying a header of their own.
 void ReceiverClient::fill_pipe() {
-  while (!queue_.empty() && http_.room() > 0) {
+  while (!queue_.empty() && http_->room() > 0) {
     const protocol::SplitRequest& head = queue_.front().request;
     const bool short_list = options_.fetch == FetchPolicy::lists && head.ids.size() < list_size(head.depth);
     if (short_list && !wire_.empty()) break;
@@ -331,12 +333,12 @@ void ReceiverClient::fill_pipe() {
 }
 
 // Reads the oldest answer due and attaches its splits. Returns the splits attached.
-size_t ReceiverClient::receive_one(ReceiverFrame& out) { return attach(http_.receive(), out); }
+size_t ReceiverClient::receive_one(ReceiverFrame& out) { return attach(http_->receive(), out); }
 
 // Every answer that has fully arrived, without waiting for one. Returns the splits attached.
 size_t ReceiverClient::attach_arrived(ReceiverFrame& out) {
   size_t attached = 0;
-  while (const std::optional<HttpAnswer> answer = http_.take()) attached += attach(*answer, out);
+  while (const std::optional<HttpAnswer> answer = http_->take()) attached += attach(*answer, out);
   return attached;
 }
 
@@ -412,7 +414,7 @@ std::vector<uint32_t> ReceiverClient::leaves_wanted(const ViewParams& view) {
 // that camera would see the mesh. Their splits are attached as held data like any answer's; adapt() makes
 // them only when a view wants them.
 void ReceiverClient::prefetch() {
-  if (cameras_.size() < 2 || http_.room() == 0) return;
+  if (cameras_.size() < 2 || http_->room() == 0) return;
   const std::optional<Camera> next = extrapolate(cameras_[0], cameras_[1]);
   if (!next) return;
   const ViewParams view = session_.view_params(*next);
@@ -422,7 +424,7 @@ void ReceiverClient::prefetch() {
     return std::binary_search(on_wire.begin(), on_wire.end(), key(w.id), protocol::code_order);
   });
   std::vector<Request> requests = requests_for(ids);
-  for (size_t i = 0; i < requests.size() && http_.room() > 0; ++i) {
+  for (size_t i = 0; i < requests.size() && http_->room() > 0; ++i) {
     requests[i].prefetch = true;
     requests[i].wanted = false;
     prefetched_.insert(prefetched_.end(), requests[i].request.ids.begin(), requests[i].request.ids.end());
@@ -465,7 +467,7 @@ ReceiverFrame ReceiverClient::begin(const Camera& camera) {
 
 void ReceiverClient::finish(ReceiverFrame& out, const HttpCounters& before, const ReceiverTotals& totals_before) {
   out.prefetch_used = count_prefetch_used();
-  const HttpCounters& after = http_.counters();
+  const HttpCounters& after = http_->counters();
   out.report.up_bytes = after.bytes_up - before.bytes_up;
   out.report.down_bytes = after.bytes_down - before.bytes_down;
   out.payload_down = after.payload_down - before.payload_down;
@@ -483,7 +485,7 @@ void ReceiverClient::finish(ReceiverFrame& out, const HttpCounters& before, cons
 // prefetch only in a path's frames, not while settling. A round ends when the answers to what it asked for are in; a
 // frame's first round re-ranks what the last frame left queued.
 ReceiverFrame ReceiverClient::run(const Camera& camera, bool settling) {
-  const HttpCounters before = http_.counters();
+  const HttpCounters before = http_->counters();
   const ReceiverTotals totals_before = totals_;
   const auto start = std::chrono::steady_clock::now();
   ReceiverFrame out = begin(camera);
@@ -531,16 +533,16 @@ ReceiverFrame ReceiverClient::run(const Camera& camera, bool settling) {
 // pipe gets what fits and, with room left, the predicted view's splits. The latency reported is the last
 // answer attached's, from its GET written.
 ReceiverFrame ReceiverClient::run_free(const Camera& camera, bool settling) {
-  const HttpCounters before = http_.counters();
+  const HttpCounters before = http_->counters();
   const ReceiverTotals totals_before = totals_;
   ReceiverFrame out = begin(camera);
-  http_.poll();
+  http_->poll();
   attach_arrived(out);
   const bool wants = rerank(camera);
   out.rounds = wants;
   fill_pipe();
   if (options_.prefetch && !settling && queue_.empty()) prefetch();
-  http_.poll();  // the GETs just handed over start on their way
+  http_->poll();  // the GETs just handed over start on their way
   out.satisfied = !wants;
   out.report.requested = wants;
   finish(out, before, totals_before);
@@ -561,11 +563,11 @@ void ReceiverClient::settle_free(const Camera& camera) {
     const ReceiverFrame r = run_free(camera, true);
     ++settle_frames_;
     if (r.satisfied || wire_.empty() || (r.answers > 0 && r.report.vsplits == 0)) break;
-    http_.wait();
+    http_->wait();
   }
   ReceiverFrame rest;
   while (!wire_.empty()) {
-    http_.wait();
+    http_->wait();
     attach_arrived(rest);
   }
   session_.refinement().converge();

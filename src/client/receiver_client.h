@@ -2,11 +2,13 @@
 // what it needs and asks for it by id over stateless HTTP GETs, so the answers can come from any cache.
 // It has no session (no HELLO, OPEN, VIEW), so it is a driver of its own beside StreamingClient rather than
 // a ClientMode (docs/architecture.md, "Streaming modes"); it shares ClientSession and FrameReport with them.
+// No I/O of its own: answers in, targets out, over an HttpTransport.
 #pragma once
 #include <chrono>
 #include <cstdint>
 #include <deque>
 #include <functional>
+#include <memory>
 #include <nlohmann/json.hpp>
 #include <span>
 #include <string>
@@ -14,8 +16,8 @@
 
 #include "client/client_mode.h"
 #include "client/client_session.h"
-#include "client/http_connection.h"
-#include "client/screen_importance.h"
+#include "client/http_transport.h"
+#include "client/importance.h"
 #include "common/camera.h"
 #include "protocol/split_request.h"
 #include "spm/split_codec.h"
@@ -42,7 +44,7 @@ struct ReceiverOptions {
   // lists: at most this many levels below a visible leaf whose screen error is many times τ come with it
   // (receiver_client.cpp, descendant_depth()); 0: the ids alone, exactly the splits the views want.
   uint32_t descendant_depth = 2;
-  HttpOptions http;  // deadlines, requests in flight, answer limits
+  HttpOptions http;  // the HttpConnection made from a URL: deadlines, requests in flight, answer limits
   // The frame budget (docs/protocol.md, "Frame budget, cancel and prefetch"): with either set, a frame also ends once
   // it has read frame_answers answers or spent frame_budget_ms (checked between answers, so a frame overruns by at most
   // one answer; one answer is always read when one is due). The rest carries to the next frame: GETs sent stay in
@@ -89,6 +91,12 @@ struct ReceiverTotals {
 
 class ReceiverClient {
  public:
+  // Over `http` (the native HttpConnection, the browser's fetch, a test's), ranking the front by `importance`.
+  ReceiverClient(std::unique_ptr<HttpTransport> http, std::unique_ptr<ImportanceSource> importance,
+                 const ReceiverOptions& options = {});
+  // The native build's (native_http_clients.cpp): ranking with the software renderer (ScreenImportance),
+  // over `http` or over an HttpConnection to `server` with options.http.
+  ReceiverClient(std::unique_ptr<HttpTransport> http, const ReceiverOptions& options = {});
   ReceiverClient(const HttpUrl& server, const ReceiverOptions& options = {});
 
   std::vector<std::string> list();      // GET /models: the names
@@ -104,7 +112,7 @@ class ReceiverClient {
   uint32_t settle_frames() const { return settle_frames_; }
 
   ClientSession& session() { return session_; }
-  const HttpCounters& counters() const { return http_.counters(); }
+  const HttpCounters& counters() const { return http_->counters(); }
   const ReceiverTotals& totals() const { return totals_; }
   uint64_t split_requests() const { return totals_.split_requests; }
   uint64_t cache_hits() const { return totals_.cache_hits; }
@@ -156,9 +164,9 @@ class ReceiverClient {
   // (and ids_per_request), or nothing is queued.
   static constexpr size_t kRerankShare = 16;
   ReceiverOptions options_;
-  HttpConnection http_;
+  std::unique_ptr<HttpTransport> http_;
   ClientSession session_;
-  ScreenImportance importance_;
+  std::unique_ptr<ImportanceSource> importance_;
   std::string model_;
   SplitCodec codec_;  // the model's split record tables (GET /models/{m}/codec)
   uint32_t frame_ = 0;

@@ -1,39 +1,27 @@
-// cheng-ooi 2008 §4.2's importance for a receiver-driven client: the vertices of its front ranked by the
-// screen area of their incident faces, measured from the software renderer's triangle-id buffer, so the
-// splits that change the most pixels are asked for first. A vertex none of whose faces shows (outside the
-// frustum, behind the camera, hidden, back-facing seen edge-on) has no area and is not ranked.
-// Shared with the browser build: single-threaded, no std::ranges algorithms, std::format or coroutines
-// (render with RenderOptions::threads = 1 there).
+// cheng-ooi 2008 §4.2's importance (importance.h) measured with the software renderer: the front ranked by
+// the screen area of each vertex's faces in the renderer's triangle-id buffer. A vertex none of whose faces
+// shows (outside the frustum, behind the camera, hidden, back-facing seen edge-on) has no area and is not
+// ranked. The native build's source; the browser's measures the same in WebGL.
 #pragma once
 #include <cstdint>
-#include <functional>
 #include <vector>
 
+#include "client/importance.h"
 #include "common/camera.h"
 #include "render/render.h"
 #include "spm/selective_mesh.h"
 
 namespace pms::client {
 
-struct VertexArea {
-  uint32_t slot = 0;    // the vertex: a slot of the client's hierarchy
-  uint64_t pixels = 0;  // pixels of its incident faces (each face's pixels count for its three corners)
-};
-
-// Whether a front vertex may be split: the caller knows which leaves the model refines further.
-using CanSplit = std::function<bool(uint32_t slot)>;
-
 // Keeps its renderer and buffers between frames, so ranking along a path allocates nothing once warm.
-class ScreenImportance {
+class ScreenImportance : public ImportanceSource {
  public:
   // The frames are drawn without shading (face ids and depth only).
   explicit ScreenImportance(const RenderOptions& options = {}) : options_(options) { options_.shade = false; }
 
-  // Renders `mesh` as `view` sees it and returns its active vertices that are leaves of the partial
-  // hierarchy (and pass `can_split`, when given) with a non-zero area, most pixels first (ties: lower
-  // slot first, so the order is deterministic).
+  // Renders `mesh` as `view` sees it and ranks its front from the face ids drawn (importance.h).
   const std::vector<VertexArea>& rank(const SelectiveMesh& mesh, const ViewParams& view,
-                                      const CanSplit& can_split = {});
+                                      const CanSplit& can_split = {}) override;
 
   // Of the last rank(): the frame drawn (its face ids index the faces of mesh_arrays(); no rgb), and the pixels
   // some face covers.

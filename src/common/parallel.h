@@ -1,18 +1,30 @@
 // Splits [0, count) into one contiguous range per core and runs them on threads, for loops whose
 // iterations are independent. Below `min_parallel` items it runs inline: starting threads costs more.
+// Built with PMSTREAM_NO_THREADS (the browser's core: emscripten without pthreads sets it), every range runs
+// inline on the caller's thread, in order, with the same results.
 #pragma once
 #include <algorithm>
 #include <cstddef>
 #include <exception>
-#include <thread>
 #include <vector>
+
+#if defined(__EMSCRIPTEN__) && !defined(__EMSCRIPTEN_PTHREADS__) && !defined(PMSTREAM_NO_THREADS)
+#define PMSTREAM_NO_THREADS 1
+#endif
+#ifndef PMSTREAM_NO_THREADS
+#include <thread>
+#endif
 
 namespace pms {
 
 // How many ranges for_each_range and map_ranges cut `count` items into.
-inline size_t range_count(size_t count, size_t min_parallel) {
+inline size_t range_count([[maybe_unused]] size_t count, [[maybe_unused]] size_t min_parallel) {
+#ifdef PMSTREAM_NO_THREADS
+  return 1;
+#else
   if (count < min_parallel) return 1;
   return std::clamp<size_t>(std::thread::hardware_concurrency(), 1, 8);
+#endif
 }
 
 template <class Fn>  // fn(begin, end)
@@ -22,10 +34,12 @@ void for_each_range(size_t count, size_t min_parallel, Fn&& fn) {
     fn(size_t(0), count);
     return;
   }
+#ifndef PMSTREAM_NO_THREADS
   std::vector<std::thread> workers;
   for (size_t i = 1; i < threads; ++i) workers.emplace_back(fn, count * i / threads, count * (i + 1) / threads);
   fn(size_t(0), count / threads);
   for (std::thread& w : workers) w.join();
+#endif
 }
 
 // [0, count) cut into `ranges` contiguous ranges of equal size: their ranges + 1 bounds.
@@ -51,10 +65,14 @@ auto map_bounded_ranges(const std::vector<size_t>& bounds, Fn&& fn) -> std::vect
       errors[i] = std::current_exception();
     }
   };
+#ifdef PMSTREAM_NO_THREADS
+  for (size_t i = 0; i < ranges; ++i) run(i);
+#else
   std::vector<std::thread> workers;
   for (size_t i = 1; i < ranges; ++i) workers.emplace_back(run, i);
   run(0);
   for (std::thread& w : workers) w.join();
+#endif
   for (const std::exception_ptr& error : errors)
     if (error) std::rethrow_exception(error);
   return results;
