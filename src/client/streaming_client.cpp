@@ -236,8 +236,13 @@ FrameReport StreamingClient::frame_free_running(const Camera& camera) {
 
 void StreamingClient::take_arrived() {
   if (!server_) return;
+  const Clock::time_point until = Clock::now() + options_.apply_budget;
   try {
-    while (std::optional<protocol::Frame> frame = server_->poll()) free_->on_frame(*frame, Clock::now());
+    while (Clock::now() < until) {
+      std::optional<protocol::Frame> frame = server_->poll();
+      if (!frame) break;
+      free_->on_frame(*frame, Clock::now());
+    }
   } catch (const ConnectionError& e) {
     return lost(e.what());  // what arrived before the loss is applied: the Link hands it over first
   }

@@ -37,6 +37,10 @@ struct ClientOptions {
   // this many times, waiting reconnect_delay, then twice that, and so on (capped at 8 s); 0 = fail at once.
   uint32_t reconnect_attempts = 0;
   std::chrono::milliseconds reconnect_delay{500};
+  // Free-running: the time a frame spends applying what arrived before it returns; the rest waits in the
+  // link for the next frame, so that a burst (a long round trip delivers several frames' answers at once)
+  // does not make one frame late. Settling applies everything.
+  std::chrono::milliseconds apply_budget{8};
   std::function<void(const std::string& reason, uint32_t attempt)> on_reconnect = {};  // told before each try
 };
 
