@@ -1,6 +1,6 @@
 // The "viewer" group (docs/architecture.md, "Viewer"): every mode's Viewer free-running at 30 fps, as
 // `pmstream stream --fps 30` children, through a relay that delays each direction (delay_proxy.h) for
-// round trips of 0 and 50 ms, on dragon's scan and orbit paths. Per run: the time frame() takes on the
+// the round trips of kRoundTripsMs, on dragon's scan and orbit paths. Per run: the time frame() takes on the
 // calling thread (median, p99), the flight's seconds, frames until a view is satisfied, the time to the
 // first picture, bytes, and whether the settled mesh is the one the mode gives in lock-step at the last
 // camera (a lock-step run over the undelayed link, compared triangle by triangle).
@@ -29,7 +29,7 @@ using app::percentile;
 constexpr uint32_t kFrames = 90;  // three seconds at 30 fps
 constexpr uint32_t kFps = 30;
 constexpr std::array<uint32_t, 2> kRoundTripsMs = {0, 50};
-constexpr double kMaxP99Ratio = 1.5;  // the target: frame() at 50 ms against the direct link
+constexpr double kMaxP99Ratio = 1.5;  // the target: frame()'s p99 over the delayed link against the direct one
 constexpr size_t kMaxPairs = 3;
 constexpr std::array<const char*, 6> kModes = {"sender", "sender-plain", "vi", "dag", "receiver", "multilevel"};
 

@@ -23,6 +23,9 @@ namespace {
 using Clock = std::chrono::steady_clock;
 using std::chrono::milliseconds;
 
+// How long the flight waits for every attacker to be under way before it starts anyway.
+constexpr milliseconds kUnderWayWait(5000);
+
 constexpr double kIdleShare = 0.10;
 constexpr milliseconds kIdleWithin(3000);
 
@@ -170,14 +173,14 @@ class GroupRun {
     outcome_.attack_cpu_s = process_cpu_seconds(pid) - cpu_before;
   }
 
-  // Every attacker has begun a round (the flood its connections), or 5 s have passed.
+  // Every attacker has begun a round (the flood its connections), or kUnderWayWait has passed.
   void wait_until_under_way(Clock::time_point start) const {
     const auto begun = [&] {
       for (const AttackTally& tally : outcome_.tallies)
         if (tally.rounds < uint64_t(setup_.attackers_per_class)) return false;
       return true;
     };
-    while (!begun() && Clock::now() < start + milliseconds(5000)) std::this_thread::sleep_for(milliseconds(5));
+    while (!begun() && Clock::now() < start + kUnderWayWait) std::this_thread::sleep_for(milliseconds(5));
   }
 
   const AttackSetup& setup_;

@@ -6,6 +6,7 @@
 #include <utility>
 
 #include "common/error.h"
+#include "protocol/url_segment.h"
 
 namespace pms::client {
 
@@ -23,17 +24,9 @@ HttpUrl parse_http_url(const std::string& text, const std::string& where) {
   url.host = authority.substr(0, colon);
   if (url.host.empty()) fail(where, "'" + text + "' names no host");
   if (colon != std::string::npos) {
-    const std::string port = authority.substr(colon + 1);
-    unsigned long value = 0;
-    try {
-      size_t used = 0;
-      value = std::stoul(port, &used);
-      if (used != port.size()) value = 0;
-    } catch (const std::exception&) {
-      value = 0;
-    }
-    if (value == 0 || value > 65535) fail(where, "'" + text + "' has no valid port");
-    url.port = uint16_t(value);
+    const std::optional<uint16_t> port = protocol::parse_port(std::string_view(authority).substr(colon + 1));
+    if (!port) fail(where, "'" + text + "' has no valid port");
+    url.port = *port;
   }
   return url;
 }

@@ -1,6 +1,7 @@
 #include "client/session_viewer.h"
 
 #include "common/error.h"
+#include "protocol/url_segment.h"
 
 namespace pms::client {
 
@@ -8,17 +9,9 @@ void split_host_port(const std::string& text, std::string& host, uint16_t& port,
   const size_t colon = text.rfind(':');
   if (colon == std::string::npos || colon == 0) fail(where, "'" + text + "' is not HOST:PORT");
   host = text.substr(0, colon);
-  const std::string digits = text.substr(colon + 1);
-  unsigned long value = 0;
-  try {
-    size_t used = 0;
-    value = std::stoul(digits, &used);
-    if (used != digits.size()) value = 0;
-  } catch (const std::exception&) {
-    value = 0;
-  }
-  if (value == 0 || value > 65535) fail(where, "'" + text + "' has no valid port");
-  port = uint16_t(value);
+  const std::optional<uint16_t> parsed = protocol::parse_port(std::string_view(text).substr(colon + 1));
+  if (!parsed) fail(where, "'" + text + "' has no valid port");
+  port = *parsed;
 }
 
 namespace {

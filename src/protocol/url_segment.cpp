@@ -89,4 +89,15 @@ std::optional<std::string> url_path_normalize(std::string_view path) {
 
 std::string model_path(std::string_view name) { return "/models/" + url_segment_encode(name); }
 
+std::optional<uint16_t> parse_port(std::string_view digits) {
+  if (digits.empty() || digits.size() > 5) return std::nullopt;
+  uint32_t value = 0;
+  for (char c : digits) {
+    if (c < '0' || c > '9') return std::nullopt;
+    value = value * 10 + uint32_t(c - '0');
+  }
+  if (value == 0 || value > 65535) return std::nullopt;
+  return uint16_t(value);
+}
+
 }  // namespace pms::protocol

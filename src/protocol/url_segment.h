@@ -1,6 +1,7 @@
 // A model's name as one segment of a URL path (RFC 3986 §3.3), and the path of its resources. Names come
 // from file names, so they may hold spaces, '%' or UTF-8. Shared with the browser build.
 #pragma once
+#include <cstdint>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -20,6 +21,9 @@ std::optional<std::string> url_segment_decode(std::string_view segment);
 // others in upper case (§6.2.2.1), so two spellings of one path compare equal; nothing for a '%' without
 // two hex digits or a byte no path may hold raw.
 std::optional<std::string> url_path_normalize(std::string_view path);
+
+// A port as an address's authority spells it: decimal, 1 … 65535, nothing else; nothing otherwise.
+std::optional<uint16_t> parse_port(std::string_view digits);
 
 // "/models/" and the encoded name: where every resource of the model starts.
 std::string model_path(std::string_view name);
