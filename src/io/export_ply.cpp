@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "common/bit_cast.h"
 #include "common/error.h"
 #include "io/mesh.h"
 
@@ -60,7 +61,7 @@ void put_number(std::string& out, auto value) {
 void vertex_record(std::string& out, const Mesh& mesh, size_t v, bool binary) {
   const auto put_float = [&](float x) {
     if (binary) {
-      put32(out, std::bit_cast<uint32_t>(x));
+      put32(out, bit_cast<uint32_t>(x));
     } else {
       put_number(out, x);
       out += ' ';

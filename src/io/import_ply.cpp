@@ -9,6 +9,7 @@
 #include <string_view>
 #include <vector>
 
+#include "common/bit_cast.h"
 #include "common/error.h"
 #include "io/import_internal.h"
 #include "io/text_internal.h"
@@ -289,10 +290,10 @@ class BinaryReader {
         value = load<uint32_t>();
         break;
       case Scalar::f32:
-        value = std::bit_cast<float>(load<uint32_t>());
+        value = bit_cast<float>(load<uint32_t>());
         break;
       case Scalar::f64:
-        value = std::bit_cast<double>(load<uint64_t>());
+        value = bit_cast<double>(load<uint64_t>());
         break;
     }
     p_ += scalar_size(type);

@@ -13,6 +13,7 @@
 #include <bit>
 #include <cstring>
 
+#include "common/bit_cast.h"
 #include "common/bit_stream.h"
 #include "common/error.h"
 #include "common/prefix_code.h"
@@ -109,7 +110,7 @@ void emit_level(const LevelInput& in, Sink& sink) {
     };
     for (uint32_t k = 0; k < d; ++k) axis(kAxis + k, k, middle);
     if (!m.normals.empty())
-      for (int k = 0; k < 3; ++k) sink.raw(std::bit_cast<uint32_t>(m.normals[size_t(v) * 3 + k]), 32);
+      for (int k = 0; k < 3; ++k) sink.raw(bit_cast<uint32_t>(m.normals[size_t(v) * 3 + k]), 32);
     if (!m.colors.empty())
       for (int k = 0; k < 4; ++k) sink.raw(m.colors[size_t(v) * 4 + k], 8);
     if (texcoords)
@@ -282,7 +283,7 @@ class LevelDecoder {
       dequantize_position(c_.grid, q, p);
       positions_.insert(positions_.end(), p, p + d);
       if (c_.normals)
-        for (int k = 0; k < 3; ++k) normals_.push_back(std::bit_cast<float>(uint32_t(r_.bits(32, "normal"))));
+        for (int k = 0; k < 3; ++k) normals_.push_back(bit_cast<float>(uint32_t(r_.bits(32, "normal"))));
       if (c_.colors)
         for (int k = 0; k < 4; ++k) colors_.push_back(uint8_t(r_.bits(8, "colour")));
       if (c_.texcoords) {

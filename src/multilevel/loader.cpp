@@ -43,7 +43,7 @@ std::vector<uint8_t> level_section(const MultilevelMesh& m, uint32_t level, std:
   const std::vector<uint32_t> reps = level_representatives(m, level, stated);
   const LevelHeader h{level, v_end - v_begin, t_end - t_begin, uint32_t(reps.size() / 2)};
   const auto part = [](const auto& array, size_t begin, size_t count) {
-    return array.empty() ? std::span(array.data(), 0) : std::span(array.data() + begin, count);
+    return array.empty() ? std::span(array.data(), size_t(0)) : std::span(array.data() + begin, count);
   };
   const size_t d = m.dimension;
   return level_section_bytes(h, part(m.positions, v_begin * d, h.vertices * d),

@@ -1,9 +1,9 @@
 // The bit writer/reader of wire_internal.h and the field codecs shared by several messages.
 #include <algorithm>
-#include <bit>
 #include <cmath>
 #include <cstring>
 
+#include "common/bit_cast.h"
 #include "protocol/message_types.h"
 #include "protocol/position_grid.h"
 #include "protocol/server_messages.h"
@@ -31,7 +31,7 @@ void Writer::bits_from(std::span<const uint64_t> pool, uint64_t at, uint64_t n) 
   }
 }
 
-void Writer::f32(float v) { u32(std::bit_cast<uint32_t>(v)); }
+void Writer::f32(float v) { u32(bit_cast<uint32_t>(v)); }
 
 void Writer::string(const std::string& s, size_t max, const char* field) {
   if (s.size() > max || s.size() > UINT16_MAX)
@@ -78,7 +78,7 @@ uint64_t Reader::bits(unsigned n, const char* field) {
   return value;
 }
 
-float Reader::f32(const char* field) { return std::bit_cast<float>(u32(field)); }
+float Reader::f32(const char* field) { return bit_cast<float>(u32(field)); }
 
 float Reader::finite_f32(const char* field) {
   const float v = f32(field);

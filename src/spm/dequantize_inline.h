@@ -4,11 +4,11 @@
 // these functions, so every mode decodes the same bits.
 #pragma once
 #include <algorithm>
-#include <bit>
 #include <cmath>
 #include <cstdint>
 #include <numbers>
 
+#include "common/bit_cast.h"
 #include "spm/refine_info.h"
 
 namespace pms::dequantize_detail {
@@ -27,8 +27,8 @@ inline float float_from_half(uint16_t half) {
     const float magnitude = float(mantissa) * 0x1p-24f;
     return sign ? -magnitude : magnitude;
   }
-  if (exponent == 31) return std::bit_cast<float>(sign | 0x7F800000 | mantissa << 13);  // inf / NaN
-  return std::bit_cast<float>(sign | (exponent + 112) << 23 | mantissa << 13);
+  if (exponent == 31) return bit_cast<float>(sign | 0x7F800000 | mantissa << 13);  // inf / NaN
+  return bit_cast<float>(sign | (exponent + 112) << 23 | mantissa << 13);
 }
 
 inline float decode_length(uint16_t half, float scale) { return float_from_half(half) * effective_scale(scale); }

@@ -5,10 +5,11 @@
 // them into an FMA (clang's default -ffp-contract=on contracts only within an expression), and IEEE
 // double arithmetic rounds the same on every platform, wasm included.
 #include <algorithm>
-#include <bit>
 #include <cmath>
 
 #include "spm/position_grid.h"
+
+#include "common/bit_cast.h"
 
 namespace pms {
 namespace {
@@ -24,7 +25,7 @@ bool valid_position_bits(uint32_t bits) { return (bits >= 1 && bits <= kMaxGridB
 
 void quantize_position(const PositionGrid& grid, const float p[3], uint32_t q[3]) {
   if (grid.bits == kRawBits) {
-    for (int i = 0; i < 3; ++i) q[i] = std::bit_cast<uint32_t>(p[i]);
+    for (int i = 0; i < 3; ++i) q[i] = bit_cast<uint32_t>(p[i]);
     return;
   }
   const double steps = grid_steps(grid.bits);
@@ -38,7 +39,7 @@ void quantize_position(const PositionGrid& grid, const float p[3], uint32_t q[3]
 
 void dequantize_position(const PositionGrid& grid, const uint32_t q[3], float p[3]) {
   if (grid.bits == kRawBits) {
-    for (int i = 0; i < 3; ++i) p[i] = std::bit_cast<float>(q[i]);
+    for (int i = 0; i < 3; ++i) p[i] = bit_cast<float>(q[i]);
     return;
   }
   const double steps = grid_steps(grid.bits);

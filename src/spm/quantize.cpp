@@ -5,10 +5,10 @@
 // precision: bounds a little loose are cheap, bits on the wire are not). Cone axis: octahedral encoding
 // (Meyer et al. 2010, "On floating-point normal vectors"), kAxisBits-bit snorm per coordinate.
 #include <algorithm>
-#include <bit>
 #include <cmath>
 #include <numbers>
 
+#include "common/bit_cast.h"
 #include "spm/dequantize_inline.h"
 #include "spm/refine_info.h"
 
@@ -94,7 +94,7 @@ uint16_t encode_cone_angle(double angle) {
 uint16_t half_from_float_up(float value) {
   if (std::isnan(value) || value > kHalfMax) return kHalfInfinity;
   if (!(value > 0)) return 0;
-  const uint32_t bits = std::bit_cast<uint32_t>(value);
+  const uint32_t bits = bit_cast<uint32_t>(value);
   const int exponent = int(bits >> 23) - 127;
   const uint32_t mantissa = bits & 0x7FFFFF;
   if (exponent >= -14) {  // a normal half: keep 10 of the 23 mantissa bits, round the rest up

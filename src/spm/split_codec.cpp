@@ -26,6 +26,7 @@
 #include <memory>
 #include <string>
 
+#include "common/bit_cast.h"
 #include "common/error.h"
 #include "common/huge_pages.h"
 #include "common/parallel.h"
@@ -1010,7 +1011,7 @@ void SplitCodec::serialize(BitWriter& w) const {
   w.bits(max_depth_, 8);
   w.bits(position_bits_, 8);
   for (uint16_t step : steps_) w.bits(step, 16);
-  w.bits(std::bit_cast<uint32_t>(grid_step_), 32);
+  w.bits(bit_cast<uint32_t>(grid_step_), 32);
   w.bits((has_normals_ ? kHasNormals : 0) | (has_colors_ ? kHasColors : 0), 8);
   std::vector<const PrefixCode*> carried_codes;
   for (uint32_t slot = 0; slot < kSlotCount; ++slot)
@@ -1024,7 +1025,7 @@ SplitCodec SplitCodec::deserialize(BitReader& r) {
   codec.max_depth_ = uint32_t(r.bits(8, "max depth"));
   codec.position_bits_ = uint32_t(r.bits(8, "position bits"));
   for (uint16_t& step : codec.steps_) step = uint16_t(r.bits(16, "grid steps"));
-  codec.grid_step_ = std::bit_cast<float>(uint32_t(r.bits(32, "grid step")));
+  codec.grid_step_ = bit_cast<float>(uint32_t(r.bits(32, "grid step")));
   if (!std::isfinite(codec.grid_step_) || codec.grid_step_ < 0) r.fail_field("grid step", "not a finite length >= 0");
   if (codec.root_count_ == 0) r.fail_field("root count", "0");
   if (codec.max_depth_ > 63) r.fail_field("max depth", "above 63");
