@@ -30,10 +30,14 @@ void add(LinkCounters& total, const LinkCounters& more) {
   total.frames_down += more.frames_down;
 }
 
-// Before reconnect attempt `attempt` (from 1): reconnect_delay, then twice that, and so on, capped at 8 s.
+// The longest wait between two reconnect attempts: a server back after a long outage is found soon enough.
+constexpr std::chrono::seconds kMaxReconnectDelay(8);
+
+// Before reconnect attempt `attempt` (from 1): reconnect_delay, then twice that, and so on, up to
+// kMaxReconnectDelay.
 std::chrono::milliseconds backoff(const ClientOptions& options, uint32_t attempt) {
   const auto delay = options.reconnect_delay * (1 << std::min<uint32_t>(attempt - 1, 10));
-  return std::min<std::chrono::milliseconds>(delay, std::chrono::seconds(8));
+  return std::min<std::chrono::milliseconds>(delay, kMaxReconnectDelay);
 }
 
 // Every connection, the first and each reconnect, gets the client's deadlines; the answer timeout is

@@ -34,7 +34,7 @@ struct ClientOptions {
   // The DAG mode's MANAGE-TRAVERSAL parameters (its view and frame are filled per frame).
   protocol::DagView dag = {};
   // A frame that loses a TCP connection reconnects and resumes the session (kim-lee-kobbelt §5.3) up to
-  // this many times, waiting reconnect_delay, then twice that, and so on (capped at 8 s); 0 = fail at once.
+  // this many times, waiting reconnect_delay, then twice that, and so on (capped, docs/cli.md); 0 = fail at once.
   uint32_t reconnect_attempts = 0;
   std::chrono::milliseconds reconnect_delay{500};
   // Free-running: the time a frame spends applying what arrived before it returns; the rest waits in the
