@@ -1,0 +1,57 @@
+// A scripted flight in the page ends on the native viewer's mesh: the same path, τ and mode through
+// `pmstream stream --save-mesh`, compared as vertex and face sets (page_mesh_compare.mjs). The page hands
+// each path camera to the viewer verbatim, one displayed frame each, then settles at the last.
+import { test, before, after } from 'node:test';
+import assert from 'node:assert/strict';
+import { execFileSync } from 'node:child_process';
+import path from 'node:path';
+import { environment, terrainModel, startServer, openBrowser, openPage, settle, screenshot, readJson } from './page_harness.mjs';
+import { readPly, compareMeshes } from './page_mesh_compare.mjs';
+
+const env = environment();
+const TOLERANCE = 1;
+const FRAMES = 24;
+let server, browser, page, errors, model, flight;
+
+before(async () => {
+  const file = terrainModel(env);
+  model = path.basename(file, '.pms');
+  flight = path.join(env.artifacts, 'flight_zoom.json');
+  execFileSync(env.pmstream, ['path', 'zoom', '--model', file, '--frames', String(FRAMES), '-o', flight,
+                              '--width', '800', '--height', '600', '--fovy', '60']);
+  server = await startServer(env, [file]);
+  ({ browser, page, errors } = await openBrowser(env));
+});
+after(async () => {
+  await browser?.close();
+  await server?.stop();
+});
+
+function nativeMesh(mode) {
+  const out = path.join(env.artifacts, `flight_native_${mode}.ply`);
+  const http = mode === 'receiver' || mode === 'multilevel';
+  execFileSync(env.pmstream, ['stream', '--server', http ? server.url : server.tcp, '--mode', mode, '--model', model,
+                              '--path', flight, '--tolerance', String(TOLERANCE), '--save-mesh', out],
+               { stdio: 'ignore', timeout: 120000 });
+  return readPly(out);
+}
+
+async function pageMesh(mode) {
+  await openPage(page, server, `#model=${model}&mode=${mode}&tau=${TOLERANCE}`);
+  for (const c of readJson(flight).frames) {
+    const camera = { eye: c.eye, target: c.target, up: c.up, fovyDeg: c.fovy_deg, width: c.width, height: c.height };
+    await page.evaluate((cam) => { window.pmstream.setCamera(cam); return window.pmstream.nextFrame(); }, camera);
+  }
+  await settle(page);
+  await screenshot(env, page, `flight_${mode}`);
+  return page.evaluate(() => window.pmstream.mesh());
+}
+
+for (const mode of ['sender', 'sender-plain', 'vi', 'dag', 'receiver', 'multilevel']) {
+  test(`a flight in mode ${mode} ends on the native viewer's mesh`, async () => {
+    const browserMesh = await pageMesh(mode);
+    const difference = compareMeshes(browserMesh, nativeMesh(mode));
+    assert.equal(difference, '', `page vs native: ${difference}`);
+    assert.deepEqual(errors, []);
+  });
+}

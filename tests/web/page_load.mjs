@@ -1,0 +1,89 @@
+// The page loads with no console error, draws the base mesh where the model projects, refines when the
+// camera comes close (faces and bytes down rise in the overlay), and its link reopens the same view.
+import { test, before, after } from 'node:test';
+import assert from 'node:assert/strict';
+import { environment, terrainModel, startServer, openBrowser, openPage, settle, overlayNumbers, screenshot } from './page_harness.mjs';
+
+const env = environment();
+let server, browser, page, errors;
+
+before(async () => {
+  server = await startServer(env, [terrainModel(env)]);
+  ({ browser, page, errors } = await openBrowser(env));
+});
+after(async () => {
+  await browser?.close();
+  await server?.stop();
+});
+
+// Pixels that differ from the sky drawn alone: inside the model's projected box, and a fair part of it.
+async function silhouette() {
+  return page.evaluate(() => {
+    const hook = window.pmstream;
+    const sky = hook.pixels(false), shot = hook.pixels(true), box = hook.projectedBox();
+    let inside = 0, outside = 0, boxPixels = 0;
+    for (let y = 0; y < shot.height; ++y) {
+      for (let x = 0; x < shot.width; ++x) {
+        const i = 4 * (y * shot.width + x);
+        const inBox = x >= box.x0 - 1 && x <= box.x1 + 1 && y >= box.y0 - 1 && y <= box.y1 + 1;
+        boxPixels += inBox;
+        const differs = Math.abs(sky.rgba[i] - shot.rgba[i]) + Math.abs(sky.rgba[i + 1] - shot.rgba[i + 1]) +
+          Math.abs(sky.rgba[i + 2] - shot.rgba[i + 2]) > 6;
+        if (differs) inBox ? ++inside : ++outside;
+      }
+    }
+    return { inside, outside, boxPixels, total: shot.width * shot.height };
+  });
+}
+
+test('the page loads with no console error and draws the base mesh where the model projects', async () => {
+  await openPage(page, server);
+  const report = await settle(page);
+  assert.ok(report.faces > 0, 'the base mesh has faces');
+  const s = await silhouette();
+  await screenshot(env, page, 'load_base_mesh');
+  assert.ok(s.inside > 0.02 * s.total, `the model covers a visible part of the picture (${s.inside} of ${s.total})`);
+  assert.ok(s.inside > 0.3 * s.boxPixels, `the model fills its projected box (${s.inside} of ${s.boxPixels})`);
+  assert.equal(s.outside, 0, 'nothing drawn outside the model\'s projection');
+  assert.deepEqual(errors, []);
+});
+
+test('moving the camera close raises faces and bytes down in the overlay', async () => {
+  const far = await overlayNumbers(page);
+  const b = await page.evaluate(() => window.pmstream.bounds());
+  const centre = b.min.map((v, i) => (v + b.max[i]) / 2);
+  const size = Math.max(...b.max.map((v, i) => v - b.min[i]));
+  // Low over the middle of the terrain, looking across it: the near part needs many more faces.
+  await page.evaluate(([c, s]) => window.pmstream.setCamera({
+    eye: [c[0], c[1] + 0.08 * s, c[2] + 0.1 * s], target: [c[0], c[1], c[2] - 0.2 * s], up: [0, 1, 0],
+    fovyDeg: 60, width: 800, height: 600 }), [centre, size]);
+  await settle(page);
+  const near = await overlayNumbers(page);
+  await screenshot(env, page, 'load_close_up');
+  assert.ok(near.faces > far.faces * 1.5, `faces ${far.faces} -> ${near.faces}`);
+  assert.ok(near.down > far.down, `bytes down ${far.down} -> ${near.down}`);
+  assert.deepEqual(errors, []);
+});
+
+test('the link carries model, mode, tolerance and camera', async () => {
+  await page.evaluate(() => window.pmstream.release());
+  await page.selectOption('#mode', 'vi');
+  await page.fill('#tolerance', '2');
+  await page.dispatchEvent('#tolerance', 'change');
+  await page.waitForFunction(() => window.pmstream.ready);
+  await page.waitForFunction(() => location.hash.includes('mode=vi') && location.hash.includes('eye='));
+  const link = await page.evaluate(() => location.href);
+  const before = await page.evaluate(() => window.pmstream.state);
+  const other = await browser.newPage({ viewport: { width: 800, height: 600 } });
+  await other.goto(link);
+  await other.waitForFunction(() => window.pmstream?.ready);
+  const after = await other.evaluate(() => window.pmstream.state);
+  await other.close();
+  assert.equal(after.model, before.model);
+  assert.equal(after.mode, 'vi');
+  assert.equal(after.tolerance, 2);
+  for (const key of ['eye', 'target']) {
+    after[key].forEach((v, i) => assert.ok(Math.abs(v - before[key][i]) <= 1e-4 * Math.max(1, Math.abs(v)), `${key} ${after[key]} vs ${before[key]}`));
+  }
+  assert.deepEqual(errors, []);
+});

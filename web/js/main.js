@@ -1,0 +1,177 @@
+// The page: loads the WASM core, opens a viewer for the model and mode the URL names, and per displayed
+// frame hands the camera to the viewer, uploads what changed and draws.
+import { Vector2 } from 'three';
+import { loadCore, openViewer } from './pmstream.js';
+import { createScene, fitDepthRange } from './scene.js';
+import { MeshGeometry } from './mesh_geometry.js';
+import { CameraControls } from './camera_controls.js';
+import { Overlay, FrameRate } from './overlay.js';
+import { ModePanel } from './mode_panel.js';
+import { FaceIdPass } from './face_id_pass.js';
+import { parseState, formatState } from './url_state.js';
+import { viewerOptions, changeKind } from './viewer_options.js';
+import { installHook } from './page_hook.js';
+
+const URL_EVERY_MS = 500;  // the link follows the camera, without a history write per frame
+
+class App {
+  constructor() {
+    this.state = parseState(location.hash);
+    this.server = this.state.server || location.origin;
+    this.view = createScene(document.getElementById('view'));
+    this.controls = new CameraControls(this.view.camera, this.view.renderer.domElement);
+    this.controls.setStyle(this.state.camera);
+    this.overlay = new Overlay(document.getElementById('overlay'));
+    this.panel = new ModePanel(document.getElementById('panel'), (key, value) => this.change(key, value));
+    this.faceIds = new FaceIdPass(this.view.renderer);
+    this.frameRate = new FrameRate();
+    this.geometry = null;
+    this.reallocations = 0;
+    this.viewer = null;
+    this.report = null;
+    this.bounds = null;
+    this.scripted = null;
+    this.errors = [];
+    this.failed = false;
+    this.lastTime = 0;
+    this.lastUrl = 0;
+    this.view.material.wireframe = this.state.wireframe;
+  }
+
+  async start() {
+    this.overlay.say('loading the core…');
+    this.core = await loadCore('pmstream_core.js');
+    this.models = await this.core.catalogue(this.server);
+    if (!this.models.length) throw new Error(`${this.server} serves no model`);
+    this.panel.setModels(this.models);
+    if (!this.models.some((m) => m.name === this.state.model)) this.state.model = this.models[0].name;
+    this.open();
+    if (this.state.eye && this.state.target) this.controls.set(this.state);
+    window.addEventListener('keydown', (e) => this.key(e));
+    window.addEventListener('hashchange', () => this.followLink());
+    requestAnimationFrame((t) => this.loop(t));
+  }
+
+  open() {
+    this.viewer?.close();
+    if (this.geometry) {
+      this.view.scene.remove(this.geometry.mesh);
+      this.geometry.mesh.geometry.dispose();
+    }
+    this.geometry = new MeshGeometry(this.view.material);
+    this.view.scene.add(this.geometry.mesh);
+    this.bounds = null;
+    this.report = null;
+    this.failed = false;
+    const faces = this.models.find((m) => m.name === this.state.model)?.faces ?? 0;
+    this.viewer = openViewer(this.core, viewerOptions(this.state, this.server, faces, {
+      onError: (message) => this.fail(message),
+      onStatus: (text) => this.overlay.say(text),
+    }));
+    this.panel.show(this.state);
+    this.overlay.say(`opening ${this.state.model} (${this.state.mode})…`);
+  }
+
+  fail(message) {
+    this.errors.push(String(message));
+    this.overlay.say(String(message), true);
+  }
+
+  change(key, value) {
+    this.state[key] = value;
+    if (key === 'camera') this.controls.setStyle(value);
+    if (key === 'wireframe') this.view.material.wireframe = value;
+    if (key === 'model') this.state.eye = this.state.target = null;  // frame the new model
+    if (changeKind(key) === 'reopen') this.open();
+    else this.panel.show(this.state);
+  }
+
+  // A link pasted into the address bar: the camera moves, anything else reopens.
+  followLink() {
+    const next = parseState(location.hash);
+    const reopen = ['model', 'mode', 'tolerance', 'traversal', 'budget', 'maxOps', 'fetch', 'prefetch', 'lod']
+      .some((k) => next[k] !== this.state[k]);
+    this.state = { ...next, model: next.model || this.state.model };
+    if (reopen) this.open();
+    if (next.eye && next.target) this.controls.set(next);
+  }
+
+  key(e) {
+    if (e.target instanceof HTMLInputElement || e.target instanceof HTMLSelectElement) return;
+    if (e.key === 'c') this.change('camera', this.state.camera === 'orbit' ? 'fly' : 'orbit');
+    if (e.key === 'l') this.change('wireframe', !this.state.wireframe);
+  }
+
+  script(camera) {
+    this.scripted = camera;
+    if (camera) this.controls.set({ ...camera, fovy: camera.fovyDeg });
+  }
+
+  cameraForViewer() {
+    if (this.scripted) return this.scripted;
+    const c = this.controls.state();
+    const size = this.view.renderer.getDrawingBufferSize(new Vector2());
+    return { eye: c.eye, target: c.target, up: c.up, fovyDeg: c.fovy, width: size.x, height: size.y };
+  }
+
+  loop(time) {
+    requestAnimationFrame((t) => this.loop(t));
+    const seconds = this.lastTime ? Math.min(0.1, (time - this.lastTime) / 1000) : 0;
+    this.lastTime = time;
+    if (!this.scripted) this.controls.update(seconds);
+    if (!this.failed) this.step();
+    fitDepthRange(this.view.camera, this.bounds);
+    this.view.renderer.render(this.view.scene, this.view.camera);
+    this.frameRate.tick(time);
+    if (this.report) this.overlay.show(this.report, this.frameRate.value());
+    if (time - this.lastUrl > URL_EVERY_MS) this.writeLink(time);
+  }
+
+  // One viewer frame: the camera in, what changed out to the GPU, and the face ids back in when asked.
+  step() {
+    try {
+      this.viewerFrame();
+      this.afterFrame?.(this.report);
+    } catch (error) {
+      this.failed = true;
+      this.fail(error?.message ?? error);
+    }
+  }
+
+  viewerFrame() {
+    this.report = this.viewer.frame(this.cameraForViewer());
+    if (this.report.opening) return;  // no model yet: nothing to draw
+    if (!this.bounds) this.opened();
+    const capacity = this.geometry.vertexCapacity;
+    this.geometry.update(this.viewer.buffers());
+    if (this.geometry.vertexCapacity !== capacity) this.reallocations++;
+    if (this.viewer.wantsFaceIds()) this.faceIdPass();
+  }
+
+  opened() {
+    this.bounds = this.viewer.bounds();
+    this.controls.setSpeed(Math.hypot(...this.bounds.max.map((v, i) => v - this.bounds.min[i])) / 2);
+    if (!this.state.eye && !this.scripted) this.controls.frame(this.bounds);
+    this.overlay.say('');
+  }
+
+  faceIdPass() {
+    const g = this.geometry;
+    fitDepthRange(this.view.camera, this.bounds);
+    const ids = this.faceIds.run(this.view.camera, g.positions(), g.indices(), g.triangleCount);
+    if (ids) this.viewer.setFaceIds(ids.rgba, ids.width, ids.height);
+  }
+
+  writeLink(time) {
+    this.lastUrl = time;
+    if (!this.bounds) return;
+    const c = this.controls.state();
+    Object.assign(this.state, { eye: c.eye, target: c.target, up: c.up, fovy: c.fovy });
+    const link = formatState({ ...this.state, server: this.state.server });
+    if (link !== location.hash) history.replaceState(null, '', link);
+  }
+}
+
+const app = new App();
+installHook(app);
+app.start().catch((error) => app.fail(error?.message ?? String(error)));

@@ -1,0 +1,66 @@
+// The overlay: what the viewer holds and what it cost, per displayed frame, and a progress bar while data
+// arrives. Reads only the frame report (web/js/pmstream.js) and the page's own frame rate.
+
+function bytes(n) {
+  if (n < 1024) return `${n} B`;
+  if (n < 1024 * 1024) return `${(n / 1024).toFixed(1)} KiB`;
+  return `${(n / 1024 / 1024).toFixed(2)} MiB`;
+}
+
+function count(n) {
+  return Number(n ?? 0).toLocaleString('en-US');
+}
+
+// Frames per second over the last second of frames.
+export class FrameRate {
+  constructor() { this.times = []; }
+  tick(now) {
+    this.times.push(now);
+    while (this.times.length > 2 && now - this.times[0] > 1000) this.times.shift();
+  }
+  value() {
+    const n = this.times.length;
+    return n < 2 ? 0 : ((n - 1) * 1000) / (this.times[n - 1] - this.times[0]);
+  }
+}
+
+export class Overlay {
+  constructor(root) {
+    this.stats = root.querySelector('#stats');
+    this.progress = root.querySelector('#progress');
+    this.bar = root.querySelector('#progress-bar');
+    this.status = root.querySelector('#status');
+    this.root = root;
+  }
+
+  show(report, fps) {
+    const lines = [
+      `faces      ${count(report.faces)}`,
+      `vertices   ${count(report.vertices)}`,
+      `${(report.receivedUnit || 'vsplits').padEnd(10)} ${count(report.received)}` +
+        (report.receivedTotal ? ` / ${count(report.receivedTotal)}` : ''),
+      `down       ${bytes(report.downBytes ?? 0)}`,
+      `up         ${bytes(report.upBytes ?? 0)}`,
+      `latency    ${report.latencyMs == null ? '–' : `${report.latencyMs.toFixed(1)} ms`}`,
+      `fps        ${fps.toFixed(1)}`,
+    ];
+    if (report.levels) lines.push(`levels     ${report.levels.shown} shown, ${report.levels.loaded} / ${report.levels.count} in`);
+    this.stats.textContent = lines.join('\n');
+    // The same figures as numbers, for a script reading the page (the browser tests do).
+    Object.assign(this.stats.dataset, {
+      faces: report.faces ?? 0, vertices: report.vertices ?? 0, received: report.received ?? 0,
+      down: report.downBytes ?? 0, up: report.upBytes ?? 0,
+    });
+    // Data is arriving while the view is unsatisfied or anything is in flight.
+    const busy = report.opening || !report.satisfied || report.inFlight > 0;
+    this.progress.hidden = !busy;
+    const fraction = report.receivedTotal ? report.received / report.receivedTotal : 0;
+    this.bar.style.width = `${Math.round(Math.min(1, fraction) * 100)}%`;
+    this.root.dataset.busy = busy ? '1' : '0';
+  }
+
+  say(text, error = false) {
+    this.status.textContent = text;
+    this.status.classList.toggle('error', error);
+  }
+}
