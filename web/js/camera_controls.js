@@ -10,11 +10,20 @@ export class CameraControls {
     this.element = element;
     this.style = 'orbit';
     this.distance = 1;  // the fly camera's target sits this far ahead, so switching back orbits the same point
-    this.orbit = new OrbitControls(camera, element);
-    this.orbit.enableDamping = false;
-    this.orbit.listenToKeyEvents(window);
+    this.orbit = null;
+    this.orbitUp = [0, 1, 0];
+    this.makeOrbit();
     this.fly = null;
     this.speed = 1;
+  }
+
+  // OrbitControls takes its axis from camera.up when made: a new up (a z-up model's link) needs a new one.
+  makeOrbit() {
+    const target = this.orbit?.target.clone();
+    this.orbit?.dispose();
+    this.orbit = new OrbitControls(this.camera, this.element);
+    this.orbit.listenToKeyEvents(window);
+    if (target) this.orbit.target.copy(target);
   }
 
   setStyle(style) {
@@ -33,7 +42,7 @@ export class CameraControls {
       const ahead = new THREE.Vector3();
       this.camera.getWorldDirection(ahead);
       this.orbit.target.copy(this.camera.position).addScaledVector(ahead, this.distance);
-      this.camera.up.set(0, 1, 0);
+      this.camera.up.set(...this.orbitUp);
       this.orbit.enabled = true;
       this.orbit.update();
     }
@@ -60,6 +69,11 @@ export class CameraControls {
   set({ eye, target, up, fovy }) {
     this.camera.position.set(...eye);
     this.camera.up.set(...up);
+    if (up.some((v, i) => v !== this.orbitUp[i])) {
+      this.orbitUp = [...up];
+      this.makeOrbit();
+      this.orbit.enabled = !this.fly;
+    }
     this.camera.fov = fovy;
     this.camera.updateProjectionMatrix();
     this.orbit.target.set(...target);
@@ -82,7 +96,8 @@ export class CameraControls {
       c.getWorldDirection(ahead);
       target = c.position.clone().addScaledVector(ahead, this.distance);
     }
-    const up = new THREE.Vector3(0, 1, 0).applyQuaternion(c.quaternion);
+    // Orbiting keeps the world's up (the link then reopens the same axis); flying rolls the camera itself.
+    const up = this.fly ? new THREE.Vector3(0, 1, 0).applyQuaternion(c.quaternion) : c.up.clone();
     return { eye: c.position.toArray(), target: target.toArray(), up: up.toArray(), fovy: c.fov };
   }
 }

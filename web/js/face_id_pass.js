@@ -1,7 +1,8 @@
 // The receiver mode's face-id pass (cheng-ooi 2008 §4.2: the screen importance of a face is the pixels it
 // covers). Every few frames the current triangles are drawn non-indexed into a small off-screen target,
-// each triangle in one flat colour = its face slot + 1 as a 24-bit number (R high byte, B low byte; 0 is
-// the background), and the pixels read back are handed to the viewer, which counts them per face.
+// each triangle in one flat colour = its face slot + 1 as a 24-bit number (R the low byte, B the high byte,
+// as client/face_id_importance.h reads it; 0 is the background), and the pixels read back are handed to
+// the viewer, which counts them per face.
 import * as THREE from 'three';
 
 const EVERY_FRAMES = 4;  // the ranking changes with the view, not every frame
@@ -88,9 +89,9 @@ export class FaceIdPass {
     for (let t = 0; t < this.capacity; ++t) {
       const id = t + 1;
       for (let k = 0; k < 3; ++k) {
-        ids[9 * t + 3 * k] = (id >> 16) & 255;
+        ids[9 * t + 3 * k] = id & 255;
         ids[9 * t + 3 * k + 1] = (id >> 8) & 255;
-        ids[9 * t + 3 * k + 2] = id & 255;
+        ids[9 * t + 3 * k + 2] = (id >> 16) & 255;
       }
     }
     this.geometry.dispose();
