@@ -3,7 +3,7 @@
 import { test } from 'node:test';
 import assert from 'node:assert/strict';
 import { parseState, formatState, DEFAULTS, MODES } from '../../web/js/url_state.js';
-import { lodBudget } from '../../web/js/mode_panel.js';
+import { lodBudget } from '../../web/js/viewer_options.js';
 
 test('every mode\'s state survives formatState then parseState', () => {
   for (const mode of MODES) {

@@ -8,8 +8,8 @@ import { CameraControls } from './camera_controls.js';
 import { Overlay, FrameRate } from './overlay.js';
 import { ModePanel } from './mode_panel.js';
 import { FaceIdPass } from './face_id_pass.js';
-import { parseState, formatState } from './url_state.js';
-import { viewerOptions, changeKind } from './viewer_options.js';
+import { parseState, formatState, MODES } from './url_state.js';
+import { viewerOptions, changeKind, modesFor } from './viewer_options.js';
 import { installHook } from './page_hook.js';
 
 const URL_EVERY_MS = 500;  // the link follows the camera, without a history write per frame
@@ -53,6 +53,8 @@ class App {
   }
 
   open() {
+    const model = this.models.find((m) => m.name === this.state.model);
+    if (!modesFor(model, MODES).includes(this.state.mode)) this.state.mode = modesFor(model, MODES)[0];
     this.viewer?.close();
     if (this.geometry) {
       this.view.scene.remove(this.geometry.mesh);
@@ -63,8 +65,7 @@ class App {
     this.bounds = null;
     this.report = null;
     this.failed = false;
-    const faces = this.models.find((m) => m.name === this.state.model)?.faces ?? 0;
-    this.viewer = openViewer(this.core, viewerOptions(this.state, this.server, faces, {
+    this.viewer = openViewer(this.core, viewerOptions(this.state, this.server, model?.faces ?? 0, {
       onError: (message) => this.fail(message),
       onStatus: (text) => this.overlay.say(text),
     }));

@@ -1,11 +1,7 @@
 // The side panel: model, mode and each mode's own controls, camera style, wireframe. It holds no state of
 // its own: it shows a state (url_state.js) and reports each change as a new one.
-
-// The LOD slider's 0 is the screen-size rule; above it a triangle budget, logarithmic up to the model's faces.
-export function lodBudget(position, faces) {
-  if (position <= 0 || !faces) return 0;
-  return Math.max(1, Math.round(Math.pow(faces, position / 1000)));
-}
+import { MODES } from './url_state.js';
+import { modesFor, lodBudget } from './viewer_options.js';
 
 export class ModePanel {
   constructor(root, onChange) {
@@ -49,7 +45,10 @@ export class ModePanel {
     i.lod.value = state.lod;
     i.camera.value = state.camera;
     i.wireframe.checked = state.wireframe;
-    this.faces = this.models?.find((m) => m.name === state.model)?.faces ?? 0;
+    const model = this.models?.find((m) => m.name === state.model);
+    this.faces = model?.faces ?? 0;
+    const modes = modesFor(model, MODES);
+    for (const option of i.mode.options) option.disabled = !modes.includes(option.value);
     for (const set of this.root.querySelectorAll('fieldset[data-mode]')) set.hidden = set.dataset.mode !== state.mode;
     this.showLod();
   }

@@ -1,5 +1,10 @@
 // The page's state as openViewer's options (web/js/pmstream.js).
-import { lodBudget } from './mode_panel.js';
+
+// The LOD slider's 0 is the screen-size rule; above it a triangle budget, logarithmic up to the model's faces.
+export function lodBudget(position, faces) {
+  if (position <= 0 || !faces) return 0;
+  return Math.max(1, Math.round(Math.pow(faces, position / 1000)));
+}
 
 export function viewerOptions(state, server, faces, callbacks) {
   return {
@@ -18,4 +23,9 @@ export function viewerOptions(state, server, faces, callbacks) {
 // What a change of the key does: 'view' settings change the picture only; the rest reopen the viewer.
 export function changeKind(key) {
   return key === 'camera' || key === 'wireframe' ? 'view' : 'reopen';
+}
+
+// A multilevel-only model (a `.pml`, catalogue kind "multilevel") has no progressive hierarchy to stream.
+export function modesFor(model, modes) {
+  return model?.kind === 'multilevel' ? ['multilevel'] : modes;
 }
