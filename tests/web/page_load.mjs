@@ -65,8 +65,29 @@ test('moving the camera close raises faces and bytes down in the overlay', async
   assert.deepEqual(errors, []);
 });
 
-test('the link carries model, mode, tolerance and camera', async () => {
+test('a camera move uploads the changed ranges, not the whole mesh', async () => {
+  const { before, frames } = await page.evaluate(async () => {
+    const hook = window.pmstream, start = hook.camera, before = hook.uploads, frames = [];
+    for (let i = 1; i <= 8; ++i) {
+      hook.setCamera({ ...start, eye: start.eye.map((v, k) => v + (start.target[k] - v) * 0.02 * i) });
+      await hook.nextFrame();
+      frames.push(hook.uploads);
+    }
+    return { before, frames };
+  });
+  // Only a frame that outgrew the arrays uploads them whole.
+  let reallocations = before.reallocations;
+  for (const f of frames) {
+    if (f.reallocations === reallocations) {
+      assert.ok(f.vertices < f.vertexSlots && f.triangles < f.triangleSlots, `uploads ${JSON.stringify(f)}`);
+    }
+    reallocations = f.reallocations;
+  }
+  assert.ok(frames.some((f) => f.vertices > 0 || f.triangles > 0), `the move changed nothing: ${JSON.stringify(frames)}`);
   await page.evaluate(() => window.pmstream.release());
+  assert.deepEqual(errors, []);
+});
+test('the link carries model, mode, tolerance and camera', async () => {
   await page.selectOption('#mode', 'vi');
   await page.fill('#tolerance', '2');
   await page.dispatchEvent('#tolerance', 'change');

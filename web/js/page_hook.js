@@ -11,8 +11,11 @@ export function installHook(app) {
     get errors() { return [...app.errors]; },
     get uploads() {
       const g = app.geometry;
-      return { vertices: g.uploadedVertices, triangles: g.uploadedTriangles, reallocations: app.reallocations };
+      return { vertices: g.uploadedVertices, triangles: g.uploadedTriangles, reallocations: app.reallocations,
+               vertexSlots: g.vertexCount, triangleSlots: g.triangleCount };
     },
+    // The camera the viewer was last handed.
+    get camera() { return app.cameraForViewer(); },
     // cam: {eye, target, up, fovyDeg, width, height}
     setCamera(cam) { app.script(cam); },
     release() { app.script(null); },
