@@ -5,13 +5,13 @@ import { test, before, after } from 'node:test';
 import assert from 'node:assert/strict';
 import { execFileSync } from 'node:child_process';
 import path from 'node:path';
-import { environment, terrainModel, startServer, openBrowser, openPage, settle, screenshot, readJson } from './page_harness.mjs';
+import { environment, terrainModel, startServer, openBrowser, newPage, openPage, settle, screenshot, readJson } from './page_harness.mjs';
 import { readPly, compareMeshes } from './page_mesh_compare.mjs';
 
 const env = environment();
 const TOLERANCE = 1;
 const FRAMES = 24;
-let server, browser, page, errors, model, flight;
+let server, browser, model, flight;
 
 before(async () => {
   const file = terrainModel(env);
@@ -20,7 +20,7 @@ before(async () => {
   execFileSync(env.pmstream, ['path', 'zoom', '--model', file, '--frames', String(FRAMES), '-o', flight,
                               '--width', '800', '--height', '600', '--fovy', '60']);
   server = await startServer(env, [file]);
-  ({ browser, page, errors } = await openBrowser(env));
+  ({ browser } = await openBrowser(env));
 });
 after(async () => {
   await browser?.close();
@@ -36,20 +36,25 @@ function nativeMesh(mode) {
   return readPly(out);
 }
 
+// A page of its own per flight: the first path camera is the viewer's first view.
 async function pageMesh(mode) {
-  await openPage(page, server, `#model=${model}&mode=${mode}&tau=${TOLERANCE}`);
-  for (const c of readJson(flight).frames) {
-    const camera = { eye: c.eye, target: c.target, up: c.up, fovyDeg: c.fovy_deg, width: c.width, height: c.height };
+  const { page, errors } = await newPage(browser);
+  const cameras = readJson(flight).frames.map((c) => (
+    { eye: c.eye, target: c.target, up: c.up, fovyDeg: c.fovy_deg, width: c.width, height: c.height }));
+  await openPage(page, server, `#model=${model}&mode=${mode}&tau=${TOLERANCE}`, cameras[0]);
+  for (const camera of cameras) {
     await page.evaluate((cam) => { window.pmstream.setCamera(cam); return window.pmstream.nextFrame(); }, camera);
   }
   await settle(page);
   await screenshot(env, page, `flight_${mode}`);
-  return page.evaluate(() => window.pmstream.mesh());
+  const mesh = await page.evaluate(() => window.pmstream.mesh());
+  await page.close();
+  return { mesh, errors };
 }
 
 for (const mode of ['sender', 'sender-plain', 'vi', 'dag', 'receiver', 'multilevel']) {
   test(`a flight in mode ${mode} ends on the native viewer's mesh`, async () => {
-    const browserMesh = await pageMesh(mode);
+    const { mesh: browserMesh, errors } = await pageMesh(mode);
     const difference = compareMeshes(browserMesh, nativeMesh(mode));
     assert.equal(difference, '', `page vs native: ${difference}`);
     assert.deepEqual(errors, []);

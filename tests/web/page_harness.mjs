@@ -88,16 +88,23 @@ export async function openBrowser(env, { width = 800, height = 600 } = {}) {
     executablePath: CHROMIUM, headless: true,
     args: ['--use-angle=swiftshader', '--enable-unsafe-swiftshader', '--ignore-gpu-blocklist'],
   });
+  return { browser, ...await newPage(browser, { width, height }) };
+}
+
+// A page of its own in `browser`, its console errors and page errors collected in `errors`.
+export async function newPage(browser, { width = 800, height = 600 } = {}) {
   const page = await browser.newPage({ viewport: { width, height } });
   const errors = [];
   page.on('console', (m) => { if (m.type() === 'error') errors.push(`console: ${m.text()}`); });
   page.on('pageerror', (e) => errors.push(`page: ${e.message}`));
   page.setDefaultTimeout(DEADLINE_MS);
-  return { browser, page, errors };
+  return { page, errors };
 }
 
-// The page for a server and a state (url_state.js), opened until the model's base mesh is in.
-export async function openPage(page, server, hash = '') {
+// The page for a server and a state (url_state.js), opened until the model's base mesh is in; with
+// `camera`, the viewer's first view is that one ({eye, target, up, fovyDeg, width, height}).
+export async function openPage(page, server, hash = '', camera = null) {
+  if (camera) await page.addInitScript((c) => { window.pmstreamInitialCamera = c; }, camera);
   await page.goto('about:blank');  // a new document: a hash change alone would keep the page
   await page.goto(`${server.url}/${hash}`);
   await page.waitForFunction(() => window.pmstream?.ready, null, { timeout: DEADLINE_MS });

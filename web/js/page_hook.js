@@ -66,4 +66,7 @@ export function installHook(app) {
     for (const resolve of waiting.splice(0)) resolve(report);
   };
   window.pmstream = hook;
+  // A camera a script set before the page's own code ran (playwright's addInitScript): the viewer opens
+  // with it, so a scripted flight has no other view in its history.
+  if (window.pmstreamInitialCamera) app.script(window.pmstreamInitialCamera);
 }
