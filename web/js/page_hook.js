@@ -41,7 +41,7 @@ export function installHook(app) {
       gl.readPixels(0, 0, gl.drawingBufferWidth, gl.drawingBufferHeight, gl.RGBA, gl.UNSIGNED_BYTE, out);
       return { width: gl.drawingBufferWidth, height: gl.drawingBufferHeight, rgba: out };
     },
-    // The pixel box (bottom-up rows) the mesh's vertices project into, clamped to the canvas.
+    // The pixel box (bottom-up rows) the mesh's vertices in front of the camera project into (may exceed the canvas).
     projectedBox() {
       const { camera, renderer } = app.view;
       const gl = renderer.getContext();
