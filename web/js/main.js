@@ -143,8 +143,10 @@ class App {
     this.report = this.viewer.frame(this.cameraForViewer());
     if (this.report.opening) return;  // no model yet: nothing to draw
     if (!this.bounds) this.opened();
+    const buffers = this.viewer.buffers();
+    if (!buffers?.positions) return;  // the viewer failed: onError has said why
     const capacity = this.geometry.vertexCapacity;
-    this.geometry.update(this.viewer.buffers());
+    this.geometry.update(buffers);
     if (this.geometry.vertexCapacity !== capacity) this.reallocations++;
     if (this.viewer.wantsFaceIds()) this.faceIdPass();
   }
