@@ -63,6 +63,8 @@ std::optional<HttpAnswer> ExternalHttpTransport::take() {
   return std::move(front.answer);
 }
 
-void ExternalHttpTransport::wait() { fail("http", "this transport cannot wait: its answers are delivered from outside"); }
+void ExternalHttpTransport::wait() {
+  fail("http", "this transport cannot wait: its answers are delivered from outside");
+}
 
 }  // namespace pms::client

@@ -59,8 +59,7 @@ HttpAnswer HttpTransport::get(const std::string& target) {
   return out;
 }
 
-PendingGets::PendingGets(std::vector<std::string> targets)
-    : targets_(std::move(targets)), answers_(targets_.size()) {}
+PendingGets::PendingGets(std::vector<std::string> targets) : targets_(std::move(targets)), answers_(targets_.size()) {}
 
 bool PendingGets::advance(HttpTransport& http) {
   while (posted_ < targets_.size() && http.room() > 0) http.post(targets_[posted_++]);

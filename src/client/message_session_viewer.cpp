@@ -29,7 +29,9 @@ protocol::DagView request_of(const ClientOptions& options) {
 }  // namespace
 
 MessageSessionViewer::MessageSessionViewer(const ClientOptions& options, const std::string& model)
-    : options_(options), model_(model), mode_(make_client_mode(options.mode)),
+    : options_(options),
+      model_(model),
+      mode_(make_client_mode(options.mode)),
       session_(prepared_session(options, *mode_)) {
   free_ = std::make_unique<FreeRunningSession>(session_, *mode_, request_of(options));
   free_->restart();  // nothing is asked before BASE
@@ -108,9 +110,7 @@ bool MessageSessionViewer::settled() const {
          !in_motion();
 }
 
-Mesh MessageSessionViewer::mesh() const {
-  return session_.has_model() ? current_mesh(session_.refinement()) : Mesh{};
-}
+Mesh MessageSessionViewer::mesh() const { return session_.has_model() ? current_mesh(session_.refinement()) : Mesh{}; }
 
 nlohmann::json MessageSessionViewer::totals() const {
   return {{"total_up_payload_bytes", counters_.payload_up()}, {"total_down_payload_bytes", counters_.payload_down()}};

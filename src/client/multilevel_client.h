@@ -85,7 +85,8 @@ class MultilevelClient {
 
  private:
   std::vector<std::string> open_targets(const std::string& model);
-  void opened(const std::string& model, const std::vector<std::string>& targets, const std::vector<HttpAnswer>& answers);
+  void opened(const std::string& model, const std::vector<std::string>& targets,
+              const std::vector<HttpAnswer>& answers);
   void read_entry(const std::string& model, const std::string& target, const HttpAnswer& answer);
   void add(const std::string& target, const HttpAnswer& answer);
   uint32_t load_to(uint32_t level);

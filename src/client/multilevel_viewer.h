@@ -29,7 +29,9 @@ class MultilevelViewer : public Viewer {
   uint64_t down_bytes() const override { return client_.counters().bytes_down; }
   nlohmann::json totals() const override;
   // A LOD switch's geomorph: the level shown is between two.
-  bool in_motion() const override { return client_.opened() && client_.lod().level() != std::floor(client_.lod().level()); }
+  bool in_motion() const override {
+    return client_.opened() && client_.lod().level() != std::floor(client_.lod().level());
+  }
 
   MultilevelClient& client() { return client_; }
 

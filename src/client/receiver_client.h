@@ -133,7 +133,8 @@ class ReceiverClient {
   };
   nlohmann::json catalogue();
   std::vector<std::string> open_targets(const std::string& model) const;
-  void opened(const std::string& model, const std::vector<std::string>& targets, const std::vector<HttpAnswer>& answers);
+  void opened(const std::string& model, const std::vector<std::string>& targets,
+              const std::vector<HttpAnswer>& answers);
   ReceiverFrame begin(const Camera& camera);
   void finish(ReceiverFrame& out, const HttpCounters& before, const ReceiverTotals& totals_before);
   ReceiverFrame run(const Camera& camera, bool settling);

@@ -15,8 +15,8 @@ namespace pms {
 namespace {
 
 constexpr double kTwoOverPi = 6.36619772367581382433e-01;
-constexpr double kPio2Hi = 1.57079632673412561417e+00;   // the first 33 bits of pi/2
-constexpr double kPio2Lo = 6.07710050650619224932e-11;   // pi/2 - kPio2Hi
+constexpr double kPio2Hi = 1.57079632673412561417e+00;  // the first 33 bits of pi/2
+constexpr double kPio2Lo = 6.07710050650619224932e-11;  // pi/2 - kPio2Hi
 
 // x = r + k pi/2 with |r| <= ~pi/4; k mod 4 picks the quadrant.
 struct Reduced {
@@ -33,29 +33,34 @@ Reduced reduce(double x) {
 
 double kernel_sin(double x) {
   const double z = x * x;
-  const double r = 8.33333333332248946124e-03 +
-                   z * (-1.98412698298579493134e-04 +
-                        z * (2.75573137070700676789e-06 + z * (-2.50507602534068634195e-08 + z * 1.58969099521155010221e-10)));
+  const double r =
+      8.33333333332248946124e-03 +
+      z * (-1.98412698298579493134e-04 +
+           z * (2.75573137070700676789e-06 + z * (-2.50507602534068634195e-08 + z * 1.58969099521155010221e-10)));
   return x + z * x * (-1.66666666666666324348e-01 + z * r);
 }
 
 double kernel_cos(double x) {
   const double z = x * x;
-  const double r = 4.16666666666666019037e-02 +
-                   z * (-1.38888888888741095749e-03 +
-                        z * (2.48015872894767294178e-05 +
-                             z * (-2.75573143513906633035e-07 +
-                                  z * (2.08757232129817482790e-09 + z * -1.13596475577881948265e-11))));
+  const double r =
+      4.16666666666666019037e-02 +
+      z * (-1.38888888888741095749e-03 +
+           z * (2.48015872894767294178e-05 + z * (-2.75573143513906633035e-07 +
+                                                  z * (2.08757232129817482790e-09 + z * -1.13596475577881948265e-11))));
   return (1.0 - 0.5 * z) + z * z * r;
 }
 
 // sin(x) for quadrant 0..3 of the reduced argument, or cos(x) with the quadrant one further on.
 double sin_of(const Reduced& a) {
   switch (a.quadrant & 3) {
-    case 0: return kernel_sin(a.r);
-    case 1: return kernel_cos(a.r);
-    case 2: return -kernel_sin(a.r);
-    default: return -kernel_cos(a.r);
+    case 0:
+      return kernel_sin(a.r);
+    case 1:
+      return kernel_cos(a.r);
+    case 2:
+      return -kernel_sin(a.r);
+    default:
+      return -kernel_cos(a.r);
   }
 }
 

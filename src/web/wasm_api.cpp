@@ -39,9 +39,9 @@ using nlohmann::json;
 // One page viewer: the Viewer and, for its mode, the pieces JS talks to (owned by the viewer).
 struct PageViewer {
   std::unique_ptr<client::Viewer> viewer;
-  client::MessageSessionViewer* session = nullptr;    // sender, sender-plain, vi, dag
-  client::ExternalHttpTransport* http = nullptr;      // receiver, multilevel
-  client::FaceIdImportance* face_ids = nullptr;       // receiver
+  client::MessageSessionViewer* session = nullptr;  // sender, sender-plain, vi, dag
+  client::ExternalHttpTransport* http = nullptr;    // receiver, multilevel
+  client::FaceIdImportance* face_ids = nullptr;     // receiver
   client::ReceiverViewer* receiver = nullptr;
   client::ViewerReport last;
   std::vector<uint8_t> outgoing;  // frames to send, concatenated (each carries its length)
@@ -82,7 +82,8 @@ PageViewer& viewer_of(int handle) {
 protocol::DagView dag_request(const json& dag, float tolerance) {
   protocol::DagView request;
   const std::string traversal = dag.value("traversal", "priority");
-  if (traversal == "priority" || traversal == "free" || traversal == "budget") request.traversal = DagTraversal::priority;
+  if (traversal == "priority" || traversal == "free" || traversal == "budget")
+    request.traversal = DagTraversal::priority;
   else if (traversal == "linear") request.traversal = DagTraversal::linear;
   else if (traversal == "constant") request.traversal = DagTraversal::constant_time;
   else fail("dag.traversal", "'" + traversal + "': priority, linear or constant");

@@ -141,7 +141,9 @@ void expect_session_mode_settles_as_lock_step(StreamMode mode) {
 TEST(BrowserViewers, SenderOverMessagesNeverWaitsAndSettlesAsLockStep) {
   expect_session_mode_settles_as_lock_step(StreamMode::sender_driven);
 }
-TEST(BrowserViewers, SenderPlainOverMessagesNeverWaits) { expect_session_mode_settles_as_lock_step(StreamMode::sender_plain); }
+TEST(BrowserViewers, SenderPlainOverMessagesNeverWaits) {
+  expect_session_mode_settles_as_lock_step(StreamMode::sender_plain);
+}
 TEST(BrowserViewers, ViewIndependentOverMessagesNeverWaits) {
   expect_session_mode_settles_as_lock_step(StreamMode::view_independent);
 }

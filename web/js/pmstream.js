@@ -254,8 +254,10 @@ class Viewer {
   lost(ws, reason) {
     if (this.closed || this.failed || (ws && this.ws !== ws)) return;
     this.ws = null;
-    if (this.wsOpen) this.m._pms_session_disconnected(this.handle);
+    const wasOpen = this.wsOpen;
     this.wsOpen = false;
+    // The frames that came whole are applied first: one may be the server's ERROR, which is final.
+    if (wasOpen && !this.m._pms_session_disconnected(this.handle)) return this.fail(this.core.error());
     if (++this.attempts > RECONNECT_ATTEMPTS) return this.fail(`server: connection lost (${reason})`);
     const delay = backoff(this.attempts);
     this.onStatus(`connection lost (${reason}): reconnecting in ${Math.round(delay)} ms`);
