@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # The layering rule of docs/architecture.md: a file in src/LAYER/ includes only its own layer and the
-# layers below it. Layers of the same rank (render and protocol, server and client) are siblings and
+# layers below it. Layers of the same rank (render and protocol, server and client, apps and web) are siblings and
 # never include each other. Prints every include that goes up or sideways and exits 1 if there is one.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -10,7 +10,7 @@ declare -A rank=(
   [builder]=3 [dag]=3 [multilevel]=3
   [render]=4 [protocol]=4
   [server]=5 [client]=5
-  [apps]=6
+  [apps]=6 [web]=6
   [bench]=7
 )
 

@@ -9,6 +9,7 @@
 #include <cstdint>
 #include <functional>
 #include <memory>
+#include <string>
 #include <vector>
 
 #include "client/client_session.h"
@@ -89,5 +90,9 @@ class ClientMode {
 };
 
 std::unique_ptr<ClientMode> make_client_mode(protocol::StreamMode mode);
+
+// OPEN for `model` in `mode`; with the session holding a model already (a lost connection's), the front to
+// resume from (kim-lee-kobbelt §5.3), so the server rebuilds its state from it.
+protocol::Open open_request(const std::string& model, const ClientMode& mode, const ClientSession& session);
 
 }  // namespace pms::client

@@ -23,4 +23,10 @@ std::unique_ptr<ClientMode> make_client_mode(protocol::StreamMode mode) {
   fail("client", "a streaming mode this client does not know");
 }
 
+protocol::Open open_request(const std::string& model, const ClientMode& mode, const ClientSession& session) {
+  protocol::Open message{model, {}, mode.wire_mode()};
+  if (session.has_model()) message.resume = mode.resume_front(session);
+  return message;
+}
+
 }  // namespace pms::client

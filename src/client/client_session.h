@@ -48,6 +48,7 @@ class ClientSession {
   VertexHierarchy& hierarchy() { return *hierarchy_; }
   SelectiveMesh& mesh() { return *mesh_; }
   SelectiveRefinement& refinement() { return *refinement_; }
+  const SelectiveRefinement& refinement() const { return *refinement_; }
   ViewParams view_params(const Camera& camera) const;
   // The leaves of the partial hierarchy: what a resumed session sends in OPEN.
   std::vector<VertexId> known_leaves() const;

@@ -59,4 +59,16 @@ HttpAnswer HttpTransport::get(const std::string& target) {
   return out;
 }
 
+PendingGets::PendingGets(std::vector<std::string> targets) : targets_(std::move(targets)), answers_(targets_.size()) {}
+
+bool PendingGets::advance(HttpTransport& http) {
+  while (posted_ < targets_.size() && http.room() > 0) http.post(targets_[posted_++]);
+  http.poll();
+  while (answered_ < posted_)
+    if (std::optional<HttpAnswer> answer = http.take()) answers_[answered_++] = std::move(*answer);
+    else break;
+  while (posted_ < targets_.size() && http.room() > 0) http.post(targets_[posted_++]);
+  return answered_ == targets_.size();
+}
+
 }  // namespace pms::client

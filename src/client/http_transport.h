@@ -77,4 +77,20 @@ class HttpTransport {
   HttpAnswer get(const std::string& target);
 };
 
+// GETs for a client that must not wait (the browser's event-driven open): posted as the transport has room,
+// their answers collected as they arrive, in target order. Nothing else may be pending on the transport.
+class PendingGets {
+ public:
+  explicit PendingGets(std::vector<std::string> targets);
+  // Posts what fits, takes what has arrived, without waiting; true once every answer is in.
+  bool advance(HttpTransport& http);
+  const std::vector<std::string>& targets() const { return targets_; }
+  std::vector<HttpAnswer>& answers() { return answers_; }
+
+ private:
+  std::vector<std::string> targets_;
+  std::vector<HttpAnswer> answers_;
+  size_t posted_ = 0, answered_ = 0;
+};
+
 }  // namespace pms::client

@@ -6,10 +6,12 @@
 #pragma once
 #include <cstdint>
 #include <functional>
+#include <span>
 #include <vector>
 
 #include "common/camera.h"
 #include "spm/selective_mesh.h"
+#include "spm/vertex_id.h"
 
 namespace pms::client {
 
@@ -20,6 +22,15 @@ struct VertexArea {
 
 // Whether a front vertex may be split: the caller knows which leaves the model refines further.
 using CanSplit = std::function<bool(uint32_t slot)>;
+
+// The ranking every source ends with, from the pixels it counted per face: each face's pixels count for its
+// three corners (`corners`, 3 per face; a face whose first corner is kNone is free and skipped), a corner
+// being vertex `slot_of[corner]`, or the slot itself when `slot_of` is empty; then the leaves of `mesh`'s
+// hierarchy that pass `can_split`, most pixels first (ties: lower slot first). `vertex_pixels` is working
+// space kept between calls.
+void rank_by_area(std::span<const uint64_t> face_pixels, std::span<const uint32_t> corners,
+                  std::span<const uint32_t> slot_of, const SelectiveMesh& mesh, const CanSplit& can_split,
+                  std::vector<uint64_t>& vertex_pixels, std::vector<VertexArea>& ranked);
 
 class ImportanceSource {
  public:

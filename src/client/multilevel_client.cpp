@@ -110,15 +110,40 @@ void MultilevelClient::read_entry(const std::string& model, const std::string& t
   radius_ = radius->get<float>();
 }
 
-void MultilevelClient::open(const std::string& model) {
-  if (loader_) fail("open", "this client already holds '" + model_ + "'");
+// The entry and the head (free-running: and the coarsest level) in one round trip.
+std::vector<std::string> MultilevelClient::open_targets(const std::string& model) {
+  if (loader_ || opening_) fail("open", "this client already holds '" + model_ + "'");
   opened_ = Clock::now();
   const std::string prefix = model_prefix(model, options_.compressed);
-  const std::string target = prefix + "head";
-  std::vector<std::string> targets = {protocol::model_path(model) + "/multilevel", target};
+  std::vector<std::string> targets = {protocol::model_path(model) + "/multilevel", prefix + "head"};
   if (options_.free_running) targets.push_back(coarsest_target(prefix));
+  return targets;
+}
+
+void MultilevelClient::open(const std::string& model) {
+  const std::vector<std::string> targets = open_targets(model);
   std::vector<HttpAnswer> answers(targets.size());
   http_->get_all(targets, [&](size_t index, HttpAnswer&& answer) { answers[index] = std::move(answer); });
+  opened(model, targets, answers);
+}
+
+void MultilevelClient::start_open(const std::string& model) {
+  opening_ = std::make_unique<PendingGets>(open_targets(model));
+  model_ = model;
+}
+
+bool MultilevelClient::poll_open() {
+  if (loader_) return true;
+  if (!opening_) fail("open", "no model being opened");
+  if (!opening_->advance(*http_)) return false;
+  const std::unique_ptr<PendingGets> done = std::move(opening_);
+  opened(model_, done->targets(), done->answers());
+  return true;
+}
+
+void MultilevelClient::opened(const std::string& model, const std::vector<std::string>& targets,
+                              const std::vector<HttpAnswer>& answers) {
+  const std::string& target = targets[1];
   read_entry(model, targets[0], answers[0]);
   const HttpAnswer& head = answers[1];
   if (head.status != 200) refused(target, head);

@@ -65,7 +65,12 @@ class MultilevelClient {
   std::vector<std::string> list();  // GET /models: the multilevel models' names
   // GET /models/{m}/multilevel and /models/{m}/head pipelined, and free-running the coarsest level too.
   void open(const std::string& model);
+  // The same without waiting (the browser's): start_open() posts the GETs, each poll_open() takes what has
+  // arrived, until it returns true: the model is open. frame() is for after that.
+  void start_open(const std::string& model);
+  bool poll_open();
 
+  bool opened() const { return loader_.has_value(); }
   MultilevelFrame frame(const Camera& camera);
   void settle(const Camera& camera);  // the last camera's LOD loaded and reached, no geomorph left
 
@@ -79,6 +84,9 @@ class MultilevelClient {
   const HttpCounters& counters() const { return http_->counters(); }
 
  private:
+  std::vector<std::string> open_targets(const std::string& model);
+  void opened(const std::string& model, const std::vector<std::string>& targets,
+              const std::vector<HttpAnswer>& answers);
   void read_entry(const std::string& model, const std::string& target, const HttpAnswer& answer);
   void add(const std::string& target, const HttpAnswer& answer);
   uint32_t load_to(uint32_t level);
@@ -91,6 +99,7 @@ class MultilevelClient {
   MultilevelOptions options_;
   std::unique_ptr<HttpTransport> http_;
   std::string model_;
+  std::unique_ptr<PendingGets> opening_;  // start_open()'s GETs, until poll_open() has them all
   std::chrono::steady_clock::time_point opened_;
   std::vector<uint32_t> lod_triangles_;  // per level (0 finest), from the catalogue
   std::vector<float> level_errors_;

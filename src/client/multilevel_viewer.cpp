@@ -1,7 +1,6 @@
 #include "client/multilevel_viewer.h"
 
 namespace pms::client {
-namespace {
 
 // Free-running: the levels load in the background and no frame waits (MultilevelOptions::free_running).
 MultilevelOptions paced(MultilevelOptions options, Pacing pacing) {
@@ -9,19 +8,19 @@ MultilevelOptions paced(MultilevelOptions options, Pacing pacing) {
   return options;
 }
 
-}  // namespace
-
-MultilevelViewer::MultilevelViewer(const std::string& server, const MultilevelOptions& options, Pacing pacing,
+MultilevelViewer::MultilevelViewer(std::unique_ptr<HttpTransport> http, const MultilevelOptions& options,
                                    const std::string& model)
-    : client_(parse_http_url(server), paced(options, pacing)), options_(paced(options, pacing)) {
-  client_.open(model);
+    : client_(std::move(http), paced(options, Pacing::free_running)), options_(paced(options, Pacing::free_running)) {
+  client_.start_open(model);
 }
 
 ViewerReport MultilevelViewer::frame(const Camera& camera) {
+  if (!client_.poll_open()) return opening_report();
   const MultilevelFrame r = client_.frame(camera);
   ViewerReport report;
   report.frame = r.report.frame;
   report.faces = r.report.faces;
+  report.vertices = client_.lod().vertex_count();
   report.received = r.report.vsplits;  // levels
   report.up_bytes = r.report.up_bytes;
   report.down_bytes = r.report.down_bytes;
@@ -50,7 +49,7 @@ nlohmann::json MultilevelViewer::totals() const {
                         {"http_connections", c.connections},
                         {"rule", options_.budget ? "budget" : "screen"},
                         {"form", options_.compressed ? "compressed" : "plain"},
-                        {"levels", client_.loader().level_count()},
+                        {"levels", client_.opened() ? client_.loader().level_count() : 0},
                         {"levels_received", client_.arrivals().size()},
                         {"arrivals", arrivals}};
   if (!client_.arrivals().empty()) {

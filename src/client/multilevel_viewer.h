@@ -2,6 +2,7 @@
 // (MultilevelOptions::free_running) or in lock-step as the pacing says. What it receives is levels, not
 // splits (received_unit()).
 #pragma once
+#include <cmath>
 #include <string>
 
 #include "client/multilevel_client.h"
@@ -14,16 +15,23 @@ class MultilevelViewer : public Viewer {
   // `server` is http://HOST:PORT[/prefix]; pms::Error naming --server otherwise.
   MultilevelViewer(const std::string& server, const MultilevelOptions& options, Pacing pacing,
                    const std::string& model);
+  // The browser's: free-running over `http`; the model opens as answers come, and frames report `opening`
+  // until it has. settle() needs a transport that can wait.
+  MultilevelViewer(std::unique_ptr<HttpTransport> http, const MultilevelOptions& options, const std::string& model);
 
   ViewerReport frame(const Camera& camera) override;
   void settle(const Camera& camera) override { client_.settle(camera); }
-  Mesh mesh() const override { return client_.current_mesh(); }
+  Mesh mesh() const override { return client_.opened() ? client_.current_mesh() : Mesh{}; }
   ViewParams view_params(const Camera& camera) const override { return client_.view_params(camera); }
   const char* received_unit() const override { return "levels"; }
   uint64_t received_total() const override { return client_.arrivals().size(); }
   uint64_t up_bytes() const override { return client_.counters().bytes_up; }
   uint64_t down_bytes() const override { return client_.counters().bytes_down; }
   nlohmann::json totals() const override;
+  // A LOD switch's geomorph: the level shown is between two.
+  bool in_motion() const override {
+    return client_.opened() && client_.lod().level() != std::floor(client_.lod().level());
+  }
 
   MultilevelClient& client() { return client_; }
 
@@ -31,5 +39,8 @@ class MultilevelViewer : public Viewer {
   MultilevelClient client_;
   MultilevelOptions options_;
 };
+
+// `options` with free_running set as `pacing` says.
+MultilevelOptions paced(MultilevelOptions options, Pacing pacing);
 
 }  // namespace pms::client

@@ -1,4 +1,4 @@
-// The HTTP clients as the native build makes them: over an HttpConnection (Boost.Beast) and, for the
+// The HTTP clients and their viewers as the native build makes them: over an HttpConnection (Boost.Beast) and, for the
 // receiver-driven one, ranking with the software renderer. Apart from the clients' own files, which the
 // browser build compiles without asio or the renderer (CMakeLists.txt, pms_browser_core).
 #include <memory>
@@ -6,7 +6,9 @@
 
 #include "client/http_connection.h"
 #include "client/multilevel_client.h"
+#include "client/multilevel_viewer.h"
 #include "client/receiver_client.h"
+#include "client/receiver_viewer.h"
 #include "client/screen_importance.h"
 
 namespace pms::client {
@@ -20,5 +22,17 @@ ReceiverClient::ReceiverClient(const HttpUrl& server, const ReceiverOptions& opt
 
 MultilevelClient::MultilevelClient(const HttpUrl& server, const MultilevelOptions& options)
     : MultilevelClient(std::make_unique<HttpConnection>(server, options.http), options) {}
+
+ReceiverViewer::ReceiverViewer(const std::string& server, const ReceiverOptions& options, Pacing pacing,
+                               const std::string& model)
+    : client_(parse_http_url(server), paced(options, pacing)), options_(paced(options, pacing)) {
+  client_.open(model);
+}
+
+MultilevelViewer::MultilevelViewer(const std::string& server, const MultilevelOptions& options, Pacing pacing,
+                                   const std::string& model)
+    : client_(parse_http_url(server), paced(options, pacing)), options_(paced(options, pacing)) {
+  client_.open(model);
+}
 
 }  // namespace pms::client

@@ -9,8 +9,6 @@
 
 namespace pms::client {
 
-std::string viewer_mode_names() { return protocol::mode_names() + ", receiver, multilevel"; }
-
 std::unique_ptr<Viewer> open_viewer(const ViewerOptions& options, const std::string& model) {
   if (options.mode == "receiver")
     return std::make_unique<ReceiverViewer>(options.server, options.receiver, options.pacing, model);

@@ -100,14 +100,37 @@ std::vector<std::string> ReceiverClient::list() {
   return names;
 }
 
+// The base, the catalogue and the code tables are named by the model alone: one round trip for the three.
+std::vector<std::string> ReceiverClient::open_targets(const std::string& model) const {
+  if (session_.has_model() || opening_) fail("open", "this client already holds '" + model_ + "'");
+  return {protocol::model_path(model) + "/base", "/models", protocol::model_path(model) + "/codec"};
+}
+
 void ReceiverClient::open(const std::string& model) {
-  if (session_.has_model()) fail("open", "this client already holds '" + model_ + "'");
-  // The base, the catalogue and the code tables are named by the model alone: one round trip for the three.
-  const std::string target = protocol::model_path(model) + "/base";
-  const std::string tables = protocol::model_path(model) + "/codec";
-  const std::vector<std::string> targets = {target, "/models", tables};
+  const std::vector<std::string> targets = open_targets(model);
   std::vector<HttpAnswer> answers(targets.size());
   http_->get_all(targets, [&](size_t index, HttpAnswer&& answer) { answers[index] = std::move(answer); });
+  opened(model, targets, answers);
+}
+
+void ReceiverClient::start_open(const std::string& model) {
+  opening_ = std::make_unique<PendingGets>(open_targets(model));
+  model_ = model;
+}
+
+bool ReceiverClient::poll_open() {
+  if (session_.has_model()) return true;
+  if (!opening_) fail("open", "no model being opened");
+  if (!opening_->advance(*http_)) return false;
+  const std::unique_ptr<PendingGets> done = std::move(opening_);
+  opened(model_, done->targets(), done->answers());
+  return true;
+}
+
+void ReceiverClient::opened(const std::string& model, const std::vector<std::string>& targets,
+                            const std::vector<HttpAnswer>& answers) {
+  const std::string& target = targets[0];
+  const std::string& tables = targets[2];
   const HttpAnswer& answer = answers[0];
   if (answer.status != 200) refused(target, answer);
   session_.on_base(protocol::decode_base(answer.body));
@@ -186,8 +209,12 @@ std::vector<ReceiverClient::Wanted> ReceiverClient::ranked(std::span<const uint3
 uint32_t ReceiverClient::descendant_depth(float priority, float pixel_angle2) const {
   if (options_.descendant_depth == 0 || !(priority > 0) || !(pixel_angle2 > 0)) return 0;
   const float floor_px = std::max(options_.tolerance, 1.0f);
-  const double doublings = 0.5 * std::log2(double(priority) / (double(pixel_angle2) * floor_px * floor_px));
-  return uint32_t(std::clamp(std::floor(doublings) - 1, 0.0, double(options_.descendant_depth)));
+  // floor(log2(r) / 2) is floor(floor(log2 r) / 2), and ilogb gives floor(log2 r) exactly on every
+  // platform, where log2 itself may round differently in the browser's libm.
+  const double ratio = double(priority) / (double(pixel_angle2) * floor_px * floor_px);
+  if (!(ratio >= 1)) return 0;  // and NaN; ilogb(inf) is INT_MAX: the whole depth
+  const int doublings = std::ilogb(ratio) / 2;
+  return uint32_t(std::clamp(doublings - 1, 0, int(options_.descendant_depth)));
 }
 
 // What a GET names for `id`: the id itself (lists) or the root of the block holding it (blocks).

@@ -101,6 +101,10 @@ class ReceiverClient {
 
   std::vector<std::string> list();      // GET /models: the names
   void open(const std::string& model);  // GET /models/{m}/base
+  // The same without waiting (the browser's): start_open() posts the GETs, each poll_open() takes what has
+  // arrived, until it returns true: the model is open. frame() is for after that.
+  void start_open(const std::string& model);
+  bool poll_open();
 
   // One frame: adapt; while qrefine wants splits the client lacks, rank them by screen area × squared
   // screen error, GET them in that order with several requests in flight, attach what arrives, adapt and
@@ -128,6 +132,9 @@ class ReceiverClient {
     uint32_t stale = 0;              // of its ids, those the last ranking no longer wants (not prefetched ones)
   };
   nlohmann::json catalogue();
+  std::vector<std::string> open_targets(const std::string& model) const;
+  void opened(const std::string& model, const std::vector<std::string>& targets,
+              const std::vector<HttpAnswer>& answers);
   ReceiverFrame begin(const Camera& camera);
   void finish(ReceiverFrame& out, const HttpCounters& before, const ReceiverTotals& totals_before);
   ReceiverFrame run(const Camera& camera, bool settling);
@@ -168,6 +175,7 @@ class ReceiverClient {
   ClientSession session_;
   std::unique_ptr<ImportanceSource> importance_;
   std::string model_;
+  std::unique_ptr<PendingGets> opening_;  // start_open()'s GETs, until poll_open() has them all
   SplitCodec codec_;  // the model's split record tables (GET /models/{m}/codec)
   uint32_t frame_ = 0;
   uint32_t settle_frames_ = 0;

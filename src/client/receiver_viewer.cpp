@@ -1,7 +1,6 @@
 #include "client/receiver_viewer.h"
 
 namespace pms::client {
-namespace {
 
 // Free-running: each frame attaches what has arrived and returns (ReceiverOptions::free_running).
 ReceiverOptions paced(ReceiverOptions options, Pacing pacing) {
@@ -9,20 +8,21 @@ ReceiverOptions paced(ReceiverOptions options, Pacing pacing) {
   return options;
 }
 
-}  // namespace
-
-ReceiverViewer::ReceiverViewer(const std::string& server, const ReceiverOptions& options, Pacing pacing,
-                               const std::string& model)
-    : client_(parse_http_url(server), paced(options, pacing)), options_(paced(options, pacing)) {
-  client_.open(model);
+ReceiverViewer::ReceiverViewer(std::unique_ptr<HttpTransport> http, std::unique_ptr<ImportanceSource> importance,
+                               const ReceiverOptions& options, const std::string& model)
+    : client_(std::move(http), std::move(importance), paced(options, Pacing::free_running)),
+      options_(paced(options, Pacing::free_running)) {
+  client_.start_open(model);
 }
 
 ViewerReport ReceiverViewer::frame(const Camera& camera) {
+  if (!client_.poll_open()) return opening_report();
   const ReceiverFrame r = client_.frame(camera);
   unsatisfied_ += !r.satisfied;
   ViewerReport report;
   report.frame = r.report.frame;
   report.faces = r.report.faces;
+  report.vertices = client_.session().mesh().vertex_count();
   report.received = r.report.vsplits;
   report.up_bytes = r.report.up_bytes;
   report.down_bytes = r.report.down_bytes;
@@ -43,7 +43,9 @@ ViewerReport ReceiverViewer::frame(const Camera& camera) {
   return report;
 }
 
-Mesh ReceiverViewer::mesh() const { return current_mesh(client_.session().refinement()); }
+Mesh ReceiverViewer::mesh() const {
+  return client_.session().has_model() ? current_mesh(client_.session().refinement()) : Mesh{};
+}
 
 ViewParams ReceiverViewer::view_params(const Camera& camera) const { return client_.session().view_params(camera); }
 

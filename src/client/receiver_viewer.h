@@ -1,5 +1,6 @@
 // The Viewer of the receiver-driven mode (cheng-ooi 2008): a ReceiverClient over HTTP, its frames
-// free-running (ReceiverOptions::free_running) or in lock-step as the pacing says.
+// free-running (ReceiverOptions::free_running) or in lock-step as the pacing says. The URL constructor is
+// the native build's (native_http_clients.cpp); the browser's hands in its fetch transport.
 #pragma once
 #include <string>
 
@@ -12,6 +13,10 @@ class ReceiverViewer : public Viewer {
  public:
   // `server` is http://HOST:PORT[/prefix]; pms::Error naming --server otherwise.
   ReceiverViewer(const std::string& server, const ReceiverOptions& options, Pacing pacing, const std::string& model);
+  // The browser's: free-running over `http`, ranking by `importance`; the model opens as answers come, and
+  // frames report `opening` until it has. settle() needs a transport that can wait.
+  ReceiverViewer(std::unique_ptr<HttpTransport> http, std::unique_ptr<ImportanceSource> importance,
+                 const ReceiverOptions& options, const std::string& model);
 
   ViewerReport frame(const Camera& camera) override;
   void settle(const Camera& camera) override { client_.settle(camera); }
@@ -26,12 +31,17 @@ class ReceiverViewer : public Viewer {
   ReceiverClient& client() { return client_; }
 
  protected:
-  const SelectiveRefinement* refinement() const override { return &client_.session().refinement(); }
+  const SelectiveRefinement* refinement() const override {
+    return client_.session().has_model() ? &client_.session().refinement() : nullptr;
+  }
 
  private:
   mutable ReceiverClient client_;
   ReceiverOptions options_;
   uint64_t unsatisfied_ = 0;  // frames that ended with the view wanting more
 };
+
+// `options` with free_running set as `pacing` says.
+ReceiverOptions paced(ReceiverOptions options, Pacing pacing);
 
 }  // namespace pms::client

@@ -10,8 +10,8 @@ namespace pms::client {
 ServerConnection::ServerConnection(std::unique_ptr<Transport> transport, const std::string& client_name,
                                    std::chrono::milliseconds answer_timeout, Greeting greeting)
     : transport_(std::move(transport)), answer_timeout_(answer_timeout) {
-  transport_->send(protocol::encode(protocol::Hello{protocol::kProtocolVersion, client_name}));
-  if (greeting == Greeting::await) (void)take(receive_answer());  // anything but HELLO_OK fails there
+  transport_->send(hello_frame(client_name));
+  if (greeting == Greeting::await) (void)greeting_.take(receive_answer());  // anything but HELLO_OK fails there
 }
 
 protocol::Frame ServerConnection::receive_answer() {
@@ -20,30 +20,16 @@ protocol::Frame ServerConnection::receive_answer() {
   return std::move(*frame);
 }
 
-std::optional<protocol::Frame> ServerConnection::take(protocol::Frame frame) {
-  if (frame.type == protocol::MessageType::error) {
-    const protocol::ErrorMessage e = protocol::decode_error(frame.payload);
-    fail("server", protocol::to_string(e.code) + ": " + e.text);
-  }
-  if (greeted_) return frame;
-  if (frame.type != protocol::MessageType::hello_ok)
-    fail("server", "expected " + protocol::to_string(protocol::MessageType::hello_ok) + ", got " +
-                       protocol::to_string(frame.type));
-  hello_ok_ = protocol::decode_hello_ok(frame.payload);
-  greeted_ = true;
-  return std::nullopt;
-}
-
 protocol::Frame ServerConnection::next() {
   for (;;)
-    if (std::optional<protocol::Frame> frame = take(receive_answer())) return std::move(*frame);
+    if (std::optional<protocol::Frame> frame = greeting_.take(receive_answer())) return std::move(*frame);
 }
 
 std::optional<protocol::Frame> ServerConnection::poll() {
   for (;;) {
     std::optional<protocol::Frame> frame = transport_->receive(std::chrono::milliseconds(0));
     if (!frame) return std::nullopt;
-    if ((frame = take(std::move(*frame)))) return frame;
+    if ((frame = greeting_.take(std::move(*frame)))) return frame;
   }
 }
 

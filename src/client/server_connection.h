@@ -9,6 +9,7 @@
 #include <optional>
 #include <string>
 
+#include "client/server_greeting.h"
 #include "client/transport.h"
 #include "common/camera.h"
 #include "protocol/client_messages.h"
@@ -51,18 +52,14 @@ class ServerConnection {
 
   LinkCounters counters() const { return transport_->counters(); }
   // Once it has come (pipelined: with the first answer).
-  const protocol::HelloOk& hello_ok() const { return hello_ok_; }
+  const protocol::HelloOk& hello_ok() const { return greeting_.hello_ok(); }
 
  private:
   protocol::Frame receive_answer();  // one frame under the answer deadline
-  // A frame as the server sent it: an ERROR thrown, HELLO_OK kept (nullopt then), anything else before
-  // HELLO_OK refused.
-  std::optional<protocol::Frame> take(protocol::Frame frame);
 
   std::unique_ptr<Transport> transport_;
   std::chrono::milliseconds answer_timeout_;
-  protocol::HelloOk hello_ok_;
-  bool greeted_ = false;  // HELLO_OK is in
+  ServerGreeting greeting_;
 };
 
 }  // namespace pms::client

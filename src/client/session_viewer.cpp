@@ -37,6 +37,7 @@ ViewerReport SessionViewer::frame(const Camera& camera) {
   ViewerReport report;
   report.frame = r.frame;
   report.faces = r.faces;
+  report.vertices = client_->session().mesh().vertex_count();
   report.received = r.vsplits;
   report.up_bytes = r.up_bytes;
   report.down_bytes = r.down_bytes;

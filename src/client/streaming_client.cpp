@@ -95,11 +95,7 @@ void StreamingClient::greet(std::unique_ptr<Transport> transport, Greeting greet
 
 protocol::Catalogue StreamingClient::list() { return server_->list(); }
 
-protocol::Open StreamingClient::open_message() const {
-  protocol::Open message{model_, {}, mode_->wire_mode()};
-  if (session_.has_model()) message.resume = mode_->resume_front(session_);
-  return message;
-}
+protocol::Open StreamingClient::open_message() const { return open_request(model_, *mode_, session_); }
 
 void StreamingClient::open(const std::string& model) {
   model_ = model;

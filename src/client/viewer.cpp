@@ -1,7 +1,18 @@
 // What every Viewer shares, in the browser's core too (the native factory is open_viewer.cpp).
 #include "client/viewer.h"
 
+#include "protocol/stream_mode.h"
+
 namespace pms::client {
+
+std::string viewer_mode_names() { return protocol::mode_names() + ", receiver, multilevel"; }
+
+ViewerReport opening_report() {
+  ViewerReport report;
+  report.opening = true;
+  report.satisfied = false;
+  return report;
+}
 
 Mesh to_mesh(MeshArrays&& arrays) {
   Mesh out;
@@ -12,10 +23,15 @@ Mesh to_mesh(MeshArrays&& arrays) {
   return out;
 }
 
-Mesh current_mesh(SelectiveRefinement& refinement) {
+Mesh current_mesh(const SelectiveRefinement& refinement) {
   MeshArrays arrays;
   refinement.extract(arrays);
   return to_mesh(std::move(arrays));
+}
+
+bool Viewer::in_motion() const {
+  const SelectiveRefinement* shown = refinement();
+  return shown && shown->geomorphs().morphing() > 0;
 }
 
 const MeshBuffers& Viewer::buffers() {

@@ -50,11 +50,13 @@ struct ViewerOptions {
 struct ViewerReport {
   uint32_t frame = 0;
   uint64_t faces = 0;
+  uint64_t vertices = 0;
   uint64_t received = 0;  // splits this frame, or levels for multilevel (received_unit says which)
   uint64_t up_bytes = 0, down_bytes = 0;  // this frame's traffic, on the wire
   uint32_t in_flight = 0;  // requests sent and not yet answered at the frame's end
   double latency_ms = 0;   // request -> last of its answer applied, for the last answer applied this frame
   bool satisfied = true;   // the view wants nothing more that the server has
+  bool opening = false;    // the event-driven viewers (the browser's): no model yet, the frame did nothing
   nlohmann::json details;  // the mode's own per-frame counters (docs/cli.md, "stream")
 };
 
@@ -72,6 +74,8 @@ class Viewer {
   virtual uint64_t up_bytes() const = 0;    // in total, on the wire
   virtual uint64_t down_bytes() const = 0;  // in total, on the wire
   virtual nlohmann::json totals() const = 0;  // the mode's own totals (docs/cli.md, "stream")
+  // Geomorphs still moving: a frame would change the mesh with nothing new arriving.
+  virtual bool in_motion() const;
 
   // The mesh as a renderer's buffers (mesh_buffers.h), brought up to date now: what changed since the call
   // before is in their changed ranges. Costs a read of every slot; a headless run never calls it.
@@ -90,10 +94,13 @@ class Viewer {
 // --mode) or a server that cannot be reached or refuses the model.
 std::unique_ptr<Viewer> open_viewer(const ViewerOptions& options, const std::string& model);
 
+// What an event-driven viewer's frame reports while its model is still opening.
+ViewerReport opening_report();
+
 // A refined mesh's flat arrays as io's Mesh (what the exporters and the renderer take).
 Mesh to_mesh(MeshArrays&& arrays);
 // The mesh `refinement` holds now.
-Mesh current_mesh(SelectiveRefinement& refinement);
+Mesh current_mesh(const SelectiveRefinement& refinement);
 
 // "sender, sender-plain, vi, dag, receiver, multilevel".
 std::string viewer_mode_names();

@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "common/error.h"
+#include "common/portable_math.h"
 
 namespace pms {
 namespace {
@@ -102,7 +103,8 @@ ViewParams make_view(const Camera& camera, const float box_min[3], const float b
 
   depth_range(view, box_min, box_max, view.near_plane, view.far_plane);
   const float n = view.near_plane, f = view.far_plane;
-  const float tan_half = std::tan(camera.fovy_deg * float(M_PI) / 360.0f);
+  // portable_tan: the server derives the same view from the camera the client sends, bit for bit.
+  const float tan_half = portable_tan(camera.fovy_deg * float(M_PI) / 360.0f);
   const float aspect = float(camera.width) / float(camera.height);
   float* p = view.projection.m;
   std::fill(p, p + 16, 0.0f);

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "common/error.h"
+#include "common/portable_math.h"
 #include "spm/refine_info.h"
 
 namespace pms {
@@ -30,8 +31,9 @@ NodeCriteria node_criteria(const float position[3], const RefineBounds& bounds) 
   NodeCriteria n = node_criteria_without_cone(position, bounds);
   // A cone of half-angle >= pi/2 holds opposite normals: some face below may always face the eye.
   if (bounds.cone_angle < std::numbers::pi_v<float> / 2) {
-    n.cos_a = std::cos(bounds.cone_angle);
-    n.sin_a = std::sin(bounds.cone_angle);
+    // Portable: the sender-driven server and its client must agree on every back-face test.
+    n.cos_a = portable_cos(bounds.cone_angle);
+    n.sin_a = portable_sin(bounds.cone_angle);
   }
   return n;
 }

@@ -6,8 +6,10 @@
 #include <span>
 
 #include "builder/build.h"
+#include "client/face_id_importance.h"
 #include "client/screen_importance.h"
 #include "common/camera.h"
+#include "common/error.h"
 #include "io/shapes.h"
 #include "spm/adapt.h"
 #include "spm/hierarchy.h"
@@ -136,6 +138,43 @@ TEST(ScreenImportance, OnlyVerticesThatCanSplitAreRanked) {
     EXPECT_EQ(rest[i].slot, all[i + 1].slot);
     EXPECT_EQ(rest[i].pixels, all[i + 1].pixels);
   }
+}
+
+// The browser's source (client/face_id_importance.h) handed the same frame as the page would draw it, face
+// slot + 1 in RGB, ranks exactly as the software renderer's: the counting is shared.
+TEST(FaceIdImportance, RanksAsTheRenderersFaceIdsDo) {
+  const Camera camera = looking_at(0.4f, 0.3f, 3.0f, 0, 0, 0);
+  ClientMesh c(make_sphere(24, 32), camera, 1.0f);
+  client::ScreenImportance screen(RenderOptions{1});
+  const std::vector<client::VertexArea> want = screen.rank(*c.mesh, c.view(camera));
+  ASSERT_FALSE(want.empty());
+  // extract() lists the live face slots in order: the renderer's face k is the k-th live slot.
+  std::vector<uint32_t> slot_of_face;
+  for (uint32_t f = 0; f < c.mesh->face_capacity(); ++f)
+    if (c.mesh->face_alive(f)) slot_of_face.push_back(f);
+  const Image& image = screen.image();
+  ASSERT_EQ(slot_of_face.size(), screen.mesh_arrays().indices.size() / 3);
+  std::vector<uint8_t> rgba(image.face_id.size() * 4, 0);
+  for (size_t p = 0; p < image.face_id.size(); ++p) {
+    if (image.face_id[p] == kNone) continue;
+    const uint32_t id = slot_of_face[image.face_id[p]] + 1;
+    rgba[4 * p] = uint8_t(id), rgba[4 * p + 1] = uint8_t(id >> 8), rgba[4 * p + 2] = uint8_t(id >> 16);
+    rgba[4 * p + 3] = 255;
+  }
+  client::FaceIdImportance face_ids;
+  EXPECT_TRUE(face_ids.rank(*c.mesh, c.view(camera), {}).empty()) << "no frame yet: nothing ranked";
+  face_ids.set_face_ids(rgba, camera.width, camera.height);
+  const std::vector<client::VertexArea>& got = face_ids.rank(*c.mesh, c.view(camera), {});
+  ASSERT_EQ(got.size(), want.size());
+  for (size_t i = 0; i < got.size(); ++i) {
+    EXPECT_EQ(got[i].slot, want[i].slot);
+    EXPECT_EQ(got[i].pixels, want[i].pixels);
+  }
+  EXPECT_THROW(face_ids.set_face_ids(rgba, camera.width + 1, camera.height), Error);
+  // Ids past the mesh's faces (a stale frame) count for nothing.
+  std::vector<uint8_t> stale(rgba.size(), 0xFF);
+  face_ids.set_face_ids(stale, camera.width, camera.height);
+  EXPECT_TRUE(face_ids.rank(*c.mesh, c.view(camera), {}).empty());
 }
 
 }  // namespace
