@@ -185,6 +185,15 @@ void print_stats(const char* event, const ServeArgs& args, const server::Catalog
           (unsigned long long)s.not_modified.load(), (unsigned long long)s.client_errors.load(),
           (unsigned long long)s.bytes_in.load(), (unsigned long long)s.bytes_out.load(),
           (unsigned long long)s.splits_served.load(), (unsigned long long)s.split_requests.load());
+      const server::ServerStats& w = http->ws_sessions();
+      std::printf("ws: %llu sessions (%llu refused, %llu timed out), %llu upgrades refused (origin %llu), %llu bytes "
+                  "in, %llu bytes out\n",
+                  (unsigned long long)w.sessions_opened.load(), (unsigned long long)w.sessions_refused.load(),
+                  (unsigned long long)w.sessions_timed_out.load(),
+                  (unsigned long long)(http->ws_stats().refused_origin.load() + http->ws_stats().refused_full.load() +
+                                       http->ws_stats().refused_malformed.load()),
+                  (unsigned long long)http->ws_stats().refused_origin.load(), (unsigned long long)w.bytes_in.load(),
+                  (unsigned long long)w.bytes_out.load());
       std::fflush(stdout);
     }
   }

@@ -14,7 +14,7 @@
 namespace pms::server {
 
 struct SiteLimits {
-  uint64_t max_file_bytes = 64u << 20;    // a larger file is refused (the WASM core is a few MB)
+  uint64_t max_file_bytes = 64u << 20;    // a larger file is refused (the WASM core is the largest)
   uint64_t max_cached_bytes = 256u << 20;  // all the files kept: past it, the cache starts over
 };
 

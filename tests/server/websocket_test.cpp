@@ -110,6 +110,19 @@ TEST(WebSocket, ASessionResumesOnARestartedServer) {
   EXPECT_EQ(faces_by_id(client.session().mesh()), local_faces(f.snapped, path.back(), 0.5f));
 }
 
+TEST(WebSocket, ASessionPaysItsAddressBudgetAndIsSlowedNotBroken) {
+  const Fixture& f = terrain();
+  server::HttpLimits limits;
+  limits.address_budget = 4000;  // units a second: the flight costs more than the second's burst
+  WsServer server(web_options(), limits);
+  const std::vector<Camera> path = orbit_path(f.hierarchy, 6, 0.2f);
+  client::StreamingClient client("127.0.0.1", server.port(), over_websocket(client::ClientOptions{1.0f}));
+  const Flight flight = fly(client, path);
+  EXPECT_EQ(flight.faces, local_faces(f.snapped, path.back(), 1.0f));
+  EXPECT_GT(server.http.ws_stats().budget_waits.load(), 0u);
+  EXPECT_GT(server.http.tracked_addresses(), 0u);
+}
+
 TEST(WebSocket, TheUpgradeChecksTheOrigin) {
   server::WebOptions listed = web_options();
   listed.allowed_origins = {"https://viewer.example"};
