@@ -32,12 +32,15 @@
 #include "server/http_server.h"
 #include "server/limits.h"
 #include "spm/pms_file.h"
+#include "conversation.h"
 
 namespace {
 
 using namespace pms;
 using namespace pms::server;
-using Clock = std::chrono::steady_clock;
+using fuzz_conversation::Chunks;
+using fuzz_conversation::Clock;
+using fuzz_conversation::converse;
 
 void check(bool condition) {
   if (!condition) __builtin_trap();
@@ -143,41 +146,6 @@ std::string composed_conversation(std::string_view bytes) {
   std::string conversation;
   while (!script.bytes.empty() && conversation.size() < 65536) conversation += composed_request(script);
   return conversation;
-}
-
-// A small generator for the chunk sizes, from the input's first two bytes.
-struct Chunks {
-  uint32_t state;
-  size_t next() {
-    state = state * 1103515245u + 12345u;
-    const uint32_t r = state >> 16;
-    return (r % 4 == 0) ? 1 + r % 3 : 1 + r % 700;  // single bytes now and then: split tokens, split CRLFs
-  }
-};
-
-// Writes the conversation in chunks, reading whatever comes meanwhile, then half-closes and reads to the
-// end; false when the server did not end the conversation within `deadline`.
-bool converse(int fd, std::string_view bytes, Chunks chunks, std::string& received, Clock::time_point deadline) {
-  bool write_closed = false;
-  char buffer[65536];
-  while (Clock::now() < deadline) {
-    if (!bytes.empty()) {
-      const size_t n = std::min(bytes.size(), chunks.next());
-      const ssize_t sent = ::send(fd, bytes.data(), n, MSG_NOSIGNAL | MSG_DONTWAIT);
-      if (sent > 0) bytes.remove_prefix(size_t(sent));
-      if (sent < 0 && errno != EAGAIN && errno != EWOULDBLOCK) return true;  // the server closed it first
-    } else if (!write_closed) {
-      ::shutdown(fd, SHUT_WR);
-      write_closed = true;
-    }
-    pollfd p{fd, POLLIN, 0};
-    if (::poll(&p, 1, bytes.empty() ? 50 : 0) <= 0) continue;
-    const ssize_t got = ::recv(fd, buffer, sizeof buffer, MSG_DONTWAIT);
-    if (got == 0) return true;  // the server ended it
-    if (got < 0 && errno != EAGAIN && errno != EWOULDBLOCK) return true;  // reset at a deadline
-    if (got > 0) received.append(buffer, size_t(got));
-  }
-  return false;
 }
 
 // Every response in `received`: a documented status and whole headers, then its body, but for the last

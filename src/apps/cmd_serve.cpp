@@ -2,6 +2,7 @@
 // Runs the sender-driven TCP server, and with --http-port the receiver-driven HTTP server beside it, until
 // SIGINT or SIGTERM; SIGUSR1 prints the totals so far.
 #include <pthread.h>
+#include <unistd.h>
 #include <algorithm>
 #include <csignal>
 #include <cstdio>
@@ -31,6 +32,7 @@ struct ServeArgs {
   server::ServerLimits limits;
   server::HttpLimits http;
   std::vector<std::string> trusted_proxies;  // --trusted-proxy, parsed into http.trusted_proxies
+  server::WebOptions web;                    // --web-root, --ws-allowed-origin; its sessions' limits are `limits`
   std::string preload;         // mode names, or "all"
   bool preload_given = false;  // else every table is built when first asked for
   uint32_t max_table_builds = server::TableOptions{}.max_builds;
@@ -53,18 +55,9 @@ double cpu_seconds() {
   return double(t.tv_sec) + 1e-9 * double(t.tv_nsec);
 }
 
-// One line a program can read: the event, then every counter (docs/operating.md lists them).
-nlohmann::json stats_json(const char* event, const server::ServerStats& s, const Stopwatch& uptime) {
-  // The kernel syncs a thread's RSS count into VmHWM lazily (pages at a time), so VmHWM read now can be
-  // below a VmRSS printed earlier: the peak printed is never below any RSS this server printed.
-  // Only the thread that waits for signals prints these lines.
-  static uint64_t highest_rss = 0;
-  const uint64_t rss = rss_bytes();
-  highest_rss = std::max(highest_rss, rss);
-  const uint64_t peak_rss = std::max(uint64_t(peak_rss_mb() * 1024 * 1024), highest_rss);
-  return {{"event", event},
-          {"uptime_s", uptime.seconds()},
-          {"sessions_opened", s.sessions_opened.load()},
+// The sessions' counters, the TCP port's or the WebSocket's.
+nlohmann::json session_counters(const server::ServerStats& s) {
+  return {{"sessions_opened", s.sessions_opened.load()},
           {"sessions_active", s.sessions_active.load()},
           {"sessions_refused", s.sessions_refused.load()},
           {"sessions_timed_out", s.sessions_timed_out.load()},
@@ -77,10 +70,25 @@ nlohmann::json stats_json(const char* event, const server::ServerStats& s, const
           {"splits_sent", s.splits_sent.load()},
           {"errors_sent", s.errors_sent.load()},
           {"peak_state_bytes", s.peak_state_bytes.load()},
-          {"peak_buffer_bytes", s.peak_buffer_bytes.load()},
-          {"rss_bytes", rss},
-          {"peak_rss_bytes", peak_rss},
-          {"cpu_s", cpu_seconds()}};
+          {"peak_buffer_bytes", s.peak_buffer_bytes.load()}};
+}
+
+// One line a program can read: the event, then every counter (docs/operating.md lists them).
+nlohmann::json stats_json(const char* event, const server::ServerStats& s, const Stopwatch& uptime) {
+  // The kernel syncs a thread's RSS count into VmHWM lazily (pages at a time), so VmHWM read now can be
+  // below a VmRSS printed earlier: the peak printed is never below any RSS this server printed.
+  // Only the thread that waits for signals prints these lines.
+  static uint64_t highest_rss = 0;
+  const uint64_t rss = rss_bytes();
+  highest_rss = std::max(highest_rss, rss);
+  const uint64_t peak_rss = std::max(uint64_t(peak_rss_mb() * 1024 * 1024), highest_rss);
+  nlohmann::json line = session_counters(s);
+  line["event"] = event;
+  line["uptime_s"] = uptime.seconds();
+  line["rss_bytes"] = rss;
+  line["peak_rss_bytes"] = peak_rss;
+  line["cpu_s"] = cpu_seconds();
+  return line;
 }
 
 // The tables built so far, per model and mode, and the builders' counters (docs/operating.md, "Tables").
@@ -128,6 +136,14 @@ void add_http_stats(nlohmann::json& line, const server::HttpServer& http, const 
                   {"bytes_out", s.bytes_out.load()},
                   {"splits_served", s.splits_served.load()},
                   {"split_requests", s.split_requests.load()}};
+  const server::WsStats& ws = http.ws_stats();
+  nlohmann::json& counters = line["ws"] = session_counters(http.ws_sessions());
+  counters["upgrades"] = ws.upgrades.load();
+  counters["refused_origin"] = ws.refused_origin.load();
+  counters["refused_full"] = ws.refused_full.load();
+  counters["refused_malformed"] = ws.refused_malformed.load();
+  counters["messages_refused"] = ws.messages_refused.load();
+  counters["budget_waits"] = ws.budget_waits.load();
 }
 
 void print_line(const std::string& line) {
@@ -169,9 +185,27 @@ void print_stats(const char* event, const ServeArgs& args, const server::Catalog
           (unsigned long long)s.not_modified.load(), (unsigned long long)s.client_errors.load(),
           (unsigned long long)s.bytes_in.load(), (unsigned long long)s.bytes_out.load(),
           (unsigned long long)s.splits_served.load(), (unsigned long long)s.split_requests.load());
+      const server::ServerStats& w = http->ws_sessions();
+      std::printf("ws: %llu sessions (%llu refused, %llu timed out), %llu upgrades refused (origin %llu), %llu bytes "
+                  "in, %llu bytes out\n",
+                  (unsigned long long)w.sessions_opened.load(), (unsigned long long)w.sessions_refused.load(),
+                  (unsigned long long)w.sessions_timed_out.load(),
+                  (unsigned long long)(http->ws_stats().refused_origin.load() + http->ws_stats().refused_full.load() +
+                                       http->ws_stats().refused_malformed.load()),
+                  (unsigned long long)http->ws_stats().refused_origin.load(), (unsigned long long)w.bytes_in.load(),
+                  (unsigned long long)w.bytes_out.load());
       std::fflush(stdout);
     }
   }
+}
+
+// The assembled page sits beside the binary in the build directory (build/web beside build/pmstream).
+std::string default_web_root() {
+  char path[4096];
+  const ssize_t n = readlink("/proc/self/exe", path, sizeof path - 1);
+  if (n <= 0) return "web";
+  const std::string exe(path, size_t(n));
+  return exe.substr(0, exe.rfind('/') + 1) + "web";
 }
 
 void run_serve(ServeArgs args) {
@@ -193,7 +227,9 @@ void run_serve(ServeArgs args) {
   std::unique_ptr<server::HttpServer> http;
   if (args.http_port_given) {
     args.http.threads = args.limits.threads;
-    http = std::make_unique<server::HttpServer>(catalogue, args.http, args.host, args.http_port);
+    if (args.web.root.empty()) args.web.root = default_web_root();
+    args.web.sessions = args.limits;
+    http = std::make_unique<server::HttpServer>(catalogue, args.http, args.host, args.http_port, args.web);
   }
   tcp.start();
   if (http) http->start();
@@ -217,7 +253,10 @@ void run_serve(ServeArgs args) {
                   (unsigned long long)model->info.vsplits, model->path.c_str());
     print_line("listening on " + args.host + ":" + std::to_string(tcp.port()) +
                " (TCP, sender-driven); Ctrl-C stops, SIGUSR1 prints the totals so far");
-    if (http) print_line("listening on " + args.host + ":" + std::to_string(http->port()) + " (HTTP, receiver-driven)");
+    if (http)
+      print_line("listening on " + args.host + ":" + std::to_string(http->port()) +
+                 " (HTTP: the page at /, receiver-driven and multilevel under /models, the session modes' WebSocket "
+                 "at /ws)");
   }
   for (;;) {
     int received = 0;
@@ -288,6 +327,14 @@ void add_serve_command(CliCommand& app) {
   http_only.push_back({cmd.option("--trusted-proxy", args->trusted_proxies,
                                   "Peers (addresses or CIDR ranges) whose X-Forwarded-For names the client the "
                                   "per-address limits apply to, e.g. the nginx cache in front"),
+                       {"--http-port"}});
+  http_only.push_back({cmd.option("--web-root", args->web.root,
+                                  "Directory of the page served at / on the HTTP port (default: web/ beside the "
+                                  "pmstream executable)"),
+                       {"--http-port"}});
+  http_only.push_back({cmd.option("--ws-allowed-origin", args->web.allowed_origins,
+                                  "Origins (scheme://host[:port]) a browser may open the WebSocket /ws from "
+                                  "(default: the page's own origin only)"),
                        {"--http-port"}});
   cmd.flag("--json", args->json, "Print one JSON object per line: listening, stats (SIGUSR1), stopped");
   add_limit(cmd, "--max-sessions", limits.max_sessions, "Concurrent sessions; more are refused (server_full)");

@@ -1,4 +1,4 @@
-// pmstream stream --server HOST:PORT --model NAME --path PATH.json --mode MODE --tolerance PX
+// pmstream stream --server HOST:PORT|ws://HOST:PORT/ws --model NAME --path PATH.json --mode MODE --tolerance PX
 //                 (--mode receiver: --server http://HOST:PORT[/prefix] [--in-flight N] [--fetch lists|blocks]
 //                  [--ids-per-request N] [--descendant-depth K] [--block-depth K] [--frame-budget-ms MS]
 //                  [--frame-answers N] [--prefetch])
@@ -224,8 +224,8 @@ void add_stream_command(CliCommand& app) {
   auto args = std::make_shared<StreamArgs>();
   CliCommand cmd = app.subcommand("stream", "Headless viewer: stream a model from a server along a camera path");
   cmd.option("--server", args->server,
-             "HOST:PORT of the server's TCP port; for --mode receiver and multilevel http://HOST:PORT[/prefix] of its "
-             "HTTP port")
+             "HOST:PORT of the server's TCP port, or ws://HOST:PORT/ws of its HTTP port's WebSocket; for --mode "
+             "receiver and multilevel http://HOST:PORT[/prefix] of its HTTP port")
       .required();
   cmd.option("--model", args->model, "Model name in the server's catalogue").required();
   cmd.option("--path", args->path, "PATH.json (pmstream path ...)").required();

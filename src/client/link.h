@@ -46,9 +46,16 @@ class Link : public Transport {
   LinkCounters counters() const override;
   void close();
 
+  struct Core;  // link_core.h: the thread, the queues and the stream
+
+ protected:
+  // Starts `core`'s thread and connects it to host:port (then `path`, for a stream over HTTP); `what`
+  // names the server in the ConnectionError thrown when it cannot connect.
+  Link(std::unique_ptr<Core> core, const std::string& host, uint16_t port, const std::string& path,
+       const std::string& what);
+
  private:
-  struct Impl;
-  std::unique_ptr<Impl> impl_;
+  std::unique_ptr<Core> core_;
 };
 
 }  // namespace pms::client

@@ -1,5 +1,6 @@
 #include "client/session_viewer.h"
 
+#include "client/websocket_link.h"
 #include "common/error.h"
 #include "protocol/url_segment.h"
 
@@ -17,8 +18,14 @@ void split_host_port(const std::string& text, std::string& host, uint16_t& port,
 namespace {
 
 // HELLO and OPEN together: the first picture (BASE) one round trip after connecting.
-std::unique_ptr<StreamingClient> connect(const std::string& server, const ClientOptions& options,
-                                         const std::string& model) {
+// HOST:PORT is the TCP port; ws://HOST:PORT/ws the HTTP port's WebSocket, for a client that only HTTP reaches.
+std::unique_ptr<StreamingClient> connect(const std::string& server, ClientOptions options, const std::string& model) {
+  if (server.starts_with("ws://")) {
+    const std::optional<WebSocketUrl> url = parse_websocket_url(server);
+    if (!url) fail("--server", "'" + server + "' is not ws://HOST:PORT[/PATH]");
+    options.websocket_path = url->path;
+    return std::make_unique<StreamingClient>(url->host, url->port, options, model);
+  }
   std::string host;
   uint16_t port = 0;
   split_host_port(server, host, port, "--server");

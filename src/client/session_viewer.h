@@ -12,7 +12,8 @@ namespace pms::client {
 
 class SessionViewer : public Viewer {
  public:
-  // `server` is HOST:PORT; pms::Error naming --server otherwise.
+  // `server` is HOST:PORT (TCP) or ws://HOST:PORT/ws (the HTTP port's WebSocket); pms::Error naming --server
+  // otherwise.
   SessionViewer(const std::string& server, const ClientOptions& options, Pacing pacing, const std::string& model);
 
   ViewerReport frame(const Camera& camera) override;

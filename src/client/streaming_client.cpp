@@ -7,6 +7,7 @@
 #include "client/link.h"
 #include "client/streaming_client.h"
 #include "client/transport.h"
+#include "client/websocket_link.h"
 #include "common/error.h"
 #include "protocol/client_messages.h"
 #include "protocol/framing.h"
@@ -42,11 +43,13 @@ std::chrono::milliseconds backoff(const ClientOptions& options, uint32_t attempt
 
 // Every connection, the first and each reconnect, gets the client's deadlines; the answer timeout is
 // also how long a frame may take once it has begun to arrive.
-std::unique_ptr<Link> open_link(const std::string& host, uint16_t port, const ClientOptions& options) {
+std::unique_ptr<Transport> open_link(const std::string& host, uint16_t port, const ClientOptions& options) {
   LinkOptions link;
   link.connect_timeout = options.connect_timeout;
   link.write_timeout = options.write_timeout;
   link.read_timeout = options.answer_timeout;
+  if (!options.websocket_path.empty())
+    return std::make_unique<WebSocketLink>(host, port, options.websocket_path, link);
   return std::make_unique<Link>(host, port, link);
 }
 

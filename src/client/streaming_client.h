@@ -42,6 +42,9 @@ struct ClientOptions {
   // does not make one frame late. Settling applies everything.
   std::chrono::milliseconds apply_budget{8};
   std::function<void(const std::string& reason, uint32_t attempt)> on_reconnect = {};  // told before each try
+  // Non-empty: every connection is a WebSocket upgraded at this path of the HTTP server at host:port
+  // (ws://HOST:PORT/ws), not a TCP connection to its TCP port.
+  std::string websocket_path = {};
 };
 
 class StreamingClient : private ViewRequests {

@@ -25,6 +25,7 @@
 #include "server/http_message.h"
 #include "server/http_routes.h"
 #include "server/io_threads.h"
+#include "server/ws_connection.h"
 
 namespace pms::server {
 namespace {
@@ -96,6 +97,7 @@ class HttpConnection : public std::enable_shared_from_this<HttpConnection> {
 
   ~HttpConnection() {
     shared_.catalogue.table_builds().forget_owner(this);
+    if (handed_over_) return;  // the WebSocket holds the connection's place now
     shared_.addresses.close(peer_);
     stats_.connections_active--;
   }
@@ -258,9 +260,11 @@ class HttpConnection : public std::enable_shared_from_this<HttpConnection> {
   // The request in the parser, routed; one whose tables are being built waits for them (wait_for_tables);
   // one whose body is large is built over turns (build_body).
   void route_request(Clock::time_point turn_end) {
+    const auto target = parser_->get().target();
+    if (is_ws_target(std::string_view(target.data(), target.size()))) return upgrade();
     HttpAnswer answer;
     try {
-      answer = answer_request(shared_.catalogue, limits_, parser_->get());
+      answer = answer_request(shared_.catalogue, limits_, parser_->get(), shared_.site);
     } catch (const std::exception& e) {  // out of memory for an answer: this request's fault only
       log_line(std::string("internal error: ") + e.what());
       answer = error_answer(500, "internal error");
@@ -272,6 +276,19 @@ class HttpConnection : public std::enable_shared_from_this<HttpConnection> {
       return;
     }
     finish_request(std::move(answer));
+  }
+
+  // The socket goes to a WebSocket session (ws_connection.h), with the connection's place in the limits.
+  void upgrade() {
+    if (std::optional<HttpAnswer> refusal = refuse_upgrade(parser_->get(), buffer_.size(), *shared_.ws))
+      return finish_request(std::move(*refusal));
+    const ClientAddress client = client_of(parser_->get());
+    shared_.addresses.charge(client, request_cost(0, 0, request_bytes_), Clock::now());  // the session pays the debt
+    closed_ = handed_over_ = true;
+    deadline_.cancel();
+    pause_.cancel();
+    start_ws_connection(std::move(socket_), peer_, client, shared_, parser_->release());
+    parser_.reset();
   }
 
   // True when the body is done and its answer sent on its way.
@@ -455,6 +472,7 @@ class HttpConnection : public std::enable_shared_from_this<HttpConnection> {
   uint64_t bytes_written_ = 0;  // to the socket, in the connection's life
   bool writing_ = false, keep_alive_ = false, closed_ = false;
   bool interim_ = false;  // what is being written is a 100 Continue, the request's answer to come
+  bool handed_over_ = false;  // upgraded: the socket is a WebSocket session's
   bool paused_ = false;   // over budget
   bool yielded_ = false;  // its turn is over, the next one posted
   bool waiting_ = false;  // for the tables the request in the parser needs

@@ -9,10 +9,13 @@
 #include "server/catalogue.h"
 #include "server/client_address.h"
 #include "server/limits.h"
+#include "server/static_site.h"
 #include "server/stats.h"
 #include "server/work_budget.h"
 
 namespace pms::server {
+
+struct WsShared;
 
 // What the connections of one HttpServer share.
 struct HttpServerShared {
@@ -21,6 +24,8 @@ struct HttpServerShared {
   HttpStats& stats;
   AddressBudgets& addresses;
   const void* group;  // the TableBuilds group of this server's connections
+  StaticSite* site;   // the page's files
+  WsShared* ws;       // the WebSocket's sessions
 };
 
 // The address a socket's peer has, as the per-address limits key it.

@@ -1,5 +1,7 @@
 // Beast's messages to and from the routes (http_message.h).
 #include "server/http_message.h"
+#include "protocol/url_segment.h"
+#include "server/static_site.h"
 
 #include <algorithm>
 #include <string>
@@ -130,14 +132,22 @@ bool expects_continue(const HttpParser& parser) {
   return body && std::ranges::any_of(expectations, [](std::string_view e) { return iequals(e, "100-continue"); });
 }
 
+bool is_api_target(std::string_view target) {
+  if (target.empty() || target.front() != '/') return true;  // the routes answer it 400
+  // Any spelling of /models ("/%6Dodels") is the API's: the routes send it to the canonical URL.
+  const std::optional<std::string> path = protocol::url_path_normalize(target.substr(0, target.find('?')));
+  return !path || *path == "/models" || path->starts_with("/models/");
+}
+
 HttpAnswer answer_request(const Catalogue& catalogue, const HttpLimits& limits,
-                          const http::request<http::vector_body<uint8_t>>& request) {
+                          const http::request<http::vector_body<uint8_t>>& request, StaticSite* site) {
   HttpRequest r;
   r.method = view_of(request.method_string());
   r.target = view_of(request.target());
   r.body = request.body();
   if (const auto it = request.find(http::field::if_none_match); it != request.end())
     r.if_none_match = view_of(it->value());
+  if (site && !is_api_target(r.target)) return site->answer(r);
   return route(catalogue, limits, r);
 }
 
@@ -155,7 +165,7 @@ void write_response_head(const HttpAnswer& answer, bool keep_alive, unsigned ver
   if (!answer.etag.empty()) header("ETag", answer.etag);
   // No "public": the server takes no Authorization, and max-age alone lets a shared cache store the
   // answer (RFC 9111 §3).
-  header("Cache-Control", answer.cacheable ? "max-age=31536000, immutable" : "no-store");
+  header("Cache-Control", answer.cacheable ? "max-age=31536000, immutable" : answer.revalidate ? "no-cache" : "no-store");
   if (!answer.allow.empty()) header("Allow", answer.allow);
   if (!answer.location.empty()) header("Location", answer.location);
   if (answer.status == 503) header("Retry-After", "1");

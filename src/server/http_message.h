@@ -19,6 +19,8 @@
 
 namespace pms::server {
 
+class StaticSite;
+
 namespace http = boost::beast::http;
 using HttpParser = http::request_parser<http::vector_body<uint8_t>>;
 
@@ -45,9 +47,14 @@ std::optional<HeaderRefusal> refuse_header(const HttpParser& parser);
 // request with a body and "Expect: 100-continue". The parser's header must be done.
 bool expects_continue(const HttpParser& parser);
 
-// The answer to a parsed request (the routes, with HEAD answered as GET).
+// The answer to a parsed request: the API's routes (with HEAD answered as GET) for /models and below,
+// the page's files (when `site` is given) for every other path.
 HttpAnswer answer_request(const Catalogue& catalogue, const HttpLimits& limits,
-                          const http::request<http::vector_body<uint8_t>>& request);
+                          const http::request<http::vector_body<uint8_t>>& request, StaticSite* site = nullptr);
+
+// Whether `target` is the API's (/models and below, and any target that is not a path): those keep
+// the routes' answers, whatever files the page holds.
+bool is_api_target(std::string_view target);
 
 // The status line and headers of `answer` (the same for GET and HEAD), replacing `out`'s text: only what
 // a cache needs (docs/protocol.md, "Receiver-driven over HTTP"), so they depend only on the answer and

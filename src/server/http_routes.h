@@ -37,6 +37,7 @@ struct HttpAnswer {
   std::string_view content_type = "text/plain; charset=utf-8";  // a literal
   std::string etag;                                             // strong, quoted; empty for errors
   bool cacheable = false;                                       // immutable for a year; errors are not stored
+  bool revalidate = false;  // stored, but revalidated on every use (the page's files: their names stay)
   std::string allow;                                            // the methods a 405's resource takes
   std::string location;                                         // a redirect's target: the canonical URL
   uint64_t splits = 0;                                          // split records in the body

@@ -16,6 +16,7 @@
 #include "server/http_message.h"
 #include "server/http_routes.h"
 #include "server/io_threads.h"
+#include "server/ws_connection.h"
 
 namespace pms::server {
 namespace {
@@ -46,8 +47,8 @@ void refuse(tcp::socket& socket, const std::string& text) {
 }  // namespace
 
 struct HttpServer::Impl {
-  Impl(std::shared_ptr<const Catalogue> c, const HttpLimits& l)
-      : catalogue(std::move(c)), limits(l), contexts(make_contexts(l.threads)) {
+  Impl(std::shared_ptr<const Catalogue> c, const HttpLimits& l, const WebOptions& w)
+      : catalogue(std::move(c)), limits(l), web(w), site(w.root, w.site), contexts(make_contexts(l.threads)) {
     for (const auto& io : contexts) work.push_back(asio::make_work_guard(*io));
   }
 
@@ -104,9 +105,12 @@ struct HttpServer::Impl {
 
   std::shared_ptr<const Catalogue> catalogue;
   HttpLimits limits;
+  WebOptions web;
+  StaticSite site;
   HttpStats stats;
   AddressBudgets addresses{limits.max_connections_per_address, double(limits.address_budget)};
-  HttpServerShared shared{*catalogue, limits, stats, addresses, this};
+  WsShared ws{catalogue, web};
+  HttpServerShared shared{*catalogue, limits, stats, addresses, this, &site, &ws};
   std::vector<std::thread> threads;
   std::mutex stop_mutex;
   bool stopped = false;
@@ -120,8 +124,9 @@ struct HttpServer::Impl {
 };
 
 HttpServer::HttpServer(std::shared_ptr<const Catalogue> catalogue, const HttpLimits& limits, const std::string& host,
-                       uint16_t port)
-    : impl_(std::make_unique<Impl>(std::move(catalogue), limits)) {
+                       uint16_t port, const WebOptions& web)
+    : impl_(std::make_unique<Impl>(std::move(catalogue), limits, web)) {
+  impl_->catalogue->check_limits(web.sessions);
   listen_on(impl_->acceptor, host, port, "HTTP");
 }
 
@@ -149,6 +154,10 @@ void HttpServer::stop() {
 }
 
 const HttpStats& HttpServer::stats() const { return impl_->stats; }
+
+const ServerStats& HttpServer::ws_sessions() const { return impl_->ws.sessions; }
+
+const WsStats& HttpServer::ws_stats() const { return impl_->ws.stats; }
 
 size_t HttpServer::tracked_addresses() const { return impl_->addresses.tracked(); }
 

@@ -8,6 +8,7 @@
 #include "server/catalogue.h"
 #include "server/limits.h"
 #include "server/stats.h"
+#include "server/web_options.h"
 
 namespace pms::server {
 
@@ -17,7 +18,7 @@ namespace pms::server {
 class HttpServer {
  public:
   HttpServer(std::shared_ptr<const Catalogue> catalogue, const HttpLimits& limits, const std::string& host,
-             uint16_t port);
+             uint16_t port, const WebOptions& web = {});
   ~HttpServer();
   HttpServer(const HttpServer&) = delete;
   HttpServer& operator=(const HttpServer&) = delete;
@@ -26,6 +27,8 @@ class HttpServer {
   void start();           // runs the I/O threads in the background
   void stop();            // closes every connection and joins the threads
   const HttpStats& stats() const;
+  const ServerStats& ws_sessions() const;  // the WebSocket's sessions, counted as the TCP server counts its own
+  const WsStats& ws_stats() const;
   size_t tracked_addresses() const;  // client addresses with a connection or a budget debt now
 
  private:

@@ -31,6 +31,17 @@ struct HttpStats {
   std::atomic<uint64_t> longest_turn_us{0};  // the longest one connection held an I/O thread in one go
 };
 
+// The WebSocket's counters beyond its sessions' (which are a ServerStats of their own): the upgrades and
+// why some were refused (docs/operating.md, "The JSON lines").
+struct WsStats {
+  std::atomic<uint64_t> upgrades{0};                  // 101s: sessions begun
+  std::atomic<uint64_t> refused_origin{0};            // 403: an Origin not allowed
+  std::atomic<uint64_t> refused_full{0};              // 503: at the WebSocket sessions cap
+  std::atomic<uint64_t> refused_malformed{0};         // 400/426: not a valid upgrade
+  std::atomic<uint64_t> messages_refused{0};          // text, split or merged frames, pings past the rate
+  std::atomic<uint64_t> budget_waits{0};              // times a session waited for its address's budget
+};
+
 // Raises `target` to `value` if it is larger, from any thread.
 inline void update_max(std::atomic<uint64_t>& target, uint64_t value) {
   uint64_t seen = target.load(std::memory_order_relaxed);

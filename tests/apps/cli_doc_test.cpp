@@ -79,7 +79,7 @@ void add_fields(std::map<std::string, Names>& fields, const std::string& command
 }
 
 // serve's lines (listening, stats, stopped) and a stream in each kind of mode against it: the sender-driven
-// one over TCP, the receiver-driven one and the multilevel levels over HTTP.
+// one over TCP and over the WebSocket, the receiver-driven one and the multilevel levels over HTTP.
 void add_served_fields(std::map<std::string, Names>& fields, const std::string& dir) {
   using std::chrono::seconds;
   test::ChildProcess serve(PMSTREAM_BINARY, {"serve", dir + "/terrain.pms", dir + "/levels.pml", "--host", "127.0.0.1",
@@ -93,6 +93,7 @@ void add_served_fields(std::map<std::string, Names>& fields, const std::string& 
   const std::string common = " --path " + dir + "/path.json --json --timeout-ms 20000";
   add_fields(fields, "stream", "stream --server " + tcp + " --model terrain" + common);
   add_fields(fields, "stream", "stream --server " + http + " --mode receiver --model terrain" + common);
+  add_fields(fields, "stream", "stream --server ws" + http.substr(4) + "/ws --model terrain" + common);
   add_fields(fields, "stream", "stream --server " + http + " --mode multilevel --model levels" + common);
   for (const int signal : {SIGUSR1, SIGTERM}) {
     serve.signal(signal);

@@ -1,8 +1,7 @@
 // The Beast test client (http_test_client.h).
 #include "http_test_client.h"
+#include "loopback_socket.h"
 
-#include <sys/socket.h>
-#include <sys/time.h>
 #include <boost/asio.hpp>
 #include <boost/beast/core.hpp>
 #include <boost/beast/http.hpp>
@@ -25,13 +24,7 @@ struct HttpTestClient::Impl {
 
 HttpTestClient::HttpTestClient(uint16_t port, int timeout_ms, const std::string& from, int receive_buffer)
     : impl_(std::make_unique<Impl>()) {
-  const auto loopback = asio::ip::make_address("127.0.0.1");
-  impl_->socket.open(tcp::v4());
-  if (receive_buffer > 0) impl_->socket.set_option(asio::socket_base::receive_buffer_size(receive_buffer));
-  impl_->socket.bind(tcp::endpoint(asio::ip::make_address(from), 0));
-  impl_->socket.connect(tcp::endpoint(loopback, port));
-  timeval tv{timeout_ms / 1000, (timeout_ms % 1000) * 1000};
-  ::setsockopt(impl_->socket.native_handle(), SOL_SOCKET, SO_RCVTIMEO, &tv, sizeof tv);
+  connect_loopback(impl_->socket, port, from, timeout_ms, receive_buffer);
 }
 
 HttpTestClient::~HttpTestClient() = default;

@@ -57,8 +57,9 @@ struct LoopbackTcpServer {
 };
 
 struct LoopbackHttpServer {
-  explicit LoopbackHttpServer(std::shared_ptr<const server::Catalogue> catalogue, const server::HttpLimits& limits = {})
-      : http(std::move(catalogue), limits, "127.0.0.1", 0) {
+  explicit LoopbackHttpServer(std::shared_ptr<const server::Catalogue> catalogue, const server::HttpLimits& limits = {},
+                              const server::WebOptions& web = {})
+      : http(std::move(catalogue), limits, "127.0.0.1", 0, web) {
     http.start();
   }
   uint16_t port() const { return http.port(); }
