@@ -5,20 +5,19 @@ import { test, before, after } from 'node:test';
 import assert from 'node:assert/strict';
 import { execFileSync } from 'node:child_process';
 import path from 'node:path';
-import { environment, terrainModel, startServer, openBrowser, newPage, openPage, settle, screenshot, readJson } from './page_harness.mjs';
+import { environment, terrainModel, pathCameras, startServer, openBrowser, newPage, openPage, settle, screenshot } from './page_harness.mjs';
 import { readPly, compareMeshes } from './page_mesh_compare.mjs';
 
 const env = environment();
 const TOLERANCE = 1;
 const FRAMES = 24;
-let server, browser, model, flight;
+let server, browser, model, flight, cameras;
 
 before(async () => {
   const file = terrainModel(env);
   model = path.basename(file, '.pms');
-  flight = path.join(env.artifacts, 'flight_zoom.json');
-  execFileSync(env.pmstream, ['path', 'zoom', '--model', file, '--frames', String(FRAMES), '-o', flight,
-                              '--width', '800', '--height', '600', '--fovy', '60']);
+  cameras = pathCameras(env, file, 'zoom', FRAMES);
+  flight = path.join(env.artifacts, `path_${model}_zoom_${FRAMES}.json`);
   server = await startServer(env, [file]);
   ({ browser } = await openBrowser(env));
 });
@@ -39,8 +38,6 @@ function nativeMesh(mode) {
 // A page of its own per flight: the first path camera is the viewer's first view.
 async function pageMesh(mode) {
   const { page, errors } = await newPage(browser);
-  const cameras = readJson(flight).frames.map((c) => (
-    { eye: c.eye, target: c.target, up: c.up, fovyDeg: c.fovy_deg, width: c.width, height: c.height }));
   await openPage(page, server, `#model=${model}&mode=${mode}&tau=${TOLERANCE}`, cameras[0]);
   for (const camera of cameras) {
     await page.evaluate((cam) => { window.pmstream.setCamera(cam); return window.pmstream.nextFrame(); }, camera);

@@ -51,6 +51,15 @@ export function terrainModel(env, faces = 20000) {
   return file;
 }
 
+// A scripted path (`pmstream path KIND`, docs/cli.md) over the model, as the cameras the page's hook takes.
+export function pathCameras(env, model, kind = 'zoom', frames = 24) {
+  const file = path.join(env.artifacts, `path_${path.basename(model, '.pms')}_${kind}_${frames}.json`);
+  execFileSync(env.pmstream, ['path', kind, '--model', model, '--frames', String(frames), '-o', file,
+                              '--width', '800', '--height', '600', '--fovy', '60'], { stdio: 'ignore' });
+  return readJson(file).frames.map((c) => (
+    { eye: c.eye, target: c.target, up: c.up, fovyDeg: c.fovy_deg, width: c.width, height: c.height }));
+}
+
 // `pmstream serve` on loopback; resolves once its `listening` line names the ports.
 export function startServer(env, models, { httpPort = 0, extra = [] } = {}) {
   const args = ['serve', ...models, '--host', '127.0.0.1', '--port', '0', '--http-port', String(httpPort),

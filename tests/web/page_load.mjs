@@ -2,13 +2,14 @@
 // camera comes close (faces and bytes down rise in the overlay), and its link reopens the same view.
 import { test, before, after } from 'node:test';
 import assert from 'node:assert/strict';
-import { environment, terrainModel, startServer, openBrowser, openPage, settle, overlayNumbers, screenshot } from './page_harness.mjs';
+import { environment, terrainModel, pathCameras, startServer, openBrowser, openPage, settle, overlayNumbers, screenshot } from './page_harness.mjs';
 
 const env = environment();
-let server, browser, page, errors;
+let server, browser, page, errors, model;
 
 before(async () => {
-  server = await startServer(env, [terrainModel(env)]);
+  model = terrainModel(env);
+  server = await startServer(env, [model]);
   ({ browser, page, errors } = await openBrowser(env));
 });
 after(async () => {
@@ -50,13 +51,8 @@ test('the page loads with no console error and draws the base mesh where the mod
 
 test('moving the camera close raises faces and bytes down in the overlay', async () => {
   const far = await overlayNumbers(page);
-  const b = await page.evaluate(() => window.pmstream.bounds());
-  const centre = b.min.map((v, i) => (v + b.max[i]) / 2);
-  const size = Math.max(...b.max.map((v, i) => v - b.min[i]));
-  // Low over the middle of the terrain, looking across it: the near part needs many more faces.
-  await page.evaluate(([c, s]) => window.pmstream.setCamera({
-    eye: [c[0], c[1] + 0.08 * s, c[2] + 0.1 * s], target: [c[0], c[1], c[2] - 0.2 * s], up: [0, 1, 0],
-    fovyDeg: 60, width: 800, height: 600 }), [centre, size]);
+  // The end of `pmstream path zoom`: a close-up of a surface point.
+  await page.evaluate((c) => window.pmstream.setCamera(c), pathCameras(env, model, 'zoom').at(-1));
   await settle(page);
   const near = await overlayNumbers(page);
   await screenshot(env, page, 'load_close_up');

@@ -8,6 +8,9 @@ export class CameraControls {
   constructor(camera, element) {
     this.camera = camera;
     this.element = element;
+    // The native default view (common/camera.h) until the model's box is known: the viewer refuses a
+    // camera whose eye is its target, and fails for good on one.
+    camera.position.set(0, 0, 3);
     this.style = 'orbit';
     this.distance = 1;  // the fly camera's target sits this far ahead, so switching back orbits the same point
     this.orbit = null;
@@ -48,15 +51,24 @@ export class CameraControls {
     }
   }
 
-  // A view of the whole model: the box's centre, from far enough that the box fits the field of view.
+  // A view of the whole model: the box's centre, from far enough that the box fits the field of view,
+  // up along +y or, for a flat model, its short axis (as `pmstream path` chooses).
   frame(bounds) {
     const min = new THREE.Vector3(...bounds.min), max = new THREE.Vector3(...bounds.max);
     const centre = min.clone().add(max).multiplyScalar(0.5);
     const radius = Math.max(max.distanceTo(min) / 2, 1e-6);
     const distance = radius / Math.sin(THREE.MathUtils.degToRad(this.camera.fov) / 2);
+    const size = max.clone().sub(min).toArray();
+    const short = size.indexOf(Math.min(...size));
+    const upAxis = size[short] < 0.5 * Math.min(...size.filter((_, i) => i !== short)) ? short : 1;
+    const [side, front] = [0, 1, 2].filter((i) => i !== upAxis);
+    const eye = centre.toArray(), up = [0, 0, 0];
+    up[upAxis] = 1;
+    eye[upAxis] += 0.45 * distance;
+    eye[side] += 0.3 * distance;
+    eye[front] += 0.85 * distance;
     this.setSpeed(radius);
-    this.set({ eye: [centre.x + 0.3 * distance, centre.y + 0.45 * distance, centre.z + 0.85 * distance],
-               target: centre.toArray(), up: [0, 1, 0], fovy: this.camera.fov });
+    this.set({ eye, target: centre.toArray(), up, fovy: this.camera.fov });
   }
 
   setSpeed(radius) {

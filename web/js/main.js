@@ -52,8 +52,12 @@ class App {
     requestAnimationFrame((t) => this.loop(t));
   }
 
+  model() {
+    return this.models?.find((m) => m.name === this.state.model);
+  }
+
   open() {
-    const model = this.models.find((m) => m.name === this.state.model);
+    const model = this.model();
     if (!modesFor(model, MODES).includes(this.state.mode)) this.state.mode = modesFor(model, MODES)[0];
     this.viewer?.close();
     if (this.geometry) {
@@ -124,7 +128,7 @@ class App {
     fitDepthRange(this.view.camera, this.bounds);
     this.view.renderer.render(this.view.scene, this.view.camera);
     this.frameRate.tick(time);
-    if (this.report) this.overlay.show(this.report, this.frameRate.value());
+    if (this.report) this.overlay.show(this.report, this.frameRate.value(), this.model()?.vsplits);
     if (time - this.lastUrl > URL_EVERY_MS) this.writeLink(time);
   }
 
@@ -155,6 +159,9 @@ class App {
     this.bounds = this.viewer.bounds();
     this.controls.setSpeed(Math.hypot(...this.bounds.max.map((v, i) => v - this.bounds.min[i])) / 2);
     if (!this.state.eye && !this.scripted) this.controls.frame(this.bounds);
+    // The sun high over the model's up axis, a little to the side.
+    const up = this.controls.orbitUp;
+    this.view.sun.position.set(...up.map((v, i) => v || [0.4, 0.3, 0.3][i]));
     this.overlay.say('');
   }
 

@@ -33,29 +33,32 @@ export class Overlay {
     this.root = root;
   }
 
-  show(report, fps) {
+  // modelTotal: what the model has of the unit received (its splits, or levels), for the "of N" and the bar.
+  show(report, fps, modelTotal) {
+    const unit = report.receivedUnit || 'vsplits';
+    const total = unit === 'levels' ? report.levels?.count : modelTotal;
+    const received = report.receivedTotal ?? 0;
     const lines = [
       `faces      ${count(report.faces)}`,
       `vertices   ${count(report.vertices)}`,
-      `${(report.receivedUnit || 'vsplits').padEnd(10)} ${count(report.received)}` +
-        (report.receivedTotal ? ` / ${count(report.receivedTotal)}` : ''),
+      `${unit.padEnd(10)} ${count(received)}${total ? ` of ${count(total)}` : ''}`,
       `down       ${bytes(report.downBytes ?? 0)}`,
       `up         ${bytes(report.upBytes ?? 0)}`,
-      `latency    ${report.latencyMs == null ? '–' : `${report.latencyMs.toFixed(1)} ms`}`,
+      `latency    ${report.latencyMs ? `${report.latencyMs.toFixed(1)} ms` : '–'}`,
       `fps        ${fps.toFixed(1)}`,
     ];
-    if (report.levels) lines.push(`levels     ${report.levels.shown} shown, ${report.levels.loaded} / ${report.levels.count} in`);
+    if (report.levels) lines.push(`levels     ${report.levels.shown} shown, ${report.levels.loaded} in`);
     this.stats.textContent = lines.join('\n');
     // The same figures as numbers, for a script reading the page (the browser tests do).
     Object.assign(this.stats.dataset, {
-      faces: report.faces ?? 0, vertices: report.vertices ?? 0, received: report.received ?? 0,
+      faces: report.faces ?? 0, vertices: report.vertices ?? 0, received,
       down: report.downBytes ?? 0, up: report.upBytes ?? 0,
     });
-    // Data is arriving while the view is unsatisfied or anything is in flight.
-    const busy = report.opening || !report.satisfied || report.inFlight > 0;
-    this.progress.hidden = !busy;
-    const fraction = report.receivedTotal ? report.received / report.receivedTotal : 0;
-    this.bar.style.width = `${Math.round(Math.min(1, fraction) * 100)}%`;
+    // Data is arriving while the view is unsatisfied or anything is in flight; the bar is how much of the
+    // model is in, and moves (css) while busy.
+    const busy = Boolean(report.opening || !report.satisfied || report.inFlight > 0);
+    this.progress.classList.toggle('busy', busy);
+    this.bar.style.width = `${Math.round(Math.min(1, total ? received / total : 0) * 100)}%`;
     this.root.dataset.busy = busy ? '1' : '0';
   }
 
