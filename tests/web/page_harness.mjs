@@ -119,8 +119,10 @@ export async function openPage(page, server, hash = '', camera = null) {
   await page.waitForFunction(() => window.pmstream?.ready, null, { timeout: DEADLINE_MS });
 }
 
-// Until the viewer's last view is satisfied, nothing in flight or in motion.
+// Until the viewer's last view is satisfied, nothing in flight or in motion. A frame first, so that the
+// viewer has seen the camera set last (settled() speaks of the view before until then).
 export async function settle(page) {
+  await page.evaluate(() => window.pmstream.nextFrame());
   await page.waitForFunction(() => window.pmstream.settled(), null, { timeout: DEADLINE_MS, polling: 100 });
   return page.evaluate(() => window.pmstream.report);
 }

@@ -74,6 +74,7 @@ class App {
       onStatus: (text) => this.overlay.say(text),
     }));
     this.panel.show(this.state);
+    this.overlay.reset();
     this.overlay.say(`opening ${this.state.model} (${this.state.mode})…`);
   }
 

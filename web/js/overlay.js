@@ -31,6 +31,7 @@ export class Overlay {
     this.bar = root.querySelector('#progress-bar');
     this.status = root.querySelector('#status');
     this.root = root;
+    this.latencyMs = 0;
   }
 
   // modelTotal: what the model has of the unit received (its splits, or levels), for the "of N" and the bar.
@@ -38,13 +39,14 @@ export class Overlay {
     const unit = report.receivedUnit || 'vsplits';
     const total = unit === 'levels' ? report.levels?.count : modelTotal;
     const received = report.receivedTotal ?? 0;
+    if (report.latencyMs > 0) this.latencyMs = report.latencyMs;  // a frame reports it when an answer came
     const lines = [
       `faces      ${count(report.faces)}`,
       `vertices   ${count(report.vertices)}`,
       `${unit.padEnd(10)} ${count(received)}${total ? ` of ${count(total)}` : ''}`,
       `down       ${bytes(report.downBytes ?? 0)}`,
       `up         ${bytes(report.upBytes ?? 0)}`,
-      `latency    ${report.latencyMs ? `${report.latencyMs.toFixed(1)} ms` : '–'}`,
+      `latency    ${this.latencyMs ? `${this.latencyMs.toFixed(1)} ms` : '–'}`,
       `fps        ${fps.toFixed(1)}`,
     ];
     if (report.levels) lines.push(`levels     ${report.levels.shown} shown, ${report.levels.loaded} in`);
@@ -60,6 +62,11 @@ export class Overlay {
     this.progress.classList.toggle('busy', busy);
     this.bar.style.width = `${Math.round(Math.min(1, total ? received / total : 0) * 100)}%`;
     this.root.dataset.busy = busy ? '1' : '0';
+  }
+
+  // A new viewer: nothing measured yet.
+  reset() {
+    this.latencyMs = 0;
   }
 
   say(text, error = false) {
