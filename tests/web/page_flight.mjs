@@ -1,30 +1,21 @@
 // A scripted flight in the page ends on the native viewer's mesh: the same path, τ and mode through
 // `pmstream stream --save-mesh`, compared as vertex and face sets (page_mesh_compare.mjs). The page hands
 // each path camera to the viewer verbatim, one displayed frame each, then settles at the last.
-import { test, before, after } from 'node:test';
+import { test, after } from 'node:test';
 import assert from 'node:assert/strict';
 import { execFileSync } from 'node:child_process';
 import path from 'node:path';
-import { environment, terrainModel, pathCameras, startServer, openBrowser, newPage, openPage, settle, screenshot } from './page_harness.mjs';
+import { environment, serveAndBrowse, closeAll, pathCameras, newPage, openPage, settle, screenshot } from './page_harness.mjs';
 import { readPly, compareMeshes } from './page_mesh_compare.mjs';
 
 const env = environment();
 const TOLERANCE = 1;
 const FRAMES = 24;
-let server, browser, model, flight, cameras;
-
-before(async () => {
-  const file = terrainModel(env);
-  model = path.basename(file, '.pms');
-  cameras = pathCameras(env, file, 'zoom', FRAMES);
-  flight = path.join(env.artifacts, `path_${model}_zoom_${FRAMES}.json`);
-  server = await startServer(env, [file]);
-  ({ browser } = await openBrowser(env));
-});
-after(async () => {
-  await browser?.close();
-  await server?.stop();
-});
+const { model: file, server, browser } = await serveAndBrowse(env);
+after(() => closeAll(browser, server));
+const model = path.basename(file, '.pms');
+const cameras = pathCameras(env, file, 'zoom', FRAMES);
+const flight = path.join(env.artifacts, `path_${model}_zoom_${FRAMES}.json`);
 
 function nativeMesh(mode) {
   const out = path.join(env.artifacts, `flight_native_${mode}.ply`);

@@ -65,6 +65,7 @@ export function startServer(env, models, { httpPort = 0, extra = [] } = {}) {
   const args = ['serve', ...models, '--host', '127.0.0.1', '--port', '0', '--http-port', String(httpPort),
                 '--web-root', env.site, '--json', ...extra];
   const child = spawn(env.pmstream, args, { stdio: ['ignore', 'pipe', 'pipe'] });
+  process.on('exit', () => child.kill('SIGKILL'));  // a test that throws outside node:test's hooks
   let stderr = '';
   child.stderr.on('data', (d) => { stderr += d; });
   return new Promise((resolve, reject) => {
@@ -108,6 +109,18 @@ export async function newPage(browser, { width = 800, height = 600 } = {}) {
   page.on('pageerror', (e) => errors.push(`page: ${e.message}`));
   page.setDefaultTimeout(DEADLINE_MS);
   return { page, errors };
+}
+
+// What most test files start with: the terrain served, a browser and a page; close with closeAll.
+export async function serveAndBrowse(env) {
+  const model = terrainModel(env);
+  const server = await startServer(env, [model]);
+  return { model, server, ...await openBrowser(env) };
+}
+
+export async function closeAll(browser, server) {
+  await browser?.close();
+  await server?.stop();
 }
 
 // The page for a server and a state (url_state.js), opened until the model's base mesh is in; with

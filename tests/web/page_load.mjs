@@ -1,21 +1,12 @@
 // The page loads with no console error, draws the base mesh where the model projects, refines when the
 // camera comes close (faces and bytes down rise in the overlay), and its link reopens the same view.
-import { test, before, after } from 'node:test';
+import { test, after } from 'node:test';
 import assert from 'node:assert/strict';
-import { environment, terrainModel, pathCameras, startServer, openBrowser, openPage, settle, overlayNumbers, screenshot } from './page_harness.mjs';
+import { environment, serveAndBrowse, closeAll, pathCameras, openPage, settle, overlayNumbers, screenshot } from './page_harness.mjs';
 
 const env = environment();
-let server, browser, page, errors, model;
-
-before(async () => {
-  model = terrainModel(env);
-  server = await startServer(env, [model]);
-  ({ browser, page, errors } = await openBrowser(env));
-});
-after(async () => {
-  await browser?.close();
-  await server?.stop();
-});
+const { model, server, browser, page, errors } = await serveAndBrowse(env);
+after(() => closeAll(browser, server));
 
 // Pixels that differ from the sky drawn alone: inside the model's projected box, and a fair part of it.
 async function silhouette() {

@@ -1,23 +1,15 @@
 // Each of the six modes, picked in the page's mode switch, opens the model, streams and settles; the
 // multilevel LOD slider changes the face count.
-import { test, before, after } from 'node:test';
+import { test, after } from 'node:test';
 import assert from 'node:assert/strict';
-import { environment, terrainModel, startServer, openBrowser, openPage, settle, overlayNumbers, screenshot } from './page_harness.mjs';
+import { environment, serveAndBrowse, closeAll, openPage, settle, overlayNumbers, screenshot } from './page_harness.mjs';
 
 const env = environment();
-let server, browser, page, errors;
-
-before(async () => {
-  server = await startServer(env, [terrainModel(env)]);
-  ({ browser, page, errors } = await openBrowser(env));
-  await openPage(page, server);
-});
-after(async () => {
-  await browser?.close();
-  await server?.stop();
-});
+const { server, browser, page, errors } = await serveAndBrowse(env);
+after(() => closeAll(browser, server));
 
 async function pick(mode) {
+  if (!page.url().startsWith(server.url)) await openPage(page, server);
   await page.selectOption('#mode', mode);
   await page.waitForFunction((m) => window.pmstream.state.mode === m && window.pmstream.ready, mode);
   return settle(page);

@@ -1,21 +1,14 @@
 // A killed and restarted server is resumed from: the page keeps its mesh through the outage and, once the
 // server is back on the same port, refines on for a new view.
-import { test, before, after } from 'node:test';
+import { test, after } from 'node:test';
 import assert from 'node:assert/strict';
-import { environment, terrainModel, pathCameras, startServer, openBrowser, openPage, settle, screenshot } from './page_harness.mjs';
+import { environment, serveAndBrowse, closeAll, pathCameras, startServer, openPage, settle, screenshot } from './page_harness.mjs';
 
 const env = environment();
-let server, browser, page, errors, model;
-
-before(async () => {
-  model = terrainModel(env);
-  server = await startServer(env, [model]);
-  ({ browser, page, errors } = await openBrowser(env));
-});
-after(async () => {
-  await browser?.close();
-  await server?.stop();
-});
+const started = await serveAndBrowse(env);
+const { model, browser, page, errors } = started;
+let { server } = started;  // a new one after the restart
+after(() => closeAll(browser, server));
 
 for (const mode of ['sender', 'receiver']) {
   test(`mode ${mode} resumes from a restarted server`, async () => {
