@@ -51,6 +51,16 @@ export function terrainModel(env, faces = 20000) {
   return file;
 }
 
+// ../shared/models/NAME.ply.xz built once into the artifacts, or null where ../shared is absent.
+export function sharedModel(env, name) {
+  const source = path.join(SOURCE_DIR, '..', 'shared', 'models', `${name}.ply.xz`);
+  if (!existsSync(source)) return null;
+  const file = path.join(env.artifacts, 'models', `${name}.pms`);
+  mkdirSync(path.dirname(file), { recursive: true });
+  if (!existsSync(file)) execFileSync(env.pmstream, ['build', source, '-o', file], { stdio: 'ignore', timeout: DEADLINE_MS });
+  return file;
+}
+
 // A scripted path (`pmstream path KIND`, docs/cli.md) over the model, as the cameras the page's hook takes.
 export function pathCameras(env, model, kind = 'zoom', frames = 24) {
   const file = path.join(env.artifacts, `path_${path.basename(model, '.pms')}_${kind}_${frames}.json`);
@@ -111,10 +121,11 @@ export async function newPage(browser, { width = 800, height = 600 } = {}) {
   return { page, errors };
 }
 
-// What most test files start with: the terrain served, a browser and a page; close with closeAll.
-export async function serveAndBrowse(env) {
+// What most test files start with: the terrain served (and `extra` models), a browser and a page; close
+// with closeAll.
+export async function serveAndBrowse(env, extra = []) {
   const model = terrainModel(env);
-  const server = await startServer(env, [model]);
+  const server = await startServer(env, [model, ...extra]);
   return { model, server, ...await openBrowser(env) };
 }
 

@@ -2,10 +2,12 @@
 // camera comes close (faces and bytes down rise in the overlay), and its link reopens the same view.
 import { test, after } from 'node:test';
 import assert from 'node:assert/strict';
-import { environment, serveAndBrowse, closeAll, pathCameras, openPage, settle, overlayNumbers, screenshot } from './page_harness.mjs';
+import path from 'node:path';
+import { environment, sharedModel, serveAndBrowse, closeAll, pathCameras, openPage, settle, overlayNumbers, screenshot } from './page_harness.mjs';
 
 const env = environment();
-const { model, server, browser, page, errors } = await serveAndBrowse(env);
+const bunny = sharedModel(env, 'bunny');  // a closed, curved silhouette beside the terrain, when ../shared has it
+const { model, server, browser, page, errors } = await serveAndBrowse(env, bunny ? [bunny] : []);
 after(() => closeAll(browser, server));
 
 // Pixels that differ from the sky drawn alone: inside the model's projected box, and a fair part of it.
@@ -28,15 +30,26 @@ async function silhouette() {
   });
 }
 
-test('the page loads with no console error and draws the base mesh where the model projects', async () => {
-  await openPage(page, server);
+// The base mesh drawn, and only where the model projects.
+async function expectSilhouette(name) {
   const report = await settle(page);
   assert.ok(report.faces > 0, 'the base mesh has faces');
   const s = await silhouette();
-  await screenshot(env, page, 'load_base_mesh');
+  await screenshot(env, page, name);
   assert.ok(s.inside > 0.02 * s.total, `the model covers a visible part of the picture (${s.inside} of ${s.total})`);
   assert.ok(s.inside > 0.3 * s.boxPixels, `the model fills its projected box (${s.inside} of ${s.boxPixels})`);
   assert.equal(s.outside, 0, 'nothing drawn outside the model\'s projection');
+}
+
+test('the bunny (../shared) draws its silhouette where it projects', { skip: !bunny && '../shared/models/bunny.ply.xz absent' }, async () => {
+  await openPage(page, server, '#model=bunny');
+  await expectSilhouette('load_bunny');
+  assert.deepEqual(errors, []);
+});
+
+test('the page loads with no console error and draws the base mesh where the model projects', async () => {
+  await openPage(page, server, `#model=${path.basename(model, '.pms')}`);
+  await expectSilhouette('load_base_mesh');
   assert.deepEqual(errors, []);
 });
 
