@@ -12,8 +12,8 @@
 #include "apps/camera_path.h"
 #include "apps/percentile.h"
 #include "apps/resource_usage.h"
-#include "client/viewer.h"
 #include "client/transport.h"
+#include "client/viewer.h"
 #include "common/error.h"
 #include "protocol/client_messages.h"
 #include "render/render.h"
@@ -26,17 +26,28 @@
 namespace pms::app {
 namespace {
 
-// A flat model (smallest box extent under a quarter of the others) is flown over; anything else orbited.
-std::vector<Camera> flight_path(const ModelData& model, uint32_t frames) {
+// The axis a flat model (smallest box extent under a quarter of the others) is flown over, or -1 for
+// anything else, which is orbited.
+int flat_up_axis(const ModelData& model) {
   float extent[3];
   for (int k = 0; k < 3; ++k) extent[k] = model.bbox_max[k] - model.bbox_min[k];
   const int up = int(std::min_element(extent, extent + 3) - extent);
   const int along = up == 0 ? 1 : 0, across = 3 - up - along;
-  if (extent[up] * 4 > std::min(extent[along], extent[across])) {
+  return extent[up] * 4 > std::min(extent[along], extent[across]) ? -1 : up;
+}
+
+}  // namespace
+
+std::vector<Camera> demo_flight_path(const ModelData& model, uint32_t frames) {
+  const int up = flat_up_axis(model);
+  if (up < 0) {
     PathOptions options;
     options.frames = frames;
     return make_camera_path(PathKind::orbit, model, options);
   }
+  float extent[3];
+  for (int k = 0; k < 3; ++k) extent[k] = model.bbox_max[k] - model.bbox_min[k];
+  const int along = up == 0 ? 1 : 0, across = 3 - up - along;
   std::vector<Camera> path;
   const float altitude = model.bbox_max[up] + 0.08f * extent[along];
   for (uint32_t i = 0; i < frames; ++i) {
@@ -60,10 +71,28 @@ std::vector<Camera> flight_path(const ModelData& model, uint32_t frames) {
   return path;
 }
 
+namespace {
+
+// Over a flat model (a terrain) a sky behind and a sun low in the south-west, so the flight looks like
+// land; anything else keeps the renderer's headlight and backdrop.
+RenderOptions snapshot_look(const ModelData& model) {
+  RenderOptions look;
+  const int up = flat_up_axis(model);
+  if (up < 0) return look;
+  const int along = up == 0 ? 1 : 0, across = 3 - up - along;
+  look.light[along] = 0.6f;
+  look.light[across] = 0.45f;
+  look.light[up] = -1;
+  look.ambient = 0.3f;
+  const uint8_t sky[3] = {150, 190, 230};
+  std::copy_n(sky, 3, look.background);
+  return look;
+}
+
 void snapshot(const client::Viewer& viewer, const Camera& camera, const std::string& path, Renderer& renderer,
-              Image& image) {
+              const RenderOptions& look, Image& image) {
   const Mesh mesh = viewer.mesh();
-  renderer.render({mesh.positions, mesh.indices, mesh.colors}, viewer.view_params(camera), image);
+  renderer.render({mesh.positions, mesh.indices, mesh.colors}, viewer.view_params(camera), image, look);
   save_png(path, image);
 }
 
@@ -103,7 +132,7 @@ void print_progress(const client::Viewer& viewer, const client::ViewerReport& r,
 }
 
 Flight fly(client::Viewer& viewer, const std::vector<Camera>& path, const FlightOptions& options,
-           const std::string& snapshots) {
+           const RenderOptions& look, const std::string& snapshots) {
   Renderer renderer;
   Image image;
   Flight flight;
@@ -121,7 +150,7 @@ Flight fly(client::Viewer& viewer, const std::vector<Camera>& path, const Flight
     if (snapshot_frame) {
       char name[64];
       std::snprintf(name, sizeof name, "/frame_%04zu.png", i);
-      snapshot(viewer, path[i], snapshots + name, renderer, image);
+      snapshot(viewer, path[i], snapshots + name, renderer, look, image);
     }
   }
   flight.seconds = clock.seconds();
@@ -171,12 +200,12 @@ void run_demo_flight(const std::string& pms_path, const std::string& model_name,
   tcp.start();
   std::printf("server:    %s on 127.0.0.1:%u (TCP, sender-driven)\n", model_name.c_str(), unsigned(tcp.port()));
 
-  const std::vector<Camera> path = flight_path(served.model(), options.frames);
+  const std::vector<Camera> path = demo_flight_path(served.model(), options.frames);
   const std::unique_ptr<client::Viewer> viewer = open_demo_viewer(tcp.port(), model_name, "sender", options.tolerance);
   const uint64_t base_bytes = viewer->down_bytes();
   const std::string snapshots = options.out_dir + "/snapshots";
   if (options.snapshot_every) std::filesystem::create_directories(snapshots);
-  const Flight flight = fly(*viewer, path, options, snapshots);
+  const Flight flight = fly(*viewer, path, options, snapshot_look(served.model()), snapshots);
 
   std::printf("baseline:  the same flight, view-independent (plain PM order) ...");
   std::fflush(stdout);
