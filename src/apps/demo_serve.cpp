@@ -1,6 +1,7 @@
 #include "apps/demo_serve.h"
 
 #include <pthread.h>
+#include <cctype>
 #include <charconv>
 #include <csignal>
 #include <cstdio>
@@ -23,6 +24,23 @@ std::string number(float value) {
   return error == std::errc{} ? std::string(text, end) : "0";
 }
 
+// RFC 3986 §2.3: unreserved characters as they are, every other byte %XX (a model named after its file
+// may hold spaces or '&').
+std::string percent_encoded(const std::string& text) {
+  static constexpr char kHex[] = "0123456789ABCDEF";
+  std::string out;
+  for (const unsigned char c : text) {
+    if (std::isalnum(c) || c == '-' || c == '.' || c == '_' || c == '~') {
+      out += char(c);
+    } else {
+      out += '%';
+      out += kHex[c >> 4];
+      out += kHex[c & 15];
+    }
+  }
+  return out;
+}
+
 std::string triple(const float (&v)[3]) { return number(v[0]) + "," + number(v[1]) + "," + number(v[2]); }
 
 // The page's routes come with the server's web options (server/web_options.h); a server without them
@@ -41,7 +59,7 @@ std::unique_ptr<server::HttpServer> open_http(std::shared_ptr<const server::Cata
 }  // namespace
 
 std::string page_link(uint16_t http_port, const std::string& model_name, const Camera& camera, float tolerance) {
-  return "http://127.0.0.1:" + std::to_string(http_port) + "/#model=" + model_name +
+  return "http://127.0.0.1:" + std::to_string(http_port) + "/#model=" + percent_encoded(model_name) +
          "&mode=sender&tau=" + number(tolerance) + "&eye=" + triple(camera.eye) + "&target=" + triple(camera.target) +
          "&up=" + triple(camera.up) + "&fovy=" + number(camera.fovy_deg);
 }
