@@ -160,10 +160,14 @@ void add_demo_command(CliCommand& app) {
   // Each half's own options, refused in the other (cli.h, VariantOption).
   const std::vector<VariantOption> by_half = {
       {cmd.option("--frames", args->frames, "Frames of the flight").range(1u, 100000u).show_default(), {"--headless"}},
-      {cmd.option("--port", args->page.port, "TCP port for native clients (0: any free port)").show_default(),
+      {cmd.option("--port", args->page.port,
+                  "TCP port for native clients (0: any free port; the default, if taken, falls back to one)")
+           .show_default(),
        {"--serve"}},
       {cmd.option("--http-port", args->page.http_port,
-                  "HTTP port of the page, its WebSocket and the HTTP modes (0: any free port)")
+                  "HTTP port of the page, its WebSocket and the HTTP modes (0: any free port; the default, if taken, "
+                  "falls back "
+                  "to one)")
            .show_default(),
        {"--serve"}},
       {cmd.option("--web-root", args->page.web_root,
@@ -177,6 +181,8 @@ void add_demo_command(CliCommand& app) {
                                : terminal       ? "a run on a terminal, which serves the page"
                                                 : "a run without a terminal, which flies the headless client";
     refuse_unused_options(by_half, serve ? "--serve" : "--headless", chosen);
+    // The default ports are a convenience: taken by another program, any free ones do (the link says which).
+    args->page.any_port_if_taken = !by_half[1].option.given() && !by_half[2].option.given();
     run_demo(*args, serve);
   });
 }

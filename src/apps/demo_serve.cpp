@@ -9,6 +9,7 @@
 #include <memory>
 
 #include "apps/web_root.h"
+#include "common/error.h"
 #include "server/catalogue.h"
 #include "server/http_server.h"
 #include "server/limits.h"
@@ -56,6 +57,18 @@ std::unique_ptr<server::HttpServer> open_http(std::shared_ptr<const server::Cata
 #endif
 }
 
+// `open(port)`, or where that port is taken and the caller allows it, `open(0)`: any free port.
+template <typename Open>
+auto on_port(uint16_t port, bool any_if_taken, const Open& open) {
+  if (!any_if_taken || port == 0) return open(port);
+  try {
+    return open(port);
+  } catch (const Error& e) {
+    std::printf("note:      %s; any free port instead\n", e.what());
+    return open(uint16_t(0));
+  }
+}
+
 }  // namespace
 
 std::string page_link(uint16_t http_port, const std::string& model_name, const Camera& camera, float tolerance) {
@@ -75,9 +88,12 @@ void serve_demo(const std::string& pms_path, const std::string& model_name, cons
 
   const std::string root = options.web_root.empty() ? default_web_root() : options.web_root;
   const auto catalogue = server::Catalogue::open({pms_path});
-  server::TcpServer tcp(catalogue, server::ServerLimits{}, "127.0.0.1", options.port);
-  const std::unique_ptr<server::HttpServer> http = open_http(catalogue, options.http_port, root);
-  tcp.start();
+  const auto tcp = on_port(options.port, options.any_port_if_taken, [&](uint16_t port) {
+    return std::make_unique<server::TcpServer>(catalogue, server::ServerLimits{}, "127.0.0.1", port);
+  });
+  const auto http = on_port(options.http_port, options.any_port_if_taken,
+                            [&](uint16_t port) { return open_http(catalogue, port, root); });
+  tcp->start();
   http->start();
   if (!std::filesystem::exists(std::filesystem::path(root) / "index.html"))
     std::printf(
@@ -85,7 +101,7 @@ void serve_demo(const std::string& pms_path, const std::string& model_name, cons
         "with --web-root\n",
         root.c_str());
   std::printf("server:    %s on 127.0.0.1:%u (TCP) and 127.0.0.1:%u (HTTP: the page, its WebSocket, the HTTP modes)\n",
-              model_name.c_str(), unsigned(tcp.port()), unsigned(http->port()));
+              model_name.c_str(), unsigned(tcp->port()), unsigned(http->port()));
   std::printf("page:      %s\n", page_link(http->port(), model_name, first_view, options.tolerance).c_str());
   std::printf("           open it in a browser; Ctrl-C stops the server\n");
   std::fflush(stdout);
@@ -93,11 +109,11 @@ void serve_demo(const std::string& pms_path, const std::string& model_name, cons
   int received = 0;
   sigwait(&signals, &received);
   http->stop();
-  tcp.stop();
+  tcp->stop();
   const server::HttpStats& s = http->stats();
   std::printf("stopped:   %llu HTTP requests, %llu TCP sessions, %llu bytes out\n",
-              (unsigned long long)s.requests.load(), (unsigned long long)tcp.stats().sessions_opened.load(),
-              (unsigned long long)(s.bytes_out.load() + tcp.stats().bytes_out.load()));
+              (unsigned long long)s.requests.load(), (unsigned long long)tcp->stats().sessions_opened.load(),
+              (unsigned long long)(s.bytes_out.load() + tcp->stats().bytes_out.load()));
   std::fflush(stdout);
 }
 

@@ -10,10 +10,11 @@
 namespace pms::app {
 
 struct DemoServeOptions {
-  uint16_t port = 7300;       // TCP (0: any free port)
-  uint16_t http_port = 7301;  // the page, its WebSocket and the HTTP modes (0: any free port)
-  std::string web_root;       // the assembled site; empty: default_web_root()
-  float tolerance = 1;        // the page's τ, carried in the link
+  uint16_t port = 7300;            // TCP (0: any free port)
+  uint16_t http_port = 7301;       // the page, its WebSocket and the HTTP modes (0: any free port)
+  bool any_port_if_taken = false;  // a port another program holds: take any free one instead of failing
+  std::string web_root;            // the assembled site; empty: default_web_root()
+  float tolerance = 1;             // the page's τ, carried in the link
 };
 
 // The page's link (docs/web.md, "The link"): model, sender mode, τ and `camera` in the hash.
