@@ -11,6 +11,7 @@
 #include "apps/commands.h"
 #include "apps/demo_flight.h"
 #include "apps/demo_serve.h"
+#include "apps/demo_views.h"
 #include "apps/progress_bar.h"
 #include "apps/refine_pipeline.h"
 #include "apps/resource_usage.h"
@@ -126,7 +127,7 @@ void run_demo(const DemoArgs& args, bool serve) {
   if (serve) {
     DemoServeOptions page = args.page;
     page.tolerance = args.tolerance;
-    serve_demo(pms_path, name, demo_flight_path(file->model(), 2).front(), page);
+    serve_demo(pms_path, name, demo_first_view(file->model()), page);
     return;
   }
   write_meshes(file->model(), args.out_dir);

@@ -4,12 +4,11 @@
 
 #include <unistd.h>
 #include <algorithm>
-#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 
-#include "apps/camera_path.h"
+#include "apps/demo_views.h"
 #include "apps/percentile.h"
 #include "apps/resource_usage.h"
 #include "client/transport.h"
@@ -25,69 +24,6 @@
 
 namespace pms::app {
 namespace {
-
-// The axis a flat model (smallest box extent under a quarter of the others) is flown over, or -1 for
-// anything else, which is orbited.
-int flat_up_axis(const ModelData& model) {
-  float extent[3];
-  for (int k = 0; k < 3; ++k) extent[k] = model.bbox_max[k] - model.bbox_min[k];
-  const int up = int(std::min_element(extent, extent + 3) - extent);
-  const int along = up == 0 ? 1 : 0, across = 3 - up - along;
-  return extent[up] * 4 > std::min(extent[along], extent[across]) ? -1 : up;
-}
-
-}  // namespace
-
-std::vector<Camera> demo_flight_path(const ModelData& model, uint32_t frames) {
-  const int up = flat_up_axis(model);
-  if (up < 0) {
-    PathOptions options;
-    options.frames = frames;
-    return make_camera_path(PathKind::orbit, model, options);
-  }
-  float extent[3];
-  for (int k = 0; k < 3; ++k) extent[k] = model.bbox_max[k] - model.bbox_min[k];
-  const int along = up == 0 ? 1 : 0, across = 3 - up - along;
-  std::vector<Camera> path;
-  const float altitude = model.bbox_max[up] + 0.08f * extent[along];
-  for (uint32_t i = 0; i < frames; ++i) {
-    const float t = float(i) / float(std::max(1u, frames - 1));
-    Camera c;
-    c.width = 800;
-    c.height = 450;
-    c.fovy_deg = 50;
-    // Across the terrain with a gentle weave, looking ahead and down at the ground in front.
-    const float s = 0.05f + 0.7f * t;
-    c.eye[along] = model.bbox_min[along] + s * extent[along];
-    c.eye[across] = model.bbox_min[across] + (0.5f + 0.15f * std::sin(6.0f * t)) * extent[across];
-    c.eye[up] = altitude;
-    std::copy_n(c.eye, 3, c.target);
-    c.target[along] += 0.15f * extent[along];
-    c.target[up] = model.bbox_min[up] + 0.5f * extent[up];
-    c.up[0] = c.up[1] = c.up[2] = 0;
-    c.up[up] = 1;
-    path.push_back(c);
-  }
-  return path;
-}
-
-namespace {
-
-// Over a flat model (a terrain) a sky behind and a sun low in the south-west, so the flight looks like
-// land; anything else keeps the renderer's headlight and backdrop.
-RenderOptions snapshot_look(const ModelData& model) {
-  RenderOptions look;
-  const int up = flat_up_axis(model);
-  if (up < 0) return look;
-  const int along = up == 0 ? 1 : 0, across = 3 - up - along;
-  look.light[along] = 0.6f;
-  look.light[across] = 0.45f;
-  look.light[up] = -1;
-  look.ambient = 0.3f;
-  const uint8_t sky[3] = {150, 190, 230};
-  std::copy_n(sky, 3, look.background);
-  return look;
-}
 
 void snapshot(const client::Viewer& viewer, const Camera& camera, const std::string& path, Renderer& renderer,
               const RenderOptions& look, Image& image) {
@@ -205,7 +141,7 @@ void run_demo_flight(const std::string& pms_path, const std::string& model_name,
   const uint64_t base_bytes = viewer->down_bytes();
   const std::string snapshots = options.out_dir + "/snapshots";
   if (options.snapshot_every) std::filesystem::create_directories(snapshots);
-  const Flight flight = fly(*viewer, path, options, snapshot_look(served.model()), snapshots);
+  const Flight flight = fly(*viewer, path, options, demo_snapshot_look(served.model()), snapshots);
 
   std::printf("baseline:  the same flight, view-independent (plain PM order) ...");
   std::fflush(stdout);

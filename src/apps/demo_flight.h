@@ -1,11 +1,8 @@
 // The streaming half of `pmstream demo`: an in-process server on loopback, a headless client flying
 // over the model, a live progress line, a final table, snapshots and a report in the output directory.
 #pragma once
+#include <cstdint>
 #include <string>
-#include <vector>
-
-#include "common/camera.h"
-#include "spm/hierarchy.h"
 
 namespace pms::app {
 
@@ -15,10 +12,6 @@ struct FlightOptions {
   float tolerance = 1;
   uint32_t snapshot_every = 40;  // frames between PNG snapshots (0 = none)
 };
-
-// The demo's path over `model`: for a flat model (a terrain) a low flight across it, looking ahead and down;
-// for any other model the orbit path.
-std::vector<Camera> demo_flight_path(const ModelData& model, uint32_t frames);
 
 // Streams `pms_path` (served as `model_name`) along a low flight over its bounding box (for a terrain:
 // across it, looking ahead and down; for any other model: the orbit path). Prints the table.
