@@ -1,9 +1,12 @@
 #!/usr/bin/env bash
-# One entry point for a fresh Debian 12 machine: installs what is missing, builds, then
-#   setup.sh demo   -> builds build/pmstream alone and runs `pmstream demo`
-#   setup.sh test   -> runs the test suite (the layering check, a release build and its tests, then one clang
-#                      build with ASan+UBSan: the tests again and short runs of every fuzz target)
-#   setup.sh build  -> only builds (build/pmstream, build/pmstream-bench and the tests)
+# One entry point for a fresh Debian 12 machine: installs what is missing (apt; the page's npm packages,
+# pinned by web/package-lock.json), builds, then
+#   setup.sh demo   -> builds what the demo needs alone (build/pmstream and the browser page's site, build/web)
+#                      and runs `pmstream demo`: on a terminal it serves the page and prints its link
+#   setup.sh test   -> runs the test suite (the layering check, a release build and its tests, the browser
+#                      tests included, then one clang build with ASan+UBSan: the native tests again and
+#                      short runs of every fuzz target)
+#   setup.sh build  -> only builds (build/pmstream, build/pmstream-bench, the tests and the page)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -17,7 +20,13 @@ packages=(build-essential cmake ninja-build pkg-config git xz-utils
           libmeshoptimizer-dev libdraco-dev
           libgtest-dev libgmock-dev libbenchmark-dev clang libclang-rt-14-dev
           libopenmesh-apps gnuplot-nox graphviz
-          nginx-light)  # the caching proxy of deploy/nginx, which the NginxCache tests run on loopback
+          nginx-light  # the caching proxy of deploy/nginx, which the NginxCache tests run on loopback
+          emscripten   # the browser viewer's WASM core (web/CMakeLists.txt)
+          chromium)    # the browser tests' browser, driven headless by playwright-core (docs/web.md)
+# node and npm install the page's packages and run the browser tests. Debian's `npm` package conflicts with
+# a nodejs from elsewhere (NodeSource's bundles npm), so they are asked for only when the commands are missing.
+command -v node >/dev/null 2>&1 || packages+=(nodejs)
+command -v npm >/dev/null 2>&1 || packages+=(npm)
 
 install_packages() {
   local missing=()
@@ -40,8 +49,29 @@ install_packages() {
   exit 1
 }
 
+# three.js and playwright-core, exactly as web/package-lock.json pins them, into web/node_modules; the build
+# copies the page's share of them into build/web. Skipped when that install is newer than the lock file.
+install_web_packages() {
+  [ -f web/package-lock.json ] || return 0
+  if [ -f web/node_modules/.package-lock.json ] && [ web/node_modules/.package-lock.json -nt web/package-lock.json ]; then
+    return 0
+  fi
+  echo "setup: npm ci in web/"
+  (cd web && npm ci --no-audit --no-fund --loglevel=error)
+}
+
 # The targets configure_and_build builds; empty: all of them.
 targets=()
+
+# The build's targets among $2...: the browser site's exist only when emscripten and web/node_modules do.
+existing_targets() {  # dir, names...
+  local dir=$1; shift
+  local all
+  all=$(ninja -C "$dir" -t targets all 2>/dev/null)
+  for name in "$@"; do
+    if grep -q "^$name: " <<<"$all"; then echo "$name"; fi
+  done
+}
 
 configure_and_build() {  # dir, extra cmake args...
   local dir=$1; shift
@@ -73,12 +103,15 @@ run_fuzzers() {
 }
 
 install_packages
+install_web_packages
 case "$mode" in
   build)
     configure_and_build build
     ;;
   demo)
-    targets=(pmstream)  # neither the bench nor the tests
+    # Neither the bench nor the tests: the binary and the page's site (the WASM core and the page's files).
+    cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=Release -DPMSTREAM_WERROR=ON >/dev/null
+    mapfile -t targets < <(echo pmstream; existing_targets build web web_page)
     configure_and_build build
     ./build/pmstream demo "$@"
     ;;
@@ -86,12 +119,14 @@ case "$mode" in
     # First, before anything builds: no include goes up or sideways in the layers (docs/architecture.md).
     bash scripts/check_layers.sh
     configure_and_build build
+    # Every test, the browser ones (labels browser and web: node, chromium, the built site) among them.
     (cd build && ctest --output-on-failure -j "$jobs" --timeout 900)
-    # Second configuration (clang): the unit tests under AddressSanitizer + UndefinedBehaviorSanitizer, and
-    # every decoder's libFuzzer target, from one build of the libraries.
+    # Second configuration (clang): the native unit tests under AddressSanitizer + UndefinedBehaviorSanitizer,
+    # and every decoder's libFuzzer target, from one build of the libraries. The browser's part was tested
+    # above; it is neither built nor run again here.
     CC=clang CXX=clang++ configure_and_build build-asan -DCMAKE_BUILD_TYPE=RelWithDebInfo -DPMSTREAM_SANITIZE=ON \
-      -DPMSTREAM_FUZZ=ON
-    (cd build-asan && ASAN_OPTIONS=detect_leaks=1 ctest --output-on-failure -j "$jobs" --timeout 900 -LE slow)
+      -DPMSTREAM_FUZZ=ON -DPMSTREAM_WEB=OFF
+    (cd build-asan && ASAN_OPTIONS=detect_leaks=1 ctest --output-on-failure -j "$jobs" --timeout 900 -LE 'slow|browser|web')
     run_fuzzers build-asan
     ;;
   *)

@@ -59,15 +59,22 @@ BuildRun build_mesh(Mesh mesh, const std::string& input_name, const std::string&
 
 namespace {
 
-// "terrain:FACES" names the built-in procedural terrain instead of a file.
-bool parse_terrain_spec(const std::string& spec, uint64_t& faces) {
-  constexpr std::string_view prefix = "terrain:";
+// "terrain:FACES" names the built-in procedural terrain instead of a file; "terrain:FACES:colors" the same
+// terrain with land colours (the demo's). The plain spelling keeps the uncoloured mesh that tests and
+// benches compare byte for byte.
+bool parse_terrain_spec(const std::string& spec, uint64_t& faces, TerrainColors& colors) {
+  constexpr std::string_view prefix = "terrain:", colored = ":colors";
   if (spec.rfind(prefix, 0) != 0) return false;
-  const std::string count = spec.substr(prefix.size());
+  std::string count = spec.substr(prefix.size());
+  colors = TerrainColors::none;
+  if (count.size() > colored.size() && count.ends_with(colored)) {
+    count.resize(count.size() - colored.size());
+    colors = TerrainColors::land;
+  }
   char* end = nullptr;
   const unsigned long long value = std::strtoull(count.c_str(), &end, 10);
   if (count.empty() || *end != '\0' || value < 2 || value > 200'000'000)
-    fail(spec, "expected terrain:FACES with FACES between 2 and 200000000");
+    fail(spec, "expected terrain:FACES or terrain:FACES:colors with FACES between 2 and 200000000");
   faces = value;
   return true;
 }
@@ -76,7 +83,8 @@ bool parse_terrain_spec(const std::string& spec, uint64_t& faces) {
 
 Mesh load_input(const std::string& in_path, const ProgressFn& progress) {
   uint64_t faces = 0;
-  if (parse_terrain_spec(in_path, faces)) return make_terrain(faces);
+  TerrainColors colors{};
+  if (parse_terrain_spec(in_path, faces, colors)) return make_terrain(faces, 1, colors);
   return load_mesh(in_path, progress);
 }
 

@@ -25,7 +25,8 @@ std::string describe(const CleanReport& report);
 
 // Builds an already loaded mesh (cleaned here) and writes OUT.pms.
 BuildRun build_mesh(Mesh mesh, const std::string& input_name, const std::string& out_path, const BuildOptions& options);
-// A mesh file (any supported format, .gz/.xz), or "terrain:FACES" for the built-in terrain.
+// A mesh file (any supported format, .gz/.xz), or "terrain:FACES" for the built-in terrain
+// ("terrain:FACES:colors": with land colours).
 Mesh load_input(const std::string& in_path, const ProgressFn& progress);
 // Loads IN (see load_input) then as above, with the builder's memory tuning on until it returns.
 BuildRun build_file(const std::string& in_path, const std::string& out_path, const BuildOptions& options,

@@ -4,16 +4,15 @@
 
 #include <unistd.h>
 #include <algorithm>
-#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 
-#include "apps/camera_path.h"
+#include "apps/demo_views.h"
 #include "apps/percentile.h"
 #include "apps/resource_usage.h"
-#include "client/viewer.h"
 #include "client/transport.h"
+#include "client/viewer.h"
 #include "common/error.h"
 #include "protocol/client_messages.h"
 #include "render/render.h"
@@ -26,44 +25,10 @@
 namespace pms::app {
 namespace {
 
-// A flat model (smallest box extent under a quarter of the others) is flown over; anything else orbited.
-std::vector<Camera> flight_path(const ModelData& model, uint32_t frames) {
-  float extent[3];
-  for (int k = 0; k < 3; ++k) extent[k] = model.bbox_max[k] - model.bbox_min[k];
-  const int up = int(std::min_element(extent, extent + 3) - extent);
-  const int along = up == 0 ? 1 : 0, across = 3 - up - along;
-  if (extent[up] * 4 > std::min(extent[along], extent[across])) {
-    PathOptions options;
-    options.frames = frames;
-    return make_camera_path(PathKind::orbit, model, options);
-  }
-  std::vector<Camera> path;
-  const float altitude = model.bbox_max[up] + 0.08f * extent[along];
-  for (uint32_t i = 0; i < frames; ++i) {
-    const float t = float(i) / float(std::max(1u, frames - 1));
-    Camera c;
-    c.width = 800;
-    c.height = 450;
-    c.fovy_deg = 50;
-    // Across the terrain with a gentle weave, looking ahead and down at the ground in front.
-    const float s = 0.05f + 0.7f * t;
-    c.eye[along] = model.bbox_min[along] + s * extent[along];
-    c.eye[across] = model.bbox_min[across] + (0.5f + 0.15f * std::sin(6.0f * t)) * extent[across];
-    c.eye[up] = altitude;
-    std::copy_n(c.eye, 3, c.target);
-    c.target[along] += 0.15f * extent[along];
-    c.target[up] = model.bbox_min[up] + 0.5f * extent[up];
-    c.up[0] = c.up[1] = c.up[2] = 0;
-    c.up[up] = 1;
-    path.push_back(c);
-  }
-  return path;
-}
-
 void snapshot(const client::Viewer& viewer, const Camera& camera, const std::string& path, Renderer& renderer,
-              Image& image) {
+              const RenderOptions& look, Image& image) {
   const Mesh mesh = viewer.mesh();
-  renderer.render({mesh.positions, mesh.indices, mesh.colors}, viewer.view_params(camera), image);
+  renderer.render({mesh.positions, mesh.indices, mesh.colors}, viewer.view_params(camera), image, look);
   save_png(path, image);
 }
 
@@ -103,7 +68,7 @@ void print_progress(const client::Viewer& viewer, const client::ViewerReport& r,
 }
 
 Flight fly(client::Viewer& viewer, const std::vector<Camera>& path, const FlightOptions& options,
-           const std::string& snapshots) {
+           const RenderOptions& look, const std::string& snapshots) {
   Renderer renderer;
   Image image;
   Flight flight;
@@ -121,7 +86,7 @@ Flight fly(client::Viewer& viewer, const std::vector<Camera>& path, const Flight
     if (snapshot_frame) {
       char name[64];
       std::snprintf(name, sizeof name, "/frame_%04zu.png", i);
-      snapshot(viewer, path[i], snapshots + name, renderer, image);
+      snapshot(viewer, path[i], snapshots + name, renderer, look, image);
     }
   }
   flight.seconds = clock.seconds();
@@ -171,12 +136,12 @@ void run_demo_flight(const std::string& pms_path, const std::string& model_name,
   tcp.start();
   std::printf("server:    %s on 127.0.0.1:%u (TCP, sender-driven)\n", model_name.c_str(), unsigned(tcp.port()));
 
-  const std::vector<Camera> path = flight_path(served.model(), options.frames);
+  const std::vector<Camera> path = demo_flight_path(served.model(), options.frames);
   const std::unique_ptr<client::Viewer> viewer = open_demo_viewer(tcp.port(), model_name, "sender", options.tolerance);
   const uint64_t base_bytes = viewer->down_bytes();
   const std::string snapshots = options.out_dir + "/snapshots";
   if (options.snapshot_every) std::filesystem::create_directories(snapshots);
-  const Flight flight = fly(*viewer, path, options, snapshots);
+  const Flight flight = fly(*viewer, path, options, demo_snapshot_look(served.model()), snapshots);
 
   std::printf("baseline:  the same flight, view-independent (plain PM order) ...");
   std::fflush(stdout);

@@ -1,6 +1,7 @@
 // The streaming half of `pmstream demo`: an in-process server on loopback, a headless client flying
 // over the model, a live progress line, a final table, snapshots and a report in the output directory.
 #pragma once
+#include <cstdint>
 #include <string>
 
 namespace pms::app {

@@ -10,6 +10,7 @@
 #include <thread>
 
 #include "common/error.h"
+#include "io/terrain_colors.h"
 
 namespace pms {
 namespace {
@@ -216,7 +217,7 @@ Mesh make_nonmanifold_fixture() {
   return m;
 }
 
-Mesh make_terrain(uint64_t target_faces, uint32_t seed) {
+Mesh make_terrain(uint64_t target_faces, uint32_t seed, TerrainColors colors) {
   constexpr uint64_t kMaxFaces = uint64_t(1) << 31;
   const std::string name = "terrain:" + std::to_string(target_faces);
   if (target_faces > kMaxFaces) fail(name, "at most " + std::to_string(kMaxFaces) + " faces");
@@ -249,6 +250,7 @@ Mesh make_terrain(uint64_t target_faces, uint32_t seed) {
       quad_faces(&m.indices[6 * (size_t(y) * nx + x)], at(x, y), at(x + 1, y), at(x + 1, y + 1), at(x, y + 1),
                  (x + y) % 2 == 1);
   if (helper.joinable()) helper.join();
+  if (colors == TerrainColors::land) color_land(m, nx + 1, ny + 1, spacing);
   return m;
 }
 

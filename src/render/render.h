@@ -22,8 +22,11 @@ struct RenderMesh {
 };
 
 struct RenderOptions {
-  unsigned threads = 0;                  // 0 = std::thread::hardware_concurrency(); never changes the image
-  float ambient = 0.15f;                 // intensity = ambient + (1 - ambient) * |n . view direction|
+  unsigned threads = 0;   // 0 = std::thread::hardware_concurrency(); never changes the image
+  float ambient = 0.15f;  // intensity = ambient + (1 - ambient) * |n . light direction|
+  // The direction the light shines along, in model space (it need not be unit length), as a sun over a
+  // terrain; all zero: a headlight along the view direction.
+  float light[3] = {0, 0, 0};
   uint8_t surface[3] = {200, 200, 200};  // when the mesh has no colors
   uint8_t background[3] = {40, 44, 52};
   // false: depth and face ids only, `rgb` left empty (no normals, lighting or colour writes) -- what a

@@ -2,6 +2,7 @@
 // being drawn (so a coarse mesh looks coarse), the clip transform, outcodes, the snapped screen position
 // and the Lambert-shaded colour (Gouraud: lit at the vertices, interpolated across the face).
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <string>
 
@@ -65,10 +66,22 @@ void accumulate_normals(const RenderMesh& mesh, size_t begin, size_t end, std::v
   }
 }
 
+namespace {
+
+// The unit direction the light shines along: options.light, or the headlight (the view direction).
+std::array<float, 3> light_direction(const ViewParams& view, const RenderOptions& options) {
+  const float* l = options.light;
+  const float length = std::sqrt(l[0] * l[0] + l[1] * l[1] + l[2] * l[2]);
+  if (!(length > 0)) return {view.forward[0], view.forward[1], view.forward[2]};
+  return {l[0] / length, l[1] / length, l[2] / length};
+}
+
+}  // namespace
+
 void transform_vertices(const RenderMesh& mesh, const ViewParams& view, const Frame& frame,
                         const RenderOptions& options, size_t begin, size_t end, VertexData& data) {
   const float* m = view.view_projection.m;
-  const float* forward = view.forward;
+  const std::array<float, 3> light = light_direction(view, options);
   const bool has_colors = !mesh.colors.empty();
   for (size_t v = begin; v < end; ++v) {
     const float* p = &mesh.positions[3 * v];
@@ -79,11 +92,10 @@ void transform_vertices(const RenderMesh& mesh, const ViewParams& view, const Fr
     data.screen[v] = code & (kClipMask | kOutInvalid) ? ScreenVertex{0, 0, 0, 0} : project(clip, frame);
     if (!options.shade) continue;
 
-    // Headlight: the light shines along the view direction. |cos| lights back faces like front faces,
-    // since open meshes show their inside through holes.
+    // |cos| lights back faces like front faces, since open meshes show their inside through holes.
     const float* n = &data.normals[3 * v];
     const float length = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
-    float cosine = length > 0 ? std::fabs(n[0] * forward[0] + n[1] * forward[1] + n[2] * forward[2]) / length : 0.0f;
+    float cosine = length > 0 ? std::fabs(n[0] * light[0] + n[1] * light[1] + n[2] * light[2]) / length : 0.0f;
     cosine = std::min(cosine, 1.0f);
     const float intensity = options.ambient + (1.0f - options.ambient) * cosine;
     const uint8_t* base = has_colors ? &mesh.colors[4 * v] : options.surface;

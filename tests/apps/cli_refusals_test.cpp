@@ -64,6 +64,7 @@ TEST(CliRefusals, NumbersThatAreNotNumbers) {
       {"path orbit --model m.pms --frames 0 -o p.json", {"--frames"}},
       {"path orbit --model m.pms --frames 2 --width 0x10 -o p.json", {"--width", "'0x10'"}},
       {"demo --frames ''", {"--frames", "''"}},
+      {"build terrain:100:colours -o o.pms", {"terrain:100:colours", "terrain:FACES:colors"}},
       {"serve m.pms --port 70000", {"--port", "out of range"}},
   });
 }
@@ -100,6 +101,10 @@ TEST(CliRefusals, OptionsOutsideTheirVariants) {
       {"multilevel level m.pml --level 1 --pixels 2 -o o.ply", {"--pixels", "--level alone"}},
       {"multilevel build terrain:100 -o o.pml --cluster grid:8,4 --base-vertices 10", {"--base-vertices", "--cluster"}},
       {"demo --model m.pms --rebuild", {"--rebuild", ".pms"}},
+      {"demo --serve --headless", {"--serve", "--headless"}},
+      {"demo --serve --frames 3", {"--frames", "not used with --serve", "only with --headless"}},
+      {"demo --http-port 0", {"--http-port", "without a terminal", "only with --serve"}},
+      {"demo --headless --web-root w", {"--web-root", "--headless"}},
       {"serve m.pms --http-max-connections 5", {"--http-max-connections", "--http-port"}},
       {"serve m.pms --port 0 --http-request-timeout-ms 100", {"--http-request-timeout-ms", "--http-port"}},
   });

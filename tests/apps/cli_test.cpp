@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "child_process.h"
+#include "client/http_connection.h"
 #include "io/mesh.h"
 #include "io/shapes.h"
 #include "test_support.h"
@@ -83,7 +84,7 @@ TEST(Cli, DemoStreamsTheUsersOwnModel) {
   EXPECT_NE(text.find("| 12 |"), std::string::npos) << text;
   EXPECT_TRUE(std::filesystem::exists(dir / "demo" / "snapshots" / "frame_0000.png"));
 
-  const RunResult again = run("demo --model " + ply + " --out " + out + " --frames 2");
+  const RunResult again = run("demo --headless --model " + ply + " --out " + out + " --frames 2");
   ASSERT_EQ(again.exit_code, 0) << again.err;
   EXPECT_NE(again.out.find("using the cached build"), std::string::npos) << again.out;
 
@@ -95,6 +96,40 @@ TEST(Cli, DemoStreamsTheUsersOwnModel) {
   const RunResult missing = run("demo --model " + (dir / "nope.ply").string() + " --out " + out);
   EXPECT_NE(missing.exit_code, 0);
   EXPECT_NE(missing.err.find("nope.ply: no such file"), std::string::npos) << missing.err;
+}
+
+// `demo --serve` (what a terminal gets): the model served on loopback, the page's link printed, the page and
+// the catalogue answered over HTTP, a clean stop on SIGINT (Ctrl-C). Every line is waited for under a deadline.
+TEST(Cli, DemoServesThePageUntilCtrlC) {
+  using std::chrono::seconds;
+  const auto dir = test::temp_dir();
+  const std::string ply = (dir / "torus.ply").string(), root = (dir / "site").string();
+  save_ply(make_torus(40, 16, 2.0f, 0.5f), ply);
+  std::filesystem::create_directories(root);
+  const std::string page = "<!doctype html><title>pmstream</title>\n";
+  std::ofstream(root + "/index.html") << page;
+  test::ChildProcess demo(PMSTREAM_BINARY, {"demo", "--serve", "--model", ply, "--out", (dir / "demo").string(),
+                                            "--port", "0", "--http-port", "0", "--web-root", root});
+  std::string link;
+  for (std::string line; link.empty() && !(line = demo.next_line(seconds(60))).empty();)
+    if (line.rfind("page:", 0) == 0) link = line.substr(line.find("http://"));
+  ASSERT_FALSE(link.empty()) << "no page: line";
+  EXPECT_NE(link.find("/#model=torus&mode=sender&tau=1&eye="), std::string::npos) << link;
+  const size_t port_at = link.find(':', 5) + 1;
+  client::HttpConnection http(client::parse_http_url(link.substr(0, link.find('/', port_at))));
+  const client::HttpAnswer models = http.get("/models");
+  EXPECT_EQ(models.status, 200);
+  EXPECT_NE(std::string(models.body.begin(), models.body.end()).find("\"torus\""), std::string::npos);
+#if __has_include("server/web_options.h")  // the server that serves the page's files
+  const client::HttpAnswer index = http.get("/");
+  EXPECT_EQ(index.status, 200);
+  EXPECT_EQ(std::string(index.body.begin(), index.body.end()), page);
+#endif
+  demo.signal(SIGINT);
+  std::string last;
+  for (std::string line; !(line = demo.next_line(seconds(30))).empty();) last = line;
+  EXPECT_EQ(last.rfind("stopped:", 0), 0u) << last;
+  EXPECT_EQ(demo.wait(seconds(30)), 0);
 }
 
 TEST(Cli, ErrorsAreOneLineNamingTheFile) {

@@ -157,6 +157,38 @@ TEST(Shapes, TerrainHeightsDoNotDependOnResolutionOrThreads) {
       ASSERT_EQ(point(coarse, y * 41 + x), point(fine, 2 * y * 81 + 2 * x)) << x << ", " << y;
 }
 
+// The coloured terrain is today's terrain (same positions, same faces, bit for bit) with land colours:
+// every class of land shows, the same call gives the same bytes, and the plain terrain stays uncoloured.
+TEST(Shapes, ColouredTerrainIsThePlainTerrainWithLandColours) {
+  const Mesh plain = make_terrain(100000, 1), colored = make_terrain(100000, 1, TerrainColors::land);
+  EXPECT_FALSE(plain.has_colors());
+  EXPECT_EQ(colored.positions, plain.positions);
+  EXPECT_EQ(colored.indices, plain.indices);
+  ASSERT_EQ(colored.colors.size(), 4 * colored.vertex_count());
+  EXPECT_EQ(make_terrain(100000, 1, TerrainColors::land).colors, colored.colors);
+  size_t water = 0, grass = 0, rock = 0, snow = 0;
+  for (size_t v = 0; v < colored.vertex_count(); ++v) {
+    const int r = colored.colors[4 * v], g = colored.colors[4 * v + 1], b = colored.colors[4 * v + 2];
+    ASSERT_EQ(colored.colors[4 * v + 3], 255) << "opaque";
+    const float height = point(colored, uint32_t(v))[2];
+    if (b > r + 40 && b > g) {
+      ++water;
+      EXPECT_LT(height, 60.0f) << "water only on the valley floors, vertex " << v;
+    }
+    grass += g > r + 15 && g > b + 15;
+    rock += std::abs(r - g) < 20 && std::abs(g - b) < 20 && r > 90 && r < 160;
+    if (r > 220 && g > 220 && b > 220) {
+      ++snow;
+      EXPECT_GT(height, 900.0f) << "snow only high up, vertex " << v;
+    }
+  }
+  const size_t some = colored.vertex_count() / 200;
+  EXPECT_GT(water, some);
+  EXPECT_GT(grass, 10 * some);
+  EXPECT_GT(rock, some);
+  EXPECT_GT(snow, some);
+}
+
 TEST(Shapes, TerrainRefusesAnUnboundedSize) { EXPECT_THROW(make_terrain(uint64_t(1) << 40), Error); }
 
 }  // namespace

@@ -40,6 +40,26 @@ TEST(Shading, LambertFromTheHeadlightWithAmbient) {
   EXPECT_EQ(flat.rgb[3 * centre + 2], 30);
 }
 
+// RenderOptions::light: a fixed light (a sun) instead of the headlight, whatever its length; all zero is the
+// headlight.
+TEST(Shading, LambertFromAFixedLight) {
+  // A square facing the camera (normal +z, view along -z): the headlight gives |cos| = 1.
+  const std::vector<float> positions = {-0.5f, -0.5f, 0, 0.5f, -0.5f, 0, 0.5f, 0.5f, 0, -0.5f, 0.5f, 0};
+  const std::vector<uint32_t> indices = {0, 1, 2, 0, 2, 3};
+  const size_t centre = 8 * 16 + 8;
+  const Image headlight = render({positions, indices, {}}, square_view(16));
+  ASSERT_NE(headlight.face_id[centre], kNone);
+  EXPECT_NEAR(headlight.rgb[3 * centre], expected_shade(200, 1), 1);
+  RenderOptions options;
+  options.light[0] = 0, options.light[1] = 0, options.light[2] = 0;
+  EXPECT_EQ(render({positions, indices, {}}, square_view(16), options).rgb, headlight.rgb);
+  // Light 60 degrees off the normal, given at another length: |cos| = 0.5.
+  options.light[0] = 3 * std::sin(float(M_PI) / 3), options.light[2] = -3 * std::cos(float(M_PI) / 3);
+  const Image sun = render({positions, indices, {}}, square_view(16), options);
+  EXPECT_NEAR(sun.rgb[3 * centre], expected_shade(200, 0.5), 1);
+  EXPECT_EQ(sun.face_id, headlight.face_id) << "light changes colours only";
+}
+
 TEST(Shading, BackFacesLookLikeFrontFaces) {
   const Mesh sphere = make_sphere(12, 24);
   Mesh inside_out = sphere;
