@@ -92,7 +92,7 @@ test('the link carries model, mode, tolerance and camera', async () => {
   await page.fill('#tolerance', '2');
   await page.dispatchEvent('#tolerance', 'change');
   await page.waitForFunction(() => window.pmstream.ready);
-  await page.waitForFunction(() => location.hash.includes('mode=vi') && location.hash.includes('eye='));
+  await page.waitForFunction(() => location.hash.includes('mode=vi') && location.hash.includes('tau=2') && location.hash.includes('eye='));
   const link = await page.evaluate(() => location.href);
   const before = await page.evaluate(() => window.pmstream.state);
   const other = await browser.newPage({ viewport: { width: 800, height: 600 } });
