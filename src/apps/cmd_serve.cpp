@@ -1,6 +1,7 @@
 // pmstream serve FILES_OR_DIRS... [--port 7300] [--http-port P] [--host 0.0.0.0] [--max-sessions N] [--json] ...
-// Runs the sender-driven TCP server, and with --http-port the receiver-driven HTTP server beside it, until
-// SIGINT or SIGTERM; SIGUSR1 prints the totals so far.
+// Runs the sender-driven TCP server, and with --http-port the HTTP server beside it (the receiver-driven and
+// multilevel modes, the page, the session modes' WebSocket), until SIGINT or SIGTERM; SIGUSR1 prints the
+// totals so far.
 #include <pthread.h>
 #include <unistd.h>
 #include <algorithm>
@@ -280,7 +281,8 @@ void add_serve_command(CliCommand& app) {
   server::ServerLimits& limits = args->limits;
   CliCommand cmd = app.subcommand(
       "serve",
-      "Serve .pms models to streaming clients (sender-driven over TCP; receiver-driven over HTTP with --http-port)");
+      "Serve .pms models to streaming clients (sender-driven over TCP; with --http-port, receiver-driven over HTTP, "
+      "the browser page and a WebSocket for the session modes)");
   cmd.option("paths", args->paths, ".pms files or directories holding them").required();
   cmd.option("--host", args->host, "Address to listen on").show_default();
   cmd.option("--port", args->port, "TCP port (0: any free port, printed at start)").show_default();

@@ -147,7 +147,8 @@ HttpAnswer answer_request(const Catalogue& catalogue, const HttpLimits& limits,
   r.body = request.body();
   if (const auto it = request.find(http::field::if_none_match); it != request.end())
     r.if_none_match = view_of(it->value());
-  if (site && !is_api_target(r.target)) return site->answer(r);
+  // A URL over the bound is the routes' 414 wherever it points.
+  if (site && !is_api_target(r.target) && r.target.size() <= limits.max_target_bytes) return site->answer(r);
   return route(catalogue, limits, r);
 }
 

@@ -165,7 +165,7 @@ TEST(Cli, ServeSigusr1PrintsStatsAndOnlyTheStopPrintsStopped) {
   const auto lines_after = [&serve](int signal) {
     serve.signal(signal);
     std::vector<std::string> lines;
-    for (int i = 0; i < 3; ++i) lines.push_back(serve.next_line(seconds(30)));
+    for (int i = 0; i < 4; ++i) lines.push_back(serve.next_line(seconds(30)));
     return lines;
   };
   for (int round = 0; round < 2; ++round) {
@@ -173,10 +173,12 @@ TEST(Cli, ServeSigusr1PrintsStatsAndOnlyTheStopPrintsStopped) {
     EXPECT_EQ(stats[0].rfind("stats: ", 0), 0u) << stats[0];
     EXPECT_EQ(stats[1].rfind("tables: ", 0), 0u) << stats[1];
     EXPECT_EQ(stats[2].rfind("http: ", 0), 0u) << stats[2];
+    EXPECT_EQ(stats[3].rfind("ws: ", 0), 0u) << stats[3];
   }
   const std::vector<std::string> stopped = lines_after(SIGTERM);
   EXPECT_EQ(stopped[0].rfind("stopped: ", 0), 0u) << stopped[0];
   EXPECT_EQ(stopped[2].rfind("http: ", 0), 0u) << stopped[2];
+  EXPECT_EQ(stopped[3].rfind("ws: ", 0), 0u) << stopped[3];
   EXPECT_EQ(serve.wait(seconds(30)), 0);
 }
 

@@ -165,6 +165,7 @@ TEST(StaticSite, TheApiKeepsItsRoutes) {
   EXPECT_EQ(models.status, 200);
   EXPECT_EQ(models.header("content-type"), "application/json");
   EXPECT_EQ(client.get("/models/index.html").status, 404);
+  EXPECT_EQ(client.get("/" + std::string(5000, 'a') + ".js").status, 414);  // the URL bound holds here too
 }
 
 }  // namespace
