@@ -3,7 +3,6 @@
 // multilevel modes, the page, the session modes' WebSocket), until SIGINT or SIGTERM; SIGUSR1 prints the
 // totals so far.
 #include <pthread.h>
-#include <unistd.h>
 #include <algorithm>
 #include <csignal>
 #include <cstdio>
@@ -12,6 +11,7 @@
 
 #include "apps/commands.h"
 #include "apps/resource_usage.h"
+#include "apps/web_root.h"
 #include "common/error.h"
 #include "protocol/message_types.h"
 #include "server/catalogue.h"
@@ -198,15 +198,6 @@ void print_stats(const char* event, const ServeArgs& args, const server::Catalog
       std::fflush(stdout);
     }
   }
-}
-
-// The assembled page sits beside the binary in the build directory (build/web beside build/pmstream).
-std::string default_web_root() {
-  char path[4096];
-  const ssize_t n = readlink("/proc/self/exe", path, sizeof path - 1);
-  if (n <= 0) return "web";
-  const std::string exe(path, size_t(n));
-  return exe.substr(0, exe.rfind('/') + 1) + "web";
 }
 
 void run_serve(ServeArgs args) {

@@ -14,6 +14,7 @@
 #include "server/http_server.h"
 #include "server/limits.h"
 #include "server/tcp_server.h"
+#include "server/web_options.h"
 
 namespace pms::app {
 namespace {
@@ -44,17 +45,12 @@ std::string percent_encoded(const std::string& text) {
 
 std::string triple(const float (&v)[3]) { return number(v[0]) + "," + number(v[1]) + "," + number(v[2]); }
 
-// The page's routes come with the server's web options (server/web_options.h); a server without them
-// serves the models alone.
+// The models' routes and the page's files (server/web_options.h) on one port.
 std::unique_ptr<server::HttpServer> open_http(std::shared_ptr<const server::Catalogue> catalogue, uint16_t port,
-                                              [[maybe_unused]] const std::string& web_root) {
-#if __has_include("server/web_options.h")
+                                              const std::string& web_root) {
   server::WebOptions web;
   web.root = web_root;
   return std::make_unique<server::HttpServer>(std::move(catalogue), server::HttpLimits{}, "127.0.0.1", port, web);
-#else
-  return std::make_unique<server::HttpServer>(std::move(catalogue), server::HttpLimits{}, "127.0.0.1", port);
-#endif
 }
 
 // `open(port)`, or where that port is taken and the caller allows it, `open(0)`: any free port.
