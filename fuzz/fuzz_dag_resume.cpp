@@ -8,14 +8,11 @@
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
-#include <filesystem>
 #include <memory>
 #include <string>
 #include <vector>
 
-#include "builder/build.h"
 #include "dag/compact.h"
-#include "io/shapes.h"
 #include "protocol/client_messages.h"
 #include "protocol/framing.h"
 #include "protocol/message_types.h"
@@ -23,7 +20,7 @@
 #include "server/dag_mode.h"
 #include "server/limits.h"
 #include "server/session.h"
-#include "spm/pms_file.h"
+#include "terrain_catalogue.h"
 
 namespace pms::fuzz {
 namespace {
@@ -38,13 +35,7 @@ const Served& served() {
     Served out;
     out.limits.slice_work = 64;
     out.limits.batch_splits = 16;
-    const BuildResult built = build_progressive_mesh(make_terrain(2000), BuildOptions{});
-    const auto dir = std::filesystem::temp_directory_path() / ("pmstream-fuzz-dag-resume-" + std::to_string(getpid()));
-    std::filesystem::create_directories(dir);
-    const std::string path = (dir / "terrain.pms").string();
-    write_pms(path, built.hierarchy, built.stats);
-    out.catalogue = server::Catalogue::open({path});
-    std::filesystem::remove_all(dir);
+    out.catalogue = fuzz_model::terrain_catalogue("dag-resume");
     return out;
   }();
   return s;

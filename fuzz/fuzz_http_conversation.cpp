@@ -20,19 +20,16 @@
 #include <chrono>
 #include <cstddef>
 #include <cstdint>
-#include <filesystem>
 #include <string>
 #include <vector>
 
-#include "builder/build.h"
-#include "io/shapes.h"
 #include "protocol/base64url.h"
 #include "protocol/split_request.h"
 #include "server/catalogue.h"
 #include "server/http_server.h"
 #include "server/limits.h"
-#include "spm/pms_file.h"
 #include "conversation.h"
+#include "terrain_catalogue.h"
 
 namespace {
 
@@ -53,12 +50,7 @@ struct Served {
 
 const Served& fuzzed_server() {
   static const Served served = [] {
-    const BuildResult built = build_progressive_mesh(make_terrain(2000), BuildOptions{});
-    const auto dir = std::filesystem::temp_directory_path() / ("pmstream-fuzz-conv-" + std::to_string(getpid()));
-    std::filesystem::create_directories(dir);
-    write_pms((dir / "terrain.pms").string(), built.hierarchy, built.stats);
-    auto catalogue = Catalogue::open({(dir / "terrain.pms").string()});
-    std::filesystem::remove_all(dir);
+    auto catalogue = fuzz_model::terrain_catalogue("conv");
     HttpLimits limits;
     limits.max_request_ids = 64;
     limits.max_response_splits = 256;

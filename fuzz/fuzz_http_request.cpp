@@ -8,16 +8,13 @@
 #include <unistd.h>
 #include <cstddef>
 #include <cstdint>
-#include <filesystem>
 #include <string>
 
-#include "builder/build.h"
-#include "io/shapes.h"
 #include "protocol/base64url.h"
 #include "server/catalogue.h"
 #include "server/http_message.h"
 #include "server/limits.h"
-#include "spm/pms_file.h"
+#include "terrain_catalogue.h"
 
 namespace {
 
@@ -39,12 +36,7 @@ const Fixture& fixture() {
     Fixture f;
     f.limits.max_request_ids = 64;
     f.limits.max_response_splits = 256;
-    const BuildResult built = build_progressive_mesh(make_terrain(2000), BuildOptions{});
-    const auto dir = std::filesystem::temp_directory_path() / ("pmstream-fuzz-http-" + std::to_string(getpid()));
-    std::filesystem::create_directories(dir);
-    write_pms((dir / "terrain.pms").string(), built.hierarchy, built.stats);
-    f.catalogue = Catalogue::open({(dir / "terrain.pms").string()});
-    std::filesystem::remove_all(dir);
+    f.catalogue = fuzz_model::terrain_catalogue("http");
     // A vsplit packet is under 1024 bits; BASE and the catalogue are what they are.
     f.body_bound = std::max<size_t>(f.catalogue->find("terrain")->base_frame->size(),
                                     size_t(f.limits.max_response_splits) * 128 + 16) +

@@ -14,19 +14,16 @@
 #include <chrono>
 #include <cstddef>
 #include <cstdint>
-#include <filesystem>
 #include <string>
 #include <vector>
 
-#include "builder/build.h"
 #include "conversation.h"
-#include "io/shapes.h"
 #include "protocol/client_messages.h"
 #include "protocol/framing.h"
 #include "server/catalogue.h"
 #include "server/http_server.h"
 #include "server/limits.h"
-#include "spm/pms_file.h"
+#include "terrain_catalogue.h"
 
 namespace {
 
@@ -42,12 +39,7 @@ void check(bool condition) {
 
 HttpServer& fuzzed_server() {
   static HttpServer* const started = [] {
-    const BuildResult built = build_progressive_mesh(make_terrain(2000), BuildOptions{});
-    const auto dir = std::filesystem::temp_directory_path() / ("pmstream-fuzz-ws-" + std::to_string(getpid()));
-    std::filesystem::create_directories(dir);
-    write_pms((dir / "terrain.pms").string(), built.hierarchy, built.stats);
-    auto catalogue = Catalogue::open({(dir / "terrain.pms").string()});
-    std::filesystem::remove_all(dir);
+    auto catalogue = fuzz_model::terrain_catalogue("ws");
     HttpLimits limits;
     limits.idle_timeout_ms = 300;
     limits.request_timeout_ms = 200;
