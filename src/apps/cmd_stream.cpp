@@ -90,10 +90,9 @@ client::HttpOptions http_options(const StreamArgs& args) {
 // --mode dag: MANAGE-TRAVERSAL's parameters; --budget 0 is FREE mode, --max-ops 0 the paper's N = 300.
 protocol::DagView dag_request(const StreamArgs& args) {
   protocol::DagView request;
-  if (args.traversal == "priority") request.traversal = DagTraversal::priority;
-  else if (args.traversal == "linear") request.traversal = DagTraversal::linear;
-  else if (args.traversal == "constant") request.traversal = DagTraversal::constant_time;
-  else fail("--traversal", "'" + args.traversal + "': priority, linear or constant");
+  const std::optional<DagTraversal> traversal = protocol::dag_traversal_named(args.traversal);
+  if (!traversal) fail("--traversal", "'" + args.traversal + "': " + protocol::kDagTraversalNames);
+  request.traversal = *traversal;
   request.management = args.budget ? DagMode::budget : DagMode::free;
   request.budget = args.budget;
   request.max_ops = args.max_ops ? args.max_ops : 300;

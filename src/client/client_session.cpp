@@ -18,6 +18,11 @@
 
 namespace pms::client {
 
+void ClientSession::set_adapt_options(const AdaptOptions& options) {
+  if (refinement_) refinement_->set_options(options);
+  adapt_options = options;
+}
+
 void ClientSession::on_base(const protocol::Base& base) {
   if (has_model()) {
     // A resumed session: the server sends BASE again; the hierarchy held must be of the same model.

@@ -57,6 +57,8 @@ class ClientSession {
   uint64_t splits_received() const { return splits_received_; }
 
   AdaptOptions adapt_options;
+  // New adapt options now, for the refinement held too (the mesh is kept; the next adapt uses them).
+  void set_adapt_options(const AdaptOptions& options);
   // Set before on_base, by the mode: whether its packets carry refinement info.
   bool refinement_info = true;
 

@@ -99,6 +99,12 @@ std::vector<uint8_t> FreeRunningSession::frame(const Camera& camera, Clock::time
   return out;
 }
 
+void FreeRunningSession::set_request(const protocol::DagView& request) {
+  request_ = request;
+  asked_.reset();
+  rounds_ = 0;
+}
+
 void FreeRunningSession::restart() {
   sent_.clear();
   asked_.reset();

@@ -43,6 +43,8 @@ class FreeRunningSession {
   // The connection is gone: what is in flight will never be answered, and no request goes out until a
   // new connection's BASE (and CODEC) have come in.
   void restart();
+  // What every request carries from now on; the next frame asks with it, at the same camera too.
+  void set_request(const protocol::DagView& request);
 
   bool opening() const { return opening_; }
   uint32_t in_flight() const { return uint32_t(sent_.size()); }

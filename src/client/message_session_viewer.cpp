@@ -5,6 +5,7 @@
 
 #include "common/error.h"
 #include "protocol/client_messages.h"
+#include "protocol/stream_mode.h"
 
 namespace pms::client {
 namespace {
@@ -79,7 +80,7 @@ void MessageSessionViewer::take_arrived() {
   for (protocol::Frame frame; Clock::now() < until && reader_.next(frame);) apply(std::move(frame));
 }
 
-ViewerReport MessageSessionViewer::frame(const Camera& camera) {
+ViewerReport MessageSessionViewer::frame_view(const Camera& camera) {
   const LinkCounters before = counters_;
   take_arrived();
   if (!session_.has_model()) return opening_report();
@@ -98,6 +99,23 @@ ViewerReport MessageSessionViewer::frame(const Camera& camera) {
   report.satisfied = free_->satisfied();
   report.opening = free_->opening();
   return report;
+}
+
+void MessageSessionViewer::retune(const ViewerTuning& tuning) {
+  if (tuning.tolerance) options_.tolerance = *tuning.tolerance;
+  if (tuning.morph_frames && options_.mode == protocol::StreamMode::sender_driven)
+    options_.morph_frames = *tuning.morph_frames;
+  if (tuning.dag_traversal) options_.dag.traversal = *tuning.dag_traversal;
+  if (tuning.dag_budget) {
+    options_.dag.budget = *tuning.dag_budget;
+    options_.dag.management = options_.dag.budget ? DagMode::budget : DagMode::free;
+  }
+  if (tuning.dag_max_ops) options_.dag.max_ops = *tuning.dag_max_ops;
+  AdaptOptions adapt = session_.adapt_options;
+  adapt.tolerance = options_.tolerance;
+  adapt.morph_frames = options_.morph_frames;
+  session_.set_adapt_options(adapt);
+  free_->set_request(request_of(options_));
 }
 
 void MessageSessionViewer::settle(const Camera& camera) {

@@ -43,7 +43,10 @@ class MessageSessionViewer : public Viewer {
   // Applies what has arrived (within options.apply_budget; the rest waits for the next frame), adapts,
   // queues a request when the view wants one. pms::Error for an ERROR from the server or a frame the
   // session refuses: final.
-  ViewerReport frame(const Camera& camera) override;
+  ViewerReport frame_view(const Camera& camera) override;
+  // Tolerance, the sender's geomorphs, the DAG's traversal, budget and max-ops: the next frame asks anew
+  // with them, at the same camera too.
+  void retune(const ViewerTuning& tuning) override;
   // This viewer cannot wait: pms::Error. Frame until settled() instead.
   void settle(const Camera& camera) override;
   // The last view satisfied, nothing in flight, queued or in motion (geomorphs).

@@ -187,6 +187,18 @@ ViewParams MultilevelClient::view_params(const Camera& camera) const {
   return make_view(camera, lo, hi);
 }
 
+void MultilevelClient::set_rule(float tolerance, uint64_t budget, uint32_t morph_frames) {
+  options_.tolerance = tolerance;
+  options_.budget = budget;
+  // A switch under way is a number of frames out of the old length: end it where it was going.
+  if (switch_ && morph_frames != options_.morph_frames) {
+    lod_->set_level(switch_->to);
+    shown_ = float(switch_->to);
+    switch_.reset();
+  }
+  options_.morph_frames = morph_frames;
+}
+
 // GETs the levels still missing down to `level`, pipelined, and adds each as it arrives. Returns how many.
 uint32_t MultilevelClient::load_to(uint32_t level) {
   if (loader_->complete() || loader_->finest_loaded() <= level) return 0;
@@ -242,16 +254,46 @@ void MultilevelClient::show(float level, MultilevelFrame& out) {
   shown_ = level;
 }
 
-// The wanted level, or the finest loaded if coarser; a geomorph's step towards it.
-void MultilevelClient::step_to(uint32_t wanted, MultilevelFrame& out) {
-  const float target = float(std::max(wanted, loader_->finest_loaded()));
-  float level = target;
-  if (options_.morph_frames > 0 && shown_ >= 0) {
-    const float step = 1.0f / float(options_.morph_frames);
-    level = shown_ < target ? std::min(target, shown_ + step) : std::max(target, shown_ - step);
+// The switch's geomorph at its current frame: LOD `to` once it is done.
+void MultilevelClient::show_switch(MultilevelFrame& out) {
+  const auto start = Clock::now();
+  const LodSwitch& s = *switch_;
+  if (s.frame >= options_.morph_frames) {
+    lod_->set_level(s.to);
+    switch_.reset();
+  } else {
+    // t runs from LOD `from` to LOD `to`; geomorph's t weighs the finer of the two.
+    const float done = float(s.frame) / float(options_.morph_frames);
+    lod_->geomorph(std::min(s.from, s.to), std::max(s.from, s.to), s.to < s.from ? done : 1 - done);
   }
-  show(level, out);
+  out.lod_ms = ms_since(start);
+  shown_ = lod_->level();
 }
+
+// The wanted level, or the finest loaded if coarser (the target): one geomorph from the level shown straight
+// to it over morph_frames frames (gueziec et al. blend the two LODs of one switch, whatever lies between).
+// A switch runs to its end before the next starts, unless the target goes back to where it came from,
+// which reverses it.
+void MultilevelClient::step_to(uint32_t wanted, MultilevelFrame& out) {
+  target_ = std::max(wanted, loader_->finest_loaded());
+  if (options_.morph_frames == 0 || shown_ < 0) {
+    show(float(target_), out);
+    return;
+  }
+  if (switch_ && switch_->from == target_) {
+    std::swap(switch_->from, switch_->to);
+    switch_->frame = options_.morph_frames - switch_->frame;
+  }
+  if (!switch_ && float(target_) != shown_) switch_ = LodSwitch{uint32_t(shown_), target_, 0};
+  if (!switch_) {
+    show(shown_, out);
+    return;
+  }
+  ++switch_->frame;
+  show_switch(out);
+}
+
+bool MultilevelClient::in_motion() const { return switch_.has_value() || (opened() && shown_ != float(target_)); }
 
 MultilevelFrame MultilevelClient::frame(const Camera& camera) {
   if (!loader_) fail("stream", "no model open");
@@ -303,7 +345,9 @@ void MultilevelClient::settle(const Camera& camera) {
   if (options_.free_running) settle_free(wanted);
   else load_to(wanted);
   MultilevelFrame ignored;
-  show(float(std::max(wanted, loader_->finest_loaded())), ignored);
+  switch_.reset();
+  target_ = std::max(wanted, loader_->finest_loaded());
+  show(float(target_), ignored);
 }
 
 }  // namespace pms::client

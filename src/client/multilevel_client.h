@@ -26,7 +26,7 @@ namespace pms::client {
 struct MultilevelOptions {
   uint64_t budget = 0;        // > 0: the finest LOD of at most this many triangles; 0: the screen-size rule
   float tolerance = 1;        // screen-size rule: the coarsest LOD whose error covers at most this many pixels
-  uint32_t morph_frames = 0;  // a LOD switch moves 1 / N level per frame (a geomorph); 0 = at once
+  uint32_t morph_frames = 0;  // a LOD switch is one geomorph over this many frames, however far; 0 = at once
   bool compressed = true;     // the compressed levels (positions on the server's grid), or the binary form's
   HttpOptions http;  // the HttpConnection made from a URL
   MultilevelLimits limits;  // what the head may announce
@@ -73,6 +73,12 @@ class MultilevelClient {
   bool opened() const { return loader_.has_value(); }
   MultilevelFrame frame(const Camera& camera);
   void settle(const Camera& camera);  // the last camera's LOD loaded and reached, no geomorph left
+  // A LOD switch still blending, or the last frame's target not yet shown: a frame would change the mesh
+  // with nothing new arriving.
+  bool in_motion() const;
+
+  // New rule and geomorph length: the next frame picks its LOD by them (a switch under way finishes).
+  void set_rule(float tolerance, uint64_t budget, uint32_t morph_frames);
 
   uint32_t wanted_level(const Camera& camera) const;
   ViewParams view_params(const Camera& camera) const;
@@ -94,7 +100,14 @@ class MultilevelClient {
   void request_to(uint32_t level);
   void settle_free(uint32_t wanted);
   void show(float level, MultilevelFrame& out);
+  void show_switch(MultilevelFrame& out);
   void step_to(uint32_t wanted, MultilevelFrame& out);
+
+  // A LOD switch under way: a geomorph from LOD `from` to LOD `to`, `frame` of morph_frames done.
+  struct LodSwitch {
+    uint32_t from = 0, to = 0;
+    uint32_t frame = 0;
+  };
 
   MultilevelOptions options_;
   std::unique_ptr<HttpTransport> http_;
@@ -110,6 +123,8 @@ class MultilevelClient {
   std::deque<std::string> posted_;  // free-running: level GETs on the wire, coarsest first
   uint32_t requested_ = 0;          // free-running: the finest level asked for (loaded or on the wire)
   float shown_ = -1;
+  uint32_t target_ = 0;  // the last frame's: the level its camera wants, or the finest loaded if coarser
+  std::optional<LodSwitch> switch_;
   uint32_t frame_ = 0;
 };
 

@@ -14,7 +14,7 @@ MultilevelViewer::MultilevelViewer(std::unique_ptr<HttpTransport> http, const Mu
   client_.start_open(model);
 }
 
-ViewerReport MultilevelViewer::frame(const Camera& camera) {
+ViewerReport MultilevelViewer::frame_view(const Camera& camera) {
   if (!client_.poll_open()) return opening_report();
   const MultilevelFrame r = client_.frame(camera);
   ViewerReport report;
@@ -33,6 +33,13 @@ ViewerReport MultilevelViewer::frame(const Camera& camera) {
                     {"levels_loaded", r.levels_loaded},
                     {"lod_ms", r.lod_ms}};
   return report;
+}
+
+void MultilevelViewer::retune(const ViewerTuning& tuning) {
+  if (tuning.tolerance) options_.tolerance = *tuning.tolerance;
+  if (tuning.lod_budget) options_.budget = *tuning.lod_budget;
+  if (tuning.morph_frames) options_.morph_frames = *tuning.morph_frames;
+  client_.set_rule(options_.tolerance, options_.budget, options_.morph_frames);
 }
 
 nlohmann::json MultilevelViewer::totals() const {

@@ -2,7 +2,6 @@
 // (MultilevelOptions::free_running) or in lock-step as the pacing says. What it receives is levels, not
 // splits (received_unit()).
 #pragma once
-#include <cmath>
 #include <string>
 
 #include "client/multilevel_client.h"
@@ -19,7 +18,8 @@ class MultilevelViewer : public Viewer {
   // until it has. settle() needs a transport that can wait.
   MultilevelViewer(std::unique_ptr<HttpTransport> http, const MultilevelOptions& options, const std::string& model);
 
-  ViewerReport frame(const Camera& camera) override;
+  ViewerReport frame_view(const Camera& camera) override;
+  void retune(const ViewerTuning& tuning) override;  // tolerance, LOD budget, geomorphs
   void settle(const Camera& camera) override { client_.settle(camera); }
   Mesh mesh() const override { return client_.opened() ? client_.current_mesh() : Mesh{}; }
   ViewParams view_params(const Camera& camera) const override { return client_.view_params(camera); }
@@ -28,10 +28,8 @@ class MultilevelViewer : public Viewer {
   uint64_t up_bytes() const override { return client_.counters().bytes_up; }
   uint64_t down_bytes() const override { return client_.counters().bytes_down; }
   nlohmann::json totals() const override;
-  // A LOD switch's geomorph: the level shown is between two.
-  bool in_motion() const override {
-    return client_.opened() && client_.lod().level() != std::floor(client_.lod().level());
-  }
+  // A LOD switch's geomorph under way, or the last camera's LOD not yet shown.
+  bool in_motion() const override { return client_.in_motion(); }
 
   MultilevelClient& client() { return client_; }
 

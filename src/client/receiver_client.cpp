@@ -90,6 +90,16 @@ ReceiverClient::ReceiverClient(std::unique_ptr<HttpTransport> http, std::unique_
   session_.refinement_info = true;  // the records carry the children's refinement info: the client refines
 }
 
+void ReceiverClient::set_view_options(float tolerance, uint32_t morph_frames, bool prefetch) {
+  options_.tolerance = tolerance;
+  options_.morph_frames = morph_frames;
+  options_.prefetch = prefetch;
+  AdaptOptions adapt = session_.adapt_options;
+  adapt.tolerance = tolerance;
+  adapt.morph_frames = morph_frames;
+  session_.set_adapt_options(adapt);
+}
+
 nlohmann::json ReceiverClient::catalogue() { return models_of(http_->get("/models")); }
 
 std::vector<std::string> ReceiverClient::list() {

@@ -113,6 +113,8 @@ class ReceiverClient {
   // Holds the last camera for frames (within the budget, without prefetch) until its view is satisfied,
   // then reads what is still in flight and converges. settle_frames(): how many it took (1 unbudgeted).
   void settle(const Camera& camera);
+  // New tolerance, geomorph length and prefetch: the next frame ranks and refines by them, the mesh is kept.
+  void set_view_options(float tolerance, uint32_t morph_frames, bool prefetch);
   uint32_t settle_frames() const { return settle_frames_; }
 
   ClientSession& session() { return session_; }

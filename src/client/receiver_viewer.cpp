@@ -15,7 +15,14 @@ ReceiverViewer::ReceiverViewer(std::unique_ptr<HttpTransport> http, std::unique_
   client_.start_open(model);
 }
 
-ViewerReport ReceiverViewer::frame(const Camera& camera) {
+void ReceiverViewer::retune(const ViewerTuning& tuning) {
+  if (tuning.tolerance) options_.tolerance = *tuning.tolerance;
+  if (tuning.morph_frames) options_.morph_frames = *tuning.morph_frames;
+  if (tuning.prefetch) options_.prefetch = *tuning.prefetch;
+  client_.set_view_options(options_.tolerance, options_.morph_frames, options_.prefetch);
+}
+
+ViewerReport ReceiverViewer::frame_view(const Camera& camera) {
   if (!client_.poll_open()) return opening_report();
   const ReceiverFrame r = client_.frame(camera);
   unsatisfied_ += !r.satisfied;

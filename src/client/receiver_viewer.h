@@ -18,7 +18,8 @@ class ReceiverViewer : public Viewer {
   ReceiverViewer(std::unique_ptr<HttpTransport> http, std::unique_ptr<ImportanceSource> importance,
                  const ReceiverOptions& options, const std::string& model);
 
-  ViewerReport frame(const Camera& camera) override;
+  ViewerReport frame_view(const Camera& camera) override;
+  void retune(const ViewerTuning& tuning) override;  // tolerance, geomorphs, prefetch
   void settle(const Camera& camera) override { client_.settle(camera); }
   Mesh mesh() const override;
   ViewParams view_params(const Camera& camera) const override;

@@ -38,7 +38,7 @@ SessionViewer::SessionViewer(const std::string& server, const ClientOptions& opt
                              const std::string& model)
     : client_(connect(server, options, model)), pacing_(pacing) {}
 
-ViewerReport SessionViewer::frame(const Camera& camera) {
+ViewerReport SessionViewer::frame_view(const Camera& camera) {
   const bool lock_step = pacing_ == Pacing::lock_step;
   const FrameReport r = lock_step ? client_->frame(camera) : client_->frame_free_running(camera);
   ViewerReport report;

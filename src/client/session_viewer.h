@@ -16,7 +16,7 @@ class SessionViewer : public Viewer {
   // otherwise.
   SessionViewer(const std::string& server, const ClientOptions& options, Pacing pacing, const std::string& model);
 
-  ViewerReport frame(const Camera& camera) override;
+  ViewerReport frame_view(const Camera& camera) override;
   void settle(const Camera& camera) override;
   Mesh mesh() const override;
   ViewParams view_params(const Camera& camera) const override;

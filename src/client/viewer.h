@@ -14,6 +14,7 @@
 #include <cstdint>
 #include <memory>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <string>
 
 #include "client/mesh_buffers.h"
@@ -57,13 +58,34 @@ struct ViewerReport {
   double latency_ms = 0;   // request -> last of its answer applied, for the last answer applied this frame
   bool satisfied = true;   // the view wants nothing more that the server has
   bool opening = false;    // the event-driven viewers (the browser's): no model yet, the frame did nothing
+  // Non-empty: the camera was degenerate (camera_problem says how) and the frame did nothing; the mesh and
+  // everything else stay as the last frame left them, and the next good camera goes on from there.
+  std::string refused;
   nlohmann::json details;  // the mode's own per-frame counters (docs/cli.md, "stream")
 };
+
+// The options an open viewer lets change without reopening it (Viewer::tune): each one set replaces that
+// option and the mesh is kept; a mode ignores what it does not have, as open_viewer does. The model, the
+// mode and the receiver's fetch style need a new viewer.
+struct ViewerTuning {
+  std::optional<float> tolerance;
+  std::optional<uint32_t> morph_frames;  // the modes with geomorphs (sender, receiver, multilevel)
+  std::optional<DagTraversal> dag_traversal;
+  std::optional<uint64_t> dag_budget;   // > 0: the budget variant of the traversal
+  std::optional<uint32_t> dag_max_ops;  // 1 .. protocol::kMaxDagOps
+  std::optional<bool> prefetch;         // receiver
+  std::optional<uint64_t> lod_budget;   // multilevel: > 0 a fixed LOD by triangles, 0 the screen-size rule
+};
+
+// What an event-driven viewer's frame reports while its model is still opening.
+ViewerReport opening_report();
 
 class Viewer {
  public:
   virtual ~Viewer() = default;
-  virtual ViewerReport frame(const Camera& camera) = 0;
+  // One displayed frame at `camera`; a degenerate camera (eye == target, up zero or along the view, not
+  // finite, an empty viewport) is refused: the report says why and repeats the last frame's state.
+  ViewerReport frame(const Camera& camera);
   // Holds `camera` until its view is satisfied and nothing is still in motion (geomorphs, answers in
   // flight): the mesh is then what lock_step gives at that camera.
   virtual void settle(const Camera& camera) = 0;
@@ -74,6 +96,9 @@ class Viewer {
   virtual uint64_t up_bytes() const = 0;    // in total, on the wire
   virtual uint64_t down_bytes() const = 0;  // in total, on the wire
   virtual nlohmann::json totals() const = 0;  // the mode's own totals (docs/cli.md, "stream")
+  // New options now (ViewerTuning); the next frame uses them. pms::Error naming the option for a value out
+  // of range (nothing is changed then), or for a viewer whose options are fixed.
+  void tune(const ViewerTuning& tuning);
   // Geomorphs still moving: a frame would change the mesh with nothing new arriving.
   virtual bool in_motion() const;
 
@@ -82,20 +107,20 @@ class Viewer {
   const MeshBuffers& buffers();
 
  protected:
+  virtual ViewerReport frame_view(const Camera& camera) = 0;  // frame() at a camera make_view takes
+  virtual void retune(const ViewerTuning& tuning);              // tune() with its values checked
   // What the session modes and the receiver-driven mode show; null for a mode whose mesh() is numbered
   // its own way (multilevel's LOD).
   virtual const SelectiveRefinement* refinement() const { return nullptr; }
 
  private:
   MeshBuffers buffers_;
+  ViewerReport last_ = opening_report();  // what a refused frame repeats: before any, nothing shown yet
 };
 
 // Connects and opens `model` on `options.server` in `options.mode`. pms::Error for an unknown mode (naming
 // --mode) or a server that cannot be reached or refuses the model.
 std::unique_ptr<Viewer> open_viewer(const ViewerOptions& options, const std::string& model);
-
-// What an event-driven viewer's frame reports while its model is still opening.
-ViewerReport opening_report();
 
 // A refined mesh's flat arrays as io's Mesh (what the exporters and the renderer take).
 Mesh to_mesh(MeshArrays&& arrays);

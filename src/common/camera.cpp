@@ -58,7 +58,28 @@ void extract_planes(ViewParams& view) {
   }
 }
 
+// The view's unit forward and side axes, or what makes the camera unusable (nothing is written then).
+const char* view_axes(const Camera& camera, float forward[3], float side[3]) {
+  if (!(camera.fovy_deg > 0 && camera.fovy_deg < 180)) return "fovy_deg must be in (0, 180)";
+  if (camera.width == 0 || camera.height == 0) return "viewport width and height must be positive";
+  float f[3], s[3], up[3] = {camera.up[0], camera.up[1], camera.up[2]};
+  sub(camera.target, camera.eye, f);
+  if (!normalize(f)) return "eye and target must differ";
+  cross(f, up, s);
+  // |s| = |up| sin(angle): an up within about a microradian of the view (or zero) leaves the side axis to
+  // rounding, and the view's basis with it.
+  if (!(std::sqrt(dot(s, s)) > 1e-6f * std::sqrt(dot(up, up))) || !normalize(s))
+    return "up must not be parallel to the view direction";
+  for (int i = 0; i < 3; ++i) forward[i] = f[i], side[i] = s[i];
+  return nullptr;
+}
+
 }  // namespace
+
+const char* camera_problem(const Camera& camera) {
+  float forward[3], side[3];
+  return view_axes(camera, forward, side);
+}
 
 Mat4 multiply(const Mat4& a, const Mat4& b) {
   Mat4 out;
@@ -79,14 +100,9 @@ void transform_point(const Mat4& m, const float p[3], float clip[4]) {
 ViewParams make_view(const Camera& camera, const float box_min[3], const float box_max[3]) {
   ViewParams view;
   view.camera = camera;
-  if (!(camera.fovy_deg > 0 && camera.fovy_deg < 180)) fail("camera", "fovy_deg must be in (0, 180)");
-  if (camera.width == 0 || camera.height == 0) fail("camera", "viewport width and height must be positive");
+  float side[3], up[3];
+  if (const char* problem = view_axes(camera, view.forward, side)) fail("camera", problem);
   for (int i = 0; i < 3; ++i) view.eye[i] = camera.eye[i];
-  sub(camera.target, camera.eye, view.forward);
-  if (!normalize(view.forward)) fail("camera", "eye and target must differ");
-  float side[3], up[3] = {camera.up[0], camera.up[1], camera.up[2]};
-  cross(view.forward, up, side);
-  if (!normalize(side)) fail("camera", "up must not be parallel to the view direction");
   cross(side, view.forward, up);
 
   float* v = view.view.m;

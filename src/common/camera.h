@@ -42,6 +42,9 @@ struct ViewParams {
 // so a camera inside the box still gets a usable depth range). Throws pms::Error for a degenerate
 // camera (eye == target, up parallel to the view direction, fovy outside (0, 180), empty viewport).
 ViewParams make_view(const Camera& camera, const float box_min[3], const float box_max[3]);
+// What make_view would refuse `camera` for, or null when it makes a view (eye, target or up not finite,
+// and an up within about a microradian of the view direction, count as degenerate too).
+const char* camera_problem(const Camera& camera);
 
 Mat4 multiply(const Mat4& a, const Mat4& b);
 // (x, y, z, 1) -> 4 clip coordinates.

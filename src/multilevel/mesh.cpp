@@ -240,12 +240,14 @@ void MultilevelLod::set_level(uint32_t level) {
   level_ = float(level);
 }
 
-void MultilevelLod::prepare_morph(uint32_t lo) {
-  if (lo == morph_level_) return;
+void MultilevelLod::prepare_morph(uint32_t lo, uint32_t hi) {
+  if (lo == morph_lo_ && hi == morph_hi_) return;
   const MultilevelMesh& m = mesh_;
-  const uint32_t n_hi = m.vertex_count[lo + 1], n_lo = m.vertex_count[lo];
-  // Where each vertex of level lo stands at level lo + 1; one without a representative (a structure with
-  // only the discrete LODs' representatives, e.g. read from the ASCII form) has no place there and stays put.
+  const uint32_t n_hi = m.vertex_count[hi], n_lo = m.vertex_count[lo];
+  // Where each vertex of levels lo .. hi - 1 stands at level hi: its representative, followed while that is
+  // still above n_hi (each is below its vertex, so it was placed before). One without a representative (a
+  // structure with only the discrete LODs' representatives, e.g. read from the ASCII form) has no place
+  // there and stays put.
   morph_source_.resize(n_lo - n_hi);
   m.representative.visit([&](auto representative) {
     for (uint32_t v = n_hi; v < n_lo; ++v) {
@@ -258,20 +260,25 @@ void MultilevelLod::prepare_morph(uint32_t lo) {
   morph_normals_.assign(m.normals.begin(), m.normals.begin() + (m.normals.empty() ? 0 : size_t(n_lo) * 3));
   morph_colors_.assign(m.colors.begin(), m.colors.begin() + (m.colors.empty() ? 0 : size_t(n_lo) * 4));
   morph_texcoords_.assign(m.texcoords.begin(), m.texcoords.begin() + (m.texcoords.empty() ? 0 : size_t(n_lo) * 2));
-  morph_level_ = lo;
+  morph_lo_ = lo;
+  morph_hi_ = hi;
 }
 
-void MultilevelLod::geomorph(uint32_t lo, float t) {
-  if (lo + 1 >= mesh_.level_count()) {
+void MultilevelLod::geomorph(uint32_t lo, float t) { geomorph(lo, lo + 1, t); }
+
+void MultilevelLod::geomorph(uint32_t lo, uint32_t hi, float t) {
+  const uint32_t top = mesh_.level_count() - 1;
+  hi = std::min(hi, top);
+  if (lo >= hi) {
     set_level(lo);
     return;
   }
   if (!(t >= 0)) t = 0;  // NaN too
   if (t > 1) t = 1;
   connect(lo);
-  prepare_morph(lo);
+  prepare_morph(lo, hi);
   const MultilevelMesh& m = mesh_;
-  const uint32_t n_hi = m.vertex_count[lo + 1], n_lo = m.vertex_count[lo];
+  const uint32_t n_hi = m.vertex_count[hi], n_lo = m.vertex_count[lo];
   const uint32_t d = m.dimension;
   const float s = 1 - t;
   for (uint32_t v = n_hi; v < n_lo; ++v) {
@@ -298,7 +305,7 @@ void MultilevelLod::geomorph(uint32_t lo, float t) {
             s * m.texcoords[size_t(from) * 2 + k] + t * m.texcoords[size_t(v) * 2 + k];
   }
   morphed_ = true;
-  level_ = float(lo + 1) - t;
+  level_ = float(hi) - float(hi - lo) * t;
 }
 
 void MultilevelLod::set_level(float x) {

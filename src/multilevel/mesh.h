@@ -86,6 +86,11 @@ class MultilevelLod {
   // (level lo's triangles have zero area) when every vertex of level lo that the LOD names has a
   // representative, which the geomorph representatives ensure; one without stays put.
   void geomorph(uint32_t lo, float t);
+  // The same between LOD lo and any coarser LOD hi (gueziec et al. §"Vertex clustering": LOD hi is LOD lo
+  // after the clusterings of levels lo .. hi - 1, and their composition is a clustering too): the vertices
+  // of levels lo .. hi - 1 blend from where LOD hi puts them (t = 0) to their own positions (t = 1), so
+  // one LOD switch across many levels is one geomorph. level() is hi - (hi - lo) * t.
+  void geomorph(uint32_t lo, uint32_t hi, float t);
 
   float level() const { return level_; }
   uint32_t vertex_count() const { return vertex_count_; }
@@ -98,7 +103,7 @@ class MultilevelLod {
  private:
   void connect(uint32_t level);
   bool connect_by_walking(uint32_t level);
-  void prepare_morph(uint32_t lo);
+  void prepare_morph(uint32_t lo, uint32_t hi);
 
   const MultilevelMesh& mesh_;
   float level_ = -1;
@@ -107,8 +112,10 @@ class MultilevelLod {
   uint32_t vertex_count_ = 0;
   std::vector<uint32_t> pc_rep_;  // path-compressed representatives for `connected_`
   std::vector<uint32_t> indices_;
-  uint32_t morph_level_ = 0xFFFFFFFFu;  // the level whose own vertices morph_source_ covers
-  std::vector<uint32_t> morph_source_;  // per vertex of that level: its representative at level + 1
+  // The levels morph_source_ is for: per vertex of levels morph_lo_ .. morph_hi_ - 1, where LOD morph_hi_
+  // puts it.
+  uint32_t morph_lo_ = 0xFFFFFFFFu, morph_hi_ = 0xFFFFFFFFu;
+  std::vector<uint32_t> morph_source_;
   std::vector<float> morph_positions_, morph_normals_, morph_texcoords_;
   std::vector<uint8_t> morph_colors_;
 };

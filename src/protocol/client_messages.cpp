@@ -65,6 +65,22 @@ void check_view(Reader& r, const View& m) {
 
 }  // namespace
 
+std::optional<DagTraversal> dag_traversal_named(std::string_view name) {
+  if (name == "priority") return DagTraversal::priority;
+  if (name == "linear") return DagTraversal::linear;
+  if (name == "constant") return DagTraversal::constant_time;
+  return std::nullopt;
+}
+
+const char* dag_traversal_name(DagTraversal traversal) {
+  switch (traversal) {
+    case DagTraversal::linear: return "linear";
+    case DagTraversal::constant_time: return "constant";
+    case DagTraversal::priority: break;
+  }
+  return "priority";
+}
+
 std::vector<uint8_t> encode(const Hello& m) {
   Writer w(MessageType::hello);
   for (char c : kMagic) w.u8(uint8_t(c));

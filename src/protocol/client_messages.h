@@ -4,8 +4,10 @@
 #pragma once
 #include <cstddef>
 #include <cstdint>
+#include <optional>
 #include <span>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "common/camera.h"
@@ -52,6 +54,12 @@ struct DagView {
   DagMode management = DagMode::free;
   uint64_t budget = 0;  // triangles: 1..kMaxDagBudget in BUDGET mode, 0 in FREE mode
 };
+
+// The traversals by the names every front end uses (`stream --traversal`, the page's DAG panel and URL):
+// "priority", "linear", "constant"; nullopt for any other. A budget > 0 picks BUDGET mode, not a name.
+std::optional<DagTraversal> dag_traversal_named(std::string_view name);
+const char* dag_traversal_name(DagTraversal traversal);
+constexpr const char* kDagTraversalNames = "priority, linear or constant";
 
 // OPEN up to its resume front. A front may list millions of leaves; a server decodes it with FrontDecoder a
 // slice at a time instead of all at once inside one message handler.

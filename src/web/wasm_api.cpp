@@ -17,6 +17,7 @@
 #include <map>
 #include <memory>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -28,6 +29,7 @@
 #include "client/viewer.h"
 #include "common/camera.h"
 #include "common/error.h"
+#include "protocol/client_messages.h"
 #include "protocol/stream_mode.h"
 #include "web/view_probe.h"
 
@@ -79,20 +81,47 @@ PageViewer& viewer_of(int handle) {
   return *it->second;
 }
 
+DagTraversal traversal_named(const std::string& name) {
+  const std::optional<DagTraversal> traversal = protocol::dag_traversal_named(name);
+  if (!traversal) fail("dag.traversal", "'" + name + "': " + protocol::kDagTraversalNames);
+  return *traversal;
+}
+
+// dag.maxOps: 0 is the paper's N, as `pmstream stream --max-ops 0`.
+uint32_t max_ops_of(const json& dag) {
+  const uint32_t max_ops = dag.value("maxOps", 0u);
+  return max_ops ? max_ops : 300;
+}
+
 protocol::DagView dag_request(const json& dag, float tolerance) {
   protocol::DagView request;
-  const std::string traversal = dag.value("traversal", "priority");
-  if (traversal == "priority" || traversal == "free" || traversal == "budget")
-    request.traversal = DagTraversal::priority;
-  else if (traversal == "linear") request.traversal = DagTraversal::linear;
-  else if (traversal == "constant") request.traversal = DagTraversal::constant_time;
-  else fail("dag.traversal", "'" + traversal + "': priority, linear or constant");
+  request.traversal = traversal_named(dag.value("traversal", "priority"));
   request.budget = dag.value("budget", uint64_t(0));
   request.management = request.budget ? DagMode::budget : DagMode::free;
-  const uint32_t max_ops = dag.value("maxOps", 0u);
-  request.max_ops = max_ops ? max_ops : 300;  // the paper's N, as `pmstream stream`
+  request.max_ops = max_ops_of(dag);
   request.view.tolerance = tolerance;
   return request;
+}
+
+// pms_viewer_set's JSON: only the options it names.
+client::ViewerTuning tuning_of(const json& o) {
+  client::ViewerTuning t;
+  if (o.contains("tolerance")) t.tolerance = o["tolerance"].get<float>();
+  if (o.contains("morphFrames")) t.morph_frames = o["morphFrames"].get<uint32_t>();
+  if (const auto dag = o.find("dag"); dag != o.end() && dag->is_object()) {
+    if (dag->contains("traversal")) t.dag_traversal = traversal_named((*dag)["traversal"].get<std::string>());
+    if (dag->contains("budget")) t.dag_budget = (*dag)["budget"].get<uint64_t>();
+    if (dag->contains("maxOps")) t.dag_max_ops = max_ops_of(*dag);
+  }
+  if (const auto r = o.find("receiver"); r != o.end() && r->is_object()) {
+    if (r->contains("fetch")) fail("receiver.fetch", "changes only with a new viewer");
+    if (r->contains("prefetch")) t.prefetch = (*r)["prefetch"].get<bool>();
+  }
+  if (const auto m = o.find("multilevel"); m != o.end() && m->is_object() && m->contains("budget"))
+    t.lod_budget = (*m)["budget"].get<uint64_t>();
+  for (const char* fixed : {"mode", "model"})
+    if (o.contains(fixed)) fail(fixed, "changes only with a new viewer");
+  return t;
 }
 
 std::unique_ptr<PageViewer> make_viewer(const json& o) {
@@ -165,6 +194,7 @@ json report_json(const PageViewer& page, const client::ViewerReport& r) {
               {"satisfied", r.satisfied},
               {"opening", r.opening},
               {"settled", settled(page)},
+              {"refused", r.refused},
               {"details", r.details.is_null() ? json::object() : r.details}};
   if (!page.session && !page.receiver && !r.opening && r.details.is_object())
     out["levels"] = {{"loaded", r.details.value("levels_loaded", 0u)},
@@ -200,6 +230,20 @@ EMSCRIPTEN_KEEPALIVE int pms_viewer_open(const char* options_json) {
 }
 
 EMSCRIPTEN_KEEPALIVE void pms_viewer_close(int handle) { viewers.erase(handle); }
+
+// Options changed on the open viewer, the mesh kept (client::Viewer::tune): `options_json` names any of
+// tolerance, morphFrames, dag: {traversal, budget, maxOps}, receiver: {prefetch}, multilevel: {budget}.
+// 1, or 0 with nothing changed (a value out of range, or mode, model or receiver.fetch named: those need
+// a new viewer).
+EMSCRIPTEN_KEEPALIVE int pms_viewer_set(int handle, const char* options_json) {
+  return guarded(
+      [&] {
+        PageViewer& page = viewer_of(handle);
+        page.viewer->tune(tuning_of(json::parse(options_json)));
+        return 1;
+      },
+      0);
+}
 
 // `camera`: eye (3), target (3), up (3), fovy in degrees. The frame's report as JSON, or null.
 EMSCRIPTEN_KEEPALIVE const char* pms_viewer_frame(int handle, const float* camera, uint32_t width, uint32_t height) {

@@ -8,6 +8,7 @@
 
 #include <chrono>
 #include <deque>
+#include <limits>
 #include <memory>
 #include <string>
 #include <vector>
@@ -190,6 +191,46 @@ TEST(BrowserViewers, ASessionLostIsResumedOnTheNextSocket) {
   EXPECT_EQ(faces_by_id(viewer.session().mesh()), local_faces(f.snapped, path.back(), kTolerance));
 }
 
+// Degenerate cameras: eye on the target, a zero up, an up along the view, a non-finite eye.
+std::vector<Camera> degenerate_cameras(const Camera& good) {
+  std::vector<Camera> out(4, good);
+  for (int k = 0; k < 3; ++k) out[0].target[k] = out[0].eye[k];
+  for (int k = 0; k < 3; ++k) out[1].up[k] = 0;
+  for (int k = 0; k < 3; ++k) out[2].up[k] = good.target[k] - good.eye[k];
+  out[3].eye[0] = std::numeric_limits<float>::quiet_NaN();
+  return out;
+}
+
+// A degenerate camera does not end the viewer: that frame is refused (the report says why, the mesh and
+// the counters stay), and the next good camera goes on and settles where an unbroken flight does.
+TEST(BrowserViewers, ADegenerateCameraIsRefusedAndTheNextGoodOneWorks) {
+  const test::Fixture& f = terrain();
+  test::LoopbackTcpServer server(f.catalogue);
+  const std::vector<Camera> path = orbit_path(f.hierarchy, 6, 0.3f);
+  client::MessageSessionViewer viewer(options_for(StreamMode::sender_driven), "terrain");
+  const client::ViewerReport early = viewer.frame(degenerate_cameras(path[0])[0]);
+  EXPECT_FALSE(early.refused.empty());
+  EXPECT_FALSE(early.satisfied) << "nothing shown yet";
+  SocketPump pump(viewer, server.port());
+  opened(viewer, pump, path[0]);
+  settle(viewer, pump, path[0]);
+  const test::Faces before = faces_by_id(viewer.session().mesh());
+  const uint64_t up = viewer.up_bytes();
+  for (const Camera& bad : degenerate_cameras(path[1])) {
+    const client::ViewerReport r = viewer.frame(bad);
+    pump.send();
+    EXPECT_NE(r.refused.find("camera"), std::string::npos) << r.refused;
+    EXPECT_EQ(r.faces, before.size());
+    EXPECT_EQ(r.up_bytes, 0u);
+  }
+  EXPECT_EQ(viewer.up_bytes(), up) << "a refused frame asks for nothing";
+  EXPECT_EQ(faces_by_id(viewer.session().mesh()), before);
+  EXPECT_TRUE(viewer.settled());
+  settle(viewer, pump, path[1]);
+  EXPECT_TRUE(viewer.frame(path[1]).refused.empty());
+  EXPECT_EQ(faces_by_id(viewer.session().mesh()), local_faces(f.snapped, path[1], kTolerance));
+}
+
 // The page's fetch for an HTTP viewer: each GET taken from the transport goes out on an HttpConnection;
 // its answer is handed back by id.
 struct FetchPump {
@@ -264,19 +305,27 @@ TEST(BrowserViewers, ReceiverOverFetchOpensWithoutWaitingAndSettlesOnLocalRefine
   EXPECT_THROW(transport.wait(), Error) << "this transport cannot wait";
 }
 
-TEST(BrowserViewers, MultilevelOverFetchSettlesOnLockStepsLevel) {
+// Settled by frames alone (satisfied, nothing in flight, not in motion), with geomorphs and without, the
+// mesh is lock-step's at the last camera: not in motion means the wanted level is shown, not merely some
+// whole level on the way to it. A degenerate camera on the way changes nothing.
+void expect_multilevel_settles_on_lock_steps_level(uint32_t morph_frames) {
+  SCOPED_TRACE("morph_frames " + std::to_string(morph_frames));
   const test::Fixture& f = terrain();
   test::LoopbackHttpServer server(f.catalogue);
-  const std::vector<Camera> path = orbit_path(f.hierarchy, 10, 0.3f);
+  std::vector<Camera> path = orbit_path(f.hierarchy, 10, 0.3f);
   auto owned = std::make_unique<client::ExternalHttpTransport>();
   client::ExternalHttpTransport& transport = *owned;
-  client::MultilevelViewer viewer(std::move(owned), client::MultilevelOptions{}, "terrain");
+  client::MultilevelOptions options;
+  options.morph_frames = morph_frames;
+  client::MultilevelViewer viewer(std::move(owned), options, "terrain");
   FetchPump pump(transport, server.url());
   EXPECT_TRUE(viewer.frame(path[0]).opening);
   pump.send();
+  const std::vector<Camera> bad = degenerate_cameras(path[3]);
+  path.insert(path.begin() + 3, bad.begin(), bad.end());
   fly_http(viewer, pump, path);
 
-  client::MultilevelViewer reference("http://127.0.0.1:" + std::to_string(server.port()), client::MultilevelOptions{},
+  client::MultilevelViewer reference("http://127.0.0.1:" + std::to_string(server.port()), options,
                                      client::Pacing::lock_step, "terrain");
   for (const Camera& camera : path) reference.frame(camera);
   reference.settle(path.back());
@@ -284,6 +333,11 @@ TEST(BrowserViewers, MultilevelOverFetchSettlesOnLockStepsLevel) {
   EXPECT_GT(got.face_count(), 0u);
   EXPECT_EQ(got.positions, want.positions);
   EXPECT_EQ(got.indices, want.indices);
+}
+
+TEST(BrowserViewers, MultilevelOverFetchSettlesOnLockStepsLevel) { expect_multilevel_settles_on_lock_steps_level(0); }
+TEST(BrowserViewers, MultilevelWithGeomorphsSettlesOnLockStepsLevel) {
+  expect_multilevel_settles_on_lock_steps_level(client::kDefaultGeomorphFrames);
 }
 
 }  // namespace

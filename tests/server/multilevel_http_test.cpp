@@ -119,27 +119,66 @@ TEST(MultilevelHttp, ABudgetLoadsOnlyTheLevelsItNeedsAndTheirLodIsTheFiles) {
   EXPECT_TRUE(std::equal(p.begin(), p.end(), q.begin(), q.end()));
 }
 
-// The screen-size rule asks for finer levels as the camera closes in, and geomorphs move one step at a time.
+client::MultilevelOptions with_geomorphs(uint32_t frames) {
+  client::MultilevelOptions options;
+  options.morph_frames = frames;
+  return options;
+}
+
+// The screen-size rule asks for finer levels as the camera closes in; each switch is one geomorph that
+// ends on the wanted level after morph_frames frames at the same camera.
 TEST(MultilevelHttp, CloserCamerasWantFinerLevels) {
   Server server;
-  client::MultilevelOptions options;
-  options.morph_frames = 4;
+  const client::MultilevelOptions options = with_geomorphs(4);
   client::MultilevelClient client(server.url(), options);
   client.open("ball");
   uint32_t previous = ~0u;
-  float shown = -1;
   for (float distance : {400.0f, 40.0f, 8.0f, 3.0f, 1.5f}) {
     Camera c;
     c.eye[2] = distance;
-    const client::MultilevelFrame frame = client.frame(c);
+    client::MultilevelFrame frame = client.frame(c);
     EXPECT_LE(frame.wanted_level, previous) << "distance " << distance;
-    if (shown >= 0) {
-      EXPECT_LE(std::abs(frame.level - shown), 0.25f + 1e-5f);
-    }
+    for (uint32_t i = 1; i < options.morph_frames; ++i) frame = client.frame(c);
+    EXPECT_EQ(frame.level, float(frame.wanted_level)) << "distance " << distance;
+    EXPECT_FALSE(client.in_motion()) << "distance " << distance;
     previous = frame.wanted_level;
-    shown = frame.level;
   }
   EXPECT_LT(previous, sphere_model().mesh.level_count() - 1);
+}
+
+// A switch from the coarsest LOD to the finest is one geomorph (gueziec et al.: the two LODs blended),
+// not one per level in between: the level shown moves the same part of the way each frame, the client is
+// in motion until it shows the wanted level (an integral level on the way is still motion), and
+// morph_frames frames reach it. A switch back to where it came from reverses it.
+TEST(MultilevelHttp, AFarSwitchIsOneGeomorph) {
+  Server server;
+  const client::MultilevelOptions options = with_geomorphs(8);
+  client::MultilevelClient client(server.url(), options);
+  client.open("ball");
+  const float top = float(sphere_model().mesh.level_count() - 1);
+  Camera far = far_camera(), near;
+  near.eye[2] = 1.2f;
+  EXPECT_EQ(client.frame(far).level, top);
+  EXPECT_FALSE(client.in_motion());
+  const uint32_t wanted = client.wanted_level(near);
+  ASSERT_LT(float(wanted) + 2, top) << "the switch crosses several levels";
+  float shown = top;
+  for (uint32_t i = 1; i <= options.morph_frames; ++i) {
+    const client::MultilevelFrame frame = client.frame(near);
+    const float expected = top + (float(wanted) - top) * float(i) / float(options.morph_frames);
+    EXPECT_NEAR(frame.level, expected, 1e-4f) << "frame " << i;
+    EXPECT_LT(frame.level, shown) << "frame " << i;
+    EXPECT_EQ(client.in_motion(), i < options.morph_frames) << "frame " << i << ", level " << frame.level;
+    shown = frame.level;
+  }
+  EXPECT_EQ(shown, float(wanted));
+  // Halfway back to the coarsest, then forward again: the same geomorph, reversed twice.
+  for (uint32_t i = 0; i < options.morph_frames / 2; ++i) client.frame(far);
+  EXPECT_NEAR(client.lod().level(), (top + float(wanted)) / 2, 1e-4f);
+  EXPECT_TRUE(client.in_motion());
+  for (uint32_t i = 0; i < options.morph_frames / 2; ++i) client.frame(near);
+  EXPECT_EQ(client.lod().level(), float(wanted));
+  EXPECT_FALSE(client.in_motion());
 }
 
 TEST(MultilevelHttp, ResourcesAreCacheableAndHostileUrlsGet4xx) {

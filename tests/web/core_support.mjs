@@ -4,6 +4,7 @@
 import { createRequire } from 'node:module';
 import { spawn, execFileSync } from 'node:child_process';
 import fs from 'node:fs';
+import net from 'node:net';
 import os from 'node:os';
 import path from 'node:path';
 import readline from 'node:readline';
@@ -161,4 +162,21 @@ export async function fly(viewer, cameras, maxFrames = 20000) {
     await nextTick();
   }
   throw new Error(`not settled after ${maxFrames} frames`);
+}
+
+// What the binding needs of a WebSocket, over a TCP socket to `port`; `sockets` collects them, so the test
+// can cut one.
+export function tcpSockets(port, sockets) {
+  return class TcpSocket {
+    constructor() {
+      this.binaryType = 'arraybuffer';
+      this.socket = net.connect(port, '127.0.0.1', () => this.onopen?.());
+      this.socket.on('data', (data) => this.onmessage?.({ data: data.buffer.slice(data.byteOffset, data.byteOffset + data.length) }));
+      this.socket.on('close', () => this.onclose?.({ reason: 'TCP closed' }));
+      this.socket.on('error', () => {});
+      sockets.push(this);
+    }
+    send(bytes) { this.socket.write(bytes); }
+    close() { this.socket.destroy(); }
+  };
 }

@@ -40,12 +40,8 @@ async function pageMesh(mode) {
   return { mesh, errors };
 }
 
-// The multilevel viewer reports settled() while its shown level still morphs towards the wanted one
-// (1/8 level a frame); until the core's settled() waits for that, the check runs but does not fail the suite.
-const TODO = { multilevel: 'core: settled() is true while the shown level still morphs' };
-
 for (const mode of ['sender', 'sender-plain', 'vi', 'dag', 'receiver', 'multilevel']) {
-  test(`a flight in mode ${mode} ends on the native viewer's mesh`, { todo: TODO[mode] }, async () => {
+  test(`a flight in mode ${mode} ends on the native viewer's mesh`, async () => {
     const { mesh: browserMesh, errors } = await pageMesh(mode);
     const difference = compareMeshes(browserMesh, nativeMesh(mode));
     assert.equal(difference, '', `page vs native: ${difference}`);

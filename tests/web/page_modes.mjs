@@ -27,8 +27,10 @@ for (const mode of ['sender', 'sender-plain', 'vi', 'dag', 'receiver', 'multilev
   });
 }
 
+// The slider goes to the open viewer (viewer.set): no new viewer, the levels held kept.
 test('the LOD slider changes the face count', async () => {
   await pick('multilevel');
+  const opens = await page.evaluate(() => window.pmstream.opens);
   const faces = [];
   for (const position of ['400', '900']) {
     await page.$eval('#lod', (e, v) => { e.value = v; e.dispatchEvent(new Event('input')); e.dispatchEvent(new Event('change')); }, position);
@@ -37,5 +39,7 @@ test('the LOD slider changes the face count', async () => {
     await screenshot(env, page, `lod_${position}`);
   }
   assert.ok(faces[1] > faces[0], `faces at a coarse and a fine LOD: ${faces}`);
+  assert.equal(await page.evaluate(() => window.pmstream.opens), opens, 'the slider reopened the viewer');
+  assert.ok(await page.evaluate(() => window.pmstream.tunes) >= 2, 'the slider went to the open viewer');
   assert.deepEqual(errors, []);
 });

@@ -2,12 +2,13 @@
 // malformed or hand-edited link falls back to defaults rather than failing.
 import { test } from 'node:test';
 import assert from 'node:assert/strict';
-import { parseState, formatState, DEFAULTS, MODES } from '../../web/js/url_state.js';
-import { lodBudget } from '../../web/js/viewer_options.js';
+import fs from 'node:fs';
+import { parseState, formatState, DEFAULTS, MODES, DAG_TRAVERSALS } from '../../web/js/url_state.js';
+import { lodBudget, changeKind, viewerTuning } from '../../web/js/viewer_options.js';
 
 test('every mode\'s state survives formatState then parseState', () => {
   for (const mode of MODES) {
-    const state = { ...DEFAULTS, model: 'bunny', mode, tolerance: 0.5, traversal: 'change', budget: 5000, maxOps: 300,
+    const state = { ...DEFAULTS, model: 'bunny', mode, tolerance: 0.5, traversal: 'constant', budget: 5000, maxOps: 300,
                     fetch: 'blocks', prefetch: true, lod: 420, camera: 'fly', wireframe: true,
                     eye: [1.5, -2.25, 3], target: [0, 0.125, 0], up: [0, 0, 1], fovy: 45 };
     const back = parseState(formatState(state));
@@ -15,7 +16,7 @@ test('every mode\'s state survives formatState then parseState', () => {
     assert.equal(back.tolerance, 0.5);
     assert.deepEqual([back.eye, back.target, back.up, back.fovy], [state.eye, state.target, state.up, 45]);
     assert.deepEqual([back.camera, back.wireframe], ['fly', true]);
-    if (mode === 'dag') assert.deepEqual([back.traversal, back.budget, back.maxOps], ['change', 5000, 300]);
+    if (mode === 'dag') assert.deepEqual([back.traversal, back.budget, back.maxOps], ['constant', 5000, 300]);
     if (mode === 'receiver') assert.deepEqual([back.fetch, back.prefetch], ['blocks', true]);
     if (mode === 'multilevel') assert.equal(back.lod, 420);
   }
@@ -36,4 +37,24 @@ test('the LOD slider: 0 is the screen-size rule, then budgets rise to the model\
     last = b;
   }
   assert.equal(lodBudget(1000, 100000), 100000);
+});
+
+test('the DAG traversals are the core\'s names, in the link and in the panel', () => {
+  assert.deepEqual(DAG_TRAVERSALS, ['priority', 'linear', 'constant']);
+  assert.equal(DEFAULTS.traversal, 'priority');
+  for (const name of DAG_TRAVERSALS) assert.equal(parseState(`#mode=dag&traversal=${name}`).traversal, name);
+  for (const other of ['free', 'budget', 'change']) assert.equal(parseState(`#mode=dag&traversal=${other}`).traversal, 'priority');
+  const html = fs.readFileSync(new URL('../../web/index.html', import.meta.url), 'utf8');
+  const select = html.slice(html.indexOf('id="dag-traversal"'), html.indexOf('</select>', html.indexOf('id="dag-traversal"')));
+  assert.deepEqual([...select.matchAll(/<option value="([^"]+)"/g)].map((m) => m[1]), DAG_TRAVERSALS);
+});
+
+test('options the open viewer takes go to viewer.set; model, mode and fetch reopen', () => {
+  for (const key of ['tolerance', 'traversal', 'budget', 'maxOps', 'prefetch', 'lod']) assert.equal(changeKind(key), 'tune', key);
+  for (const key of ['model', 'mode', 'fetch']) assert.equal(changeKind(key), 'reopen', key);
+  const state = { ...DEFAULTS, tolerance: 3, traversal: 'linear', budget: 900, maxOps: 50, prefetch: true, lod: 1000 };
+  assert.deepEqual(viewerTuning('tolerance', state, 5000), { tolerance: 3 });
+  assert.deepEqual(viewerTuning('budget', state, 5000), { dag: { traversal: 'linear', budget: 900, maxOps: 50 } });
+  assert.deepEqual(viewerTuning('prefetch', state, 5000), { receiver: { prefetch: true } });
+  assert.deepEqual(viewerTuning('lod', state, 5000), { multilevel: { budget: 5000 } });
 });

@@ -2,27 +2,9 @@
 // core and binding the page's WebSocket carries (one message = one frame there; any chunking here). Each
 // mode's flight settles where the native client does along the same path; a connection cut mid-flight is
 // resumed on the next socket.
-import net from 'node:net';
 import fs from 'node:fs';
-import { check, expectSameFaces, fly, loadNodeCore, nativeMesh, nextTick, servedTerrain, tempDir } from './core_support.mjs';
+import { check, expectSameFaces, fly, loadNodeCore, nativeMesh, nextTick, servedTerrain, tcpSockets, tempDir } from './core_support.mjs';
 import { openViewer } from '../../web/js/pmstream.js';
-
-// What the binding needs of a WebSocket, over a TCP socket to `port`; `sockets` collects them, so the test
-// can cut one.
-function tcpSockets(port, sockets) {
-  return class TcpSocket {
-    constructor() {
-      this.binaryType = 'arraybuffer';
-      this.socket = net.connect(port, '127.0.0.1', () => this.onopen?.());
-      this.socket.on('data', (data) => this.onmessage?.({ data: data.buffer.slice(data.byteOffset, data.byteOffset + data.length) }));
-      this.socket.on('close', () => this.onclose?.({ reason: 'TCP closed' }));
-      this.socket.on('error', () => {});
-      sockets.push(this);
-    }
-    send(bytes) { this.socket.write(bytes); }
-    close() { this.socket.destroy(); }
-  };
-}
 
 const core = await loadNodeCore();
 const dir = tempDir();

@@ -9,7 +9,7 @@ import { Overlay, FrameRate } from './overlay.js';
 import { ModePanel } from './mode_panel.js';
 import { FaceIdPass } from './face_id_pass.js';
 import { parseState, formatState, MODES } from './url_state.js';
-import { viewerOptions, changeKind, modesFor } from './viewer_options.js';
+import { viewerOptions, viewerTuning, changeKind, modesFor } from './viewer_options.js';
 import { installHook } from './page_hook.js';
 
 const URL_EVERY_MS = 500;  // the link follows the camera, without a history write per frame
@@ -27,6 +27,8 @@ class App {
     this.frameRate = new FrameRate();
     this.geometry = null;
     this.reallocations = 0;
+    this.opens = 0;  // viewers opened, and options changed in place: what the page tests count
+    this.tunes = 0;
     this.viewer = null;
     this.report = null;
     this.bounds = null;
@@ -69,6 +71,7 @@ class App {
     this.bounds = null;
     this.report = null;
     this.failed = false;
+    this.opens++;
     this.viewer = openViewer(this.core, viewerOptions(this.state, this.server, model?.faces ?? 0, {
       onError: (message) => this.fail(message),
       onStatus: (text) => this.overlay.say(text),
@@ -88,17 +91,33 @@ class App {
     if (key === 'camera') this.controls.setStyle(value);
     if (key === 'wireframe') this.view.material.wireframe = value;
     if (key === 'model') this.state.eye = this.state.target = null;  // frame the new model
-    if (changeKind(key) === 'reopen') this.open();
+    const kind = changeKind(key);
+    if (kind === 'reopen') this.open();
+    else if (kind === 'tune') this.tune([key]);
     else this.panel.show(this.state);
   }
 
-  // A link pasted into the address bar: the camera moves, anything else reopens.
+  // Options the open viewer takes in place, its mesh kept; one it refuses is said in the overlay.
+  tune(keys) {
+    this.panel.show(this.state);
+    try {
+      for (const key of keys) this.viewer.set(viewerTuning(key, this.state, this.model()?.faces ?? 0));
+      this.tunes++;
+    } catch (error) {
+      this.overlay.say(String(error?.message ?? error), true);
+    }
+  }
+
+  // A link pasted into the address bar: the camera moves, options go to the open viewer, a new model,
+  // mode or fetch style reopens it.
   followLink() {
     const next = parseState(location.hash);
-    const reopen = ['model', 'mode', 'tolerance', 'traversal', 'budget', 'maxOps', 'fetch', 'prefetch', 'lod']
-      .some((k) => next[k] !== this.state[k]);
+    const differs = (keys) => keys.filter((k) => next[k] !== this.state[k]);
+    const reopen = differs(['model', 'mode', 'fetch']).length > 0;
+    const tuned = differs(['tolerance', 'traversal', 'budget', 'maxOps', 'prefetch', 'lod']);
     this.state = { ...next, model: next.model || this.state.model };
     if (reopen) this.open();
+    else if (tuned.length) this.tune(tuned);
     if (next.eye && next.target) this.controls.set(next);
   }
 
@@ -145,7 +164,11 @@ class App {
   }
 
   viewerFrame() {
+    const wasRefused = Boolean(this.report?.refused);
     this.report = this.viewer.frame(this.cameraForViewer());
+    // A degenerate camera (eye on the target, say) is refused for that frame only: said while it lasts.
+    if (this.report.refused) this.overlay.say(this.report.refused, true);
+    else if (wasRefused) this.overlay.say('');
     if (this.report.opening) return;  // no model yet: nothing to draw
     if (!this.bounds) this.opened();
     const buffers = this.viewer.buffers();

@@ -16,7 +16,7 @@ export class ModePanel {
     };
     this.lodValue = $('lod-value');
     for (const [key, input] of Object.entries(this.inputs)) {
-      // A slider reports once it is let go: each change reopens the viewer.
+      // A slider reports once it is let go: the open viewer takes the new value (main.js).
       input.addEventListener('change', () => this.onChange(key, this.read(key)));
     }
     this.inputs.lod.addEventListener('input', () => this.showLod());

@@ -8,6 +8,9 @@ export function installHook(app) {
     get ready() { return Boolean(app.report && !app.report.opening); },
     get report() { return app.report; },
     get state() { return { ...app.state }; },
+    // Viewers opened, and option changes the open viewer took in place.
+    get opens() { return app.opens; },
+    get tunes() { return app.tunes; },
     get errors() { return [...app.errors]; },
     get uploads() {
       const g = app.geometry;
@@ -30,12 +33,22 @@ export function installHook(app) {
     },
     set(key, value) { app.change(key, value); },
     // The picture with or without the model, as the canvas's RGBA rows (bottom row first): the tests
-    // compare the two to find the model's silhouette.
-    pixels(showModel) {
+    // compare the two to find the model's silhouette. `reversed`: every triangle wound the other way for
+    // this picture (the shading must not depend on it).
+    pixels(showModel, reversed = false) {
       const { renderer, scene, camera } = app.view;
+      const index = app.geometry.mesh.geometry.getIndex();
+      const swap = () => {
+        const a = index.array;
+        for (let i = 0; i + 2 < a.length; i += 3) [a[i + 1], a[i + 2]] = [a[i + 2], a[i + 1]];
+        index.clearUpdateRanges();
+        index.needsUpdate = true;
+      };
+      if (reversed) swap();
       app.geometry.mesh.visible = showModel;
       renderer.render(scene, camera);
       app.geometry.mesh.visible = true;
+      if (reversed) swap();
       const gl = renderer.getContext();
       const out = new Uint8Array(gl.drawingBufferWidth * gl.drawingBufferHeight * 4);
       gl.readPixels(0, 0, gl.drawingBufferWidth, gl.drawingBufferHeight, gl.RGBA, gl.UNSIGNED_BYTE, out);

@@ -8,6 +8,9 @@
 //   const models = await core.catalogue(server);
 //   const viewer = openViewer(core, { server, mode, model, tolerance, ... });
 //   const report = viewer.frame({ eye, target, up, fovyDeg, width, height });   // per displayed frame
+//   viewer.set({ tolerance: 2 });   // options changed on the open viewer, the mesh kept
+// A degenerate camera (eye on the target, a zero up or one along the view) is refused for that frame only:
+// report.refused says why, the mesh and the rest of the report stay as they were.
 
 const SESSION_MODES = new Set(['sender', 'sender-plain', 'vi', 'dag']);
 const FRAME_HEADER_BYTES = 5;  // u32 payload length (little-endian) + u8 type (docs/protocol.md)
@@ -127,6 +130,16 @@ class Viewer {
     if (!report.opening) this.attempts = 0;
     this.report = report;
     return report;
+  }
+
+  // Changes options on the open viewer, keeping its mesh: any of tolerance, morphFrames,
+  // dag: {traversal, budget, maxOps}, receiver: {prefetch}, multilevel: {budget}. The model, the mode and
+  // receiver.fetch need a new viewer. Throws (and changes nothing) for a value the core refuses.
+  set(options) {
+    if (this.closed || this.failed) return;
+    const ok = this.core.withString(JSON.stringify(options), (ptr) => this.m._pms_viewer_set(this.handle, ptr));
+    if (!ok) throw new Error(this.core.error());
+    Object.assign(this.options, options);
   }
 
   // Views into the core's memory, valid until the next call into the viewer (memory may grow then).

@@ -19,6 +19,21 @@ function skyTexture() {
   return texture;
 }
 
+// Two-sided lighting by the normal, as the native renderer's headlight (|cos|): a fragment whose
+// interpolated normal faces away from the eye is lit with it turned round, whatever the triangle's winding.
+// three's DoubleSide turns it by the winding instead, which draws as dark lines the fold-overs a
+// view-dependent mesh may hold: vsplits made in another order than the build's collapses can fold a thin
+// triangle over its neighbour (the build checks flips along its own sequence only), wound backwards while
+// its vertex normals, averaged over their fans, still face the eye.
+const WINDING_FLIP = 'normal *= faceDirection;';
+const NORMAL_FLIP = 'normal = faceforward( normal, - vViewPosition, normal );';
+
+function litByNormal(shader) {
+  const chunk = THREE.ShaderChunk.normal_fragment_begin;
+  if (!chunk.includes(WINDING_FLIP)) console.error('three.js changed normal_fragment_begin: two-sided lighting is by winding');
+  shader.fragmentShader = shader.fragmentShader.replace('#include <normal_fragment_begin>', chunk.replace(WINDING_FLIP, NORMAL_FLIP));
+}
+
 export function createScene(container) {
   // preserveDrawingBuffer: the tests' screenshots read the canvas after the frame was presented.
   const renderer = new THREE.WebGLRenderer({ antialias: true, preserveDrawingBuffer: true });
@@ -37,6 +52,7 @@ export function createScene(container) {
   const material = new THREE.MeshStandardMaterial({
     color: 0xd8d8d8, vertexColors: true, roughness: 0.85, metalness: 0, side: THREE.DoubleSide,
   });
+  material.onBeforeCompile = litByNormal;
 
   function resize() {
     const width = container.clientWidth || 1, height = container.clientHeight || 1;

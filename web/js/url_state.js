@@ -4,10 +4,13 @@
 // Anything missing or malformed falls back to the default, so a hand-edited link still opens.
 
 export const MODES = ['sender', 'sender-plain', 'vi', 'dag', 'receiver', 'multilevel'];
+// The DAG traversals by the core's names (`pmstream stream --traversal`); a budget > 0 picks the budget
+// variant of the one named, as --budget does.
+export const DAG_TRAVERSALS = ['priority', 'linear', 'constant'];
 
 export const DEFAULTS = Object.freeze({
   server: '', model: '', mode: 'sender', tolerance: 1, camera: 'orbit', wireframe: false,
-  traversal: 'free', budget: 0, maxOps: 0, fetch: 'lists', prefetch: false, lod: 0,
+  traversal: 'priority', budget: 0, maxOps: 0, fetch: 'lists', prefetch: false, lod: 0,
   eye: null, target: null, up: [0, 1, 0], fovy: 60,
 });
 
@@ -35,7 +38,7 @@ export function parseState(hash) {
     tolerance: number(q.get('tau'), DEFAULTS.tolerance, 0),
     camera: oneOf(q.get('camera'), ['orbit', 'fly'], DEFAULTS.camera),
     wireframe: q.get('wire') === '1',
-    traversal: oneOf(q.get('traversal'), ['free', 'budget', 'change'], DEFAULTS.traversal),
+    traversal: oneOf(q.get('traversal'), DAG_TRAVERSALS, DEFAULTS.traversal),
     budget: Math.floor(number(q.get('budget'), DEFAULTS.budget, 0)),
     maxOps: Math.floor(number(q.get('maxops'), DEFAULTS.maxOps, 0)),
     fetch: oneOf(q.get('fetch'), ['lists', 'blocks'], DEFAULTS.fetch),

@@ -20,9 +20,22 @@ export function viewerOptions(state, server, faces, callbacks) {
   };
 }
 
-// What a change of the key does: 'view' settings change the picture only; the rest reopen the viewer.
+// The options an open viewer takes in place (viewer.set): the mesh is kept.
+const TUNED = new Set(['tolerance', 'traversal', 'budget', 'maxOps', 'prefetch', 'lod']);
+
+// What a change of the key does: 'view' settings change the picture only, 'tune' ones go to the open viewer
+// (viewer.set), the rest (model, mode, the receiver's fetch style) reopen it.
 export function changeKind(key) {
-  return key === 'camera' || key === 'wireframe' ? 'view' : 'reopen';
+  if (key === 'camera' || key === 'wireframe') return 'view';
+  return TUNED.has(key) ? 'tune' : 'reopen';
+}
+
+// viewer.set's options for a change of `key` ('tune' kind) in `state`.
+export function viewerTuning(key, state, faces) {
+  if (key === 'tolerance') return { tolerance: state.tolerance };
+  if (key === 'prefetch') return { receiver: { prefetch: state.prefetch } };
+  if (key === 'lod') return { multilevel: { budget: lodBudget(state.lod, faces) } };
+  return { dag: { traversal: state.traversal, budget: state.budget, maxOps: state.maxOps } };
 }
 
 // A multilevel-only model (a `.pml`, catalogue kind "multilevel") has no progressive hierarchy to stream.
