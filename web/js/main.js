@@ -41,11 +41,13 @@ class App {
   async start() {
     this.overlay.say('loading the core…');
     this.core = await loadCore('pmstream_core.js');
+    performance.mark('pmstream:core');  // the bench's first-picture breakdown
     this.models = await this.core.catalogue(this.server);
     if (!this.models.length) throw new Error(`${this.server} serves no model`);
     this.panel.setModels(this.models);
     if (!this.models.some((m) => m.name === this.state.model)) this.state.model = this.models[0].name;
     this.open();
+    performance.mark('pmstream:viewer');
     if (this.state.eye && this.state.target) this.controls.set(this.state);
     window.addEventListener('keydown', (e) => this.key(e));
     window.addEventListener('hashchange', () => this.followLink());
@@ -60,12 +62,8 @@ class App {
     const model = this.model();
     if (!modesFor(model, MODES).includes(this.state.mode)) this.state.mode = modesFor(model, MODES)[0];
     this.viewer?.close();
-    if (this.geometry) {
-      this.view.scene.remove(this.geometry.mesh);
-      this.geometry.mesh.geometry.dispose();
-    }
-    this.geometry = new MeshGeometry(this.view.material);
-    this.view.scene.add(this.geometry.mesh);
+    this.replay = null;
+    this.newGeometry();
     this.bounds = null;
     this.report = null;
     this.failed = false;
@@ -76,6 +74,16 @@ class App {
     this.panel.show(this.state);
     this.overlay.reset();
     this.overlay.say(`opening ${this.state.model} (${this.state.mode})…`);
+  }
+
+  // An empty mesh on the GPU: a new model, or a replay starting over.
+  newGeometry() {
+    if (this.geometry) {
+      this.view.scene.remove(this.geometry.mesh);
+      this.geometry.mesh.geometry.dispose();
+    }
+    this.geometry = new MeshGeometry(this.view.material);
+    this.view.scene.add(this.geometry.mesh);
   }
 
   fail(message) {
@@ -125,9 +133,14 @@ class App {
     const seconds = this.lastTime ? Math.min(0.1, (time - this.lastTime) / 1000) : 0;
     this.lastTime = time;
     if (!this.scripted) this.controls.update(seconds);
+    // The page's own CPU time for the frame (WASM frame, buffer updates, JS), for the bench.
+    const start = performance.now();
     if (!this.failed) this.step();
+    this.stepMs = performance.now() - start;
     fitDepthRange(this.view.camera, this.bounds);
     this.view.renderer.render(this.view.scene, this.view.camera);
+    this.renderMs = performance.now() - start - this.stepMs;  // three.js issuing the draw
+    this.afterDraw?.(time);
     this.frameRate.tick(time);
     if (this.report) this.overlay.show(this.report, this.frameRate.value(), this.model()?.vsplits);
     if (time - this.lastUrl > URL_EVERY_MS) this.writeLink(time);
@@ -136,7 +149,8 @@ class App {
   // One viewer frame: the camera in, what changed out to the GPU, and the face ids back in when asked.
   step() {
     try {
-      this.viewerFrame();
+      if (this.replay) this.replayFrame();
+      else this.viewerFrame();
       this.afterFrame?.(this.report);
     } catch (error) {
       this.failed = true;
@@ -145,15 +159,24 @@ class App {
   }
 
   viewerFrame() {
+    const start = performance.now();
     this.report = this.viewer.frame(this.cameraForViewer());
+    this.coreMs = performance.now() - start;  // the viewer's frame alone, for the bench
     if (this.report.opening) return;  // no model yet: nothing to draw
     if (!this.bounds) this.opened();
     const buffers = this.viewer.buffers();
     if (!buffers?.positions) return;  // the viewer failed: onError has said why
+    this.onBuffers?.(buffers);
     const capacity = this.geometry.vertexCapacity;
     this.geometry.update(buffers);
     if (this.geometry.vertexCapacity !== capacity) this.reallocations++;
     if (this.viewer.wantsFaceIds()) this.faceIdPass();
+  }
+
+  // A recorded frame's buffers (frame_recorder.js) instead of the viewer's: no network, no core work.
+  replayFrame() {
+    const buffers = this.replay.next();
+    if (buffers) this.geometry.update(buffers);
   }
 
   opened() {
