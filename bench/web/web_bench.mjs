@@ -171,7 +171,7 @@ async function streamAndReplay(browser, config, cams) {
 // Where a profile's samples fall: the WASM core, three.js, the page's modules, or the browser's own work.
 function category(frame) {
   const url = frame.url ?? '';
-  if (url.startsWith('wasm://')) return 'WASM core';
+  if (url.startsWith('wasm://') || url.endsWith('.wasm')) return 'WASM core';
   if (url.includes('/vendor/')) return 'three.js';
   if (url.endsWith('/pmstream.js') || url.endsWith('/pmstream_core.js')) return 'pmstream.js + emscripten glue';
   if (url.includes('/js/')) return 'page modules';
