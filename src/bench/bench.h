@@ -59,6 +59,8 @@ void run_dag_group(BenchContext& context);
 void run_attacks_group(BenchContext& context);
 // Every mode's Viewer free-running over a delaying link (bench_viewer.cpp).
 void run_viewer_group(BenchContext& context);
+// The browser viewer in headless Chromium against the native client (bench_web.cpp).
+void run_web_group(BenchContext& context);
 
 // The directory holding models/: `explicit_dir` (--shared) if given, else $PMSTREAM_SHARED_DIR, else
 // ../shared or ../../shared relative to the working directory and then to `exe_dir`. An explicit

@@ -39,13 +39,6 @@ void print_now(const std::string& text) {
   std::fflush(stdout);
 }
 
-VertexHierarchy complete_hierarchy(const ModelData& model) {
-  VertexHierarchy h = VertexHierarchy::from_model(model);
-  h.reserve(model.node_count());
-  for (uint32_t node : model.split_order) h.add_split(split_record(model, node));
-  return h;
-}
-
 namespace {
 
 constexpr uint32_t kScanFrames = 180, kQuickScanFrames = 40;

@@ -6,15 +6,13 @@
 #include "bench/bench.h"
 #include "common/camera.h"
 #include "spm/hierarchy.h"
+#include "spm/path_refinement.h"  // complete_hierarchy
 #include "spm/vertex_hierarchy.h"
 
 namespace pms::bench {
 
 // Writes `text` to stdout at once: tables show as they fill.
 void print_now(const std::string& text);
-
-// Every split known: the loop's cost alone, with nothing to fetch.
-VertexHierarchy complete_hierarchy(const ModelData& model);
 
 // Issue 18's cameras: eye = c + d·r·(sin a, 0, cos a), c the box centre and r half its diagonal, looking at
 // c, up +y, 1920 x 1080, 60° vertical field of view.

@@ -37,6 +37,10 @@ constexpr BenchGroup kGroups[] = {
      "every mode's Viewer free-running at 30 fps over 0 and 50 ms round trips: frame() time, flight and settle "
      "seconds, first picture, settled mesh against lock-step",
      run_viewer_group},
+    {"web",
+     "the browser viewer in headless Chromium: WASM refinement against native, first picture, frame rate while "
+     "streaming against a replay, the page's CPU per frame by mode, memory over laps",
+     run_web_group},
 };
 
 std::span<const BenchGroup> bench_groups() { return kGroups; }

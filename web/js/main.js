@@ -43,11 +43,13 @@ class App {
   async start() {
     this.overlay.say('loading the core…');
     this.core = await loadCore('pmstream_core.js');
+    performance.mark('pmstream:core');  // the bench's first-picture breakdown
     this.models = await this.core.catalogue(this.server);
     if (!this.models.length) throw new Error(`${this.server} serves no model`);
     this.panel.setModels(this.models);
     if (!this.models.some((m) => m.name === this.state.model)) this.state.model = this.models[0].name;
     this.open();
+    performance.mark('pmstream:viewer');
     if (this.state.eye && this.state.target) this.controls.set(this.state);
     window.addEventListener('keydown', (e) => this.key(e));
     window.addEventListener('hashchange', () => this.followLink());
@@ -62,12 +64,8 @@ class App {
     const model = this.model();
     if (!modesFor(model, MODES).includes(this.state.mode)) this.state.mode = modesFor(model, MODES)[0];
     this.viewer?.close();
-    if (this.geometry) {
-      this.view.scene.remove(this.geometry.mesh);
-      this.geometry.mesh.geometry.dispose();
-    }
-    this.geometry = new MeshGeometry(this.view.material);
-    this.view.scene.add(this.geometry.mesh);
+    this.replay = null;
+    this.newGeometry();
     this.bounds = null;
     this.report = null;
     this.failed = false;
@@ -79,6 +77,16 @@ class App {
     this.panel.show(this.state);
     this.overlay.reset();
     this.overlay.say(`opening ${this.state.model} (${this.state.mode})…`);
+  }
+
+  // An empty mesh on the GPU: a new model, or a replay starting over.
+  newGeometry() {
+    if (this.geometry) {
+      this.view.scene.remove(this.geometry.mesh);
+      this.geometry.mesh.geometry.dispose();
+    }
+    this.geometry = new MeshGeometry(this.view.material);
+    this.view.scene.add(this.geometry.mesh);
   }
 
   fail(message) {
@@ -144,9 +152,14 @@ class App {
     const seconds = this.lastTime ? Math.min(0.1, (time - this.lastTime) / 1000) : 0;
     this.lastTime = time;
     if (!this.scripted) this.controls.update(seconds);
+    // The page's own CPU time for the frame (WASM frame, buffer updates, JS), for the bench.
+    const start = performance.now();
     if (!this.failed) this.step();
+    this.stepMs = performance.now() - start;
     fitDepthRange(this.view.camera, this.bounds);
     this.view.renderer.render(this.view.scene, this.view.camera);
+    this.renderMs = performance.now() - start - this.stepMs;  // three.js issuing the draw
+    this.afterDraw?.(time);
     this.frameRate.tick(time);
     if (this.report) this.overlay.show(this.report, this.frameRate.value(), this.model()?.vsplits);
     if (time - this.lastUrl > URL_EVERY_MS) this.writeLink(time);
@@ -155,7 +168,8 @@ class App {
   // One viewer frame: the camera in, what changed out to the GPU, and the face ids back in when asked.
   step() {
     try {
-      this.viewerFrame();
+      if (this.replay) this.replayFrame();
+      else this.viewerFrame();
       this.afterFrame?.(this.report);
     } catch (error) {
       this.failed = true;
@@ -165,7 +179,9 @@ class App {
 
   viewerFrame() {
     const wasRefused = Boolean(this.report?.refused);
+    const start = performance.now();
     this.report = this.viewer.frame(this.cameraForViewer());
+    this.coreMs = performance.now() - start;  // the viewer's frame alone, for the bench
     // A degenerate camera (eye on the target, say) is refused for that frame only: said while it lasts.
     if (this.report.refused) this.overlay.say(this.report.refused, true);
     else if (wasRefused) this.overlay.say('');
@@ -173,10 +189,17 @@ class App {
     if (!this.bounds) this.opened();
     const buffers = this.viewer.buffers();
     if (!buffers?.positions) return;  // the viewer failed: onError has said why
+    this.onBuffers?.(buffers);
     const capacity = this.geometry.vertexCapacity;
     this.geometry.update(buffers);
     if (this.geometry.vertexCapacity !== capacity) this.reallocations++;
     if (this.viewer.wantsFaceIds()) this.faceIdPass();
+  }
+
+  // A recorded frame's buffers (frame_recorder.js) instead of the viewer's: no network, no core work.
+  replayFrame() {
+    const buffers = this.replay.next();
+    if (buffers) this.geometry.update(buffers);
   }
 
   opened() {

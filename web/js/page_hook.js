@@ -1,6 +1,43 @@
 // window.pmstream: what a script driving the page may read and do (the browser tests, tests/web/page_*.mjs).
 // The camera a script sets is handed to the viewer verbatim, its viewport included, so a flight is the
-// native viewer's path camera for camera.
+// native viewer's path camera for camera. `bench` is what pmstream-bench's driver (bench/web/web_bench.mjs)
+// reads: the first picture's time, each drawn frame's CPU time, the WASM memory, a recorded flight replayed.
+import { FrameRecorder, FramePlayer } from './frame_recorder.js';
+
+// The bench's view of the page. Times are performance.now(): milliseconds since navigation started.
+function benchHook(app) {
+  let firstPicture = null, log = null, recorder = null;
+  app.afterDraw = () => {
+    const now = performance.now();
+    if (!firstPicture && app.report && !app.report.opening && app.geometry.triangleCount > 0) {
+      firstPicture = { ms: now, downBytes: app.report.downBytes, upBytes: app.report.upBytes,
+                       faces: app.geometry.triangleCount };
+    }
+    log?.push({ t: now, stepMs: app.stepMs, coreMs: app.coreMs, renderMs: app.renderMs,
+                faces: app.geometry.triangleCount });
+  };
+  return {
+    get firstPicture() { return firstPicture; },
+    get wasmBytes() { return app.core?.m.HEAPU8.buffer.byteLength ?? 0; },
+    // Every drawn frame from now until takeLog(): {t, stepMs (the page's frame work), coreMs (the viewer's
+    // frame() of it), renderMs (three.js's render()), faces}.
+    startLog() { log = []; },
+    takeLog() { const taken = log ?? []; log = null; return taken; },
+    // The viewer's buffer changes, frame by frame, until replay().
+    record() {
+      recorder = new FrameRecorder();
+      app.onBuffers = (b) => recorder.record(b);
+    },
+    // From an empty mesh, the recorded frames one per displayed frame, instead of the viewer's.
+    replay() {
+      app.onBuffers = null;
+      app.newGeometry();
+      app.replay = new FramePlayer(recorder?.frames ?? []);
+      recorder = null;
+      return app.replay.frames.length;
+    },
+  };
+}
 
 export function installHook(app) {
   const waiting = [];
@@ -32,6 +69,7 @@ export function installHook(app) {
       return { positions: Array.from(m.positions), faces: Array.from(m.faces) };
     },
     set(key, value) { app.change(key, value); },
+    bench: benchHook(app),
     // The picture with or without the model, as the canvas's RGBA rows (bottom row first): the tests
     // compare the two to find the model's silhouette. `reversed`: every triangle wound the other way for
     // this picture (the shading must not depend on it).
