@@ -4,7 +4,8 @@
 //   firstPicture  per cold page load: ms from navigation start to the first frame drawn with the base mesh,
 //                 the model's bytes (the viewer's up and down) and the site's (resource timing) until then
 //   refine        per repeat: the WASM module's refinement run along the path (src/web/bench_api.cpp)
-//   flights       per mode: each frame's draw time and the page's CPU time for it, along the path
+//   flights       per mode: each frame's draw time and the page's time for it (wall), along the path, and
+//                 each animation-frame callback's thread CPU time (tracing)
 //   replay        the sender flight's recorded buffer changes drawn again from memory, same cameras
 //   laps          per lap of the orbit: JS heap (after a collection) and WASM memory
 //   profile       the sender flight once more under Chromium's CPU profiler: where the main thread's time goes
@@ -139,6 +140,25 @@ function fly(page, cams) {
   }, cams);
 }
 
+// `run()` under Chromium's tracing: its result, and the thread CPU time (not the wall time, which on a
+// shared machine includes the time the page's thread waited for a core) of each animation-frame callback
+// on the page's main thread, in ms. The page does one callback a frame: its viewer frame, buffer uploads,
+// render call and overlay.
+async function withFrameCpu(context, page, run) {
+  const cdp = await context.newCDPSession(page);
+  const events = [];
+  cdp.on('Tracing.dataCollected', (e) => events.push(...e.value));
+  await cdp.send('Tracing.start', { categories: 'devtools.timeline,disabled-by-default-devtools.timeline',
+                                    transferMode: 'ReportEvents' });
+  const result = await run();
+  const complete = new Promise((resolve) => cdp.once('Tracing.tracingComplete', resolve));
+  await cdp.send('Tracing.end');
+  await complete;
+  await cdp.detach();
+  const frames = events.filter((e) => e.name === 'FireAnimationFrame' && e.ph === 'X' && e.tdur !== undefined);
+  return { result, frameCpuMs: frames.map((e) => e.tdur / 1000) };
+}
+
 // Each mode along the path from its first view settled.
 async function flights(browser, config, cams) {
   const out = {};
@@ -146,9 +166,10 @@ async function flights(browser, config, cams) {
     process.stderr.write(`web_bench: flight, ${mode}\n`);
     const { context, page, errors } = await openPage(browser, config, mode, cams[0]);
     const settled = await settle(page, config.settleSeconds);
-    const log = await fly(page, cams);
+    const { result: log, frameCpuMs } = await withFrameCpu(context, page, () => fly(page, cams));
     const report = await page.evaluate(() => window.pmstream.report);
-    out[mode] = { settledBeforeFlight: settled, log, downBytes: report.downBytes, faces: report.faces, errors };
+    out[mode] = { settledBeforeFlight: settled, log, frameCpuMs, downBytes: report.downBytes, faces: report.faces,
+                  errors };
     await context.close();
   }
   return out;

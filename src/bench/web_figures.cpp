@@ -45,20 +45,24 @@ double frames_per_second(const json& log) {
 ModeFlight mode_flight(const std::string& mode, const json& flight) {
   ModeFlight f;
   f.mode = mode;
-  std::vector<double> cpu;
+  std::vector<double> cpu, step, core, render;
+  if (const json& traced = at(flight, "frameCpuMs"); traced.is_array())
+    for (const json& ms : traced)
+      if (ms.is_number()) cpu.push_back(ms.get<double>());
   const json& log = at(flight, "log");
   if (log.is_array())
-    for (const json& frame : log) cpu.push_back(frame.value("stepMs", 0.0));
-  f.frames = uint32_t(cpu.size());
-  f.fps = frames_per_second(log);
-  f.cpu_p50_ms = percentile(cpu, 0.5);
-  f.cpu_p99_ms = percentile(cpu, 0.99);
-  std::vector<double> core, render;
-  if (log.is_array())
     for (const json& frame : log) {
+      step.push_back(frame.value("stepMs", 0.0));
       core.push_back(frame.value("coreMs", 0.0));
       render.push_back(frame.value("renderMs", 0.0));
     }
+  f.frames = uint32_t(step.size());
+  f.fps = frames_per_second(log);
+  f.cpu_frames = uint32_t(cpu.size());
+  f.cpu_p50_ms = percentile(cpu, 0.5);
+  f.cpu_p99_ms = percentile(cpu, 0.99);
+  f.step_p50_ms = percentile(step, 0.5);
+  f.step_p99_ms = percentile(step, 0.99);
   f.core_p50_ms = percentile(core, 0.5);
   f.core_p99_ms = percentile(core, 0.99);
   f.render_p50_ms = percentile(render, 0.5);
@@ -167,9 +171,12 @@ std::string targets_section(const WebFigures& f) {
        "≥ " + fixed(kMinFpsRatio, 1), met(f.fps_ratio() >= kMinFpsRatio)});
   const auto sender =
       std::find_if(f.modes.begin(), f.modes.end(), [](const ModeFlight& m) { return m.mode == "sender"; });
-  if (sender != f.modes.end())
-    targets.add_row({"page CPU per frame, sender p99", fixed(sender->cpu_p99_ms, 2) + " ms",
-                     "≤ " + fixed(kMaxSenderP99Ms, 0) + " ms", met(sender->cpu_p99_ms <= kMaxSenderP99Ms)});
+  if (sender != f.modes.end()) {
+    const bool measured = sender->cpu_frames > 0;
+    targets.add_row({"page CPU per frame, sender p99",
+                     measured ? fixed(sender->cpu_p99_ms, 2) + " ms (thread time)" : "not measured (no trace)",
+                     "≤ " + fixed(kMaxSenderP99Ms, 0) + " ms", met(measured && sender->cpu_p99_ms <= kMaxSenderP99Ms)});
+  }
   targets.add_row({"JS heap growth, lap 2 to " + std::to_string(f.laps.size()), fixed(100 * f.heap_growth(), 1) + " %",
                    "≤ " + fixed(100 * kMaxGrowth, 0) + " %", met(f.heap_growth() <= kMaxGrowth)});
   targets.add_row({"WASM memory growth, lap 2 to " + std::to_string(f.laps.size()),
@@ -195,6 +202,8 @@ std::string modes_section(const WebFigures& f) {
                {"fps"},
                {"CPU p50 ms"},
                {"CPU p99 ms"},
+               {"step p50 ms"},
+               {"step p99 ms"},
                {"frame() p50 ms"},
                {"frame() p99 ms"},
                {"render() p50 ms"},
@@ -203,13 +212,16 @@ std::string modes_section(const WebFigures& f) {
                {"settled before", false}});
   for (const ModeFlight& m : f.modes)
     modes.add_row({m.mode, std::to_string(m.frames), fixed(m.fps, 1), fixed(m.cpu_p50_ms, 2), fixed(m.cpu_p99_ms, 2),
-                   fixed(m.core_p50_ms, 2), fixed(m.core_p99_ms, 2), fixed(m.render_p50_ms, 2), thousands(m.faces),
+                   fixed(m.step_p50_ms, 2), fixed(m.step_p99_ms, 2), fixed(m.core_p50_ms, 2), fixed(m.core_p99_ms, 2), fixed(m.render_p50_ms, 2), thousands(m.faces),
                    thousands(m.down_bytes), m.settled_before ? "yes" : "no"});
   return "### Each mode along the orbit\n\nFrom the first view settled (\"settled before\": within the deadline); "
-         "CPU is the page's own time per frame (the viewer's WASM frame, the buffer updates, the JS around them, "
-         "and for the receiver its face-id pass with the pixels read back; performance.now around it); frame() "
-         "is the viewer's frame alone (the WASM core and the binding moving its bytes), part of CPU; render() is "
-         "three.js issuing the frame's draw, apart from it.\n\n" +
+         "CPU is the page's main thread's CPU time in each frame's animation-frame callback, from Chromium's "
+         "tracing: all of the page's frame work (the viewer's WASM frame, the buffer updates, for the receiver its "
+         "face-id pass with the pixels read back, three.js's render call, the overlay), and not the time the "
+         "thread waited for a core, which on this shared machine (SwiftShader's rasterizer threads, the server) "
+         "the clock would count. The rest is by the clock (performance.now): step is the viewer's frame, the "
+         "buffer updates and the JS around them; frame() the viewer's frame alone (the WASM core and the binding "
+         "moving its bytes); render() three.js issuing the frame's draw.\n\n" +
          modes.markdown() + "\n";
 }
 
@@ -262,6 +274,9 @@ json figures_json(const WebFigures& f) {
                      {"fps", m.fps},
                      {"cpu_p50_ms", m.cpu_p50_ms},
                      {"cpu_p99_ms", m.cpu_p99_ms},
+                     {"cpu_frames", m.cpu_frames},
+                     {"step_p50_ms", m.step_p50_ms},
+                     {"step_p99_ms", m.step_p99_ms},
                      {"core_p50_ms", m.core_p50_ms},
                      {"core_p99_ms", m.core_p99_ms},
                      {"render_p50_ms", m.render_p50_ms},

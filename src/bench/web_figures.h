@@ -11,9 +11,15 @@ namespace pms::bench {
 struct ModeFlight {
   std::string mode;
   uint32_t frames = 0;
-  double fps = 0, cpu_p50_ms = 0, cpu_p99_ms = 0;
-  double core_p50_ms = 0, core_p99_ms = 0;  // the viewer's frame() alone (WASM and the binding), of the above
-  double render_p50_ms = 0;                 // three.js's render() call, beside the page's own CPU time
+  double fps = 0;
+  // The page's CPU per frame: its main thread's CPU time in each animation-frame callback (tracing), which
+  // is all of its frame work (the viewer's frame, buffer updates, render call, overlay) and, unlike the
+  // clock, not the time the thread waited for a core on a shared machine.
+  double cpu_p50_ms = 0, cpu_p99_ms = 0;
+  uint32_t cpu_frames = 0;                  // callbacks traced; 0: the trace had none, the CPU is not measured
+  double step_p50_ms = 0, step_p99_ms = 0;  // the frame work (viewer frame + buffer updates + JS) by the clock
+  double core_p50_ms = 0, core_p99_ms = 0;  // the viewer's frame() alone (WASM and the binding), by the clock
+  double render_p50_ms = 0;                 // three.js's render() call, by the clock
   uint64_t faces = 0, down_bytes = 0;
   bool settled_before = false;
 };

@@ -1,5 +1,6 @@
 #include "client/mesh_buffers.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <span>
@@ -26,19 +27,18 @@ class ChangeRuns {
   std::vector<BufferRange>& out_;
 };
 
-// Stores `n` values of `value` at element `i` of `array` (n per element); true when they differ.
-template <class T>
-bool store(std::vector<T>& array, size_t i, size_t n, const T* value) {
-  T* at = &array[n * i];
-  if (std::memcmp(at, value, n * sizeof(T)) == 0) return false;
-  std::memcpy(at, value, n * sizeof(T));
+// Stores the N values of `value` at element `i` of `array` (N per element); true when they differ. N is a
+// constant so that the compare and the copy compile to a few loads, not calls into libc per element.
+template <size_t N, class T>
+bool store(std::vector<T>& array, size_t i, const T* value) {
+  T* at = &array[N * i];
+  if (std::memcmp(at, value, N * sizeof(T)) == 0) return false;
+  std::memcpy(at, value, N * sizeof(T));
   return true;
 }
 
-// Area-weighted vertex normals of `indices` over `positions`, unit length (zero for a vertex no live
-// triangle uses).
-void face_normals(std::span<const float> positions, std::span<const uint32_t> indices, std::vector<float>& out) {
-  out.assign(positions.size(), 0.0f);
+// Adds each live triangle's area-weighted normal to its corners' entries of `out`.
+void accumulate_face_normals(std::span<const float> positions, std::span<const uint32_t> indices, std::vector<float>& out) {
   for (size_t t = 0; t + 2 < indices.size(); t += 3) {
     const uint32_t a = indices[t], b = indices[t + 1], c = indices[t + 2];
     if (a == b || b == c || a == c) continue;  // a free slot, or degenerate
@@ -51,11 +51,30 @@ void face_normals(std::span<const float> positions, std::span<const uint32_t> in
     for (uint32_t corner : {a, b, c})
       for (int k = 0; k < 3; ++k) out[3 * size_t(corner) + k] += n[k];
   }
-  for (size_t i = 0; i + 2 < out.size(); i += 3) {
-    const float length = std::sqrt(out[i] * out[i] + out[i + 1] * out[i + 1] + out[i + 2] * out[i + 2]);
-    if (length > 0)
-      for (int k = 0; k < 3; ++k) out[i + k] /= length;
-  }
+}
+
+void normalize_at(std::vector<float>& out, size_t i) {
+  const float length = std::sqrt(out[i] * out[i] + out[i + 1] * out[i + 1] + out[i + 2] * out[i + 2]);
+  if (length > 0)
+    for (int k = 0; k < 3; ++k) out[i + k] /= length;
+}
+
+// Area-weighted vertex normals of `indices` over `positions`, unit length (zero for a vertex no live
+// triangle uses).
+void face_normals(std::span<const float> positions, std::span<const uint32_t> indices, std::vector<float>& out) {
+  out.assign(positions.size(), 0.0f);
+  accumulate_face_normals(positions, indices, out);
+  for (size_t i = 0; i + 2 < out.size(); i += 3) normalize_at(out, i);
+}
+
+// face_normals() for the `active` vertices only: the others' entries are left as they were, so the work
+// follows the mesh, not every slot the hierarchy ever held.
+void active_face_normals(std::span<const uint32_t> active, std::span<const float> positions,
+                         std::span<const uint32_t> indices, std::vector<float>& out) {
+  out.resize(positions.size(), 0.0f);
+  for (uint32_t v : active) std::fill_n(&out[3 * size_t(v)], 3, 0.0f);
+  accumulate_face_normals(positions, indices, out);
+  for (uint32_t v : active) normalize_at(out, 3 * size_t(v));
 }
 
 // The arrays' sizes before they grew: from there on everything counts as changed (a renderer reallocates
@@ -85,25 +104,31 @@ void update_buffers(const SelectiveRefinement& refinement, MeshBuffers& buffers)
   ChangeRuns triangles(buffers.changed_triangles);
   static constexpr uint32_t kFree[3] = {0, 0, 0};
   for (uint32_t f = 0; f < grown.triangles; ++f)
-    if (store(buffers.indices, f, 3, mesh.face_alive(f) ? mesh.face(f) : kFree)) triangles.mark(f);
+    if (store<3>(buffers.indices, f, mesh.face_alive(f) ? mesh.face(f) : kFree)) triangles.mark(f);
   for (uint32_t f = grown.triangles; f < mesh.face_capacity(); ++f)
-    store(buffers.indices, f, 3, mesh.face_alive(f) ? mesh.face(f) : kFree);
+    store<3>(buffers.indices, f, mesh.face_alive(f) ? mesh.face(f) : kFree);
   triangles.mark_up_to(grown.triangles, mesh.face_capacity());
   static constexpr uint8_t kWhite[4] = {255, 255, 255, 255};
-  std::vector<uint8_t>& dirty = buffers.dirty;
-  dirty.assign(h.size(), 0);
-  for (uint32_t v : mesh.active_vertices()) {
-    dirty[v] |= store(buffers.positions, v, 3, morphs.enabled() ? morphs.shown(h, v) : h.position(v));
-    dirty[v] |= store(buffers.colors, v, 4, h.has_colors() ? h.color(v) : kWhite);
+  // The active vertices whose entries changed: a list, not a flag per slot, so that an update costs what
+  // the mesh holds and not what the hierarchy ever received.
+  std::vector<uint32_t>& changed = buffers.changed_slots;
+  changed.clear();
+  const std::span<const uint32_t> active = mesh.active_vertices();
+  for (uint32_t v : active) {
+    bool moved = store<3>(buffers.positions, v, morphs.enabled() ? morphs.shown(h, v) : h.position(v));
+    moved |= store<4>(buffers.colors, v, h.has_colors() ? h.color(v) : kWhite);
+    if (moved) changed.push_back(v);
   }
   // Without the model's normals, the faces' around each vertex, from the positions just stored (a
   // vertex's normal changes with any face around it).
-  if (!h.has_normals()) face_normals(buffers.positions, buffers.indices, buffers.computed_normals);
-  for (uint32_t v : mesh.active_vertices())
-    dirty[v] |= store(buffers.normals, v, 3, h.has_normals() ? h.normal(v) : &buffers.computed_normals[3 * size_t(v)]);
+  if (!h.has_normals()) active_face_normals(active, buffers.positions, buffers.indices, buffers.computed_normals);
+  for (uint32_t v : active)
+    if (store<3>(buffers.normals, v, h.has_normals() ? h.normal(v) : &buffers.computed_normals[3 * size_t(v)]))
+      changed.push_back(v);
+  std::sort(changed.begin(), changed.end());
   ChangeRuns vertices(buffers.changed_vertices);
-  for (uint32_t v = 0; v < grown.vertices; ++v)
-    if (dirty[v]) vertices.mark(v);
+  for (size_t i = 0; i < changed.size() && changed[i] < grown.vertices; ++i)
+    if (i == 0 || changed[i] != changed[i - 1]) vertices.mark(changed[i]);
   vertices.mark_up_to(grown.vertices, h.size());
   ++buffers.updates;
 }
@@ -114,7 +139,7 @@ void update_buffers(const Mesh& mesh, MeshBuffers& buffers) {
   ChangeRuns triangles(buffers.changed_triangles);
   static constexpr uint32_t kFree[3] = {0, 0, 0};
   for (size_t t = 0; t < buffers.indices.size() / 3; ++t)
-    if (store(buffers.indices, t, 3, t < triangle_count ? &mesh.indices[3 * t] : kFree) && t < grown.triangles)
+    if (store<3>(buffers.indices, t, t < triangle_count ? &mesh.indices[3 * t] : kFree) && t < grown.triangles)
       triangles.mark(uint32_t(t));
   triangles.mark_up_to(grown.triangles, uint32_t(triangle_count));
   const bool has_normals = mesh.normals.size() == mesh.positions.size();
@@ -124,9 +149,9 @@ void update_buffers(const Mesh& mesh, MeshBuffers& buffers) {
   const bool has_colors = mesh.colors.size() == 4 * vertex_count;
   ChangeRuns vertices(buffers.changed_vertices);
   for (size_t v = 0; v < vertex_count; ++v) {
-    bool changed = store(buffers.positions, v, 3, &mesh.positions[3 * v]);
-    changed |= store(buffers.normals, v, 3, &normals[3 * v]);
-    changed |= store(buffers.colors, v, 4, has_colors ? &mesh.colors[4 * v] : kWhite);
+    bool changed = store<3>(buffers.positions, v, &mesh.positions[3 * v]);
+    changed |= store<3>(buffers.normals, v, &normals[3 * v]);
+    changed |= store<4>(buffers.colors, v, has_colors ? &mesh.colors[4 * v] : kWhite);
     if (changed && v < grown.vertices) vertices.mark(uint32_t(v));
   }
   vertices.mark_up_to(grown.vertices, uint32_t(vertex_count));

@@ -36,7 +36,7 @@ struct MeshBuffers {
   uint64_t updates = 0;
   // Working space of update_buffers, kept so that an update allocates nothing once the mesh has grown.
   std::vector<float> computed_normals;
-  std::vector<uint8_t> dirty;
+  std::vector<uint32_t> changed_slots;
 
   static constexpr uint32_t kMergeGap = 64;
   uint32_t vertex_count() const { return uint32_t(positions.size() / 3); }
@@ -44,8 +44,8 @@ struct MeshBuffers {
 };
 
 // Brings `buffers` to the refinement's mesh: vertex i = hierarchy slot i, triangle t = face slot t. Reads
-// every live slot once (no allocation once the arrays have grown); computes normals from the faces when the
-// hierarchy has none.
+// every face slot and active vertex once (no allocation once the arrays have grown), never the inactive
+// slots; computes normals from the faces when the hierarchy has none.
 void update_buffers(const SelectiveRefinement& refinement, MeshBuffers& buffers);
 // Brings `buffers` to `mesh` as it numbers its vertices and triangles (the multilevel mode's LOD).
 void update_buffers(const Mesh& mesh, MeshBuffers& buffers);

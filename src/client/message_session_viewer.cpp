@@ -14,9 +14,7 @@ using Clock = std::chrono::steady_clock;
 
 ClientSession prepared_session(const ClientOptions& options, const ClientMode& mode) {
   ClientSession session;
-  session.adapt_options.tolerance = options.tolerance;
-  session.adapt_options.morph_frames = options.morph_frames;
-  session.adapt_options.max_ops = options.max_ops;
+  session.adapt_options = adapt_options_of(options);
   mode.prepare(session);
   return session;
 }
@@ -77,7 +75,10 @@ void MessageSessionViewer::apply(protocol::Frame&& frame) {
 
 void MessageSessionViewer::take_arrived() {
   const Clock::time_point until = Clock::now() + options_.apply_budget;
-  for (protocol::Frame frame; Clock::now() < until && reader_.next(frame);) apply(std::move(frame));
+  for (protocol::Frame frame; reader_.next(frame);) {
+    apply(std::move(frame));
+    if (Clock::now() >= until) break;
+  }
 }
 
 ViewerReport MessageSessionViewer::frame_view(const Camera& camera) {

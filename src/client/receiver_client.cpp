@@ -87,6 +87,7 @@ ReceiverClient::ReceiverClient(std::unique_ptr<HttpTransport> http, std::unique_
   session_.adapt_options.tolerance = options.tolerance;
   session_.adapt_options.morph_frames = options.morph_frames;
   session_.adapt_options.max_ops = options.max_ops;
+  session_.adapt_options.time_budget_us = options.adapt_budget_us;
   session_.refinement_info = true;  // the records carry the children's refinement info: the client refines
 }
 

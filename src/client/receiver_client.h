@@ -38,6 +38,7 @@ struct ReceiverOptions {
   float tolerance = 1;
   uint32_t morph_frames = 0;
   uint32_t max_ops = 0;  // per frame, 0 = no cap
+  uint32_t adapt_budget_us = 0;  // a frame's adaptation time (AdaptOptions::time_budget_us), 0 = no limit
   FetchPolicy fetch = FetchPolicy::lists;
   uint32_t ids_per_request = 64;  // lists: split ids in one GET /splits/{code}
   uint32_t block_depth = 2;       // blocks: levels below a block's root; GET /models suggests the same

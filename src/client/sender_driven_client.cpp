@@ -32,7 +32,11 @@ void SenderDrivenClient::frame(const Camera& camera, ClientSession& session, Vie
 bool SenderDrivenClient::adapt(const Camera& camera, ClientSession& session) {
   SelectiveRefinement& refinement = session.refinement();
   refinement.set_view(session.view_params(camera));
-  return adapt_with_held(refinement);
+  // One pass a displayed frame: the next frame goes on from here, so the extra passes the blocking frame
+  // makes (collapses that waited for a geomorph) would only walk the front again now. What is left shows
+  // as the viewer's in_motion() (geomorphs moving, or a capped frame) until done.
+  refinement.adapt();
+  return !refinement.missing().empty();
 }
 
 void SenderDrivenClient::settle(ClientSession& session) { session.refinement().converge(); }

@@ -78,9 +78,7 @@ StreamingClient::StreamingClient(const std::string& host, uint16_t port, const C
 StreamingClient::~StreamingClient() = default;
 
 void StreamingClient::prepare() {
-  session_.adapt_options.tolerance = options_.tolerance;
-  session_.adapt_options.morph_frames = options_.morph_frames;
-  session_.adapt_options.max_ops = options_.max_ops;
+  session_.adapt_options = adapt_options_of(options_);
   mode_ = make_client_mode(options_.mode);
   mode_->prepare(session_);
 }

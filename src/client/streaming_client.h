@@ -24,6 +24,7 @@ struct ClientOptions {
   float tolerance = 1;
   uint32_t morph_frames = 0;
   uint32_t max_ops = 0;  // per frame, 0 = no cap
+  uint32_t adapt_budget_us = 0;  // sender: a frame's adaptation time (AdaptOptions::time_budget_us), 0 = no limit
   // The read deadline: a server silent this long while an answer is due (or stuck mid-frame) is lost.
   std::chrono::milliseconds answer_timeout{30000};
   std::chrono::milliseconds connect_timeout{5000};  // each connection, reconnects included
@@ -39,13 +40,24 @@ struct ClientOptions {
   std::chrono::milliseconds reconnect_delay{500};
   // Free-running: the time a frame spends applying what arrived before it returns; the rest waits in the
   // link for the next frame, so that a burst (a long round trip delivers several frames' answers at once)
-  // does not make one frame late. Settling applies everything.
-  std::chrono::milliseconds apply_budget{8};
+  // does not make one frame late. At least one frame is applied per displayed frame. Settling applies
+  // everything.
+  std::chrono::microseconds apply_budget{8000};
   std::function<void(const std::string& reason, uint32_t attempt)> on_reconnect = {};  // told before each try
   // Non-empty: every connection is a WebSocket upgraded at this path of the HTTP server at host:port
   // (ws://HOST:PORT/ws), not a TCP connection to its TCP port.
   std::string websocket_path = {};
 };
+
+// The adaptation options `options` give a session's refinement.
+inline AdaptOptions adapt_options_of(const ClientOptions& options) {
+  AdaptOptions adapt;
+  adapt.tolerance = options.tolerance;
+  adapt.morph_frames = options.morph_frames;
+  adapt.max_ops = options.max_ops;
+  adapt.time_budget_us = options.adapt_budget_us;
+  return adapt;
+}
 
 class StreamingClient : private ViewRequests {
  public:

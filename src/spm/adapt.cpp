@@ -72,7 +72,9 @@ SelectiveRefinement::SelectiveRefinement(SelectiveMesh& mesh, float model_scale,
 void SelectiveRefinement::set_options(const AdaptOptions& options) {
   if (!(options.tolerance >= 0) || !std::isfinite(options.tolerance))
     fail(kWhere, "tolerance must be a finite number >= 0");
-  if (options.morph_frames != options_.morph_frames || options.max_ops != options_.max_ops) settled_ = false;
+  if (options.morph_frames != options_.morph_frames || options.max_ops != options_.max_ops ||
+      options.time_budget_us != options_.time_budget_us)
+    settled_ = false;
   options_ = options;
   morphs_.set_frames(options.morph_frames);
   if (has_view_) use_criteria(make_criteria(view_params_, options_.tolerance));
@@ -389,8 +391,10 @@ FrameStats SelectiveRefinement::adapt() {
   if (unchanged_since_settled()) {
     FrameStats stats;
     stats.missing = uint32_t(missing_.size());
+    capped_ = false;
     return stats;
   }
+  if (options_.time_budget_us) deadline_ = Clock::now() + std::chrono::microseconds(options_.time_budget_us);
   sync();
   if (++frame_ == 0) {  // stamps wrapped: clear them so old frames cannot match
     for (uint32_t v = 0; v < slot_count_; ++v)
@@ -431,6 +435,7 @@ FrameStats SelectiveRefinement::adapt() {
   if (morphs_.enabled()) stats.morphing = uint32_t(morphs_.advance(*mesh_));
   stats.missing = uint32_t(missing_.size());
   settled_ = stats.ops() == 0 && !stats.capped && stats.morphing == 0;
+  capped_ = stats.capped;
   settled_changes_ = mesh_->changes();
   settled_size_ = uint32_t(h.size());
   return stats;

@@ -4,6 +4,7 @@
 // docs/internals.md ("Adaptation loop") explains the target mesh and why the loop reaches it.
 // Shared with the browser build: single-threaded, no std::ranges algorithms, std::format or coroutines.
 #pragma once
+#include <chrono>
 #include <cmath>
 #include <cstdint>
 #include <functional>
@@ -26,7 +27,13 @@ struct AdaptOptions {
   float tolerance = 1;        // τ: screen-space error in pixels
   uint32_t max_ops = 0;       // vsplits + ecols per frame (a forced chain counts each split); 0 = no cap
   uint32_t morph_frames = 0;  // geomorph length in frames; 0 = off (viewers use kDefaultMorphFrames)
+  // Wall time a frame's walk and operations may take, in microseconds; 0 = no limit. Past it the frame
+  // stops as at max_ops (capped) once it has done kMinOpsPerBudgetedFrame operations, so a frame whose walk
+  // alone overruns still makes progress. A viewer sets it to keep its frames short: a burst of collapses
+  // (a region leaving the view) then spreads over frames instead of stalling one.
+  uint32_t time_budget_us = 0;
 };
+constexpr uint32_t kMinOpsPerBudgetedFrame = 8;
 constexpr uint32_t kDefaultMorphFrames = 8;
 
 struct FrameStats {
@@ -35,7 +42,7 @@ struct FrameStats {
   uint32_t missing = 0;    // leaves reported by missing()
   uint32_t evaluated = 0;  // qrefine evaluations
   uint32_t morphing = 0;   // vertices that moved this frame (geomorphs)
-  bool capped = false;     // stopped at max_ops; more work is left for the next frames
+  bool capped = false;     // stopped at max_ops or time_budget_us; more work is left for the next frames
   uint32_t ops() const { return vsplits + ecols; }
 };
 
@@ -64,6 +71,9 @@ class SelectiveRefinement {
   // while it is wanted, forced by a kept split, or an ancestor of one, and collapses the rest (after a
   // geomorph when morph_frames > 0). Known leaves that want a split whose packet is unknown go to missing().
   FrameStats adapt();
+  // The last adapt() stopped at its cap (max_ops or time_budget_us): the next one has work left even if
+  // nothing new arrives.
+  bool capped() const { return capped_; }
   // The next adapt() walks even when nothing changed (benchmarks time the walk with it).
   void rewalk() { settled_ = false; }
 
@@ -124,7 +134,10 @@ class SelectiveRefinement {
   void pin_chain(uint32_t v);
   void report_missing(uint32_t v);
   void collapse_unwanted(FrameStats& stats);
-  bool cap_reached(const FrameStats& stats) const { return options_.max_ops && stats.ops() >= options_.max_ops; }
+  bool cap_reached(const FrameStats& stats) const {
+    if (options_.max_ops && stats.ops() >= options_.max_ops) return true;
+    return options_.time_budget_us && stats.ops() >= kMinOpsPerBudgetedFrame && Clock::now() >= deadline_;
+  }
 
   SelectiveMesh* mesh_;
   float scale_;  // the model's, as the decoder applies it (dequantize_detail::effective_scale)
@@ -137,6 +150,9 @@ class SelectiveRefinement {
   // The last frame changed nothing (no operation, cap or movement); valid while view, options,
   // hierarchy size and mesh changes() stay as they were then.
   bool settled_ = false;
+  bool capped_ = false;
+  using Clock = std::chrono::steady_clock;
+  Clock::time_point deadline_;  // this frame's, with options().time_budget_us
   uint64_t settled_changes_ = 0;
   uint32_t settled_size_ = 0;
   // Everything the walk reads of a slot, in one cache line: the walk is bound by memory latency. Slots

@@ -124,6 +124,14 @@ client::ViewerTuning tuning_of(const json& o) {
   return t;
 }
 
+// A time budget given in milliseconds, as microseconds; absent: 0 (no limit).
+uint32_t budget_us(const json& o, const char* key) {
+  if (!o.contains(key)) return 0;
+  const double ms = o[key].get<double>();
+  if (!(ms >= 0 && ms <= 60000)) fail(key, "must be a number of milliseconds in [0, 60000]");
+  return uint32_t(ms * 1000);
+}
+
 std::unique_ptr<PageViewer> make_viewer(const json& o) {
   auto page = std::make_unique<PageViewer>();
   const std::string mode = o.value("mode", "sender");
@@ -132,6 +140,7 @@ std::unique_ptr<PageViewer> make_viewer(const json& o) {
   const float tolerance = o.value("tolerance", 1.0f);
   const uint32_t morph = o.value("morphFrames", client::kDefaultGeomorphFrames);
   const uint32_t in_flight = o.value("inFlight", 4u);
+  const uint32_t adapt_budget_us = budget_us(o, "adaptBudgetMs");
   if (mode == "receiver") {
     const json r = o.value("receiver", json::object());
     client::ReceiverOptions options;
@@ -139,6 +148,7 @@ std::unique_ptr<PageViewer> make_viewer(const json& o) {
     options.morph_frames = morph;
     options.fetch = client::fetch_policy_named(r.value("fetch", "lists"), "receiver.fetch");
     options.prefetch = r.value("prefetch", false);
+    options.adapt_budget_us = adapt_budget_us;
     auto http = std::make_unique<client::ExternalHttpTransport>(in_flight);
     auto face_ids = std::make_unique<client::FaceIdImportance>();
     page->http = http.get();
@@ -167,6 +177,11 @@ std::unique_ptr<PageViewer> make_viewer(const json& o) {
   options.morph_frames = *wire == protocol::StreamMode::sender_driven ? morph : 0;
   options.dag = dag_request(o.value("dag", json::object()), tolerance);
   options.name = "pmstream-web";
+  options.adapt_budget_us = adapt_budget_us;
+  if (o.contains("applyBudgetMs")) {
+    options.apply_budget = std::chrono::microseconds(budget_us(o, "applyBudgetMs"));
+    if (options.apply_budget.count() == 0) fail("applyBudgetMs", "must be more than 0");
+  }
   auto viewer = std::make_unique<client::MessageSessionViewer>(options, model);
   page->session = viewer.get();
   page->viewer = std::move(viewer);

@@ -12,7 +12,9 @@ import { parseState, formatState, MODES } from './url_state.js';
 import { viewerOptions, viewerTuning, changeKind, modesFor } from './viewer_options.js';
 import { installHook } from './page_hook.js';
 
-const URL_EVERY_MS = 500;  // the link follows the camera, without a history write per frame
+// The link follows the camera once it rests: a history write costs the browser milliseconds, too many to
+// spend while the camera moves (and Chrome throttles frequent ones), and a link is shared from a view.
+const URL_EVERY_MS = 500;
 
 class App {
   constructor() {
@@ -37,6 +39,7 @@ class App {
     this.failed = false;
     this.lastTime = 0;
     this.lastUrl = 0;
+    this.pendingLink = '';  // the link the last check wanted: written once a check finds it again
     this.view.material.wireframe = this.state.wireframe;
   }
 
@@ -161,7 +164,7 @@ class App {
     this.renderMs = performance.now() - start - this.stepMs;  // three.js issuing the draw
     this.afterDraw?.(time);
     this.frameRate.tick(time);
-    if (this.report) this.overlay.show(this.report, this.frameRate.value(), this.model()?.vsplits);
+    if (this.report) this.overlay.show(this.report, this.frameRate.value(), this.model()?.vsplits, time);
     if (time - this.lastUrl > URL_EVERY_MS) this.writeLink(time);
   }
 
@@ -203,6 +206,7 @@ class App {
   }
 
   opened() {
+    performance.mark('pmstream:opened');  // the base mesh in the viewer
     this.bounds = this.viewer.bounds();
     this.controls.setSpeed(Math.hypot(...this.bounds.max.map((v, i) => v - this.bounds.min[i])) / 2);
     if (!this.state.eye && !this.scripted) this.controls.frame(this.bounds);
@@ -225,7 +229,8 @@ class App {
     const c = this.controls.state();
     Object.assign(this.state, { eye: c.eye, target: c.target, up: c.up, fovy: c.fovy });
     const link = formatState({ ...this.state, server: this.state.server });
-    if (link !== location.hash) history.replaceState(null, '', link);
+    if (link === this.pendingLink && link !== location.hash) history.replaceState(null, '', link);
+    this.pendingLink = link;
   }
 }
 

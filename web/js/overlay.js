@@ -1,6 +1,8 @@
 // The overlay: what the viewer holds and what it cost, per displayed frame, and a progress bar while data
 // arrives. Reads only the frame report (web/js/pmstream.js) and the page's own frame rate.
 
+const SHOW_EVERY_MS = 250;
+
 function bytes(n) {
   if (n < 1024) return `${n} B`;
   if (n < 1024 * 1024) return `${(n / 1024).toFixed(1)} KiB`;
@@ -32,14 +34,22 @@ export class Overlay {
     this.status = root.querySelector('#status');
     this.root = root;
     this.latencyMs = 0;
+    this.busy = null;
+    this.shownAt = -Infinity;
   }
 
   // modelTotal: what the model has of the unit received (its splits, or levels), for the "of N" and the bar.
-  show(report, fps, modelTotal) {
+  // Written a few times a second, and when the busy state flips: each write restyles the page, a cost the
+  // frame should not pay for figures nobody reads at 60 Hz.
+  show(report, fps, modelTotal, now = performance.now()) {
+    if (report.latencyMs > 0) this.latencyMs = report.latencyMs;  // a frame reports it when an answer came
+    const busy = Boolean(report.opening || !report.satisfied || report.inFlight > 0);
+    if (busy === this.busy && now - this.shownAt < SHOW_EVERY_MS) return;
+    this.busy = busy;
+    this.shownAt = now;
     const unit = report.receivedUnit || 'vsplits';
     const total = unit === 'levels' ? report.levels?.count : modelTotal;
     const received = report.receivedTotal ?? 0;
-    if (report.latencyMs > 0) this.latencyMs = report.latencyMs;  // a frame reports it when an answer came
     const lines = [
       `faces      ${count(report.faces)}`,
       `vertices   ${count(report.vertices)}`,
@@ -58,7 +68,6 @@ export class Overlay {
     });
     // Data is arriving while the view is unsatisfied or anything is in flight; the bar is how much of the
     // model is in, and moves (css) while busy.
-    const busy = Boolean(report.opening || !report.satisfied || report.inFlight > 0);
     this.progress.classList.toggle('busy', busy);
     this.bar.style.width = `${Math.round(Math.min(1, total ? received / total : 0) * 100)}%`;
     this.root.dataset.busy = busy ? '1' : '0';
@@ -67,6 +76,7 @@ export class Overlay {
   // A new viewer: nothing measured yet.
   reset() {
     this.latencyMs = 0;
+    this.busy = null;
   }
 
   say(text, error = false) {

@@ -9,6 +9,8 @@
 //   const viewer = openViewer(core, { server, mode, model, tolerance, ... });
 //   const report = viewer.frame({ eye, target, up, fovyDeg, width, height });   // per displayed frame
 //   viewer.set({ tolerance: 2 });   // options changed on the open viewer, the mesh kept
+// applyBudgetMs and adaptBudgetMs bound the core's work in a frame (applying what arrived; adapting the
+// mesh, sender and receiver): what does not fit carries to the next frames. Absent: the native defaults.
 // A degenerate camera (eye on the target, a zero up or one along the view) is refused for that frame only:
 // report.refused says why, the mesh and the rest of the report stay as they were.
 
@@ -100,6 +102,8 @@ class Viewer {
       tolerance: options.tolerance ?? 1,
       morphFrames: options.morphFrames ?? 8,
       inFlight: options.inFlight ?? 4,
+      ...(options.applyBudgetMs ? { applyBudgetMs: options.applyBudgetMs } : {}),
+      ...(options.adaptBudgetMs ? { adaptBudgetMs: options.adaptBudgetMs } : {}),
       dag: options.dag ?? {},
       receiver: options.receiver ?? {},
       multilevel: options.multilevel ?? {},
@@ -250,12 +254,15 @@ class Viewer {
     ws.onopen = () => {
       if (this.ws !== ws) return;
       this.wsOpen = true;
+      performance.mark('pmstream:connected');  // the bench's first-picture breakdown
       if (!this.m._pms_session_connected(this.handle)) return this.fail(this.core.error());
       this.onStatus(this.attempts ? 'reconnected: resuming' : 'connected');
       this.flush();
     };
     ws.onmessage = (event) => {
       if (this.ws !== ws || this.failed) return;
+      if (!this.bytesIn) performance.mark('pmstream:first-bytes');
+      this.bytesIn = true;
       const bytes = new Uint8Array(event.data);
       const ok = this.core.withBytes(bytes, (ptr, size) => this.m._pms_session_bytes(this.handle, ptr, size));
       if (!ok) this.fail(this.core.error());

@@ -6,6 +6,13 @@ export function lodBudget(position, faces) {
   return Math.max(1, Math.round(Math.pow(faces, position / 1000)));
 }
 
+// The core's share of a displayed frame: applying what arrived, then adapting the mesh (the walk and its
+// splits and collapses). What does not fit carries to the next frames, so a burst (a region leaving the
+// view collapses hundreds of vertices at once) spreads out instead of dropping a frame; together with the
+// buffer updates and the page's JS they leave most of a 60 Hz frame to drawing.
+export const APPLY_BUDGET_MS = 1;
+export const ADAPT_BUDGET_MS = 1.5;
+
 export function viewerOptions(state, server, faces, callbacks) {
   return {
     server,
@@ -13,6 +20,8 @@ export function viewerOptions(state, server, faces, callbacks) {
     model: state.model,
     tolerance: state.tolerance,
     morphFrames: 8,  // geomorphs on: the core blends splits and collapses, the page uploads the positions
+    applyBudgetMs: APPLY_BUDGET_MS,
+    adaptBudgetMs: ADAPT_BUDGET_MS,
     dag: { traversal: state.traversal, budget: state.budget, maxOps: state.maxOps },
     receiver: { fetch: state.fetch, prefetch: state.prefetch },
     multilevel: { budget: lodBudget(state.lod, faces) },
