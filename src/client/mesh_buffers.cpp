@@ -1,6 +1,7 @@
 #include "client/mesh_buffers.h"
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <cstring>
 #include <span>
@@ -27,13 +28,24 @@ class ChangeRuns {
   std::vector<BufferRange>& out_;
 };
 
-// Stores the N values of `value` at element `i` of `array` (N per element); true when they differ. N is a
-// constant so that the compare and the copy compile to a few loads, not calls into libc per element.
+// The bits of `value`: floats compare as stored, so that -0 against +0 (or a NaN) counts as a change.
+inline uint32_t bits(float value) {
+  uint32_t out;
+  std::memcpy(&out, &value, sizeof out);
+  return out;
+}
+inline uint32_t bits(uint32_t value) { return value; }
+inline uint32_t bits(uint8_t value) { return value; }
+
+// Stores the N values of `value` at element `i` of `array` (N per element); true when they differ. Element
+// by element, not memcmp: N is a handful and a call into libc per vertex costs more than the compare.
 template <size_t N, class T>
 bool store(std::vector<T>& array, size_t i, const T* value) {
   T* at = &array[N * i];
-  if (std::memcmp(at, value, N * sizeof(T)) == 0) return false;
-  std::memcpy(at, value, N * sizeof(T));
+  uint32_t differ = 0;
+  for (size_t k = 0; k < N; ++k) differ |= bits(at[k]) ^ bits(value[k]);
+  if (differ == 0) return false;
+  for (size_t k = 0; k < N; ++k) at[k] = value[k];
   return true;
 }
 
@@ -100,6 +112,14 @@ void update_buffers(const SelectiveRefinement& refinement, MeshBuffers& buffers)
   const SelectiveMesh& mesh = refinement.mesh();
   const VertexHierarchy& h = mesh.hierarchy();
   const Geomorphs& morphs = refinement.geomorphs();
+  const MeshBuffers::Source source{mesh.changes(), h.size(), mesh.face_capacity(), morphs.morphing() == 0};
+  if (source.at_rest && source == buffers.source) {
+    buffers.changed_vertices.clear();
+    buffers.changed_triangles.clear();
+    ++buffers.updates;
+    return;
+  }
+  buffers.source = source;
   const Grown grown = grow(buffers, h.size(), mesh.face_capacity());
   ChangeRuns triangles(buffers.changed_triangles);
   static constexpr uint32_t kFree[3] = {0, 0, 0};
@@ -109,31 +129,38 @@ void update_buffers(const SelectiveRefinement& refinement, MeshBuffers& buffers)
     store<3>(buffers.indices, f, mesh.face_alive(f) ? mesh.face(f) : kFree);
   triangles.mark_up_to(grown.triangles, mesh.face_capacity());
   static constexpr uint8_t kWhite[4] = {255, 255, 255, 255};
-  // The active vertices whose entries changed: a list, not a flag per slot, so that an update costs what
-  // the mesh holds and not what the hierarchy ever received.
-  std::vector<uint32_t>& changed = buffers.changed_slots;
-  changed.clear();
+  // Which blocks of kMergeGap slots hold a vertex whose entries changed, a bit each: runs come out in order
+  // without a sort and the work follows the mesh, not every slot the hierarchy ever received. A run covers
+  // whole blocks (a few unchanged entries, which the merge gap allows).
+  constexpr uint32_t kBlock = MeshBuffers::kMergeGap;
+  std::vector<uint64_t>& blocks = buffers.changed_blocks;
+  blocks.assign((h.size() + 64 * kBlock - 1) / (64 * kBlock), 0);
+  auto changed = [&](uint32_t v) { blocks[v / (64 * kBlock)] |= uint64_t(1) << (v / kBlock % 64); };
   const std::span<const uint32_t> active = mesh.active_vertices();
   for (uint32_t v : active) {
     bool moved = store<3>(buffers.positions, v, morphs.enabled() ? morphs.shown(h, v) : h.position(v));
     moved |= store<4>(buffers.colors, v, h.has_colors() ? h.color(v) : kWhite);
-    if (moved) changed.push_back(v);
+    if (moved) changed(v);
   }
   // Without the model's normals, the faces' around each vertex, from the positions just stored (a
   // vertex's normal changes with any face around it).
   if (!h.has_normals()) active_face_normals(active, buffers.positions, buffers.indices, buffers.computed_normals);
   for (uint32_t v : active)
     if (store<3>(buffers.normals, v, h.has_normals() ? h.normal(v) : &buffers.computed_normals[3 * size_t(v)]))
-      changed.push_back(v);
-  std::sort(changed.begin(), changed.end());
+      changed(v);
   ChangeRuns vertices(buffers.changed_vertices);
-  for (size_t i = 0; i < changed.size() && changed[i] < grown.vertices; ++i)
-    if (i == 0 || changed[i] != changed[i - 1]) vertices.mark(changed[i]);
+  for (size_t word = 0; word < blocks.size(); ++word)
+    for (uint64_t bits = blocks[word]; bits != 0; bits &= bits - 1) {
+      const uint32_t first = uint32_t((word * 64 + uint32_t(std::countr_zero(bits))) * kBlock);
+      if (first >= grown.vertices) break;
+      vertices.mark_up_to(first, std::min(first + kBlock, grown.vertices));
+    }
   vertices.mark_up_to(grown.vertices, h.size());
   ++buffers.updates;
 }
 
 void update_buffers(const Mesh& mesh, MeshBuffers& buffers) {
+  buffers.source = {};  // read from a Mesh: the next update from a refinement reads everything
   const size_t vertex_count = mesh.positions.size() / 3, triangle_count = mesh.indices.size() / 3;
   const Grown grown = grow(buffers, vertex_count, triangle_count);
   ChangeRuns triangles(buffers.changed_triangles);

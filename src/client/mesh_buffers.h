@@ -34,9 +34,18 @@ struct MeshBuffers {
   // from their old end: a renderer reallocates such a buffer.
   std::vector<BufferRange> changed_vertices, changed_triangles;
   uint64_t updates = 0;
+  // What the last update from a refinement read: the mesh's changes(), the hierarchy's size and the face
+  // slots, with no geomorph moving. The same again means nothing can have changed (a vertex moves only by
+  // a geomorph, which a split or a collapse starts), and the update is skipped.
+  struct Source {
+    uint64_t changes = 0;
+    size_t slots = 0, faces = 0;
+    bool at_rest = false;
+    friend bool operator==(const Source&, const Source&) = default;
+  } source;
   // Working space of update_buffers, kept so that an update allocates nothing once the mesh has grown.
   std::vector<float> computed_normals;
-  std::vector<uint32_t> changed_slots;
+  std::vector<uint64_t> changed_blocks;
 
   static constexpr uint32_t kMergeGap = 64;
   uint32_t vertex_count() const { return uint32_t(positions.size() / 3); }
