@@ -1,5 +1,5 @@
-// The session modes over the HTTP port's WebSocket (/ws): a flight ends with the mesh and the payload bytes
-// of the same flight over TCP, a session dropped with its server resumes on a new one, and the upgrade's
+// The session modes over the HTTP port's WebSocket (/ws): a flight in each of the four ends with the mesh and
+// the payload bytes of the same flight over TCP, a session dropped with its server resumes on a new one, and the upgrade's
 // refusals (Origin, not an upgrade, the sessions cap).
 #include <gtest/gtest.h>
 #include <atomic>
@@ -10,6 +10,7 @@
 #include "client/websocket_link.h"
 #include "http_test_client.h"
 #include "protocol/message_types.h"
+#include "protocol/stream_mode.h"
 #include "server/http_server.h"
 #include "streaming_fixture.h"
 #include "test_support.h"
@@ -56,7 +57,9 @@ Flight fly(client::StreamingClient& client, const std::vector<Camera>& path) {
 TEST(WebSocket, AFlightEqualsTheTcpFlightInMeshAndBytes) {
   const Fixture& f = terrain();
   const std::vector<Camera> path = orbit_path(f.hierarchy, 10, 0.7f);
-  for (const protocol::StreamMode mode : {protocol::StreamMode::sender_driven, protocol::StreamMode::view_independent}) {
+  using enum protocol::StreamMode;
+  for (const protocol::StreamMode mode : {sender_driven, view_independent, sender_plain, dag}) {
+    SCOPED_TRACE(protocol::mode_name(mode));
     client::ClientOptions options{1.0f};
     options.mode = mode;
     LoopbackTcpServer tcp(f.catalogue);
