@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
 # One entry point for a fresh Debian 12 machine: installs what is missing (apt; the page's npm packages,
 # pinned by web/package-lock.json), builds, then
-#   setup.sh demo   -> builds what the demo needs alone (build/pmstream and the browser page's site, build/web)
-#                      and runs `pmstream demo`: on a terminal it serves the page and prints its link
+#   setup.sh demo   -> installs and builds what the demo needs alone (build/pmstream and the browser page's
+#                      site, build/web; not the tests' packages, chromium and clang among them) and runs
+#                      `pmstream demo`: on a terminal it serves the page and prints its link
 #   setup.sh test   -> runs the test suite (the layering check, a release build and its tests, the browser
 #                      tests included, then one clang build with ASan+UBSan: the native tests again and
 #                      short runs of every fuzz target)
@@ -14,15 +15,18 @@ mode=${1:-build}
 shift || true
 jobs=$(nproc 2>/dev/null || echo 2)
 
+# What pmstream and the page build from: all the demo installs.
 packages=(build-essential cmake ninja-build pkg-config git xz-utils
           libcli11-dev nlohmann-json3-dev libfmt-dev libassimp-dev zlib1g-dev liblzma-dev libxxhash-dev
           libfast-float-dev libzstd-dev libboost-dev libstb-dev libpng-dev
           libmeshoptimizer-dev libdraco-dev
-          libgtest-dev libgmock-dev libbenchmark-dev clang libclang-rt-14-dev
-          libopenmesh-apps gnuplot-nox graphviz
-          nginx-light  # the caching proxy of deploy/nginx, which the NginxCache tests run on loopback
-          emscripten   # the browser viewer's WASM core (web/CMakeLists.txt)
-          chromium)    # the browser tests' browser, driven headless by playwright-core (docs/web.md)
+          emscripten)  # the browser viewer's WASM core (web/CMakeLists.txt)
+# What the tests and the bench add (chromium and clang are most of a fresh machine's download).
+test_packages=(libgtest-dev libgmock-dev libbenchmark-dev clang libclang-rt-14-dev
+               libopenmesh-apps gnuplot-nox graphviz
+               nginx-light  # the caching proxy of deploy/nginx, which the NginxCache tests run on loopback
+               chromium)    # the browser tests' browser, driven headless by playwright-core (docs/web.md)
+[ "$mode" = demo ] || packages+=("${test_packages[@]}")
 # node and npm install the page's packages and run the browser tests. Debian's `npm` package conflicts with
 # a nodejs from elsewhere (NodeSource's bundles npm), so they are asked for only when the commands are missing.
 command -v node >/dev/null 2>&1 || packages+=(nodejs)
@@ -106,26 +110,27 @@ install_packages
 install_web_packages
 case "$mode" in
   build)
-    configure_and_build build
+    configure_and_build build -DPMSTREAM_TESTS=ON
     ;;
   demo)
     # Neither the bench nor the tests: the binary and the page's site (the WASM core and the page's files).
-    cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=Release -DPMSTREAM_WERROR=ON >/dev/null
+    # The tests are not configured either: GoogleTest is among what only they install.
+    cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=Release -DPMSTREAM_WERROR=ON -DPMSTREAM_TESTS=OFF >/dev/null
     mapfile -t targets < <(echo pmstream; existing_targets build web web_page)
-    configure_and_build build
+    configure_and_build build -DPMSTREAM_TESTS=OFF
     ./build/pmstream demo "$@"
     ;;
   test)
     # First, before anything builds: no include goes up or sideways in the layers (docs/architecture.md).
     bash scripts/check_layers.sh
-    configure_and_build build
+    configure_and_build build -DPMSTREAM_TESTS=ON
     # Every test, the browser ones (labels browser and web: node, chromium, the built site) among them.
     (cd build && ctest --output-on-failure -j "$jobs" --timeout 900)
     # Second configuration (clang): the native unit tests under AddressSanitizer + UndefinedBehaviorSanitizer,
     # and every decoder's libFuzzer target, from one build of the libraries. The browser's part was tested
     # above; it is neither built nor run again here.
     CC=clang CXX=clang++ configure_and_build build-asan -DCMAKE_BUILD_TYPE=RelWithDebInfo -DPMSTREAM_SANITIZE=ON \
-      -DPMSTREAM_FUZZ=ON -DPMSTREAM_WEB=OFF
+      -DPMSTREAM_FUZZ=ON -DPMSTREAM_WEB=OFF -DPMSTREAM_TESTS=ON
     (cd build-asan && ASAN_OPTIONS=detect_leaks=1 ctest --output-on-failure -j "$jobs" --timeout 900 -LE 'slow|browser|web')
     run_fuzzers build-asan
     ;;
