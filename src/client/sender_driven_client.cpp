@@ -33,8 +33,8 @@ bool SenderDrivenClient::adapt(const Camera& camera, ClientSession& session) {
   SelectiveRefinement& refinement = session.refinement();
   refinement.set_view(session.view_params(camera));
   // One pass a displayed frame: the next frame goes on from here, so the extra passes the blocking frame
-  // makes (collapses that waited for a geomorph) would only walk the front again now. What is left shows
-  // as the viewer's in_motion() (geomorphs moving, or a capped frame) until done.
+  // makes (collapses that waited for a geomorph, parents their children's collapses left unwanted) happen
+  // on the next frames. Until one finds nothing to do, the viewer is in_motion() (SelectiveRefinement::at_rest).
   refinement.adapt();
   return !refinement.missing().empty();
 }

@@ -60,7 +60,7 @@ void Viewer::retune(const ViewerTuning&) { fail("tune", "this viewer's options a
 
 bool Viewer::in_motion() const {
   const SelectiveRefinement* shown = refinement();
-  return shown && (shown->geomorphs().morphing() > 0 || shown->capped());
+  return shown && (shown->geomorphs().morphing() > 0 || !shown->at_rest());
 }
 
 const MeshBuffers& Viewer::buffers() {

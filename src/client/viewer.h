@@ -99,8 +99,8 @@ class Viewer {
   // New options now (ViewerTuning); the next frame uses them. pms::Error naming the option for a value out
   // of range (nothing is changed then), or for a viewer whose options are fixed.
   void tune(const ViewerTuning& tuning);
-  // Geomorphs still moving, or a frame stopped at its cap with work left: a frame would change the mesh
-  // with nothing new arriving.
+  // Geomorphs still moving, or the last adaptation operated or stopped at its cap (the next walk may find
+  // more to do): a frame would change the mesh with nothing new arriving.
   virtual bool in_motion() const;
 
   // The mesh as a renderer's buffers (mesh_buffers.h), brought up to date now: what changed since the call

@@ -391,7 +391,6 @@ FrameStats SelectiveRefinement::adapt() {
   if (unchanged_since_settled()) {
     FrameStats stats;
     stats.missing = uint32_t(missing_.size());
-    capped_ = false;
     return stats;
   }
   if (options_.time_budget_us) deadline_ = Clock::now() + std::chrono::microseconds(options_.time_budget_us);
@@ -435,7 +434,6 @@ FrameStats SelectiveRefinement::adapt() {
   if (morphs_.enabled()) stats.morphing = uint32_t(morphs_.advance(*mesh_));
   stats.missing = uint32_t(missing_.size());
   settled_ = stats.ops() == 0 && !stats.capped && stats.morphing == 0;
-  capped_ = stats.capped;
   settled_changes_ = mesh_->changes();
   settled_size_ = uint32_t(h.size());
   return stats;

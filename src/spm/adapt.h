@@ -71,9 +71,11 @@ class SelectiveRefinement {
   // while it is wanted, forced by a kept split, or an ancestor of one, and collapses the rest (after a
   // geomorph when morph_frames > 0). Known leaves that want a split whose packet is unknown go to missing().
   FrameStats adapt();
-  // The last adapt() stopped at its cap (max_ops or time_budget_us): the next one has work left even if
-  // nothing new arrives.
-  bool capped() const { return capped_; }
+  // The last adapt() changed nothing and left nothing to do (no operation, no cap reached, nothing
+  // moving), or there was none yet: another one at the same view and hierarchy would change nothing. False
+  // after a frame that operated: its collapses may have left a parent that only the next walk finds
+  // unwanted, and a capped frame left work.
+  bool at_rest() const { return settled_ || frame_ == 0; }
   // The next adapt() walks even when nothing changed (benchmarks time the walk with it).
   void rewalk() { settled_ = false; }
 
@@ -150,7 +152,6 @@ class SelectiveRefinement {
   // The last frame changed nothing (no operation, cap or movement); valid while view, options,
   // hierarchy size and mesh changes() stay as they were then.
   bool settled_ = false;
-  bool capped_ = false;
   using Clock = std::chrono::steady_clock;
   Clock::time_point deadline_;  // this frame's, with options().time_budget_us
   uint64_t settled_changes_ = 0;

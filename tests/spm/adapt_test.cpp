@@ -169,6 +169,47 @@ TEST(Adapt, FarAfterCloseEqualsFarBunny) {
   expect_history_independence(*test::built_bunny());
 }
 
+// A display's frames, one adapt() each, under a time budget small enough to cap every frame and with
+// geomorphs: at_rest() says when the frames are done, and the mesh is then the view's target, far after
+// close too (a frame's collapses leave parents that only the next walk finds unwanted).
+void expect_frames_until_at_rest_reach_the_target(const BuiltModel& model) {
+  const ModelData m = model.model();
+  std::vector<NamedView> views = views_of(model);
+  views.push_back(views.front());  // far again, after close
+  const VertexHierarchy h = test::complete_hierarchy(m);
+  SelectiveMesh mesh(h, m.base_faces);
+  AdaptOptions options;
+  options.time_budget_us = 1;
+  options.morph_frames = 3;
+  SelectiveRefinement refinement(mesh, m.scale, options);
+  EXPECT_TRUE(refinement.at_rest()) << "no frame yet";
+  for (const NamedView& named : views) {
+    SCOPED_TRACE(model.name + " " + named.name);
+    const ViewParams view = test::view_for(model, named.camera);
+    refinement.set_view(view);
+    uint32_t frames = 0, capped = 0;
+    do {
+      const FrameStats stats = refinement.adapt();
+      capped += stats.capped;
+      if (stats.ops() > 0) {
+        EXPECT_FALSE(refinement.at_rest()) << "a frame that operated";
+      }
+    } while (!refinement.at_rest() && ++frames < 100000);
+    ASSERT_TRUE(refinement.at_rest());
+    EXPECT_EQ(refinement.geomorphs().morphing(), 0u);
+    ASSERT_EQ(invariants(mesh), "ok");
+    EXPECT_EQ(test::id_faces(mesh), test::naive_refinement(model, view, 1));
+    if (named.name == "close") {
+      EXPECT_GT(capped, 0u) << "the budget never capped a frame: the test proves nothing";
+    }
+  }
+}
+
+TEST(Adapt, FramesUntilAtRestReachTheTargetSphere) { expect_frames_until_at_rest_reach_the_target(test::built_sphere()); }
+TEST(Adapt, FramesUntilAtRestReachTheTargetTerrain) {
+  expect_frames_until_at_rest_reach_the_target(test::built_terrain());
+}
+
 // A fresh mesh and refinement reach a view's target in one frame from the base, and so does a mesh whose
 // state was used before (fully refined, then coarsened back): per-slot state made on first use
 // (SelectiveMesh records, the loop's decoded slots) must not differ from state left behind.
