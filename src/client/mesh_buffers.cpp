@@ -150,8 +150,8 @@ void update_buffers(const SelectiveRefinement& refinement, MeshBuffers& buffers)
       changed(v);
   ChangeRuns vertices(buffers.changed_vertices);
   for (size_t word = 0; word < blocks.size(); ++word)
-    for (uint64_t bits = blocks[word]; bits != 0; bits &= bits - 1) {
-      const uint32_t first = uint32_t((word * 64 + uint32_t(std::countr_zero(bits))) * kBlock);
+    for (uint64_t mask = blocks[word]; mask != 0; mask &= mask - 1) {
+      const uint32_t first = uint32_t((word * 64 + uint32_t(std::countr_zero(mask))) * kBlock);
       if (first >= grown.vertices) break;
       vertices.mark_up_to(first, std::min(first + kBlock, grown.vertices));
     }
