@@ -1,7 +1,7 @@
 // pmstream serve FILES_OR_DIRS... [--port 7300] [--http-port P] [--host 0.0.0.0] [--max-sessions N] [--json] ...
 // Runs the sender-driven TCP server, and with --http-port the HTTP server beside it (the receiver-driven and
 // multilevel modes, the page, the session modes' WebSocket), until SIGINT or SIGTERM; SIGUSR1 prints the
-// totals so far.
+// totals so far, SIGHUP reloads the models from the paths given (serve_reload.h).
 #include <pthread.h>
 #include <algorithm>
 #include <csignal>
@@ -11,10 +11,12 @@
 
 #include "apps/commands.h"
 #include "apps/resource_usage.h"
+#include "apps/serve_reload.h"
 #include "apps/web_root.h"
 #include "common/error.h"
 #include "protocol/message_types.h"
 #include "server/catalogue.h"
+#include "server/catalogue_slot.h"
 #include "server/http_server.h"
 #include "server/limits.h"
 #include "server/stats.h"
@@ -167,15 +169,22 @@ void print_totals(const char* event, const server::ServerStats& s) {
 }
 
 void print_stats(const char* event, const ServeArgs& args, const server::Catalogue& catalogue,
-                 const server::TcpServer& tcp, const server::HttpServer* http, const Stopwatch& uptime) {
+                 const server::TcpServer& tcp, const server::HttpServer* http, const Stopwatch& uptime,
+                 const ReloadCounts& reloads) {
   if (args.json) {
     nlohmann::json line = stats_json(event, tcp.stats(), uptime);
     add_table_stats(line, catalogue);
+    line.update(reload_stats(reloads));
     if (http) add_http_stats(line, *http, args.http);
     print_line(line.dump());
   } else {
     print_totals(event, tcp.stats());
     std::printf("tables: %llu bytes built\n", (unsigned long long)catalogue.table_bytes());
+    if (reloads.reloads > 0)
+      std::printf("reloads: %llu (%llu failed): %llu models added, %llu removed, %llu replaced, %llu files skipped\n",
+                  (unsigned long long)reloads.reloads, (unsigned long long)reloads.failed,
+                  (unsigned long long)reloads.added, (unsigned long long)reloads.removed,
+                  (unsigned long long)reloads.replaced, (unsigned long long)reloads.skipped);
     if (http) {
       const server::HttpStats& s = http->stats();
       std::printf(
@@ -207,6 +216,7 @@ void run_serve(ServeArgs args) {
   sigaddset(&signals, SIGINT);
   sigaddset(&signals, SIGTERM);
   sigaddset(&signals, SIGUSR1);
+  sigaddset(&signals, SIGHUP);
   pthread_sigmask(SIG_BLOCK, &signals, nullptr);
 
   const Stopwatch uptime;
@@ -215,13 +225,14 @@ void run_serve(ServeArgs args) {
   else tables.preload.reset();
   tables.max_builds = args.max_table_builds;
   const auto catalogue = server::Catalogue::open(args.paths, args.limits.position_bits, tables);
-  server::TcpServer tcp(catalogue, args.limits, args.host, args.port);
+  const auto catalogues = std::make_shared<server::CatalogueSlot>(catalogue);
+  server::TcpServer tcp(catalogues, args.limits, args.host, args.port);
   std::unique_ptr<server::HttpServer> http;
   if (args.http_port_given) {
     args.http.threads = args.limits.threads;
     if (args.web.root.empty()) args.web.root = default_web_root();
     args.web.sessions = args.limits;
-    http = std::make_unique<server::HttpServer>(catalogue, args.http, args.host, args.http_port, args.web);
+    http = std::make_unique<server::HttpServer>(catalogues, args.http, args.host, args.http_port, args.web);
   }
   tcp.start();
   if (http) http->start();
@@ -229,6 +240,7 @@ void run_serve(ServeArgs args) {
     nlohmann::json models = nlohmann::json::array();
     for (const auto& model : catalogue->models())
       models.push_back({{"name", model->name},
+                        {"version", model->version},
                         {"path", model->path},
                         {"faces", model->info.input_faces},
                         {"base_vertices", model->info.base_vertices},
@@ -244,21 +256,23 @@ void run_serve(ServeArgs args) {
                   (unsigned long long)model->info.input_faces, model->info.base_vertices,
                   (unsigned long long)model->info.vsplits, model->path.c_str());
     print_line("listening on " + args.host + ":" + std::to_string(tcp.port()) +
-               " (TCP, sender-driven); Ctrl-C stops, SIGUSR1 prints the totals so far");
+               " (TCP, sender-driven); Ctrl-C stops, SIGUSR1 prints the totals so far, SIGHUP reloads the models");
     if (http)
       print_line("listening on " + args.host + ":" + std::to_string(http->port()) +
                  " (HTTP: the page at /, receiver-driven and multilevel under /models, the session modes' WebSocket "
                  "at /ws)");
   }
+  ReloadCounts reloads;
   for (;;) {
     int received = 0;
     sigwait(&signals, &received);
-    if (received != SIGUSR1) break;
-    print_stats("stats", args, *catalogue, tcp, http.get(), uptime);
+    if (received == SIGHUP) reload_models(*catalogues, args.limits, args.json, reloads);
+    else if (received == SIGUSR1) print_stats("stats", args, *catalogues->get(), tcp, http.get(), uptime, reloads);
+    else break;
   }
   if (http) http->stop();
   tcp.stop();
-  print_stats("stopped", args, *catalogue, tcp, http.get(), uptime);
+  print_stats("stopped", args, *catalogues->get(), tcp, http.get(), uptime, reloads);
 }
 
 CliOption add_limit(CliCommand& cmd, const char* name, uint32_t& value, const char* help) {
@@ -317,6 +331,9 @@ void add_serve_command(CliCommand& app) {
                  "Kernel send buffer asked per HTTP connection (SO_SNDBUF; Linux holds twice this)");
   add_http_limit("--http-receive-buffer-bytes", http.receive_buffer_bytes,
                  "Kernel receive buffer asked per HTTP connection (SO_RCVBUF; Linux holds twice this)");
+  add_http_limit("--catalogue-max-age", http.catalogue_max_age_s,
+                 "Seconds a cache may answer GET /models without asking again (then revalidated with its ETag); a "
+                 "model added or replaced shows behind a cache within this (0: asked each time)");
   http_only.push_back({cmd.option("--trusted-proxy", args->trusted_proxies,
                                   "Peers (addresses or CIDR ranges) whose X-Forwarded-For names the client the "
                                   "per-address limits apply to, e.g. the nginx cache in front"),

@@ -195,7 +195,7 @@ double p99(const std::vector<double>& samples) { return samples.empty() ? 0 : ap
 
 AttackOutcome run_attack_group(const AttackSetup& setup, const AttackGroup& group) {
   AttackTarget target;
-  target.model = protocol::model_path(setup.model_name);
+  target.model = setup.model_path;
   target.expensive = setup.expensive;
   target.request_timeout = setup.request_timeout;
   target.write_timeout = setup.write_timeout;

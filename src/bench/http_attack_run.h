@@ -18,6 +18,7 @@ namespace pms::bench {
 
 struct AttackSetup {
   std::string pmstream_exe, model_pms, model_name;
+  std::string model_path;      // "/models/NAME/VERSION", where its resources are
   std::vector<Camera> path;
   float tolerance = 1;
   std::string expensive;       // the most expensive split request's URL (http_attack_targets.h)

@@ -8,6 +8,7 @@
 #include "protocol/base64url.h"
 #include "protocol/split_request.h"
 #include "protocol/url_segment.h"
+#include "server/catalogue.h"
 #include "spm/pms_file.h"
 
 namespace pms::bench {
@@ -50,22 +51,22 @@ uint64_t band_splits(const ModelData& model, const std::vector<uint32_t>& ids, u
   return splits;
 }
 
-std::string target_of(const ModelData& model, const std::string& name, const std::vector<uint32_t>& ids,
+std::string target_of(const ModelData& model, const std::string& prefix, const std::vector<uint32_t>& ids,
                       uint32_t depth) {
   protocol::SplitRequest request;
   request.depth = depth;
   for (uint32_t n : ids) request.ids.push_back(model.id(n));
-  return protocol::model_path(name) + "/splits/" + protocol::base64url_encode(protocol::encode_split_request(request));
+  return prefix + "/splits/" + protocol::base64url_encode(protocol::encode_split_request(request));
 }
 
 }  // namespace
 
-ExpensiveRequest most_expensive_request(const ModelData& model, const std::string& name, uint32_t max_ids,
+ExpensiveRequest most_expensive_request(const ModelData& model, const std::string& prefix, uint32_t max_ids,
                                         uint32_t max_depth, uint64_t max_splits, size_t max_url_bytes) {
   std::vector<uint32_t> ids = widest_level(model);
   if (ids.size() > max_ids) ids.resize(max_ids);
   // Fewer ids until the URL fits (the code of one level's ids takes about 5 bits an id).
-  while (ids.size() > kMinIds && target_of(model, name, ids, 0).size() > max_url_bytes)
+  while (ids.size() > kMinIds && target_of(model, prefix, ids, 0).size() > max_url_bytes)
     ids.resize(std::max<size_t>(kMinIds, ids.size() * 9 / 10));
   ExpensiveRequest best;
   for (uint32_t depth = 0; depth <= max_depth; ++depth) {
@@ -73,7 +74,7 @@ ExpensiveRequest most_expensive_request(const ModelData& model, const std::strin
     if (splits > max_splits) break;
     best = {"", uint32_t(ids.size()), depth, splits};
   }
-  best.target = target_of(model, name, ids, best.depth);
+  best.target = target_of(model, prefix, ids, best.depth);
   if (best.target.size() > max_url_bytes) fail("attacks", "the expensive request's URL is over the limit");
   return best;
 }
@@ -91,11 +92,14 @@ AttackSetup attack_setup(const std::string& pmstream_exe, const std::string& pms
   setup.pmstream_exe = pmstream_exe;
   setup.model_pms = pms;
   setup.model_name = std::filesystem::path(pms).stem().string();
+  // The URLs of the model as `serve` on its default grid names them.
+  setup.model_path = protocol::model_path(
+      setup.model_name, server::content_version(file->content_checksum(), protocol::kDefaultPositionBits));
   app::PathOptions options;
   options.frames = frames;
   setup.path = app::make_camera_path(app::PathKind::orbit, file->model(), options);
   setup.tolerance = tolerance;
-  const ExpensiveRequest expensive = most_expensive_request(file->model(), setup.model_name);
+  const ExpensiveRequest expensive = most_expensive_request(file->model(), setup.model_path);
   setup.expensive = expensive.target;
   setup.expensive_note = std::to_string(expensive.ids) + " ids, depth " + std::to_string(expensive.depth) + ": " +
                          std::to_string(expensive.splits) + " splits, a " + std::to_string(expensive.target.size()) +

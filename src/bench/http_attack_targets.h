@@ -12,15 +12,15 @@
 namespace pms::bench {
 
 struct ExpensiveRequest {
-  std::string target;  // GET /models/{m}/splits/{code}
+  std::string target;  // GET /models/{m}/{version}/splits/{code}
   uint32_t ids = 0, depth = 0;
   uint64_t splits = 0;  // split records in its answer
 };
 
 // At least 1,024 ids of one level of the hierarchy (as many as the URL limit takes, up to `max_ids`), with
 // the deepest descendant depth (up to `max_depth`) whose answer stays within `max_splits` records.
-// pms::Error when the model has no level of 1,024 internal nodes.
-ExpensiveRequest most_expensive_request(const ModelData& model, const std::string& name, uint32_t max_ids = 4096,
+// pms::Error when the model has no level of 1,024 internal nodes. `prefix` is the model's path, /models/{m}/{version}.
+ExpensiveRequest most_expensive_request(const ModelData& model, const std::string& prefix, uint32_t max_ids = 4096,
                                         uint32_t max_depth = 8, uint64_t max_splits = 65536,
                                         size_t max_url_bytes = 4096);
 

@@ -37,7 +37,7 @@ const std::vector<AttackGroup>& attack_groups();
 // Where the attackers aim and how hard.
 struct AttackTarget {
   uint16_t port = 0;      // the server's HTTP port
-  std::string model;      // its escaped path: "/models/terrain"
+  std::string model;      // its escaped path and version: "/models/terrain/0123456789abcdef"
   std::string expensive;  // the most expensive split request's URL (http_attack_targets.h)
   std::string unread;     // a URL whose answers, `unread_count` of them, fit the server's send buffer
   uint32_t unread_count = 16;

@@ -24,16 +24,6 @@ double ms_since(Clock::time_point start) {
   fail("GET " + target, "HTTP " + std::to_string(answer.status) + ": " + text);
 }
 
-nlohmann::json catalogue_models(HttpTransport& http) {
-  const std::string target = "/models";
-  const HttpAnswer answer = http.get(target);
-  if (answer.status != 200) refused(target, answer);
-  nlohmann::json json = nlohmann::json::parse(answer.body.begin(), answer.body.end(), nullptr, false);
-  if (json.is_discarded() || !json.is_object() || !json.contains("models") || !json["models"].is_array())
-    fail("GET " + target, "not the catalogue's JSON");
-  return std::move(json["models"]);
-}
-
 bool is_kind(const nlohmann::json& entry, const char* kind) {
   return entry.is_object() && entry.value("kind", "") == kind && entry.contains("name") && entry["name"].is_string();
 }
@@ -57,10 +47,6 @@ std::vector<T> per_level(const nlohmann::json& entry, const char* key, uint32_t 
   return out;
 }
 
-// /models/{m}/ or /models/{m}/compressed/, where the model's head and levels are.
-std::string model_prefix(const std::string& model, bool compressed) {
-  return protocol::model_path(model) + (compressed ? "/compressed/" : "/");
-}
 
 std::string level_target(const std::string& prefix, uint32_t level) {
   std::string target = prefix;
@@ -82,7 +68,7 @@ MultilevelClient::MultilevelClient(std::unique_ptr<HttpTransport> http, const Mu
 
 std::vector<std::string> MultilevelClient::list() {
   std::vector<std::string> names;
-  for (const nlohmann::json& entry : catalogue_models(*http_))
+  for (const nlohmann::json& entry : catalogue_models(http_->get("/models")))
     if (is_multilevel(entry)) names.push_back(entry["name"].get<std::string>());
   return names;
 }
@@ -110,48 +96,92 @@ void MultilevelClient::read_entry(const std::string& model, const std::string& t
   radius_ = radius->get<float>();
 }
 
-// The entry and the head (free-running: and the coarsest level) in one round trip.
-std::vector<std::string> MultilevelClient::open_targets(const std::string& model) {
-  if (loader_ || opening_) fail("open", "this client already holds '" + model_ + "'");
-  opened_ = Clock::now();
-  const std::string prefix = model_prefix(model, options_.compressed);
-  std::vector<std::string> targets = {protocol::model_path(model) + "/multilevel", prefix + "head"};
-  if (options_.free_running) targets.push_back(coarsest_target(prefix));
-  return targets;
+// /models/{m}/{version}/ or /models/{m}/{version}/compressed/, where the model's head and levels are.
+std::string MultilevelClient::prefix(bool compressed) const {
+  return protocol::model_path(model_, version_) + (compressed ? "/compressed/" : "/");
 }
 
+// Its version from GET /models, then the version's entry and head (free-running: and the coarsest level)
+// in one round trip.
 void MultilevelClient::open(const std::string& model) {
-  const std::vector<std::string> targets = open_targets(model);
-  std::vector<HttpAnswer> answers(targets.size());
-  http_->get_all(targets, [&](size_t index, HttpAnswer&& answer) { answers[index] = std::move(answer); });
-  opened(model, targets, answers);
+  if (loader_ || opening_) fail("open", "this client already holds '" + model_ + "'");
+  model_ = model;
+  opened_ = Clock::now();
+  open_version(catalogue_entry(http_->get("/models"), model_));
+  await_open();
 }
 
 void MultilevelClient::start_open(const std::string& model) {
-  opening_ = std::make_unique<PendingGets>(open_targets(model));
+  if (loader_ || opening_) fail("open", "this client already holds '" + model_ + "'");
   model_ = model;
+  opened_ = Clock::now();
+  opening_ = std::make_unique<PendingGets>(std::vector<std::string>{"/models"});
 }
 
+// The catalogue (when the version is not known yet), then the version's entry and head; first, after a
+// 410, the level GETs of the replaced version still on the wire, read and dropped.
 bool MultilevelClient::poll_open() {
   if (loader_) return true;
   if (!opening_) fail("open", "no model being opened");
+  http_->poll();
+  while (!posted_.empty()) {
+    if (!http_->take()) return false;
+    posted_.pop_front();
+  }
   if (!opening_->advance(*http_)) return false;
   const std::unique_ptr<PendingGets> done = std::move(opening_);
-  opened(model_, done->targets(), done->answers());
-  return true;
+  if (done->targets().size() == 1) open_version(catalogue_entry(done->answers()[0], model_));
+  else opened(done->targets(), done->answers());
+  return poll_open();  // true once open, unless a 410 started another re-open
 }
 
-void MultilevelClient::opened(const std::string& model, const std::vector<std::string>& targets,
-                              const std::vector<HttpAnswer>& answers) {
+// Waits for the version being opened (free-running: the transport's non-blocking calls, as frames use it).
+void MultilevelClient::await_open() {
+  if (options_.free_running) {
+    while (!poll_open()) http_->wait();
+    return;
+  }
+  while (opening_) {  // again after a 410 in its answers
+    const std::unique_ptr<PendingGets> done = std::move(opening_);
+    std::vector<HttpAnswer> answers(done->targets().size());
+    http_->get_all(done->targets(), [&](size_t index, HttpAnswer&& answer) { answers[index] = std::move(answer); });
+    opened(done->targets(), answers);
+  }
+}
+
+// The GETs that open the version `entry` names (a progressive model's levels are derived: the same URLs).
+void MultilevelClient::open_version(const nlohmann::json& entry) {
+  version_ = entry_version(entry);
+  std::vector<std::string> targets = {protocol::model_path(model_, version_) + "/multilevel",
+                                      prefix(options_.compressed) + "head"};
+  if (options_.free_running) targets.push_back(coarsest_target(prefix(options_.compressed)));
+  opening_ = std::make_unique<PendingGets>(std::move(targets));
+}
+
+// A 410: the model was replaced under its name. Its levels are dropped and the version the 410 names
+// opens as a new model; level GETs still on the wire are read and dropped first (poll_open).
+void MultilevelClient::replaced(const std::string& target, const HttpAnswer& answer) {
+  const nlohmann::json entry = replaced_entry(target, answer, model_);
+  reopens_.spend(model_);
+  loader_.reset();
+  lod_.reset();
+  switch_.reset();
+  shown_ = -1;
+  target_ = requested_ = 0;
+  open_version(entry);
+}
+
+void MultilevelClient::opened(const std::vector<std::string>& targets, const std::vector<HttpAnswer>& answers) {
+  for (size_t i = 0; i < answers.size(); ++i)
+    if (answers[i].status == 410) return replaced(targets[i], answers[i]);
   const std::string& target = targets[1];
-  read_entry(model, targets[0], answers[0]);
+  read_entry(model_, targets[0], answers[0]);
   const HttpAnswer& head = answers[1];
   if (head.status != 200) refused(target, head);
   loader_.emplace("GET " + target, head.body, options_.limits,
                   options_.compressed ? MultilevelForm::compressed : MultilevelForm::plain);
   if (loader_->level_count() != lod_triangles_.size()) fail("GET " + target, "its level count is not the catalogue's");
   lod_.emplace(loader_->mesh());
-  model_ = model;
   if (answers.size() > 2) {
     add(targets[2], answers[2]);
     lod_.emplace(loader_->mesh());
@@ -203,45 +233,52 @@ void MultilevelClient::set_rule(float tolerance, uint64_t budget, uint32_t morph
 uint32_t MultilevelClient::load_to(uint32_t level) {
   if (loader_->complete() || loader_->finest_loaded() <= level) return 0;
   std::vector<std::string> targets;
-  const std::string prefix = model_prefix(model_, options_.compressed);
-  for (uint32_t l = loader_->finest_loaded(); l-- > level;) targets.push_back(level_target(prefix, l));
+  for (uint32_t l = loader_->finest_loaded(); l-- > level;) targets.push_back(level_target(prefix(options_.compressed), l));
   uint32_t added = 0;
   http_->get_all(targets, [&](size_t index, HttpAnswer&& answer) {
-    add(targets[index], answer);
-    ++added;
+    if (!opening_) added += add(targets[index], answer);  // else a 410 came: the rest is the old version's
   });
-  lod_.emplace(loader_->mesh());  // the structure grew: nothing cached of it is kept
+  if (!opening_) lod_.emplace(loader_->mesh());  // the structure grew: nothing cached of it is kept
   return added;
 }
 
-// The event "a level arrived" (the next one, coarsest first): added and its arrival kept, no I/O.
-void MultilevelClient::add(const std::string& target, const HttpAnswer& answer) {
+// The event "a level arrived" (the next one, coarsest first): added and its arrival kept, no I/O. False
+// for a 410: the model was replaced, and the version it names is opening.
+bool MultilevelClient::add(const std::string& target, const HttpAnswer& answer) {
+  if (answer.status == 410) {
+    replaced(target, answer);
+    return false;
+  }
   if (answer.status != 200) refused(target, answer);
+  reopens_.refill();
   const uint32_t l = loader_->next_level();
   loader_->add_level("GET " + target, answer.body);
   const HttpCounters& c = http_->counters();
   arrivals_.push_back({l, answer.body.size(), c.bytes_down, c.payload_down, ms_since(opened_)});
+  return true;
 }
 
 // Free-running: every level fully arrived, added without waiting for one. Returns how many.
 uint32_t MultilevelClient::add_arrived(MultilevelFrame& out) {
   uint32_t added = 0;
-  while (const std::optional<HttpAnswer> answer = http_->take()) {
-    add(posted_.front(), *answer);
+  while (!opening_) {
+    const std::optional<HttpAnswer> answer = http_->take();
+    if (!answer) break;
+    const std::string target = std::move(posted_.front());
     posted_.pop_front();
+    if (!add(target, *answer)) break;
     out.report.latency_ms = ms_since(answer->sent_at);
     ++added;
   }
-  if (added > 0) lod_.emplace(loader_->mesh());
+  if (added > 0 && !opening_) lod_.emplace(loader_->mesh());
   return added;
 }
 
 // Free-running: the levels not yet asked for down to `level`, coarsest first, as many as the pipe takes;
 // the rest wait for a later frame, which asks only for what its own rule wants.
 void MultilevelClient::request_to(uint32_t level) {
-  const std::string prefix = model_prefix(model_, options_.compressed);
   while (requested_ > level && http_->room() > 0) {
-    posted_.push_back(level_target(prefix, --requested_));
+    posted_.push_back(level_target(prefix(options_.compressed), --requested_));
     http_->post(posted_.back());
   }
 }
@@ -304,12 +341,21 @@ MultilevelFrame MultilevelClient::frame(const Camera& camera) {
   if (options_.free_running) {
     http_->poll();
     out.report.vsplits = add_arrived(out);
+    if (opening_) {  // a 410: the version it names opens over the next frames (poll_open)
+      poll_open();
+      return out;
+    }
     request_to(out.wanted_level);
     http_->poll();  // the GETs just handed over start on their way
     out.report.requested = !posted_.empty();
   } else {
     const auto start = Clock::now();
     out.report.vsplits = load_to(out.wanted_level);
+    if (opening_) {  // a 410: this frame again on the version it names
+      await_open();
+      --frame_;
+      return frame(camera);
+    }
     if (out.report.vsplits > 0) {
       out.report.requested = true;
       out.report.latency_ms = ms_since(start);
@@ -336,14 +382,20 @@ void MultilevelClient::settle_free(uint32_t wanted) {
     if (posted_.empty()) return;
     http_->wait();
     add_arrived(ignored);
+    if (opening_) await_open();
   }
 }
 
 void MultilevelClient::settle(const Camera& camera) {
+  if (opening_) await_open();
   if (!loader_) fail("stream", "no model open");
   const uint32_t wanted = wanted_level(camera);
   if (options_.free_running) settle_free(wanted);
   else load_to(wanted);
+  if (opening_) {  // a 410 among the levels
+    await_open();
+    return settle(camera);
+  }
   MultilevelFrame ignored;
   switch_.reset();
   target_ = std::max(wanted, loader_->finest_loaded());

@@ -16,6 +16,7 @@
 
 #include "client/client_mode.h"
 #include "client/http_transport.h"
+#include "client/model_version.h"
 #include "common/camera.h"
 #include "io/mesh.h"
 #include "multilevel/loader.h"
@@ -63,7 +64,9 @@ class MultilevelClient {
   MultilevelClient(const HttpUrl& server, const MultilevelOptions& options = {});
 
   std::vector<std::string> list();  // GET /models: the multilevel models' names
-  // GET /models/{m}/multilevel and /models/{m}/head pipelined, and free-running the coarsest level too.
+  // GET /models for the model's version, then its /multilevel entry and /head pipelined, and free-running
+  // the coarsest level too (docs/protocol.md, "Versions"). A 410 later (the model replaced under its name)
+  // drops the levels and opens the version it names, as the receiver-driven client does.
   void open(const std::string& model);
   // The same without waiting (the browser's): start_open() posts the GETs, each poll_open() takes what has
   // arrived, until it returns true: the model is open. frame() is for after that.
@@ -88,13 +91,16 @@ class MultilevelClient {
   Mesh current_mesh() const { return lod_mesh(mesh(), *lod_); }
   const std::vector<LevelArrival>& arrivals() const { return arrivals_; }
   const HttpCounters& counters() const { return http_->counters(); }
+  uint64_t reopens() const { return reopens_.total(); }  // versions opened after a 410
 
  private:
-  std::vector<std::string> open_targets(const std::string& model);
-  void opened(const std::string& model, const std::vector<std::string>& targets,
-              const std::vector<HttpAnswer>& answers);
+  std::string prefix(bool compressed) const;
+  void open_version(const nlohmann::json& entry);
+  void await_open();
+  void replaced(const std::string& target, const HttpAnswer& answer);
+  void opened(const std::vector<std::string>& targets, const std::vector<HttpAnswer>& answers);
   void read_entry(const std::string& model, const std::string& target, const HttpAnswer& answer);
-  void add(const std::string& target, const HttpAnswer& answer);
+  bool add(const std::string& target, const HttpAnswer& answer);
   uint32_t load_to(uint32_t level);
   uint32_t add_arrived(MultilevelFrame& out);
   void request_to(uint32_t level);
@@ -112,7 +118,10 @@ class MultilevelClient {
   MultilevelOptions options_;
   std::unique_ptr<HttpTransport> http_;
   std::string model_;
-  std::unique_ptr<PendingGets> opening_;  // start_open()'s GETs, until poll_open() has them all
+  std::string version_;  // the version open, or opening
+  // The GETs of an open (GET /models alone, then a version's entry and head), until poll_open() has them.
+  std::unique_ptr<PendingGets> opening_;
+  ReopenBudget reopens_;
   std::chrono::steady_clock::time_point opened_;
   std::vector<uint32_t> lod_triangles_;  // per level (0 finest), from the catalogue
   std::vector<float> level_errors_;

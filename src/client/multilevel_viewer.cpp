@@ -17,6 +17,7 @@ MultilevelViewer::MultilevelViewer(std::unique_ptr<HttpTransport> http, const Mu
 ViewerReport MultilevelViewer::frame_view(const Camera& camera) {
   if (!client_.poll_open()) return opening_report();
   const MultilevelFrame r = client_.frame(camera);
+  if (!client_.opened()) return opening_report();  // a 410: the model's new version opens
   ViewerReport report;
   report.frame = r.report.frame;
   report.faces = r.report.faces;
@@ -54,6 +55,7 @@ nlohmann::json MultilevelViewer::totals() const {
   nlohmann::json out = {{"total_down_payload_bytes", c.payload_down},
                         {"http_requests", c.requests},
                         {"http_connections", c.connections},
+                        {"reopens", client_.reopens()},
                         {"rule", options_.budget ? "budget" : "screen"},
                         {"form", options_.compressed ? "compressed" : "plain"},
                         {"levels", client_.opened() ? client_.loader().level_count() : 0},

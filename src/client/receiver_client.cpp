@@ -36,16 +36,6 @@ std::string answer_text(const HttpAnswer& answer) {
   fail("GET " + target, "HTTP " + std::to_string(answer.status) + ": " + answer_text(answer));
 }
 
-// GET /models's answer: the array of models, checked to be one.
-nlohmann::json models_of(const HttpAnswer& answer) {
-  const std::string target = "/models";
-  if (answer.status != 200) refused(target, answer);
-  nlohmann::json json = nlohmann::json::parse(answer.body.begin(), answer.body.end(), nullptr, false);
-  if (json.is_discarded() || !json.is_object() || !json.contains("models") || !json["models"].is_array())
-    fail("GET " + target, "not the catalogue's JSON");
-  return std::move(json["models"]);
-}
-
 // Frames without a cap reach the view's mesh for what is known in one adapt(); the extra passes only
 // finish collapses that waited for a geomorph (as the sender-driven client does).
 void adapt_for_view(SelectiveRefinement& refinement) {
@@ -55,8 +45,8 @@ void adapt_for_view(SelectiveRefinement& refinement) {
 }
 
 // Appended piece by piece: GCC 12 warns wrongly (-Wrestrict) on a chain of `+` with to_string().
-std::string block_target(const std::string& model, VertexId root, uint32_t depth) {
-  std::string target = protocol::model_path(model);
+std::string block_target(const std::string& prefix, VertexId root, uint32_t depth) {
+  std::string target = prefix;
   target += "/blocks/";
   target += std::to_string(root.tree);
   target += '/';
@@ -101,60 +91,103 @@ void ReceiverClient::set_view_options(float tolerance, uint32_t morph_frames, bo
   session_.set_adapt_options(adapt);
 }
 
-nlohmann::json ReceiverClient::catalogue() { return models_of(http_->get("/models")); }
-
 std::vector<std::string> ReceiverClient::list() {
   std::vector<std::string> names;
-  for (const nlohmann::json& model : catalogue())
+  for (const nlohmann::json& model : catalogue_models(http_->get("/models")))
     if (model.is_object() && model.contains("name") && model["name"].is_string())
       names.push_back(model["name"].get<std::string>());
   return names;
 }
 
-// The base, the catalogue and the code tables are named by the model alone: one round trip for the three.
-std::vector<std::string> ReceiverClient::open_targets(const std::string& model) const {
+// Its version from GET /models, then the base and the code tables of that version in one round trip.
+void ReceiverClient::open(const std::string& model) {
   if (session_.has_model() || opening_) fail("open", "this client already holds '" + model_ + "'");
-  return {protocol::model_path(model) + "/base", "/models", protocol::model_path(model) + "/codec"};
+  model_ = model;
+  open_version(catalogue_entry(http_->get("/models"), model_));
+  await_open();
 }
 
-void ReceiverClient::open(const std::string& model) {
-  const std::vector<std::string> targets = open_targets(model);
-  std::vector<HttpAnswer> answers(targets.size());
-  http_->get_all(targets, [&](size_t index, HttpAnswer&& answer) { answers[index] = std::move(answer); });
-  opened(model, targets, answers);
+// Waits for the version being opened (free-running: the transport's non-blocking calls, as frames use it).
+void ReceiverClient::await_open() {
+  if (options_.free_running) {
+    while (!poll_open()) http_->wait();
+    return;
+  }
+  while (!wire_.empty()) {  // the replaced version's
+    http_->receive();
+    wire_.pop_front();
+  }
+  while (opening_) {  // again after a 410 in its answers
+    const std::unique_ptr<PendingGets> done = std::move(opening_);
+    std::vector<HttpAnswer> answers(done->targets().size());
+    http_->get_all(done->targets(), [&](size_t index, HttpAnswer&& answer) { answers[index] = std::move(answer); });
+    opened(done->targets(), answers);
+  }
 }
 
 void ReceiverClient::start_open(const std::string& model) {
-  opening_ = std::make_unique<PendingGets>(open_targets(model));
+  if (session_.has_model() || opening_) fail("open", "this client already holds '" + model_ + "'");
   model_ = model;
+  opening_ = std::make_unique<PendingGets>(std::vector<std::string>{"/models"});
 }
 
+// The catalogue (when the version is not known yet), then the version's base and tables; first, after a
+// 410, the answers of the replaced version still on the wire, read and dropped.
 bool ReceiverClient::poll_open() {
   if (session_.has_model()) return true;
   if (!opening_) fail("open", "no model being opened");
+  http_->poll();
+  while (!wire_.empty()) {
+    if (!http_->take()) return false;
+    wire_.pop_front();
+  }
   if (!opening_->advance(*http_)) return false;
   const std::unique_ptr<PendingGets> done = std::move(opening_);
-  opened(model_, done->targets(), done->answers());
-  return true;
+  if (done->targets().size() == 1) {
+    open_version(catalogue_entry(done->answers()[0], model_));
+    return poll_open();
+  }
+  opened(done->targets(), done->answers());
+  return poll_open();  // true, unless a 410 there started another re-open
 }
 
-void ReceiverClient::opened(const std::string& model, const std::vector<std::string>& targets,
-                            const std::vector<HttpAnswer>& answers) {
-  const std::string& target = targets[0];
-  const std::string& tables = targets[2];
-  const HttpAnswer& answer = answers[0];
-  if (answer.status != 200) refused(target, answer);
-  session_.on_base(protocol::decode_base(answer.body));
-  model_ = model;
+// Opens the version `entry` names once its base and tables arrive (poll_open).
+void ReceiverClient::open_version(const nlohmann::json& entry) {
   // The body format of the answers (docs/protocol.md, "Receiver-driven over HTTP"): compact split records.
   constexpr uint32_t kRecordsFormat = 4;
-  uint32_t records_format = 0;
-  for (const nlohmann::json& entry : models_of(answers[1]))
-    if (entry.is_object() && entry.value("name", "") == model) records_format = entry.value("records_format", 0u);
+  const uint32_t records_format = entry.value("records_format", 0u);
   if (records_format != kRecordsFormat)
     fail("GET /models", "records format " + std::to_string(records_format) + " is not one this client reads (" +
                             std::to_string(kRecordsFormat) + ")");
-  const HttpAnswer& codec = answers[2];
+  version_ = entry_version(entry);
+  opening_ = std::make_unique<PendingGets>(std::vector<std::string>{prefix() + "/base", prefix() + "/codec"});
+}
+
+// A 410: the model was replaced under its name. The held mesh belongs to the old version: it is dropped
+// with everything queued, and the version the 410 names opens as a new model (poll_open), the answers
+// still on the wire read and dropped first.
+void ReceiverClient::replaced(const std::string& target, const HttpAnswer& answer) {
+  const nlohmann::json entry = replaced_entry(target, answer, model_);
+  reopens_.spend(model_);
+  queue_.clear();
+  prefetched_.clear();
+  cameras_.clear();
+  const AdaptOptions adapt = session_.adapt_options;
+  session_ = ClientSession();
+  session_.adapt_options = adapt;
+  session_.refinement_info = true;
+  open_version(entry);
+}
+
+void ReceiverClient::opened(const std::vector<std::string>& targets, const std::vector<HttpAnswer>& answers) {
+  for (size_t i = 0; i < answers.size(); ++i)
+    if (answers[i].status == 410) return replaced(targets[i], answers[i]);
+  const std::string& target = targets[0];
+  const std::string& tables = targets[1];
+  const HttpAnswer& answer = answers[0];
+  if (answer.status != 200) refused(target, answer);
+  session_.on_base(protocol::decode_base(answer.body));
+  const HttpAnswer& codec = answers[1];
   if (codec.status != 200) refused(tables, codec);
   BitReader r(codec.body, "GET " + tables);
   codec_ = SplitCodec::deserialize(r);
@@ -269,7 +302,7 @@ std::vector<ReceiverClient::Request> ReceiverClient::list_requests(const std::ve
     std::sort(r.request.ids.begin(), r.request.ids.end(), protocol::code_order);
     const std::vector<uint8_t> code = protocol::encode_split_request(r.request);
     r.code_bytes = uint32_t(code.size());
-    r.target = protocol::model_path(model_) + "/splits/" + protocol::base64url_encode(code);
+    r.target = prefix() + "/splits/" + protocol::base64url_encode(code);
     out.push_back(std::move(r));
   }
   return out;
@@ -291,7 +324,7 @@ std::vector<ReceiverClient::Request> ReceiverClient::block_requests(const std::v
     const VertexId root = key(wanted.id);
     if (!asked.emplace(root.tree, root.node).second) continue;
     Request& r = out.emplace_back();
-    r.target = block_target(model_, root, options_.block_depth);
+    r.target = block_target(prefix(), root, options_.block_depth);
     r.request = {options_.block_depth, {root}};
   }
   return out;
@@ -384,7 +417,13 @@ size_t ReceiverClient::attach_arrived(ReceiverFrame& out) {
 size_t ReceiverClient::attach(const HttpAnswer& answer, ReceiverFrame& out) {
   const Request sent = std::move(wire_.front());
   wire_.pop_front();
+  if (opening_) return 0;  // an answer of a version replaced meanwhile
+  if (answer.status == 410) {
+    replaced(sent.target, answer);
+    return 0;
+  }
   if (answer.status != 200) refused(sent.target, answer);
+  reopens_.refill();
   totals_.cache_hits += answer.cache_status == "HIT";
   totals_.stale_arrivals += sent.stale;
   const size_t attached = session_.on_split_bands(answer.body, sent.request, codec_);
@@ -504,7 +543,10 @@ ReceiverFrame ReceiverClient::begin(const Camera& camera) {
 }
 
 void ReceiverClient::finish(ReceiverFrame& out, const HttpCounters& before, const ReceiverTotals& totals_before) {
-  out.prefetch_used = count_prefetch_used();
+  if (session_.has_model()) {  // else a 410 dropped the mesh: the next version is opening
+    out.prefetch_used = count_prefetch_used();
+    out.report.faces = session_.mesh().face_count();
+  }
   const HttpCounters& after = http_->counters();
   out.report.up_bytes = after.bytes_up - before.bytes_up;
   out.report.down_bytes = after.bytes_down - before.bytes_down;
@@ -516,7 +558,6 @@ void ReceiverClient::finish(ReceiverFrame& out, const HttpCounters& before, cons
   out.prefetched = uint32_t(totals_.prefetched - totals_before.prefetched);
   out.queued = uint32_t(queued_ids());
   out.in_flight = uint32_t(wire_.size());
-  out.report.faces = session_.mesh().face_count();
 }
 
 // Rounds of adapt -> rank -> GET -> attach until the view wants nothing more or the budget is spent;
@@ -557,6 +598,10 @@ ReceiverFrame ReceiverClient::run(const Camera& camera, bool settling) {
     out.rounds += wants;
   }
 
+  if (opening_) {  // a 410: this frame again on the version it names
+    await_open();
+    return run(camera, settling);
+  }
   if (may_prefetch && !prefetched && !wants) prefetch();
   out.satisfied = !wants;
   out.report.requested = out.rounds > 0;
@@ -576,6 +621,12 @@ ReceiverFrame ReceiverClient::run_free(const Camera& camera, bool settling) {
   ReceiverFrame out = begin(camera);
   http_->poll();
   attach_arrived(out);
+  if (opening_) {  // a 410: the version it names opens over the next frames (poll_open)
+    poll_open();
+    out.satisfied = false;
+    finish(out, before, totals_before);
+    return out;
+  }
   const bool wants = rerank(camera);
   out.rounds = wants;
   fill_pipe();
@@ -598,8 +649,10 @@ void ReceiverClient::settle(const Camera& camera) {
 void ReceiverClient::settle_free(const Camera& camera) {
   settle_frames_ = 0;
   for (;;) {
+    if (opening_) await_open();
     const ReceiverFrame r = run_free(camera, true);
     ++settle_frames_;
+    if (opening_) continue;
     if (r.satisfied || wire_.empty() || (r.answers > 0 && r.report.vsplits == 0)) break;
     http_->wait();
   }
@@ -608,6 +661,7 @@ void ReceiverClient::settle_free(const Camera& camera) {
     http_->wait();
     attach_arrived(rest);
   }
+  if (opening_) return settle_free(camera);  // a 410 among the last answers
   session_.refinement().converge();
 }
 
@@ -622,6 +676,10 @@ void ReceiverClient::settle_locked(const Camera& camera) {
   }
   ReceiverFrame rest;
   while (!wire_.empty()) receive_one(rest);  // prefetched or stale: read, as every GET sent is
+  if (opening_) {  // a 410 among them
+    await_open();
+    return settle_locked(camera);
+  }
   session_.refinement().converge();
 }
 

@@ -18,7 +18,9 @@
 #include "client/client_session.h"
 #include "client/http_transport.h"
 #include "client/importance.h"
+#include "client/model_version.h"
 #include "common/camera.h"
+#include "protocol/url_segment.h"
 #include "protocol/split_request.h"
 #include "spm/split_codec.h"
 #include "spm/vertex_id.h"
@@ -101,7 +103,10 @@ class ReceiverClient {
   ReceiverClient(const HttpUrl& server, const ReceiverOptions& options = {});
 
   std::vector<std::string> list();      // GET /models: the names
-  void open(const std::string& model);  // GET /models/{m}/base
+  // GET /models for the model's version, then its base and code tables (docs/protocol.md, "Versions"). A
+  // 410 later (the model replaced under its name) drops the mesh and opens the version it names: the frame
+  // goes on with it (lock-step), or the next frames report opening until it is open (free-running).
+  void open(const std::string& model);
   // The same without waiting (the browser's): start_open() posts the GETs, each poll_open() takes what has
   // arrived, until it returns true: the model is open. frame() is for after that.
   void start_open(const std::string& model);
@@ -123,6 +128,7 @@ class ReceiverClient {
   const ReceiverTotals& totals() const { return totals_; }
   uint64_t split_requests() const { return totals_.split_requests; }
   uint64_t cache_hits() const { return totals_.cache_hits; }
+  uint64_t reopens() const { return reopens_.total(); }  // versions opened after a 410
 
  private:
   // One GET: its URL and the ids it names (lists: the ids; blocks: the block's root).
@@ -134,10 +140,11 @@ class ReceiverClient {
     bool wanted = true;              // the last ranking wants one of its ids
     uint32_t stale = 0;              // of its ids, those the last ranking no longer wants (not prefetched ones)
   };
-  nlohmann::json catalogue();
-  std::vector<std::string> open_targets(const std::string& model) const;
-  void opened(const std::string& model, const std::vector<std::string>& targets,
-              const std::vector<HttpAnswer>& answers);
+  std::string prefix() const { return protocol::model_path(model_, version_); }
+  void open_version(const nlohmann::json& entry);
+  void await_open();
+  void replaced(const std::string& target, const HttpAnswer& answer);
+  void opened(const std::vector<std::string>& targets, const std::vector<HttpAnswer>& answers);
   ReceiverFrame begin(const Camera& camera);
   void finish(ReceiverFrame& out, const HttpCounters& before, const ReceiverTotals& totals_before);
   ReceiverFrame run(const Camera& camera, bool settling);
@@ -178,7 +185,10 @@ class ReceiverClient {
   ClientSession session_;
   std::unique_ptr<ImportanceSource> importance_;
   std::string model_;
-  std::unique_ptr<PendingGets> opening_;  // start_open()'s GETs, until poll_open() has them all
+  std::string version_;  // the version open, or opening
+  // The GETs of an open (GET /models alone, then a version's base and tables), until poll_open() has them.
+  std::unique_ptr<PendingGets> opening_;
+  ReopenBudget reopens_;
   SplitCodec codec_;  // the model's split record tables (GET /models/{m}/codec)
   uint32_t frame_ = 0;
   uint32_t settle_frames_ = 0;

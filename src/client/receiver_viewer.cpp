@@ -25,6 +25,7 @@ void ReceiverViewer::retune(const ViewerTuning& tuning) {
 ViewerReport ReceiverViewer::frame_view(const Camera& camera) {
   if (!client_.poll_open()) return opening_report();
   const ReceiverFrame r = client_.frame(camera);
+  if (!client_.session().has_model()) return opening_report();  // a 410: the model's new version opens
   unsatisfied_ += !r.satisfied;
   ViewerReport report;
   report.frame = r.report.frame;
@@ -74,6 +75,7 @@ nlohmann::json ReceiverViewer::totals() const {
           {"prefetched", t.prefetched},
           {"prefetch_used", t.prefetch_used},
           {"http_connections", c.connections},
+          {"reopens", client_.reopens()},
           {"fetch", fetch_policy_name(options_.fetch)},
           {"frame_budget_ms", options_.frame_budget_ms},
           {"frame_answers", options_.frame_answers},

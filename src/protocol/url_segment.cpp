@@ -87,7 +87,24 @@ std::optional<std::string> url_path_normalize(std::string_view path) {
   return read ? std::optional(std::move(out)) : std::nullopt;
 }
 
-std::string model_path(std::string_view name) { return "/models/" + url_segment_encode(name); }
+bool is_model_version(std::string_view text) {
+  return text.size() == kModelVersionChars &&
+         text.find_first_not_of("0123456789abcdef") == std::string_view::npos;
+}
+
+std::string model_version_text(uint64_t hash) {
+  static constexpr char kHex[] = "0123456789abcdef";
+  std::string text(kModelVersionChars, '0');
+  for (size_t i = 0; i < kModelVersionChars; ++i) text[i] = kHex[(hash >> (60 - 4 * i)) & 15];
+  return text;
+}
+
+std::string model_path(std::string_view name, std::string_view version) {
+  std::string path = "/models/" + url_segment_encode(name);
+  path += '/';
+  path += version;
+  return path;
+}
 
 std::optional<uint16_t> parse_port(std::string_view digits) {
   if (digits.empty() || digits.size() > 5) return std::nullopt;

@@ -25,7 +25,14 @@ std::optional<std::string> url_path_normalize(std::string_view path);
 // A port as an address's authority spells it: decimal, 1 … 65535, nothing else; nothing otherwise.
 std::optional<uint16_t> parse_port(std::string_view digits);
 
-// "/models/" and the encoded name: where every resource of the model starts.
-std::string model_path(std::string_view name);
+// A model's content version as URLs carry it (docs/protocol.md, "Versions"): 16 lower-case hex digits, one
+// spelling per version, so one URL per resource.
+constexpr size_t kModelVersionChars = 16;
+bool is_model_version(std::string_view text);
+// The version spelling of a 64-bit hash of what a version's bytes depend on.
+std::string model_version_text(uint64_t hash);
+
+// "/models/", the encoded name and the version: where every resource of that version of the model starts.
+std::string model_path(std::string_view name, std::string_view version);
 
 }  // namespace pms::protocol

@@ -21,9 +21,15 @@ namespace pms::server {
 
 // One model as every session sees it: the mapped file, the BASE frame encoded once, and each mode's tables
 // (model_tables.h), built when a session first asks for that mode, or at start for the modes preloaded.
-struct ServedModel {
+// Shared: a reload keeps an unchanged file's model, tables and all, in the next catalogue, and a table
+// build holds the model it builds.
+struct ServedModel : std::enable_shared_from_this<ServedModel> {
   std::string name;  // file name without .pms
   std::string path;
+  // The content version every URL of the model carries (docs/protocol.md, "Versions"): a hash of the
+  // file's content checksum, the wire's grid and the records format, so a file replaced under the same
+  // name, or served on another grid, has other URLs and no cache holds a stale answer for one.
+  std::string version;
   std::unique_ptr<PmsFile> file;
   protocol::ModelInfo info;
   protocol::StreamContext context;
@@ -37,10 +43,19 @@ struct ServedModel {
   const ModelData& model() const { return file->model(); }
 };
 
+// The version of a model file served on a grid of `grid_bits` (ServedModel::version).
+std::string content_version(uint64_t content_checksum, uint32_t grid_bits);
+
 // How a catalogue builds its models' tables: which modes at once, and how many builds may run at once.
 struct TableOptions {
   ModeSet preload = streaming_modes();
   uint32_t max_builds = 2;
+};
+
+// What a reload changed, by model name; `skipped` names a file (or path) and why it is not served.
+struct CatalogueChanges {
+  std::vector<std::string> added, removed, replaced, kept, skipped;
+  bool any() const { return !added.empty() || !removed.empty() || !replaced.empty(); }
 };
 
 class Catalogue {
@@ -53,25 +68,41 @@ class Catalogue {
   static std::shared_ptr<const Catalogue> open(const std::vector<std::string>& paths,
                                                uint32_t position_bits = protocol::kDefaultPositionBits,
                                                const TableOptions& tables = {});
+  // The models `previous`'s paths hold now (SIGHUP; docs/operating.md, "Signals"), built aside while
+  // `previous` serves on: a file whose content checksum is unchanged keeps previous's model (its mapping
+  // and built tables); a new or changed one is opened, its preloaded modes queued on the same builders.
+  // A path or file that fails to open, a name served twice and a model that breaks `limits` are skipped
+  // and named in `changes`, the rest served. pms::Error when no model is left or the CATALOGUE breaks
+  // `limits`: the caller keeps `previous`.
+  static std::shared_ptr<const Catalogue> reload(const Catalogue& previous, const ServerLimits& limits,
+                                                 CatalogueChanges& changes);
   const ServedModel* find(const std::string& name) const;
-  const std::vector<std::unique_ptr<ServedModel>>& models() const { return models_; }
+  const std::vector<std::shared_ptr<ServedModel>>& models() const { return models_; }
   const ServedMultilevel* find_multilevel(const std::string& name) const;
-  const std::vector<std::unique_ptr<ServedMultilevel>>& multilevel_models() const { return multilevel_; }
+  const std::vector<std::shared_ptr<ServedMultilevel>>& multilevel_models() const { return multilevel_; }
   // The CATALOGUE frame, encoded once and shared by every LIST's answer.
   const std::shared_ptr<const std::vector<uint8_t>>& catalogue_frame() const { return catalogue_frame_; }
   uint64_t mapped_bytes() const;
-  // The tables' workers: sessions and HTTP connections ask them for a mode's tables.
+  // The tables' workers: sessions and HTTP connections ask them for a mode's tables. One set for a
+  // catalogue and every catalogue reloaded from it.
   TableBuilds& table_builds() const { return *builds_; }
+  const std::shared_ptr<TableBuilds>& shared_table_builds() const { return builds_; }
   uint64_t table_bytes() const;  // every model's built tables
   // pms::Error naming the model when a frame the server would send can exceed limits.max_server_message
   // (a BASE, the CATALOGUE, a full VSPLITS batch), or the batch is too large to slice.
   void check_limits(const ServerLimits& limits) const;
 
  private:
-  std::vector<std::unique_ptr<ServedModel>> models_;
-  std::vector<std::unique_ptr<ServedMultilevel>> multilevel_;
+  void finish();  // the CATALOGUE frame
+
+  std::vector<std::string> paths_;
+  uint32_t position_bits_ = protocol::kDefaultPositionBits;
+  ModeSet preload_;
+  // First: its workers stop after the last catalogue that shares them is gone; each build holds its model.
+  std::shared_ptr<TableBuilds> builds_;
+  std::vector<std::shared_ptr<ServedModel>> models_;
+  std::vector<std::shared_ptr<ServedMultilevel>> multilevel_;
   std::shared_ptr<const std::vector<uint8_t>> catalogue_frame_;
-  std::unique_ptr<TableBuilds> builds_;  // last: its workers stop before the models they build go
 };
 
 }  // namespace pms::server

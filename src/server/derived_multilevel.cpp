@@ -58,9 +58,9 @@ Mesh full_resolution_mesh(const ModelData& model) {
 }
 
 std::unique_ptr<ServedMultilevel> derive_multilevel(const std::string& name, const std::string& path,
-                                                    const ModelData& model) {
+                                                    const std::string& version, const ModelData& model) {
   const Mesh mesh = full_resolution_mesh(model);
-  return serve_multilevel(build_multilevel(mesh, collapses_of(model)), name, path);
+  return serve_multilevel(build_multilevel(mesh, collapses_of(model)), name, path, version);
 }
 
 }  // namespace pms::server

@@ -15,8 +15,8 @@ namespace pms::server {
 // collapses of its hierarchy apply to. pms::Error for a model whose leaves do not number that mesh.
 Mesh full_resolution_mesh(const ModelData& model);
 
-// Every level (none merged), cut into the resources of /models/{name}.
+// Every level (none merged), cut into the resources of /models/{name}/{version}.
 std::unique_ptr<ServedMultilevel> derive_multilevel(const std::string& name, const std::string& path,
-                                                    const ModelData& model);
+                                                    const std::string& version, const ModelData& model);
 
 }  // namespace pms::server

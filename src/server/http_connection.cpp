@@ -96,7 +96,7 @@ class HttpConnection : public std::enable_shared_from_this<HttpConnection> {
         connection_budget_(behind_proxy_ ? 0 : shared.limits.connection_budget) {}
 
   ~HttpConnection() {
-    shared_.catalogue.table_builds().forget_owner(this);
+    shared_.catalogues.table_builds().forget_owner(this);
     if (handed_over_) return;  // the WebSocket holds the connection's place now
     shared_.addresses.close(peer_);
     stats_.connections_active--;
@@ -264,7 +264,8 @@ class HttpConnection : public std::enable_shared_from_this<HttpConnection> {
     if (is_ws_target(std::string_view(target.data(), target.size()))) return upgrade();
     HttpAnswer answer;
     try {
-      answer = answer_request(shared_.catalogue, limits_, parser_->get(), shared_.site);
+      catalogue_ = shared_.catalogues.get();  // held until the answer is sent: its body may be built from it
+      answer = answer_request(*catalogue_, limits_, parser_->get(), shared_.site);
     } catch (const std::exception& e) {  // out of memory for an answer: this request's fault only
       log_line(std::string("internal error: ") + e.what());
       answer = error_answer(500, "internal error");
@@ -312,7 +313,7 @@ class HttpConnection : public std::enable_shared_from_this<HttpConnection> {
                            if (const auto self = weak.lock()) self->on_tables_settled();
                          });
                        }};
-    if (shared_.catalogue.table_builds().request(*answer.waits_for, answer.waits_for_mode, std::move(waiter)))
+    if (shared_.catalogues.table_builds().request(*answer.waits_for, answer.waits_for_mode, std::move(waiter)))
       return route_request(Clock::now() + std::chrono::microseconds(limits_.turn_us));  // built meanwhile
     waiting_ = true;
     pending_answer_ = std::move(answer);
@@ -329,7 +330,7 @@ class HttpConnection : public std::enable_shared_from_this<HttpConnection> {
   // The request deadline passed while its tables were being built: the 503 (Retry-After) goes out.
   void stop_waiting() {
     waiting_ = false;
-    shared_.catalogue.table_builds().forget_owner(this);
+    shared_.catalogues.table_builds().forget_owner(this);
     finish_request(std::move(pending_answer_));
     serve();
   }
@@ -344,6 +345,7 @@ class HttpConnection : public std::enable_shared_from_this<HttpConnection> {
     request_begun_ = false;
     const double cost = request_cost(answer.splits, answer.body().size(), request_bytes_);
     respond(std::move(answer), head, keep_alive, version);
+    catalogue_.reset();  // the body holds what it needs of it: a reload's dropped models may go
     charge(client, cost);
   }
 
@@ -442,7 +444,7 @@ class HttpConnection : public std::enable_shared_from_this<HttpConnection> {
   void close(bool reset) {
     if (closed_) return;
     closed_ = true;
-    if (std::exchange(waiting_, false)) shared_.catalogue.table_builds().forget_owner(this);
+    if (std::exchange(waiting_, false)) shared_.catalogues.table_builds().forget_owner(this);
     deadline_.cancel();
     pause_.cancel();
     boost::system::error_code ignored;
@@ -455,6 +457,7 @@ class HttpConnection : public std::enable_shared_from_this<HttpConnection> {
   }
 
   tcp::socket socket_;
+  std::shared_ptr<const Catalogue> catalogue_;  // the request's, from routing to its answer
   Deadline deadline_;
   asio::steady_timer pause_;  // over budget: the connection's next turn
   beast::flat_buffer buffer_;

@@ -7,6 +7,7 @@
 #include <boost/asio.hpp>
 
 #include "server/catalogue.h"
+#include "server/catalogue_slot.h"
 #include "server/client_address.h"
 #include "server/limits.h"
 #include "server/static_site.h"
@@ -19,7 +20,7 @@ struct WsShared;
 
 // What the connections of one HttpServer share.
 struct HttpServerShared {
-  const Catalogue& catalogue;
+  const CatalogueSlot& catalogues;  // each request is answered from the one in place when it is routed
   const HttpLimits& limits;
   HttpStats& stats;
   AddressBudgets& addresses;

@@ -100,6 +100,19 @@ std::optional<HeaderRefusal> refuse_expectation(const RequestHeader& header) {
   return std::nullopt;
 }
 
+std::string cache_control(const HttpAnswer& answer) {
+  switch (answer.caching) {
+    case Caching::immutable:
+      return "max-age=31536000, immutable";
+    case Caching::max_age:
+      return "max-age=" + std::to_string(answer.max_age_s);
+    case Caching::revalidate:
+      return "no-cache";
+    default:
+      return "no-store";
+  }
+}
+
 }  // namespace
 
 void bound_parser(HttpParser& parser, const HttpLimits& limits) {
@@ -166,7 +179,7 @@ void write_response_head(const HttpAnswer& answer, bool keep_alive, unsigned ver
   if (!answer.etag.empty()) header("ETag", answer.etag);
   // No "public": the server takes no Authorization, and max-age alone lets a shared cache store the
   // answer (RFC 9111 §3).
-  header("Cache-Control", answer.cacheable ? "max-age=31536000, immutable" : answer.revalidate ? "no-cache" : "no-store");
+  header("Cache-Control", cache_control(answer));
   if (!answer.allow.empty()) header("Allow", answer.allow);
   if (!answer.location.empty()) header("Location", answer.location);
   if (answer.status == 503) header("Retry-After", "1");

@@ -1,7 +1,8 @@
-// The routes of the receiver-driven mode: GET /models, GET /models/M/base, POST /models/M/splits and its
-// GET form /models/M/splits/CODE, and GET /models/M/blocks/TREE/NODE/DEPTH (docs/protocol.md,
-// "Receiver-driven over HTTP"); a multilevel model's go to multilevel_routes.h. Each URL has one answer for a given
-// model file: strong ETags, immutable.
+// The routes of the receiver-driven mode: GET /models, GET /models/M/V/base, POST /models/M/V/splits and its
+// GET form /models/M/V/splits/CODE, and GET /models/M/V/blocks/TREE/NODE/DEPTH (docs/protocol.md,
+// "Receiver-driven over HTTP"), each under the model's version, /models/M/VERSION/...; a multilevel model's go to
+// multilevel_routes.h. Each URL has one answer for a given model file: strong ETags, immutable. GET /models,
+// which names the versions, is the one answer revalidated.
 #define XXH_INLINE_ALL
 #include <xxhash.h>
 #include <array>
@@ -46,12 +47,6 @@ Segments segments_of(std::string_view path) {
   return segments;
 }
 
-std::string hex64(uint64_t v) {
-  char text[17];
-  std::snprintf(text, sizeof text, "%016llx", (unsigned long long)v);
-  return text;
-}
-
 // A strong ETag from what the bytes depend on: the model file's content, the wire's quantization, the
 // record format and the canonical URL of the resource, "/models/NAME" then `resource`'s pieces, hashed as
 // they are, without building the URL.
@@ -93,26 +88,49 @@ int status_of(ErrorCode code) {
   }
 }
 
-HttpAnswer catalogue_answer(const Catalogue& catalogue, const HttpRequest& request) {
+nlohmann::json progressive_entry(const ServedModel& model) {
+  const protocol::ModelInfo& info = model.info;
+  return {{"name", info.name},
+          {"kind", "progressive"},
+          {"version", model.version},
+          {"faces", info.input_faces},
+          {"base_vertices", info.base_vertices},
+          {"vsplits", info.vsplits},
+          {"tree_id_bits", info.tree_id_bits},
+          {"node_id_bits", info.node_id_bits},
+          {"position_bits", model.context.grid.bits},
+          {"records_format", model.records_format},
+          {"block_depth", kSuggestedBlockDepth}};
+}
+
+// The one answer whose bytes change with the model set: a cache may use it for max-age, then asks again
+// with If-None-Match, and a 304 costs the origin a hash of the list.
+HttpAnswer catalogue_answer(const Catalogue& catalogue, const HttpLimits& limits, const HttpRequest& request) {
   nlohmann::json models = nlohmann::json::array();
-  for (const auto& model : catalogue.models()) {
-    const protocol::ModelInfo& info = model->info;
-    models.push_back({{"name", info.name},
-                      {"faces", info.input_faces},
-                      {"base_vertices", info.base_vertices},
-                      {"vsplits", info.vsplits},
-                      {"tree_id_bits", info.tree_id_bits},
-                      {"node_id_bits", info.node_id_bits},
-                      {"position_bits", model->context.grid.bits},
-                      {"records_format", model->records_format},
-                      {"block_depth", kSuggestedBlockDepth},
-                      {"etag_seed", hex64(model->file->content_checksum())},
-                      {"kind", "progressive"}});
-  }
+  for (const auto& model : catalogue.models()) models.push_back(progressive_entry(*model));
   for (const auto& model : catalogue.multilevel_models()) models.push_back(multilevel_entry(*model));
   const std::string text = nlohmann::json{{"models", models}}.dump() + "\n";
   HttpAnswer answer = fresh(request, etag_text(XXH64(text.data(), text.size(), 0)), "application/json");
+  answer.caching = Caching::max_age;
+  answer.max_age_s = limits.catalogue_max_age_s;
   if (answer.status == 200) answer.owned.assign(text.begin(), text.end());
+  return answer;
+}
+
+// A URL of another version of a model than the one served (docs/protocol.md, "Versions"): 410 Gone, not
+// 404, so a client tells "re-open on the version this names" from "no such model"; its body is the
+// model's catalogue entry as GET /models has it now, from the origin (no cache stores a 410 marked
+// no-store), so a client behind a cache whose GET /models is not yet stale learns the new version at once.
+HttpAnswer replaced_answer(const std::string& name, std::string_view asked, const nlohmann::json& entry) {
+  const std::string version = entry.value("version", "");
+  const std::string text = nlohmann::json{{"error", "model '" + name + "' is version " + version + " here, not " +
+                                                        std::string(asked) + ": open that version"},
+                                          {"model", entry}}
+                               .dump() +
+                           "\n";
+  HttpAnswer answer = error_answer(410, "");
+  answer.content_type = "application/json";
+  answer.owned.assign(text.begin(), text.end());
   return answer;
 }
 
@@ -196,15 +214,12 @@ bool multilevel_resource(std::span<const std::string_view> s) {
   return s[2] == "head" || s[2] == "levels" || s[2] == "compressed" || s[2] == "multilevel";
 }
 
-HttpAnswer model_route(const Catalogue& catalogue, const HttpLimits& limits, const HttpRequest& request,
-                       std::span<const std::string_view> s) {
-  const std::optional<std::string> name = protocol::url_segment_decode(s[1]);
-  if (!name) return error_answer(400, "the model name in the URL is not a path segment (RFC 3986: escape it as %XX)");
-  if (const ServedMultilevel* multilevel = catalogue.find_multilevel(*name))
-    return multilevel_route(*multilevel, request, s);
-  if (const ServedModel* progressive = catalogue.find(*name); progressive && multilevel_resource(s)) {
-    if (auto pending = tables_pending(*progressive, ServedMode::multilevel)) return std::move(*pending);
-    return multilevel_route(progressive->tables->multilevel(), request, s);
+// A .pms model's resources under /models/{m}/{version}/: `s` is the URL's segments without the version.
+HttpAnswer progressive_route(const ServedModel& model, const HttpLimits& limits, const HttpRequest& request,
+                             std::span<const std::string_view> s) {
+  if (multilevel_resource(s)) {
+    if (auto pending = tables_pending(model, ServedMode::multilevel)) return std::move(*pending);
+    return multilevel_route(model.tables->multilevel(), request, s);
   }
   const bool get = request.method == "GET" || request.method == "HEAD";
   const bool post_route = s.size() == 3 && s[2] == "splits";
@@ -213,22 +228,44 @@ HttpAnswer model_route(const Catalogue& catalogue, const HttpLimits& limits, con
   if (!post_route && !get_route) return error_answer(404, "no such resource (docs/protocol.md lists them)");
   if (post_route && request.method != "POST") return method_not_allowed("POST");
   if (get_route && !get) return method_not_allowed("GET, HEAD");
-  const ServedModel* model = catalogue.find(*name);
-  if (!model) return error_answer(404, "no model named '" + *name + "'");
-  if (s[2] == "base") return base_answer(*model, request);
-  if (auto pending = tables_pending(*model, ServedMode::receiver)) return std::move(*pending);
-  if (s[2] == "codec") return codec_answer(*model, request);
-  if (s[2] == "blocks") return block_answer(*model, limits, request, s.subspan(3));
+  if (s[2] == "base") return base_answer(model, request);
+  if (auto pending = tables_pending(model, ServedMode::receiver)) return std::move(*pending);
+  if (s[2] == "codec") return codec_answer(model, request);
+  if (s[2] == "blocks") return block_answer(model, limits, request, s.subspan(3));
   if (post_route)
-    return splits_answer(*model, limits, request, decode_code(*model, limits, request.body),
-                         etag_of(*model, {"/splits/", protocol::base64url_encode(request.body)}));
+    return splits_answer(model, limits, request, decode_code(model, limits, request.body),
+                         etag_of(model, {"/splits/", protocol::base64url_encode(request.body)}));
   if (s[3].size() > (uint64_t(limits.max_body_bytes) * 4 + 2) / 3)
     return error_answer(414, "a request code of over " + std::to_string(limits.max_body_bytes) + " bytes");
   const auto code = protocol::base64url_decode(s[3]);
   if (!code) return error_answer(400, "the request code is not canonical base64url (RFC 4648 §5, no padding)");
   // Strict base64url has one text per code: the segment is the canonical URL's.
-  return splits_answer(*model, limits, request, decode_code(*model, limits, *code),
-                       etag_of(*model, {"/splits/", s[3]}));
+  return splits_answer(model, limits, request, decode_code(model, limits, *code),
+                       etag_of(model, {"/splits/", s[3]}));
+}
+
+// /models/{m}/{version}/...: the model, then its version (410 for another), then the resource.
+HttpAnswer model_route(const Catalogue& catalogue, const HttpLimits& limits, const HttpRequest& request,
+                       std::span<const std::string_view> segments) {
+  const std::optional<std::string> name = protocol::url_segment_decode(segments[1]);
+  if (!name) return error_answer(400, "the model name in the URL is not a path segment (RFC 3986: escape it as %XX)");
+  const ServedMultilevel* multilevel = catalogue.find_multilevel(*name);
+  const ServedModel* progressive = catalogue.find(*name);
+  if (!multilevel && !progressive) return error_answer(404, "no model named '" + *name + "'");
+  const std::string_view version = segments[2];
+  if (segments.size() < 4 || !protocol::is_model_version(version))
+    return error_answer(404, "a model's resources are /models/NAME/VERSION/..., VERSION as GET /models names it");
+  const std::string& served = multilevel ? multilevel->version : progressive->version;
+  if (version != served)
+    return replaced_answer(*name, version, multilevel ? multilevel_entry(*multilevel) : progressive_entry(*progressive));
+  // The routes below read the segments as /models/{m}/RESOURCE...
+  std::array<std::string_view, kMaxSegments> s;
+  s[0] = segments[0];
+  s[1] = segments[1];
+  std::copy(segments.begin() + 3, segments.end(), s.begin() + 2);
+  const std::span<const std::string_view> rest(s.data(), segments.size() - 1);
+  if (multilevel) return multilevel_route(*multilevel, request, rest);
+  return progressive_route(*progressive, limits, request, rest);
 }
 
 // The one spelling of `target` (RFC 3986 §6.2.2's normal form, and a model's name escaped as the clients
@@ -280,7 +317,7 @@ HttpAnswer fresh(const HttpRequest& request, const std::string& etag, const char
   answer.status = matches(request.if_none_match, etag) ? 304 : 200;
   answer.content_type = content_type;
   answer.etag = etag;
-  answer.cacheable = true;
+  answer.caching = Caching::immutable;
   return answer;
 }
 
@@ -317,7 +354,7 @@ HttpAnswer route(const Catalogue& catalogue, const HttpLimits& limits, const Htt
   try {
     if (s.size() == 1 && s[0] == "models") {
       if (request.method != "GET" && request.method != "HEAD") return method_not_allowed("GET, HEAD");
-      return catalogue_answer(catalogue, request);
+      return catalogue_answer(catalogue, limits, request);
     }
     if (s.size() >= 3 && s[0] == "models") return model_route(catalogue, limits, request, s);
   } catch (const ProtocolError& e) {

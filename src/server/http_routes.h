@@ -32,12 +32,20 @@ class BodyBuilder {
   virtual std::vector<uint8_t> take() = 0;
 };
 
+// How long a cache may use an answer without asking the origin (its Cache-Control).
+enum class Caching : uint8_t {
+  no_store,    // errors, redirects: not stored
+  immutable,   // a versioned resource: its URL's bytes never change (max-age a year, immutable)
+  max_age,     // GET /models: used for max_age_s, then revalidated (the model set changes)
+  revalidate,  // revalidated on every use (the page's files: their names stay)
+};
+
 struct HttpAnswer {
   int status = 200;
   std::string_view content_type = "text/plain; charset=utf-8";  // a literal
   std::string etag;                                             // strong, quoted; empty for errors
-  bool cacheable = false;                                       // immutable for a year; errors are not stored
-  bool revalidate = false;  // stored, but revalidated on every use (the page's files: their names stay)
+  Caching caching = Caching::no_store;
+  uint32_t max_age_s = 0;  // Caching::max_age's
   std::string allow;                                            // the methods a 405's resource takes
   std::string location;                                         // a redirect's target: the canonical URL
   uint64_t splits = 0;                                          // split records in the body
@@ -58,7 +66,8 @@ struct HttpAnswer {
   }
 };
 
-// The answer to one request: 200, 304 (If-None-Match matched), or a 4xx with a short text body.
+// The answer to one request: 200, 304 (If-None-Match matched), or a 4xx with a short text body (a 410,
+// a model version this server does not serve, with the model's catalogue entry in JSON).
 HttpAnswer route(const Catalogue& catalogue, const HttpLimits& limits, const HttpRequest& request);
 
 // Builds `answer`'s body to the end, in one go, if it has a builder.

@@ -47,8 +47,8 @@ void refuse(tcp::socket& socket, const std::string& text) {
 }  // namespace
 
 struct HttpServer::Impl {
-  Impl(std::shared_ptr<const Catalogue> c, const HttpLimits& l, const WebOptions& w)
-      : catalogue(std::move(c)), limits(l), web(w), site(w.root, w.site), contexts(make_contexts(l.threads)) {
+  Impl(std::shared_ptr<CatalogueSlot> c, const HttpLimits& l, const WebOptions& w)
+      : catalogues(std::move(c)), limits(l), web(w), site(w.root, w.site), contexts(make_contexts(l.threads)) {
     for (const auto& io : contexts) work.push_back(asio::make_work_guard(*io));
   }
 
@@ -103,14 +103,14 @@ struct HttpServer::Impl {
     }
   }
 
-  std::shared_ptr<const Catalogue> catalogue;
+  std::shared_ptr<CatalogueSlot> catalogues;
   HttpLimits limits;
   WebOptions web;
   StaticSite site;
   HttpStats stats;
   AddressBudgets addresses{limits.max_connections_per_address, double(limits.address_budget)};
-  WsShared ws{catalogue, web};
-  HttpServerShared shared{*catalogue, limits, stats, addresses, this, &site, &ws};
+  WsShared ws{catalogues, web};
+  HttpServerShared shared{*catalogues, limits, stats, addresses, this, &site, &ws};
   std::vector<std::thread> threads;
   std::mutex stop_mutex;
   bool stopped = false;
@@ -125,8 +125,12 @@ struct HttpServer::Impl {
 
 HttpServer::HttpServer(std::shared_ptr<const Catalogue> catalogue, const HttpLimits& limits, const std::string& host,
                        uint16_t port, const WebOptions& web)
-    : impl_(std::make_unique<Impl>(std::move(catalogue), limits, web)) {
-  impl_->catalogue->check_limits(web.sessions);
+    : HttpServer(std::make_shared<CatalogueSlot>(std::move(catalogue)), limits, host, port, web) {}
+
+HttpServer::HttpServer(std::shared_ptr<CatalogueSlot> catalogues, const HttpLimits& limits, const std::string& host,
+                       uint16_t port, const WebOptions& web)
+    : impl_(std::make_unique<Impl>(std::move(catalogues), limits, web)) {
+  impl_->catalogues->get()->check_limits(web.sessions);
   listen_on(impl_->acceptor, host, port, "HTTP");
 }
 
@@ -147,7 +151,7 @@ void HttpServer::stop() {
     impl_->stopped = true;
   }
   // No table build may post to a loop once it is stopped and destroyed.
-  impl_->catalogue->table_builds().forget_group(impl_.get());
+  impl_->catalogues->table_builds().forget_group(impl_.get());
   for (const auto& io : impl_->contexts) io->stop();
   for (std::thread& t : impl_->threads)
     if (t.joinable()) t.join();

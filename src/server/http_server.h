@@ -6,6 +6,7 @@
 #include <string>
 
 #include "server/catalogue.h"
+#include "server/catalogue_slot.h"
 #include "server/limits.h"
 #include "server/stats.h"
 #include "server/web_options.h"
@@ -18,6 +19,10 @@ namespace pms::server {
 class HttpServer {
  public:
   HttpServer(std::shared_ptr<const Catalogue> catalogue, const HttpLimits& limits, const std::string& host,
+             uint16_t port, const WebOptions& web = {});
+  // Answering each request from the catalogue `catalogues` holds then (a reload swaps it); a WebSocket
+  // session from the one in place at its upgrade.
+  HttpServer(std::shared_ptr<CatalogueSlot> catalogues, const HttpLimits& limits, const std::string& host,
              uint16_t port, const WebOptions& web = {});
   ~HttpServer();
   HttpServer(const HttpServer&) = delete;

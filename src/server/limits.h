@@ -48,6 +48,7 @@ struct HttpLimits {
   uint32_t request_timeout_ms = 10000;   // a request, once begun, must arrive whole within this
   uint32_t write_timeout_ms = 10000;     // answer bytes waiting and none taken for this long: closed
   uint32_t threads = 0;                  // I/O threads; 0 = one per core
+  uint32_t catalogue_max_age_s = 60;     // GET /models: how long a cache may use it unasked (0: ask each time)
   // Peers whose X-Forwarded-For names the client the per-address limits apply to (--trusted-proxy).
   AddressRanges trusted_proxies;
 };

@@ -123,7 +123,7 @@ void ModelTables::build(const ServedModel& served, ServedMode mode) {
       return build_records(served, mode);
     case ServedMode::multilevel:
       std::call_once(multilevel_once_, [&] {
-        multilevel_ = derive_multilevel(served.name, served.path, data);
+        multilevel_ = derive_multilevel(served.name, served.path, served.version, data);
         count(mode, multilevel_->memory_bytes());
       });
       return;

@@ -70,6 +70,7 @@ nlohmann::json multilevel_entry(const ServedMultilevel& m) {
   for (const auto& bytes : m.compressed_levels) compressed_bytes.push_back(bytes->size());
   return {{"name", m.name},
           {"kind", "multilevel"},
+          {"version", m.version},
           {"levels", m.level_count()},
           {"dimension", m.dimension},
           {"normals", m.normals},

@@ -1,6 +1,7 @@
 // The multilevel mode's resources (gueziec et al. 1999; docs/protocol.md, "Multilevel over HTTP"):
-// GET /models/{m}/head and GET /models/{m}/levels/{level}, immutable, one per level, coarsest first, and
-// the same under /models/{m}/compressed/ in the compressed form (multilevel/codec.h).
+// GET /models/{m}/{version}/head and GET /models/{m}/{version}/levels/{level}, immutable, one per level,
+// coarsest first, and the same under /models/{m}/{version}/compressed/ in the compressed form
+// (multilevel/codec.h).
 #pragma once
 #include <nlohmann/json_fwd.hpp>
 #include <span>
@@ -11,7 +12,8 @@
 
 namespace pms::server {
 
-// `segments` is the URL's path cut at '/', starting with "models", "{m}".
+// `segments` is the URL's path cut at '/', starting with "models", "{m}", without the version (the caller
+// has checked it).
 HttpAnswer multilevel_route(const ServedMultilevel& model, const HttpRequest& request,
                             std::span<const std::string_view> segments);
 

@@ -9,6 +9,7 @@
 #include "multilevel/file.h"
 #include "multilevel/loader.h"
 #include "multilevel/mesh.h"
+#include "protocol/url_segment.h"
 #include "server/http_answers.h"
 #include "server/served_multilevel.h"
 
@@ -19,6 +20,13 @@ namespace {
 std::string etag_of(const std::vector<uint8_t>& bytes, const std::string& resource) {
   const uint64_t hashes[2] = {XXH64(bytes.data(), bytes.size(), 0), XXH64(resource.data(), resource.size(), 0)};
   return etag_text(XXH64(hashes, sizeof hashes, 0));
+}
+
+// The binary form's bytes determine the compressed form's (on a fixed grid): their hash is the version.
+std::string version_of(const MultilevelParts& parts) {
+  std::vector<uint64_t> hashes = {XXH64(parts.head.data(), parts.head.size(), 0)};
+  for (const auto& level : parts.levels) hashes.push_back(XXH64(level.data(), level.size(), 0));
+  return protocol::model_version_text(XXH64(hashes.data(), hashes.size() * sizeof(uint64_t), 0));
 }
 
 using Bytes = std::shared_ptr<const std::vector<uint8_t>>;
@@ -69,7 +77,7 @@ std::unique_ptr<ServedMultilevel> open_multilevel(const std::string& path) {
 }
 
 std::unique_ptr<ServedMultilevel> serve_multilevel(const MultilevelMesh& mesh, const std::string& name,
-                                                   const std::string& path) {
+                                                   const std::string& path, const std::string& version) {
   auto out = std::make_unique<ServedMultilevel>();
   out->path = path;
   out->name = name;
@@ -79,8 +87,10 @@ std::unique_ptr<ServedMultilevel> serve_multilevel(const MultilevelMesh& mesh, c
   out->texcoords = !mesh.texcoords.empty();
   out->vertices = mesh.vertices();
   out->triangles = mesh.faces();
-  const std::string prefix = "/models/" + out->name;
-  cut(multilevel_parts(mesh), prefix, out->head, out->head_etag, out->levels, out->level_etags);
+  MultilevelParts parts = multilevel_parts(mesh);
+  out->version = version.empty() ? version_of(parts) : version;
+  const std::string prefix = "/models/" + out->name + "/" + out->version;
+  cut(std::move(parts), prefix, out->head, out->head_etag, out->levels, out->level_etags);
   out->position_bits = kDefaultPositionBits;
   cut(multilevel_compressed_parts(mesh, out->position_bits), prefix + "/compressed", out->compressed_head,
       out->compressed_head_etag, out->compressed_levels, out->compressed_level_etags);

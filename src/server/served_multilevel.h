@@ -16,6 +16,9 @@ namespace pms::server {
 struct ServedMultilevel {
   std::string name;  // file name without .pml
   std::string path;
+  // The content version its URLs carry (docs/protocol.md, "Versions"): a derived mesh's is its .pms
+  // model's, a .pml file's a hash of its levels.
+  std::string version;
   uint32_t dimension = 3;
   bool normals = false, colors = false, texcoords = false;
   uint32_t vertices = 0, triangles = 0;
@@ -40,8 +43,8 @@ struct ServedMultilevel {
 
 // Reads either form (multilevel/file.h); pms::Error naming the file.
 std::unique_ptr<ServedMultilevel> open_multilevel(const std::string& path);
-// `mesh` cut into its resources under /models/{name}.
+// `mesh` cut into its resources under /models/{name}/{version}; an empty `version` is the mesh's own hash.
 std::unique_ptr<ServedMultilevel> serve_multilevel(const MultilevelMesh& mesh, const std::string& name,
-                                                   const std::string& path);
+                                                   const std::string& path, const std::string& version = {});
 
 }  // namespace pms::server

@@ -17,14 +17,17 @@ using protocol::ErrorCode;
 using protocol::ProtocolError;
 
 Session::Session(std::shared_ptr<const Catalogue> catalogue, const ServerLimits& limits)
-    : catalogue_(std::move(catalogue)), limits_(limits) {}
+    : catalogue_(std::move(catalogue)),
+      list_frame_(catalogue_->catalogue_frame()),
+      builds_(catalogue_->shared_table_builds()),
+      limits_(limits) {}
 
 Session::~Session() { stop_waiting(); }
 
 void Session::wake_with(const void* group, std::function<void()> wake) { waiter_ = {this, group, std::move(wake)}; }
 
 void Session::stop_waiting() {
-  if (waiting_) catalogue_->table_builds().forget_owner(this);
+  if (waiting_) builds_->forget_owner(this);
   waiting_.reset();
 }
 
@@ -90,7 +93,7 @@ void Session::handle(protocol::Frame& frame) {
   if (!greeted_ && !std::holds_alternative<protocol::Hello>(message))
     throw ProtocolError(ErrorCode::out_of_order, protocol::to_string(frame.type) + " before HELLO");
   if (std::holds_alternative<protocol::List>(message)) {
-    outbox_.push_back(catalogue_->catalogue_frame());
+    outbox_.push_back(list_frame_);
   } else if (std::holds_alternative<protocol::Close>(message)) {
     if (mode_) mode_->stop();
     stop_waiting();
@@ -123,8 +126,10 @@ void Session::on_open(const protocol::OpenHeader& m, protocol::Frame& frame) {
   const ServedModel* model = catalogue_->find(m.model);
   if (!model) throw ProtocolError(ErrorCode::unknown_model, "OPEN: no model named '" + m.model + "'");
   model_ = model;
+  model_hold_ = model->shared_from_this();
+  catalogue_.reset();
   mode_kind_ = m.mode;
-  TableBuilds& builds = catalogue_->table_builds();
+  TableBuilds& builds = *builds_;
   if (builds.request(*model, served_mode_of(m.mode), waiter_)) return open_mode(m, frame);
   waiting_ = WaitingOpen{m, std::move(frame)};
   if (!waiter_.wake) {

@@ -84,7 +84,12 @@ class Session {
   void queue(std::vector<uint8_t> frame);
   void fault(const char* what);
 
+  // The catalogue until OPEN; then the session holds its model alone, so a model a reload dropped goes
+  // when its last session ends, not when every session opened before the reload has.
   std::shared_ptr<const Catalogue> catalogue_;
+  std::shared_ptr<const std::vector<uint8_t>> list_frame_;  // LIST's answer
+  std::shared_ptr<TableBuilds> builds_;
+  std::shared_ptr<const ServedModel> model_hold_;
   ServerLimits limits_;
   bool greeted_ = false, closing_ = false;
   std::optional<protocol::ErrorCode> error_;

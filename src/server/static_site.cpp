@@ -78,8 +78,7 @@ HttpAnswer StaticSite::answer(const HttpRequest& request) {
   const std::shared_ptr<const File> found = file(*relative, refusal);
   if (!found) return refusal;
   HttpAnswer answer = fresh(request, found->etag, site_content_type(*relative));
-  answer.cacheable = false;
-  answer.revalidate = true;
+  answer.caching = Caching::revalidate;
   if (answer.status == 200) answer.shared = found->bytes;
   return answer;
 }

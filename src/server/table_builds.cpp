@@ -34,7 +34,7 @@ bool TableBuilds::queue_locked(const ServedModel& model, ServedMode mode) {
   if (state == State::failed) return false;
   if (state == State::absent) {
     tables.set_state(mode, State::queued);
-    jobs_.push_back({&model, mode});
+    jobs_.push_back({model.shared_from_this(), mode});
     jobs_ready_.notify_one();
   }
   return true;
@@ -68,13 +68,15 @@ void TableBuilds::wait(const ServedModel& model, ServedMode mode) {
   });
 }
 
+void TableBuilds::queue_all(const std::vector<const ServedModel*>& models, ModeSet modes) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  for (const ServedModel* model : models)
+    for (size_t m = 0; m < kServedModeCount; ++m)
+      if (modes.test(m)) queue_locked(*model, served_mode_at(m));
+}
+
 void TableBuilds::build_all(const std::vector<const ServedModel*>& models, ModeSet modes) {
-  {
-    std::lock_guard<std::mutex> lock(mutex_);
-    for (const ServedModel* model : models)
-      for (size_t m = 0; m < kServedModeCount; ++m)
-        if (modes.test(m)) queue_locked(*model, served_mode_at(m));
-  }
+  queue_all(models, modes);
   for (const ServedModel* model : models)
     for (size_t m = 0; m < kServedModeCount; ++m) {
       if (!modes.test(m)) continue;
@@ -91,7 +93,7 @@ void TableBuilds::work() {
   for (;;) {
     jobs_ready_.wait(lock, [this] { return stopping_ || !jobs_.empty(); });
     if (stopping_) return;
-    const Job job = jobs_.front();
+    Job job = std::move(jobs_.front());
     jobs_.pop_front();
     job.model->tables->set_state(job.mode, State::building);
     stats_.started++;
@@ -99,6 +101,7 @@ void TableBuilds::work() {
     stats_.peak_running.store(std::max(stats_.peak_running.load(), running));
     lock.unlock();
     run(job);
+    job = {};  // a model a reload dropped is freed here, outside the lock
     lock.lock();
     stats_.running--;
   }

@@ -9,6 +9,7 @@
 #include <cstdint>
 #include <deque>
 #include <functional>
+#include <memory>
 #include <mutex>
 #include <thread>
 #include <vector>
@@ -49,6 +50,8 @@ class TableBuilds {
   void forget_group(const void* group);
   // Blocks until `mode`'s tables of `model` settle, ready or failed (a session with no transport to wake it).
   void wait(const ServedModel& model, ServedMode mode);
+  // Queues `modes` of every model given (those not built or queued yet), without waiting.
+  void queue_all(const std::vector<const ServedModel*>& models, ModeSet modes);
   // Builds `modes` of every model given and waits for them; pms::Error naming the model and the mode for
   // the first that failed.
   void build_all(const std::vector<const ServedModel*>& models, ModeSet modes);
@@ -58,7 +61,7 @@ class TableBuilds {
 
  private:
   struct Job {
-    const ServedModel* model;
+    std::shared_ptr<const ServedModel> model;  // a model a reload dropped lives until its build ends
     ServedMode mode;
   };
   struct Waiting {

@@ -176,8 +176,8 @@ const std::vector<uint8_t>& server_full_frame() {
 }  // namespace
 
 struct TcpServer::Impl {
-  Impl(std::shared_ptr<const Catalogue> c, const ServerLimits& l)
-      : catalogue(std::move(c)), limits(l), acceptor(io), backoff(io) {}
+  Impl(std::shared_ptr<CatalogueSlot> c, const ServerLimits& l)
+      : catalogues(std::move(c)), limits(l), acceptor(io), backoff(io) {}
 
   void accept() {
     acceptor.async_accept(asio::make_strand(io), [this](const boost::system::error_code& ec, tcp::socket socket) {
@@ -206,7 +206,7 @@ struct TcpServer::Impl {
     if (registry.size() >= limits.max_sessions) return refuse(socket);
     try {
       auto connection =
-          std::make_shared<Connection>(std::move(socket), catalogue, limits, stats, registry, ++next_id, this);
+          std::make_shared<Connection>(std::move(socket), catalogues->get(), limits, stats, registry, ++next_id, this);
       registry.add(connection);
       stats.sessions_opened++;
       stats.sessions_active++;
@@ -227,7 +227,7 @@ struct TcpServer::Impl {
     socket.close(ignored);
   }
 
-  std::shared_ptr<const Catalogue> catalogue;
+  std::shared_ptr<CatalogueSlot> catalogues;
   ServerLimits limits;
   asio::io_context io;
   tcp::acceptor acceptor;
@@ -244,8 +244,12 @@ struct TcpServer::Impl {
 
 TcpServer::TcpServer(std::shared_ptr<const Catalogue> catalogue, const ServerLimits& limits, const std::string& host,
                      uint16_t port)
-    : impl_(std::make_unique<Impl>(std::move(catalogue), limits)) {
-  impl_->catalogue->check_limits(limits);
+    : TcpServer(std::make_shared<CatalogueSlot>(std::move(catalogue)), limits, host, port) {}
+
+TcpServer::TcpServer(std::shared_ptr<CatalogueSlot> catalogues, const ServerLimits& limits, const std::string& host,
+                     uint16_t port)
+    : impl_(std::make_unique<Impl>(std::move(catalogues), limits)) {
+  impl_->catalogues->get()->check_limits(limits);
   listen_on(impl_->acceptor, host, port, "");
 }
 
@@ -274,7 +278,7 @@ void TcpServer::stop() {
   // Let the closes run (each handler is at most one turn), then end the loop.
   for (int i = 0; i < 100 && impl_->registry.size() > 0; ++i) std::this_thread::sleep_for(milliseconds(5));
   // No table build may post to the loop once it is stopped and destroyed.
-  impl_->catalogue->table_builds().forget_group(impl_.get());
+  impl_->catalogues->table_builds().forget_group(impl_.get());
   impl_->io.stop();
   for (std::thread& t : impl_->threads)
     if (t.joinable()) t.join();

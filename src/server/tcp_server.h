@@ -5,16 +5,21 @@
 #include <string>
 
 #include "server/catalogue.h"
+#include "server/catalogue_slot.h"
 #include "server/limits.h"
 #include "server/stats.h"
 
 namespace pms::server {
 
 // TCP transport: `threads` I/O threads, one strand per connection, every read bounded by the frame
-// limit and every wait by the idle timeout.
+// limit and every wait by the idle timeout. A session answers from the catalogue in place when its
+// connection was accepted.
 class TcpServer {
  public:
   TcpServer(std::shared_ptr<const Catalogue> catalogue, const ServerLimits& limits, const std::string& host,
+            uint16_t port);
+  // Serving whatever catalogue `catalogues` holds when a connection is accepted (a reload swaps it).
+  TcpServer(std::shared_ptr<CatalogueSlot> catalogues, const ServerLimits& limits, const std::string& host,
             uint16_t port);
   ~TcpServer();
   TcpServer(const TcpServer&) = delete;

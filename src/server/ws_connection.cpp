@@ -56,7 +56,7 @@ class WsConnection : public SessionConnection {
  public:
   WsConnection(tcp::socket socket, const ClientAddress& peer, const ClientAddress& client, HttpServerShared& shared,
                uint64_t id)
-      : SessionConnection(socket.get_executor(), shared.ws->catalogue, shared.ws->web.sessions, shared.ws->sessions,
+      : SessionConnection(socket.get_executor(), shared.ws->catalogues->get(), shared.ws->web.sessions, shared.ws->sessions,
                           id, shared.group),
         ws_(std::move(socket)),
         close_timer_(ws_.get_executor()),

@@ -12,6 +12,7 @@
 #include <optional>
 
 #include "server/catalogue.h"
+#include "server/catalogue_slot.h"
 #include "server/client_address.h"
 #include "server/http_message.h"
 #include "server/stats.h"
@@ -23,8 +24,8 @@ struct HttpServerShared;
 
 // What the WebSocket sessions of one HttpServer share.
 struct WsShared {
-  WsShared(std::shared_ptr<const Catalogue> c, const WebOptions& w) : catalogue(std::move(c)), web(w) {}
-  std::shared_ptr<const Catalogue> catalogue;
+  WsShared(std::shared_ptr<CatalogueSlot> c, const WebOptions& w) : catalogues(std::move(c)), web(w) {}
+  std::shared_ptr<CatalogueSlot> catalogues;
   const WebOptions& web;
   ServerStats sessions;  // the sessions' counters, as the TCP server keeps its own
   WsStats stats;

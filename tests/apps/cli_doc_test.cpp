@@ -78,7 +78,7 @@ void add_fields(std::map<std::string, Names>& fields, const std::string& command
   for (const std::string& field : test::json_fields(json::parse(run.out))) fields[command].insert(field);
 }
 
-// serve's lines (listening, stats, stopped) and a stream in each kind of mode against it: the sender-driven
+// serve's lines (listening, reloaded, stats, stopped) and a stream in each kind of mode against it: the sender-driven
 // one over TCP and over the WebSocket, the receiver-driven one and the multilevel levels over HTTP.
 void add_served_fields(std::map<std::string, Names>& fields, const std::string& dir) {
   using std::chrono::seconds;
@@ -95,7 +95,7 @@ void add_served_fields(std::map<std::string, Names>& fields, const std::string& 
   add_fields(fields, "stream", "stream --server " + http + " --mode receiver --model terrain" + common);
   add_fields(fields, "stream", "stream --server ws" + http.substr(4) + "/ws --model terrain" + common);
   add_fields(fields, "stream", "stream --server " + http + " --mode multilevel --model levels" + common);
-  for (const int signal : {SIGUSR1, SIGTERM}) {
+  for (const int signal : {SIGHUP, SIGUSR1, SIGTERM}) {
     serve.signal(signal);
     const std::string line = serve.next_line(seconds(30));
     ASSERT_FALSE(line.empty()) << "serve printed nothing on signal " << signal;

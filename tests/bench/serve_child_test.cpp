@@ -131,7 +131,8 @@ TEST(ServeChild, ServesHttpBesideTcpAndCountsIt) {
   const std::string models = http_exchange(http_port, "/models");
   EXPECT_EQ(models.rfind("HTTP/1.1 200 OK\r\n", 0), 0u) << models;
   EXPECT_NE(models.find("\"name\":\"terrain\""), std::string::npos) << models;
-  const std::string base = http_exchange(http_port, "/models/terrain/base");
+  const std::string version = server.listening()["models"][0]["version"];
+  const std::string base = http_exchange(http_port, "/models/terrain/" + version + "/base");
   EXPECT_NE(base.find("Cache-Control: max-age=31536000, immutable"), std::string::npos) << base;
   EXPECT_EQ(http_exchange(http_port, "/models/other/base").rfind("HTTP/1.1 404", 0), 0u);
   const ServeStats stopped = server.stop();
@@ -191,13 +192,14 @@ TEST(ServeChild, StreamReceiverWithAFrameBudgetReportsWhatItCarried) {
 TEST(ServeChild, HttpSizeLimitsComeFromTheCommandLine) {
   const auto pms = small_model(test::temp_dir());
   ServeChild server(PMSTREAM_BINARY,
-                    {pms.string(), "--http-port", "0", "--http-max-url-bytes", "24", "--http-max-header-bytes", "200"});
+                    {pms.string(), "--http-port", "0", "--http-max-url-bytes", "48", "--http-max-header-bytes", "200"});
   const uint16_t http_port = server.listening()["http_port"];
-  const std::string at_limit = "/models/terrain/base" + std::string(4, '/');  // 24 bytes: a route, not found
-  ASSERT_EQ(at_limit.size(), 24u);
+  const std::string base = "/models/terrain/" + server.listening()["models"][0]["version"].get<std::string>() + "/base";
+  const std::string at_limit = base + std::string(48 - base.size(), '/');  // a route, not found
+  ASSERT_EQ(at_limit.size(), 48u);
   EXPECT_EQ(http_exchange(http_port, at_limit).rfind("HTTP/1.1 404", 0), 0u);
   EXPECT_EQ(http_exchange(http_port, at_limit + "/").rfind("HTTP/1.1 414", 0), 0u);
-  EXPECT_EQ(http_exchange(http_port, "/models/terrain/base").rfind("HTTP/1.1 200", 0), 0u);
+  EXPECT_EQ(http_exchange(http_port, base).rfind("HTTP/1.1 200", 0), 0u);
   EXPECT_EQ(http_exchange(http_port, "/models", "X: " + std::string(200, 'x') + "\r\n").rfind("HTTP/1.1 431", 0), 0u);
   EXPECT_EQ(http_exchange(http_port, "/models?" + std::string(200, 'x')).rfind("HTTP/1.1 414", 0), 0u);
 }

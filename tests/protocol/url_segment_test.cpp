@@ -18,7 +18,15 @@ TEST(UrlSegment, EveryByteOfAFileNameRoundTripsAndOnlyUnreservedOnesStayRaw) {
   EXPECT_EQ(url_segment_encode("bunny"), "bunny");
   EXPECT_EQ(url_segment_encode("my bunny 50%"), "my%20bunny%2050%25");
   EXPECT_EQ(url_segment_encode("\xC3\xBC"), "%C3%BC");
-  EXPECT_EQ(model_path("my bunny"), "/models/my%20bunny");
+  EXPECT_EQ(model_path("my bunny", "0123456789abcdef"), "/models/my%20bunny/0123456789abcdef");
+}
+
+TEST(UrlSegment, AVersionHasOneSpelling) {
+  EXPECT_TRUE(is_model_version("0123456789abcdef"));
+  EXPECT_FALSE(is_model_version("0123456789ABCDEF"));  // upper case: another URL for the same version
+  EXPECT_FALSE(is_model_version("0123456789abcde"));
+  EXPECT_FALSE(is_model_version("0123456789abcdef0"));
+  EXPECT_FALSE(is_model_version("base"));
 }
 
 TEST(UrlSegment, DecodingTakesEitherCaseAndRawPathCharacters) {

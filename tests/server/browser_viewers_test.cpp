@@ -299,7 +299,7 @@ TEST(BrowserViewers, ReceiverOverFetchOpensWithoutWaitingAndSettlesOnLocalRefine
     EXPECT_TRUE(viewer.frame(path[0]).opening);
     pump.send();
   }
-  EXPECT_EQ(pump.ids.size(), 3u) << "base, catalogue and code tables in one round trip";
+  EXPECT_EQ(pump.ids.size(), 1u) << "the catalogue first: it names the version whose base and tables come next";
   fly_http(viewer, pump, path);
   EXPECT_EQ(faces_by_id(viewer.client().session().mesh()), local_faces(f.snapped, path.back(), kTolerance));
   EXPECT_THROW(transport.wait(), Error) << "this transport cannot wait";

@@ -21,6 +21,8 @@ using server::HttpLimits;
 
 const Fixture& terrain() { return terrain_fixture(20000, 3); }
 
+std::string at() { return model_url(*terrain().catalogue, "terrain"); }  // the model's resources
+
 struct Server : LoopbackHttpServer {
   explicit Server(const HttpLimits& limits = {}) : LoopbackHttpServer(terrain().catalogue, limits) {}
 };
@@ -49,7 +51,7 @@ int refused_and_closed(uint16_t port, const std::string& request) {
 }
 
 std::string post_header(const std::string& fields) {
-  return "POST /models/terrain/splits HTTP/1.1\r\nHost: x\r\n" + fields + "\r\n";
+  return "POST " + at() + "/splits HTTP/1.1\r\nHost: x\r\n" + fields + "\r\n";
 }
 
 std::string chunked(const std::string& body) {
@@ -73,7 +75,7 @@ TEST(HttpFraming, ATransferEncodingOtherThanChunkedAloneIsRefusedAndTheConnectio
   }
   // HTTP/1.0 has no transfer codings (RFC 9112 §6.1).
   EXPECT_EQ(
-      refused_and_closed(server.port(), "POST /models/terrain/splits HTTP/1.0\r\nTransfer-Encoding: chunked\r\n\r\n" +
+      refused_and_closed(server.port(), "POST " + at() + "/splits HTTP/1.0\r\nTransfer-Encoding: chunked\r\n\r\n" +
                                             chunked(a_code())),
       400);
 }
@@ -107,7 +109,7 @@ TEST(HttpFraming, AChunkedBodyIsReadAsTheRequestsBody) {
   const std::string code = a_code();
   const HttpReply chunked_post = client.raw(post_header("Transfer-Encoding: chunked\r\n") + chunked(code));
   ASSERT_EQ(chunked_post.status, 200) << chunked_post.text();
-  const HttpReply get = client.get("/models/terrain/splits/" +
+  const HttpReply get = client.get(at() + "/splits/" +
                                    protocol::base64url_encode(std::vector<uint8_t>(code.begin(), code.end())));
   EXPECT_EQ(chunked_post.body, get.body);
   EXPECT_EQ(client.raw(kSmuggled).status, 200);  // kept alive, in step
@@ -192,16 +194,17 @@ TEST(HttpFraming, AUrlSpelledAnotherWayIsRedirectedToTheCanonicalOne) {
   HttpTestClient client(server.port());
   const std::string raw_code = a_code();
   const std::string code = protocol::base64url_encode(std::vector<uint8_t>(raw_code.begin(), raw_code.end()));
+  const std::string v = at().substr(at().rfind('/') + 1);
   const struct {
     std::string url, canonical;
-  } cases[] = {{"/models/%74errain/base", "/models/terrain/base"},
-               {"/models/terra%69n/base", "/models/terrain/base"},
+  } cases[] = {{"/models/%74errain/" + v + "/base", at() + "/base"},
+               {"/models/terra%69n/" + v + "/base", at() + "/base"},
                {"/%6Dodels", "/models"},
-               {"/models/terrain/b%61se", "/models/terrain/base"},
-               {"/models/terrain/splits/%41" + code, "/models/terrain/splits/A" + code},
-               {"/models/terrain/blocks/%30/1/2", "/models/terrain/blocks/0/1/2"},
-               {"/models/terrain/%6Dultilevel", "/models/terrain/multilevel"},
-               {"/models/terrain/compressed/levels/%30", "/models/terrain/compressed/levels/0"},
+               {at() + "/b%61se", at() + "/base"},
+               {at() + "/splits/%41" + code, at() + "/splits/A" + code},
+               {at() + "/blocks/%30/1/2", at() + "/blocks/0/1/2"},
+               {at() + "/%6Dultilevel", at() + "/multilevel"},
+               {at() + "/compressed/levels/%30", at() + "/compressed/levels/0"},
                {"/models/a%2cb/base", "/models/a%2Cb/base"},
                {"/models/a,b/base", "/models/a%2Cb/base"},
                {"/models/%7e%C3%bc/base", "/models/~%C3%BC/base"}};
@@ -212,12 +215,13 @@ TEST(HttpFraming, AUrlSpelledAnotherWayIsRedirectedToTheCanonicalOne) {
     EXPECT_EQ(moved.header("cache-control"), "no-store") << url;
     EXPECT_EQ(client.head(url).header("location"), canonical) << url;
   }
-  for (const char* canonical : {"/models", "/models/terrain/base"}) EXPECT_EQ(client.get(canonical).status, 200);
+  for (const std::string& canonical : std::vector<std::string>{"/models", at() + "/base"})
+    EXPECT_EQ(client.get(canonical).status, 200);
   EXPECT_EQ(client.get("/models/a%2Cb/base").status, 404);  // the redirect's target: no such model, no loop
   const HttpReply post =
-      client.post("/models/%74errain/splits", std::vector<uint8_t>(raw_code.begin(), raw_code.end()));
+      client.post("/models/%74errain/" + v + "/splits", std::vector<uint8_t>(raw_code.begin(), raw_code.end()));
   EXPECT_EQ(post.status, 308);  // a POST is sent on as a POST
-  EXPECT_EQ(post.header("location"), "/models/terrain/splits");
+  EXPECT_EQ(post.header("location"), at() + "/splits");
   EXPECT_EQ(client.get("/models/terrain%/base").status, 400);  // no path: nothing to redirect to
 }
 

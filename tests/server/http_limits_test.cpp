@@ -36,7 +36,7 @@ std::string all_roots_url(uint32_t depth) {
   SplitRequest request{depth, {}};
   for (uint32_t r = 0; r < model.root_count; ++r)
     if (!model.is_leaf(r)) request.ids.push_back(model.id(r));
-  return "/models/terrain/splits/" + protocol::base64url_encode(protocol::encode_split_request(request));
+  return model_url(*terrain().catalogue, "terrain") + "/splits/" + protocol::base64url_encode(protocol::encode_split_request(request));
 }
 
 // What the request of all_roots_url(3) costs (http_cost.h), as a server without budgets counts it.
@@ -164,7 +164,8 @@ TEST(HttpLimits, APipeliningPeerThatNeverReadsIsResetAtTheWriteDeadline) {
   Server server(limits);
   HttpTestClient reader(server.port(), 5000, "127.0.0.5", 4096);
   std::string requests;
-  for (int i = 0; i < 40; ++i) requests += "GET /models/terrain/base HTTP/1.1\r\nHost: x\r\n\r\n";
+  const std::string base = model_url(*terrain().catalogue, "terrain") + "/base";
+  for (int i = 0; i < 40; ++i) requests += "GET " + base + " HTTP/1.1\r\nHost: x\r\n\r\n";
   reader.send(requests);
   ASSERT_TRUE(reaches(server.stats().requests, 40, std::chrono::milliseconds(5000)));
   EXPECT_TRUE(reaches(server.stats().connections_reset, 1, std::chrono::milliseconds(5000)))

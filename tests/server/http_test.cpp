@@ -37,6 +37,9 @@ struct Server : LoopbackHttpServer {
 
 const server::ServedModel& served() { return *terrain().catalogue->find("terrain"); }
 
+// /models/terrain/VERSION: where the model's resources are.
+std::string at() { return model_url(*terrain().catalogue, "terrain"); }
+
 // The first `n` roots that have a split, as one request.
 SplitRequest some_roots(size_t n, uint32_t depth = 0) {
   const ModelData& model = served().model();
@@ -47,7 +50,7 @@ SplitRequest some_roots(size_t n, uint32_t depth = 0) {
 }
 
 std::string splits_url(const SplitRequest& request) {
-  return "/models/terrain/splits/" + protocol::base64url_encode(protocol::encode_split_request(request));
+  return at() + "/splits/" + protocol::base64url_encode(protocol::encode_split_request(request));
 }
 
 // The splits an answer to `request` carries, in its order, read as a client that holds the base mesh
@@ -98,20 +101,56 @@ TEST(Http, CatalogueAndBaseAreCacheableAndTheSameForEveryClient) {
   const auto json = nlohmann::json::parse(models.text());
   EXPECT_EQ(json["models"][0]["name"], "terrain");
   EXPECT_EQ(json["models"][0]["vsplits"], served().info.vsplits);
-  const HttpReply base = a.get("/models/terrain/base");
+  const HttpReply base = a.get(at() + "/base");
   ASSERT_EQ(base.status, 200);
   expect_cacheable(base);
   const std::vector<uint8_t>& frame = *served().base_frame;
   EXPECT_EQ(base.body, std::vector<uint8_t>(frame.begin() + protocol::kFrameHeaderBytes, frame.end()));
   EXPECT_EQ(protocol::decode_base(base.body).positions.size(), 3 * size_t(served().model().root_count));
-  const HttpReply again = b.get("/models/terrain/base");  // another client, another connection
+  const HttpReply again = b.get(at() + "/base");  // another client, another connection
   EXPECT_EQ(again.header("etag"), base.header("etag"));
   EXPECT_EQ(again.headers, base.headers);
   EXPECT_EQ(again.body, base.body);
-  const HttpReply head = b.head("/models/terrain/base");
+  const HttpReply head = b.head(at() + "/base");
   EXPECT_EQ(head.status, 200);
   EXPECT_EQ(head.header("content-length"), std::to_string(base.body.size()));
   EXPECT_TRUE(head.body.empty());
+}
+
+// The catalogue names each model's version and changes with the model set: a cache may keep it for
+// max-age, then revalidates it for a 304. Every other URL carries the version: another one is gone (410,
+// with the entry of the version served), none at all is no resource.
+TEST(Http, TheCatalogueIsRevalidatedAndAnotherVersionIsGone) {
+  HttpLimits limits;
+  limits.catalogue_max_age_s = 7;
+  Server server(limits);
+  HttpTestClient client(server.port());
+  const HttpReply models = client.get("/models");
+  EXPECT_EQ(models.header("cache-control"), "max-age=7");
+  const auto entry = nlohmann::json::parse(models.text())["models"][0];
+  EXPECT_EQ(entry["version"], served().version);
+  EXPECT_EQ(at(), "/models/terrain/" + served().version);
+  const HttpReply again = client.get("/models", {{"If-None-Match", models.header("etag")}});
+  EXPECT_EQ(again.status, 304);
+  EXPECT_TRUE(again.body.empty());
+  std::string old = served().version;
+  old[0] = old[0] == '0' ? '1' : '0';
+  for (const std::string resource : {"/base", "/codec", "/blocks/0/1/2", "/head", "/levels/0"}) {
+    const HttpReply gone = client.get("/models/terrain/" + old + resource);
+    EXPECT_EQ(gone.status, 410) << resource;
+    EXPECT_EQ(gone.header("cache-control"), "no-store");
+    EXPECT_EQ(gone.header("content-type"), "application/json");
+    const auto body = nlohmann::json::parse(gone.text());
+    EXPECT_EQ(body["model"], entry) << "the entry GET /models has";
+    EXPECT_NE(body["error"].get<std::string>().find(served().version), std::string::npos);
+  }
+  EXPECT_EQ(client.get("/models/terrain/base").status, 404);
+  EXPECT_EQ(client.get("/models/terrain/" + served().version).status, 404);  // a version, no resource
+  std::string upper = served().version;
+  for (char& c : upper) c = char(std::toupper(c));
+  if (upper != served().version) {  // one spelling per version: no second URL for its bytes
+    EXPECT_EQ(client.get("/models/terrain/" + upper + "/base").status, 404);
+  }
 }
 
 // Stateless: another server process over the same file answers every URL with the same headers and bytes.
@@ -121,14 +160,14 @@ TEST(Http, TwoServersOfOneFileAnswerAlike) {
   second.start();
   HttpTestClient a(first.port()), b(second.port());
   for (const std::string& url :
-       {std::string("/models"), std::string("/models/terrain/base"), splits_url(some_roots(7, 2)),
-        std::string("/models/terrain/blocks/") + std::to_string(some_roots(1).ids[0].tree) + "/1/3"}) {
+       {std::string("/models"), at() + "/base", splits_url(some_roots(7, 2)),
+        at() + "/blocks/" + std::to_string(some_roots(1).ids[0].tree) + "/1/3"}) {
     const HttpReply x = a.get(url), y = b.get(url);
     ASSERT_EQ(x.status, 200) << url << ": " << x.text();
     EXPECT_EQ(x.headers, y.headers) << url;
     EXPECT_EQ(x.body, y.body) << url;
   }
-  EXPECT_NE(a.get("/models/terrain/base").header("etag"), a.get(splits_url(some_roots(7, 2))).header("etag"));
+  EXPECT_NE(a.get(at() + "/base").header("etag"), a.get(splits_url(some_roots(7, 2))).header("etag"));
 }
 
 TEST(Http, IfNoneMatchGetsA304WithoutABody) {
@@ -154,7 +193,7 @@ TEST(Http, GetAndPostOfARequestCarryItsSplitsInCodeOrder) {
   ASSERT_EQ(get.status, 200) << get.text();
   expect_cacheable(get);
   EXPECT_EQ(split_ids(get.body, request), request.ids);  // the roots come in tree order
-  const HttpReply post = client.post("/models/terrain/splits", protocol::encode_split_request(request));
+  const HttpReply post = client.post(at() + "/splits", protocol::encode_split_request(request));
   ASSERT_EQ(post.status, 200);
   EXPECT_EQ(post.body, get.body);
   EXPECT_EQ(post.header("etag"), get.header("etag"));  // one resource, whichever form named it
@@ -172,14 +211,14 @@ TEST(Http, ADepthBringsDescendantsBreadthFirstAndBlocksTileTheTrees) {
   const HttpReply deep = client.get(splits_url(request));
   ASSERT_EQ(deep.status, 200);
   EXPECT_EQ(split_ids(deep.body, request), expected);
-  const std::string block = "/models/terrain/blocks/" + std::to_string(root) + "/1/1";
+  const std::string block = at() + "/blocks/" + std::to_string(root) + "/1/1";
   const HttpReply tile = client.get(block);
   ASSERT_EQ(tile.status, 200) << tile.text();
   expect_cacheable(tile);
   EXPECT_EQ(tile.body, deep.body);
   // Blocks of depth 1 start at even depths only; node 2 is at depth 1.
-  EXPECT_EQ(client.get("/models/terrain/blocks/" + std::to_string(root) + "/2/1").status, 400);
-  EXPECT_EQ(client.get("/models/terrain/blocks/" + std::to_string(root) + "/01/1").status, 400);
+  EXPECT_EQ(client.get(at() + "/blocks/" + std::to_string(root) + "/2/1").status, 400);
+  EXPECT_EQ(client.get(at() + "/blocks/" + std::to_string(root) + "/01/1").status, 400);
 }
 
 TEST(Http, KeepAliveServesManyRequestsOnOneConnection) {
@@ -188,7 +227,7 @@ TEST(Http, KeepAliveServesManyRequestsOnOneConnection) {
   for (int i = 0; i < 10; ++i)
     ASSERT_EQ(client.get(i % 2 ? "/models" : splits_url(some_roots(size_t(i + 1)))).status, 200);
   // Pipelined: two requests in one write, two answers in order.
-  client.send("GET /models HTTP/1.1\r\nHost: x\r\n\r\nGET /models/terrain/base HTTP/1.1\r\nHost: x\r\n\r\n");
+  client.send("GET /models HTTP/1.1\r\nHost: x\r\n\r\nGET " + at() + "/base HTTP/1.1\r\nHost: x\r\n\r\n");
   EXPECT_EQ(client.read().status, 200);
   EXPECT_EQ(client.read().body.size(), served().base_frame->size() - protocol::kFrameHeaderBytes);
   EXPECT_EQ(server.http.stats().connections_opened.load(), 1u);
@@ -225,7 +264,7 @@ TEST(Http, RequestsInPiecesAndConnectionHeaders) {
   HttpTestClient pieces(server.port());
   pieces.send("GET /models/ter");
   std::this_thread::sleep_for(std::chrono::milliseconds(50));
-  pieces.send("rain/base HTTP/1.1\r\nHo");
+  pieces.send("rain/" + served().version + "/base HTTP/1.1\r\nHo");
   std::this_thread::sleep_for(std::chrono::milliseconds(50));
   const HttpReply whole = pieces.raw("st: x\r\n\r\n");
   EXPECT_EQ(whole.status, 200);
@@ -251,14 +290,14 @@ TEST(Http, HostileRequestsGet4xxWhileAGoodClientIsServed) {
   HttpTestClient good(server.port());
   ASSERT_EQ(good.get("/models").status, 200);
   HttpTestClient bad(server.port());  // these keep the connection: each request parsed fine
-  EXPECT_EQ(bad.post("/models/terrain/splits", std::vector<uint8_t>(10, 0)).status, 400);  // not a code
+  EXPECT_EQ(bad.post(at() + "/splits", std::vector<uint8_t>(10, 0)).status, 400);  // not a code
   std::vector<uint8_t> code = protocol::encode_split_request(some_roots(3));
   code.pop_back();
-  EXPECT_EQ(bad.post("/models/terrain/splits", code).status, 400);  // truncated
-  EXPECT_EQ(bad.get("/models/terrain/splits/AA+A").status, 400);    // not base64url
+  EXPECT_EQ(bad.post(at() + "/splits", code).status, 400);  // truncated
+  EXPECT_EQ(bad.get(at() + "/splits/AA+A").status, 400);    // not base64url
   const SplitRequest too_many = some_roots(5);
   ASSERT_EQ(too_many.ids.size(), 5u);
-  EXPECT_EQ(bad.post("/models/terrain/splits", protocol::encode_split_request(too_many)).status, 413);
+  EXPECT_EQ(bad.post(at() + "/splits", protocol::encode_split_request(too_many)).status, 413);
   const ModelData& model = served().model();
   uint32_t leaf = 0;
   while (!model.is_leaf(leaf)) ++leaf;
@@ -272,14 +311,14 @@ TEST(Http, HostileRequestsGet4xxWhileAGoodClientIsServed) {
     EXPECT_EQ(bad.get(std::string("/models/") + name + "/base").status, 400) << name;
   EXPECT_EQ(bad.get("/elsewhere").status, 404);
   EXPECT_EQ(bad.get("/models?x=1").status, 400);
-  const HttpReply wrong_method = bad.post("/models/terrain/base", {});
+  const HttpReply wrong_method = bad.post(at() + "/base", {});
   EXPECT_EQ(wrong_method.status, 405);
   EXPECT_EQ(wrong_method.header("allow"), "GET, HEAD");
   EXPECT_EQ(wrong_method.header("cache-control"), "no-store");
-  EXPECT_EQ(bad.get("/models/terrain/splits").status, 405);
-  EXPECT_EQ(bad.get("/models/terrain/base").status, 200);  // still served on the same connection
+  EXPECT_EQ(bad.get(at() + "/splits").status, 405);
+  EXPECT_EQ(bad.get(at() + "/base").status, 200);  // still served on the same connection
   // These end their connection: the parser is out of step with the stream.
-  EXPECT_EQ(HttpTestClient(server.port()).post("/models/terrain/splits", std::vector<uint8_t>(20000, 1)).status, 413);
+  EXPECT_EQ(HttpTestClient(server.port()).post(at() + "/splits", std::vector<uint8_t>(20000, 1)).status, 413);
   EXPECT_EQ(HttpTestClient(server.port()).get("/models/" + std::string(5000, 'a')).status, 414);
   EXPECT_EQ(HttpTestClient(server.port()).get("/models/" + std::string(20000, 'a')).status, 414);
   EXPECT_EQ(HttpTestClient(server.port()).get("/models", {{"X-Big", std::string(9000, 'b')}}).status, 431);

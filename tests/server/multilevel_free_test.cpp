@@ -39,8 +39,9 @@ void expect_same_mesh(const Mesh& got, const Mesh& want) {
 TEST(MultilevelFree, TheCoarsestLevelNamedByItsNameIsTheLastLevel) {
   test::LoopbackHttpServer server(terrain().catalogue);
   client::HttpConnection http(server.url());
-  for (const std::string prefix : {"/models/terrain/", "/models/terrain/compressed/"}) {
-    const client::HttpAnswer entry = http.get("/models/terrain/multilevel");
+  const std::string at = test::model_url(*terrain().catalogue, "terrain");
+  for (const std::string& prefix : {at + "/", at + "/compressed/"}) {
+    const client::HttpAnswer entry = http.get(at + "/multilevel");
     ASSERT_EQ(entry.status, 200);
     const uint32_t levels = nlohmann::json::parse(entry.body.begin(), entry.body.end())["levels"].get<uint32_t>();
     const client::HttpAnswer coarsest = http.get(prefix + "levels/coarsest");

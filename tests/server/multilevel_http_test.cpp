@@ -48,6 +48,12 @@ struct Server : test::LoopbackHttpServer {
   Server() : LoopbackHttpServer(server::Catalogue::open({sphere_model().path})) {}
 };
 
+// /models/ball/VERSION: where the served file's resources are.
+const std::string& ball() {
+  static const std::string url = test::model_url(*server::Catalogue::open({sphere_model().path}), "ball");
+  return url;
+}
+
 Camera far_camera() {
   Camera c;
   c.eye[2] = 1000;
@@ -185,42 +191,43 @@ TEST(MultilevelHttp, ResourcesAreCacheableAndHostileUrlsGet4xx) {
   const MultilevelModel& model = sphere_model();
   Server server;
   test::HttpTestClient http(server.http.port());
-  const test::HttpReply head = http.get("/models/ball/head");
+  const test::HttpReply head = http.get(ball() + "/head");
   ASSERT_EQ(head.status, 200);
   EXPECT_EQ(head.body.size(), 32u);
-  const test::HttpReply level = http.get("/models/ball/levels/0");
+  const test::HttpReply level = http.get(ball() + "/levels/0");
   ASSERT_EQ(level.status, 200);
   EXPECT_EQ(level.header("cache-control"), "max-age=31536000, immutable");
   const std::string etag = level.header("etag");
   ASSERT_FALSE(etag.empty());
-  EXPECT_EQ(http.get("/models/ball/levels/0").body, level.body) << "the same bytes for the same URL";
-  EXPECT_EQ(http.get("/models/ball/levels/0", {{"If-None-Match", etag}}).status, 304);
-  EXPECT_NE(http.get("/models/ball/levels/1").header("etag"), etag);
+  EXPECT_EQ(http.get(ball() + "/levels/0").body, level.body) << "the same bytes for the same URL";
+  EXPECT_EQ(http.get(ball() + "/levels/0", {{"If-None-Match", etag}}).status, 304);
+  EXPECT_NE(http.get(ball() + "/levels/1").header("etag"), etag);
   const std::string last = std::to_string(model.mesh.level_count());
-  EXPECT_EQ(http.get("/models/ball/levels/" + last).status, 404);
-  EXPECT_EQ(http.get("/models/ball/levels/01").status, 400);
-  EXPECT_EQ(http.get("/models/ball/levels/-1").status, 400);
-  EXPECT_EQ(http.get("/models/ball/levels/99999999999999999999999").status, 400);
-  EXPECT_EQ(http.get("/models/ball/levels").status, 404);
+  EXPECT_EQ(http.get(ball() + "/levels/" + last).status, 404);
+  EXPECT_EQ(http.get(ball() + "/levels/01").status, 400);
+  EXPECT_EQ(http.get(ball() + "/levels/-1").status, 400);
+  EXPECT_EQ(http.get(ball() + "/levels/99999999999999999999999").status, 400);
+  EXPECT_EQ(http.get(ball() + "/levels").status, 404);
   // The compressed form: its own resources, as cacheable, smaller, with ETags of their own.
-  const test::HttpReply zhead = http.get("/models/ball/compressed/head");
+  const test::HttpReply zhead = http.get(ball() + "/compressed/head");
   ASSERT_EQ(zhead.status, 200);
   EXPECT_EQ(zhead.body.size(), 80u);  // 64, and the texture coordinates' grid box
-  const test::HttpReply zlevel = http.get("/models/ball/compressed/levels/0");
+  const test::HttpReply zlevel = http.get(ball() + "/compressed/levels/0");
   ASSERT_EQ(zlevel.status, 200);
   EXPECT_LT(zlevel.body.size(), level.body.size());
   EXPECT_EQ(zlevel.header("cache-control"), "max-age=31536000, immutable");
   const std::string zetag = zlevel.header("etag");
   EXPECT_FALSE(zetag.empty());
   EXPECT_NE(zetag, etag);
-  EXPECT_EQ(http.get("/models/ball/compressed/levels/0", {{"If-None-Match", zetag}}).status, 304);
-  EXPECT_EQ(http.get("/models/ball/compressed/levels/" + last).status, 404);
-  EXPECT_EQ(http.get("/models/ball/compressed/levels/01").status, 400);
-  EXPECT_EQ(http.get("/models/ball/compressed").status, 404);
-  EXPECT_EQ(http.get("/models/ball/compressed/compressed/head").status, 404);
-  EXPECT_EQ(http.get("/models/ball/base").status, 404);
+  EXPECT_EQ(http.get(ball() + "/compressed/levels/0", {{"If-None-Match", zetag}}).status, 304);
+  EXPECT_EQ(http.get(ball() + "/compressed/levels/" + last).status, 404);
+  EXPECT_EQ(http.get(ball() + "/compressed/levels/01").status, 400);
+  EXPECT_EQ(http.get(ball() + "/compressed").status, 404);
+  EXPECT_EQ(http.get(ball() + "/compressed/compressed/head").status, 404);
+  EXPECT_EQ(http.get(ball() + "/base").status, 404);
   EXPECT_EQ(http.get("/models/nosuch/head").status, 404);
-  EXPECT_EQ(http.post("/models/ball/head", {1, 2}).status, 405);
+  EXPECT_EQ(http.get("/models/ball/head").status, 404);  // no version
+  EXPECT_EQ(http.post(ball() + "/head", {1, 2}).status, 405);
   const test::HttpReply catalogue = http.get("/models");
   EXPECT_NE(catalogue.text().find("\"kind\":\"multilevel\""), std::string::npos) << catalogue.text();
   EXPECT_NE(catalogue.text().find("\"texcoords\":true"), std::string::npos) << catalogue.text();

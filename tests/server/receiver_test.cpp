@@ -385,7 +385,7 @@ TEST(Receiver, AnUnknownModelIsACleanError) {
     client.open("nope");
     FAIL() << "opened an unknown model";
   } catch (const Error& e) {
-    EXPECT_NE(std::string(e.what()).find("HTTP 404"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("no model named 'nope'"), std::string::npos) << e.what();
   }
 }
 

@@ -1,6 +1,8 @@
 // Helpers the server tests share (streaming_fixture.h).
 #include "streaming_fixture.h"
 
+#include <gtest/gtest.h>
+
 #include <utility>  // before asio with C++20
 
 #include <algorithm>
@@ -18,6 +20,7 @@
 #include "protocol/message_types.h"
 #include "protocol/position_grid.h"
 #include "protocol/server_messages.h"
+#include "protocol/url_segment.h"
 #include "server/catalogue.h"
 #include "spm/adapt.h"
 #include "spm/hierarchy.h"
@@ -29,6 +32,14 @@
 #include "test_support.h"
 
 namespace pms::test {
+
+std::string model_url(const server::Catalogue& catalogue, const std::string& name) {
+  if (const server::ServedModel* model = catalogue.find(name)) return protocol::model_path(name, model->version);
+  if (const server::ServedMultilevel* model = catalogue.find_multilevel(name))
+    return protocol::model_path(name, model->version);
+  ADD_FAILURE() << "no model named " << name;
+  return {};
+}
 
 Fixture make_fixture(const Mesh& mesh, const std::string& name) {
   Fixture f;

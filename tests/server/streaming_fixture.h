@@ -35,6 +35,9 @@ struct Fixture {
   std::string name;
 };
 
+// Where the resources of the version `catalogue` serves of model `name` are: /models/NAME/VERSION.
+std::string model_url(const server::Catalogue& catalogue, const std::string& name);
+
 // Builds `mesh` and writes it to NAME.pms in a fresh temp_dir().
 Fixture make_fixture(const Mesh& mesh, const std::string& name);
 
