@@ -129,6 +129,7 @@ class ReceiverClient {
   uint64_t split_requests() const { return totals_.split_requests; }
   uint64_t cache_hits() const { return totals_.cache_hits; }
   uint64_t reopens() const { return reopens_.total(); }  // versions opened after a 410
+  const std::string& version() const { return version_; }  // the model's version open (or opening)
 
  private:
   // One GET: its URL and the ids it names (lists: the ids; blocks: the block's root).
