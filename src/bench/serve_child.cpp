@@ -131,6 +131,11 @@ ServeStats ServeChild::stats(double timeout_s) {
   return parse_serve_stats(next_line("stats", timeout_s));
 }
 
+json ServeChild::reload(double timeout_s) {
+  send_signal(SIGHUP, "SIGHUP");
+  return next_line("reloaded", timeout_s);
+}
+
 ServeStats ServeChild::stop(double timeout_s) {
   send_signal(SIGTERM, "SIGTERM");
   const ServeStats stopped = parse_serve_stats(next_line("stopped", timeout_s));

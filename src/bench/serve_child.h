@@ -47,6 +47,8 @@ class ServeChild {
   const nlohmann::json& listening() const { return listening_; }
   // SIGUSR1, then the "stats" line it prints.
   ServeStats stats(double timeout_s = 30);
+  // SIGHUP, then the "reloaded" line: what the reload added, removed, replaced and skipped.
+  nlohmann::json reload(double timeout_s = 60);
   // SIGTERM, then the "stopped" line; the server must then exit with status 0.
   ServeStats stop(double timeout_s = 30);
   // What it wrote to stderr (one line per session fault); read it only after stop() returned.
