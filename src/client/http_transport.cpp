@@ -53,6 +53,12 @@ void HttpTransport::get_all(const std::vector<std::string>& targets, const OnAns
   }
 }
 
+std::vector<HttpAnswer> HttpTransport::get_all(const std::vector<std::string>& targets) {
+  std::vector<HttpAnswer> answers(targets.size());
+  get_all(targets, [&](size_t index, HttpAnswer&& answer) { answers[index] = std::move(answer); });
+  return answers;
+}
+
 HttpAnswer HttpTransport::get(const std::string& target) {
   HttpAnswer out;
   get_all({target}, [&](size_t, HttpAnswer&& answer) { out = std::move(answer); });

@@ -74,6 +74,7 @@ class HttpTransport {
   // arrives; nothing else may be pending.
   using OnAnswer = std::function<void(size_t index, HttpAnswer&& answer)>;
   void get_all(const std::vector<std::string>& targets, const OnAnswer& on_answer);
+  std::vector<HttpAnswer> get_all(const std::vector<std::string>& targets);  // the answers, in target order
   HttpAnswer get(const std::string& target);
 };
 

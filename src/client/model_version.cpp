@@ -23,9 +23,13 @@ bool is_entry_of(const nlohmann::json& entry, const std::string& model) {
 
 }  // namespace
 
+void refused(const std::string& target, const HttpAnswer& answer) {
+  fail("GET " + target, "HTTP " + std::to_string(answer.status) + ": " + text_of(answer));
+}
+
 nlohmann::json catalogue_models(const HttpAnswer& answer) {
   const std::string where = "GET /models";
-  if (answer.status != 200) fail(where, "HTTP " + std::to_string(answer.status) + ": " + text_of(answer));
+  if (answer.status != 200) refused("/models", answer);
   nlohmann::json json = nlohmann::json::parse(answer.body.begin(), answer.body.end(), nullptr, false);
   if (json.is_discarded() || !json.is_object() || !json.contains("models") || !json["models"].is_array())
     fail(where, "not the catalogue's JSON");
@@ -46,11 +50,13 @@ nlohmann::json replaced_entry(const std::string& target, const HttpAnswer& answe
 
 std::string entry_version(const nlohmann::json& entry) { return entry["version"].get<std::string>(); }
 
-void ReopenBudget::spend(const std::string& model) {
+nlohmann::json ReopenBudget::follow(const std::string& target, const HttpAnswer& answer, const std::string& model) {
+  nlohmann::json entry = replaced_entry(target, answer, model);
   if (++in_a_row_ > kMostInARow)
     fail("open", "model '" + model + "' changed version " + std::to_string(kMostInARow) +
                      " times in a row with no answer of the version opened (origins serving different files?)");
   ++total_;
+  return entry;
 }
 
 }  // namespace pms::client

@@ -12,6 +12,8 @@
 
 namespace pms::client {
 
+// pms::Error for an answer that is not the 200 `target` needed: "GET TARGET: HTTP STATUS: its body's start".
+[[noreturn]] void refused(const std::string& target, const HttpAnswer& answer);
 // GET /models's answer: its array of models; pms::Error naming the target for another status or body.
 nlohmann::json catalogue_models(const HttpAnswer& answer);
 // The entry of `model` in GET /models's answer, with a valid version; pms::Error when there is none.
@@ -27,8 +29,9 @@ std::string entry_version(const nlohmann::json& entry);
 class ReopenBudget {
  public:
   static constexpr uint32_t kMostInARow = 4;
-  // A 410 for `model`: pms::Error once kMostInARow re-opens went by without an answer of their version.
-  void spend(const std::string& model);
+  // A 410 of `target` for `model`: the entry of the version to open (replaced_entry); pms::Error once
+  // kMostInARow re-opens went by without an answer of their version.
+  nlohmann::json follow(const std::string& target, const HttpAnswer& answer, const std::string& model);
   void refill() { in_a_row_ = 0; }  // an answer of the version opened came
   uint64_t total() const { return total_; }
 

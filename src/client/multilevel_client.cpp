@@ -18,11 +18,6 @@ double ms_since(Clock::time_point start) {
   return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
 }
 
-[[noreturn]] void refused(const std::string& target, const HttpAnswer& answer) {
-  std::string text(answer.body.begin(), answer.body.begin() + std::min<size_t>(answer.body.size(), 200));
-  while (!text.empty() && (text.back() == '\n' || text.back() == '\r')) text.pop_back();
-  fail("GET " + target, "HTTP " + std::to_string(answer.status) + ": " + text);
-}
 
 bool is_kind(const nlohmann::json& entry, const char* kind) {
   return entry.is_object() && entry.value("kind", "") == kind && entry.contains("name") && entry["name"].is_string();
@@ -143,9 +138,7 @@ void MultilevelClient::await_open() {
   }
   while (opening_) {  // again after a 410 in its answers
     const std::unique_ptr<PendingGets> done = std::move(opening_);
-    std::vector<HttpAnswer> answers(done->targets().size());
-    http_->get_all(done->targets(), [&](size_t index, HttpAnswer&& answer) { answers[index] = std::move(answer); });
-    opened(done->targets(), answers);
+    opened(done->targets(), http_->get_all(done->targets()));
   }
 }
 
@@ -161,8 +154,7 @@ void MultilevelClient::open_version(const nlohmann::json& entry) {
 // A 410: the model was replaced under its name. Its levels are dropped and the version the 410 names
 // opens as a new model; level GETs still on the wire are read and dropped first (poll_open).
 void MultilevelClient::replaced(const std::string& target, const HttpAnswer& answer) {
-  const nlohmann::json entry = replaced_entry(target, answer, model_);
-  reopens_.spend(model_);
+  const nlohmann::json entry = reopens_.follow(target, answer, model_);
   loader_.reset();
   lod_.reset();
   switch_.reset();

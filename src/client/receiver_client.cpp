@@ -26,16 +26,6 @@
 namespace pms::client {
 namespace {
 
-std::string answer_text(const HttpAnswer& answer) {
-  std::string text(answer.body.begin(), answer.body.begin() + std::min<size_t>(answer.body.size(), 200));
-  while (!text.empty() && (text.back() == '\n' || text.back() == '\r')) text.pop_back();
-  return text;
-}
-
-[[noreturn]] void refused(const std::string& target, const HttpAnswer& answer) {
-  fail("GET " + target, "HTTP " + std::to_string(answer.status) + ": " + answer_text(answer));
-}
-
 // Frames without a cap reach the view's mesh for what is known in one adapt(); the extra passes only
 // finish collapses that waited for a geomorph (as the sender-driven client does).
 void adapt_for_view(SelectiveRefinement& refinement) {
@@ -119,9 +109,7 @@ void ReceiverClient::await_open() {
   }
   while (opening_) {  // again after a 410 in its answers
     const std::unique_ptr<PendingGets> done = std::move(opening_);
-    std::vector<HttpAnswer> answers(done->targets().size());
-    http_->get_all(done->targets(), [&](size_t index, HttpAnswer&& answer) { answers[index] = std::move(answer); });
-    opened(done->targets(), answers);
+    opened(done->targets(), http_->get_all(done->targets()));
   }
 }
 
@@ -167,8 +155,7 @@ void ReceiverClient::open_version(const nlohmann::json& entry) {
 // with everything queued, and the version the 410 names opens as a new model (poll_open), the answers
 // still on the wire read and dropped first.
 void ReceiverClient::replaced(const std::string& target, const HttpAnswer& answer) {
-  const nlohmann::json entry = replaced_entry(target, answer, model_);
-  reopens_.spend(model_);
+  const nlohmann::json entry = reopens_.follow(target, answer, model_);
   queue_.clear();
   prefetched_.clear();
   cameras_.clear();

@@ -26,6 +26,7 @@
 #include "apps/camera_json.h"
 #include "bench/child_process.h"
 #include "bench/serve_child.h"
+#include "client/http_connection.h"
 #include "common/error.h"
 #include "test_support.h"
 
@@ -272,6 +273,57 @@ TEST_F(NginxCache, MultilevelLevelsComeFromTheCacheTheSecondTime) {
   EXPECT_EQ(second.report["total_down_payload_bytes"], first.report["total_down_payload_bytes"]);
   ASSERT_FALSE(first.mesh.empty());
   EXPECT_TRUE(second.mesh == first.mesh) << "the meshes differ";
+}
+
+// The catalogue behind the cache (docs/protocol.md, "Versions"): stored for its max-age, then revalidated
+// (the origin answers 304 while the model set is unchanged); a model added to the origin and reloaded
+// (SIGHUP) reaches a client behind the cache within the max-age, and streams through it.
+TEST_F(NginxCache, AModelAddedToTheOriginReachesClientsBehindTheCacheWithinTheCataloguesMaxAge) {
+  using Clock = std::chrono::steady_clock;
+  const fs::path models = dir_ / "models", added = dir_ / "terrain.pms";
+  fs::create_directories(models);
+  fs::copy_file(pms_, models / "bunny.pms");
+  ASSERT_EQ(test::run_pmstream("build terrain:20000 -o " + added.string()).exit_code, 0);
+  constexpr int kMaxAge = 2;
+  std::vector<std::string> flags = origin_flags(models);
+  flags.insert(flags.end(), {"--catalogue-max-age", std::to_string(kMaxAge)});
+  ServeChild origin(PMSTREAM_BINARY, flags);
+  Nginx nginx(nginx_, origin.listening()["http_port"].get<uint16_t>());
+  client::HttpConnection http(client::parse_http_url(nginx.url()));
+  const auto catalogue = [&http] {
+    const client::HttpAnswer answer = http.get("/models");
+    EXPECT_EQ(answer.status, 200);
+    return std::pair(std::string(answer.body.begin(), answer.body.end()), answer.cache_status);
+  };
+  const auto lists_terrain = [](const std::string& text) { return text.find("\"terrain\"") != std::string::npos; };
+
+  const auto stored = Clock::now();
+  EXPECT_EQ(catalogue().second, "MISS");
+  EXPECT_EQ(catalogue().second, "HIT");
+  fs::copy_file(added, models / "terrain.pms");
+  EXPECT_EQ(origin.reload()["added"], nlohmann::json::array({"terrain"}));
+  const auto [cached, cached_status] = catalogue();
+  if (Clock::now() - stored < std::chrono::seconds(kMaxAge)) {  // within the max-age: the entry stored
+    EXPECT_EQ(cached_status, "HIT");
+    EXPECT_FALSE(lists_terrain(cached));
+  }
+  // nginx keeps time in whole seconds: an entry is stale after max-age and before max-age + 1 s.
+  const auto past_max_age = std::chrono::milliseconds(kMaxAge * 1000 + 1100);
+  std::this_thread::sleep_until(stored + past_max_age);
+  const auto [fresh, fresh_status] = catalogue();
+  EXPECT_TRUE(lists_terrain(fresh)) << "past the max-age the cache asks again and gets the new list";
+  EXPECT_EQ(fresh_status, "EXPIRED");
+  const uint64_t not_modified = origin.stats().line["http"]["not_modified"];
+  std::this_thread::sleep_for(past_max_age);
+  EXPECT_EQ(catalogue().second, "REVALIDATED") << "unchanged: the origin's 304 renews the stored list";
+  EXPECT_EQ(origin.stats().line["http"]["not_modified"], not_modified + 1);
+
+  const fs::path path = dir_ / "terrain_orbit.json";
+  ASSERT_EQ(test::run_pmstream("path orbit --model " + added.string() + " --frames 6 -o " + path.string()).exit_code, 0);
+  const test::CliRun run = test::run_pmstream("stream --mode receiver --server " + nginx.url() +
+                                              " --model terrain --path " + path.string() + " --json");
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  EXPECT_GT(nlohmann::json::parse(run.out)["vsplits_received"].get<uint64_t>(), 0u);
 }
 
 }  // namespace

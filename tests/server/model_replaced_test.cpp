@@ -60,9 +60,17 @@ struct ReplacedModel {
     EXPECT_NE(slot->get()->find("m")->version, old_version);
   }
 
+  // An HTTP server over the slot, started: its port.
+  uint16_t serve_http() {
+    http = std::make_unique<server::HttpServer>(slot, server::HttpLimits{}, "127.0.0.1", 0);
+    http->start();
+    return http->port();
+  }
+
   fs::path dir;
   std::shared_ptr<server::CatalogueSlot> slot;
   std::string old_version;
+  std::unique_ptr<server::HttpServer> http;
 };
 
 std::string http_url(uint16_t port) { return "http://127.0.0.1:" + std::to_string(port); }
@@ -91,11 +99,10 @@ TEST(ModelReplaced, ATcpSessionKeepsItsModelAndANewOneOpensTheNewFile) {
 TEST(ModelReplaced, AReceiverClientReopensOnTheNewVersionAndEndsOnItsRefinement) {
   for (const client::FetchPolicy fetch : {client::FetchPolicy::lists, client::FetchPolicy::blocks}) {
     ReplacedModel m;
-    server::HttpServer http(m.slot, server::HttpLimits{}, "127.0.0.1", 0);
-    http.start();
+    const uint16_t port = m.serve_http();
     client::ReceiverOptions options;
     options.fetch = fetch;
-    client::ReceiverClient client(client::HttpUrl{"127.0.0.1", http.port(), ""}, options);
+    client::ReceiverClient client(client::HttpUrl{"127.0.0.1", port, ""}, options);
     client.open("m");
     for (const Camera& camera : orbit_path(first().hierarchy, 8, 0.3f)) client.frame(camera);
     const uint64_t before = client.session().splits_received();
@@ -116,9 +123,8 @@ TEST(ModelReplaced, AReceiverClientReopensOnTheNewVersionAndEndsOnItsRefinement)
 // version is open, and settling ends on the new model's refinement.
 TEST(ModelReplaced, AFreeRunningReceiverViewerFollowsTheNewVersion) {
   ReplacedModel m;
-  server::HttpServer http(m.slot, server::HttpLimits{}, "127.0.0.1", 0);
-  http.start();
-  client::ReceiverViewer viewer(http_url(http.port()), client::ReceiverOptions{}, client::Pacing::free_running, "m");
+  const uint16_t port = m.serve_http();
+  client::ReceiverViewer viewer(http_url(port), client::ReceiverOptions{}, client::Pacing::free_running, "m");
   for (const Camera& camera : orbit_path(first().hierarchy, 6, 0.3f)) viewer.frame(camera);
   m.replace();
   const std::vector<Camera> path = orbit_path(second().hierarchy, 8, 0.6f);
@@ -141,12 +147,11 @@ TEST(ModelReplaced, AFreeRunningReceiverViewerFollowsTheNewVersion) {
 TEST(ModelReplaced, AMultilevelClientReloadsTheNewVersionsLevels) {
   for (const client::Pacing pacing : {client::Pacing::lock_step, client::Pacing::free_running}) {
     ReplacedModel m;
-    server::HttpServer http(m.slot, server::HttpLimits{}, "127.0.0.1", 0);
-    http.start();
+    const uint16_t port = m.serve_http();
     client::MultilevelOptions options;
     options.morph_frames = 4;
     options.budget = 1;  // the coarsest level alone, until the replacement
-    client::MultilevelViewer viewer(http_url(http.port()), options, pacing, "m");
+    client::MultilevelViewer viewer(http_url(port), options, pacing, "m");
     viewer.frame(orbit_path(first().hierarchy, 8, 0.3f).front());
     m.replace();
     client::ViewerTuning finest;
@@ -157,7 +162,7 @@ TEST(ModelReplaced, AMultilevelClientReloadsTheNewVersionsLevels) {
     viewer.settle(path.back());
     EXPECT_EQ(viewer.client().reopens(), 1u) << "the first finer level's GET met the 410";
     options.budget = *finest.lod_budget;
-    client::MultilevelClient fresh(client::HttpUrl{"127.0.0.1", http.port(), ""}, options);
+    client::MultilevelClient fresh(client::HttpUrl{"127.0.0.1", port, ""}, options);
     fresh.open("m");
     fresh.settle(path.back());
     EXPECT_EQ(viewer.client().loader().level_count(), fresh.loader().level_count());
