@@ -406,7 +406,7 @@ void run_receiver_group(BenchContext& context) {
   section +=
       "### The whole model, bits per vertex\n\n" + whole.markdown() +
       "\nEvery split of the model at the default 16-bit grid. \"records + base + tables\" = BASE (as `GET "
-      "/models/{m}/base` sends it), the model's code tables and every compact split record (docs/protocol.md, "
+      "/models/{m}/{v}/base` sends it), the model's code tables and every compact split record (docs/protocol.md, "
       "\"Split records\"; stored in the .pms), with no HTTP framing; \"bits / split\" is the same total per split, "
       "issue 19's ≤ 40 target. \"HTTP bodies\" = BASE plus the bodies the receiver-driven routes send for "
       "every split (each tree as one band: the records with their presence bits). meshoptimizer 0.18: vertex cache "
