@@ -25,8 +25,10 @@ void ClientSession::set_adapt_options(const AdaptOptions& options) {
 
 void ClientSession::on_base(const protocol::Base& base) {
   if (has_model()) {
-    // A resumed session: the server sends BASE again; the hierarchy held must be of the same model.
-    if (base.root_count() != base_.root_count() || base.faces != base_.faces || base.scale != base_.scale)
+    // A resumed session: the server sends BASE again; the hierarchy held must be of the same model (a file
+    // replaced under the same name may keep the base mesh's size and faces: the positions tell it apart).
+    if (base.root_count() != base_.root_count() || base.faces != base_.faces || base.scale != base_.scale ||
+        base.positions != base_.positions)
       fail("BASE", "the server's model '" + base.model + "' is not the one this client holds");
     return;
   }

@@ -22,6 +22,7 @@
 #include "server/catalogue_slot.h"
 #include "server/http_server.h"
 #include "server/tcp_server.h"
+#include "common/error.h"
 #include "streaming_fixture.h"
 #include "test_support.h"
 
@@ -92,6 +93,30 @@ TEST(ModelReplaced, ATcpSessionKeepsItsModelAndANewOneOpensTheNewFile) {
   const Camera camera = orbit_path(second().hierarchy, 8, 0.3f).back();
   fresh.frame(camera);
   EXPECT_EQ(faces_by_id(fresh.session().mesh()), local_faces(second().snapped, camera, 1.0f));
+}
+
+// A session that loses its connection after the reload cannot resume its front on another file: it fails
+// with an error that says so, never a mesh of both models.
+TEST(ModelReplaced, AResumeOntoTheReplacedFileIsAClearError) {
+  ReplacedModel m;
+  server::TcpServer tcp(m.slot, server::ServerLimits{}, "127.0.0.1", 0);
+  tcp.start();
+  client::StreamingClient client("127.0.0.1", tcp.port(), client::ClientOptions{1.0f});
+  client.open("m");
+  const std::vector<Camera> path = orbit_path(first().hierarchy, 8, 0.3f);
+  for (size_t i = 0; i < 4; ++i) client.frame(path[i]);
+  m.replace();
+  try {
+    client.resume("127.0.0.1", tcp.port());
+    client.frame(path[4]);
+    FAIL() << "resumed a front of the old file on the new one";
+  } catch (const Error& e) {
+    const std::string what = e.what();
+    // The server finds an id of the old front missing from the new file, or the client a BASE not its own.
+    EXPECT_TRUE(what.find("is not in the model") != std::string::npos ||
+                what.find("not the one this client holds") != std::string::npos)
+        << what;
+  }
 }
 
 // Lock-step: the frame whose GET met the 410 is flown again on the new version, so every frame after the
