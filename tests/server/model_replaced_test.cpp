@@ -95,6 +95,24 @@ TEST(ModelReplaced, ATcpSessionKeepsItsModelAndANewOneOpensTheNewFile) {
   EXPECT_EQ(faces_by_id(fresh.session().mesh()), local_faces(second().snapped, camera, 1.0f));
 }
 
+// A reload that finds a file's content unchanged (even copied anew: another inode, the same bytes) keeps
+// its model, mapping and built tables: nothing is built twice, no URL changes.
+TEST(ModelReplaced, AnUnchangedFileKeepsItsModelAndItsTables) {
+  ReplacedModel m;
+  const server::ServedModel* before = m.slot->get()->find("m");
+  m.slot->get()->table_builds().build_all({before}, server::ModeSet().set(server::index_of(server::ServedMode::receiver)));
+  const uint64_t builds = m.slot->get()->table_builds().stats().started.load();
+  fs::copy_file(first().path, m.dir / "m.pms.new");
+  fs::rename(m.dir / "m.pms.new", m.dir / "m.pms");
+  server::CatalogueChanges changes;
+  m.slot->set(server::Catalogue::reload(*m.slot->get(), server::ServerLimits{}, changes));
+  EXPECT_EQ(changes.kept, std::vector<std::string>{"m"});
+  EXPECT_FALSE(changes.any());
+  EXPECT_EQ(m.slot->get()->find("m"), before);
+  EXPECT_TRUE(before->tables->ready(server::ServedMode::receiver));
+  EXPECT_EQ(m.slot->get()->table_builds().stats().started.load(), builds) << "nothing built again";
+}
+
 // A session that loses its connection after the reload cannot resume its front on another file: it fails
 // with an error that says so, never a mesh of both models.
 TEST(ModelReplaced, AResumeOntoTheReplacedFileIsAClearError) {
