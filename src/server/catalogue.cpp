@@ -194,8 +194,7 @@ void Catalogue::check_limits(const ServerLimits& limits) const {
   const std::string limit = " bytes, over --max-server-message " + std::to_string(limits.max_server_message) +
                             " (raise it, or serve the model with fewer base vertices)";
   for (const auto& model : models_)
-    if (payload(*model->base_frame) > limits.max_server_message)
-      fail(model->path, "its BASE message is " + std::to_string(payload(*model->base_frame)) + limit);
+    if (const std::string why = frame_limit_failure(*model, limits); !why.empty()) fail(model->path, why);
   if (payload(*catalogue_frame_) > limits.max_server_message)
     fail("serve", "the CATALOGUE of " + std::to_string(models_.size()) + " models is " +
                       std::to_string(payload(*catalogue_frame_)) + limit);
