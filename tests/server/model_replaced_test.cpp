@@ -68,31 +68,39 @@ struct ReplacedModel {
     return http->port();
   }
 
+  // A client that opened "m" over TCP, on a server over the slot started for the first.
+  std::unique_ptr<client::StreamingClient> open_over_tcp() {
+    if (!tcp) {
+      tcp = std::make_unique<server::TcpServer>(slot, server::ServerLimits{}, "127.0.0.1", 0);
+      tcp->start();
+    }
+    auto client = std::make_unique<client::StreamingClient>("127.0.0.1", tcp->port(), client::ClientOptions{1.0f});
+    client->open("m");
+    return client;
+  }
+
   fs::path dir;
   std::shared_ptr<server::CatalogueSlot> slot;
   std::string old_version;
   std::unique_ptr<server::HttpServer> http;
+  std::unique_ptr<server::TcpServer> tcp;
 };
 
 std::string http_url(uint16_t port) { return "http://127.0.0.1:" + std::to_string(port); }
 
 TEST(ModelReplaced, ATcpSessionKeepsItsModelAndANewOneOpensTheNewFile) {
   ReplacedModel m;
-  server::TcpServer tcp(m.slot, server::ServerLimits{}, "127.0.0.1", 0);
-  tcp.start();
-  client::StreamingClient client("127.0.0.1", tcp.port(), client::ClientOptions{1.0f});
-  client.open("m");
+  const auto client = m.open_over_tcp();
   const std::vector<Camera> path = orbit_path(first().hierarchy, 8, 0.3f);
   for (size_t i = 0; i < path.size(); ++i) {
     if (i == 3) m.replace();
-    client.frame(path[i]);
-    EXPECT_EQ(faces_by_id(client.session().mesh()), local_faces(first().snapped, path[i], 1.0f)) << "frame " << i;
+    client->frame(path[i]);
+    EXPECT_EQ(faces_by_id(client->session().mesh()), local_faces(first().snapped, path[i], 1.0f)) << "frame " << i;
   }
-  client::StreamingClient fresh("127.0.0.1", tcp.port(), client::ClientOptions{1.0f});
-  fresh.open("m");
+  const auto fresh = m.open_over_tcp();
   const Camera camera = orbit_path(second().hierarchy, 8, 0.3f).back();
-  fresh.frame(camera);
-  EXPECT_EQ(faces_by_id(fresh.session().mesh()), local_faces(second().snapped, camera, 1.0f));
+  fresh->frame(camera);
+  EXPECT_EQ(faces_by_id(fresh->session().mesh()), local_faces(second().snapped, camera, 1.0f));
 }
 
 // A reload that finds a file's content unchanged (even copied anew: another inode, the same bytes) keeps
@@ -117,16 +125,13 @@ TEST(ModelReplaced, AnUnchangedFileKeepsItsModelAndItsTables) {
 // with an error that says so, never a mesh of both models.
 TEST(ModelReplaced, AResumeOntoTheReplacedFileIsAClearError) {
   ReplacedModel m;
-  server::TcpServer tcp(m.slot, server::ServerLimits{}, "127.0.0.1", 0);
-  tcp.start();
-  client::StreamingClient client("127.0.0.1", tcp.port(), client::ClientOptions{1.0f});
-  client.open("m");
+  const auto client = m.open_over_tcp();
   const std::vector<Camera> path = orbit_path(first().hierarchy, 8, 0.3f);
-  for (size_t i = 0; i < 4; ++i) client.frame(path[i]);
+  for (size_t i = 0; i < 4; ++i) client->frame(path[i]);
   m.replace();
   try {
-    client.resume("127.0.0.1", tcp.port());
-    client.frame(path[4]);
+    client->resume("127.0.0.1", m.tcp->port());
+    client->frame(path[4]);
     FAIL() << "resumed a front of the old file on the new one";
   } catch (const Error& e) {
     const std::string what = e.what();
