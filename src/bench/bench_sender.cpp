@@ -43,7 +43,6 @@ const std::vector<uint32_t> kClientCounts = {1, 10, 100, 500};
 const std::vector<uint32_t> kQuickClientCounts = {1, 10};
 constexpr uint32_t kE11Frames = 20;
 // A stored vertex front holds one 64-bit <tree-id, node-id> (or pointer) per active node.
-constexpr double kFrontEntryBytes = 8;
 
 // kim-lee-kobbelt 2005 Fig 9: bytes until the tolerance is satisfied.
 struct PaperE5 {
@@ -496,9 +495,12 @@ std::string e2_to_e5_sections(const Table& e2, const Table& e34, const Table& e5
       "\nTopology = v_s's id and the record's v̂_l, v̂_r (split records, docs/protocol.md \"VSPLITS\"). "
       "Position = the record's geometry; normal + color = v_t's, for a model that has them. Whole split "
       "order; the wire column is E3's first lap, frame headers included.\n\n";
-  section += "### E3/E4: two laps of one orbit path, τ = 1 px\n\n" + e34.markdown() + "\nA stored front costs " +
-             fixed(kFrontEntryBytes, 0) +
-             " bytes per active node (one 64-bit id). The tags cost "
+  section += "### E3/E4: two laps of one orbit path, τ = 1 px\n\n" + e34.markdown() +
+             "\nTwo sessions fly the path side by side: one keeps the paper's windowed tags, one parks its front "
+             "as a CompactFront after every answer (`serve --park-after-ms 0`; a server parks a session once it "
+             "is idle), and each column is the session's own allocation (`front_bytes()`) over a stored front, "
+             "allocated as one 64-bit id per active node. \"server CPU\" is the two sessions' thread CPU time in "
+             "receive() and pump(): the compact one decodes and codes its front once per VIEW. The tags cost "
              "a bit per node of the window, which spans from the coarsest active node to the finest, so tags / front "
              "≈ window / (64 × front): at most 10 % needs a front of at least a sixth of the window (peak columns, "
              "as a share of the hierarchy's nodes). A front that mixes unrefined coarse nodes with leaves spans "
