@@ -42,7 +42,6 @@ constexpr uint32_t kPathFrames = 120, kQuickPathFrames = 30;
 const std::vector<uint32_t> kClientCounts = {1, 10, 100, 500};
 const std::vector<uint32_t> kQuickClientCounts = {1, 10};
 constexpr uint32_t kE11Frames = 20;
-// A stored vertex front holds one 64-bit <tree-id, node-id> (or pointer) per active node.
 
 // kim-lee-kobbelt 2005 Fig 9: bytes until the tolerance is satisfied.
 struct PaperE5 {
