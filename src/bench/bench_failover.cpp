@@ -13,9 +13,9 @@
 #include "apps/percentile.h"
 #include "bench/bench.h"
 #include "bench/bench_model.h"
-#include "bench/child_process.h"
 #include "bench/failover_flight.h"
 #include "bench/haproxy_child.h"
+#include "bench/loopback_daemon.h"
 #include "bench/report.h"
 #include "bench/serve_child.h"
 #include "common/error.h"
@@ -152,20 +152,9 @@ Table flight_table(const FailoverRun& run) {
   return table;
 }
 
-json figures_json(const FlightFigures& f) {
-  return {{"viewers", f.viewers},
-          {"failed", f.failed},
-          {"resumed_viewers", f.resumed_viewers},
-          {"resumes", f.resumes},
-          {"reconnect_attempts", f.attempts},
-          {"splits_received", f.splits_received},
-          {"splits_arrived_twice", f.arrived_twice},
-          {"bytes_down", f.bytes_down},
-          {"extra_bytes_down", f.extra_bytes},
-          {"resent_base_bytes", f.resent_base_bytes},
-          {"resume_ms", f.resume_ms},
-          {"failures", f.failures}};
-}
+// failover.json's fields are the figures' names.
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(FlightFigures, viewers, failed, resumed_viewers, resumes, attempts, splits_received,
+                                   arrived_twice, bytes_down, extra_bytes, resent_base_bytes, resume_ms, failures)
 
 std::string summary(const FailoverRun& run, const std::string& model, uint32_t viewers) {
   const FlightFigures &calm = *run.calm, &killed = *run.killed;
@@ -181,9 +170,9 @@ std::string summary(const FailoverRun& run, const std::string& model, uint32_t v
   text += "- splits received: " + thousands(killed.splits_received) + " against " + thousands(calm.splits_received) +
           " undisturbed (" + (same_splits ? "the same" : "**not the same**") + "); arrived twice: " +
           thousands(killed.arrived_twice) + ". Extra bytes down: " + signed_thousands(killed.extra_bytes) + ", of which " +
-          thousands(killed.resent_base_bytes) +
-          " are the re-sent bases (HELLO_OK, BASE, CODEC per resume); the rest is framing of answers the kill cut "
-          "and the other origin finished in batches of its own.\n";
+          thousands(killed.resent_base_bytes) + " are the re-sent bases (HELLO_OK, BASE, CODEC per resume); " +
+          signed_thousands(killed.extra_bytes - int64_t(killed.resent_base_bytes)) +
+          " more is the framing of answers the kill cut, which the other origin finished in batches of its own.\n";
   const bool met = killed.failed == 0 && killed.arrived_twice == 0 && same_splits;
   text += std::string("- target (issue 45): 0 viewers failed, 0 splits sent twice: ") + (met ? "met" : "**missed**") +
           ".\n";
@@ -196,8 +185,7 @@ std::string summary(const FailoverRun& run, const std::string& model, uint32_t v
 void run_failover_figure(BenchContext& context) {
   std::string section = "## failover: sender-driven viewers behind HAProxy, one origin killed\n\n";
   if (skipped_without_models(context, section)) return;
-  std::string haproxy = find_program("haproxy");
-  if (haproxy.empty()) haproxy = find_program("/usr/sbin/haproxy");
+  const std::string haproxy = find_daemon("haproxy");
   if (haproxy.empty()) {
     context.report += section + "Not measured: haproxy is not installed (scripts/setup.sh installs Debian's).\n\n";
     return;
@@ -221,8 +209,8 @@ void run_failover_figure(BenchContext& context) {
                     {"frames", kFrames},
                     {"tolerance_px", kTolerance},
                     {"killed_sessions", run.killed_sessions},
-                    {"undisturbed", figures_json(*run.calm)},
-                    {"origin_killed", figures_json(*run.killed)}};
+                    {"undisturbed", *run.calm},
+                    {"origin_killed", *run.killed}};
   write_text_file(context.options.out_dir / "failover.json", out.dump(2) + "\n");
   context.report += section + text;
 }

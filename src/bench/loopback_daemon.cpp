@@ -17,6 +17,11 @@ std::string file_text(const fs::path& path) {
   return std::string(std::istreambuf_iterator<char>(in), {});
 }
 
+std::string find_daemon(const std::string& name) {
+  const std::string found = find_program(name);
+  return found.empty() ? find_program("/usr/sbin/" + name) : found;
+}
+
 uint16_t free_loopback_port() {
   boost::asio::io_context io;
   boost::asio::ip::tcp::acceptor acceptor(io, {boost::asio::ip::make_address("127.0.0.1"), 0});

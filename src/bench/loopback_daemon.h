@@ -19,6 +19,10 @@ namespace pms::bench {
 // A file's bytes; empty when it cannot be read (a log that was never written).
 std::string file_text(const std::filesystem::path& path);
 
+// A daemon's executable (`nginx`, `haproxy`) on PATH, else in /usr/sbin, which a user's PATH may lack;
+// empty when it is not installed.
+std::string find_daemon(const std::string& name);
+
 // A port the kernel considers free now (neither nginx nor HAProxy can be asked to pick one and report it).
 uint16_t free_loopback_port();
 

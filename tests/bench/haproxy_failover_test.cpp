@@ -16,9 +16,9 @@
 #include <string>
 #include <vector>
 
-#include "bench/child_process.h"
 #include "bench/failover_flight.h"
 #include "bench/haproxy_child.h"
+#include "bench/loopback_daemon.h"
 #include "bench/serve_child.h"
 #include "io/mesh.h"
 #include "streaming_fixture.h"
@@ -49,11 +49,9 @@ uint64_t both_transports(ServeChild& origin, const char* counter) {
 class HaproxyFailover : public ::testing::Test {
  protected:
   void SetUp() override {
-    haproxy_ = bench::find_program("haproxy");
-    if (haproxy_.empty()) haproxy_ = bench::find_program("/usr/sbin/haproxy");
+    PMS_REQUIRE_SHARED_MODEL(model, "bunny.ply.xz");
+    haproxy_ = bench::find_daemon("haproxy");
     if (haproxy_.empty()) GTEST_SKIP() << "haproxy is not installed (scripts/setup.sh installs Debian's haproxy)";
-    const fs::path model = test::shared_model("bunny.ply.xz");
-    if (model.empty()) GTEST_SKIP() << "../shared/models/bunny.ply.xz not found: this test needs the shared meshes";
     Mesh mesh = load_mesh(model.string());
     clean_mesh(mesh);
     fixture_ = std::make_unique<test::Fixture>(test::make_fixture(mesh, "bunny"));

@@ -17,7 +17,6 @@
 #include <vector>
 
 #include "apps/camera_json.h"
-#include "bench/child_process.h"
 #include "bench/loopback_daemon.h"
 #include "bench/serve_child.h"
 #include "common/error.h"
@@ -95,8 +94,7 @@ std::vector<std::string> origin_flags(const fs::path& model) {
 class NginxCache : public ::testing::Test {
  protected:
   void SetUp() override {
-    nginx_ = bench::find_program("nginx");
-    if (nginx_.empty()) nginx_ = bench::find_program("/usr/sbin/nginx");
+    nginx_ = bench::find_daemon("nginx");
     if (nginx_.empty()) GTEST_SKIP() << "nginx is not installed (scripts/setup.sh installs Debian's nginx-light)";
     const fs::path model = test::shared_model("bunny.ply.xz");
     if (model.empty()) GTEST_SKIP() << "../shared/models/bunny.ply.xz not found: this test needs the shared meshes";
