@@ -197,8 +197,8 @@ ChildResult run_child(const std::vector<std::string>& argv, const ChildOptions& 
   const pid_t pid = ::fork();
   if (pid < 0) fail(name, errno_text("fork"));
   if (pid == 0)
-    exec_child(program.c_str(), args.data(), env.data(), in.get(), out_file.get() >= 0 ? out_file.get() : out.write.get(),
-               err.write.get(), report.write.get());
+    exec_child(program.c_str(), args.data(), env.data(), in.get(),
+               out_file.get() >= 0 ? out_file.get() : out.write.get(), err.write.get(), report.write.get());
 
   // Drop the child's ends: end of file on a pipe then means the child (and anything it started) is done with it.
   in.reset();

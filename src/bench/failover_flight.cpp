@@ -16,47 +16,53 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-// Where the viewers meet the plan's event: all of them (held), or the first to come (not held). A viewer
-// that failed before getting there leaves, so the others are not held for it.
+// Where the viewers meet the plan's event: all of them (held), or the first to come (not held). Either way
+// it happens mid-flight, once every viewer has its session: a viewer still opening when an origin dies
+// fails its first OPEN, which no viewer retries. A viewer that failed, or never gets to the event frame,
+// leaves, so the others are not held for it.
 class EventPoint {
  public:
-  explicit EventPoint(const FailoverPlan& plan) : plan_(plan), waiting_for_(plan.viewers.size()) {}
+  explicit EventPoint(const FailoverPlan& plan) : plan_(plan), viewers_(plan.viewers.size()) {}
+
+  // The viewer has its session, or will never have one.
+  void opened() {
+    const std::lock_guard lock(mutex_);
+    ++opened_;
+    changed_.notify_all();
+  }
 
   void arrive() {
     std::unique_lock lock(mutex_);
-    if (!plan_.hold_viewers) {
-      if (std::exchange(done_, true)) return;
-      lock.unlock();
-      run();
-      return;
+    ++arrived_;
+    if (plan_.hold_viewers) {
+      if (arrived_ == viewers_) return happen(lock);
+      return changed_.wait(lock, [this] { return done_; });
     }
-    --waiting_for_;
-    if (waiting_for_ == 0) return happen(lock);
-    changed_.wait(lock, [this] { return done_; });
+    if (std::exchange(claimed_, true)) return;  // another viewer runs it
+    changed_.wait(lock, [this] { return opened_ == viewers_; });
+    happen(lock);
   }
 
   void leave() {
     std::unique_lock lock(mutex_);
-    if (plan_.hold_viewers && !done_ && --waiting_for_ == 0) happen(lock);
+    if (++arrived_ == viewers_ && plan_.hold_viewers && !done_) happen(lock);
   }
 
  private:
   void happen(std::unique_lock<std::mutex>& lock) {
     lock.unlock();
-    run();
+    if (plan_.event) plan_.event();
     lock.lock();
     done_ = true;
     changed_.notify_all();
   }
-  void run() {
-    if (plan_.event) plan_.event();
-  }
 
   const FailoverPlan& plan_;
+  const size_t viewers_;
   std::mutex mutex_;
   std::condition_variable changed_;
-  size_t waiting_for_;
-  bool done_ = false;
+  size_t opened_ = 0, arrived_ = 0;
+  bool claimed_ = false, done_ = false;
 };
 
 client::ClientOptions viewer_options(const FailoverPlan& plan, const FailoverViewerPlan& viewer) {
@@ -72,22 +78,30 @@ client::ClientOptions viewer_options(const FailoverPlan& plan, const FailoverVie
 void fly_one(const FailoverPlan& plan, size_t index, EventPoint& event, FailoverViewer& out,
              const std::function<void(size_t, client::StreamingClient&)>& at_end) {
   const FailoverViewerPlan& viewer = plan.viewers[index];
-  bool met_event = false;
+  bool opened = false, met_event = false;
   try {
     std::optional<Clock::time_point> lost_at;  // in the frame being flown
+    uint64_t frame_began_with = 0;             // splits received before the frame
+    client::StreamingClient* flying = nullptr;
     client::ClientOptions options = viewer_options(plan, viewer);
     options.on_reconnect = [&](const std::string&, uint32_t) {
       ++out.attempts;
-      if (!lost_at) lost_at = Clock::now();
+      if (lost_at) return;
+      lost_at = Clock::now();
+      out.answers_cut += flying->session().splits_received() > frame_began_with;
     };
     client::StreamingClient client("127.0.0.1", viewer.port, options, plan.model);
+    flying = &client;  // reconnects happen in frames only
     out.opened = client.counters();
+    opened = true;
+    event.opened();
     for (size_t frame = 0; frame < viewer.path.size(); ++frame) {
       if (frame == plan.event_frame) {
         met_event = true;
         event.arrive();
       }
       lost_at.reset();
+      frame_began_with = client.session().splits_received();
       client.frame(viewer.path[frame]);
       if (lost_at) out.resume_ms.push_back(std::chrono::duration<double, std::milli>(Clock::now() - *lost_at).count());
     }
@@ -99,6 +113,7 @@ void fly_one(const FailoverPlan& plan, size_t index, EventPoint& event, Failover
   } catch (const std::exception& e) {
     out.error = e.what();
   }
+  if (!opened) event.opened();
   if (!met_event) event.leave();
 }
 

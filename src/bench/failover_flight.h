@@ -25,10 +25,10 @@ struct FailoverPlan {
   std::string model;
   float tolerance = 1;
   std::vector<FailoverViewerPlan> viewers;
-  // Before frame `event_frame` of its path a viewer meets `event` (empty: none). With `hold_viewers` every
-  // viewer waits there until the event is over, so it happens between two frames of every viewer (the test:
-  // the bytes of each viewer are then exact); without, the first viewer there runs it and the others fly on,
-  // so it may cut answers in the middle (the bench).
+  // Before frame `event_frame` of its path a viewer meets `event` (empty: none), which happens once every
+  // viewer has its session. With `hold_viewers` every viewer waits there until the event is over, so it
+  // happens between two frames of every viewer (the bytes of each viewer are then exact); without, the
+  // first viewer there runs it and the others fly on, so it may cut answers in the middle.
   size_t event_frame = SIZE_MAX;
   bool hold_viewers = false;
   std::function<void()> event;
@@ -37,11 +37,12 @@ struct FailoverPlan {
 };
 
 struct FailoverViewer {
-  std::string error;   // empty: the viewer flew its whole path
+  std::string error;      // empty: the viewer flew its whole path
   uint32_t attempts = 0;  // reconnect attempts (ClientOptions::on_reconnect)
   // Per frame that lost its connection: the loss noticed -> the frame's view satisfied on a new connection
   // (the backoff's delay and the resume included), milliseconds.
   std::vector<double> resume_ms;
+  uint32_t answers_cut = 0;      // of those frames, the ones that had received part of their answer
   uint64_t splits_received = 0;  // every VSPLITS packet, over all its sessions
   uint64_t splits_held = 0;      // the split nodes of its hierarchy: one per distinct split received
   client::LinkCounters opened;   // its first session's HELLO, OPEN and their answers (HELLO_OK, BASE, CODEC)

@@ -7,8 +7,8 @@
 
 #include <cstdlib>
 #include <cstring>
-#include <system_error>
 #include <sstream>
+#include <system_error>
 #include <thread>
 
 #include "common/error.h"
@@ -38,7 +38,8 @@ fs::path socket_directory() {
 
 }  // namespace
 
-HaproxyChild::HaproxyChild(const std::string& program, const fs::path& config, const std::vector<HaproxyOrigin>& origins)
+HaproxyChild::HaproxyChild(const std::string& program, const fs::path& config,
+                           const std::vector<HaproxyOrigin>& origins)
     : socket_dir_(socket_directory()),
       socket_(socket_dir_ / "api.sock"),
       daemon_("haproxy", [&] { return prepare(program, config, origins); }) {}
@@ -51,7 +52,8 @@ HaproxyChild::~HaproxyChild() {
 
 DaemonStart HaproxyChild::prepare(const std::string& program, const fs::path& config,
                                   const std::vector<HaproxyOrigin>& origins) {
-  if (origins.size() != 2) fail("haproxy", "the configuration names two origins, not " + std::to_string(origins.size()));
+  if (origins.size() != 2)
+    fail("haproxy", "the configuration names two origins, not " + std::to_string(origins.size()));
   session_port_ = free_loopback_port();
   http_port_ = free_loopback_port();
   std::vector<std::string> env = {"PMSTREAM_SESSIONS_BIND=" + loopback(session_port_),
@@ -90,18 +92,23 @@ std::string HaproxyChild::runtime_api(const std::string& command) const {
   return answer;
 }
 
-std::string HaproxyChild::status(const std::string& backend, const std::string& server) const {
-  std::stringstream stat(runtime_api("show stat"));
+std::string HaproxyChild::stat(const std::string& backend, const std::string& server, const std::string& field) const {
+  std::stringstream table(runtime_api("show stat"));
   std::string line;
-  std::getline(stat, line);  // "# pxname,svname,...,status,..."
-  const std::vector<std::string> header = fields(line.substr(line.find_first_not_of("# ")));
+  std::getline(table, line);  // "# pxname,svname,...,status,..."
+  if (line.rfind("# ", 0) != 0) fail("haproxy", "`show stat` answered: " + line);
+  const std::vector<std::string> header = fields(line.substr(2));
   size_t column = 0;
-  while (column < header.size() && header[column] != "status") ++column;
-  while (std::getline(stat, line)) {
+  while (column < header.size() && header[column] != field) ++column;
+  while (std::getline(table, line)) {
     const std::vector<std::string> row = fields(line);
     if (row.size() > column && row[0] == backend && row[1] == server) return row[column];
   }
-  fail("haproxy", "`show stat` lists no server " + server + " in " + backend);
+  fail("haproxy", "`show stat` has no " + field + " of server " + server + " in " + backend);
+}
+
+std::string HaproxyChild::status(const std::string& backend, const std::string& server) const {
+  return stat(backend, server, "status");
 }
 
 bool HaproxyChild::await_state(const std::string& server, const std::string& state,
@@ -109,7 +116,11 @@ bool HaproxyChild::await_state(const std::string& server, const std::string& sta
   const auto until = std::chrono::steady_clock::now() + deadline;
   for (;;) {
     bool all = true;
-    for (const char* backend : kBackends) all = all && status(backend, server) == state;
+    try {
+      for (const char* backend : kBackends) all = all && status(backend, server) == state;
+    } catch (const Error&) {
+      all = false;  // HAProxy takes its port before its runtime API's socket: ask again
+    }
     if (all) return true;
     if (std::chrono::steady_clock::now() >= until) return false;
     std::this_thread::sleep_for(std::chrono::milliseconds(100));

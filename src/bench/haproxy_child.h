@@ -38,6 +38,8 @@ class HaproxyChild {
 
  private:
   std::string runtime_api(const std::string& command) const;
+  // One field of a server's row in `show stat`.
+  std::string stat(const std::string& backend, const std::string& server, const std::string& field) const;
   DaemonStart prepare(const std::string& program, const std::filesystem::path& config,
                       const std::vector<HaproxyOrigin>& origins);
 
