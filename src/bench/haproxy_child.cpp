@@ -30,25 +30,22 @@ std::vector<std::string> fields(const std::string& line) {
   return out;
 }
 
-fs::path socket_directory() {
+}  // namespace
+
+HaproxyChild::SocketDirectory::SocketDirectory() {
   char name[] = "/tmp/pmstream-haproxy-XXXXXX";
   if (!::mkdtemp(name)) fail("haproxy", std::string("mkdtemp: ") + std::strerror(errno));
-  return name;
+  path = name;
 }
 
-}  // namespace
+HaproxyChild::SocketDirectory::~SocketDirectory() {
+  std::error_code ignored;
+  fs::remove_all(path, ignored);
+}
 
 HaproxyChild::HaproxyChild(const std::string& program, const fs::path& config,
                            const std::vector<HaproxyOrigin>& origins)
-    : socket_dir_(socket_directory()),
-      socket_(socket_dir_ / "api.sock"),
-      daemon_("haproxy", [&] { return prepare(program, config, origins); }) {}
-
-HaproxyChild::~HaproxyChild() {
-  daemon_.stop();
-  std::error_code ignored;
-  fs::remove_all(socket_dir_, ignored);
-}
+    : socket_(socket_dir_.path / "api.sock"), daemon_("haproxy", [&] { return prepare(program, config, origins); }) {}
 
 DaemonStart HaproxyChild::prepare(const std::string& program, const fs::path& config,
                                   const std::vector<HaproxyOrigin>& origins) {

@@ -22,7 +22,6 @@ class HaproxyChild {
   // `origins`: exactly the two the file names (origin1, origin2).
   HaproxyChild(const std::string& program, const std::filesystem::path& config,
                const std::vector<HaproxyOrigin>& origins);
-  ~HaproxyChild();  // stops HAProxy, removes its socket's directory
   HaproxyChild(const HaproxyChild&) = delete;
   HaproxyChild& operator=(const HaproxyChild&) = delete;
 
@@ -43,9 +42,15 @@ class HaproxyChild {
   DaemonStart prepare(const std::string& program, const std::filesystem::path& config,
                       const std::vector<HaproxyOrigin>& origins);
 
-  // The runtime API's socket, in a directory of its own under /tmp: a socket's path has at most 107 bytes,
-  // fewer than a test's temporary directory may take.
-  std::filesystem::path socket_dir_, socket_;
+  // The runtime API's socket, in a directory of its own under /tmp (a socket's path has at most 107 bytes,
+  // fewer than a test's temporary directory may take), removed with it.
+  struct SocketDirectory {
+    SocketDirectory();
+    ~SocketDirectory();
+    std::filesystem::path path;
+  };
+  SocketDirectory socket_dir_;
+  std::filesystem::path socket_;
   uint16_t session_port_ = 0, http_port_ = 0;
   LoopbackDaemon daemon_;  // last: prepare() fills the members above
 };
