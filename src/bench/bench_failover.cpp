@@ -33,7 +33,7 @@ constexpr uint32_t kFrames = 60;
 // What one flight of every viewer came to.
 struct FlightFigures {
   uint32_t viewers = 0, failed = 0, resumed_viewers = 0, resumes = 0, attempts = 0;
-  uint32_t answers_cut = 0;  // resumes in the middle of an answer: part of it had arrived
+  uint32_t lost_mid_frame = 0;  // resumes after part of the frame's splits had arrived
   uint64_t splits_received = 0, arrived_twice = 0, bytes_down = 0;
   int64_t extra_bytes = 0;  // bytes down beyond the undisturbed flight's, viewer by viewer
   uint64_t resent_base_bytes = 0;
@@ -54,7 +54,7 @@ FlightFigures figures_of(const std::vector<FailoverViewer>& flight, const std::v
     f.resumed_viewers += !v.resume_ms.empty();
     f.resumes += uint32_t(v.resume_ms.size());
     f.attempts += v.attempts;
-    f.answers_cut += v.answers_cut;
+    f.lost_mid_frame += v.lost_mid_frame;
     f.splits_received += v.splits_received;
     f.arrived_twice += v.splits_received - v.splits_held;
     f.bytes_down += v.total.bytes_down;
@@ -139,7 +139,7 @@ Table flight_table(const FailoverRun& run) {
                {"failed", true},
                {"resumed", true},
                {"attempts", true},
-               {"answers cut", true},
+               {"mid-frame", true},
                {"splits received", true},
                {"arrived twice", true},
                {"bytes down", true},
@@ -151,7 +151,7 @@ Table flight_table(const FailoverRun& run) {
                {"max", true}});
   for (const auto& [name, f] : {std::pair{"undisturbed", &*run.calm}, std::pair{"origin killed", &*run.killed}})
     table.add_row({name, thousands(f->viewers), thousands(f->failed), thousands(f->resumed_viewers),
-                   thousands(f->attempts), thousands(f->answers_cut), thousands(f->splits_received),
+                   thousands(f->attempts), thousands(f->lost_mid_frame), thousands(f->splits_received),
                    thousands(f->arrived_twice), thousands(f->bytes_down), signed_thousands(f->extra_bytes),
                    thousands(f->resent_base_bytes), ms(f->resume_ms, 0.5), ms(f->resume_ms, 0.9),
                    ms(f->resume_ms, 0.99), ms(f->resume_ms, 1)});
@@ -159,7 +159,7 @@ Table flight_table(const FailoverRun& run) {
 }
 
 // failover.json's fields are the figures' names.
-NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(FlightFigures, viewers, failed, resumed_viewers, resumes, attempts, answers_cut,
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(FlightFigures, viewers, failed, resumed_viewers, resumes, attempts, lost_mid_frame,
                                    splits_received, arrived_twice, bytes_down, extra_bytes, resent_base_bytes,
                                    resume_ms, failures)
 
@@ -170,11 +170,12 @@ std::string summary(const FailoverRun& run, const std::string& model, uint32_t v
                      "-frame orbit from its own phase, through HAProxy (deploy/haproxy/pmstream.cfg) in front of two "
                      "origins; the second flight kills origin1 (SIGKILL) when its first viewer reaches frame " +
                      std::to_string(kFrames / 2) + ", the others flying on.\n";
-  text += "- " + std::to_string(run.killed_sessions) +
-          " sessions were on the killed origin (one may be a health check); " + std::to_string(killed.resumed_viewers) +
-          " viewers resumed, with " + std::to_string(killed.attempts) + " reconnect attempts for " +
-          std::to_string(killed.resumes) + " resumes; " + std::to_string(killed.answers_cut) +
-          " of them had received part of the answer the kill cut.\n";
+  text +=
+      "- " + std::to_string(run.killed_sessions) + " sessions were on the killed origin (one may be a health check); " +
+      std::to_string(killed.resumed_viewers) + " viewers resumed, with " + std::to_string(killed.attempts) +
+      " reconnect attempts for " + std::to_string(killed.resumes) + " resumes; " +
+      std::to_string(killed.lost_mid_frame) +
+      " of them mid-frame, with some of the frame's splits in (an answer the kill cut, or the frame's next request).\n";
   const bool same_splits = killed.splits_received == calm.splits_received;
   text += "- splits received: " + thousands(killed.splits_received) + " against " + thousands(calm.splits_received) +
           " undisturbed (" + (same_splits ? "the same" : "**not the same**") +

@@ -88,7 +88,7 @@ void fly_one(const FailoverPlan& plan, size_t index, EventPoint& event, Failover
       ++out.attempts;
       if (lost_at) return;
       lost_at = Clock::now();
-      out.answers_cut += flying->session().splits_received() > frame_began_with;
+      out.lost_mid_frame += flying->session().splits_received() > frame_began_with;
     };
     client::StreamingClient client("127.0.0.1", viewer.port, options, plan.model);
     flying = &client;  // reconnects happen in frames only

@@ -42,7 +42,9 @@ struct FailoverViewer {
   // Per frame that lost its connection: the loss noticed -> the frame's view satisfied on a new connection
   // (the backoff's delay and the resume included), milliseconds.
   std::vector<double> resume_ms;
-  uint32_t answers_cut = 0;      // of those frames, the ones that had received part of their answer
+  // Of those frames, the ones that had received splits before the loss: an answer the loss cut in the
+  // middle, or a later request of the same frame (a frame asks again until its view is satisfied).
+  uint32_t lost_mid_frame = 0;
   uint64_t splits_received = 0;  // every VSPLITS packet, over all its sessions
   uint64_t splits_held = 0;      // the split nodes of its hierarchy: one per distinct split received
   client::LinkCounters opened;   // its first session's HELLO, OPEN and their answers (HELLO_OK, BASE, CODEC)
