@@ -172,16 +172,28 @@ TEST(Adapt, FarAfterCloseEqualsFarBunny) {
 // A display's frames, one adapt() each, under a time budget small enough to cap every frame and with
 // geomorphs: at_rest() says when the frames are done, and the mesh is then the view's target, far after
 // close too (a frame's collapses leave parents that only the next walk finds unwanted).
+// A complete model's mesh adapted frame by frame under a time budget small enough to cap every frame, with
+// geomorphs.
+struct BudgetedFrames {
+  explicit BudgetedFrames(const ModelData& m)
+      : h(test::complete_hierarchy(m)), mesh(h, m.base_faces), refinement(mesh, m.scale, options()) {}
+  static AdaptOptions options() {
+    AdaptOptions options;
+    options.time_budget_us = 1;
+    options.morph_frames = 3;
+    return options;
+  }
+  const VertexHierarchy h;
+  SelectiveMesh mesh;
+  SelectiveRefinement refinement;
+};
+
 void expect_frames_until_at_rest_reach_the_target(const BuiltModel& model) {
-  const ModelData m = model.model();
   std::vector<NamedView> views = views_of(model);
   views.push_back(views.front());  // far again, after close
-  const VertexHierarchy h = test::complete_hierarchy(m);
-  SelectiveMesh mesh(h, m.base_faces);
-  AdaptOptions options;
-  options.time_budget_us = 1;
-  options.morph_frames = 3;
-  SelectiveRefinement refinement(mesh, m.scale, options);
+  BudgetedFrames frames_of(model.model());
+  SelectiveMesh& mesh = frames_of.mesh;
+  SelectiveRefinement& refinement = frames_of.refinement;
   EXPECT_TRUE(refinement.at_rest()) << "no frame yet";
   for (const NamedView& named : views) {
     SCOPED_TRACE(model.name + " " + named.name);
@@ -215,14 +227,10 @@ TEST(Adapt, FramesUntilAtRestReachTheTargetTerrain) {
 // view that barely moves would split and collapse the same nodes round after round), and once the view
 // stays the frames settle on its target.
 void expect_paused_walks_settle_on_the_target(const BuiltModel& model) {
-  const ModelData m = model.model();
   const std::vector<NamedView> views = views_of(model);
-  const VertexHierarchy h = test::complete_hierarchy(m);
-  SelectiveMesh mesh(h, m.base_faces);
-  AdaptOptions options;
-  options.time_budget_us = 1;
-  options.morph_frames = 3;
-  SelectiveRefinement refinement(mesh, m.scale, options);
+  BudgetedFrames frames_of(model.model());
+  SelectiveMesh& mesh = frames_of.mesh;
+  SelectiveRefinement& refinement = frames_of.refinement;
   constexpr int kSteps = 12;
   uint32_t paused = 0;
   for (size_t i = 0; i + 1 < views.size(); ++i) {
