@@ -292,6 +292,7 @@ class Harness {
     read,
     reconnect,
     timeout,
+    park,
     count
   };
 
@@ -329,6 +330,8 @@ class Harness {
         return reconnect(any_mode(in));
       case Op::timeout:
         return time_out();
+      case Op::park:  // the connection's idle timer (ServerLimits::park_after_ms)
+        return call([&] { c_->session.park(); });
       case Op::count:
         break;
     }
@@ -585,9 +588,8 @@ class Harness {
       fail("one call did " + std::to_string(s.last_work()) + " work units, over " + std::to_string(work_bound));
     if (s.state_bytes() > f_.state_bound)
       fail("state_bytes() " + std::to_string(s.state_bytes()) + " over " + std::to_string(f_.state_bound));
-    if (s.tags().memory_bytes() > f_.tags_bound)
-      fail("the tags hold " + std::to_string(s.tags().memory_bytes()) + " bytes, over " +
-           std::to_string(f_.tags_bound));
+    if (s.front_bytes() > f_.tags_bound)
+      fail("the front holds " + std::to_string(s.front_bytes()) + " bytes, over " + std::to_string(f_.tags_bound));
     if (s.error() == ErrorCode::internal) fail("ERROR internal: " + newest_error_text());
     if (was_closing && s.outbox().size() > before) fail("a frame queued after the session closed");
     if (s.closing() && s.has_work()) fail("has_work() on a closing session");

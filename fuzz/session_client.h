@@ -146,8 +146,9 @@ class SimulatedClient {
       check(s_.last_answered, "the last VIEW's answer did not end with a final VSPLITS");
     check(session.splits_sent() == s_.splits, "splits_sent() is not what the client received");
     if (s_.mode == protocol::StreamMode::dag) return check_cut(session);
+    const ActiveTags tags = session.front_tags();  // decoded when the session parked it
     for (uint32_t n = 0; n < model_.node_count(); ++n)
-      if (session.tags().is_active(n) != bool(held_[n]))
+      if (tags.is_active(n) != bool(held_[n]))
         fail("the session's tags differ from the client's leaves at " + to_string(model_.id(n)));
   }
 

@@ -25,6 +25,7 @@ packages=(build-essential cmake ninja-build pkg-config git xz-utils
 test_packages=(libgtest-dev libgmock-dev libbenchmark-dev clang libclang-rt-14-dev
                libopenmesh-apps gnuplot-nox graphviz
                nginx-light  # the caching proxy of deploy/nginx, which the NginxCache tests run on loopback
+               haproxy      # deploy/haproxy in front of two origins: the HaproxyFailover test, the failover bench
                chromium)    # the browser tests' browser, driven headless by playwright-core (docs/web.md)
 [ "$mode" = demo ] || packages+=("${test_packages[@]}")
 # node and npm install the page's packages and run the browser tests. Debian's `npm` package conflicts with

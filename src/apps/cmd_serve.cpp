@@ -37,6 +37,7 @@ struct ServeArgs {
   std::vector<std::string> trusted_proxies;  // --trusted-proxy, parsed into http.trusted_proxies
   server::WebOptions web;                    // --web-root, --ws-allowed-origin; its sessions' limits are `limits`
   std::string preload;         // mode names, or "all"
+  std::string session_front = "compact";  // --session-front: compact or tags (ServerLimits::compact_fronts)
   bool preload_given = false;  // else every table is built when first asked for
   uint32_t max_table_builds = server::TableOptions{}.max_builds;
 };
@@ -73,7 +74,8 @@ nlohmann::json session_counters(const server::ServerStats& s) {
           {"splits_sent", s.splits_sent.load()},
           {"errors_sent", s.errors_sent.load()},
           {"peak_state_bytes", s.peak_state_bytes.load()},
-          {"peak_buffer_bytes", s.peak_buffer_bytes.load()}};
+          {"peak_buffer_bytes", s.peak_buffer_bytes.load()},
+          {"fronts_parked", s.fronts_parked.load()}};
 }
 
 // One line a program can read: the event, then every counter (docs/operating.md lists them).
@@ -372,6 +374,14 @@ void add_serve_command(CliCommand& app) {
       .range(1u, protocol::kMaxPacketsPerMessage)
       .show_default();
   add_limit(cmd, "--position-bits", limits.position_bits, "Bits per coordinate on the wire (1-24, or 32)");
+  cmd.option("--session-front", args->session_front,
+             "How a sender-driven session holds its client's front between VIEWs: compact (about two bits a node) "
+             "or tags (the paper's windowed active tags)")
+      .one_of({"compact", "tags"})
+      .show_default();
+  add_limit(cmd, "--park-after-ms", limits.park_after_ms,
+            "A sender-driven session with no message for this long codes its front compact (0 = after every "
+            "answer; a flying client sends a VIEW a frame and keeps its tags)");
   const CliOption preload =
       cmd.option("--preload", args->preload,
                  "Build these modes' tables before listening: all, or a comma list of sender, sender-plain, vi, dag, "
@@ -384,6 +394,7 @@ void add_serve_command(CliCommand& app) {
     if (!args->http_port_given) refuse_unused_options(http_only, "", "serve without --http-port");
     args->http.trusted_proxies = server::AddressRanges::parse(args->trusted_proxies, "--trusted-proxy");
     args->preload_given = preload.given();
+    args->limits.compact_fronts = args->session_front == "compact";
     run_serve(*args);
   });
 }

@@ -51,8 +51,11 @@ void run_sender_group(BenchContext& context);
 void run_receiver_group(BenchContext& context);
 // E10: multilevel memory, LOD switch and geomorph times, bytes per level loaded (bench_multilevel.cpp).
 void run_multilevel_group(BenchContext& context);
-// Requirement 8's soak: many resuming clients against one server for minutes (bench_soak.cpp).
+// Requirement 8's soak: many resuming clients against one server for minutes (bench_soak.cpp), then the
+// failover figure.
 void run_soak_group(BenchContext& context);
+// Sender-driven viewers behind HAProxy resuming on another origin when theirs is killed (bench_failover.cpp).
+void run_failover_figure(BenchContext& context);
 // E9: the DAG mode's three traversals along a scan route (bench_dag.cpp).
 void run_dag_group(BenchContext& context);
 // The HTTP attack classes in their three groups beside a good receiver-driven client (bench_attacks.cpp).

@@ -1,5 +1,7 @@
 #include "bench/bench_model.h"
 
+#include <time.h>
+
 #include <cstdio>
 #include <deque>
 #include <utility>
@@ -39,20 +41,38 @@ std::vector<Camera> path_of(const BenchModel& m, PathKind kind, uint32_t frames)
   return make_camera_path(kind, m.served->model(), options);
 }
 
-InProcessSession in_process_session(const BenchModel& m) {
-  const server::ServerLimits limits;
+namespace {
+
+double thread_seconds() {
+  timespec now{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &now);
+  return double(now.tv_sec) + 1e-9 * double(now.tv_nsec);
+}
+
+}  // namespace
+
+InProcessSession in_process_session(const BenchModel& m, const server::ServerLimits& limits) {
   auto session = std::make_shared<server::Session>(m.catalogue, limits);
+  auto seconds = std::make_shared<double>(0);
   client::LocalEndpoint endpoint;
-  endpoint.receive = [session](protocol::Frame frame) { session->receive(std::move(frame)); };
-  endpoint.next_frame = [session]() -> server::Buffer {
+  endpoint.receive = [session, seconds](protocol::Frame frame) {
+    const double start = thread_seconds();
+    session->receive(std::move(frame));
+    *seconds += thread_seconds() - start;
+  };
+  endpoint.next_frame = [session, seconds]() -> server::Buffer {
     std::deque<server::Buffer>& outbox = session->outbox();
-    while (outbox.empty())
-      if (!session->pump()) return nullptr;
+    while (outbox.empty()) {
+      const double start = thread_seconds();
+      const bool more = session->pump();
+      *seconds += thread_seconds() - start;
+      if (!more) return nullptr;
+    }
     server::Buffer frame = std::move(outbox.front());
     outbox.pop_front();
     return frame;
   };
-  return {session, std::make_unique<client::LocalTransport>(std::move(endpoint), limits.max_client_message)};
+  return {session, std::make_unique<client::LocalTransport>(std::move(endpoint), limits.max_client_message), seconds};
 }
 
 }  // namespace pms::bench

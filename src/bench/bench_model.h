@@ -33,7 +33,9 @@ std::vector<Camera> path_of(const BenchModel& m, app::PathKind kind, uint32_t fr
 struct InProcessSession {
   std::shared_ptr<server::Session> session;
   std::unique_ptr<client::LocalTransport> transport;
+  // The thread CPU time the session's receive() and pump() took: the server's share of a flight.
+  std::shared_ptr<double> server_seconds;
 };
-InProcessSession in_process_session(const BenchModel& m);
+InProcessSession in_process_session(const BenchModel& m, const server::ServerLimits& limits = {});
 
 }  // namespace pms::bench

@@ -27,7 +27,9 @@ constexpr BenchGroup kGroups[] = {
      run_receiver_group},
     {"multilevel", "E10 multilevel memory against a plain mesh, LOD switch and geomorph times, bytes per level loaded",
      run_multilevel_group},
-    {"soak", "many clients resuming and reconnecting for minutes: server RSS over time, failures, latency per minute",
+    {"soak",
+     "many clients resuming and reconnecting for minutes: server RSS over time, failures, latency per minute; "
+     "failover: viewers behind HAProxy resuming on another origin when theirs is killed",
      run_soak_group},
     {"dag", "E9 DAG traversals: time per frame, accuracy against priority, fronts, session memory, bytes down",
      run_dag_group},

@@ -42,8 +42,6 @@ constexpr uint32_t kPathFrames = 120, kQuickPathFrames = 30;
 const std::vector<uint32_t> kClientCounts = {1, 10, 100, 500};
 const std::vector<uint32_t> kQuickClientCounts = {1, 10};
 constexpr uint32_t kE11Frames = 20;
-// A stored vertex front holds one 64-bit <tree-id, node-id> (or pointer) per active node.
-constexpr double kFrontEntryBytes = 8;
 
 // kim-lee-kobbelt 2005 Fig 9: bytes until the tolerance is satisfied.
 struct PaperE5 {
@@ -97,31 +95,63 @@ std::string percent_of(uint64_t part, uint64_t whole) {
 struct Laps {
   uint64_t lap_down[2] = {0, 0}, lap_up[2] = {0, 0};
   uint64_t splits = 0, payload_down = 0;
-  double mean_ratio = 0, max_ratio = 0;  // windowed tags / stored front, over the frames
-  uint64_t max_tag_bytes = 0, max_front_bytes = 0;
+  // Per frame, over the frames: the session's front as windowed tags, and as the compact code, over a stored
+  // front (one 64-bit id per active node, allocated).
+  double mean_ratio = 0, max_ratio = 0;
+  double compact_mean_ratio = 0, compact_max_ratio = 0;
+  uint64_t max_tag_bytes = 0, max_compact_bytes = 0, max_front_bytes = 0;
   uint64_t max_front_nodes = 0, max_window_nodes = 0;
+  double compact_seconds = 0, tags_seconds = 0;  // the two sessions' CPU time
   json frames = json::array();
 };
 
+// A stored front, allocated as a server would keep it: one 64-bit id per active node.
+uint64_t stored_front_bytes(const ModelData& model, const ActiveTags& tags) {
+  std::vector<uint64_t> ids;
+  ids.reserve(tags.active_count());
+  for (uint32_t v = tags.next_active(0); v != UINT32_MAX; v = tags.next_active(v + 1)) {
+    const VertexId id = model.id(v);
+    ids.push_back(uint64_t(id.tree) << 40 | id.node);
+  }
+  return ids.capacity() * sizeof(uint64_t);
+}
+
+// Two sessions fly the same laps side by side, one parking its front coded after every answer
+// (park_after_ms 0; a server parks a session once it is idle) and one keeping the paper's windowed tags: the
+// same splits, so the same fronts.
 Laps run_laps(const BenchModel& m, const std::vector<Camera>& path) {
-  InProcessSession local = in_process_session(m);
-  client::StreamingClient client(std::move(local.transport), client::ClientOptions{kTolerance});
+  server::ServerLimits compact_limits, tags_limits;
+  compact_limits.park_after_ms = 0;
+  tags_limits.compact_fronts = false;
+  InProcessSession compact = in_process_session(m, compact_limits);
+  InProcessSession windowed = in_process_session(m, tags_limits);
+  const std::shared_ptr<double> compact_seconds = compact.server_seconds, tags_seconds = windowed.server_seconds;
+  const std::shared_ptr<server::Session> compact_session = compact.session, tags_session = windowed.session;
+  client::StreamingClient client(std::move(compact.transport), client::ClientOptions{kTolerance});
+  client::StreamingClient tags_client(std::move(windowed.transport), client::ClientOptions{kTolerance});
   client.open(m.name);
+  tags_client.open(m.name);
+  const ModelData& model = m.served->model();
   Laps laps;
-  double ratio_sum = 0;
+  double ratio_sum = 0, compact_sum = 0;
   uint32_t index = 0;
   for (int lap = 0; lap < 2; ++lap)
     for (const Camera& camera : path) {
       const client::FrameReport r = client.frame(camera);
+      tags_client.frame(camera);
       laps.lap_down[lap] += r.down_bytes;
       laps.lap_up[lap] += r.up_bytes;
-      const ActiveTags& tags = local.session->tags();
-      const double front = double(tags.active_count()) * kFrontEntryBytes;
-      const double ratio = double(tags.memory_bytes()) / front;
+      const ActiveTags tags = tags_session->front_tags();
+      const uint64_t tag_bytes = tags_session->front_bytes(), compact_bytes = compact_session->front_bytes();
+      const uint64_t front = stored_front_bytes(model, tags);
+      const double ratio = double(tag_bytes) / double(front), compact_ratio = double(compact_bytes) / double(front);
       ratio_sum += ratio;
+      compact_sum += compact_ratio;
       laps.max_ratio = std::max(laps.max_ratio, ratio);
-      laps.max_tag_bytes = std::max<uint64_t>(laps.max_tag_bytes, tags.memory_bytes());
-      laps.max_front_bytes = std::max<uint64_t>(laps.max_front_bytes, uint64_t(front));
+      laps.compact_max_ratio = std::max(laps.compact_max_ratio, compact_ratio);
+      laps.max_tag_bytes = std::max(laps.max_tag_bytes, tag_bytes);
+      laps.max_compact_bytes = std::max(laps.max_compact_bytes, compact_bytes);
+      laps.max_front_bytes = std::max(laps.max_front_bytes, front);
       laps.max_front_nodes = std::max<uint64_t>(laps.max_front_nodes, tags.active_count());
       laps.max_window_nodes = std::max<uint64_t>(laps.max_window_nodes, tags.win_max() - tags.win_min() + 1);
       laps.frames.push_back({{"frame", index++},
@@ -129,13 +159,19 @@ Laps run_laps(const BenchModel& m, const std::vector<Camera>& path) {
                              {"down_bytes", r.down_bytes},
                              {"up_bytes", r.up_bytes},
                              {"faces", r.faces},
-                             {"tag_bytes", tags.memory_bytes()},
+                             {"tag_bytes", tag_bytes},
+                             {"compact_bytes", compact_bytes},
                              {"front_bytes", front},
                              {"window", tags.win_max() - tags.win_min() + 1}});
     }
   laps.mean_ratio = ratio_sum / double(2 * path.size());
+  laps.compact_mean_ratio = compact_sum / double(2 * path.size());
   laps.splits = client.session().splits_received();
+  if (tags_client.session().splits_received() != laps.splits)
+    fail("E3", "the compact and the windowed sessions sent different splits");
   laps.payload_down = client.counters().payload_down();
+  laps.compact_seconds = *compact_seconds;
+  laps.tags_seconds = *tags_seconds;
   return laps;
 }
 
@@ -372,9 +408,13 @@ Table e34_table() {
                 {"lap 2 down B", true},
                 {"lap 2 up B", true},
                 {"tags / front (mean)", true},
-                {"(max)", true},
+                {"tags / front (max)", true},
+                {"compact / front (mean)", true},
+                {"compact / front (max)", true},
                 {"peak tags B", true},
+                {"peak compact B", true},
                 {"peak front B", true},
+                {"server CPU compact / tags", true},
                 {"front / nodes", true},
                 {"window / nodes", true}});
 }
@@ -401,7 +441,10 @@ void run_e2_to_e4(const BenchModel& m, bool quick, Table& e2, Table& e34, json& 
               fixed(bits.attributes, 1), fixed(wire, 1)});
   e34.add_row({m.name, std::to_string(2 * path.size()), thousands(laps.lap_down[0]), thousands(laps.lap_up[0]),
                thousands(laps.lap_down[1]), thousands(laps.lap_up[1]), fixed(100 * laps.mean_ratio, 1) + " %",
-               fixed(100 * laps.max_ratio, 1) + " %", thousands(laps.max_tag_bytes), thousands(laps.max_front_bytes),
+               fixed(100 * laps.max_ratio, 1) + " %", fixed(100 * laps.compact_mean_ratio, 1) + " %",
+               fixed(100 * laps.compact_max_ratio, 1) + " %", thousands(laps.max_tag_bytes),
+               thousands(laps.max_compact_bytes), thousands(laps.max_front_bytes),
+               fixed(laps.compact_seconds / std::max(laps.tags_seconds, 1e-9), 2),
                percent_of(laps.max_front_nodes, m.served->model().node_count()),
                percent_of(laps.max_window_nodes, m.served->model().node_count())});
   record["e2"] = {{"topology_bits", bits.topology},
@@ -413,6 +456,10 @@ void run_e2_to_e4(const BenchModel& m, bool quick, Table& e2, Table& e34, json& 
                      {"lap_up", {laps.lap_up[0], laps.lap_up[1]}},
                      {"tags_over_front_mean", laps.mean_ratio},
                      {"tags_over_front_max", laps.max_ratio},
+                     {"compact_over_front_mean", laps.compact_mean_ratio},
+                     {"compact_over_front_max", laps.compact_max_ratio},
+                     {"server_cpu_compact_seconds", laps.compact_seconds},
+                     {"server_cpu_tags_seconds", laps.tags_seconds},
                      {"frames", laps.frames}};
 }
 
@@ -447,9 +494,12 @@ std::string e2_to_e5_sections(const Table& e2, const Table& e34, const Table& e5
       "\nTopology = v_s's id and the record's v̂_l, v̂_r (split records, docs/protocol.md \"VSPLITS\"). "
       "Position = the record's geometry; normal + color = v_t's, for a model that has them. Whole split "
       "order; the wire column is E3's first lap, frame headers included.\n\n";
-  section += "### E3/E4: two laps of one orbit path, τ = 1 px\n\n" + e34.markdown() + "\nA stored front costs " +
-             fixed(kFrontEntryBytes, 0) +
-             " bytes per active node (one 64-bit id). The tags cost "
+  section += "### E3/E4: two laps of one orbit path, τ = 1 px\n\n" + e34.markdown() +
+             "\nTwo sessions fly the path side by side: one keeps the paper's windowed tags, one parks its front "
+             "as a CompactFront after every answer (`serve --park-after-ms 0`; a server parks a session once it "
+             "is idle), and each column is the session's own allocation (`front_bytes()`) over a stored front, "
+             "allocated as one 64-bit id per active node. \"server CPU\" is the two sessions' thread CPU time in "
+             "receive() and pump(): the compact one decodes and codes its front once per VIEW. The tags cost "
              "a bit per node of the window, which spans from the coarsest active node to the finest, so tags / front "
              "≈ window / (64 × front): at most 10 % needs a front of at least a sixth of the window (peak columns, "
              "as a share of the hierarchy's nodes). A front that mixes unrefined coarse nodes with leaves spans "

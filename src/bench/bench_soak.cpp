@@ -375,6 +375,7 @@ void run_soak_group(BenchContext& context) {
   write_text_file(context.options.out_dir / "soak.json",
                   soak_json(context, run, figures, name, std::move(minute_rows)).dump(2) + "\n");
   context.report += section + text;
+  run_failover_figure(context);
 }
 
 }  // namespace pms::bench

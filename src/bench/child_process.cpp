@@ -14,6 +14,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
+#include <string_view>
 #include <utility>
 
 #include "apps/resource_usage.h"
@@ -64,11 +65,29 @@ bool is_executable_file(const std::string& path) {
   return ::stat(path.c_str(), &st) == 0 && S_ISREG(st.st_mode) && ::access(path.c_str(), X_OK) == 0;
 }
 
-// Runs in the forked child: only async-signal-safe calls until execv. If anything fails, errno
+// This process's environment with `extra`'s entries in place of the inherited ones of the same names,
+// built before fork: the child may not allocate.
+std::vector<char*> child_environment(const std::vector<std::string>& extra) {
+  std::vector<char*> env;
+  for (const std::string& entry : extra) env.push_back(const_cast<char*>(entry.c_str()));
+  const auto overridden = [&extra](std::string_view inherited) {
+    const std::string_view name = inherited.substr(0, inherited.find('='));
+    for (const std::string& entry : extra)
+      if (std::string_view(entry).substr(0, entry.find('=')) == name) return true;
+    return false;
+  };
+  for (char** e = environ; *e; ++e)
+    if (!overridden(*e)) env.push_back(*e);
+  env.push_back(nullptr);
+  return env;
+}
+
+// Runs in the forked child: only async-signal-safe calls until execve. If anything fails, errno
 // goes back through `report` (closed by a successful exec) so the parent can name the problem.
-[[noreturn]] void exec_child(const char* program, char* const* argv, int in, int out, int err, int report) {
+[[noreturn]] void exec_child(const char* program, char* const* argv, char* const* env, int in, int out, int err,
+                             int report) {
   if (::dup2(in, STDIN_FILENO) >= 0 && ::dup2(out, STDOUT_FILENO) >= 0 && ::dup2(err, STDERR_FILENO) >= 0)
-    ::execv(program, argv);
+    ::execve(program, argv, env);
   const int error = errno;
   [[maybe_unused]] const ssize_t written = ::write(report, &error, sizeof error);
   ::_exit(127);
@@ -158,6 +177,7 @@ ChildResult run_child(const std::vector<std::string>& argv, const ChildOptions& 
   std::vector<char*> args;
   for (const std::string& arg : argv) args.push_back(const_cast<char*>(arg.c_str()));
   args.push_back(nullptr);
+  const std::vector<char*> env = child_environment(options.environment);
 
   Fd in(::open("/dev/null", O_RDONLY | O_CLOEXEC));
   if (in.get() < 0) fail("/dev/null", std::strerror(errno));
@@ -177,8 +197,8 @@ ChildResult run_child(const std::vector<std::string>& argv, const ChildOptions& 
   const pid_t pid = ::fork();
   if (pid < 0) fail(name, errno_text("fork"));
   if (pid == 0)
-    exec_child(program.c_str(), args.data(), in.get(), out_file.get() >= 0 ? out_file.get() : out.write.get(),
-               err.write.get(), report.write.get());
+    exec_child(program.c_str(), args.data(), env.data(), in.get(),
+               out_file.get() >= 0 ? out_file.get() : out.write.get(), err.write.get(), report.write.get());
 
   // Drop the child's ends: end of file on a pipe then means the child (and anything it started) is done with it.
   in.reset();

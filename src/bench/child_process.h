@@ -22,6 +22,9 @@ struct ChildOptions {
   // Called with each piece of stdout as it arrives (it is captured as well), on the thread that runs
   // run_child: a caller can act on a line (a server's "listening") while the child keeps running.
   std::function<void(std::string_view)> on_stdout;
+  // "NAME=VALUE" entries the child gets on top of this process's environment (a NAME given here
+  // replaces the inherited one): what a configuration file reads as "${NAME}" (HAProxy's).
+  std::vector<std::string> environment;
 };
 
 struct ChildResult {

@@ -54,10 +54,12 @@ ServeStats parse_serve_stats(const json& line) {
   return s;
 }
 
-ServeChild::ServeChild(const std::string& pmstream_exe, const std::vector<std::string>& args, double start_timeout_s) {
+ServeChild::ServeChild(const std::string& pmstream_exe, const std::vector<std::string>& args, double start_timeout_s,
+                       uint16_t port) {
   std::vector<std::string> argv = {pmstream_exe, "serve"};
   argv.insert(argv.end(), args.begin(), args.end());
-  for (const char* arg : {"--json", "--host", "127.0.0.1", "--port", "0"}) argv.push_back(arg);
+  for (const char* arg : {"--json", "--host", "127.0.0.1", "--port"}) argv.push_back(arg);
+  argv.push_back(std::to_string(port));
   thread_ = std::thread([this, argv] {
     ChildOptions options;
     options.on_start = [this](pid_t pid) { pid_ = pid; };

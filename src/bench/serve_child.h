@@ -35,9 +35,11 @@ ServeStats parse_serve_stats(const nlohmann::json& line);
 
 class ServeChild {
  public:
-  // Runs `pmstream_exe serve ARGS... --json --host 127.0.0.1 --port 0` and waits for its "listening" line
-  // (the port the kernel picked is in it, so nothing has to guess a free one).
-  ServeChild(const std::string& pmstream_exe, const std::vector<std::string>& args, double start_timeout_s = 120);
+  // Runs `pmstream_exe serve ARGS... --json --host 127.0.0.1 --port PORT` and waits for its "listening"
+  // line (with port 0, the port the kernel picked is in it, so nothing has to guess a free one). A given
+  // port brings a server back where a proxy in front of it expects it.
+  ServeChild(const std::string& pmstream_exe, const std::vector<std::string>& args, double start_timeout_s = 120,
+             uint16_t port = 0);
   ~ServeChild();  // a server still running is killed (SIGKILL)
   ServeChild(const ServeChild&) = delete;
   ServeChild& operator=(const ServeChild&) = delete;

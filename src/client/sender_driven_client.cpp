@@ -12,7 +12,7 @@ bool adapt_with_held(SelectiveRefinement& refinement) {
   // collapses that waited for a geomorph. Bounded, whatever the loop does.
   for (int pass = 0; pass < 64 && !stats.capped && stats.ops() > 0 && refinement.missing().empty(); ++pass)
     stats = refinement.adapt();
-  return !refinement.missing().empty();
+  return refinement.lacks_packets();
 }
 
 }  // namespace
@@ -36,7 +36,7 @@ bool SenderDrivenClient::adapt(const Camera& camera, ClientSession& session) {
   // makes (collapses that waited for a geomorph, parents their children's collapses left unwanted) happen
   // on the next frames. Until one finds nothing to do, the viewer is in_motion() (SelectiveRefinement::at_rest).
   refinement.adapt();
-  return !refinement.missing().empty();
+  return refinement.lacks_packets();
 }
 
 void SenderDrivenClient::settle(ClientSession& session) { session.refinement().converge(); }

@@ -41,6 +41,25 @@ class CollapseReplay {
 
   uint32_t producer(uint32_t v) const { return producer_[v]; }
 
+  // The normal cone of the live triangles around v and `onto` (MultilevelDag::cone), into cone[0..3].
+  void star_normal_cone(const MultilevelMesh& m, uint32_t v, uint32_t onto, float cone[4]) {
+    normals_.clear();
+    for (uint32_t around : {v, onto}) {
+      if (around == kNoRep) continue;
+      for (uint32_t t : around_[around])
+        if (live_[t]) add_unit_normal(m, t);
+    }
+    float axis[3] = {0, 0, 0};
+    for (size_t i = 0; i < normals_.size(); i += 3)
+      for (int k = 0; k < 3; ++k) axis[k] += normals_[i + size_t(k)];
+    const float length = std::sqrt(axis[0] * axis[0] + axis[1] * axis[1] + axis[2] * axis[2]);
+    float lowest_cos = length > 0 ? 1.0f : -1.0f;
+    for (int k = 0; k < 3; ++k) cone[k] = length > 0 ? axis[k] / length : 0;
+    for (size_t i = 0; i < normals_.size(); i += 3)
+      lowest_cos = std::min(lowest_cos, cone[0] * normals_[i] + cone[1] * normals_[i + 1] + cone[2] * normals_[i + 2]);
+    cone[3] = lowest_cos > 0 ? 1 - lowest_cos * lowest_cos : 2;
+  }
+
   // v onto `onto` (kNoRep: v vanishes): the triangles that degenerate go, with v as their remover when
   // they are of v's level.
   void collapse(uint32_t v, uint32_t onto, uint32_t level, const std::vector<uint32_t>& triangle_level,
@@ -67,6 +86,17 @@ class CollapseReplay {
   }
 
  private:
+  void add_unit_normal(const MultilevelMesh& m, uint32_t t) {
+    float p[3][3];
+    for (int c = 0; c < 3; ++c) m.point(corners_[3 * size_t(t) + size_t(c)], p[c]);
+    const float a[3] = {p[1][0] - p[0][0], p[1][1] - p[0][1], p[1][2] - p[0][2]};
+    const float b[3] = {p[2][0] - p[0][0], p[2][1] - p[0][1], p[2][2] - p[0][2]};
+    const float n[3] = {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
+    const float length = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+    if (!(length > 0)) return;  // a sliver has no direction to add
+    for (int k = 0; k < 3; ++k) normals_.push_back(n[k] / length);
+  }
+
   bool degenerate(uint32_t t) const {
     const uint32_t* c = &corners_[3 * size_t(t)];
     return c[0] == c[1] || c[1] == c[2] || c[2] == c[0];
@@ -76,6 +106,7 @@ class CollapseReplay {
   std::vector<uint8_t> live_;
   std::vector<std::vector<uint32_t>> around_;
   std::vector<uint32_t> producer_;  // per vertex: the latest collapse onto it (the paper's "list or hash table")
+  std::vector<float> normals_;      // star_normal_cone's scratch
 };
 
 // Per element of a prefix-by-level numbering (counts[l]: elements of levels >= l), its level.
@@ -130,7 +161,7 @@ void to_csr(std::vector<Requirement>& pairs, uint32_t rows, bool by_needs, std::
 uint64_t MultilevelDag::memory_bytes() const {
   return sizeof(uint32_t) * (prerequisite_offsets.size() + prerequisites.size() + dependent_offsets.size() +
                              dependents.size() + remover.size()) +
-         sizeof(float) * radius.size();
+         sizeof(float) * (radius.size() + cone.size());
 }
 
 MultilevelDag build_multilevel_dag(const MultilevelMesh& m) {
@@ -139,6 +170,7 @@ MultilevelDag build_multilevel_dag(const MultilevelMesh& m) {
   dag.top_vertices = m.vertex_count.back();
   dag.remover.assign(m.faces(), kNone);
   dag.radius.assign(dag.vertices - dag.top_vertices, 0.0f);
+  dag.cone.assign(4 * size_t(dag.vertices - dag.top_vertices), 0.0f);
   const std::vector<uint32_t> triangle_level = levels_of(m.triangle_count);
   CollapseReplay replay(m);
   std::vector<Requirement> pairs;
@@ -163,6 +195,7 @@ MultilevelDag build_multilevel_dag(const MultilevelMesh& m) {
         if (replay.producer(y) != kNone) producers.push_back(replay.producer(y));
       sort_unique(producers);
       for (uint32_t u : producers) pairs.push_back({u, v});
+      replay.star_normal_cone(m, v, onto, &dag.cone[4 * size_t(v - dag.top_vertices)]);
       replay.collapse(v, onto, l, triangle_level, dag.remover);
     }
     replay.drop_level(m.triangle_count[l + 1], m.triangle_count[l]);

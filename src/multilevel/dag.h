@@ -31,6 +31,10 @@ struct MultilevelDag {
   std::vector<uint32_t> remover;
   // Per node, the radius of its collapse's star around the vertex: the screen-size rule's extent.
   std::vector<float> radius;
+  // Per node, 4 floats: the normal cone of the triangles its split changes (those around the vertex and its
+  // representative before the collapse), as Hoppe 1997 §4.2's back-face test reads it: the unit axis and
+  // sin² of the half-angle; above 1 when the half-angle reaches 90° (the star is never back-facing).
+  std::vector<float> cone;
 
   std::span<const uint32_t> prerequisites_of(uint32_t v) const {
     return {prerequisites.data() + prerequisite_offsets[v], prerequisites.data() + prerequisite_offsets[v + 1]};

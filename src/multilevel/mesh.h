@@ -33,6 +33,11 @@ struct MultilevelMesh {
   uint32_t vertices() const { return vertex_count.empty() ? 0 : vertex_count[0]; }
   uint32_t faces() const { return triangle_count.empty() ? 0 : triangle_count[0]; }
   uint64_t stored_representatives() const;
+  // Vertex v's position in 3D (a 2D mesh lies in z = 0).
+  void point(uint32_t v, float p[3]) const {
+    p[2] = 0;
+    for (uint32_t k = 0; k < dimension; ++k) p[k] = positions[size_t(v) * dimension + k];
+  }
   // Vertices and triangles that belong to level l itself (its batch in a file).
   uint32_t level_vertices(uint32_t l) const;
   uint32_t level_triangles(uint32_t l) const;

@@ -25,8 +25,9 @@ std::vector<uint32_t> splits_in_region(const MultilevelMesh& mesh, const Multile
                                        uint32_t level = 0);
 
 // The screen-size rule: the collapses whose star (the ball of the node's radius around its vertex) meets
-// the view frustum and would cover more than `pixels` pixels on screen (Hoppe 1997 §4.3's kappa); in front
-// of the near plane counts as large.
+// the view frustum, does not face away from the eye (Hoppe 1997 §4.2's normal cone, MultilevelDag::cone)
+// and would cover more than `pixels` pixels on screen (§4.3's kappa); in front of the near plane counts
+// as large.
 std::vector<uint32_t> splits_for_view(const MultilevelMesh& mesh, const MultilevelDag& dag, const ViewParams& view,
                                       float pixels);
 

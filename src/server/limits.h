@@ -27,6 +27,12 @@ struct ServerLimits {
   uint32_t accept_backoff_ms = 1000;      // longest pause after a failed accept (EMFILE...), doubling from 10 ms
   uint32_t position_bits = protocol::kDefaultPositionBits;
   uint32_t threads = 0;  // I/O threads; 0 = one per core
+  // A sender-driven session holds its front coded (compact_front.h) once it has had no message for
+  // park_after_ms (0: after every answer), or as windowed active tags throughout (kim-lee-kobbelt §6.1; the
+  // bench's baseline). Coding and decoding cost a pass over the front each: a flying session, which sends
+  // a VIEW a frame, keeps its tags; an idle one, most of a real fleet, holds about two bits a node.
+  bool compact_fronts = true;
+  uint32_t park_after_ms = 1000;
 };
 
 // Every bound the HTTP transport (receiver-driven mode) puts on a peer (docs/operating.md, "HTTP").

@@ -44,6 +44,7 @@ SenderDrivenMode::SenderDrivenMode(const protocol::OpenHeader& open, protocol::F
   const uint32_t roots = context_.served.model().root_count;
   if (!open.resume) {
     tags_ = ActiveTags(roots);
+    park_if_due();
     queue_base();
     return;
   }
@@ -98,6 +99,7 @@ void SenderDrivenMode::pump_resume(uint64_t& work) {
   }
   tags_ = std::move(r.tags);
   resume_.reset();
+  park_if_due();
   queue_base();
 }
 
@@ -111,6 +113,7 @@ void SenderDrivenMode::queue_base() {
 // A VIEW's answer: splits accumulate across slices into batches of batch_splits. Splits of an earlier
 // VIEW still in the batch go out with the new one's frame number (the client applies every batch).
 void SenderDrivenMode::pump_answer(uint64_t& work) {
+  unpark();
   if (std::exchange(view_.restart, false))
     streamer_.start(context_.served.model(), context_.served.tables->selective().dependencies, tags_, importance_);
   const size_t limit = context_.limits.batch_splits;
@@ -121,7 +124,32 @@ void SenderDrivenMode::pump_answer(uint64_t& work) {
     streamer_.stop();
     view_.pending = false;
     emit_batch(batch_.size(), true);
+    park_if_due();
   }
+}
+
+bool SenderDrivenMode::can_park() const {
+  return context_.limits.compact_fronts && parked_.empty() && !resume_ && !view_.pending;
+}
+
+void SenderDrivenMode::park_front() {
+  if (!can_park()) return;
+  parked_ = CompactFront(context_.served.model(), tags_);
+  tags_ = ActiveTags();
+}
+
+void SenderDrivenMode::park_if_due() {
+  if (context_.limits.park_after_ms == 0) park_front();
+}
+
+void SenderDrivenMode::unpark() {
+  if (parked_.empty()) return;
+  tags_ = parked_.tags(context_.served.model());
+  parked_ = CompactFront();
+}
+
+ActiveTags SenderDrivenMode::front_tags() const {
+  return parked_.empty() ? tags_ : parked_.tags(context_.served.model());
 }
 
 // The first `count` splits of the batch (a VSPLITS never holds more than batch_splits: a dependency chain
@@ -140,7 +168,7 @@ void SenderDrivenMode::emit_batch(size_t count, bool final) {
 }
 
 size_t SenderDrivenMode::state_bytes() const {
-  size_t bytes = sizeof(*this) + tags_.memory_bytes() + streamer_.memory_bytes() +
+  size_t bytes = sizeof(*this) + front_bytes() + streamer_.memory_bytes() +
                  batch_.capacity() * sizeof(uint32_t) + batch_cuts_.capacity() * sizeof(ActualCuts);
   if (resume_)
     bytes += sizeof(Resume) + resume_->payload.capacity() + resume_->tags.memory_bytes() +

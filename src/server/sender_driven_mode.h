@@ -1,7 +1,8 @@
-// The sender-driven mode (kim-lee-kobbelt 2005 §5.3, §6.1): the server keeps the client's front as
-// windowed active tags and answers each VIEW with SelectiveStreaming over it, in batches of vsplit packets
-// with refinement info, so the client can refine on its own until its front needs more. A session can be
-// resumed: OPEN then carries the leaves the client holds, and the tags are rebuilt from them.
+// The sender-driven mode (kim-lee-kobbelt 2005 §5.3, §6.1): the server keeps the client's front and
+// answers each VIEW with SelectiveStreaming over it, in batches of vsplit packets with refinement info, so
+// the client can refine on its own until its front needs more. The front is windowed active tags while a
+// VIEW is answered, and coded (compact_front.h) in between, unless ServerLimits::compact_fronts is off. A
+// session can be resumed: OPEN then carries the leaves the client holds, and the front is rebuilt from them.
 // Its plain option (StreamMode::sender_plain, kim-lee-kobbelt §6.3) streams the same splits in the same
 // order, but as plain_packets.h codes them: the client's actual cut vertices, no refinement info.
 #pragma once
@@ -14,6 +15,7 @@
 #include "protocol/framing.h"
 #include "protocol/stream_context.h"
 #include "server/active_tags.h"
+#include "server/compact_front.h"
 #include "server/selective_streaming.h"
 #include "server/session_mode.h"
 
@@ -31,9 +33,11 @@ class SenderDrivenMode : public SessionMode {
   bool opened() const override { return !resume_; }
   void stop() override;
   size_t state_bytes() const override;
-  size_t front_bytes() const override { return tags_.memory_bytes(); }
+  size_t front_bytes() const override { return tags_.memory_bytes() + parked_.memory_bytes(); }
   uint64_t splits_sent() const override { return splits_sent_; }
-  const ActiveTags* tags() const override { return &tags_; }
+  ActiveTags front_tags() const override;
+  bool can_park() const override;
+  void park() override { park_front(); }
 
  private:
   struct Resume;  // an OPEN's resume front, checked and applied a slice at a time
@@ -41,10 +45,15 @@ class SenderDrivenMode : public SessionMode {
   void pump_resume(uint64_t& work);
   void pump_answer(uint64_t& work);
   void emit_batch(size_t count, bool final);
+  // The front between answers: coded (compact_fronts), and decoded when an answer starts.
+  void park_front();
+  void unpark();
+  void park_if_due();  // at once when park_after_ms is 0; else the connection parks it (can_park)
 
   ModeContext context_;
   std::unique_ptr<Resume> resume_;
-  ActiveTags tags_;
+  ActiveTags tags_;       // the front while a VIEW is answered (always, without compact_fronts)
+  CompactFront parked_;  // the front between answers (compact_fronts)
   LatestView view_;
   Importance importance_;
   SelectiveStreamer streamer_;

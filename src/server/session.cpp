@@ -170,10 +170,4 @@ bool Session::pump() {
   return true;
 }
 
-const ActiveTags& Session::tags() const {
-  static const ActiveTags none;
-  const ActiveTags* tags = mode_ ? mode_->tags() : nullptr;
-  return tags ? *tags : none;
-}
-
 }  // namespace pms::server

@@ -64,8 +64,13 @@ class Session {
   // and the part of them that grows with the client's front.
   size_t state_bytes() const { return sizeof(*this) + (mode_ ? mode_->state_bytes() : 0); }
   size_t front_bytes() const { return mode_ ? mode_->front_bytes() : 0; }
-  // The client's front, for modes that keep one as active tags (empty otherwise).
-  const ActiveTags& tags() const;
+  // SessionMode::can_park and park: the connection parks a session that stayed silent long enough.
+  bool can_park() const { return mode_ && !closing_ && mode_->can_park(); }
+  void park() {
+    if (can_park()) mode_->park();
+  }
+  // The client's front, for modes that keep one (empty otherwise): SessionMode::front_tags().
+  ActiveTags front_tags() const { return mode_ ? mode_->front_tags() : ActiveTags(); }
   const ServedModel* model() const { return model_; }
   uint64_t splits_sent() const { return mode_ ? mode_->splits_sent() : 0; }
   protocol::StreamMode mode() const { return mode_kind_; }

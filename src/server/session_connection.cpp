@@ -38,7 +38,7 @@ void SessionConnection::start() {
   boost::system::error_code ec;
   const asio::ip::tcp::endpoint peer = socket().remote_endpoint(ec);
   peer_ = ec ? "unknown peer" : peer.address().to_string() + ":" + std::to_string(peer.port());
-  connected_ = last_activity_ = refilled_ = Clock::now();
+  connected_ = last_activity_ = last_message_ = refilled_ = Clock::now();
   tokens_ = limits_.max_message_rate;
   // An OPEN waiting for its tables gets its turn back when they are built; meanwhile the handshake
   // deadline runs on.
@@ -78,7 +78,7 @@ void SessionConnection::receive_frames(Clock::time_point turn_end) {
       session_.abort_with(e.code, e.what());
       return;
     }
-    last_activity_ = Clock::now();
+    last_activity_ = last_message_ = Clock::now();
     const size_t before = session_.outbox().size();
     const size_t bytes = protocol::kFrameHeaderBytes + frame.payload.size();
     session_.receive(std::move(frame));
@@ -275,6 +275,7 @@ SessionConnection::Clock::time_point SessionConnection::next_deadline() const {
   if (!session_.opened()) at = std::min(at, connected_ + milliseconds(limits_.handshake_timeout_ms));
   if (frame_clock_running()) at = std::min(at, frame_started_ + milliseconds(limits_.frame_timeout_ms));
   if (write_deadline_.running()) at = std::min(at, write_deadline_.next_look());
+  if (session_.can_park() && limits_.park_after_ms) at = std::min(at, last_message_ + milliseconds(limits_.park_after_ms));
   return at;
 }
 
@@ -301,6 +302,10 @@ void SessionConnection::on_timer(const boost::system::error_code& ec) {
   }
   const std::string missed = missed_deadline(now);
   if (!missed.empty()) return time_out(missed);
+  if (session_.can_park() && now >= last_message_ + milliseconds(limits_.park_after_ms)) {
+    session_.park();
+    stats_.fronts_parked++;
+  }
   arm_timer();
 }
 

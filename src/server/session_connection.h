@@ -138,6 +138,7 @@ class SessionConnection : public std::enable_shared_from_this<SessionConnection>
   bool reads_paused_ = false;  // throttled, or back-pressure: the kernel's buffers push back on the peer
   const void* group_;  // the TableBuilds group of this server's sessions
   Clock::time_point connected_, last_activity_, frame_started_, close_by_;
+  Clock::time_point last_message_;  // the last frame from the peer: a session silent for park_after_ms parks
   DrainWatch write_deadline_{limits_.write_timeout_ms};  // runs while answer bytes wait, here or in the kernel
   uint64_t written_ = 0;  // bytes into the socket
   Clock::time_point timer_at_ = Clock::time_point::max();

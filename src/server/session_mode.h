@@ -57,8 +57,13 @@ class SessionMode {
   virtual size_t state_bytes() const = 0;
   virtual size_t front_bytes() const = 0;
   virtual uint64_t splits_sent() const = 0;
-  // The client's front as active tags, for the modes that keep one (tests and fuzzers audit it).
-  virtual const ActiveTags* tags() const { return nullptr; }
+  // The mode holds state it could keep in a form that costs less between answers, at the cost of a pass to
+  // restore it (the sender-driven front, ServerLimits::park_after_ms), and park() moves it there.
+  virtual bool can_park() const { return false; }
+  virtual void park() {}
+  // The client's front as active tags (decoded when the mode holds it coded), for the modes that keep one:
+  // tests and the bench audit it. Empty for the others.
+  virtual ActiveTags front_tags() const { return {}; }
 };
 
 // The mode an OPEN asks for, over the model it names. `open_frame` is the OPEN itself: a mode that takes

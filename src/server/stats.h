@@ -14,7 +14,8 @@ struct ServerStats {
   std::atomic<uint64_t> accept_failures{0};
   std::atomic<uint64_t> longest_turn_us{0};    // the longest one session held an I/O thread in one go
   std::atomic<uint64_t> peak_state_bytes{0};   // the largest Session::state_bytes() seen
-  std::atomic<uint64_t> peak_buffer_bytes{0};  // the same without the active tags
+  std::atomic<uint64_t> peak_buffer_bytes{0};  // the same without the client's front
+  std::atomic<uint64_t> fronts_parked{0};      // sender-driven fronts coded once their session went idle
 };
 
 // The HTTP transport's counters (docs/operating.md, "The JSON lines").

@@ -29,7 +29,7 @@ class ViewIndependentMode : public SessionMode {
   size_t state_bytes() const override;
   size_t front_bytes() const override { return tags_.memory_bytes(); }
   uint64_t splits_sent() const override { return sent_; }
-  const ActiveTags* tags() const override { return &tags_; }
+  ActiveTags front_tags() const override { return tags_; }
 
  private:
   struct Prefix;  // the prefix a VIEW needs, found a slice at a time

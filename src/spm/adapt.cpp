@@ -89,7 +89,10 @@ void SelectiveRefinement::set_view(const ViewParams& view) {
 // Only what qrefine reads decides the walk: the same bytes give the same frame.
 void SelectiveRefinement::use_criteria(const ViewCriteria& criteria) {
   static_assert(sizeof(ViewCriteria) == 28 * sizeof(float), "compared as bytes: no padding");
-  if (std::memcmp(&criteria, &view_, sizeof view_) != 0) settled_ = false;
+  if (std::memcmp(&criteria, &view_, sizeof view_) != 0) {
+    settled_ = false;
+    view_moved_ = true;
+  }
   view_ = criteria;
   update_plane_bounds();
 }
@@ -330,14 +333,23 @@ void SelectiveRefinement::pin_chain(uint32_t v) {
   return kNone;
 }
 
+// Kept by this frame's walk or, when the walk did not cover every tree, by any walk since every tree was
+// last walked: a tree not walked this frame may still need the nodes it forced in other trees.
+bool SelectiveRefinement::recently_kept(uint32_t v) const {
+  const uint32_t kept = slots_[v].kept;
+  return kept == frame_ || (!whole_walk_ && kept >= earlier_round_);
+}
+
 // Every split node not kept this frame lies in the subtree of a top that stayed unkept. Collapse them
 // children first; a collapse the reverse partial order refuses waits for the split that depends on it
-// (itself unkept, so it goes too) and is retried.
+// (itself unkept, so it goes too) and is retried. After a paused walk, what other trees' last walks kept
+// stays.
 void SelectiveRefinement::collapse_unwanted(FrameStats& stats) {
   const VertexHierarchy& h = mesh_->hierarchy();
   collapse_.clear();
   for (uint32_t top : tops_) {
-    if (state(top).kept == frame_) continue;
+    state(top);
+    if (recently_kept(top)) continue;
     const size_t first = collapse_.size();
     subtree_.clear();
     subtree_.push_back(top);
@@ -345,6 +357,7 @@ void SelectiveRefinement::collapse_unwanted(FrameStats& stats) {
       const uint32_t v = subtree_.back();
       subtree_.pop_back();
       if (mesh_->is_active(v)) continue;
+      if (!whole_walk_ && v != top && (state(v), recently_kept(v))) continue;  // its ancestors' collapses wait
       collapse_.push_back(v);
       subtree_.push_back(h.first_child(v));
       subtree_.push_back(h.first_child(v) + 1);
@@ -382,6 +395,53 @@ void SelectiveRefinement::collapse_unwanted(FrameStats& stats) {
   }
 }
 
+// Walks the forest's trees from next_root_ on; true when it walked every one. It pauses past the time
+// budget only while the view moves: a view that stays is walked whole, so a frame that then finds nothing
+// to do has reached the target.
+bool SelectiveRefinement::walk_trees(FrameStats& stats) {
+  const VertexHierarchy& h = mesh_->hierarchy();
+  const uint32_t roots = h.root_count();
+  const bool may_pause = options_.time_budget_us != 0 && view_moved_;
+  uint32_t evaluated = 0;  // a local, not stats.evaluated: the loop's calls may write stats
+  counted_ = 0;
+  uint32_t walked = 0, r = next_root_ < roots ? next_root_ : 0;
+  for (; walked < roots; ++walked, r = r + 1 < roots ? r + 1 : 0) {
+    if (walked > 0 && may_pause && Clock::now() >= deadline_) break;
+    if (r == 0) {
+      earlier_round_ = round_;
+      round_ = frame_;
+    }
+    walk_tree(r, stats, evaluated);
+  }
+  next_root_ = r;
+  stats.evaluated = evaluated + counted_;
+  if (walked < roots) return false;
+  round_ = earlier_round_ = frame_;  // every tree's marks are this frame's
+  return true;
+}
+
+// Top down, a root and all it leads to: a node is evaluated once its parent is kept (the root at once); a
+// forced entry keeps a node whatever its qrefine, in whichever tree it is. Each node is evaluated at most
+// once and kept at most once a frame.
+void SelectiveRefinement::walk_tree(uint32_t root, FrameStats& stats, uint32_t& evaluated) {
+  uint32_t v = mesh_->hierarchy().root_slot(root);
+  if (v >= slot_count_) grow(v + 1);
+  float margin = root_margin_;
+  for (;;) {
+    for (; v != kNone && grown_state(v).kept != frame_; ++evaluated)  // v_u of a kept node follows without the stack
+      v = mesh_->is_active_recorded(v) ? visit_active(v, margin, stats) : visit_split(v, margin);
+    if (stack_.empty()) return;
+    const StackEntry entry = stack_.back();
+    stack_.pop_back();
+    v = entry.tagged >> 1;
+    margin = entry.margin;
+    if (entry.tagged & 1) {
+      v = justify(v);
+      margin = -INFINITY;
+    }
+  }
+}
+
 bool SelectiveRefinement::unchanged_since_settled() const {
   return settled_ && settled_changes_ == mesh_->changes() && settled_size_ == mesh_->hierarchy().size();
 }
@@ -400,40 +460,24 @@ FrameStats SelectiveRefinement::adapt() {
       if (slots_[v].stamp == stamp_) slots_[v].kept = 0;
     std::fill(reported_.begin(), reported_.end(), 0);
     frame_ = 1;
+    round_ = earlier_round_ = 1;
+    lacked_frame_ = 0;
+    next_root_ = 0;
+    view_moved_ = false;  // the marks are gone: walk every tree
   }
   FrameStats stats;
   missing_.clear();
   tops_.clear();
   stack_.clear();
-  const VertexHierarchy& h = mesh_->hierarchy();
-  // Top down, a root and all it leads to at a time: a node is evaluated once its parent is kept (roots
-  // at once); a forced entry keeps a node whatever its qrefine. Each node is evaluated at most once and
-  // kept at most once.
-  uint32_t evaluated = 0;  // a local, not stats.evaluated: the loop's calls may write stats
-  counted_ = 0;
-  for (uint32_t r = 0; r < h.root_count(); ++r) {
-    uint32_t v = h.root_slot(r);
-    if (v >= slot_count_) grow(v + 1);
-    float margin = root_margin_;
-    for (;;) {
-      for (; v != kNone && grown_state(v).kept != frame_; ++evaluated)  // v_u of a kept node follows without the stack
-        v = mesh_->is_active_recorded(v) ? visit_active(v, margin, stats) : visit_split(v, margin);
-      if (stack_.empty()) break;
-      const StackEntry entry = stack_.back();
-      stack_.pop_back();
-      v = entry.tagged >> 1;
-      margin = entry.margin;
-      if (entry.tagged & 1) {
-        v = justify(v);
-        margin = -INFINITY;
-      }
-    }
-  }
-  stats.evaluated = evaluated + counted_;
+  whole_walk_ = walk_trees(stats);
+  view_moved_ = false;
+  if (!whole_walk_) stats.capped = true;
   collapse_unwanted(stats);
   if (morphs_.enabled()) stats.morphing = uint32_t(morphs_.advance(*mesh_));
   stats.missing = uint32_t(missing_.size());
+  if (!missing_.empty()) lacked_frame_ = frame_;
   settled_ = stats.ops() == 0 && !stats.capped && stats.morphing == 0;
+  const VertexHierarchy& h = mesh_->hierarchy();
   settled_changes_ = mesh_->changes();
   settled_size_ = uint32_t(h.size());
   return stats;
@@ -449,7 +493,7 @@ ConvergeStats SelectiveRefinement::converge(const Fetch& fetch, uint32_t max_fra
     size_t fetched = 0;
     if (fetch && !missing_.empty()) fetched = fetch(missing_);
     total.fetched += fetched;
-    if (frame.ops() == 0 && fetched == 0 && frame.morphing == 0) break;
+    if (frame.ops() == 0 && !frame.capped && fetched == 0 && frame.morphing == 0) break;
   }
   return total;
 }

@@ -29,8 +29,11 @@ struct AdaptOptions {
   uint32_t morph_frames = 0;  // geomorph length in frames; 0 = off (viewers use kDefaultMorphFrames)
   // Wall time a frame's walk and operations may take, in microseconds; 0 = no limit. Past it the frame
   // stops as at max_ops (capped) once it has done kMinOpsPerBudgetedFrame operations, so a frame whose walk
-  // alone overruns still makes progress. A viewer sets it to keep its frames short: a burst of collapses
-  // (a region leaving the view) then spreads over frames instead of stalling one.
+  // alone overruns still makes progress. While the view moves, the walk itself also pauses at the next
+  // tree of the forest past it, and the next frame goes on from there (Hoppe 1997 amortizes the traversal
+  // over frames the same way); a view that stays is walked whole, so the frames still settle on its target.
+  // A viewer sets it to keep its frames short whatever the front's size: a burst of collapses (a region
+  // leaving the view) then spreads over frames instead of stalling one.
   uint32_t time_budget_us = 0;
 };
 constexpr uint32_t kMinOpsPerBudgetedFrame = 8;
@@ -42,7 +45,9 @@ struct FrameStats {
   uint32_t missing = 0;    // leaves reported by missing()
   uint32_t evaluated = 0;  // qrefine evaluations
   uint32_t morphing = 0;   // vertices that moved this frame (geomorphs)
-  bool capped = false;     // stopped at max_ops or time_budget_us; more work is left for the next frames
+  // Stopped at max_ops or time_budget_us, its operations or its walk (some trees were not walked): more
+  // work is left for the next frames.
+  bool capped = false;
   uint32_t ops() const { return vsplits + ecols; }
 };
 
@@ -80,8 +85,12 @@ class SelectiveRefinement {
   void rewalk() { settled_ = false; }
 
   // Active known leaves (slots) that qrefine wants split but whose vsplit packet is not known, including
-  // the leaf a forced chain stopped at. Valid until the next adapt(): the streaming client asks for them.
+  // the leaf a forced chain stopped at, among the trees the last adapt() walked. Valid until the next
+  // adapt(): the streaming client asks for them.
   std::span<const uint32_t> missing() const { return missing_; }
+  // Some leaf wants a packet the hierarchy lacks: missing() is not empty, or, after a walk the time budget
+  // paused, a frame since every tree was last walked reported one.
+  bool lacks_packets() const { return !missing_.empty() || (lacked_frame_ != 0 && lacked_frame_ >= earlier_round_); }
 
   // Adds the vsplit packets of (some of) `leaves` to the hierarchy; returns how many it added.
   using Fetch = std::function<size_t(std::span<const uint32_t> leaves)>;
@@ -135,6 +144,9 @@ class SelectiveRefinement {
   uint32_t visit_split(uint32_t v, float& margin);
   void pin_chain(uint32_t v);
   void report_missing(uint32_t v);
+  bool walk_trees(FrameStats& stats);
+  void walk_tree(uint32_t root, FrameStats& stats, uint32_t& evaluated);
+  bool recently_kept(uint32_t v) const;
   void collapse_unwanted(FrameStats& stats);
   bool cap_reached(const FrameStats& stats) const {
     if (options_.max_ops && stats.ops() >= options_.max_ops) return true;
@@ -152,6 +164,16 @@ class SelectiveRefinement {
   // The last frame changed nothing (no operation, cap or movement); valid while view, options,
   // hierarchy size and mesh changes() stay as they were then.
   bool settled_ = false;
+  // The criteria changed since the last adapt(): the time budget may pause the walk (AdaptOptions).
+  bool view_moved_ = false;
+  // A paused walk goes on at next_root_ in the next frame. A node another tree's walk kept (forced) is
+  // kept until every tree has been walked again: `round_` is the frame in which the walk last began at
+  // root 0 (or walked every tree), `earlier_round_` the one before, and every tree's last walk is at or
+  // after `earlier_round_`. This frame's walk covered every tree: `whole_walk_`.
+  uint32_t next_root_ = 0;
+  uint32_t round_ = 1, earlier_round_ = 1;
+  bool whole_walk_ = true;
+  uint32_t lacked_frame_ = 0;  // the last frame whose missing() was not empty
   using Clock = std::chrono::steady_clock;
   Clock::time_point deadline_;  // this frame's, with options().time_budget_us
   uint64_t settled_changes_ = 0;

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 #include <signal.h>
 #include <sys/stat.h>
+#include <cstdlib>
 #include <cstring>
 #include <fstream>
 #include <optional>
@@ -248,6 +249,21 @@ TEST(ChildProcess, RedirectsStdoutToAFile) {
 TEST(ChildProcess, StdinIsEmpty) {
   const ChildResult r = run_child({"/bin/sh", "-c", "cat; echo done"});
   EXPECT_EQ(r.out, "done\n");
+}
+
+TEST(ChildProcess, TheEnvironmentGivenJoinsAndOverridesTheInheritedOne) {
+  ::setenv("PMSTREAM_TEST_INHERITED", "kept", 1);
+  ::setenv("PMSTREAM_TEST_REPLACED", "old", 1);
+  ChildOptions options;
+  options.environment = {"PMSTREAM_TEST_REPLACED=new", "PMSTREAM_TEST_ADDED=a b"};
+  const ChildResult r = run_child(
+      {"/bin/sh", "-c",
+       "printf '%s|%s|%s|' \"$PMSTREAM_TEST_INHERITED\" \"$PMSTREAM_TEST_REPLACED\" \"$PMSTREAM_TEST_ADDED\"; "
+       "env | grep -c '^PMSTREAM_TEST_REPLACED='"},
+      options);
+  ::unsetenv("PMSTREAM_TEST_INHERITED");
+  ::unsetenv("PMSTREAM_TEST_REPLACED");
+  EXPECT_EQ(r.out, "kept|new|a b|1\n") << "the given value, once";
 }
 
 TEST(ChildProcess, ProgramsThatCannotStartThrow) {

@@ -3,28 +3,21 @@
 // (`pmstream stream --mode receiver`) flying bunny through it. A second client on the same path is served
 // by the cache alone; ten clients on overlapping stretches of one orbit report the hit rate of each fetch
 // policy (docs/protocol.md, "Receiver-driven client").
-#include <utility>  // before asio with C++20 (docs/architecture.md, "Stack")
-
 #include <gtest/gtest.h>
 #include <pwd.h>
-#include <signal.h>
 #include <unistd.h>
-#include <boost/asio.hpp>
 
 #include <algorithm>
-#include <atomic>
-#include <chrono>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <string>
-#include <thread>
 #include <vector>
 
 #include "apps/camera_json.h"
-#include "bench/child_process.h"
+#include "bench/loopback_daemon.h"
 #include "bench/serve_child.h"
 #include "client/http_connection.h"
 #include "common/error.h"
@@ -34,50 +27,23 @@ namespace pms {
 namespace {
 
 namespace fs = std::filesystem;
-using bench::ChildOptions;
-using bench::ChildResult;
 using bench::ServeChild;
-
-std::string slurp(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  return std::string(std::istreambuf_iterator<char>(in), {});
-}
-
-// A port the kernel considers free now (nginx cannot be asked to pick one and report it).
-uint16_t free_loopback_port() {
-  boost::asio::io_context io;
-  boost::asio::ip::tcp::acceptor acceptor(io, {boost::asio::ip::make_address("127.0.0.1"), 0});
-  return acceptor.local_endpoint().port();
-}
-
-bool accepts_connections(uint16_t port) {
-  boost::asio::io_context io;
-  boost::asio::ip::tcp::socket socket(io);
-  boost::system::error_code ec;
-  socket.connect({boost::asio::ip::make_address("127.0.0.1"), port}, ec);
-  return !ec;
-}
 
 // nginx in the foreground in a fresh directory of its own (pid, logs, temporary files, the cache), with
 // the repo's template filled in; stopped (SIGTERM, nginx's fast shutdown) when destroyed.
 class Nginx {
  public:
-  Nginx(const std::string& program, uint16_t origin_port) : dir_(test::temp_dir()) {
-    options_.timeout_seconds = 900;  // a hung test is stopped by ctest's timeout first
-    options_.on_start = [this](pid_t pid) { pid_ = pid; };
-    for (int attempt = 0; attempt < 3 && !start(program, origin_port); ++attempt) stop();
-    if (!running_) fail("nginx", "did not start: " + run_.failure() + "\n" + slurp(dir_ / "error.log"));
-  }
-  ~Nginx() { stop(); }
-  Nginx(const Nginx&) = delete;
-  Nginx& operator=(const Nginx&) = delete;
+  Nginx(const std::string& program, uint16_t origin_port)
+      : dir_(test::temp_dir()),
+        daemon_(
+            "nginx", [&] { return prepare(program, origin_port); }, dir_ / "error.log") {}
 
   std::string url() const { return "http://127.0.0.1:" + std::to_string(port_); }
 
  private:
-  bool start(const std::string& program, uint16_t origin_port) {
-    port_ = free_loopback_port();
-    std::string conf = slurp(fs::path(PMSTREAM_SOURCE_DIR) / "deploy/nginx/pmstream-cache.conf");
+  bench::DaemonStart prepare(const std::string& program, uint16_t origin_port) {
+    port_ = bench::free_loopback_port();
+    std::string conf = bench::file_text(fs::path(PMSTREAM_SOURCE_DIR) / "deploy/nginx/pmstream-cache.conf");
     const auto fill = [&conf](const std::string& name, const std::string& value) {
       for (size_t at; (at = conf.find(name)) != std::string::npos;) conf.replace(at, name.size(), value);
     };
@@ -87,36 +53,15 @@ class Nginx {
     fill("@LISTEN@", "127.0.0.1:" + std::to_string(port_));
     fill("@ORIGIN@", "127.0.0.1:" + std::to_string(origin_port));
     std::ofstream(dir_ / "nginx.conf") << conf;
-    exited_ = false;
-    thread_ = std::thread([this, program] {
-      run_ = bench::run_child({program, "-p", dir_.string(), "-c", (dir_ / "nginx.conf").string(), "-e",
-                               (dir_ / "error.log").string(), "-g", "daemon off;"},
-                              options_);
-      exited_ = true;
-    });
-    const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(10);
-    while (!exited_ && std::chrono::steady_clock::now() < deadline) {
-      if (accepts_connections(port_)) return running_ = true;
-      std::this_thread::sleep_for(std::chrono::milliseconds(20));
-    }
-    return false;
-  }
-
-  void stop() {
-    if (pid_ > 0 && !exited_) ::kill(pid_, SIGTERM);
-    if (thread_.joinable()) thread_.join();
-    pid_ = 0;
-    running_ = false;
+    return {{program, "-p", dir_.string(), "-c", (dir_ / "nginx.conf").string(), "-e", (dir_ / "error.log").string(),
+             "-g", "daemon off;"},
+            {},
+            port_};
   }
 
   fs::path dir_;
   uint16_t port_ = 0;
-  ChildOptions options_;
-  std::thread thread_;
-  std::atomic<pid_t> pid_{0};
-  std::atomic<bool> exited_{false};
-  bool running_ = false;
-  ChildResult run_;
+  bench::LoopbackDaemon daemon_;  // last: prepare() fills the members above
 };
 
 struct Flight {
@@ -132,7 +77,7 @@ Flight fly(const std::string& server, const fs::path& path, const std::string& f
       test::run_pmstream("stream --mode receiver --server " + server + " --model bunny --path " + path.string() + " " +
                          fetch_flags + " --save-mesh " + mesh.string() + " --json");
   if (run.exit_code != 0) fail("pmstream stream", run.err);
-  Flight flight{nlohmann::json::parse(run.out), slurp(mesh)};
+  Flight flight{nlohmann::json::parse(run.out), bench::file_text(mesh)};
   for (const nlohmann::json& frame : flight.report["frames"]) flight.rounds += frame["rounds"].get<uint64_t>();
   return flight;
 }
@@ -150,8 +95,7 @@ std::vector<std::string> origin_flags(const fs::path& model) {
 class NginxCache : public ::testing::Test {
  protected:
   void SetUp() override {
-    nginx_ = bench::find_program("nginx");
-    if (nginx_.empty()) nginx_ = bench::find_program("/usr/sbin/nginx");
+    nginx_ = bench::find_daemon("nginx");
     if (nginx_.empty()) GTEST_SKIP() << "nginx is not installed (scripts/setup.sh installs Debian's nginx-light)";
     const fs::path model = test::shared_model("bunny.ply.xz");
     if (model.empty()) GTEST_SKIP() << "../shared/models/bunny.ply.xz not found: this test needs the shared meshes";
@@ -262,7 +206,7 @@ TEST_F(NginxCache, MultilevelLevelsComeFromTheCacheTheSecondTime) {
         test::run_pmstream("stream --mode multilevel --server " + nginx.url() + " --model bunnyml --path " +
                            path.string() + " --save-mesh " + mesh.string() + " --json");
     if (run.exit_code != 0) fail("pmstream stream", run.err);
-    return Flight{nlohmann::json::parse(run.out), slurp(mesh)};
+    return Flight{nlohmann::json::parse(run.out), bench::file_text(mesh)};
   };
   const Flight first = fly_levels("ml_first");
   ASSERT_EQ(first.report["levels_received"], 8u);

@@ -1,5 +1,6 @@
 // Requirement 8's CI run: `pmstream-bench --only soak` for one minute with 10 clients on dragon, checked from its
-// soak.json. It is labelled slow (CMakeLists.txt), so the ASan run leaves it out.
+// soak.json, and the group's failover figure from failover.json. It is labelled slow (CMakeLists.txt), so the
+// ASan run leaves it out.
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
@@ -7,6 +8,7 @@
 #include <fstream>
 
 #include "bench/child_process.h"
+#include "bench/loopback_daemon.h"
 #include "test_support.h"
 
 namespace pms::bench {
@@ -53,6 +55,18 @@ TEST(SoakBench, OneMinuteOfTenClientsOnDragon) {
   EXPECT_GT(minute["resumes"].get<uint64_t>(), 0u) << minute.dump();
   EXPECT_GT(minute["p99_ms"].get<double>(), 0);
   EXPECT_GE(minute["p99_ms"].get<double>(), minute["p50_ms"].get<double>());
+  // The group's failover figure (bench_failover.cpp): viewers behind HAProxy, one origin killed.
+  if (!find_daemon("haproxy").empty()) {
+    std::ifstream failover_file(out / "failover.json");
+    ASSERT_TRUE(failover_file) << "no failover.json";
+    const json failover = json::parse(failover_file);
+    const json &calm = failover["undisturbed"], &killed = failover["origin_killed"];
+    EXPECT_EQ(killed["failed"], 0) << killed["failures"].dump();
+    EXPECT_GT(killed["resumed_viewers"].get<uint64_t>(), 0u);
+    EXPECT_EQ(killed["arrived_twice"], 0);
+    EXPECT_EQ(killed["splits_received"], calm["splits_received"]);
+    EXPECT_GE(killed["extra_bytes"].get<int64_t>(), killed["resent_base_bytes"].get<int64_t>());
+  }
   // scripts/setup.sh installs gnuplot-nox; without it the report says why there is no PNG.
   if (find_program("gnuplot").empty()) GTEST_SKIP() << "gnuplot is not installed: soak-rss.png is not drawn";
   ASSERT_TRUE(std::filesystem::exists(out / "soak-rss.png"));

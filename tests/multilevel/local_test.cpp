@@ -192,6 +192,47 @@ void expect_view_refinement_works(const test::BuiltModel& model, const Multileve
   }
 }
 
+// Hoppe 1997 §4.2's back-face test: a surface is refined where it faces the eye. A terrain seen from below
+// wants almost nothing of what it wants from above; a closed surface wants little of its far side, and that
+// little only where a split's star is wide enough to bend round (a cone of 90° or more is never culled).
+TEST(MultilevelLocal, ViewDoesNotRefineWhatFacesAway) {
+  const test::BuiltModel& terrain = test::built_terrain();
+  const MultilevelMesh land = collapse_build(terrain, 0);
+  const MultilevelDag land_dag = build_multilevel_dag(land);
+  const auto wanted_from = [&](const test::BuiltModel& model, const MultilevelMesh& m, const MultilevelDag& dag,
+                               std::array<float, 3> direction, float distance) {
+    return splits_for_view(m, dag, test::view_for(model, test::framing_camera(model, direction, distance)), 1.0f);
+  };
+  const size_t above = wanted_from(terrain, land, land_dag, {0.2f, 0.1f, 1}, 0.8f).size();
+  const size_t below = wanted_from(terrain, land, land_dag, {0.2f, 0.1f, -1}, 0.8f).size();
+  EXPECT_GT(above, 100u);
+  EXPECT_LT(below * 10, above) << "from below, the terrain's faces all face away";
+
+  const test::BuiltModel& sphere = test::built_sphere();
+  const MultilevelMesh m = collapse_build(sphere, 0);
+  const MultilevelDag dag = build_multilevel_dag(m);
+  float centre[3] = {0, 0, 0};
+  for (int k = 0; k < 3; ++k) centre[k] = 0.5f * (sphere.h.bbox_min[k] + sphere.h.bbox_max[k]);
+  const float radius = 0.5f * (sphere.h.bbox_max[0] - sphere.h.bbox_min[0]);
+  for (const float side : {1.0f, -1.0f}) {
+    SCOPED_TRACE(side > 0 ? "eye on +x" : "eye on -x");
+    uint32_t near_side = 0, far_side = 0;
+    for (uint32_t v : wanted_from(sphere, m, dag, {side, 0, 0}, 1.5f)) {
+      float p[3];
+      m.point(v, p);
+      const float along = side * (p[0] - centre[0]);  // towards the eye
+      near_side += along > 0.3f * radius;
+      if (along < -0.3f * radius) {
+        ++far_side;
+        const float sin2 = dag.cone[4 * size_t(v - dag.top_vertices) + 3];
+        EXPECT_GT(sin2, 0.1f) << "a narrow cone facing away was not culled";
+      }
+    }
+    EXPECT_GT(near_side, 0u);
+    EXPECT_LT(far_side * 10, near_side);
+  }
+}
+
 TEST(MultilevelLocal, ViewRefinesNearTheEyeMore) {
   const test::BuiltModel& terrain = test::built_terrain();
   expect_view_refinement_works(terrain, collapse_build(terrain, 0));

@@ -105,7 +105,7 @@ TEST(SenderPlain, ClientMeshIsTheServersViewOfItAlongAPath) {
     for (uint32_t slot : session.mesh().active_vertices()) mesh_front.insert(model.find(h.id(slot)));
     for (uint32_t slot = 0; slot < h.size(); ++slot) EXPECT_EQ(h.is_leaf(slot), session.mesh().is_active(slot));
     // ... and the server's active tags, from which it named the actual cut vertices.
-    const ActiveTags& tags = p.session->tags();
+    const ActiveTags tags = p.session->front_tags();
     for (uint32_t n = tags.next_active(0); n != UINT32_MAX; n = tags.next_active(n + 1)) server_front.insert(n);
     EXPECT_EQ(mesh_front, server_front) << "frame " << r.frame;
   }

@@ -165,7 +165,7 @@ TEST(Session, AValidResumeOfAFineFrontIsAppliedInSlices) {
   run(session, reader, limits);
   EXPECT_TRUE(reader.base);
   EXPECT_TRUE(session.opened());
-  EXPECT_EQ(session.tags().active_count(), leaves.size());
+  EXPECT_EQ(session.front_tags().active_count(), leaves.size());
   // Every split is already held: a VIEW wants nothing.
   session.receive(frame_of(protocol::encode(protocol::View{close_camera(h), 0.0f, 1})));
   run(session, reader, limits);
@@ -290,7 +290,7 @@ TEST(Session, PlainAnswersAreSlicedAndNameHeldCutVertices) {
       ++splits;
     }
   EXPECT_GT(splits, 1000u);
-  EXPECT_EQ(session.tags().active_count(), held.size());
+  EXPECT_EQ(session.front_tags().active_count(), held.size());
   EXPECT_TRUE(reader.batches.back().final);
 }
 

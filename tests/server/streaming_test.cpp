@@ -106,6 +106,30 @@ TEST(Streaming, ResumedSessionEndsWhereAnUnbrokenOneDoes) {
   EXPECT_EQ(client.session().splits_received(), fresh.session().splits_received());
 }
 
+// A session that goes quiet parks its front coded (ServerLimits::park_after_ms) and decodes it for the next
+// VIEW: the flight goes on as on a server that keeps the tags throughout, split for split.
+TEST(Streaming, AParkedFrontAnswersAsTheTagsDo) {
+  const Fixture& f = terrain();
+  server::ServerLimits parking, tags;
+  parking.park_after_ms = 20;
+  tags.compact_fronts = false;
+  Server parking_server(f.catalogue, parking), tags_server(f.catalogue, tags);
+  const std::vector<Camera> path = orbit_path(f.hierarchy, 8, 0.7f);
+  client::StreamingClient parked("127.0.0.1", parking_server.tcp.port(), client::ClientOptions{1.0f});
+  client::StreamingClient kept("127.0.0.1", tags_server.tcp.port(), client::ClientOptions{1.0f});
+  parked.open("terrain");
+  kept.open("terrain");
+  for (const Camera& camera : path) {
+    const uint64_t parked_down = parked.frame(camera).down_bytes, kept_down = kept.frame(camera).down_bytes;
+    EXPECT_EQ(parked_down, kept_down);
+    EXPECT_EQ(faces_by_id(parked.session().mesh()), local_faces(f.snapped, camera, 1.0f));
+    std::this_thread::sleep_for(std::chrono::milliseconds(60));  // past park_after_ms: the next VIEW decodes
+  }
+  EXPECT_EQ(parked.session().splits_received(), kept.session().splits_received());
+  EXPECT_GE(parking_server.tcp.stats().fronts_parked.load(), path.size() - 1);
+  EXPECT_EQ(tags_server.tcp.stats().fronts_parked.load(), 0u);
+}
+
 TEST(Streaming, BunnyAlongAPathMatchesLocalRefinement) {
   PMS_REQUIRE_SHARED_MODEL(file, "bunny.ply.xz");
   Mesh mesh = load_mesh(file.string());

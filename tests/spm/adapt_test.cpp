@@ -172,16 +172,28 @@ TEST(Adapt, FarAfterCloseEqualsFarBunny) {
 // A display's frames, one adapt() each, under a time budget small enough to cap every frame and with
 // geomorphs: at_rest() says when the frames are done, and the mesh is then the view's target, far after
 // close too (a frame's collapses leave parents that only the next walk finds unwanted).
+// A complete model's mesh adapted frame by frame under a time budget small enough to cap every frame, with
+// geomorphs.
+struct BudgetedFrames {
+  explicit BudgetedFrames(const ModelData& m)
+      : h(test::complete_hierarchy(m)), mesh(h, m.base_faces), refinement(mesh, m.scale, options()) {}
+  static AdaptOptions options() {
+    AdaptOptions options;
+    options.time_budget_us = 1;
+    options.morph_frames = 3;
+    return options;
+  }
+  const VertexHierarchy h;
+  SelectiveMesh mesh;
+  SelectiveRefinement refinement;
+};
+
 void expect_frames_until_at_rest_reach_the_target(const BuiltModel& model) {
-  const ModelData m = model.model();
   std::vector<NamedView> views = views_of(model);
   views.push_back(views.front());  // far again, after close
-  const VertexHierarchy h = test::complete_hierarchy(m);
-  SelectiveMesh mesh(h, m.base_faces);
-  AdaptOptions options;
-  options.time_budget_us = 1;
-  options.morph_frames = 3;
-  SelectiveRefinement refinement(mesh, m.scale, options);
+  BudgetedFrames frames_of(model.model());
+  SelectiveMesh& mesh = frames_of.mesh;
+  SelectiveRefinement& refinement = frames_of.refinement;
   EXPECT_TRUE(refinement.at_rest()) << "no frame yet";
   for (const NamedView& named : views) {
     SCOPED_TRACE(model.name + " " + named.name);
@@ -209,6 +221,58 @@ TEST(Adapt, FramesUntilAtRestReachTheTargetSphere) { expect_frames_until_at_rest
 TEST(Adapt, FramesUntilAtRestReachTheTargetTerrain) {
   expect_frames_until_at_rest_reach_the_target(test::built_terrain());
 }
+
+// A moving view under a time budget that pauses every walk after one tree (Hoppe's amortized traversal):
+// every frame leaves a valid mesh, a tree not walked for frames keeps what it forced in the others (or a
+// view that barely moves would split and collapse the same nodes round after round), and once the view
+// stays the frames settle on its target.
+void expect_paused_walks_settle_on_the_target(const BuiltModel& model) {
+  const std::vector<NamedView> views = views_of(model);
+  BudgetedFrames frames_of(model.model());
+  SelectiveMesh& mesh = frames_of.mesh;
+  SelectiveRefinement& refinement = frames_of.refinement;
+  constexpr int kSteps = 12;
+  uint32_t paused = 0;
+  for (size_t i = 0; i + 1 < views.size(); ++i) {
+    SCOPED_TRACE(model.name + " " + views[i].name + " to " + views[i + 1].name);
+    const Camera& from = views[i].camera;
+    const Camera& to = views[i + 1].camera;
+    for (int step = 0; step <= kSteps; ++step) {
+      Camera camera = from;
+      const float t = float(step) / kSteps;
+      for (int k = 0; k < 3; ++k) {
+        camera.eye[k] = from.eye[k] + t * (to.eye[k] - from.eye[k]);
+        camera.target[k] = from.target[k] + t * (to.target[k] - from.target[k]);
+      }
+      camera.fovy_deg = from.fovy_deg + t * (to.fovy_deg - from.fovy_deg);
+      refinement.set_view(test::view_for(model, camera));
+      const FrameStats stats = refinement.adapt();
+      paused += stats.capped && stats.ops() < kMinOpsPerBudgetedFrame;
+      ASSERT_EQ(invariants(mesh), "ok");
+    }
+    // The view barely moves: every tree's walk finds what it found a round before, so the operations stop.
+    Camera still = to;
+    uint32_t late_ops = 0;
+    for (int frame = 0; frame < 4000; ++frame) {
+      still.eye[0] = to.eye[0] * (1 + (frame % 2 ? 1e-7f : -1e-7f));
+      refinement.set_view(test::view_for(model, still));
+      const FrameStats stats = refinement.adapt();
+      if (frame >= 3000) late_ops += stats.ops();
+    }
+    EXPECT_EQ(late_ops, 0u) << "the same nodes split and collapsed round after round";
+    const ViewParams view = test::view_for(model, to);
+    refinement.set_view(view);
+    uint32_t frames = 0;
+    while (!refinement.at_rest() && ++frames < 100000) refinement.adapt();
+    ASSERT_TRUE(refinement.at_rest());
+    ASSERT_EQ(invariants(mesh), "ok");
+    EXPECT_EQ(test::id_faces(mesh), test::naive_refinement(model, view, 1));
+  }
+  EXPECT_GT(paused, 0u) << "no walk paused: the test proves nothing";
+}
+
+TEST(Adapt, PausedWalksSettleOnTheTargetSphere) { expect_paused_walks_settle_on_the_target(test::built_sphere()); }
+TEST(Adapt, PausedWalksSettleOnTheTargetTerrain) { expect_paused_walks_settle_on_the_target(test::built_terrain()); }
 
 // A fresh mesh and refinement reach a view's target in one frame from the base, and so does a mesh whose
 // state was used before (fully refined, then coarsened back): per-slot state made on first use
