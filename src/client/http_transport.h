@@ -46,7 +46,7 @@ struct HttpUrl {
 // Throws pms::Error naming `where` for anything else (another scheme, a bad port, a query).
 HttpUrl parse_http_url(const std::string& text, const std::string& where = "--server");
 
-// A target is a path under the server's prefix ("/models/m/base"). At most room() GETs are pending (handed
+// A target is a path under the server's prefix ("/models/m/VERSION/base"). At most room() GETs are pending (handed
 // over, answer not fully arrived); a lost connection is a ConnectionError (client/transport.h).
 class HttpTransport {
  public:

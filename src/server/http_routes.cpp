@@ -49,7 +49,7 @@ Segments segments_of(std::string_view path) {
 
 // A strong ETag from what the bytes depend on: the model file's content, the wire's quantization, the
 // record format and the canonical URL of the resource, "/models/NAME" then `resource`'s pieces, hashed as
-// they are, without building the URL.
+// they are, without building the URL; the URL's version is left out, as the three before it make it.
 std::string etag_of(const ServedModel& model, std::initializer_list<std::string_view> resource) {
   XXH64_state_t state;
   XXH64_reset(&state, 0);
