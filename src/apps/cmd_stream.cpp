@@ -1,7 +1,7 @@
 // pmstream stream --server HOST:PORT|ws://HOST:PORT/ws --model NAME --path PATH.json --mode MODE --tolerance PX
 //                 (--mode receiver: --server http://HOST:PORT[/prefix] [--in-flight N] [--fetch lists|blocks]
 //                  [--ids-per-request N] [--descendant-depth K] [--block-depth K] [--frame-budget-ms MS]
-//                  [--frame-answers N] [--prefetch])
+//                  [--frame-answers N] [--prefetch] [--rerank-ms MS] [--background-bytes N])
 //                 (--mode multilevel: --server http://HOST:PORT[/prefix] [--budget TRIANGLES | --tolerance PX])
 //                 [--laps K] [--reconnect N] [--timeout-ms N] [--connect-timeout-ms N] [--save-mesh OUT.ply]
 //                 [--snapshots DIR] [--json]
@@ -40,6 +40,8 @@ struct StreamArgs {
   std::string fetch = client::fetch_policy_name(client::ReceiverOptions{}.fetch);
   uint32_t frame_budget_ms = 0, frame_answers = 0;
   bool prefetch = false;
+  uint32_t rerank_ms = client::ReceiverOptions{}.rerank_ms;
+  uint64_t background_bytes = 0;
   std::string traversal = "priority";  // dag mode
   uint64_t budget = 0;
   bool json = false;
@@ -113,6 +115,8 @@ void refuse_unused(const StreamArgs& args, const ModeOptions& options) {
   if (args.mode == "receiver") refuse_unused_options(options.by_fetch, args.fetch, "--fetch " + args.fetch);
   if (args.mode == "multilevel" && options.budget.given() && options.tolerance.given())
     fail("--tolerance", "not used with --mode multilevel --budget (the budget picks the level)");
+  if (args.background_bytes > 0 && args.fps == 0)
+    fail("--background-bytes", "needs --fps: a lock-step frame ends when its view is satisfied, so it has no idle time");
 }
 
 // Every mode's options, from the command line (refuse_unused has refused those the mode does not use).
@@ -143,6 +147,8 @@ client::ViewerOptions viewer_options(const StreamArgs& args) {
   receiver.frame_budget_ms = args.frame_budget_ms;
   receiver.frame_answers = args.frame_answers;
   receiver.prefetch = args.prefetch;
+  receiver.rerank_ms = args.rerank_ms;
+  receiver.background_bytes = args.background_bytes;
   receiver.http = http_options(args);
   client::MultilevelOptions& multilevel = options.multilevel;
   multilevel.budget = args.budget;
@@ -291,6 +297,18 @@ void add_stream_command(CliCommand& app) {
       "--prefetch", args->prefetch,
       "receiver: with the view's wants all sent, fill the pipe with what the camera extrapolated from the last "
       "two frames would want");
+  const CliOption rerank_ms =
+      cmd.option("--rerank-ms", args->rerank_ms,
+                 "receiver: rank the front again at least this often while the camera holds still (a moved camera "
+                 "ranks at once; 0 = every frame with --fps)")
+          .range(0u, 3600000u)
+          .show_default();
+  const CliOption background_bytes =
+      cmd.option("--background-bytes", args->background_bytes,
+                 "receiver, with --fps: once the view wants nothing more, keep fetching the model's remaining splits "
+                 "(largest error first) until their answers reach this many bytes (0 = off)")
+          .range(uint64_t(0), uint64_t(1) << 40)
+          .show_default();
   const CliOption geomorph_frames =
       cmd.option("--geomorph-frames", args->morph_frames, "Blend splits and collapses over N frames (0 = off)")
           .show_default();
@@ -332,6 +350,8 @@ void add_stream_command(CliCommand& app) {
                    {frame_budget_ms, {"receiver"}},
                    {frame_answers, {"receiver"}},
                    {prefetch, {"receiver"}},
+                   {rerank_ms, {"receiver"}},
+                   {background_bytes, {"receiver"}},
                    // sender-plain, vi and dag apply what comes as it comes: no adaptation to blend or cap
                    {geomorph_frames, {"sender", "receiver", "multilevel"}},
                    {max_ops, {"sender", "receiver", "dag"}},

@@ -34,6 +34,11 @@ void adapt_for_view(SelectiveRefinement& refinement) {
     stats = refinement.adapt();
 }
 
+bool same_camera(const Camera& a, const Camera& b) {
+  return std::equal(a.eye, a.eye + 3, b.eye) && std::equal(a.target, a.target + 3, b.target) &&
+         std::equal(a.up, a.up + 3, b.up) && a.fovy_deg == b.fovy_deg && a.width == b.width && a.height == b.height;
+}
+
 // Appended piece by piece: GCC 12 warns wrongly (-Wrestrict) on a chain of `+` with to_string().
 std::string block_target(const std::string& prefix, VertexId root, uint32_t depth) {
   std::string target = prefix;
@@ -157,8 +162,11 @@ void ReceiverClient::open_version(const nlohmann::json& entry) {
 void ReceiverClient::replaced(const std::string& target, const HttpAnswer& answer) {
   const nlohmann::json entry = reopens_.follow(target, answer, model_);
   queue_.clear();
+  prefetch_queue_.clear();
+  background_queue_.clear();
   prefetched_.clear();
   cameras_.clear();
+  ranked_camera_.reset();
   const AdaptOptions adapt = session_.adapt_options;
   session_ = ClientSession();
   session_.adapt_options = adapt;
@@ -284,15 +292,21 @@ std::vector<ReceiverClient::Request> ReceiverClient::list_requests(const std::ve
   }
   std::vector<Request> out;
   out.reserve(lists.size());
-  for (auto& [rank, r] : lists) {
-    // The answer comes in code order, which the bands are read in.
-    std::sort(r.request.ids.begin(), r.request.ids.end(), protocol::code_order);
-    const std::vector<uint8_t> code = protocol::encode_split_request(r.request);
-    r.code_bytes = uint32_t(code.size());
-    r.target = prefix() + "/splits/" + protocol::base64url_encode(code);
-    out.push_back(std::move(r));
-  }
+  for (auto& [rank, r] : lists) out.push_back(list_request(std::move(r.request.ids), r.request.depth));
   return out;
+}
+
+// The GET of `ids` with `depth` levels below each: the URL is the code of the id set.
+ReceiverClient::Request ReceiverClient::list_request(std::vector<VertexId> ids, uint32_t depth) const {
+  Request r;
+  r.request.depth = depth;
+  r.request.ids = std::move(ids);
+  // The answer comes in code order, which the bands are read in.
+  std::sort(r.request.ids.begin(), r.request.ids.end(), protocol::code_order);
+  const std::vector<uint8_t> code = protocol::encode_split_request(r.request);
+  r.code_bytes = uint32_t(code.size());
+  r.target = prefix() + "/splits/" + protocol::base64url_encode(code);
+  return r;
 }
 
 size_t ReceiverClient::list_size(uint32_t depth) const {
@@ -325,6 +339,10 @@ std::vector<ReceiverClient::Request> ReceiverClient::block_requests(const std::v
 bool ReceiverClient::rerank(const Camera& camera) {
   SelectiveRefinement& refinement = session_.refinement();
   adapt_for_view(refinement);
+  ranked_camera_ = camera;
+  ranked_at_ = std::chrono::steady_clock::now();
+  attached_since_ranking_ = 0;
+  ++totals_.rankings;
   std::vector<Wanted> ids = ranked(refinement.missing(), session_.view_params(camera));
   std::vector<VertexId> wanted;
   wanted.reserve(ids.size());
@@ -337,7 +355,7 @@ bool ReceiverClient::rerank(const Camera& camera) {
     const auto unwanted = uint32_t(
         std::count_if(sent.request.ids.begin(), sent.request.ids.end(), [&](VertexId id) { return !in(wanted, id); }));
     sent.wanted = unwanted < sent.request.ids.size();
-    if (!sent.prefetch) sent.stale = unwanted;
+    if (sent.source == Source::view) sent.stale = unwanted;
   }
   const std::vector<VertexId> on_wire = keys_on_wire();
   std::erase_if(ids, [&](const Wanted& w) { return in(on_wire, key(w.id)); });
@@ -350,6 +368,10 @@ bool ReceiverClient::rerank(const Camera& camera) {
         std::count_if(r.request.ids.begin(), r.request.ids.end(), [&](VertexId id) { return !in(queued, id); }));
   queue_.assign(std::make_move_iterator(queue.begin()), std::make_move_iterator(queue.end()));
   return round_open();
+}
+
+bool ReceiverClient::ranking_due() const {
+  return std::chrono::steady_clock::now() - ranked_at_ >= std::chrono::milliseconds(options_.rerank_ms);
 }
 
 size_t ReceiverClient::queued_ids() const {
@@ -372,22 +394,77 @@ bool ReceiverClient::over_budget(uint32_t answers, std::chrono::steady_clock::ti
 void ReceiverClient::send(Request&& request) {
   if (options_.free_running) http_->post(request.target);
   else http_->send(request.target);
+  if (request.source == Source::prefetch) {
+    prefetched_.insert(prefetched_.end(), request.request.ids.begin(), request.request.ids.end());
+    totals_.prefetched += request.request.ids.size();
+  } else if (request.source == Source::background) {
+    totals_.background_ids += request.request.ids.size();
+  }
   ++totals_.split_requests;
   totals_.requested_ids += request.request.ids.size();
   totals_.request_code_bytes += request.code_bytes;
   wire_.push_back(std::move(request));
 }
 
-// The queue's head onto the wire while the pipe has room. A list shorter than a full GET waits while an
-// answer is due: that answer's splits are ranked with it, and fill it, instead of paying a header of their own.
-void ReceiverClient::fill_pipe() {
-  while (!queue_.empty() && http_->room() > 0) {
-    const protocol::SplitRequest& head = queue_.front().request;
-    const bool short_list = options_.fetch == FetchPolicy::lists && head.ids.size() < list_size(head.depth);
-    if (short_list && !wire_.empty()) break;
-    send(std::move(queue_.front()));
-    queue_.pop_front();
+// The queue's head onto the wire while the pipe has room; with the queue empty, the prefetch's (planned
+// once a frame) and then the idle fetch's, within its byte budget. A list shorter than a full GET waits
+// while an answer is due: that answer's splits are ranked with it, and fill it, instead of paying a header
+// of their own.
+void ReceiverClient::fill_pipe(bool may_prefetch, bool may_background) {
+  while (http_->room() > 0) {
+    if (!queue_.empty()) {
+      const protocol::SplitRequest& head = queue_.front().request;
+      const bool short_list = options_.fetch == FetchPolicy::lists && head.ids.size() < list_size(head.depth);
+      if (short_list && !wire_.empty()) return;
+      send(std::move(queue_.front()));
+      queue_.pop_front();
+      continue;
+    }
+    if (may_prefetch) {
+      if (!prefetch_planned_) {
+        prefetch_queue_ = plan_prefetch();
+        prefetch_planned_ = true;
+      }
+      if (send_from(prefetch_queue_, Source::prefetch)) continue;
+    }
+    if (!may_background || totals_.background_bytes >= options_.background_bytes) return;
+    if (background_queue_.empty()) background_queue_ = plan_background();
+    if (!send_from(background_queue_, Source::background)) return;
   }
+}
+
+// Sends the first of `planned` that still names something lacked, dropping those before it. Returns
+// whether one went.
+bool ReceiverClient::send_from(std::deque<Request>& planned, Source source) {
+  const std::vector<VertexId> on_wire = keys_on_wire();
+  while (!planned.empty()) {
+    Request request = std::move(planned.front());
+    planned.pop_front();
+    if (!still_lacked(request, on_wire)) continue;
+    request.source = source;
+    request.wanted = false;
+    send(std::move(request));
+    return true;
+  }
+  return false;
+}
+
+// A planned GET, trimmed to the ids whose splits are still lacked and not asked for on the wire (lists: the
+// URL made again for what is left; a block's root is lacked or not). False when nothing is left. This is
+// what keeps every record arriving once when a ranking or an answer overtook the plan.
+bool ReceiverClient::still_lacked(Request& request, const std::vector<VertexId>& on_wire) {
+  const VertexHierarchy& hierarchy = session_.hierarchy();
+  const auto lacked = [&](VertexId id) {
+    const uint32_t slot = hierarchy.find(id);
+    return slot != kNone && hierarchy.is_leaf(slot) &&
+           !std::binary_search(on_wire.begin(), on_wire.end(), key(id), protocol::code_order);
+  };
+  std::vector<VertexId>& ids = request.request.ids;
+  if (std::all_of(ids.begin(), ids.end(), lacked)) return true;
+  std::erase_if(ids, [&](VertexId id) { return !lacked(id); });
+  if (ids.empty()) return false;
+  request = list_request(std::move(ids), request.request.depth);  // a block names one id: never here
+  return true;
 }
 
 // Reads the oldest answer due and attaches its splits. Returns the splits attached.
@@ -413,7 +490,9 @@ size_t ReceiverClient::attach(const HttpAnswer& answer, ReceiverFrame& out) {
   reopens_.refill();
   totals_.cache_hits += answer.cache_status == "HIT";
   totals_.stale_arrivals += sent.stale;
+  if (sent.source == Source::background) totals_.background_bytes += answer.body.size();
   const size_t attached = session_.on_split_bands(answer.body, sent.request, codec_);
+  attached_since_ranking_ += attached;
   out.report.vsplits += attached;
   ++out.answers;
   out.report.latency_ms =
@@ -473,14 +552,14 @@ std::vector<uint32_t> ReceiverClient::leaves_wanted(const ViewParams& view) {
   return leaves;
 }
 
-// Prefetch along the predicted path: with the view's wants all sent, the pipe's free room goes to what the
-// next camera (extrapolated) would want and the client neither holds nor has asked for, in rank order as
-// that camera would see the mesh. Their splits are attached as held data like any answer's; adapt() makes
-// them only when a view wants them.
-void ReceiverClient::prefetch() {
-  if (cameras_.size() < 2 || http_->room() == 0) return;
+// Prefetch along the predicted path: what the next camera (extrapolated from the last two) would want and
+// the client neither holds nor has asked for, in rank order as that camera would see the mesh. Sent while
+// the view's wants are all on the wire and the pipe has room; their splits are attached as held data like
+// any answer's, and adapt() makes them only when a view wants them.
+std::deque<ReceiverClient::Request> ReceiverClient::plan_prefetch() {
+  if (cameras_.size() < 2) return {};
   const std::optional<Camera> next = extrapolate(cameras_[0], cameras_[1]);
-  if (!next) return;
+  if (!next) return {};
   const ViewParams view = session_.view_params(*next);
   std::vector<Wanted> ids = ranked(leaves_wanted(view), view);
   const std::vector<VertexId> on_wire = keys_on_wire();
@@ -488,13 +567,34 @@ void ReceiverClient::prefetch() {
     return std::binary_search(on_wire.begin(), on_wire.end(), key(w.id), protocol::code_order);
   });
   std::vector<Request> requests = requests_for(ids);
-  for (size_t i = 0; i < requests.size() && http_->room() > 0; ++i) {
-    requests[i].prefetch = true;
-    requests[i].wanted = false;
-    prefetched_.insert(prefetched_.end(), requests[i].request.ids.begin(), requests[i].request.ids.end());
-    totals_.prefetched += requests[i].request.ids.size();
-    send(std::move(requests[i]));
+  return {std::make_move_iterator(requests.begin()), std::make_move_iterator(requests.end())};
+}
+
+// The idle fetch's next batch: held leaves whose splits some view may ask for (never_refines() is false:
+// the others come only when a split forces them), largest error (max of mu and delta) first, so the model
+// fills in coarse to fine as a view-independent stream would. A batch is bounded, so planning costs one
+// walk of the held leaves per batch sent, not per frame.
+std::deque<ReceiverClient::Request> ReceiverClient::plan_background() {
+  constexpr size_t kBatchIds = 4096;
+  const VertexHierarchy& hierarchy = session_.hierarchy();
+  const std::vector<VertexId> on_wire = keys_on_wire();
+  std::vector<std::pair<uint16_t, uint32_t>> leaves;  // (error, slot)
+  for (uint32_t slot = 0; slot < hierarchy.size(); ++slot) {
+    if (!hierarchy.is_leaf(slot) || never_refines(hierarchy.refine(slot))) continue;
+    if (std::binary_search(on_wire.begin(), on_wire.end(), key(hierarchy.id(slot)), protocol::code_order)) continue;
+    // Half-float bits of lengths >= 0 order as the lengths do.
+    const RefineInfo& info = hierarchy.refine(slot);
+    leaves.emplace_back(std::max(info.mu, info.delta), slot);
   }
+  const size_t batch = std::min(leaves.size(), kBatchIds);
+  std::partial_sort(leaves.begin(), leaves.begin() + ptrdiff_t(batch), leaves.end(), [](const auto& a, const auto& b) {
+    return a.first > b.first || (a.first == b.first && a.second < b.second);
+  });
+  std::vector<Wanted> ids;
+  ids.reserve(batch);
+  for (size_t i = 0; i < batch; ++i) ids.push_back({hierarchy.id(leaves[i].second), options_.descendant_depth});
+  std::vector<Request> requests = requests_for(ids);
+  return {std::make_move_iterator(requests.begin()), std::make_move_iterator(requests.end())};
 }
 
 // Prefetched ids whose splits the mesh has made (the front runs below them), counted once and forgotten.
@@ -525,6 +625,8 @@ ReceiverFrame ReceiverClient::begin(const Camera& camera) {
   out.report.frame = ++frame_;
   if (cameras_.size() == 2) cameras_.erase(cameras_.begin());
   cameras_.push_back(camera);
+  prefetch_queue_.clear();  // ranked for the last frame's extrapolation
+  prefetch_planned_ = false;
   session_.refinement().set_view(session_.view_params(camera));
   return out;
 }
@@ -543,6 +645,8 @@ void ReceiverClient::finish(ReceiverFrame& out, const HttpCounters& before, cons
   out.cancelled = uint32_t(totals_.cancelled - totals_before.cancelled);
   out.stale_arrivals = uint32_t(totals_.stale_arrivals - totals_before.stale_arrivals);
   out.prefetched = uint32_t(totals_.prefetched - totals_before.prefetched);
+  out.rankings = uint32_t(totals_.rankings - totals_before.rankings);
+  out.background = uint32_t(totals_.background_ids - totals_before.background_ids);
   out.queued = uint32_t(queued_ids());
   out.in_flight = uint32_t(wire_.size());
 }
@@ -556,7 +660,6 @@ ReceiverFrame ReceiverClient::run(const Camera& camera, bool settling) {
   const auto start = std::chrono::steady_clock::now();
   ReceiverFrame out = begin(camera);
   const bool may_prefetch = options_.prefetch && !settling;  // nothing follows the settling
-  bool prefetched = false;
   bool wants = rerank(camera);
   out.rounds = wants;
   uint32_t answers = 0;
@@ -565,13 +668,9 @@ ReceiverFrame ReceiverClient::run(const Camera& camera, bool settling) {
   // children of a large error compete with what is still queued, so the largest errors go first at every
   // level, as in the PM order. A ranking renders the mesh and walks the front, so it waits until the
   // splits attached since the last are a sixteenth of the ids queued and a list's worth (ids_per_request:
-  // blocks' small answers add up first), or the queue is empty.
+  // blocks' small answers add up first), or the queue is empty, or the refresh period is over.
   while (wants) {
-    fill_pipe();
-    if (may_prefetch && !prefetched && queue_.empty()) {
-      prefetch();
-      prefetched = true;
-    }
+    fill_pipe(may_prefetch, false);
     if (answers > 0 && over_budget(answers, start)) break;
     if (wire_.empty()) break;
     ++answers;
@@ -579,7 +678,8 @@ ReceiverFrame ReceiverClient::run(const Camera& camera, bool settling) {
     if (got == 0) break;  // a valid server answers every id with its split: one that has no more ends it
     attached += got;
     const size_t queued = queued_ids();
-    if (queued > 0 && (attached * kRerankShare < queued || attached < options_.ids_per_request)) continue;
+    if (queued > 0 && (attached * kRerankShare < queued || attached < options_.ids_per_request) && !ranking_due())
+      continue;
     attached = 0;
     wants = rerank(camera);
     out.rounds += wants;
@@ -589,7 +689,7 @@ ReceiverFrame ReceiverClient::run(const Camera& camera, bool settling) {
     await_open();
     return run(camera, settling);
   }
-  if (may_prefetch && !prefetched && !wants) prefetch();
+  if (may_prefetch && !wants) fill_pipe(true, false);
   out.satisfied = !wants;
   out.report.requested = out.rounds > 0;
   if (out.report.requested)
@@ -599,9 +699,10 @@ ReceiverFrame ReceiverClient::run(const Camera& camera, bool settling) {
 }
 
 // One frame that never waits: what the connection can do at once is done, every answer fully arrived is
-// attached, the view is adapted to and ranked anew (queued ids it no longer wants are dropped unsent), the
-// pipe gets what fits and, with room left, the predicted view's splits. The latency reported is the last
-// answer attached's, from its GET written.
+// attached, the view is adapted to and, when a ranking is due (moved camera, refresh period, a queue run
+// dry while answers came), ranked anew (queued ids it no longer wants are dropped unsent); the pipe gets
+// what fits and, with room left, the predicted view's splits, then with the view satisfied the idle
+// fetch's. The latency reported is the last answer attached's, from its GET written.
 ReceiverFrame ReceiverClient::run_free(const Camera& camera, bool settling) {
   const HttpCounters before = http_->counters();
   const ReceiverTotals totals_before = totals_;
@@ -614,10 +715,18 @@ ReceiverFrame ReceiverClient::run_free(const Camera& camera, bool settling) {
     finish(out, before, totals_before);
     return out;
   }
-  const bool wants = rerank(camera);
-  out.rounds = wants;
-  fill_pipe();
-  if (options_.prefetch && !settling && queue_.empty()) prefetch();
+  const bool moved = !ranked_camera_ || !same_camera(*ranked_camera_, camera);
+  const bool rank = moved || options_.rerank_ms == 0 || ranking_due() ||
+                    (queue_.empty() && attached_since_ranking_ > 0);
+  bool wants;
+  if (rank) {
+    wants = rerank(camera);
+  } else {  // the same camera, ranked lately: its queue stands, the splits that came are made
+    adapt_for_view(session_.refinement());
+    wants = round_open();
+  }
+  out.rounds = rank && wants;
+  fill_pipe(options_.prefetch && !settling, options_.background_bytes > 0 && !settling && !wants);
   http_->poll();  // the GETs just handed over start on their way
   out.satisfied = !wants;
   out.report.requested = wants;

@@ -10,6 +10,7 @@
 #include <functional>
 #include <memory>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <span>
 #include <string>
 #include <vector>
@@ -55,9 +56,20 @@ struct ReceiverOptions {
   // longer wants. Both 0: each frame runs until its view is satisfied.
   uint32_t frame_budget_ms = 0;
   uint32_t frame_answers = 0;
-  // When the view's wants are all sent and the pipe has room, GET (one pipe-full a frame) the splits the
-  // camera extrapolated from the last two frames' would want.
+  // When the view's wants are all sent and the pipe has room, GET the splits the camera extrapolated from
+  // the last two frames would want: ranked once a frame, sent as answers make room.
   bool prefetch = false;
+  // cheng-ooi §4.2's refresh: the splits that arrive change what is visible even when the camera holds
+  // still, so the front is ranked again at least this often. A ranking renders the mesh: free-running
+  // frames rank only when the camera moved, when this is due, or when the queue ran dry while answers came
+  // (their splits may want more); lock-step frames rank as answers come (kRerankShare) and when this is due.
+  // 0: free-running frames rank every frame.
+  uint32_t rerank_ms = 1000;
+  // Free-running only (idle time is between frames): once the view wants nothing more and the prefetch has
+  // nothing to ask, keep fetching the model's remaining splits, largest error first, at the lowest
+  // priority, until their answers' bodies reach this many bytes (overrun by at most the GETs in flight).
+  // They are held like prefetched splits: adapt() makes them only when a view wants them. 0: off.
+  uint64_t background_bytes = 0;
   // frame() never waits for the network (the free-running viewer): it attaches the answers that have fully
   // arrived, re-ranks, hands the pipe what fits and returns; the frame budget does not apply. settle() then
   // waits for what the last view wants, and the mesh is local refinement's for it, as in lock-step.
@@ -73,10 +85,12 @@ struct ReceiverFrame {
   uint32_t split_requests = 0;  // GETs of split ids this frame
   uint32_t cache_hits = 0;      // of those, answers a cache in between served (X-Cache-Status: HIT)
   uint32_t rounds = 0;          // rankings of the front that wanted something (adapt -> rank; answers come between)
+  uint32_t rankings = 0;        // rankings of the front (each renders the mesh for the screen areas)
   uint32_t cancelled = 0;       // queued ids (blocks: block roots) dropped unsent: this view no longer wants them
   uint32_t stale_arrivals = 0;  // ids whose answers came after the view stopped wanting them (attached all the same)
   uint32_t prefetched = 0;      // ids asked for along the predicted path
   uint32_t prefetch_used = 0;   // prefetched ids whose splits the mesh has made by this frame's end
+  uint32_t background = 0;      // ids asked for in the background (ReceiverOptions::background_bytes)
   uint32_t queued = 0;          // ids left queued at the frame's end
   uint32_t in_flight = 0;       // GETs left on the wire at the frame's end
   uint32_t answers = 0;         // answers attached this frame
@@ -90,6 +104,8 @@ struct ReceiverTotals {
   // sets' codes before base64url (docs/protocol.md, "Split request code"): the bits per requested id.
   uint64_t requested_ids = 0, request_code_bytes = 0;
   uint64_t cancelled = 0, stale_arrivals = 0, prefetched = 0, prefetch_used = 0;
+  uint64_t rankings = 0;
+  uint64_t background_ids = 0, background_bytes = 0;  // asked for in the background; their answers' bodies
 };
 
 class ReceiverClient {
@@ -132,14 +148,16 @@ class ReceiverClient {
   const std::string& version() const { return version_; }  // the model's version open (or opening)
 
  private:
+  // Why a GET was sent, most urgent first: the view's wants, the extrapolated view's, the idle fetch's.
+  enum class Source : uint8_t { view, prefetch, background };
   // One GET: its URL and the ids it names (lists: the ids; blocks: the block's root).
   struct Request {
     std::string target;
     protocol::SplitRequest request;  // format 3's answers are read by it
     uint32_t code_bytes = 0;         // lists: the id set's code in the target, before base64url
-    bool prefetch = false;           // asked for along the predicted path
+    Source source = Source::view;
     bool wanted = true;              // the last ranking wants one of its ids
-    uint32_t stale = 0;              // of its ids, those the last ranking no longer wants (not prefetched ones)
+    uint32_t stale = 0;              // of its ids, those the last ranking no longer wants (view GETs only)
   };
   std::string prefix() const { return protocol::model_path(model_, version_); }
   void open_version(const nlohmann::json& entry);
@@ -163,19 +181,24 @@ class ReceiverClient {
   std::vector<VertexId> keys_on_wire() const;
   std::vector<Request> requests_for(const std::vector<Wanted>& ids) const;
   std::vector<Request> list_requests(const std::vector<Wanted>& ids) const;
+  Request list_request(std::vector<VertexId> ids, uint32_t depth) const;
   size_t list_size(uint32_t depth) const;
   std::vector<Request> block_requests(const std::vector<Wanted>& ids) const;
   bool rerank(const Camera& camera);
+  bool ranking_due() const;
   bool round_open() const;
   size_t queued_ids() const;
   bool over_budget(uint32_t answers, std::chrono::steady_clock::time_point start) const;
-  void fill_pipe();
+  void fill_pipe(bool may_prefetch, bool may_background);
+  bool send_from(std::deque<Request>& planned, Source source);
+  bool still_lacked(Request& request, const std::vector<VertexId>& on_wire);
   void send(Request&& request);
   size_t receive_one(ReceiverFrame& out);
   size_t attach(const HttpAnswer& answer, ReceiverFrame& out);
   size_t attach_arrived(ReceiverFrame& out);
   std::vector<uint32_t> leaves_wanted(const ViewParams& view);
-  void prefetch();
+  std::deque<Request> plan_prefetch();
+  std::deque<Request> plan_background();
   uint32_t count_prefetch_used();
 
   // A frame re-ranks once the splits attached since its last ranking reach 1/kRerankShare of the ids queued
@@ -196,6 +219,16 @@ class ReceiverClient {
   ReceiverTotals totals_;
   std::deque<Request> queue_;  // ranked for the last view, not yet sent
   std::deque<Request> wire_;   // sent, in the order their answers come
+  // Lower priorities, sent only while queue_ is empty, each checked again when sent (its ids may have
+  // arrived or gone on the wire meanwhile): the extrapolated view's, ranked once a frame; the idle fetch's,
+  // planned in bounded batches and kept until sent.
+  std::deque<Request> prefetch_queue_;
+  bool prefetch_planned_ = false;
+  std::deque<Request> background_queue_;
+  // The last ranking: its camera and time, and the splits attached since (free-running's rule to rank).
+  std::optional<Camera> ranked_camera_;
+  std::chrono::steady_clock::time_point ranked_at_{};
+  size_t attached_since_ranking_ = 0;
   // Prefetched ids whose splits the mesh has not made yet: each id at most once (it is a leaf until its
   // answer comes, and on the wire till then), so bounded by the model's splits.
   std::vector<VertexId> prefetched_;

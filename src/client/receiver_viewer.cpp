@@ -41,13 +41,15 @@ ViewerReport ReceiverViewer::frame_view(const Camera& camera) {
                     {"split_requests", r.split_requests},
                     {"cache_hits", r.cache_hits},
                     {"rounds", r.rounds},
+                    {"rankings", r.rankings},
                     {"satisfied", r.satisfied},
                     {"queued", r.queued},
                     {"in_flight", r.in_flight},
                     {"cancelled", r.cancelled},
                     {"stale_arrivals", r.stale_arrivals},
                     {"prefetched", r.prefetched},
-                    {"prefetch_used", r.prefetch_used}};
+                    {"prefetch_used", r.prefetch_used},
+                    {"background", r.background}};
   return report;
 }
 
@@ -74,12 +76,17 @@ nlohmann::json ReceiverViewer::totals() const {
           {"stale_arrivals", t.stale_arrivals},
           {"prefetched", t.prefetched},
           {"prefetch_used", t.prefetch_used},
+          {"rankings", t.rankings},
+          {"background_ids", t.background_ids},
+          {"background_bytes", t.background_bytes},
           {"http_connections", c.connections},
           {"reopens", client_.reopens()},
           {"fetch", fetch_policy_name(options_.fetch)},
           {"frame_budget_ms", options_.frame_budget_ms},
           {"frame_answers", options_.frame_answers},
-          {"prefetch", options_.prefetch}};
+          {"prefetch", options_.prefetch},
+          {"rerank_ms", options_.rerank_ms},
+          {"background_budget_bytes", options_.background_bytes}};
 }
 
 }  // namespace pms::client

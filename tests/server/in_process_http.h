@@ -10,6 +10,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <utility>
 
 #include "client/http_transport.h"
 #include "server/catalogue.h"
@@ -46,6 +47,23 @@ class InProcessHttp : public client::HttpTransport {
   std::deque<Posted> posted_;
   std::deque<client::HttpAnswer> arrived_;
   client::HttpCounters counters_;
+};
+
+// A client of type Client (ReceiverClient, MultilevelClient) over an InProcessHttp whose handle the test
+// keeps, to hold and release answers; `model` open.
+template <class Client, class Options>
+struct OverInProcess {
+  OverInProcess(std::shared_ptr<const server::Catalogue> catalogue, const std::string& model, const Options& options,
+                bool free_running) {
+    auto owned = std::make_unique<InProcessHttp>(std::move(catalogue));
+    http = owned.get();
+    Options paced = options;
+    paced.free_running = free_running;
+    client = std::make_unique<Client>(std::move(owned), paced);
+    client->open(model);
+  }
+  InProcessHttp* http;  // owned by the client
+  std::unique_ptr<Client> client;
 };
 
 }  // namespace pms::test

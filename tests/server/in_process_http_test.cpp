@@ -24,19 +24,11 @@ using test::orbit_path;
 
 const Fixture& terrain() { return test::terrain_fixture(30000, 5); }
 
-// A client of type Client over an InProcessHttp whose handle the test keeps, to hold and release answers.
+// `Client` over the terrain's routes in process.
 template <class Client, class Options>
-struct OverInProcess {
-  explicit OverInProcess(const Options& options, bool free_running) {
-    auto owned = std::make_unique<InProcessHttp>(terrain().catalogue);
-    http = owned.get();
-    Options paced = options;
-    paced.free_running = free_running;
-    client = std::make_unique<Client>(std::move(owned), paced);
-    client->open("terrain");
-  }
-  InProcessHttp* http;  // owned by the client
-  std::unique_ptr<Client> client;
+struct OverInProcess : test::OverInProcess<Client, Options> {
+  OverInProcess(const Options& options, bool free_running)
+      : test::OverInProcess<Client, Options>(terrain().catalogue, "terrain", options, free_running) {}
 };
 
 client::ReceiverOptions receiver_options() {
