@@ -76,13 +76,16 @@ ReceiverClient::ReceiverClient(std::unique_ptr<HttpTransport> http, std::unique_
   session_.refinement_info = true;  // the records carry the children's refinement info: the client refines
 }
 
-void ReceiverClient::set_view_options(float tolerance, uint32_t morph_frames, bool prefetch) {
-  options_.tolerance = tolerance;
-  options_.morph_frames = morph_frames;
-  options_.prefetch = prefetch;
+void ReceiverClient::set_view_options(const ReceiverOptions& options) {
+  options_.tolerance = options.tolerance;
+  options_.morph_frames = options.morph_frames;
+  options_.prefetch = options.prefetch;
+  options_.rerank_ms = options.rerank_ms;
+  ranked_camera_.reset();  // the next frame ranks by the new options
+  options_.background_bytes = options.background_bytes;
   AdaptOptions adapt = session_.adapt_options;
-  adapt.tolerance = tolerance;
-  adapt.morph_frames = morph_frames;
+  adapt.tolerance = options.tolerance;
+  adapt.morph_frames = options.morph_frames;
   session_.set_adapt_options(adapt);
 }
 
@@ -337,11 +340,15 @@ std::vector<ReceiverClient::Request> ReceiverClient::block_requests(const std::v
 // order. Ids queued for an earlier view that this one does not want are dropped unsent: the cancel. Returns
 // whether the view wants anything it does not hold.
 bool ReceiverClient::rerank(const Camera& camera) {
+  adapt_for_view(session_.refinement());
+  return rank(camera);
+}
+
+// rerank() after the adaptation.
+bool ReceiverClient::rank(const Camera& camera) {
   SelectiveRefinement& refinement = session_.refinement();
-  adapt_for_view(refinement);
   ranked_camera_ = camera;
   ranked_at_ = std::chrono::steady_clock::now();
-  attached_since_ranking_ = 0;
   ++totals_.rankings;
   std::vector<Wanted> ids = ranked(refinement.missing(), session_.view_params(camera));
   std::vector<VertexId> wanted;
@@ -368,6 +375,20 @@ bool ReceiverClient::rerank(const Camera& camera) {
         std::count_if(r.request.ids.begin(), r.request.ids.end(), [&](VertexId id) { return !in(queued, id); }));
   queue_.assign(std::make_move_iterator(queue.begin()), std::make_move_iterator(queue.end()));
   return round_open();
+}
+
+// The adaptation wants a split that is neither queued nor on the wire (answers revealed it, a paused walk
+// went on, the tolerance changed).
+bool ReceiverClient::wants_unasked() {
+  const std::span<const uint32_t> missing = session_.refinement().missing();
+  if (missing.empty()) return false;
+  std::vector<VertexId> asked = keys_on_wire();
+  for (const Request& r : queue_) asked.insert(asked.end(), r.request.ids.begin(), r.request.ids.end());
+  std::sort(asked.begin(), asked.end(), protocol::code_order);
+  const VertexHierarchy& hierarchy = session_.hierarchy();
+  return std::any_of(missing.begin(), missing.end(), [&](uint32_t slot) {
+    return !std::binary_search(asked.begin(), asked.end(), key(hierarchy.id(slot)), protocol::code_order);
+  });
 }
 
 bool ReceiverClient::ranking_due() const {
@@ -492,7 +513,6 @@ size_t ReceiverClient::attach(const HttpAnswer& answer, ReceiverFrame& out) {
   totals_.stale_arrivals += sent.stale;
   if (sent.source == Source::background) totals_.background_bytes += answer.body.size();
   const size_t attached = session_.on_split_bands(answer.body, sent.request, codec_);
-  attached_since_ranking_ += attached;
   out.report.vsplits += attached;
   ++out.answers;
   out.report.latency_ms =
@@ -699,8 +719,8 @@ ReceiverFrame ReceiverClient::run(const Camera& camera, bool settling) {
 }
 
 // One frame that never waits: what the connection can do at once is done, every answer fully arrived is
-// attached, the view is adapted to and, when a ranking is due (moved camera, refresh period, a queue run
-// dry while answers came), ranked anew (queued ids it no longer wants are dropped unsent); the pipe gets
+// attached, the view is adapted to and, when a ranking is due (moved camera, refresh period, new options,
+// an empty queue while the adaptation wants a split not asked for), ranked anew (queued ids it no longer wants are dropped unsent); the pipe gets
 // what fits and, with room left, the predicted view's splits, then with the view satisfied the idle
 // fetch's. The latency reported is the last answer attached's, from its GET written.
 ReceiverFrame ReceiverClient::run_free(const Camera& camera, bool settling) {
@@ -715,17 +735,12 @@ ReceiverFrame ReceiverClient::run_free(const Camera& camera, bool settling) {
     finish(out, before, totals_before);
     return out;
   }
+  adapt_for_view(session_.refinement());
   const bool moved = !ranked_camera_ || !same_camera(*ranked_camera_, camera);
-  const bool rank = moved || options_.rerank_ms == 0 || ranking_due() ||
-                    (queue_.empty() && attached_since_ranking_ > 0);
-  bool wants;
-  if (rank) {
-    wants = rerank(camera);
-  } else {  // the same camera, ranked lately: its queue stands, the splits that came are made
-    adapt_for_view(session_.refinement());
-    wants = round_open();
-  }
-  out.rounds = rank && wants;
+  const bool ranked = moved || options_.rerank_ms == 0 || ranking_due() || (queue_.empty() && wants_unasked());
+  // Not ranked: the same camera, ranked lately, with its queue standing.
+  const bool wants = ranked ? rank(camera) : !session_.refinement().missing().empty();
+  out.rounds = ranked && wants;
   fill_pipe(options_.prefetch && !settling, options_.background_bytes > 0 && !settling && !wants);
   http_->poll();  // the GETs just handed over start on their way
   out.satisfied = !wants;

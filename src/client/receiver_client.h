@@ -61,9 +61,9 @@ struct ReceiverOptions {
   bool prefetch = false;
   // cheng-ooi §4.2's refresh: the splits that arrive change what is visible even when the camera holds
   // still, so the front is ranked again at least this often. A ranking renders the mesh: free-running
-  // frames rank only when the camera moved, when this is due, or when the queue ran dry while answers came
-  // (their splits may want more); lock-step frames rank as answers come (kRerankShare) and when this is due.
-  // 0: free-running frames rank every frame.
+  // frames rank only when the camera moved, when this is due, when the view options changed, or when the
+  // queue is empty and the adaptation wants a split not asked for (answers revealed it); lock-step frames
+  // rank as answers come (kRerankShare) and when this is due. 0: free-running frames rank every frame.
   uint32_t rerank_ms = 1000;
   // Free-running only (idle time is between frames): once the view wants nothing more and the prefetch has
   // nothing to ask, keep fetching the model's remaining splits, largest error first, at the lowest
@@ -135,8 +135,9 @@ class ReceiverClient {
   // Holds the last camera for frames (within the budget, without prefetch) until its view is satisfied,
   // then reads what is still in flight and converges. settle_frames(): how many it took (1 unbudgeted).
   void settle(const Camera& camera);
-  // New tolerance, geomorph length and prefetch: the next frame ranks and refines by them, the mesh is kept.
-  void set_view_options(float tolerance, uint32_t morph_frames, bool prefetch);
+  // New tolerance, geomorph length, prefetch, refresh period and idle-fetch budget from `options` (the
+  // rest of it is ignored): the next frame ranks, refines and fetches by them, the mesh is kept.
+  void set_view_options(const ReceiverOptions& options);
   uint32_t settle_frames() const { return settle_frames_; }
 
   ClientSession& session() { return session_; }
@@ -185,6 +186,8 @@ class ReceiverClient {
   size_t list_size(uint32_t depth) const;
   std::vector<Request> block_requests(const std::vector<Wanted>& ids) const;
   bool rerank(const Camera& camera);
+  bool rank(const Camera& camera);
+  bool wants_unasked();
   bool ranking_due() const;
   bool round_open() const;
   size_t queued_ids() const;
@@ -225,10 +228,9 @@ class ReceiverClient {
   std::deque<Request> prefetch_queue_;
   bool prefetch_planned_ = false;
   std::deque<Request> background_queue_;
-  // The last ranking: its camera and time, and the splits attached since (free-running's rule to rank).
+  // The last ranking: its camera (none: the next frame ranks) and time.
   std::optional<Camera> ranked_camera_;
   std::chrono::steady_clock::time_point ranked_at_{};
-  size_t attached_since_ranking_ = 0;
   // Prefetched ids whose splits the mesh has not made yet: each id at most once (it is a leaf until its
   // answer comes, and on the wire till then), so bounded by the model's splits.
   std::vector<VertexId> prefetched_;

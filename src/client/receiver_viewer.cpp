@@ -19,7 +19,8 @@ void ReceiverViewer::retune(const ViewerTuning& tuning) {
   if (tuning.tolerance) options_.tolerance = *tuning.tolerance;
   if (tuning.morph_frames) options_.morph_frames = *tuning.morph_frames;
   if (tuning.prefetch) options_.prefetch = *tuning.prefetch;
-  client_.set_view_options(options_.tolerance, options_.morph_frames, options_.prefetch);
+  if (tuning.background_bytes) options_.background_bytes = *tuning.background_bytes;
+  client_.set_view_options(options_);
 }
 
 ViewerReport ReceiverViewer::frame_view(const Camera& camera) {

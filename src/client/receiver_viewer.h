@@ -19,7 +19,7 @@ class ReceiverViewer : public Viewer {
                  const ReceiverOptions& options, const std::string& model);
 
   ViewerReport frame_view(const Camera& camera) override;
-  void retune(const ViewerTuning& tuning) override;  // tolerance, geomorphs, prefetch
+  void retune(const ViewerTuning& tuning) override;  // tolerance, geomorphs, prefetch, the idle fetch
   void settle(const Camera& camera) override { client_.settle(camera); }
   Mesh mesh() const override;
   ViewParams view_params(const Camera& camera) const override;

@@ -74,6 +74,7 @@ struct ViewerTuning {
   std::optional<uint64_t> dag_budget;   // > 0: the budget variant of the traversal
   std::optional<uint32_t> dag_max_ops;  // 1 .. protocol::kMaxDagOps
   std::optional<bool> prefetch;         // receiver
+  std::optional<uint64_t> background_bytes;  // receiver: the idle fetch's budget, 0 = off (free-running only)
   std::optional<uint64_t> lod_budget;   // multilevel: > 0 a fixed LOD by triangles, 0 the screen-size rule
 };
 

@@ -116,6 +116,7 @@ client::ViewerTuning tuning_of(const json& o) {
   if (const auto r = o.find("receiver"); r != o.end() && r->is_object()) {
     if (r->contains("fetch")) fail("receiver.fetch", "changes only with a new viewer");
     if (r->contains("prefetch")) t.prefetch = (*r)["prefetch"].get<bool>();
+    if (r->contains("background")) t.background_bytes = (*r)["background"].get<uint64_t>();
   }
   if (const auto m = o.find("multilevel"); m != o.end() && m->is_object() && m->contains("budget"))
     t.lod_budget = (*m)["budget"].get<uint64_t>();
@@ -148,6 +149,7 @@ std::unique_ptr<PageViewer> make_viewer(const json& o) {
     options.morph_frames = morph;
     options.fetch = client::fetch_policy_named(r.value("fetch", "lists"), "receiver.fetch");
     options.prefetch = r.value("prefetch", false);
+    options.background_bytes = r.value("background", uint64_t(0));
     options.adapt_budget_us = adapt_budget_us;
     auto http = std::make_unique<client::ExternalHttpTransport>(in_flight);
     auto face_ids = std::make_unique<client::FaceIdImportance>();
@@ -233,7 +235,8 @@ EMSCRIPTEN_KEEPALIVE uint8_t* pms_alloc(uint32_t size) { return new (std::nothro
 EMSCRIPTEN_KEEPALIVE void pms_free(uint8_t* bytes) { delete[] bytes; }
 
 // `options_json`: {mode, model, tolerance, morphFrames, inFlight, dag: {traversal, budget, maxOps},
-// receiver: {fetch, prefetch}, multilevel: {budget}}. The viewer's handle, or 0.
+// receiver: {fetch, prefetch, background (the idle fetch's bytes)}, multilevel: {budget}}. The viewer's
+// handle, or 0.
 EMSCRIPTEN_KEEPALIVE int pms_viewer_open(const char* options_json) {
   return guarded(
       [&] {
@@ -247,7 +250,7 @@ EMSCRIPTEN_KEEPALIVE int pms_viewer_open(const char* options_json) {
 EMSCRIPTEN_KEEPALIVE void pms_viewer_close(int handle) { viewers.erase(handle); }
 
 // Options changed on the open viewer, the mesh kept (client::Viewer::tune): `options_json` names any of
-// tolerance, morphFrames, dag: {traversal, budget, maxOps}, receiver: {prefetch}, multilevel: {budget}.
+// tolerance, morphFrames, dag: {traversal, budget, maxOps}, receiver: {prefetch, background}, multilevel: {budget}.
 // 1, or 0 with nothing changed (a value out of range, or mode, model or receiver.fetch named: those need
 // a new viewer).
 EMSCRIPTEN_KEEPALIVE int pms_viewer_set(int handle, const char* options_json) {

@@ -9,7 +9,7 @@ import { lodBudget, changeKind, viewerTuning } from '../../web/js/viewer_options
 test('every mode\'s state survives formatState then parseState', () => {
   for (const mode of MODES) {
     const state = { ...DEFAULTS, model: 'bunny', mode, tolerance: 0.5, traversal: 'constant', budget: 5000, maxOps: 300,
-                    fetch: 'blocks', prefetch: true, lod: 420, camera: 'fly', wireframe: true,
+                    fetch: 'blocks', prefetch: true, idleMb: 16, lod: 420, camera: 'fly', wireframe: true,
                     eye: [1.5, -2.25, 3], target: [0, 0.125, 0], up: [0, 0, 1], fovy: 45 };
     const back = parseState(formatState(state));
     assert.equal(back.mode, mode);
@@ -17,7 +17,7 @@ test('every mode\'s state survives formatState then parseState', () => {
     assert.deepEqual([back.eye, back.target, back.up, back.fovy], [state.eye, state.target, state.up, 45]);
     assert.deepEqual([back.camera, back.wireframe], ['fly', true]);
     if (mode === 'dag') assert.deepEqual([back.traversal, back.budget, back.maxOps], ['constant', 5000, 300]);
-    if (mode === 'receiver') assert.deepEqual([back.fetch, back.prefetch], ['blocks', true]);
+    if (mode === 'receiver') assert.deepEqual([back.fetch, back.prefetch, back.idleMb], ['blocks', true, 16]);
     if (mode === 'multilevel') assert.equal(back.lod, 420);
   }
 });
@@ -50,11 +50,12 @@ test('the DAG traversals are the core\'s names, in the link and in the panel', (
 });
 
 test('options the open viewer takes go to viewer.set; model, mode and fetch reopen', () => {
-  for (const key of ['tolerance', 'traversal', 'budget', 'maxOps', 'prefetch', 'lod']) assert.equal(changeKind(key), 'tune', key);
+  for (const key of ['tolerance', 'traversal', 'budget', 'maxOps', 'prefetch', 'idleMb', 'lod']) assert.equal(changeKind(key), 'tune', key);
   for (const key of ['model', 'mode', 'fetch']) assert.equal(changeKind(key), 'reopen', key);
   const state = { ...DEFAULTS, tolerance: 3, traversal: 'linear', budget: 900, maxOps: 50, prefetch: true, lod: 1000 };
   assert.deepEqual(viewerTuning('tolerance', state, 5000), { tolerance: 3 });
   assert.deepEqual(viewerTuning('budget', state, 5000), { dag: { traversal: 'linear', budget: 900, maxOps: 50 } });
   assert.deepEqual(viewerTuning('prefetch', state, 5000), { receiver: { prefetch: true } });
+  assert.deepEqual(viewerTuning('idleMb', { ...state, idleMb: 2 }, 5000), { receiver: { background: 2 * 1024 * 1024 } });
   assert.deepEqual(viewerTuning('lod', state, 5000), { multilevel: { budget: 5000 } });
 });

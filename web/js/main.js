@@ -125,7 +125,7 @@ class App {
     const next = parseState(location.hash);
     const differs = (keys) => keys.filter((k) => next[k] !== this.state[k]);
     const reopen = differs(['model', 'mode', 'fetch']).length > 0;
-    const tuned = differs(['tolerance', 'traversal', 'budget', 'maxOps', 'prefetch', 'lod']);
+    const tuned = differs(['tolerance', 'traversal', 'budget', 'maxOps', 'prefetch', 'idleMb', 'lod']);
     this.state = { ...next, model: next.model || this.state.model };
     if (reopen) this.open();
     else if (tuned.length) this.tune(tuned);

@@ -12,7 +12,7 @@ export class ModePanel {
     this.inputs = {
       model: $('model'), mode: $('mode'), tolerance: $('tolerance'), traversal: $('dag-traversal'),
       budget: $('dag-budget'), maxOps: $('dag-max-ops'), fetch: $('receiver-fetch'), prefetch: $('receiver-prefetch'),
-      lod: $('lod'), camera: $('camera-style'), wireframe: $('wireframe'),
+      idleMb: $('receiver-idle'), lod: $('lod'), camera: $('camera-style'), wireframe: $('wireframe'),
     };
     this.lodValue = $('lod-value');
     for (const [key, input] of Object.entries(this.inputs)) {
@@ -42,6 +42,7 @@ export class ModePanel {
     i.maxOps.value = state.maxOps;
     i.fetch.value = state.fetch;
     i.prefetch.checked = state.prefetch;
+    i.idleMb.value = state.idleMb;
     i.lod.value = state.lod;
     i.camera.value = state.camera;
     i.wireframe.checked = state.wireframe;

@@ -137,7 +137,7 @@ class Viewer {
   }
 
   // Changes options on the open viewer, keeping its mesh: any of tolerance, morphFrames,
-  // dag: {traversal, budget, maxOps}, receiver: {prefetch}, multilevel: {budget}. The model, the mode and
+  // dag: {traversal, budget, maxOps}, receiver: {prefetch, background}, multilevel: {budget}. The model, the mode and
   // receiver.fetch need a new viewer. Throws (and changes nothing) for a value the core refuses.
   set(options) {
     if (this.closed || this.failed) return;

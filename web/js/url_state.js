@@ -1,6 +1,6 @@
 // The page's state in the URL's hash, so that a view can be shared as a link:
 //   #model=bunny&mode=sender&tau=1&eye=x,y,z&target=x,y,z&up=0,1,0&fovy=60&camera=orbit
-// plus the mode's own options (traversal, budget, maxops; fetch, prefetch; lod) and wireframe.
+// plus the mode's own options (traversal, budget, maxops; fetch, prefetch, idle; lod) and wireframe.
 // Anything missing or malformed falls back to the default, so a hand-edited link still opens.
 
 export const MODES = ['sender', 'sender-plain', 'vi', 'dag', 'receiver', 'multilevel'];
@@ -10,7 +10,7 @@ export const DAG_TRAVERSALS = ['priority', 'linear', 'constant'];
 
 export const DEFAULTS = Object.freeze({
   server: '', model: '', mode: 'sender', tolerance: 1, camera: 'orbit', wireframe: false,
-  traversal: 'priority', budget: 0, maxOps: 0, fetch: 'lists', prefetch: false, lod: 0,
+  traversal: 'priority', budget: 0, maxOps: 0, fetch: 'lists', prefetch: false, idleMb: 0, lod: 0,
   eye: null, target: null, up: [0, 1, 0], fovy: 60,
 });
 
@@ -43,6 +43,7 @@ export function parseState(hash) {
     maxOps: Math.floor(number(q.get('maxops'), DEFAULTS.maxOps, 0)),
     fetch: oneOf(q.get('fetch'), ['lists', 'blocks'], DEFAULTS.fetch),
     prefetch: q.get('prefetch') === '1',
+    idleMb: number(q.get('idle'), DEFAULTS.idleMb, 0),
     lod: Math.floor(number(q.get('lod'), DEFAULTS.lod, 0)),
     eye: vector(q.get('eye')),
     target: vector(q.get('target')),
@@ -67,6 +68,7 @@ export function formatState(state) {
   if (state.mode === 'receiver') {
     q.set('fetch', state.fetch);
     if (state.prefetch) q.set('prefetch', '1');
+    if (state.idleMb) q.set('idle', String(state.idleMb));
   }
   if (state.mode === 'multilevel' && state.lod) q.set('lod', String(state.lod));
   if (state.camera !== DEFAULTS.camera) q.set('camera', state.camera);

@@ -13,6 +13,11 @@ export function lodBudget(position, faces) {
 export const APPLY_BUDGET_MS = 1;
 export const ADAPT_BUDGET_MS = 1.5;
 
+// The idle fetch's budget: the panel and the link give megabytes.
+export function idleBytes(megabytes) {
+  return Math.round(Math.max(0, megabytes) * 1024 * 1024);
+}
+
 export function viewerOptions(state, server, faces, callbacks) {
   return {
     server,
@@ -23,14 +28,14 @@ export function viewerOptions(state, server, faces, callbacks) {
     applyBudgetMs: APPLY_BUDGET_MS,
     adaptBudgetMs: ADAPT_BUDGET_MS,
     dag: { traversal: state.traversal, budget: state.budget, maxOps: state.maxOps },
-    receiver: { fetch: state.fetch, prefetch: state.prefetch },
+    receiver: { fetch: state.fetch, prefetch: state.prefetch, background: idleBytes(state.idleMb) },
     multilevel: { budget: lodBudget(state.lod, faces) },
     ...callbacks,
   };
 }
 
 // The options an open viewer takes in place (viewer.set): the mesh is kept.
-const TUNED = new Set(['tolerance', 'traversal', 'budget', 'maxOps', 'prefetch', 'lod']);
+const TUNED = new Set(['tolerance', 'traversal', 'budget', 'maxOps', 'prefetch', 'idleMb', 'lod']);
 
 // What a change of the key does: 'view' settings change the picture only, 'tune' ones go to the open viewer
 // (viewer.set), the rest (model, mode, the receiver's fetch style) reopen it.
@@ -43,6 +48,7 @@ export function changeKind(key) {
 export function viewerTuning(key, state, faces) {
   if (key === 'tolerance') return { tolerance: state.tolerance };
   if (key === 'prefetch') return { receiver: { prefetch: state.prefetch } };
+  if (key === 'idleMb') return { receiver: { background: idleBytes(state.idleMb) } };
   if (key === 'lod') return { multilevel: { budget: lodBudget(state.lod, faces) } };
   return { dag: { traversal: state.traversal, budget: state.budget, maxOps: state.maxOps } };
 }
