@@ -41,11 +41,30 @@ void add_bench_options(CliCommand& cmd) {
   CliOption minutes = cmd.option("--soak-minutes", args->soak_minutes, "Minutes the soak runs (--quick: 1)")
                           .range(1u, 24u * 60u)
                           .show_default();
+  CliOption fleet_sessions = cmd.option("--fleet-sessions", args->fleet_sessions,
+                                        "Sessions the fleet group opens and holds (--quick: 200)")
+                                    .range(1u, 100000u)
+                                    .show_default();
+  CliOption fleet_flying = cmd.option("--fleet-flying", args->fleet_flying,
+                                      "Sessions flying at each of the fleet group's steps (default "
+                                      "0,50,100,200,400,800,1600, stopping past the knee; --quick: 0,20)")
+                               .delimiter(',');
+  CliOption fleet_seconds = cmd.option("--fleet-step-seconds", args->fleet_step_seconds,
+                                       "Seconds each fleet step flies (--quick: 3)")
+                                .show_default();
+  CliOption fleet_processes = cmd.option("--fleet-processes", args->fleet_processes,
+                                         "Load processes of the fleet group (--quick: 2)")
+                                  .range(1u, 64u)
+                                  .show_default();
   cmd.option("--pmstream", args->pmstream,
              "The pmstream binary to run for builds and servers (default: the one beside pmstream-bench)");
-  cmd.on_run([args, clients, minutes] {
+  cmd.on_run([args, clients, minutes, fleet_sessions, fleet_flying, fleet_seconds, fleet_processes] {
     if (args->quick && !clients.given()) args->soak_clients = kQuickSoakClients;
     if (args->quick && !minutes.given()) args->soak_minutes = kQuickSoakMinutes;
+    if (args->quick && !fleet_sessions.given()) args->fleet_sessions = 200;
+    if (args->quick && !fleet_flying.given()) args->fleet_flying = {"0", "20"};
+    if (args->quick && !fleet_seconds.given()) args->fleet_step_seconds = 3;
+    if (args->quick && !fleet_processes.given()) args->fleet_processes = 2;
     pms::bench::run_bench(*args);
   });
 }
