@@ -17,6 +17,11 @@ struct BenchOptions {
   std::string command_line;     // as typed, for the report
   uint32_t soak_clients = 100;  // the soak group's load (--soak-clients, --soak-minutes)
   uint32_t soak_minutes = 10;
+  // The fleet group's load (--fleet-sessions, --fleet-flying, --fleet-step-seconds, --fleet-processes).
+  uint32_t fleet_sessions = 5000;
+  std::vector<uint32_t> fleet_flying = {0, 50, 100, 200, 400, 800, 1600};
+  double fleet_step_seconds = 10;
+  uint32_t fleet_processes = 4;
 };
 
 struct BenchContext {
@@ -54,6 +59,9 @@ void run_multilevel_group(BenchContext& context);
 // Requirement 8's soak: many resuming clients against one server for minutes (bench_soak.cpp), then the
 // failover figure.
 void run_soak_group(BenchContext& context);
+// E11's fleet: thousands of sessions held, a growing share flying, server and load on a core each
+// (bench_fleet.cpp).
+void run_fleet_group(BenchContext& context);
 // Sender-driven viewers behind HAProxy resuming on another origin when theirs is killed (bench_failover.cpp).
 void run_failover_figure(BenchContext& context);
 // E9: the DAG mode's three traversals along a scan route (bench_dag.cpp).

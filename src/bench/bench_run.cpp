@@ -31,6 +31,10 @@ constexpr BenchGroup kGroups[] = {
      "many clients resuming and reconnecting for minutes: server RSS over time, failures, latency per minute; "
      "failover: viewers behind HAProxy resuming on another origin when theirs is killed",
      run_soak_group},
+    {"fleet",
+     "E11 at scale: thousands of sender-driven sessions held, a growing share flying at 30 fps, the server on one "
+     "core and the load processes on the other: VIEW latency, server CPU, RSS and bytes per session, the knee",
+     run_fleet_group},
     {"dag", "E9 DAG traversals: time per frame, accuracy against priority, fronts, session memory, bytes down",
      run_dag_group},
     {"attacks", "the HTTP attack classes beside a good receiver-driven client: p99, memory, CPU after, SIGTERM",
@@ -99,6 +103,13 @@ void run_bench(const BenchArgs& args) {
   BenchContext context;
   context.pmstream_exe = locate_pmstream(args.pmstream);
   context.options = {args.quick, args.models, args.out, "", args.soak_clients, args.soak_minutes};
+  context.options.fleet_sessions = args.fleet_sessions;
+  context.options.fleet_processes = args.fleet_processes;
+  context.options.fleet_step_seconds = args.fleet_step_seconds;
+  if (!args.fleet_flying.empty()) {
+    context.options.fleet_flying.clear();
+    for (const std::string& n : args.fleet_flying) context.options.fleet_flying.push_back(uint32_t(std::stoul(n)));
+  }
   std::error_code error;
   fs::create_directories(context.options.out_dir, error);
   if (error) fail(args.out, "cannot create the output directory: " + error.message());

@@ -11,6 +11,9 @@ struct BenchArgs {
   std::vector<std::string> models, only;
   std::string shared, out = "bench-out", pmstream;
   uint32_t soak_clients = 100, soak_minutes = 10;
+  uint32_t fleet_sessions = 5000, fleet_processes = 4;
+  std::vector<std::string> fleet_flying;  // empty: the group's default
+  double fleet_step_seconds = 10;
 };
 
 // "build, refine, ...": every group's name, for --help and errors.

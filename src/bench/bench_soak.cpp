@@ -60,12 +60,7 @@ std::vector<SoakClientPlan> plan_clients(const BenchModel& m, uint16_t port, uin
     p.port = port;
     p.model = m.name;
     p.data = &m.served->model();
-    // Every client its own path: orbits and scans alternate, each from its own phase, half of each reversed.
-    p.path.cameras = i % 2 == 0 ? &orbit : &scan;
-    p.path.ping_pong = i % 2 == 1;
-    p.path.reversed = i % 4 >= 2;
-    p.path.phase = size_t(i) * 97 % p.path.cameras->size();
-    p.path.name = std::string(i % 2 == 0 ? "orbit" : "scan") + (p.path.reversed ? " reversed" : "");
+    p.path = SoakPath::of_client(i, orbit, scan);
     p.seed = kSeed + i;
     p.t0 = t0;
     p.start = t0 + std::chrono::duration_cast<Clock::duration>(

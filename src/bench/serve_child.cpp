@@ -2,10 +2,6 @@
 
 #include <signal.h>
 
-#include <cerrno>
-#include <chrono>
-#include <cstring>
-
 #include "common/error.h"
 
 namespace pms::bench {
@@ -54,100 +50,48 @@ ServeStats parse_serve_stats(const json& line) {
   return s;
 }
 
-ServeChild::ServeChild(const std::string& pmstream_exe, const std::vector<std::string>& args, double start_timeout_s,
-                       uint16_t port) {
+namespace {
+
+std::vector<std::string> serve_argv(const std::string& pmstream_exe, const std::vector<std::string>& args,
+                                    uint16_t port) {
   std::vector<std::string> argv = {pmstream_exe, "serve"};
   argv.insert(argv.end(), args.begin(), args.end());
   for (const char* arg : {"--json", "--host", "127.0.0.1", "--port"}) argv.push_back(arg);
   argv.push_back(std::to_string(port));
-  thread_ = std::thread([this, argv] {
-    ChildOptions options;
-    options.on_start = [this](pid_t pid) { pid_ = pid; };
-    options.on_stdout = [this](std::string_view piece) {
-      const std::lock_guard<std::mutex> lock(mutex_);
-      partial_.append(piece);
-      for (size_t newline; (newline = partial_.find('\n')) != std::string::npos; partial_.erase(0, newline + 1))
-        lines_.push_back(partial_.substr(0, newline));
-      changed_.notify_all();
-    };
-    ChildResult run;
-    std::string error;
-    try {
-      run = run_child(argv, options);
-    } catch (const Error& e) {
-      error = e.what();
-    }
-    const std::lock_guard<std::mutex> lock(mutex_);
-    run_ = std::move(run);
-    start_error_ = error;
-    exited_ = true;
-    changed_.notify_all();
-  });
+  return argv;
+}
+
+}  // namespace
+
+ServeChild::ServeChild(const std::string& pmstream_exe, const std::vector<std::string>& args, double start_timeout_s,
+                       uint16_t port)
+    : child_("serve", serve_argv(pmstream_exe, args, port)) {
   try {
-    listening_ = next_line("listening", start_timeout_s);
-    const auto port = listening_.find("port");
-    if (port == listening_.end() || !port->is_number_unsigned() || *port == 0 || *port > 65535)
+    listening_ = child_.next_line("listening", start_timeout_s);
+    const auto found = listening_.find("port");
+    if (found == listening_.end() || !found->is_number_unsigned() || *found == 0 || *found > 65535)
       fail("serve", "the \"listening\" line has no port: " + listening_.dump());
-    port_ = port->get<uint16_t>();
+    port_ = found->get<uint16_t>();
   } catch (...) {
-    if (pid_) ::kill(pid_, SIGKILL);
-    thread_.join();
+    child_.kill();
     throw;
   }
 }
 
-ServeChild::~ServeChild() {
-  if (!thread_.joinable()) return;
-  {
-    const std::lock_guard<std::mutex> lock(mutex_);
-    if (!exited_ && pid_) ::kill(pid_, SIGKILL);
-  }
-  thread_.join();
-}
-
-json ServeChild::next_line(const std::string& event, double timeout_s) {
-  std::unique_lock<std::mutex> lock(mutex_);
-  const auto ready = [&] { return !lines_.empty() || exited_; };
-  if (!changed_.wait_for(lock, std::chrono::duration<double>(timeout_s), ready))
-    fail("serve", "no \"" + event + "\" line within " + std::to_string(int(timeout_s)) + " s");
-  if (lines_.empty()) {
-    const std::string why = !start_error_.empty() ? start_error_ : run_.ok() ? "exit code 0" : run_.failure();
-    fail("serve", "ended (" + why + ") without its \"" + event + "\" line");
-  }
-  const std::string text = lines_.front();
-  lines_.pop_front();
-  const json line = json::parse(text, nullptr, false);
-  if (line.is_discarded() || !line.is_object()) fail("serve", "a line that is not a JSON object: " + text);
-  if (line.value("event", "") != event) fail("serve", "expected the \"" + event + "\" line, got: " + text);
-  return line;
-}
-
-void ServeChild::send_signal(int number, const char* name) {
-  const std::lock_guard<std::mutex> lock(mutex_);
-  if (exited_ || !pid_) fail("serve", std::string("ended before ") + name + " could be sent");
-  if (::kill(pid_, number) != 0) fail("serve", std::string("kill ") + name + ": " + std::strerror(errno));
-}
-
 ServeStats ServeChild::stats(double timeout_s) {
-  send_signal(SIGUSR1, "SIGUSR1");
-  return parse_serve_stats(next_line("stats", timeout_s));
+  child_.send_signal(SIGUSR1, "SIGUSR1");
+  return parse_serve_stats(child_.next_line("stats", timeout_s));
 }
 
 json ServeChild::reload(double timeout_s) {
-  send_signal(SIGHUP, "SIGHUP");
-  return next_line("reloaded", timeout_s);
+  child_.send_signal(SIGHUP, "SIGHUP");
+  return child_.next_line("reloaded", timeout_s);
 }
 
 ServeStats ServeChild::stop(double timeout_s) {
-  send_signal(SIGTERM, "SIGTERM");
-  const ServeStats stopped = parse_serve_stats(next_line("stopped", timeout_s));
-  {
-    std::unique_lock<std::mutex> lock(mutex_);
-    if (!changed_.wait_for(lock, std::chrono::duration<double>(timeout_s), [&] { return exited_; }))
-      fail("serve", "still running " + std::to_string(int(timeout_s)) + " s after its \"stopped\" line");
-  }
-  thread_.join();
-  if (!run_.ok()) fail("serve", "printed its \"stopped\" line, then " + run_.failure());
+  child_.send_signal(SIGTERM, "SIGTERM");
+  const ServeStats stopped = parse_serve_stats(child_.next_line("stopped", timeout_s));
+  child_.wait_ok(timeout_s);
   return stopped;
 }
 

@@ -4,18 +4,12 @@
 #pragma once
 #include <sys/types.h>
 
-#include <atomic>
-#include <condition_variable>
 #include <cstdint>
-#include <deque>
-#include <mutex>
 #include <nlohmann/json.hpp>
 #include <string>
-#include <string_view>
-#include <thread>
 #include <vector>
 
-#include "bench/child_process.h"
+#include "bench/line_child.h"
 
 namespace pms::bench {
 
@@ -40,12 +34,9 @@ class ServeChild {
   // port brings a server back where a proxy in front of it expects it.
   ServeChild(const std::string& pmstream_exe, const std::vector<std::string>& args, double start_timeout_s = 120,
              uint16_t port = 0);
-  ~ServeChild();  // a server still running is killed (SIGKILL)
-  ServeChild(const ServeChild&) = delete;
-  ServeChild& operator=(const ServeChild&) = delete;
-
+  // A server still running when it is destroyed is killed (SIGKILL).
   uint16_t port() const { return port_; }
-  pid_t pid() const { return pid_; }  // for /proc; 0 before it started
+  pid_t pid() const { return child_.pid(); }  // for /proc; 0 before it started
   const nlohmann::json& listening() const { return listening_; }
   // SIGUSR1, then the "stats" line it prints.
   ServeStats stats(double timeout_s = 30);
@@ -54,21 +45,10 @@ class ServeChild {
   // SIGTERM, then the "stopped" line; the server must then exit with status 0.
   ServeStats stop(double timeout_s = 30);
   // What it wrote to stderr (one line per session fault); read it only after stop() returned.
-  const std::string& log() const { return run_.err; }
+  const std::string& log() const { return child_.log(); }
 
  private:
-  nlohmann::json next_line(const std::string& event, double timeout_s);
-  void send_signal(int number, const char* name);
-
-  std::thread thread_;
-  std::atomic<pid_t> pid_{0};
-  std::mutex mutex_;
-  std::condition_variable changed_;
-  std::string partial_;            // stdout after the last newline
-  std::deque<std::string> lines_;  // complete lines not read yet
-  bool exited_ = false;
-  ChildResult run_;          // written by thread_ before exited_ is set
-  std::string start_error_;  // run_child could not start the program
+  LineChild child_;
   nlohmann::json listening_;
   uint16_t port_ = 0;
 };

@@ -33,6 +33,16 @@ const Camera& SoakPath::at(uint64_t frame) const {
   return (*cameras)[k < n ? k : period - k];
 }
 
+SoakPath SoakPath::of_client(uint32_t i, const std::vector<Camera>& orbit, const std::vector<Camera>& scan) {
+  SoakPath p;
+  p.cameras = i % 2 == 0 ? &orbit : &scan;
+  p.ping_pong = i % 2 == 1;
+  p.reversed = i % 4 >= 2;
+  p.phase = size_t(i) * 97 % p.cameras->size();
+  p.name = std::string(i % 2 == 0 ? "orbit" : "scan") + (p.reversed ? " reversed" : "");
+  return p;
+}
+
 SoakClientLog run_soak_client(const SoakClientPlan& plan, uint32_t minutes) {
   SoakClientLog log;
   log.minutes.resize(minutes);

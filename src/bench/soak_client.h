@@ -24,6 +24,8 @@ struct SoakPath {
   bool reversed = false;
   size_t phase = 0;
   const Camera& at(uint64_t frame) const;
+  // Client i's own path: orbits and scans alternate, each from its own phase, half of each reversed.
+  static SoakPath of_client(uint32_t i, const std::vector<Camera>& orbit, const std::vector<Camera>& scan);
 };
 
 struct SoakMinute {

@@ -1,6 +1,5 @@
 #include "client/load_client.h"
 
-#include <bit>
 #include <optional>
 
 #include "client/link.h"
@@ -23,7 +22,7 @@ constexpr size_t kMaxQueuedBytes = size_t(64) << 20;
 
 LoadClient::LoadClient(std::string host, uint16_t port, std::string model_name, LoadClientOptions options)
     : host_(std::move(host)), model_name_(std::move(model_name)), port_(port), options_(options) {
-  if (options_.model) hold_roots();
+  if (options_.model) held_ = std::make_unique<HeldLeaves>(*options_.model);
 }
 
 LoadClient::~LoadClient() = default;
@@ -33,10 +32,10 @@ void LoadClient::open(bool resume) {
   server_ = std::make_unique<ServerConnection>(std::make_unique<Link>(host_, port_, kMaxQueuedBytes), "pmstream-bench",
                                                options_.answer_timeout);
   protocol::Open open{model_name_, {}};
-  if (resume && options_.model && held_splits_ > 0) {
-    open.resume = held_leaves();
-  } else if (options_.model) {
-    hold_roots();
+  if (resume && holds_splits()) {
+    open.resume = held_->leaves();
+  } else if (held_) {
+    held_->hold_roots();
   }
   const protocol::Base base = server_->open(open);
   context_ = protocol::stream_context(base);
@@ -64,45 +63,13 @@ double LoadClient::view(const Camera& camera, float tolerance) {
     splits_received_ += batch.splits.size();
     if (context_.records)
       for (const SplitRecord& split : batch.splits) hierarchy_->add_split(split);
-    if (options_.model)
-      for (const SplitRecord& split : batch.splits) hold(split);
+    if (held_)
+      for (const SplitRecord& split : batch.splits) held_->split(split.vs);
     if (batch.final && batch.frame == frame) break;
   }
   return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - sent).count();
 }
 
 void LoadClient::drop() { server_.reset(); }
-
-void LoadClient::hold_roots() {
-  const ModelData& model = *options_.model;
-  leaf_bits_.assign((model.node_count() + 63) / 64, 0);
-  for (uint32_t root = 0; root < model.root_count; ++root) leaf_bits_[root / 64] |= uint64_t(1) << (root % 64);
-  held_splits_ = 0;
-}
-
-// UpdateVHierarchy (kim-lee-kobbelt §5.3) on leaves only: v_s stops being a leaf, its children become ones.
-void LoadClient::hold(const SplitRecord& split) {
-  const ModelData& model = *options_.model;
-  const uint32_t n = model.find(split.vs);
-  const auto held = [&](uint32_t node) { return (leaf_bits_[node / 64] >> (node % 64)) & 1; };
-  if (n == kNone || model.is_leaf(n))
-    fail("server", "a split of " + pms::to_string(split.vs) + ", which the model cannot split");
-  if (!held(n))
-    fail("server", "a split of " + pms::to_string(split.vs) +
-                       ", which is not a leaf this client holds "
-                       "(sent before, or its parent never was)");
-  leaf_bits_[n / 64] &= ~(uint64_t(1) << (n % 64));
-  for (uint32_t child : {model.first_child[n], model.first_child[n] + 1})
-    leaf_bits_[child / 64] |= uint64_t(1) << (child % 64);
-  ++held_splits_;
-}
-
-std::vector<VertexId> LoadClient::held_leaves() const {
-  std::vector<VertexId> leaves;
-  for (size_t word = 0; word < leaf_bits_.size(); ++word)
-    for (uint64_t bits = leaf_bits_[word]; bits; bits &= bits - 1)
-      leaves.push_back(options_.model->id(uint32_t(word * 64 + size_t(std::countr_zero(bits)))));
-  return leaves;
-}
 
 }  // namespace pms::client

@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "client/held_leaves.h"
 #include "client/server_connection.h"
 #include "common/camera.h"
 #include "protocol/framing.h"
@@ -45,14 +46,11 @@ class LoadClient {
   void drop();
 
   bool connected() const { return server_ != nullptr; }
-  bool holds_splits() const { return held_splits_ > 0; }
+  bool holds_splits() const { return held_ && held_->splits() > 0; }
   uint64_t splits_received() const { return splits_received_; }
 
  private:
-  void hold(const SplitRecord& split);
   void start_hierarchy(const protocol::Base& base);
-  void hold_roots();
-  std::vector<VertexId> held_leaves() const;
 
   std::string host_, model_name_;
   uint16_t port_;
@@ -60,9 +58,8 @@ class LoadClient {
   std::unique_ptr<ServerConnection> server_;
   protocol::StreamContext context_;
   uint32_t frame_ = 0;
-  uint64_t splits_received_ = 0;     // over every session
-  uint64_t held_splits_ = 0;         // in the hierarchy held now
-  std::vector<uint64_t> leaf_bits_;  // per model node: a leaf of the partial hierarchy held
+  uint64_t splits_received_ = 0;         // over every session
+  std::unique_ptr<HeldLeaves> held_;     // with LoadClientOptions::model
   // A session whose packets are split records decodes them against the hierarchy they make (what
   // ClientSession holds): ids, positions, refinement info and cut vertices, nothing of a mesh.
   std::unique_ptr<VertexHierarchy> hierarchy_;
