@@ -31,6 +31,10 @@ constexpr BenchGroup kGroups[] = {
      "many clients resuming and reconnecting for minutes: server RSS over time, failures, latency per minute; "
      "failover: viewers behind HAProxy resuming on another origin when theirs is killed",
      run_soak_group},
+    {"tier",
+     "receiver-driven viewers behind an nginx cache over two origins, one killed: failures, hit rate, bytes from "
+     "the cache and the origins, origin CPU per split against the sender-driven server's",
+     run_tier_group},
     {"dag", "E9 DAG traversals: time per frame, accuracy against priority, fronts, session memory, bytes down",
      run_dag_group},
     {"attacks", "the HTTP attack classes beside a good receiver-driven client: p99, memory, CPU after, SIGTERM",
