@@ -7,6 +7,7 @@
 // cache's hit rate (overall and from the second viewer of a path on), bytes served by the cache and by the
 // origins, and the origins' CPU per split delivered beside the sender-driven server's CPU per split sent,
 // both from the servers' own `cpu_s`. tier.json holds every figure.
+#include <algorithm>
 #include <cstdio>
 #include <map>
 #include <memory>
@@ -123,6 +124,9 @@ TierPlan tier_plan(const std::string& model, const NginxChild& nginx,
       const std::string address = "127.0." + std::to_string(1 + i / 250) + "." + std::to_string(2 + i % 250);
       plan.viewers.push_back({paths[j], client::FetchPolicy::blocks, address, rank * kStagger});
     }
+  // The first viewer of the middle rank, halfway: the first viewers of every path near their end, the
+  // last ones starting.
+  plan.event_viewer = paths.size() * (per_path / 2);
   plan.event_frame = kFrames / 2;
   return plan;
 }
@@ -259,8 +263,8 @@ std::string summary(const TierRun& run, const std::string& model, uint32_t paths
                      "its own), " + std::to_string(per_path) + " viewers a path starting " +
                      std::to_string(kStagger.count()) + " ms apart, each from a loopback address of its own, "
                      "through nginx (deploy/nginx/pmstream-cache.conf) over two origins trusting its "
-                     "X-Forwarded-For; origin1 killed (SIGKILL) when the first viewer reached frame " +
-                     std::to_string(kFrames / 2) + ", " + fixed(t.killed_at_s, 1) + " s into the flight.\n";
+                     "X-Forwarded-For; origin1 killed (SIGKILL) when the first viewer of rank " + std::to_string(per_path / 2 + 1) +
+                     " reached frame " + std::to_string(kFrames / 2) + ", " + fixed(t.killed_at_s, 1) + " s into the flight.\n";
   text += "- origins: " + thousands(t.origins.requests) + " requests (" + thousands(t.origins.split_requests) +
           " for splits, " + thousands(t.origins.not_modified) + " answered 304), " + thousands(t.origins.bytes_out) +
           " bytes out; the viewers got " + thousands(t.bytes_down) + " bytes (" + thousands(t.payload_down) +
@@ -278,7 +282,11 @@ std::string summary(const TierRun& run, const std::string& model, uint32_t paths
           "flight, the killed one's until its last report just before the kill, over the " + thousands(t.splits) +
           " splits the viewers received); the sender-driven server's per split sent on the same paths: " +
           fixed(sender_us, 2) + " µs (" + thousands(s.splits_sent) + " splits, " + thousands(s.splits_received) +
-          " received); ratio " + fixed(ratio, 3) + ".\n";
+          " received); ratio " + fixed(ratio, 3) + ". The receiver-driven viewers receive more splits on the same "
+          "paths (a block brings its band's descendants); per viewer, the origins spent " +
+          fixed(t.origins.cpu_s / std::max(1u, t.viewers), 4) + " s of CPU against the sender-driven server's " +
+          fixed(s.cpu_s / std::max(1u, s.viewers), 4) + " s (ratio " +
+          fixed(s.cpu_s > 0 ? t.origins.cpu_s / s.cpu_s : 0, 3) + ").\n";
   text += "- targets (issue 45): 0 viewers failed: " + met(t.failed == 0) + "; origin CPU per split delivered ≤ " +
           fixed(kTargetCpuRatio, 1) + "× the sender-driven server's: " + met(ratio > 0 && ratio <= kTargetCpuRatio) +
           "; hit rate ≥ " + percent(kTargetLaterHitRate) + " from the second viewer of a path on: " +

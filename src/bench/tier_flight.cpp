@@ -1,7 +1,6 @@
 #include "bench/tier_flight.h"
 
 #include <exception>
-#include <mutex>
 #include <thread>
 
 #include "bench/on_threads.h"
@@ -9,7 +8,7 @@
 namespace pms::bench {
 namespace {
 
-void fly_one(const TierPlan& plan, size_t index, std::once_flag& event, TierViewer& out,
+void fly_one(const TierPlan& plan, size_t index, TierViewer& out,
              const std::function<void(size_t, client::ReceiverClient&)>& at_end) {
   const TierViewerPlan& viewer = plan.viewers[index];
   std::this_thread::sleep_for(viewer.start);
@@ -21,7 +20,7 @@ void fly_one(const TierPlan& plan, size_t index, std::once_flag& event, TierView
     client::ReceiverClient client(plan.server, options);
     client.open(plan.model);
     for (size_t frame = 0; frame < viewer.path.size(); ++frame) {
-      if (frame == plan.event_frame && plan.event) std::call_once(event, plan.event);
+      if (index == plan.event_viewer && frame == plan.event_frame && plan.event) plan.event();
       client.frame(viewer.path[frame]);
       ++out.frames;
     }
@@ -39,8 +38,7 @@ void fly_one(const TierPlan& plan, size_t index, std::once_flag& event, TierView
 std::vector<TierViewer> fly_tier(const TierPlan& plan,
                                  const std::function<void(size_t, client::ReceiverClient&)>& at_end) {
   std::vector<TierViewer> viewers(plan.viewers.size());
-  std::once_flag event;
-  on_threads(plan.viewers.size(), [&](size_t i) { fly_one(plan, i, event, viewers[i], at_end); });
+  on_threads(plan.viewers.size(), [&](size_t i) { fly_one(plan, i, viewers[i], at_end); });
   return viewers;
 }
 

@@ -26,9 +26,9 @@ struct TierPlan {
   std::string model;
   float tolerance = 1;
   std::vector<TierViewerPlan> viewers;
-  // The first viewer to reach frame `event_frame` of its path runs `event` (empty: none) before that frame;
-  // the others fly on, so it may cut answers in the middle.
-  size_t event_frame = SIZE_MAX;
+  // Viewer `event_viewer` runs `event` (empty: none) before frame `event_frame` of its path; the others fly
+  // on, so it may cut answers in the middle.
+  size_t event_viewer = 0, event_frame = SIZE_MAX;
   std::function<void()> event;
 };
 

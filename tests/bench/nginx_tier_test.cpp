@@ -89,6 +89,9 @@ class NginxTier : public ::testing::Test {
 
 TEST_F(NginxTier, ViewersFlyOnThroughAKilledOriginAndTheOriginsSeeEachViewer) {
   TierPlan p = plan();
+  // When the second viewer of the first path is halfway: the first viewers near their end, the last ones
+  // starting.
+  p.event_viewer = kPaths;
   p.event_frame = kFrames / 2;
   uint64_t killed_origin_splits = 0, survivor_before = 0;
   p.event = [&] {
