@@ -64,6 +64,8 @@ void run_soak_group(BenchContext& context);
 void run_fleet_group(BenchContext& context);
 // Sender-driven viewers behind HAProxy resuming on another origin when theirs is killed (bench_failover.cpp).
 void run_failover_figure(BenchContext& context);
+// Receiver-driven viewers behind the nginx cache tier over two origins, one killed (bench_tier.cpp).
+void run_tier_group(BenchContext& context);
 // E9: the DAG mode's three traversals along a scan route (bench_dag.cpp).
 void run_dag_group(BenchContext& context);
 // The HTTP attack classes in their three groups beside a good receiver-driven client (bench_attacks.cpp).

@@ -35,6 +35,10 @@ constexpr BenchGroup kGroups[] = {
      "E11 at scale: thousands of sender-driven sessions held, a growing share flying at 30 fps, the server on one "
      "core and the load processes on the other: VIEW latency, server CPU, RSS and bytes per session, the knee",
      run_fleet_group},
+    {"tier",
+     "receiver-driven viewers behind an nginx cache over two origins, one killed: failures, hit rate, bytes from "
+     "the cache and the origins, origin CPU per split against the sender-driven server's",
+     run_tier_group},
     {"dag", "E9 DAG traversals: time per frame, accuracy against priority, fronts, session memory, bytes down",
      run_dag_group},
     {"attacks", "the HTTP attack classes beside a good receiver-driven client: p99, memory, CPU after, SIGTERM",

@@ -8,6 +8,7 @@
 #include <thread>
 #include <utility>
 
+#include "bench/on_threads.h"
 #include "common/error.h"
 #include "spm/vertex_hierarchy.h"
 
@@ -123,10 +124,7 @@ std::vector<FailoverViewer> fly_failover(const FailoverPlan& plan,
                                          const std::function<void(size_t, client::StreamingClient&)>& at_end) {
   std::vector<FailoverViewer> viewers(plan.viewers.size());
   EventPoint event(plan);
-  std::vector<std::thread> threads;
-  for (size_t i = 0; i < plan.viewers.size(); ++i)
-    threads.emplace_back([&, i] { fly_one(plan, i, event, viewers[i], at_end); });
-  for (std::thread& t : threads) t.join();
+  on_threads(plan.viewers.size(), [&](size_t i) { fly_one(plan, i, event, viewers[i], at_end); });
   return viewers;
 }
 

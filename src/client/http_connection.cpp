@@ -109,6 +109,22 @@ struct HttpConnection::Impl {
     return answer;
   }
 
+  // Every endpoint in turn; from options.local_address, the first one only (connecting to several reopens
+  // the socket, which would drop the bound address).
+  template <class Handler>
+  void async_connect(const tcp::resolver::results_type& endpoints, Handler handler) {
+    if (options.local_address.empty() || endpoints.empty())
+      return stream->async_connect(endpoints, [handler](const error_code& e, const tcp::endpoint&) { handler(e); });
+    error_code ec;
+    const tcp::endpoint to = endpoints.begin()->endpoint();
+    const asio::ip::address from = asio::ip::make_address(options.local_address, ec);
+    tcp::socket& socket = stream->socket();
+    if (!ec) socket.open(to.protocol(), ec);
+    if (!ec) socket.bind({from, 0}, ec);
+    if (ec) return asio::post(io, [handler, ec] { handler(ec); });
+    stream->async_connect(to, handler);
+  }
+
   void connect() {
     stream.emplace(io);
     buffer.clear();
@@ -122,7 +138,7 @@ struct HttpConnection::Impl {
     run();
     if (ec) lost("cannot resolve the host: " + ec.message());
     stream->expires_after(options.connect_timeout);
-    stream->async_connect(endpoints, [&](const error_code& e, const tcp::endpoint&) { ec = e; });
+    async_connect(endpoints, [&](const error_code& e) { ec = e; });
     run();
     if (ec) lost("cannot connect: " + reason(ec, options.connect_timeout));
   }
@@ -189,7 +205,7 @@ struct HttpConnection::Impl {
           stream.emplace(io);
           buffer.clear();
           stream->expires_after(options.connect_timeout);
-          stream->async_connect(endpoints, [this](const error_code& e, const tcp::endpoint&) { on_connect(e); });
+          async_connect(endpoints, [this](const error_code& e) { on_connect(e); });
         });
   }
 

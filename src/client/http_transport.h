@@ -19,6 +19,9 @@ struct HttpOptions {
   uint32_t in_flight = 4;                       // GETs sent ahead of the answer being read
   uint64_t max_body = 64u << 20;
   uint32_t max_header = 16u << 10;
+  // The address the native connection sends from ("127.0.0.7"; empty: the system's choice): a test's
+  // viewers on loopback, each its own client address to a server behind a proxy.
+  std::string local_address;
 };
 
 struct HttpCounters {

@@ -12,7 +12,6 @@
 #include <cstdio>
 #include <filesystem>
 #include <memory>
-#include <mutex>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
@@ -21,7 +20,6 @@
 #include "bench/haproxy_child.h"
 #include "bench/loopback_daemon.h"
 #include "bench/serve_child.h"
-#include "io/mesh.h"
 #include "streaming_fixture.h"
 #include "test_support.h"
 
@@ -49,23 +47,13 @@ uint64_t both_transports(const nlohmann::json& line, const char* counter) {
 
 uint64_t both_transports(ServeChild& origin, const char* counter) { return both_transports(origin.stats().line, counter); }
 
-// Bunny built and written once for the test program.
-const test::Fixture& bunny(const fs::path& model) {
-  static const test::Fixture fixture = [&] {
-    Mesh mesh = load_mesh(model.string());
-    clean_mesh(mesh);
-    return test::make_fixture(mesh, "bunny");
-  }();
-  return fixture;
-}
-
 class HaproxyFailover : public ::testing::Test {
  protected:
   void SetUp() override {
     PMS_REQUIRE_SHARED_MODEL(model, "bunny.ply.xz");
     haproxy_ = bench::find_daemon("haproxy");
     if (haproxy_.empty()) GTEST_SKIP() << "haproxy is not installed (scripts/setup.sh installs Debian's haproxy)";
-    fixture_ = &bunny(model);
+    fixture_ = &test::file_fixture(model.string(), "bunny");
   }
 
   // Two origins run with `flags`, and HAProxy with the shipped file in front of them, both origins up.
@@ -104,17 +92,12 @@ class HaproxyFailover : public ::testing::Test {
 
   // Flies `p`; every viewer must finish with local refinement's mesh for its last view.
   std::vector<FailoverViewer> fly(const FailoverPlan& p) {
-    std::mutex mutex;
-    std::vector<size_t> differ;
+    test::LocalMeshCheck meshes(fixture_->snapped, kTolerance);
     const std::vector<FailoverViewer> viewers = bench::fly_failover(p, [&](size_t i, client::StreamingClient& client) {
-      const bool same = test::faces_by_id(client.session().mesh()) ==
-                        test::local_faces(fixture_->snapped, p.viewers[i].path.back(), kTolerance);
-      const std::lock_guard lock(mutex);
-      if (!same) differ.push_back(i);
+      meshes.check(i, client.session().mesh(), p.viewers[i].path.back());
     });
     for (size_t i = 0; i < viewers.size(); ++i) EXPECT_EQ(viewers[i].error, "") << "viewer " << i << " failed";
-    EXPECT_TRUE(differ.empty()) << differ.size() << " viewers' meshes differ from local refinement, the first "
-                                << (differ.empty() ? 0 : differ[0]);
+    EXPECT_TRUE(meshes.all_same());
     return viewers;
   }
 

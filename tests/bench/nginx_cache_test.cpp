@@ -4,13 +4,9 @@
 // by the cache alone; ten clients on overlapping stretches of one orbit report the hit rate of each fetch
 // policy (docs/protocol.md, "Receiver-driven client").
 #include <gtest/gtest.h>
-#include <pwd.h>
-#include <unistd.h>
-
 #include <algorithm>
 #include <cstdio>
 #include <filesystem>
-#include <fstream>
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <string>
@@ -18,6 +14,7 @@
 
 #include "apps/camera_json.h"
 #include "bench/loopback_daemon.h"
+#include "bench/nginx_child.h"
 #include "bench/serve_child.h"
 #include "client/http_connection.h"
 #include "common/error.h"
@@ -27,42 +24,11 @@ namespace pms {
 namespace {
 
 namespace fs = std::filesystem;
+using bench::NginxChild;
 using bench::ServeChild;
 
-// nginx in the foreground in a fresh directory of its own (pid, logs, temporary files, the cache), with
-// the repo's template filled in; stopped (SIGTERM, nginx's fast shutdown) when destroyed.
-class Nginx {
- public:
-  Nginx(const std::string& program, uint16_t origin_port)
-      : dir_(test::temp_dir()),
-        daemon_(
-            "nginx", [&] { return prepare(program, origin_port); }, dir_ / "error.log") {}
-
-  std::string url() const { return "http://127.0.0.1:" + std::to_string(port_); }
-
- private:
-  bench::DaemonStart prepare(const std::string& program, uint16_t origin_port) {
-    port_ = bench::free_loopback_port();
-    std::string conf = bench::file_text(fs::path(PMSTREAM_SOURCE_DIR) / "deploy/nginx/pmstream-cache.conf");
-    const auto fill = [&conf](const std::string& name, const std::string& value) {
-      for (size_t at; (at = conf.find(name)) != std::string::npos;) conf.replace(at, name.size(), value);
-    };
-    const passwd* user = ::getpwuid(::geteuid());  // nginx ignores `user` unless it runs as root
-    fill("@USER@", user ? user->pw_name : "root");
-    fill("@DIR@", dir_.string());
-    fill("@LISTEN@", "127.0.0.1:" + std::to_string(port_));
-    fill("@ORIGIN@", "127.0.0.1:" + std::to_string(origin_port));
-    std::ofstream(dir_ / "nginx.conf") << conf;
-    return {{program, "-p", dir_.string(), "-c", (dir_ / "nginx.conf").string(), "-e", (dir_ / "error.log").string(),
-             "-g", "daemon off;"},
-            {},
-            port_};
-  }
-
-  fs::path dir_;
-  uint16_t port_ = 0;
-  bench::LoopbackDaemon daemon_;  // last: prepare() fills the members above
-};
+// The shipped configuration, as an operator with one origin fills it in.
+const fs::path kConfig = fs::path(PMSTREAM_SOURCE_DIR) / "deploy/nginx/pmstream-cache.conf";
 
 struct Flight {
   nlohmann::json report;  // `pmstream stream --json`
@@ -125,7 +91,7 @@ TEST_F(NginxCache, ASecondClientOnTheSamePathIsServedFromTheCacheAlone) {
   const fs::path path = make_path("zoom", 20);
   for (const std::string fetch : {"lists", "blocks"}) {
     SCOPED_TRACE("--fetch " + fetch);
-    Nginx nginx(nginx_, origin_port_);  // an empty cache
+    NginxChild nginx(nginx_, kConfig, test::temp_dir(), {origin_port_});  // an empty cache
     const Flight first = fly(nginx.url(), path, "--fetch " + fetch, dir_, fetch + "_first");
     const uint64_t split_requests = first.report["split_requests"];
     ASSERT_GT(split_requests, 0u);
@@ -159,7 +125,7 @@ TEST_F(NginxCache, TenClientsOnDifferentPathsShareTheCache) {
   }
   for (const std::string fetch : {"--fetch lists", "--fetch blocks", "--fetch blocks --block-depth 3"}) {
     SCOPED_TRACE(fetch);
-    Nginx nginx(nginx_, origin_port_);
+    NginxChild nginx(nginx_, kConfig, test::temp_dir(), {origin_port_});
     const nlohmann::json origin_before = origin_->stats().line["http"];
     uint64_t requests = 0, hits = 0, down = 0, payload = 0, up = 0, rounds = 0, splits = 0;
     for (size_t i = 0; i < paths.size(); ++i) {
@@ -198,7 +164,7 @@ TEST_F(NginxCache, MultilevelLevelsComeFromTheCacheTheSecondTime) {
                                                 " -o " + pml.string() + " --levels 8");
   ASSERT_EQ(build.exit_code, 0) << build.err;
   ServeChild origin(PMSTREAM_BINARY, origin_flags(pml));
-  Nginx nginx(nginx_, origin.listening()["http_port"].get<uint16_t>());
+  NginxChild nginx(nginx_, kConfig, test::temp_dir(), {origin.listening()["http_port"].get<uint16_t>()});
   const fs::path path = make_path("zoom", 10);
   const auto fly_levels = [&](const std::string& name) {
     const fs::path mesh = dir_ / (name + ".ply");
@@ -232,7 +198,7 @@ TEST_F(NginxCache, AModelAddedToTheOriginReachesClientsBehindTheCacheWithinTheCa
   std::vector<std::string> flags = origin_flags(models);
   flags.insert(flags.end(), {"--catalogue-max-age", std::to_string(kMaxAge)});
   ServeChild origin(PMSTREAM_BINARY, flags);
-  Nginx nginx(nginx_, origin.listening()["http_port"].get<uint16_t>());
+  NginxChild nginx(nginx_, kConfig, test::temp_dir(), {origin.listening()["http_port"].get<uint16_t>()});
   client::HttpConnection http(client::parse_http_url(nginx.url()));
   const auto catalogue = [&http] {
     const client::HttpAnswer answer = http.get("/models");

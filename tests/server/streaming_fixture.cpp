@@ -70,6 +70,19 @@ const Fixture& terrain_fixture(uint64_t faces, uint32_t seed) {
   return *fixture;
 }
 
+const Fixture& file_fixture(const std::string& mesh_path, const std::string& name) {
+  static std::mutex mutex;
+  static std::map<std::string, std::unique_ptr<const Fixture>> built;
+  const std::lock_guard lock(mutex);
+  auto& fixture = built[mesh_path];
+  if (!fixture) {
+    Mesh mesh = load_mesh(mesh_path);
+    clean_mesh(mesh);
+    fixture = std::make_unique<const Fixture>(make_fixture(mesh, name));
+  }
+  return *fixture;
+}
+
 const Fixture& attributed_terrain() {
   static const Fixture f = [] {
     Mesh mesh = make_terrain(8000, 9);
@@ -165,6 +178,19 @@ auto refine_locally(const Hierarchy& snapped, const Camera& camera, float tolera
 }
 
 }  // namespace
+
+void LocalMeshCheck::check(size_t viewer, SelectiveMesh& mesh, const Camera& last) {
+  const bool same = faces_by_id(mesh) == local_faces(snapped_, last, tolerance_);
+  const std::lock_guard lock(mutex_);
+  if (!same) differ_.push_back(viewer);
+}
+
+::testing::AssertionResult LocalMeshCheck::all_same() const {
+  const std::lock_guard lock(mutex_);
+  if (differ_.empty()) return ::testing::AssertionSuccess();
+  return ::testing::AssertionFailure() << differ_.size() << " viewers' meshes differ from local refinement, the first "
+                                       << *std::min_element(differ_.begin(), differ_.end());
+}
 
 Faces local_faces(const Hierarchy& snapped, const Camera& camera, float tolerance) {
   return refine_locally(snapped, camera, tolerance, [](SelectiveMesh& mesh) { return faces_by_id(mesh); });

@@ -1,9 +1,12 @@
 // What the server tests share: a model built and written as a .pms file, camera paths over it, and the mesh
 // a client should end with (local refinement of the same view, on the positions the wire carries).
 #pragma once
+#include <gtest/gtest.h>
+
 #include <array>
 #include <cstdint>
 #include <memory>
+#include <mutex>
 #include <optional>
 #include <string>
 #include <vector>
@@ -47,6 +50,9 @@ const Fixture& terrain_fixture(uint64_t faces, uint32_t seed);
 
 // A terrain with smooth per-vertex normals and colors, so both travel in the split records; made once.
 const Fixture& attributed_terrain();
+
+// A mesh file (a shared model), cleaned, built and written as NAME.pms, once per test program and file.
+const Fixture& file_fixture(const std::string& mesh_path, const std::string& name);
 
 // The servers a test runs on a free loopback port: started when made, stopped when destroyed.
 struct LoopbackTcpServer {
@@ -92,6 +98,22 @@ Vertices vertices_by_id(SelectiveMesh& mesh);
 // Local refinement of the same model (positions and normals as the wire carries them) for one view.
 Faces local_faces(const Hierarchy& snapped, const Camera& camera, float tolerance);
 Vertices local_vertices(const Hierarchy& snapped, const Camera& camera, float tolerance);
+
+// Viewers flown on threads of their own, each checked as it finishes (from its thread) against local
+// refinement for its last view; the test then asserts all_same().
+class LocalMeshCheck {
+ public:
+  LocalMeshCheck(const Hierarchy& snapped, float tolerance) : snapped_(snapped), tolerance_(tolerance) {}
+  void check(size_t viewer, SelectiveMesh& mesh, const Camera& last);
+  // A gtest assertion result naming how many differ and the first.
+  ::testing::AssertionResult all_same() const;
+
+ private:
+  const Hierarchy& snapped_;
+  float tolerance_;
+  mutable std::mutex mutex_;
+  std::vector<size_t> differ_;
+};
 
 // A client bound to a server Session in this process (LocalTransport), so a test reads the session frame
 // by frame; the model is open. `limits` must outlive it.
