@@ -10,9 +10,12 @@
 namespace pms::multilevel_binary {
 
 constexpr uint32_t kHasNormals = 1, kHasColors = 2, kHasTexcoords = 4;
+// Every LEVL carries its LOD's secondary array after its representatives (MultilevelMesh::changed), and
+// HEAD's changed_count totals their entries.
+constexpr uint32_t kHasChanged = 8;
 
 struct HeadSection {
-  uint32_t level_count, dimension, flags, vertex_count, triangle_count, representative_count, reserved[2];
+  uint32_t level_count, dimension, flags, vertex_count, triangle_count, representative_count, changed_count, reserved;
 };
 static_assert(sizeof(HeadSection) == 32);
 
@@ -41,10 +44,12 @@ static_assert(sizeof(TexcoordBox) == 16);
 // The HEAD section of a (validated) mesh.
 HeadSection head_section(const MultilevelMesh& mesh);
 
-// A LEVL section from its parts, in the section's order.
+// A LEVL section from its parts, in the section's order; `changed` (with kHasChanged) after the
+// representatives: its entry count, vertices, positions, normals, colours.
 std::vector<uint8_t> level_section_bytes(const LevelHeader& header, std::span<const float> positions,
                                          std::span<const float> normals, std::span<const uint8_t> colors,
                                          std::span<const float> texcoords, std::span<const uint32_t> triangles,
-                                         std::span<const uint32_t> representatives);
+                                         std::span<const uint32_t> representatives,
+                                         const ChangedVertices* changed = nullptr);
 
 }  // namespace pms::multilevel_binary

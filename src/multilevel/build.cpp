@@ -207,7 +207,8 @@ CollapseLevels assign_levels(const Mesh& mesh, std::span<const EdgeCollapse> col
   return out;
 }
 
-MultilevelMesh assemble_multilevel(const Mesh& mesh, const CollapseLevels& levels, MultilevelRepresentatives kind) {
+MultilevelMesh assemble_multilevel(const Mesh& mesh, const CollapseLevels& levels, MultilevelRepresentatives kind,
+                                   std::vector<uint32_t>* vertex_order_out) {
   const uint32_t n = uint32_t(mesh.vertex_count()), f = uint32_t(mesh.face_count());
   const std::vector<uint32_t> vertex_order = replay_numbering(levels);
   const std::vector<uint32_t> face_order = by_decreasing_level(levels.triangle_level);
@@ -249,6 +250,7 @@ MultilevelMesh assemble_multilevel(const Mesh& mesh, const CollapseLevels& level
   m.representative.assign(n, kNoRep);
   for (uint32_t x = 0; x < n; ++x)
     if (needed[x]) m.representative[new_index[x]] = new_index[levels.parent[x]];
+  if (vertex_order_out) *vertex_order_out = vertex_order;
   return m;
 }
 

@@ -56,7 +56,9 @@ enum class MultilevelRepresentatives {
 // that replaying their collapses from the last vertex to the first (multilevel/dag.h) keeps the order
 // `earlier` gives, children before parents, otherwise in input order (unmerged levels keep input order:
 // their collapses are independent).
-MultilevelMesh assemble_multilevel(const Mesh& mesh, const CollapseLevels& levels, MultilevelRepresentatives kind);
+// `vertex_order`, if given, receives the input vertex of each multilevel vertex.
+MultilevelMesh assemble_multilevel(const Mesh& mesh, const CollapseLevels& levels, MultilevelRepresentatives kind,
+                                   std::vector<uint32_t>* vertex_order = nullptr);
 
 // Merges consecutive levels down to `level_count` (merge_level_map); 0 or more than there are: unchanged.
 void merge_levels(CollapseLevels& levels, uint32_t level_count);

@@ -42,6 +42,55 @@ std::vector<uint32_t> preferred_ancestors(const Mesh& mesh, const VertexClusteri
   return best;
 }
 
+// LOD `level`'s secondary array after `c`, the clustering it ends with: each of its vertices (multilevel
+// numbering: `order` gives the input vertex of each) at its cluster's position, with the mean normal and
+// colour of the input vertices it stands for (those whose parents lead to it at that level); only the
+// vertices that move or change.
+ChangedVertices clustered_values(const Mesh& mesh, const VertexClustering& c, const CollapseLevels& levels,
+                                 const std::vector<uint32_t>& order, uint32_t level) {
+  const uint32_t n = uint32_t(mesh.vertex_count());
+  std::vector<uint32_t> stands_at(n, kNoRep);
+  const auto stand_in = [&](uint32_t v) {
+    uint32_t u = v;
+    while (levels.vertex_level[u] < level && stands_at[u] == kNoRep) u = levels.parent[u];
+    const uint32_t at = levels.vertex_level[u] < level ? stands_at[u] : u;
+    for (uint32_t w = v; w != u; w = levels.parent[w]) stands_at[w] = at;
+    return at;
+  };
+  std::vector<double> normal_sum(mesh.has_normals() ? 3 * size_t(n) : 0), color_sum(mesh.has_colors() ? 4 * size_t(n) : 0);
+  std::vector<uint32_t> members(n, 0);
+  for (uint32_t v = 0; v < n; ++v) {
+    const uint32_t a = stand_in(v);
+    ++members[a];
+    for (size_t k = 0; k < (normal_sum.empty() ? 0 : 3); ++k) normal_sum[3 * size_t(a) + k] += mesh.normals[3 * size_t(v) + k];
+    for (size_t k = 0; k < (color_sum.empty() ? 0 : 4); ++k) color_sum[4 * size_t(a) + k] += mesh.colors[4 * size_t(v) + k];
+  }
+  ChangedVertices out;
+  for (uint32_t i = 0; i < n && levels.vertex_level[order[i]] >= level; ++i) {
+    const uint32_t a = order[i];
+    const float* position = &c.positions[3 * size_t(c.cluster[a])];
+    float normal[3] = {0, 0, 0};
+    uint8_t color[4] = {0, 0, 0, 0};
+    bool differs = !std::equal(position, position + 3, &mesh.positions[3 * size_t(a)]);
+    if (!normal_sum.empty()) {
+      const double* s = &normal_sum[3 * size_t(a)];
+      const double length = std::sqrt(s[0] * s[0] + s[1] * s[1] + s[2] * s[2]);
+      for (int k = 0; k < 3; ++k) normal[k] = length > 0 ? float(s[k] / length) : mesh.normals[3 * size_t(a) + k];
+      differs = differs || !std::equal(normal, normal + 3, &mesh.normals[3 * size_t(a)]);
+    }
+    if (!color_sum.empty()) {
+      for (int k = 0; k < 4; ++k) color[k] = uint8_t(std::lround(color_sum[4 * size_t(a) + k] / members[a]));
+      differs = differs || !std::equal(color, color + 4, &mesh.colors[4 * size_t(a)]);
+    }
+    if (!differs) continue;
+    out.vertex.push_back(i);
+    out.positions.insert(out.positions.end(), position, position + 3);
+    if (!normal_sum.empty()) out.normals.insert(out.normals.end(), normal, normal + 3);
+    if (!color_sum.empty()) out.colors.insert(out.colors.end(), color, color + 4);
+  }
+  return out;
+}
+
 }  // namespace
 
 CollapseLevels assign_cluster_levels(const Mesh& mesh, std::span<const VertexClustering> clusterings) {
@@ -130,8 +179,19 @@ std::vector<VertexClustering> grid_clusterings(const Mesh& mesh, std::span<const
 MultilevelMesh build_multilevel_from_clusterings(const Mesh& mesh, std::span<const VertexClustering> clusterings,
                                                  uint32_t level_count) {
   CollapseLevels levels = assign_cluster_levels(mesh, clusterings);
+  const std::vector<uint32_t> merged = merge_level_map(levels.level_count, level_count);
   merge_levels(levels, level_count);
-  return assemble_multilevel(mesh, levels, MultilevelRepresentatives::discrete);  // Fig. 12: no more than necessary
+  std::vector<uint32_t> order;
+  // Fig. 12: no more representatives than necessary.
+  MultilevelMesh m = assemble_multilevel(mesh, levels, MultilevelRepresentatives::discrete, &order);
+  m.changed.resize(m.level_count());
+  for (uint32_t l = 1; l < m.level_count(); ++l) {
+    // LOD l is the input after the clusterings of the levels merged below l; the last of them places it.
+    const auto last = uint32_t(std::count_if(merged.begin(), merged.end(), [&](uint32_t k) { return k < l; }));
+    m.changed[l] = clustered_values(mesh, clusterings[last - 1], levels, order, l);
+  }
+  if (m.changed_vertices() == 0) m.changed.clear();
+  return m;
 }
 
 }  // namespace pms

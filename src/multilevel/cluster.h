@@ -13,7 +13,9 @@ namespace pms {
 
 // One clustering of the current mesh: cluster[v] for every input vertex v (entries of vertices an earlier
 // clustering removed are not read), and 3 floats per cluster, the position it stands at, which picks the
-// preferred ancestor (the nearest; ties to the lower index) and is not stored: the ancestor keeps its own.
+// preferred ancestor (the nearest; ties to the lower index). The ancestor keeps its own position in the
+// primary array; the secondary array of the clustering's LOD moves it to the cluster's position, with the
+// mean normal and colour of the input vertices it stands for.
 struct VertexClustering {
   std::vector<uint32_t> cluster;
   std::vector<float> positions;
@@ -30,7 +32,8 @@ CollapseLevels assign_cluster_levels(const Mesh& mesh, std::span<const VertexClu
 std::vector<VertexClustering> grid_clusterings(const Mesh& mesh, std::span<const uint32_t> resolutions);
 
 // assign_cluster_levels, merged to `level_count` (0: every level), then assembled with the representatives
-// that triangles need and no others (Fig. 12-13: three suffice where the clusterings name six).
+// that triangles need and no others (Fig. 12-13: three suffice where the clusterings name six), and each
+// coarse LOD's secondary array: the clustering that LOD ends with puts its vertices at their clusters.
 MultilevelMesh build_multilevel_from_clusterings(const Mesh& mesh, std::span<const VertexClustering> clusterings,
                                                  uint32_t level_count = 0);
 

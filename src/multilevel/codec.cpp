@@ -33,10 +33,11 @@ constexpr uint32_t kCornerSymbols = kRecent + kClasses;
 
 // One prefix code per kind of integer; kAxis + k for coordinate k, kTexcoord + k for texture coordinate k
 // (after the corner's, so that a mesh without texture coordinates codes as it did before them).
-enum Slot : uint32_t { kRepGap, kRepDelta, kAxis, kCorner = kAxis + 3, kTexcoord, kSlots = kTexcoord + 2 };
+// The secondary array's vertex gaps come last, for the same reason; its positions use the axes' codes.
+enum Slot : uint32_t { kRepGap, kRepDelta, kAxis, kCorner = kAxis + 3, kTexcoord, kChangedGap = kTexcoord + 2, kSlots };
 constexpr uint32_t alphabet(uint32_t slot) { return slot == kCorner ? kCornerSymbols : kClasses; }
 constexpr const char* kSlotNames[kSlots] = {
-    "representative vertex", "representative", "x", "y", "z", "corner", "u", "v"};
+    "representative vertex", "representative", "x", "y", "z", "corner", "u", "v", "changed vertex"};
 
 // Grid coordinates per vertex in the encoder's and decoder's arrays: the position's, then the texture
 // coordinates' (when the mesh has them).
@@ -76,6 +77,8 @@ struct LevelInput {
   std::span<const uint8_t> known;       // per vertex: its representative is stated by this level or a coarser one
   uint32_t level, position_bits, texcoord_bits;
   std::vector<uint32_t> pairs;  // (vertex, representative), by vertex
+  const PositionGrid& grid;
+  const ChangedVertices* changed;  // its LOD's secondary array, when the mesh has them
 };
 
 // The vertex whose grid coordinates predict v's; kNoRep: the middle of the grid.
@@ -132,6 +135,23 @@ void emit_level(const LevelInput& in, Sink& sink) {
     recent.touch(v, i);
   }
   sink.end_part(&CompressedLevelBits::triangles);
+  if (!in.changed) return;
+  // Each changed vertex after the last, its position on the grid against its own, its values raw.
+  const ChangedVertices& c = *in.changed;
+  int64_t last = -1;
+  for (size_t i = 0; i < c.size(); ++i) {
+    const uint32_t v = c.vertex[i];
+    sink.value(kChangedGap, uint32_t(v - last - 1));
+    last = v;
+    float p[3] = {0, 0, 0};
+    uint32_t q[3];
+    std::copy_n(&c.positions[i * d], d, p);
+    quantize_position(in.grid, p, q);
+    for (uint32_t k = 0; k < d; ++k) sink.value(kAxis + k, zigzag(int64_t(q[k]) - in.quantized[size_t(v) * w + k]));
+    for (size_t k = 0; k < (c.normals.empty() ? 0 : 3); ++k) sink.raw(bit_cast<uint32_t>(c.normals[i * 3 + k]), 32);
+    for (size_t k = 0; k < (c.colors.empty() ? 0 : 4); ++k) sink.raw(c.colors[i * 4 + k], 8);
+  }
+  sink.end_part(&CompressedLevelBits::changed);
 }
 
 struct Counter {
@@ -169,24 +189,27 @@ struct Writer {
 
 // Which codes a level with these counts carries (a code for nothing is left out).
 std::array<bool, kSlots> slots_used(uint32_t dimension, bool texcoords, uint32_t vertices, uint32_t triangles,
-                                    uint32_t representatives) {
+                                    uint32_t representatives, uint32_t changed) {
   std::array<bool, kSlots> used{};
   used[kRepGap] = used[kRepDelta] = representatives > 0;
-  for (uint32_t k = 0; k < dimension; ++k) used[kAxis + k] = vertices > 0;
+  for (uint32_t k = 0; k < dimension; ++k) used[kAxis + k] = vertices > 0 || changed > 0;
   used[kCorner] = triangles > 0;
   used[kTexcoord] = used[kTexcoord + 1] = texcoords && vertices > 0;
+  used[kChangedGap] = changed > 0;
   return used;
 }
 
 std::vector<uint8_t> encode_level(const LevelInput& in, CompressedLevelBits& bits) {
   const MultilevelMesh& m = in.mesh;
   const LevelHeader h{in.level, m.level_vertices(in.level), m.level_triangles(in.level), uint32_t(in.pairs.size() / 2)};
+  const uint32_t changed = in.changed ? uint32_t(in.changed->size()) : 0;
   Counter counter;
   emit_level(in, counter);
-  const auto used = slots_used(m.dimension, !m.texcoords.empty(), h.vertices, h.triangles, h.representatives);
+  const auto used = slots_used(m.dimension, !m.texcoords.empty(), h.vertices, h.triangles, h.representatives, changed);
   std::array<PrefixCode, kSlots> codes;
   BitWriter w;
   for (uint32_t field : {h.level, h.vertices, h.triangles, h.representatives}) w.bits(field, 32);
+  if (in.changed) w.bits(changed, 32);
   for (uint32_t s = 0; s < kSlots; ++s)
     if (used[s]) {
       codes[s] = PrefixCode::from_counts(counter.counts[s]);
@@ -217,7 +240,9 @@ class LevelDecoder {
     read_representatives();
     read_vertices(quantized);
     read_triangles();
-    return multilevel_binary::level_section_bytes(h_, positions_, normals_, colors_, texcoords_, triangles_, pairs_);
+    if (c_.changed) read_changed(quantized);
+    return multilevel_binary::level_section_bytes(h_, positions_, normals_, colors_, texcoords_, triangles_, pairs_,
+                                                  c_.changed ? &changed_ : nullptr);
   }
 
  private:
@@ -234,7 +259,12 @@ class LevelDecoder {
     if (h_.vertices > c_.vertices_left || h_.triangles > c_.triangles_left ||
         h_.representatives > c_.representatives_left)
       error("more vertices, triangles or representatives than the head's totals leave");
-    const auto used = slots_used(c_.dimension, c_.texcoords, h_.vertices, h_.triangles, h_.representatives);
+    if (c_.changed) {
+      changed_count_ = uint32_t(r_.bits(32, "secondary array count"));
+      if (changed_count_ > c_.changed_left) error("more secondary array entries than the head's total leaves");
+    }
+    const auto used =
+        slots_used(c_.dimension, c_.texcoords, h_.vertices, h_.triangles, h_.representatives, changed_count_);
     for (uint32_t s = 0; s < kSlots; ++s)
       if (used[s]) codes_[s] = PrefixCode::deserialize(r_, alphabet(s), kSlotNames[s]);
   }
@@ -321,10 +351,40 @@ class LevelDecoder {
     }
   }
 
+  // The secondary array: vertices of the LOD (below what is loaded with this level), ascending by
+  // construction; positions on the grid. The loader checks the rest (take_changed).
+  void read_changed(const std::vector<uint32_t>& quantized) {
+    const uint32_t d = c_.dimension, w = grid_width(d, c_.texcoords);
+    const uint64_t n_l = uint64_t(c_.vertices_loaded) + h_.vertices;
+    int64_t last = -1;
+    for (uint32_t i = 0; i < changed_count_; ++i) {
+      const uint64_t v = uint64_t(last + 1) + read_value(r_, codes_[kChangedGap], kSlotNames[kChangedGap]);
+      if (v >= n_l) error("the secondary array changes vertex " + str(v) + ", which is not in LOD " + str(c_.level));
+      last = int64_t(v);
+      changed_.vertex.push_back(uint32_t(v));
+      uint32_t q[3] = {0, 0, 0};
+      for (uint32_t k = 0; k < d; ++k) {
+        const int64_t x = int64_t(quantized[v * w + k]) + unzigzag(read_value(r_, codes_[kAxis + k], kSlotNames[kAxis + k]));
+        if (x < 0 || x > (int64_t(1) << c_.grid.bits) - 1)
+          error("the secondary array puts vertex " + str(v) + " off the " + str(c_.grid.bits) + "-bit grid");
+        q[k] = uint32_t(x);
+      }
+      float p[3];
+      dequantize_position(c_.grid, q, p);
+      changed_.positions.insert(changed_.positions.end(), p, p + d);
+      if (c_.normals)
+        for (int k = 0; k < 3; ++k) changed_.normals.push_back(bit_cast<float>(uint32_t(r_.bits(32, "normal"))));
+      if (c_.colors)
+        for (int k = 0; k < 4; ++k) changed_.colors.push_back(uint8_t(r_.bits(8, "colour")));
+    }
+  }
+
   const std::string& where_;
   BitReader r_;
   const CompressedLevelContext& c_;
   LevelHeader h_{};
+  uint32_t changed_count_ = 0;
+  ChangedVertices changed_;
   std::array<PrefixCode, kSlots> codes_;
   std::vector<uint32_t> pairs_, triangles_;
   std::vector<float> positions_, normals_, texcoords_;
@@ -384,6 +444,7 @@ PositionGrid multilevel_texcoord_grid(const MultilevelMesh& m, uint32_t bits) {
 MultilevelMesh snapped_multilevel(const MultilevelMesh& mesh, uint32_t bits, uint32_t texcoord_bits) {
   MultilevelMesh out = mesh;
   snap_all(out.positions, mesh.dimension, multilevel_grid(mesh, bits));
+  for (ChangedVertices& c : out.changed) snap_all(c.positions, mesh.dimension, multilevel_grid(mesh, bits));
   if (!mesh.texcoords.empty()) snap_all(out.texcoords, 2, multilevel_texcoord_grid(mesh, texcoord_bits));
   return out;
 }
@@ -414,7 +475,15 @@ MultilevelParts multilevel_compressed_parts(const MultilevelMesh& m, uint32_t po
   std::vector<uint8_t> stated(m.vertices(), 0), known(m.vertices(), 0);
   if (bits) bits->clear();
   for (uint32_t level = m.level_count(); level-- > 0;) {
-    LevelInput in{m, quantized, known, level, position_bits, texcoord_bits, level_representatives(m, level, stated)};
+    LevelInput in{m,
+                  quantized,
+                  known,
+                  level,
+                  position_bits,
+                  texcoord_bits,
+                  level_representatives(m, level, stated),
+                  grid,
+                  m.changed.empty() ? nullptr : &m.changed[level]};
     std::vector<uint32_t> order(in.pairs.size() / 2);
     for (uint32_t i = 0; i < order.size(); ++i) order[i] = i;
     std::sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) { return in.pairs[2 * a] < in.pairs[2 * b]; });

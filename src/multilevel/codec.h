@@ -21,7 +21,8 @@ struct CompressedLevelBits {
   uint64_t representatives = 0;  // the (vertex, representative) pairs
   uint64_t vertices = 0;         // positions, normals, colours, texture coordinates
   uint64_t triangles = 0;        // connectivity
-  uint64_t total() const { return header + representatives + vertices + triangles; }
+  uint64_t changed = 0;          // the secondary array of its LOD
+  uint64_t total() const { return header + representatives + vertices + triangles + changed; }
 };
 
 // Bits per axis of the texture coordinates' grid in the compressed form.
@@ -50,6 +51,8 @@ struct CompressedLevelContext {
   const RepresentativeArray* representative = nullptr;  // every vertex's, as loaded so far
   uint32_t vertices_loaded = 0;
   uint32_t vertices_left = 0, triangles_left = 0, representatives_left = 0;  // what the head's totals allow
+  bool changed = false;       // the levels carry secondary arrays
+  uint32_t changed_left = 0;  // their entries the head's total allows
 };
 
 // The LEVL section a compressed level stands for; appends its vertices' grid coordinates (dimension per

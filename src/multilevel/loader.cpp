@@ -15,6 +15,7 @@ namespace {
 
 using multilevel_binary::CompressedHead;
 using multilevel_binary::HeadSection;
+using multilevel_binary::kHasChanged;
 using multilevel_binary::kHasColors;
 using multilevel_binary::kHasNormals;
 using multilevel_binary::kHasTexcoords;
@@ -49,7 +50,8 @@ std::vector<uint8_t> level_section(const MultilevelMesh& m, uint32_t level, std:
   return level_section_bytes(h, part(m.positions, v_begin * d, h.vertices * d),
                              part(m.normals, v_begin * 3, h.vertices * 3), part(m.colors, v_begin * 4, h.vertices * 4),
                              part(m.texcoords, v_begin * 2, h.vertices * 2),
-                             part(m.triangles, t_begin * 3, h.triangles * 3), reps);
+                             part(m.triangles, t_begin * 3, h.triangles * 3), reps,
+                             m.changed.empty() ? nullptr : &m.changed[level]);
 }
 
 // A grid of the compressed head: 1 to 24 bits over a box of `d` finite axes (those past d stay flat).
@@ -82,11 +84,12 @@ HeadSection multilevel_binary::head_section(const MultilevelMesh& m) {
   return {m.level_count(),
           m.dimension,
           (m.normals.empty() ? 0 : kHasNormals) | (m.colors.empty() ? 0 : kHasColors) |
-              (m.texcoords.empty() ? 0 : kHasTexcoords),
+              (m.texcoords.empty() ? 0 : kHasTexcoords) | (m.changed.empty() ? 0 : kHasChanged),
           m.vertices(),
           m.faces(),
           uint32_t(m.stored_representatives()),
-          {0, 0}};
+          uint32_t(m.changed_vertices()),
+          0};
 }
 
 std::vector<uint8_t> multilevel_binary::level_section_bytes(const LevelHeader& h, std::span<const float> positions,
@@ -94,7 +97,8 @@ std::vector<uint8_t> multilevel_binary::level_section_bytes(const LevelHeader& h
                                                             std::span<const uint8_t> colors,
                                                             std::span<const float> texcoords,
                                                             std::span<const uint32_t> triangles,
-                                                            std::span<const uint32_t> representatives) {
+                                                            std::span<const uint32_t> representatives,
+                                                            const ChangedVertices* changed) {
   std::vector<uint8_t> out;
   out.reserve(sizeof h +
               4 * (positions.size() + normals.size() + texcoords.size() + triangles.size() + representatives.size()) +
@@ -106,6 +110,14 @@ std::vector<uint8_t> multilevel_binary::level_section_bytes(const LevelHeader& h
   append_bytes(out, texcoords.data(), texcoords.size());
   append_bytes(out, triangles.data(), triangles.size());
   append_bytes(out, representatives.data(), representatives.size());
+  if (changed) {
+    const auto count = uint32_t(changed->size());
+    append_bytes(out, &count, 1);
+    append_bytes(out, changed->vertex.data(), changed->vertex.size());
+    append_bytes(out, changed->positions.data(), changed->positions.size());
+    append_bytes(out, changed->normals.data(), changed->normals.size());
+    append_bytes(out, changed->colors.data(), changed->colors.size());
+  }
   return out;
 }
 
@@ -133,19 +145,27 @@ MultilevelLoader::MultilevelLoader(const std::string& where, std::span<const uin
   if (h.level_count == 0 || h.level_count > limits.max_levels)
     fail(where, "section HEAD: " + str(h.level_count) + " levels (1 to " + str(limits.max_levels) + ")");
   if (h.dimension < 2 || h.dimension > 3) fail(where, "section HEAD: dimension " + str(h.dimension));
-  if (h.flags & ~(kHasNormals | kHasColors | kHasTexcoords)) fail(where, "section HEAD: unknown flags");
+  if (h.flags & ~(kHasNormals | kHasColors | kHasTexcoords | kHasChanged)) fail(where, "section HEAD: unknown flags");
   if (h.vertex_count > 0x7FFFFFFFu || h.triangle_count > 0x7FFFFFFFu || h.representative_count > h.vertex_count)
     fail(where, "section HEAD: more than 2^31 vertices or triangles, or more representatives than vertices");
+  // Each LOD changes at most its own vertices: the entries are bounded by the levels times the vertices.
+  if ((h.changed_count != 0 && !(h.flags & kHasChanged)) || h.reserved != 0 ||
+      h.changed_count > uint64_t(h.vertex_count) * (h.level_count - 1))
+    fail(where, "section HEAD: secondary array entries without the flag, more than the levels allow, or reserved "
+                "bits set");
   const uint64_t per_vertex = 4 * (h.dimension + (h.flags & kHasNormals ? 3 : 0) + (h.flags & kHasTexcoords ? 2 : 0)) +
                               (h.flags & kHasColors ? 4 : 0);
-  const uint64_t bytes =
-      per_vertex * h.vertex_count + 12 * uint64_t(h.triangle_count) + 8 * uint64_t(h.representative_count);
+  const uint64_t per_change = 4 * (1 + h.dimension + (h.flags & kHasNormals ? 3 : 0)) + (h.flags & kHasColors ? 4 : 0);
+  const uint64_t bytes = per_vertex * h.vertex_count + 12 * uint64_t(h.triangle_count) +
+                         8 * uint64_t(h.representative_count) + per_change * h.changed_count;
   if (bytes > limits.max_file_bytes)
     fail(where, "section HEAD: a mesh of " + str(bytes) + " bytes, over the limit of " + str(limits.max_file_bytes));
   flags_ = h.flags;
   total_vertices_ = h.vertex_count;
   total_triangles_ = h.triangle_count;
   total_representatives_ = h.representative_count;
+  total_changed_ = h.changed_count;
+  if (h.flags & kHasChanged) mesh_.changed.resize(h.level_count);
   mesh_.dimension = h.dimension;
   mesh_.vertex_count.assign(h.level_count, 0);
   mesh_.triangle_count.assign(h.level_count, 0);
@@ -191,7 +211,9 @@ void MultilevelLoader::add_level(const std::string& where, std::span<const uint8
                                        mesh_.vertices(),
                                        total_vertices_ - mesh_.vertices(),
                                        total_triangles_ - mesh_.faces(),
-                                       total_representatives_ - representatives_};
+                                       total_representatives_ - representatives_,
+                                       (flags_ & kHasChanged) != 0,
+                                       total_changed_ - changed_};
   const std::vector<uint8_t> plain = decode_compressed_level(where, section, context, quantized_);
   add_plain_level(where, plain, offset);
   if (complete()) quantized_ = {};  // only later levels predict from it
@@ -207,7 +229,15 @@ void MultilevelLoader::add_plain_level(const std::string& where, std::span<const
   if (h.level != level) fail(where, name + ": says it is level " + str(h.level));
   const bool normals = flags_ & kHasNormals, colors = flags_ & kHasColors, texcoords = flags_ & kHasTexcoords;
   const uint64_t per_vertex = mesh_.dimension + (normals ? 3 : 0) + (colors ? 1 : 0) + (texcoords ? 2 : 0);
-  const uint64_t words = 4 + per_vertex * h.vertices + 3 * uint64_t(h.triangles) + 2 * uint64_t(h.representatives);
+  uint64_t words = 4 + per_vertex * h.vertices + 3 * uint64_t(h.triangles) + 2 * uint64_t(h.representatives);
+  uint32_t changed = 0;  // its secondary array's entries, counted in the word after the representatives
+  if (flags_ & kHasChanged) {
+    if (words >= section.size() / 4) fail(where, name + ": no count of its secondary array");
+    std::memcpy(&changed, section.data() + 4 * words, 4);
+    if (uint64_t(changed_) + changed > total_changed_)
+      fail(where, name + ": more secondary array entries than HEAD's total");
+    words += 1 + uint64_t(changed) * (1 + mesh_.dimension + (normals ? 3 : 0) + (colors ? 1 : 0));
+  }
   if (words != section.size() / 4)
     fail(where, name + ": " + str(section.size() / 4) + " words but its counts need " + str(words));
   const uint32_t v_begin = mesh_.vertices(), t_begin = mesh_.faces();
@@ -231,6 +261,10 @@ void MultilevelLoader::add_plain_level(const std::string& where, std::span<const
       fail(where, "a vertex texture coordinate of level " + str(level) + " is not finite");
   take_representatives(where, pairs);
   const uint32_t n_l = v_begin + h.vertices;
+  if (flags_ & kHasChanged) {
+    p += 4;  // the count
+    take_changed(where, level, n_l, changed, p);
+  }
   for (uint32_t l = 0; l <= level; ++l) {
     mesh_.vertex_count[l] = n_l;
     mesh_.triangle_count[l] = t_begin + h.triangles;
@@ -239,9 +273,30 @@ void MultilevelLoader::add_plain_level(const std::string& where, std::span<const
   ++loaded_;
   if (!complete()) return;
   if (mesh_.vertices() != total_vertices_ || mesh_.faces() != total_triangles_ ||
-      representatives_ != total_representatives_)
+      representatives_ != total_representatives_ || changed_ != total_changed_)
     fail(where, "section HEAD: its totals disagree with the LEVL sections");
   validate_multilevel(where, mesh_);
+}
+
+// Level `level`'s secondary array: vertices of its LOD (below n_l) in ascending order, finite values, none
+// at level 0; what a LOD shows as soon as its level is in.
+void MultilevelLoader::take_changed(const std::string& where, uint32_t level, uint32_t n_l, uint32_t count,
+                                    const uint8_t*& p) {
+  ChangedVertices& c = mesh_.changed[level];
+  const std::string name = "the secondary array of level " + str(level);
+  if (count > 0 && level == 0) fail(where, name + ": LOD 0 is the primary arrays");
+  take(c.vertex, p, count);
+  take(c.positions, p, uint64_t(count) * mesh_.dimension);
+  if (flags_ & kHasNormals) take(c.normals, p, uint64_t(count) * 3);
+  if (flags_ & kHasColors) take(c.colors, p, uint64_t(count) * 4);
+  for (size_t i = 0; i < c.size(); ++i)
+    if (c.vertex[i] >= n_l || (i > 0 && c.vertex[i] <= c.vertex[i - 1]))
+      fail(where, name + ": vertex " + str(c.vertex[i]) + " is not in its LOD or not in ascending order");
+  for (float x : c.positions)
+    if (!std::isfinite(x)) fail(where, name + ": a position is not finite");
+  for (float x : c.normals)
+    if (!std::isfinite(x)) fail(where, name + ": a normal is not finite");
+  changed_ += count;
 }
 
 void MultilevelLoader::take_representatives(const std::string& where, std::span<const uint32_t> pairs) {

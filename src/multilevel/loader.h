@@ -56,12 +56,14 @@ class MultilevelLoader {
  private:
   void add_plain_level(const std::string& where, std::span<const uint8_t> section, uint64_t offset);
   void read_compressed_head(const std::string& where, std::span<const uint8_t> head);
+  void take_changed(const std::string& where, uint32_t level, uint32_t n_l, uint32_t count, const uint8_t*& p);
   void take_representatives(const std::string& where, std::span<const uint32_t> pairs);
   void check_level_triangles(const std::string& where, uint32_t t_begin, uint32_t n_l);
 
   MultilevelMesh mesh_;
   uint32_t flags_ = 0;
   uint32_t total_vertices_ = 0, total_triangles_ = 0, total_representatives_ = 0, representatives_ = 0;
+  uint32_t total_changed_ = 0, changed_ = 0;  // secondary array entries: HEAD's total, loaded
   uint32_t loaded_ = 0;
   std::vector<uint8_t> resolved_;  // per vertex: its chain is known to reach a loaded vertex
   MultilevelForm form_;

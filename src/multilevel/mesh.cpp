@@ -15,6 +15,32 @@ constexpr uint32_t kNoRep = MultilevelMesh::kNoRepresentative;
 
 std::string str(uint64_t v) { return std::to_string(v); }
 
+// The secondary arrays: one per level or none, none at level 0, each naming vertices of its LOD in
+// ascending order with finite values of the mesh's attributes.
+void check_changed(const std::string& where, const MultilevelMesh& m) {
+  if (m.changed.empty()) return;
+  if (m.changed.size() != m.level_count())
+    fail(where, str(m.changed.size()) + " secondary arrays for " + str(m.level_count()) + " levels");
+  if (!m.changed[0].empty()) fail(where, "a secondary array at level 0, whose LOD is the primary arrays");
+  for (uint32_t l = 1; l < m.level_count(); ++l) {
+    const ChangedVertices& c = m.changed[l];
+    const std::string name = "the secondary array of level " + str(l);
+    const size_t n = c.size();
+    if (c.positions.size() != n * m.dimension || c.normals.size() != (m.normals.empty() ? 0 : 3 * n) ||
+        c.colors.size() != (m.colors.empty() ? 0 : 4 * n))
+      fail(where, name + ": its values do not match its " + str(n) + " vertices and the mesh's attributes");
+    for (size_t i = 0; i < n; ++i) {
+      if (c.vertex[i] >= m.vertex_count[l])
+        fail(where, name + " changes vertex " + str(c.vertex[i]) + ", which is not in LOD " + str(l));
+      if (i > 0 && c.vertex[i] <= c.vertex[i - 1]) fail(where, name + ": its vertices are not strictly ascending");
+    }
+    for (float p : c.positions)
+      if (!std::isfinite(p)) fail(where, name + ": a position is not finite");
+    for (float p : c.normals)
+      if (!std::isfinite(p)) fail(where, name + ": a normal is not finite");
+  }
+}
+
 void check_sizes(const std::string& where, const MultilevelMesh& m) {
   if (m.dimension < 2 || m.dimension > 3) fail(where, "dimension " + str(m.dimension) + " (2 or 3 expected)");
   if (m.vertex_count.empty()) fail(where, "no levels");
@@ -37,6 +63,7 @@ void check_sizes(const std::string& where, const MultilevelMesh& m) {
     if (!std::isfinite(p)) fail(where, "a vertex normal is not finite");
   for (float p : m.texcoords)
     if (!std::isfinite(p)) fail(where, "a vertex texture coordinate is not finite");
+  check_changed(where, m);
 }
 
 // The level of triangle t: the highest l with t < triangle_count[l] (walked once, in order).
@@ -53,6 +80,12 @@ void for_each_triangle_by_level(const MultilevelMesh& m, Fn&& fn) {
 uint64_t MultilevelMesh::stored_representatives() const {
   uint64_t count = 0;
   for (size_t v = 0; v < representative.size(); ++v) count += representative[v] != kNoRep;
+  return count;
+}
+
+uint64_t MultilevelMesh::changed_vertices() const {
+  uint64_t count = 0;
+  for (const ChangedVertices& c : changed) count += c.size();
   return count;
 }
 
@@ -159,9 +192,14 @@ uint64_t geomorph_representative_count(const MultilevelMesh& m) {
 std::vector<float> multilevel_level_errors(const MultilevelMesh& m) {
   std::vector<float> errors(m.level_count(), 0);
   std::vector<uint32_t> at(m.vertices());
+  std::vector<float> shown;  // the LOD's positions of its vertices (its secondary array applied)
   const uint32_t d = m.dimension, n = m.vertices();
   for (uint32_t l = 1; l < m.level_count(); ++l) {
     const uint32_t n_l = m.vertex_count[l];
+    shown.assign(m.positions.begin(), m.positions.begin() + size_t(n_l) * d);
+    if (m.changes(l))
+      for (size_t i = 0; i < m.changed[l].size(); ++i)
+        std::copy_n(&m.changed[l].positions[i * d], d, &shown[size_t(m.changed[l].vertex[i]) * d]);
     double worst = 0;
     for (uint32_t v = n_l; v < n; ++v) {
       const uint32_t r = m.representative[v];
@@ -169,7 +207,7 @@ std::vector<float> multilevel_level_errors(const MultilevelMesh& m) {
       if (at[v] == kNoRep) continue;
       double sq = 0;
       for (uint32_t k = 0; k < d; ++k) {
-        const double delta = double(m.positions[size_t(v) * d + k]) - m.positions[size_t(at[v]) * d + k];
+        const double delta = double(m.positions[size_t(v) * d + k]) - shown[size_t(at[v]) * d + k];
         sq += delta * delta;
       }
       worst = std::max(worst, sq);
@@ -236,8 +274,32 @@ void MultilevelLod::connect(uint32_t level) {
 void MultilevelLod::set_level(uint32_t level) {
   level = std::min(level, mesh_.level_count() - 1);
   connect(level);
-  morphed_ = false;
+  own_values_ = mesh_.changes(level);
+  if (own_values_) {
+    values_at(level, shown_);
+    morph_lo_ = morph_hi_ = 0xFFFFFFFFu;  // shown_ no longer holds a geomorph's start
+  }
   level_ = float(level);
+}
+
+void MultilevelLod::values_at(uint32_t level, Values& out) const {
+  const MultilevelMesh& m = mesh_;
+  const uint32_t n = m.vertex_count[level], d = m.dimension;
+  const auto prefix = [](const auto& all, auto& into, size_t count) {
+    into.assign(all.begin(), all.begin() + (all.empty() ? 0 : count));
+  };
+  prefix(m.positions, out.positions, size_t(n) * d);
+  prefix(m.normals, out.normals, size_t(n) * 3);
+  prefix(m.colors, out.colors, size_t(n) * 4);
+  prefix(m.texcoords, out.texcoords, size_t(n) * 2);
+  if (!m.changes(level)) return;
+  const ChangedVertices& c = m.changed[level];
+  for (size_t i = 0; i < c.size(); ++i) {
+    const uint32_t v = c.vertex[i];
+    std::copy_n(&c.positions[i * d], d, &out.positions[size_t(v) * d]);
+    if (!c.normals.empty()) std::copy_n(&c.normals[i * 3], 3, &out.normals[size_t(v) * 3]);
+    if (!c.colors.empty()) std::copy_n(&c.colors[i * 4], 4, &out.colors[size_t(v) * 4]);
+  }
 }
 
 void MultilevelLod::prepare_morph(uint32_t lo, uint32_t hi) {
@@ -255,13 +317,52 @@ void MultilevelLod::prepare_morph(uint32_t lo, uint32_t hi) {
       morph_source_[v - n_hi] = r == kNoRep ? v : r < n_hi ? r : morph_source_[r - n_hi];
     }
   });
-  const uint32_t d = m.dimension;
-  morph_positions_.assign(m.positions.begin(), m.positions.begin() + size_t(n_lo) * d);
-  morph_normals_.assign(m.normals.begin(), m.normals.begin() + (m.normals.empty() ? 0 : size_t(n_lo) * 3));
-  morph_colors_.assign(m.colors.begin(), m.colors.begin() + (m.colors.empty() ? 0 : size_t(n_lo) * 4));
-  morph_texcoords_.assign(m.texcoords.begin(), m.texcoords.begin() + (m.texcoords.empty() ? 0 : size_t(n_lo) * 2));
+  values_at(lo, morph_to_);
+  values_at(hi, morph_from_);
+  // A vertex of levels lo .. hi - 1 starts where LOD hi shows its source (one with none, where LOD lo shows it).
+  const auto extend = [&](auto Values::*array, size_t width) {
+    auto& from = morph_from_.*array;
+    const auto& to = morph_to_.*array;
+    if (to.empty()) return;
+    from.resize(size_t(n_lo) * width);
+    for (uint32_t v = n_hi; v < n_lo; ++v) {
+      const uint32_t source = morph_source_[v - n_hi];
+      const auto& values = source == v ? to : from;
+      std::copy_n(&values[size_t(source) * width], width, &from[size_t(v) * width]);
+    }
+  };
+  extend(&Values::positions, m.dimension);
+  extend(&Values::normals, 3);
+  extend(&Values::colors, 4);
+  extend(&Values::texcoords, 2);
+  shown_ = morph_to_;
   morph_lo_ = lo;
   morph_hi_ = hi;
+}
+
+void MultilevelLod::blend(float t, uint32_t begin, uint32_t end) {
+  const uint32_t d = mesh_.dimension;
+  const float s = 1 - t;
+  const Values &from = morph_from_, &to = morph_to_;
+  for (uint32_t v = begin; v < end; ++v) {
+    for (uint32_t k = 0; k < d; ++k)
+      shown_.positions[size_t(v) * d + k] = s * from.positions[size_t(v) * d + k] + t * to.positions[size_t(v) * d + k];
+    if (!to.normals.empty()) {
+      float nrm[3], len = 0;
+      for (int k = 0; k < 3; ++k) {
+        nrm[k] = s * from.normals[size_t(v) * 3 + k] + t * to.normals[size_t(v) * 3 + k];
+        len += nrm[k] * nrm[k];
+      }
+      const float scale = len > 0 ? 1 / std::sqrt(len) : 0;
+      for (int k = 0; k < 3; ++k)
+        shown_.normals[size_t(v) * 3 + k] = len > 0 ? nrm[k] * scale : to.normals[size_t(v) * 3 + k];
+    }
+    for (size_t k = 0; k < (to.colors.empty() ? 0 : 4); ++k)
+      shown_.colors[size_t(v) * 4 + k] =
+          uint8_t(std::lround(s * from.colors[size_t(v) * 4 + k] + t * to.colors[size_t(v) * 4 + k]));
+    for (size_t k = 0; k < (to.texcoords.empty() ? 0 : 2); ++k)
+      shown_.texcoords[size_t(v) * 2 + k] = s * from.texcoords[size_t(v) * 2 + k] + t * to.texcoords[size_t(v) * 2 + k];
+  }
 }
 
 void MultilevelLod::geomorph(uint32_t lo, float t) { geomorph(lo, lo + 1, t); }
@@ -277,34 +378,11 @@ void MultilevelLod::geomorph(uint32_t lo, uint32_t hi, float t) {
   if (t > 1) t = 1;
   connect(lo);
   prepare_morph(lo, hi);
-  const MultilevelMesh& m = mesh_;
-  const uint32_t n_hi = m.vertex_count[hi], n_lo = m.vertex_count[lo];
-  const uint32_t d = m.dimension;
-  const float s = 1 - t;
-  for (uint32_t v = n_hi; v < n_lo; ++v) {
-    const uint32_t from = morph_source_[v - n_hi];
-    for (uint32_t k = 0; k < d; ++k)
-      morph_positions_[size_t(v) * d + k] = s * m.positions[size_t(from) * d + k] + t * m.positions[size_t(v) * d + k];
-    if (!m.normals.empty()) {
-      float nrm[3], len = 0;
-      for (int k = 0; k < 3; ++k) {
-        nrm[k] = s * m.normals[size_t(from) * 3 + k] + t * m.normals[size_t(v) * 3 + k];
-        len += nrm[k] * nrm[k];
-      }
-      const float scale = len > 0 ? 1 / std::sqrt(len) : 0;
-      for (int k = 0; k < 3; ++k)
-        morph_normals_[size_t(v) * 3 + k] = len > 0 ? nrm[k] * scale : m.normals[size_t(v) * 3 + k];
-    }
-    if (!m.colors.empty())
-      for (int k = 0; k < 4; ++k)
-        morph_colors_[size_t(v) * 4 + k] =
-            uint8_t(std::lround(s * m.colors[size_t(from) * 4 + k] + t * m.colors[size_t(v) * 4 + k]));
-    if (!m.texcoords.empty())
-      for (int k = 0; k < 2; ++k)
-        morph_texcoords_[size_t(v) * 2 + k] =
-            s * m.texcoords[size_t(from) * 2 + k] + t * m.texcoords[size_t(v) * 2 + k];
-  }
-  morphed_ = true;
+  // Without secondary arrays between them, the vertices of LOD hi stand at their own values in both.
+  bool moved = false;
+  for (uint32_t l = lo; l <= hi; ++l) moved = moved || mesh_.changes(l);
+  blend(t, moved ? 0 : mesh_.vertex_count[hi], mesh_.vertex_count[lo]);
+  own_values_ = true;
   level_ = float(hi) - float(hi - lo) * t;
 }
 
@@ -322,25 +400,25 @@ void MultilevelLod::set_level(float x) {
 }
 
 std::span<const float> MultilevelLod::positions() const {
-  if (morphed_) return morph_positions_;
+  if (own_values_) return shown_.positions;
   return {mesh_.positions.data(), size_t(vertex_count_) * mesh_.dimension};
 }
 
 std::span<const float> MultilevelLod::normals() const {
   if (mesh_.normals.empty()) return {};
-  if (morphed_) return morph_normals_;
+  if (own_values_) return shown_.normals;
   return {mesh_.normals.data(), size_t(vertex_count_) * 3};
 }
 
 std::span<const uint8_t> MultilevelLod::colors() const {
   if (mesh_.colors.empty()) return {};
-  if (morphed_) return morph_colors_;
+  if (own_values_) return shown_.colors;
   return {mesh_.colors.data(), size_t(vertex_count_) * 4};
 }
 
 std::span<const float> MultilevelLod::texcoords() const {
   if (mesh_.texcoords.empty()) return {};
-  if (morphed_) return morph_texcoords_;
+  if (own_values_) return shown_.texcoords;
   return {mesh_.texcoords.data(), size_t(vertex_count_) * 2};
 }
 

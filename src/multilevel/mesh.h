@@ -12,6 +12,21 @@
 
 namespace pms {
 
+// The secondary array of one LOD (gueziec et al.: going from a level to the next finer, "the positions and
+// properties ... of the representatives ... may be changed by reading them from a secondary array"): the
+// vertices of LOD l (below n_l) that stand elsewhere while LOD l is shown than at their own values, e.g. a
+// clustering's surviving vertex at its cluster's position. Normals and colours travel when the mesh has
+// them; texture coordinates never change (a cluster may span charts).
+struct ChangedVertices {
+  std::vector<uint32_t> vertex;   // strictly ascending
+  std::vector<float> positions;   // dimension per entry
+  std::vector<float> normals;     // 3 per entry when the mesh has normals
+  std::vector<uint8_t> colors;    // 4 per entry when the mesh has colours
+
+  size_t size() const { return vertex.size(); }
+  bool empty() const { return vertex.empty(); }
+};
+
 // Levels run from 0 (finest) to level_count() - 1 (coarsest). LOD l is made of the vertices and triangles
 // of levels >= l: a prefix of both arrays, [0, vertex_count[l]) and [0, triangle_count[l]). A triangle of
 // LOD l that names a vertex >= vertex_count[l] follows representatives (each lower than the vertex it
@@ -28,11 +43,16 @@ struct MultilevelMesh {
   RepresentativeArray representative;    // per vertex; kNoRepresentative where none is stored
   std::vector<uint32_t> vertex_count;    // n_l per level: vertices of levels >= l (non-increasing in l)
   std::vector<uint32_t> triangle_count;  // likewise for triangles
+  // Per level, the secondary array of its LOD (changed[0] is always empty: LOD 0 is the primary arrays);
+  // empty when no LOD changes anything. A vertex's values in LOD l are its entry in changed[l], else its own.
+  std::vector<ChangedVertices> changed;
 
   uint32_t level_count() const { return uint32_t(vertex_count.size()); }
   uint32_t vertices() const { return vertex_count.empty() ? 0 : vertex_count[0]; }
   uint32_t faces() const { return triangle_count.empty() ? 0 : triangle_count[0]; }
   uint64_t stored_representatives() const;
+  uint64_t changed_vertices() const;  // entries of every level's secondary array
+  bool changes(uint32_t level) const { return level < changed.size() && !changed[level].empty(); }
   // Vertex v's position in 3D (a 2D mesh lies in z = 0).
   void point(uint32_t v, float p[3]) const {
     p[2] = 0;
@@ -113,16 +133,28 @@ class MultilevelLod {
   const MultilevelMesh& mesh_;
   float level_ = -1;
   uint32_t connected_ = 0xFFFFFFFFu;  // the level whose connectivity indices_ holds
-  bool morphed_ = false;
   uint32_t vertex_count_ = 0;
   std::vector<uint32_t> pc_rep_;  // path-compressed representatives for `connected_`
   std::vector<uint32_t> indices_;
+  // The values of the vertices of one LOD: what positions() and the others show, and a geomorph's ends.
+  struct Values {
+    std::vector<float> positions, normals, texcoords;
+    std::vector<uint8_t> colors;
+  };
+  // LOD `level`'s values of its vertices: the primary arrays with its secondary array applied.
+  void values_at(uint32_t level, Values& out) const;
+  // `from` and `to` blended at t into shown_, for vertices [begin, end).
+  void blend(float t, uint32_t begin, uint32_t end);
+
   // The levels morph_source_ is for: per vertex of levels morph_lo_ .. morph_hi_ - 1, where LOD morph_hi_
   // puts it.
   uint32_t morph_lo_ = 0xFFFFFFFFu, morph_hi_ = 0xFFFFFFFFu;
   std::vector<uint32_t> morph_source_;
-  std::vector<float> morph_positions_, morph_normals_, morph_texcoords_;
-  std::vector<uint8_t> morph_colors_;
+  // shown_ holds what positions() and the others return while own_values_ (a geomorph, or a LOD whose
+  // secondary array changes something); a geomorph blends morph_from_ (LOD hi's values where each vertex
+  // stands there) into morph_to_ (LOD lo's).
+  bool own_values_ = false;
+  Values shown_, morph_from_, morph_to_;
 };
 
 // The LOD `lod` holds as a plain indexed mesh (a 2D mesh lies in z = 0), with its normals, colours and

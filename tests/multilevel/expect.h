@@ -16,6 +16,13 @@ inline void expect_same_multilevel(const MultilevelMesh& a, const MultilevelMesh
   EXPECT_EQ(a.texcoords, b.texcoords);
   EXPECT_EQ(a.triangles, b.triangles);
   EXPECT_EQ(a.representative, b.representative);
+  ASSERT_EQ(a.changed.size(), b.changed.size());
+  for (size_t l = 0; l < a.changed.size(); ++l) {
+    EXPECT_EQ(a.changed[l].vertex, b.changed[l].vertex) << "secondary array of level " << l;
+    EXPECT_EQ(a.changed[l].positions, b.changed[l].positions) << "secondary array of level " << l;
+    EXPECT_EQ(a.changed[l].normals, b.changed[l].normals) << "secondary array of level " << l;
+    EXPECT_EQ(a.changed[l].colors, b.changed[l].colors) << "secondary array of level " << l;
+  }
 }
 
 }  // namespace pms::test
