@@ -80,6 +80,20 @@ std::vector<Camera> orbit(const ModelData&, const PathOptions& options, const Fr
   return path;
 }
 
+// kim-lee-kobbelt 2005 §8, Fig. 5: "looks around the model from top to bottom".
+std::vector<Camera> look(const PathOptions& options, const Frame3& f) {
+  const float distance = framing_distance(options, f);
+  std::vector<Camera> path;
+  for (uint32_t i = 0; i < options.frames; ++i) {
+    float dir[3], eye[3];
+    const float elevation = (60 - 120 * parameter(i, options.frames)) * kDegree;
+    direction(f, 2 * kPi * float(i) / float(options.frames), elevation, dir);
+    for (int k = 0; k < 3; ++k) eye[k] = f.centre[k] + distance * dir[k];
+    path.push_back(camera_at(options, f, eye, f.centre));
+  }
+  return path;
+}
+
 std::vector<Camera> scan(const ModelData& model, const PathOptions& options, const Frame3& f) {
   const float height = f.extent[f.up];
   const float reach = height / (6 * std::tan(0.5f * options.fovy_deg * kDegree));  // a third of the height in view
@@ -136,7 +150,8 @@ PathKind parse_path_kind(const std::string& name) {
   if (name == "orbit") return PathKind::orbit;
   if (name == "scan") return PathKind::scan;
   if (name == "zoom") return PathKind::zoom;
-  fail("path", "unknown kind \"" + name + "\" (expected orbit, scan or zoom)");
+  if (name == "look") return PathKind::look;
+  fail("path", "unknown kind \"" + name + "\" (expected orbit, scan, zoom or look)");
 }
 
 std::vector<Camera> make_camera_path(PathKind kind, const ModelData& model, const PathOptions& options) {
@@ -153,6 +168,8 @@ std::vector<Camera> make_camera_path(PathKind kind, const ModelData& model, cons
       return scan(model, options, f);
     case PathKind::zoom:
       return zoom(model, options, f);
+    case PathKind::look:
+      return look(options, f);
   }
   fail("path", "unknown kind");
 }

@@ -1,5 +1,6 @@
 // Scripted camera paths over a model (`pmstream path`): orbit, scan (zheng-chan 2006 §6: close to the
-// surface, bottom to top) and zoom (far to a close-up). Deterministic: the same model and options give the
+// surface, bottom to top), zoom (far to a close-up) and look (kim-lee-kobbelt 2005 Fig. 5: around the model
+// from top to bottom). Deterministic: the same model and options give the
 // same cameras, bit for bit.
 #pragma once
 #include <cstdint>
@@ -11,9 +12,9 @@
 
 namespace pms::app {
 
-enum class PathKind { orbit, scan, zoom };
+enum class PathKind { orbit, scan, zoom, look };
 
-// "orbit" | "scan" | "zoom"; pms::Error otherwise.
+// "orbit" | "scan" | "zoom" | "look"; pms::Error otherwise.
 PathKind parse_path_kind(const std::string& name);
 
 struct PathOptions {
@@ -29,7 +30,9 @@ struct PathOptions {
 // horizontally at the vertical axis through the centre, rising from the bottom of the box to the top
 // while swinging 60° around it. Zoom: toward the model's most extreme surface vertex in the viewing
 // direction, from 6 framing distances (the model small on screen) to 2% of the box diagonal, geometric in
-// distance so the speed feels constant. pms::Error for no frames or bad camera settings.
+// distance so the speed feels constant. Look: the orbit's circle at its distance, its elevation falling from
+// 60° above the horizontal plane to 60° below over the turn, so a lap sees the top, the sides and the
+// bottom (kim-lee-kobbelt fly it twice: E3/E4's two laps). pms::Error for no frames or bad camera settings.
 std::vector<Camera> make_camera_path(PathKind kind, const ModelData& model, const PathOptions& options);
 
 }  // namespace pms::app

@@ -50,7 +50,7 @@ std::span<const BenchGroup> bench_groups();
 void run_build_group(BenchContext& context);
 // Adaptation, renderer and image quality of the refinement engine (bench_refine.cpp).
 void run_refine_group(BenchContext& context);
-// E2, E3, E4, E5 and E11 of the sender-driven mode (bench_sender.cpp).
+// E2, E3, E4, E5, E13, E14 and E11 of the sender-driven mode (bench_sender.cpp).
 void run_sender_group(BenchContext& context);
 // Receiver-driven against sender-driven and single-rate codecs: whole-model bits, E7, E6, E8 (bench_receiver.cpp).
 void run_receiver_group(BenchContext& context);

@@ -28,6 +28,9 @@ BenchModel prepare_model(const BenchContext& context, const std::string& model,
 
 std::vector<Camera> path_of(const BenchModel& m, app::PathKind kind, uint32_t frames);
 
+// The calling thread's CPU time: a share of a flight that the machine's other load does not inflate.
+double thread_seconds();
+
 // A server Session of the model's catalogue in this process, and a client transport to it: the same
 // frames as over TCP, with the session's own state (its active tags) readable between frames.
 struct InProcessSession {

@@ -19,7 +19,9 @@ constexpr BenchGroup kGroups[] = {
     {"build", "E12 build time and memory, E1 hierarchy statistics, terrain scaling", run_build_group},
     {"refine", "adaptation time and ops/s on a scan path, renderer speed, image quality at far/mid/close",
      run_refine_group},
-    {"sender", "E2 packet bits, E3 server memory, E4 two laps, E5 bytes to satisfy tolerance, E11 many clients",
+    {"sender",
+     "E2 packet bits and Table 2, E3 server memory, E4 two laps, E5 bytes to satisfy tolerance, E13 frame costs, "
+     "E14 the same bytes, E11 many clients",
      run_sender_group},
     {"receiver",
      "whole-model bits per vertex against meshoptimizer, gzip, zstd and Draco; E7 server CPU and bytes per split; "

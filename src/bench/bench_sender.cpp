@@ -1,7 +1,9 @@
-// The "sender" group: kim-lee-kobbelt 2005 §7–8 on the shared models. E2 bits per vsplit packet
-// (Table 2), E3 server memory per session, windowed active tags vs a stored vertex front (Fig 6),
-// E4 bytes over two laps of one path (Fig 7), E5 bytes to satisfy τ from a close view, view-dependent
-// vs the plain PM order (Fig 9); then E11, many clients against one server process over loopback TCP.
+// The "sender" group: kim-lee-kobbelt 2005 §7–8 on the shared models. E2 bits per vsplit packet and every
+// scheme of Table 2 (topology_schemes.h), E3 server memory per session, windowed active tags vs a stored
+// vertex front (Fig 6), E4 bytes over two laps of the orbit and of Fig 5's look path (Fig 7), E5 bytes to
+// satisfy τ from a close view, view-dependent vs the plain PM order (Fig 9), E13 faces and times per frame
+// (Fig 8) and E14 three clients' meshes after the same bytes (Fig 10, sender_figures.h); then E11, many
+// clients against one server process over loopback TCP.
 // E2–E5 run the server's Session in-process (LocalTransport) so its own state can be read each frame.
 #include <algorithm>
 #include <atomic>
@@ -17,8 +19,10 @@
 #include "bench/bench.h"
 #include "bench/bench_model.h"
 #include "bench/report.h"
+#include "bench/sender_figures.h"
 #include "bench/serve_child.h"
 #include "bench/split_record_bits.h"
+#include "bench/topology_schemes.h"
 #include "client/load_client.h"
 #include "client/streaming_client.h"
 #include "common/bit_stream.h"
@@ -402,6 +406,7 @@ Table e2_table() {
 
 Table e34_table() {
   return Table({{"model", false},
+                {"path", false},
                 {"frames", true},
                 {"lap 1 down B", true},
                 {"lap 1 up B", true},
@@ -431,15 +436,52 @@ Table e5_table() {
                 {"plain / VD", true}});
 }
 
-// E2 and E3/E4 on one model: a row in each table and their entries in the model's record.
-void run_e2_to_e4(const BenchModel& m, bool quick, Table& e2, Table& e34, json& record) {
-  const E2 bits = packet_bits_of(m);
-  const std::vector<Camera> path = path_of(m, PathKind::orbit, quick ? kQuickPathFrames : kPathFrames);
-  const Laps laps = run_laps(m, path);
-  const double wire = laps.splits ? double(laps.payload_down) / double(laps.splits) : 0;
-  e2.add_row({m.name, fixed(bits.topology, 1), "96", fixed(bits.position, 1), fixed(bits.refinement, 1),
-              fixed(bits.attributes, 1), fixed(wire, 1)});
-  e34.add_row({m.name, std::to_string(2 * path.size()), thousands(laps.lap_down[0]), thousands(laps.lap_up[0]),
+// Table 2 on every model: a row per scheme, the 32-bit and the fitted columns per model.
+Table table2(const std::vector<std::string>& names) {
+  std::vector<Column> columns = {{"framework", false}, {"topological detail", false}, {"paper bits", true}};
+  for (const std::string& name : names) {
+    columns.push_back({name + " ids", true});
+    columns.push_back({name + " @32", true});
+    columns.push_back({name + " fitted", true});
+  }
+  return Table(columns);
+}
+
+// The rows of Table 2, each model's three cells side by side; the last row is our split records' topology
+// (E2's entropy-coded column).
+std::string table2_markdown(const std::vector<std::string>& names, const std::vector<std::vector<SchemeBits>>& per_model,
+                            const std::vector<double>& record_topology) {
+  Table t = table2(names);
+  for (size_t k = 0; k < per_model.front().size(); ++k) {
+    const SchemeBits& first = per_model.front()[k];
+    std::vector<std::string> row = {first.framework + ", " + first.scheme, first.fields,
+                                    std::to_string(first.paper_bits)};
+    for (const std::vector<SchemeBits>& model : per_model)
+      for (double v : {model[k].indices, model[k].bits_32, model[k].bits_fitted}) row.push_back(fixed(v, 1));
+    t.add_row(row);
+  }
+  std::vector<std::string> row = {"pmstream split record, cut vertices entropy-coded", "v_s, v̂_l, v̂_r", "96"};
+  for (double bits : record_topology)
+    for (const std::string& cell : {std::string("3.0"), std::string("-"), fixed(bits, 1)}) row.push_back(cell);
+  t.add_row(row);
+  return t.markdown();
+}
+
+json table2_record(const std::vector<SchemeBits>& rows) {
+  json out = json::array();
+  for (const SchemeBits& r : rows)
+    out.push_back({{"framework", r.framework},
+                   {"scheme", r.scheme},
+                   {"fields", r.fields},
+                   {"paper_bits", r.paper_bits},
+                   {"indices", r.indices},
+                   {"bits_at_32", r.bits_32},
+                   {"bits_fitted", r.bits_fitted}});
+  return out;
+}
+
+void add_laps_row(const BenchModel& m, const char* path_name, size_t frames, const Laps& laps, Table& e34) {
+  e34.add_row({m.name, path_name, std::to_string(2 * frames), thousands(laps.lap_down[0]), thousands(laps.lap_up[0]),
                thousands(laps.lap_down[1]), thousands(laps.lap_up[1]), fixed(100 * laps.mean_ratio, 1) + " %",
                fixed(100 * laps.max_ratio, 1) + " %", fixed(100 * laps.compact_mean_ratio, 1) + " %",
                fixed(100 * laps.compact_max_ratio, 1) + " %", thousands(laps.max_tag_bytes),
@@ -447,20 +489,42 @@ void run_e2_to_e4(const BenchModel& m, bool quick, Table& e2, Table& e34, json& 
                fixed(laps.compact_seconds / std::max(laps.tags_seconds, 1e-9), 2),
                percent_of(laps.max_front_nodes, m.served->model().node_count()),
                percent_of(laps.max_window_nodes, m.served->model().node_count())});
+}
+
+json laps_record(const Laps& laps) {
+  return {{"lap_down", {laps.lap_down[0], laps.lap_down[1]}},
+          {"lap_up", {laps.lap_up[0], laps.lap_up[1]}},
+          {"tags_over_front_mean", laps.mean_ratio},
+          {"tags_over_front_max", laps.max_ratio},
+          {"compact_over_front_mean", laps.compact_mean_ratio},
+          {"compact_over_front_max", laps.compact_max_ratio},
+          {"server_cpu_compact_seconds", laps.compact_seconds},
+          {"server_cpu_tags_seconds", laps.tags_seconds},
+          {"frames", laps.frames}};
+}
+
+// E2 and E3/E4 on one model: a row in each table (E3/E4: one per path) and their entries in the model's
+// record; Table 2's rows are returned.
+std::vector<SchemeBits> run_e2_to_e4(const BenchModel& m, bool quick, Table& e2, Table& e34, json& record) {
+  const E2 bits = packet_bits_of(m);
+  const std::vector<SchemeBits> schemes = table2_bits(m.served->model(), m.served->context);
+  const uint32_t frames = quick ? kQuickPathFrames : kPathFrames;
+  const Laps laps = run_laps(m, path_of(m, PathKind::orbit, frames));
+  const Laps look = run_laps(m, path_of(m, PathKind::look, frames));
+  const double wire = laps.splits ? double(laps.payload_down) / double(laps.splits) : 0;
+  e2.add_row({m.name, fixed(bits.topology, 1), "96", fixed(bits.position, 1), fixed(bits.refinement, 1),
+              fixed(bits.attributes, 1), fixed(wire, 1)});
+  add_laps_row(m, "orbit", frames, laps, e34);
+  add_laps_row(m, "look", frames, look, e34);
   record["e2"] = {{"topology_bits", bits.topology},
                   {"position_bits", bits.position},
                   {"refinement_bits", bits.refinement},
                   {"attribute_bits", bits.attributes},
-                  {"wire_bytes_per_packet", wire}};
-  record["e3_e4"] = {{"lap_down", {laps.lap_down[0], laps.lap_down[1]}},
-                     {"lap_up", {laps.lap_up[0], laps.lap_up[1]}},
-                     {"tags_over_front_mean", laps.mean_ratio},
-                     {"tags_over_front_max", laps.max_ratio},
-                     {"compact_over_front_mean", laps.compact_mean_ratio},
-                     {"compact_over_front_max", laps.compact_max_ratio},
-                     {"server_cpu_compact_seconds", laps.compact_seconds},
-                     {"server_cpu_tags_seconds", laps.tags_seconds},
-                     {"frames", laps.frames}};
+                  {"wire_bytes_per_packet", wire},
+                  {"table2", table2_record(schemes)}};
+  record["e3_e4"] = laps_record(laps);
+  record["e3_e4_look"] = laps_record(look);
+  return schemes;
 }
 
 // E5 on one model and on the same model built with the deviation bound (build --deviation bound).
@@ -484,9 +548,11 @@ void run_e5_pair(const BenchContext& context, const BenchModel& m, Table& e5, js
 }
 
 // Prints the three tables and returns their part of the report.
-std::string e2_to_e5_sections(const Table& e2, const Table& e34, const Table& e5) {
+std::string e2_to_e5_sections(const Table& e2, const std::string& table2, const Table& e34, const Table& e5) {
   print("\nE2: bits per vsplit packet (kim-lee-kobbelt Table 2: 96 topology bits)\n" + e2.markdown());
-  print("\nE3/E4: two laps of an orbit at τ = 1 px (Fig 6: tags ≈ 10 % of a stored front; Fig 7: lap 2 = 0)\n" +
+  print("\nE2: Table 2's schemes on our splits (topology bits per split)\n" + table2);
+  print("\nE3/E4: two laps of the orbit and of the look path at τ = 1 px (Fig 6: tags ≈ 10 % of a stored front; "
+        "Fig 7: lap 2 = 0)\n" +
         e34.markdown());
   print("\nE5: bytes to satisfy τ = 1 px from a close view (Fig 9)\n" + e5.markdown());
   std::string section =
@@ -494,8 +560,25 @@ std::string e2_to_e5_sections(const Table& e2, const Table& e34, const Table& e5
       "\nTopology = v_s's id and the record's v̂_l, v̂_r (split records, docs/protocol.md \"VSPLITS\"). "
       "Position = the record's geometry; normal + color = v_t's, for a model that has them. Whole split "
       "order; the wire column is E3's first lap, frame headers included.\n\n";
-  section += "### E3/E4: two laps of one orbit path, τ = 1 px\n\n" + e34.markdown() +
-             "\nTwo sessions fly the path side by side: one keeps the paper's windowed tags, one parks its front "
+  section +=
+      "#### Table 2: every scheme's topological detail on our splits\n\n" + table2 +
+      "\nThe paper's Table 2 (kim-lee-kobbelt §7.2) counts each framework's topological fields at 32 bits with "
+      "6 neighbours assumed. Here every split of the model's PM order is replayed on its mesh M^i "
+      "(`topology_schemes.cpp`; a test checks the replay ends on the engine's full mesh), so each scheme's "
+      "fields are those the split really has: N(v_s) with v_l, v_r first (To et al., explicit 1-ring), the "
+      "min/max ids of N(v_s) (El-Sana et al., implicit 1-ring), f_l, f_r and the four faces beside them across "
+      "their other edges (Southern et al., Hoppe 1997's 4-face vsplit; the variation infers f_l, f_r). Per "
+      "model: \"ids\" = mean indices per split; \"@32\" = the paper's convention, 32 bits an index; \"fitted\" "
+      "= each written with a BitWriter at the model's widths (a vertex id in bit_width(nodes) bits, a face id in "
+      "bit_width(faces) bits, the top value for a missing side on a boundary; the explicit 1-ring list's length "
+      "as an Elias-γ code, which no fixed count can replace). None of these schemes is entropy-coded; ours "
+      "(\"pmstream packet\") codes the three ids with the <tree-id, node-id> code and 2 cut flags "
+      "(`protocol::packet_bits`), and the last row is the split record's topology, v̂_l, v̂_r entropy-coded "
+      "against v_s's ancestors' cuts (E2's first table).\n\n";
+  section += "### E3/E4: two laps of the orbit and of the look path (Fig. 5), τ = 1 px\n\n" + e34.markdown() +
+             "\nThe look path is Fig. 5's navigation: one turn around the model at the orbit's distance, looking from "
+             "60° above to 60° below, flown twice as the paper does (`pmstream path look`). "
+             "Two sessions fly each path side by side: one keeps the paper's windowed tags, one parks its front "
              "as a CompactFront after every answer (`serve --park-after-ms 0`; a server parks a session once it "
              "is idle), and each column is the session's own allocation (`front_bytes()`) over a stored front, "
              "allocated as one 64-bit id per active node. \"server CPU\" is the two sessions' thread CPU time in "
@@ -523,7 +606,8 @@ std::string e2_to_e5_sections(const Table& e2, const Table& e34, const Table& e5
 void run_sender_group(BenchContext& context) {
   json out = {{"command", context.options.command_line}, {"machine", machine_json()}, {"models", json::array()}};
   std::string section =
-      "## sender: E2 packet bits, E3 server memory, E4 two laps, E5 bytes to satisfy τ, E11 many clients\n\n";
+      "## sender: E2 packet bits, E3 server memory, E4 two laps, E5 bytes to satisfy τ, E13 frame costs, E14 the "
+      "same bytes, E11 many clients\n\n";
   if (skipped_without_models(context, section)) return;
   const bool quick = context.options.quick;
   std::vector<std::string> names = context.options.models.empty() ? kDefaultModels : context.options.models;
@@ -531,15 +615,20 @@ void run_sender_group(BenchContext& context) {
 
   Table e2 = e2_table(), e34 = e34_table(), e5 = e5_table();
   std::vector<BenchModel> models;
+  std::vector<std::vector<SchemeBits>> schemes;
+  std::vector<double> record_topology;
   for (const std::string& name : names) {
     BenchModel m = prepare_model(context, name);
     json record = {{"model", name}};
-    run_e2_to_e4(m, quick, e2, e34, record);
+    schemes.push_back(run_e2_to_e4(m, quick, e2, e34, record));
+    record_topology.push_back(record["e2"]["topology_bits"].get<double>());
     run_e5_pair(context, m, e5, record);
     out["models"].push_back(record);
     models.push_back(std::move(m));
   }
-  section += e2_to_e5_sections(e2, e34, e5);
+  section += e2_to_e5_sections(e2, table2_markdown(names, schemes, record_topology), e34, e5);
+  section += frame_costs_section(context, models.back(), quick, out);  // Fig. 8 on the largest model asked for
+  section += budget_images_section(context, models, quick, out);
   section += e11_section(context, models.back(), quick, out);  // on the largest model asked for
   write_text_file(context.options.out_dir / "sender.json", out.dump(2) + "\n");
   context.report += section;

@@ -51,7 +51,7 @@ float distance(const nlohmann::json& a, const nlohmann::json& b) {
 
 TEST(ViewCli, PathsAreDeterministicAndShapedAsTheirKind) {
   const Model model;
-  for (const std::string kind : {"orbit", "scan", "zoom"}) {
+  for (const std::string kind : {"orbit", "scan", "zoom", "look"}) {
     SCOPED_TRACE(kind);
     const std::string a = (model.dir / (kind + "-a.json")).string(), b = (model.dir / (kind + "-b.json")).string();
     const std::string options = " --model " + model.pms + " --frames 24 --width 640 --height 480 --fovy 50 -o ";
@@ -85,6 +85,17 @@ TEST(ViewCli, PathsAreDeterministicAndShapedAsTheirKind) {
       for (const auto& cam : frames) {  // just outside the box (half extents 2.5 x 2.5), a third of its height away
         EXPECT_GT(distance(cam["eye"], cam["target"]), 2.5f);
         EXPECT_LT(distance(cam["eye"], cam["target"]), 0.5f * (2.5f + 2.5f) * 1.42f + 0.4f) << "close to the surface";
+      }
+    } else if (kind == "look") {  // the orbit's distance around a fixed centre, from 60° above to 60° below
+      const float r = distance(frames[0]["eye"], frames[0]["target"]);
+      EXPECT_GT(r, 2.6f);
+      const float z0 = frames[0]["target"][2].get<float>(), sin60 = std::sin(60 * 3.14159f / 180);
+      EXPECT_NEAR(frames[0]["eye"][2].get<float>() - z0, r * sin60, 1e-3f * r) << "starts at the top";
+      EXPECT_NEAR(frames[23]["eye"][2].get<float>() - z0, -r * sin60, 1e-3f * r) << "ends at the bottom";
+      for (size_t i = 1; i < frames.size(); ++i) {
+        EXPECT_NEAR(distance(frames[i]["eye"], frames[i]["target"]), r, 1e-3f * r);
+        EXPECT_EQ(frames[i]["target"], frames[0]["target"]);
+        EXPECT_LT(frames[i]["eye"][2].get<float>(), frames[i - 1]["eye"][2].get<float>());
       }
     } else {  // from far to a close-up, always getting closer
       EXPECT_GT(distance(frames[0]["eye"], frames[0]["target"]), 10.0f);
