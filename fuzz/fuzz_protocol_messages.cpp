@@ -1,6 +1,6 @@
 // libFuzzer target for every protocol message decoder (docs/architecture.md, "Correctness properties", 5): the
 // first byte picks the decoder, VSPLITS and DAG_OPS take its stream context from the next 8 bytes, the rest is the
-// payload. VSPLITS with split records (which = 12) and CODEC (13) take u16 T | T bytes of code tables first
+// payload (AHEAD: 14). VSPLITS with split records (which = 12) and CODEC (13) take u16 T | T bytes of code tables first
 // (hostile tables too) and a context made to fit them, whose client holds the roots. Any bytes must decode or throw
 // ProtocolError — never crash, hang, over-allocate or throw anything else — and what decodes must re-encode and decode
 // to the same message (byte for byte where no quantization is involved).
@@ -98,8 +98,8 @@ bool records_context(std::span<const uint8_t>& payload, StreamContext& c, std::v
 void fuzz_one(uint8_t which, std::span<const uint8_t> payload, const StreamContext& given) {
   StreamContext context = given;
   std::vector<uint8_t> tables;
-  if (which % 14 >= 12 && !records_context(payload, context, tables)) return;
-  switch (which % 14) {
+  if (which % 15 >= 12 && which % 15 <= 13 && !records_context(payload, context, tables)) return;
+  switch (which % 15) {
     case 0:
       check(same(payload_of(encode(decode_hello(payload))), payload));
       break;
@@ -133,7 +133,8 @@ void fuzz_one(uint8_t which, std::span<const uint8_t> payload, const StreamConte
     case 8: {
       const VSplits batch = decode_vsplits(payload, context);
       const VSplits back = decode_vsplits(payload_of(encode(batch, context)), context);
-      check(back.frame == batch.frame && back.final == batch.final && back.splits.size() == batch.splits.size());
+      check(back.frame == batch.frame && back.final == batch.final && back.ahead == batch.ahead &&
+            back.splits.size() == batch.splits.size());
       for (size_t i = 0; i < batch.splits.size(); ++i) check(same_split(back.splits[i], batch.splits[i]));
       break;
     }
@@ -154,10 +155,14 @@ void fuzz_one(uint8_t which, std::span<const uint8_t> payload, const StreamConte
         break;  // hostile tables may lack the code words the encoder's own choice needs
       }
       const VSplits back = decode_vsplits(payload_of(again), context);
-      check(back.frame == batch.frame && back.final == batch.final && back.splits.size() == batch.splits.size());
+      check(back.frame == batch.frame && back.final == batch.final && back.ahead == batch.ahead &&
+            back.splits.size() == batch.splits.size());
       for (size_t i = 0; i < batch.splits.size(); ++i) check(same_split(back.splits[i], batch.splits[i]));
       break;
     }
+    case 14:
+      check(same(payload_of(encode(decode_ahead(payload))), payload));
+      break;
     case 13: {
       const Codec codec = decode_codec(payload, context);
       check(same(payload_of(encode(codec)), payload));

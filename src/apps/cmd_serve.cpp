@@ -382,6 +382,9 @@ void add_serve_command(CliCommand& app) {
   add_limit(cmd, "--park-after-ms", limits.park_after_ms,
             "A sender-driven session with no message for this long codes its front compact (0 = after every "
             "answer; a flying client sends a VIEW a frame and keeps its tags)");
+  add_limit(cmd, "--ahead-budget", limits.ahead_budget_bytes,
+            "Bytes a sender-driven session may send ahead of its views while idle (AHEAD, stream --ahead) over "
+            "its life, at most one batch over; 0 = none");
   const CliOption preload =
       cmd.option("--preload", args->preload,
                  "Build these modes' tables before listening: all, or a comma list of sender, sender-plain, vi, dag, "

@@ -1,7 +1,7 @@
 // pmstream stream --server HOST:PORT|ws://HOST:PORT/ws --model NAME --path PATH.json --mode MODE --tolerance PX
 //                 (--mode receiver: --server http://HOST:PORT[/prefix] [--in-flight N] [--fetch lists|blocks]
 //                  [--ids-per-request N] [--descendant-depth K] [--block-depth K] [--frame-budget-ms MS]
-//                  [--frame-answers N] [--prefetch] [--rerank-ms MS] [--background-bytes N])
+//                  [--frame-answers N] [--prefetch] [--rerank-ms MS] [--background-bytes N] [--ahead N])
 //                 (--mode multilevel: --server http://HOST:PORT[/prefix] [--budget TRIANGLES | --tolerance PX])
 //                 [--laps K] [--reconnect N] [--timeout-ms N] [--connect-timeout-ms N] [--save-mesh OUT.ply]
 //                 [--snapshots DIR] [--json]
@@ -40,6 +40,7 @@ struct StreamArgs {
   std::string fetch = client::fetch_policy_name(client::ReceiverOptions{}.fetch);
   uint32_t frame_budget_ms = 0, frame_answers = 0;
   bool prefetch = false;
+  uint32_t ahead = 0;  // sender, with --fps
   uint32_t rerank_ms = client::ReceiverOptions{}.rerank_ms;
   uint64_t background_bytes = 0;
   std::string traversal = "priority";  // dag mode
@@ -117,6 +118,8 @@ void refuse_unused(const StreamArgs& args, const ModeOptions& options) {
     fail("--tolerance", "not used with --mode multilevel --budget (the budget picks the level)");
   if (args.background_bytes > 0 && args.fps == 0)
     fail("--background-bytes", "needs --fps: a lock-step frame ends when its view is satisfied, so it has no idle time");
+  if (args.ahead > 0 && args.fps == 0)
+    fail("--ahead", "needs --fps: a lock-step frame ends when its view is satisfied, so it has no idle time");
 }
 
 // Every mode's options, from the command line (refuse_unused has refused those the mode does not use).
@@ -129,6 +132,7 @@ client::ViewerOptions viewer_options(const StreamArgs& args) {
   session.tolerance = args.tolerance;
   session.morph_frames = args.morph_frames;
   session.max_ops = args.max_ops;
+  session.ahead_frames = args.ahead;
   if (args.mode == "dag") session.dag = dag_request(args);
   session.reconnect_attempts = args.reconnect;
   session.answer_timeout = std::chrono::milliseconds(args.timeout_ms);
@@ -297,6 +301,12 @@ void add_stream_command(CliCommand& app) {
       "--prefetch", args->prefetch,
       "receiver: with the view's wants all sent, fill the pipe with what the camera extrapolated from the last "
       "two frames would want");
+  const CliOption ahead =
+      cmd.option("--ahead", args->ahead,
+                 "sender, with --fps: while the view lacks nothing and no VIEW is on the wire, have the server send "
+                 "at low priority what the camera extrapolated this many frames on will want (0 = off)")
+          .range(0u, 300u)
+          .show_default();
   const CliOption rerank_ms =
       cmd.option("--rerank-ms", args->rerank_ms,
                  "receiver: rank the front again at least this often while the camera holds still (a moved camera "
@@ -350,6 +360,7 @@ void add_stream_command(CliCommand& app) {
                    {frame_budget_ms, {"receiver"}},
                    {frame_answers, {"receiver"}},
                    {prefetch, {"receiver"}},
+                   {ahead, {"sender"}},
                    {rerank_ms, {"receiver"}},
                    {background_bytes, {"receiver"}},
                    // sender-plain, vi and dag apply what comes as it comes: no adaptation to blend or cap

@@ -72,6 +72,8 @@ void run_dag_group(BenchContext& context);
 void run_attacks_group(BenchContext& context);
 // Every mode's Viewer free-running over a delaying link (bench_viewer.cpp).
 void run_viewer_group(BenchContext& context);
+// The viewer group's idle-time experiment: the sender-driven viewer with and without AHEAD (bench_idle_time.cpp).
+void run_idle_time_group(BenchContext& context);
 // The browser viewer in headless Chromium against the native client (bench_web.cpp).
 void run_web_group(BenchContext& context);
 

@@ -49,6 +49,10 @@ constexpr BenchGroup kGroups[] = {
      "every mode's Viewer free-running at 30 fps over 0 and 50 ms round trips: frame() time, flight and settle "
      "seconds, first picture, settled mesh against lock-step",
      run_viewer_group},
+    {"idle",
+     "the viewer group's idle time (kim-lee-kobbelt §9): the sender-driven viewer at 30 fps over a 50 ms round trip, "
+     "two laps of the orbit with AHEAD and without: frames satisfied, bytes",
+     run_idle_time_group},
     {"web",
      "the browser viewer in headless Chromium: WASM refinement against native, first picture, frame rate while "
      "streaming against a replay, the page's CPU per frame by mode, memory over laps",

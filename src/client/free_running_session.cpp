@@ -1,5 +1,6 @@
 #include "client/free_running_session.h"
 
+#include "common/camera.h"
 #include "common/error.h"
 #include "protocol/message_types.h"
 #include "protocol/model_messages.h"
@@ -33,6 +34,12 @@ void FreeRunningSession::on_frame(const protocol::Frame& frame, Clock::time_poin
       const protocol::VSplits batch = protocol::decode_vsplits(frame.payload, session_.context());
       session_.on_vsplits(batch);
       mode_.on_batch(batch, session_);
+      if (batch.ahead) {  // answers no VIEW
+        if (ahead_frames_ == 0) fail("server", "VSPLITS sent ahead to a client that sent no AHEAD");
+        ahead_splits_ += batch.splits.size();
+        splits_ += batch.splits.size();
+        return;
+      }
       return received(batch.splits.size(), batch.splits.size(), batch.frame, batch.final, now);
     }
     case protocol::MessageType::dag_ops: {
@@ -83,12 +90,24 @@ std::vector<uint8_t> FreeRunningSession::request(const Camera& camera, Clock::ti
   return mode_.encode_request(request);
 }
 
+// Idle: no VIEW on the wire and the view lacks nothing; moving: there is a path to extrapolate.
+std::vector<uint8_t> FreeRunningSession::ahead(const Camera& camera) {
+  if (ahead_frames_ == 0 || mode_.wire_mode() != protocol::StreamMode::sender_driven || opening_ || !sent_.empty() || lacks_ || !previous_ || same_camera(*previous_, camera))
+    return {};
+  const std::optional<Camera> next = extrapolate(*previous_, camera, ahead_frames_);
+  if (!next || camera_problem(*next)) return {};
+  ++aheads_;
+  return protocol::encode(protocol::Ahead{protocol::View{*next, request_.view.tolerance, aheads_}});
+}
+
 std::vector<uint8_t> FreeRunningSession::frame(const Camera& camera, Clock::time_point now, FrameReport& report) {
   report.frame = ++frames_;
   lacks_ = mode_.adapt(camera, session_);
   std::vector<uint8_t> out;
   if (wants_request(camera)) out = request(camera, now);
   report.requested = !out.empty();
+  if (out.empty()) out = ahead(camera);
+  previous_ = camera;
   report.vsplits = splits_;
   report.latency_ms = latency_ms_;
   report.in_flight = in_flight();
@@ -107,6 +126,7 @@ void FreeRunningSession::set_request(const protocol::DagView& request) {
 
 void FreeRunningSession::restart() {
   sent_.clear();
+  previous_.reset();
   asked_.reset();
   rounds_ = 0;
   answer_operations_ = 0;

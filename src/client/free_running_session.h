@@ -9,6 +9,11 @@
 // since the server's state assumes it. At a camera that stays, a request is repeated only once its answer
 // is in and was cut short (it brought something, and the mode still wants more), at most
 // ClientMode::rounds_per_view() times: the blocking frame's re-asks, spread over frames.
+// Idle time (kim-lee-kobbelt §9, set_ahead; sender-driven only): a frame that sends no VIEW, with none in
+// flight and a view that lacks nothing, whose camera moved since the frame before, sends AHEAD with the
+// camera extrapolated that many frames on (common/camera.h). The client, not the server, predicts: it sees
+// every frame's camera, the server only the VIEWs, which come exactly when the client is not idle. What
+// comes ahead is attached as held data like any batch; adapt() makes it only when a view wants it.
 // Shared with the browser build: single-threaded, no std::ranges algorithms, std::format or coroutines.
 #pragma once
 #include <chrono>
@@ -45,7 +50,10 @@ class FreeRunningSession {
   void restart();
   // What every request carries from now on; the next frame asks with it, at the same camera too.
   void set_request(const protocol::DagView& request);
-
+  // Idle time: AHEAD with the camera `frames` frames on (0: never).
+  void set_ahead(uint32_t frames) { ahead_frames_ = frames; }
+  uint64_t ahead_splits() const { return ahead_splits_; }  // received in batches sent ahead
+  uint32_t aheads_sent() const { return aheads_; }
   bool opening() const { return opening_; }
   uint32_t in_flight() const { return uint32_t(sent_.size()); }
   // The last request's final batch is in and the view lacks nothing the mode can tell.
@@ -59,7 +67,7 @@ class FreeRunningSession {
 
   bool wants_request(const Camera& camera) const;
   std::vector<uint8_t> request(const Camera& camera, Clock::time_point now);
-  void on_base(const protocol::Frame& frame);
+  std::vector<uint8_t> ahead(const Camera& camera);  void on_base(const protocol::Frame& frame);
   void received(uint64_t splits, uint64_t operations, uint32_t number, bool final, Clock::time_point now);
 
   ClientSession& session_;
@@ -73,6 +81,11 @@ class FreeRunningSession {
   uint64_t answer_operations_ = 0;  // splits and collapses received since the last request
   bool lacks_ = false;              // the last adapt: the view misses packets
   bool opening_ = false, codec_due_ = false;
+  // Idle time.
+  uint32_t ahead_frames_ = 0;
+  std::optional<Camera> previous_;  // the camera of the frame before
+  uint32_t aheads_ = 0;
+  uint64_t ahead_splits_ = 0;
   // Since the last displayed frame.
   uint64_t splits_ = 0;
   double latency_ms_ = 0;

@@ -33,6 +33,7 @@ MessageSessionViewer::MessageSessionViewer(const ClientOptions& options, const s
       mode_(make_client_mode(options.mode)),
       session_(prepared_session(options, *mode_)) {
   free_ = std::make_unique<FreeRunningSession>(session_, *mode_, request_of(options));
+  free_->set_ahead(options.ahead_frames);
   free_->restart();  // nothing is asked before BASE
 }
 

@@ -521,34 +521,6 @@ size_t ReceiverClient::attach(const HttpAnswer& answer, ReceiverFrame& out) {
   return attached;
 }
 
-namespace {
-
-// The camera one frame on, if it moves as it did from `a` to `b`: the eye one step further, the view
-// direction turned on as far again (linearly, renormalised), at b's distance from its target; b's up, field
-// of view and viewport. Nothing when a direction is degenerate.
-std::optional<Camera> extrapolate(const Camera& a, const Camera& b) {
-  float da[3], db[3];
-  for (int i = 0; i < 3; ++i) {
-    da[i] = a.target[i] - a.eye[i];
-    db[i] = b.target[i] - b.eye[i];
-  }
-  const float la = std::sqrt(da[0] * da[0] + da[1] * da[1] + da[2] * da[2]);
-  const float lb = std::sqrt(db[0] * db[0] + db[1] * db[1] + db[2] * db[2]);
-  if (!(la > 0) || !(lb > 0)) return std::nullopt;
-  float d[3];
-  for (int i = 0; i < 3; ++i) d[i] = 2 * db[i] / lb - da[i] / la;
-  const float ld = std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
-  if (!(ld > 1e-6f)) return std::nullopt;
-  Camera next = b;
-  for (int i = 0; i < 3; ++i) {
-    next.eye[i] = 2 * b.eye[i] - a.eye[i];
-    next.target[i] = next.eye[i] + d[i] / ld * lb;
-  }
-  return next;
-}
-
-}  // namespace
-
 // The leaves held that `view` would want split: reached from the roots through nodes qrefine wants split
 // (criteria.h, the same function adapt() evaluates), in walk order. Leaves of the model never qualify
 // (qrefine is strict), so each names a split the server has. A forced chain's leaf is not predicted.

@@ -67,7 +67,10 @@ uint64_t SessionViewer::received_total() const { return client_->session().split
 
 nlohmann::json SessionViewer::totals() const {
   const LinkCounters c = client_->counters();
-  return {{"total_up_payload_bytes", c.payload_up()}, {"total_down_payload_bytes", c.payload_down()}};
+  return {{"total_up_payload_bytes", c.payload_up()},
+          {"total_down_payload_bytes", c.payload_down()},
+          {"aheads_sent", client_->aheads_sent()},
+          {"ahead_vsplits", client_->ahead_splits()}};
 }
 
 }  // namespace pms::client

@@ -208,6 +208,7 @@ FreeRunningSession& StreamingClient::free_running() {
     protocol::DagView request = options_.dag;
     request.view.tolerance = options_.tolerance;
     free_ = std::make_unique<FreeRunningSession>(session_, *mode_, request);
+    free_->set_ahead(options_.ahead_frames);
   }
   return *free_;
 }

@@ -43,6 +43,9 @@ struct ClientOptions {
   // does not make one frame late. At least one frame is applied per displayed frame. Settling applies
   // everything.
   std::chrono::microseconds apply_budget{8000};
+  // Sender-driven, free-running: while idle, AHEAD with the camera this many frames on (0: off; lock-step
+  // never sends it). FreeRunningSession::set_ahead.
+  uint32_t ahead_frames = 0;
   std::function<void(const std::string& reason, uint32_t attempt)> on_reconnect = {};  // told before each try
   // Non-empty: every connection is a WebSocket upgraded at this path of the HTTP server at host:port
   // (ws://HOST:PORT/ws), not a TCP connection to its TCP port.
@@ -96,6 +99,9 @@ class StreamingClient : private ViewRequests {
 
   ClientSession& session() { return session_; }
   LinkCounters counters() const;  // over every connection this client made
+  // Free-running idle time: AHEADs sent, and the splits that came ahead (0 in lock-step).
+  uint32_t aheads_sent() const { return free_ ? free_->aheads_sent() : 0; }
+  uint64_t ahead_splits() const { return free_ ? free_->ahead_splits() : 0; }
 
  private:
   FrameReport frame_once(const Camera& camera);

@@ -8,6 +8,44 @@
 #include "common/portable_math.h"
 
 namespace pms {
+
+namespace {
+
+// One frame on: the eye one step further, the direction turned on as far again (linearly, renormalised).
+std::optional<Camera> step_on(const Camera& a, const Camera& b) {
+  float da[3], db[3];
+  for (int i = 0; i < 3; ++i) {
+    da[i] = a.target[i] - a.eye[i];
+    db[i] = b.target[i] - b.eye[i];
+  }
+  const float la = std::sqrt(da[0] * da[0] + da[1] * da[1] + da[2] * da[2]);
+  const float lb = std::sqrt(db[0] * db[0] + db[1] * db[1] + db[2] * db[2]);
+  if (!(la > 0) || !(lb > 0)) return std::nullopt;
+  float d[3];
+  for (int i = 0; i < 3; ++i) d[i] = 2 * db[i] / lb - da[i] / la;
+  const float ld = std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+  if (!(ld > 1e-6f)) return std::nullopt;
+  Camera next = b;
+  for (int i = 0; i < 3; ++i) {
+    next.eye[i] = 2 * b.eye[i] - a.eye[i];
+    next.target[i] = next.eye[i] + d[i] / ld * lb;
+  }
+  return next;
+}
+
+}  // namespace
+
+std::optional<Camera> extrapolate(const Camera& a, const Camera& b, uint32_t steps) {
+  Camera previous = a, next = b;
+  for (uint32_t i = 0; i < steps; ++i) {
+    const std::optional<Camera> on = step_on(previous, next);
+    if (!on) return std::nullopt;
+    previous = next;
+    next = *on;
+  }
+  return next;
+}
+
 namespace {
 
 void sub(const float a[3], const float b[3], float out[3]) {

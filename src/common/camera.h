@@ -4,6 +4,7 @@
 // Shared with the browser build: plain arithmetic, single-threaded.
 #pragma once
 #include <cstdint>
+#include <optional>
 
 namespace pms {
 
@@ -45,6 +46,12 @@ ViewParams make_view(const Camera& camera, const float box_min[3], const float b
 // What make_view would refuse `camera` for, or null when it makes a view (eye, target or up not finite,
 // and an up within about a microradian of the view direction, count as degenerate too).
 const char* camera_problem(const Camera& camera);
+
+// The camera one frame on, if it moves as it did from `a` to `b` (the eye one step further, the view direction
+// turned on as far again, at b's distance from its target; b's up, field of view and viewport), and `steps`
+// frames on by repeating that step. Nothing when a direction is degenerate. The prefetch of the
+// receiver-driven client and the idle time of the sender-driven one predict the path with it.
+std::optional<Camera> extrapolate(const Camera& a, const Camera& b, uint32_t steps = 1);
 
 Mat4 multiply(const Mat4& a, const Mat4& b);
 // (x, y, z, 1) -> 4 clip coordinates.

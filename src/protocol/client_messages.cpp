@@ -127,6 +127,20 @@ View decode_view(std::span<const uint8_t> payload) {
   return m;
 }
 
+std::vector<uint8_t> encode(const Ahead& m) {
+  Writer w(MessageType::ahead);
+  write_view(w, m.view);
+  return w.finish();
+}
+
+Ahead decode_ahead(std::span<const uint8_t> payload) {
+  Reader r(payload, MessageType::ahead);
+  const Ahead m{read_view(r)};
+  r.expect_end();
+  check_view(r, m.view);
+  return m;
+}
+
 std::vector<uint8_t> encode(const DagView& m) {
   Writer w(MessageType::dag_view);
   write_view(w, m.view);

@@ -43,6 +43,12 @@ struct View {
   uint32_t frame = 0;   // echoed in the VSPLITS that answer it
 };
 struct Close {};
+// AHEAD (version 7, sender-driven sessions): the view the client expects to reach, extrapolated from its
+// last cameras, for the server to stream at low priority while it has nothing else to send (kim-lee-kobbelt
+// §9's idle time). Its fields and checks are VIEW's; its frame is echoed by the ahead VSPLITS it causes.
+struct Ahead {
+  View view;
+};
 // DAG_VIEW (StreamMode::dag): the view as VIEW carries it and MANAGE-TRAVERSAL's parameters (zheng-chan
 // §4): N, the traversal, FREE or BUDGET and the budget. Bounded so one message asks for bounded work.
 constexpr uint32_t kMaxDagOps = 65536;
@@ -108,6 +114,8 @@ Hello decode_hello(std::span<const uint8_t> payload);  // checks the magic; the 
 List decode_list(std::span<const uint8_t> payload);
 Open decode_open(std::span<const uint8_t> payload, uint64_t max_resume_leaves = kDefaultMaxResumeLeaves);
 OpenHeader decode_open_header(std::span<const uint8_t> payload);  // the front is left to a FrontDecoder
+std::vector<uint8_t> encode(const Ahead& m);
+Ahead decode_ahead(std::span<const uint8_t> payload);  // VIEW's checks
 View decode_view(std::span<const uint8_t> payload);               // also rejects cameras make_view() would refuse
 Close decode_close(std::span<const uint8_t> payload);
 DagView decode_dag_view(std::span<const uint8_t> payload);  // the checks of VIEW and the bounds above

@@ -31,6 +31,8 @@ ClientMessage decode_client_message(const Frame& frame, uint64_t max_resume_leav
       return decode_close(frame.payload);
     case MessageType::dag_view:
       return decode_dag_view(frame.payload);
+    case MessageType::ahead:
+      return decode_ahead(frame.payload);
     default:
       unexpected(frame.type, "client");
   }

@@ -11,7 +11,7 @@
 
 namespace pms::protocol {
 
-using ClientMessage = std::variant<Hello, List, Open, View, Close, DagView>;
+using ClientMessage = std::variant<Hello, List, Open, View, Close, DagView, Ahead>;
 using ServerMessage = std::variant<HelloOk, Catalogue, Base, VSplits, ErrorMessage, DagOps, Codec>;
 // Dispatch on the frame's type; a server type (or unknown byte) from a client is bad_message and vice
 // versa. VSPLITS, DAG_OPS and CODEC need the context of the BASE before it: without one (nullptr) it is out_of_order.

@@ -30,6 +30,8 @@ std::string to_string(MessageType type) {
       return "CLOSE";
     case MessageType::dag_view:
       return "DAG_VIEW";
+    case MessageType::ahead:
+      return "AHEAD";
     case MessageType::dag_ops:
       return "DAG_OPS";
     case MessageType::codec:

@@ -13,9 +13,12 @@ namespace pms::protocol {
 
 // Version 6: a sender-driven session gets CODEC after BASE, and its VSPLITS packets are v_s's id and the
 // compact split record (v_t's normal and color included); in the full packets (view-independent, plain,
-// DAG_OPS) a node with mu = delta = 0 sends its refinement info as one flag bit. A server answers any other
-// version with unsupported_version: each one codes the packets differently.
-constexpr uint16_t kProtocolVersion = 6;
+// DAG_OPS) a node with mu = delta = 0 sends its refinement info as one flag bit. Version 7 is version 6 and
+// AHEAD, with the VSPLITS that answer it (flag bit 1): a server speaks both, and a session greeted with 6
+// is one that never asks ahead (AHEAD there is out_of_order). A server answers any other version with
+// unsupported_version: each earlier one codes the packets differently.
+constexpr uint16_t kProtocolVersion = 7;
+constexpr uint16_t kMinProtocolVersion = 6;
 constexpr char kMagic[4] = {'P', 'M', 'S', 'T'};
 constexpr size_t kFrameHeaderBytes = 5;                 // u32 payload length + u8 type
 constexpr uint32_t kDefaultMaxMessage = 16u << 20;      // payload bytes a reader accepts by default
@@ -34,6 +37,7 @@ enum class MessageType : uint8_t {
   view = 0x04,
   close = 0x05,
   dag_view = 0x06,
+  ahead = 0x07,
   hello_ok = 0x81,
   catalogue = 0x82,
   base = 0x83,

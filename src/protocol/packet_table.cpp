@@ -86,6 +86,14 @@ void PacketTable::build(const ModelData& model, const std::function<void(Writer&
 }
 
 std::vector<uint8_t> PacketTable::encode(uint32_t frame, bool final, std::span<const uint32_t> nodes) const {
+  return encode_with(frame, vsplits_flags(final, false), nodes);
+}
+
+std::vector<uint8_t> PacketTable::encode_ahead(uint32_t frame, std::span<const uint32_t> nodes) const {
+  return encode_with(frame, vsplits_flags(false, true), nodes);
+}
+
+std::vector<uint8_t> PacketTable::encode_with(uint32_t frame, uint8_t flags, std::span<const uint32_t> nodes) const {
   Writer w(MessageType::vsplits);
   uint64_t total = 0;
   for (uint32_t node : nodes) {
@@ -94,7 +102,7 @@ std::vector<uint8_t> PacketTable::encode(uint32_t frame, bool final, std::span<c
     total += where_[node] & ((1u << kLengthBits) - 1);
   }
   w.reserve_payload(9 + (total + 7) / 8);
-  write_vsplits_header(w, frame, final, nodes.size());
+  write_vsplits_header(w, frame, flags, nodes.size());
   for (uint32_t node : nodes) w.bits_from(bits_, where_[node] >> kLengthBits, where_[node] & ((1u << kLengthBits) - 1));
   return w.finish();
 }

@@ -32,8 +32,11 @@ class PacketTable {
   // The same frame encode(VSplits{frame, final, splits of `nodes`}, context) gives; pms::Error for a node
   // that is not an internal node of the table's model.
   std::vector<uint8_t> encode(uint32_t frame, bool final, std::span<const uint32_t> nodes) const;
+  // The same as a batch sent ahead (VSplits::ahead).
+  std::vector<uint8_t> encode_ahead(uint32_t frame, std::span<const uint32_t> nodes) const;
 
  private:
+  std::vector<uint8_t> encode_with(uint32_t frame, uint8_t flags, std::span<const uint32_t> nodes) const;
   // Every internal node's packet, as `write` puts it into a batch's bit stream.
   void build(const ModelData& model, const std::function<void(Writer& w, uint32_t node)>& write);
   static constexpr unsigned kLengthBits = 10;  // a packet is < 1024 bits (3 ids of <= 101 bits, info, attributes)

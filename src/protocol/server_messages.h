@@ -70,6 +70,9 @@ struct VSplits {
   uint32_t frame = 0;
   bool final = false;
   std::vector<SplitRecord> splits;  // in the order the client must apply them (parents and partial order first)
+  // Sent ahead (an AHEAD's, docs/protocol.md): held by the client until a view wants it; answers no VIEW,
+  // so never final, and `frame` is the AHEAD's.
+  bool ahead = false;
 };
 
 // DAG_OPS (StreamMode::dag): one DAG_VIEW's operations in the order the client applies them, collapses

@@ -245,10 +245,15 @@ void write_packet(Writer& w, const SplitRecord& s, const StreamContext& c) {
     for (uint8_t v : s.color_t) w.u8(v);
 }
 
-void write_vsplits_header(Writer& w, uint32_t frame, bool final, size_t count) {
+uint8_t vsplits_flags(bool final, bool ahead) {
+  if (final && ahead) fail("VSPLITS", "a batch sent ahead answers no VIEW: it is never final");
+  return uint8_t((final ? kFlagFinal : 0) | (ahead ? kFlagAhead : 0));
+}
+
+void write_vsplits_header(Writer& w, uint32_t frame, uint8_t flags, size_t count) {
   if (count > UINT32_MAX) fail("VSPLITS", "too many packets in one batch");
   w.u32(frame);
-  w.u8(final ? kFlagFinal : 0);
+  w.u8(flags);
   w.u32(uint32_t(count));
 }
 
@@ -276,7 +281,7 @@ std::vector<uint8_t> encode(const VSplits& m, const StreamContext& c) {
   if (m.splits.size() > kMaxPacketsPerMessage) fail("VSPLITS", "too many packets in one batch");
   Writer w(MessageType::vsplits);
   w.reserve_payload(9 + m.splits.size() * min_packet_bits(c) / 8);
-  write_vsplits_header(w, m.frame, m.final, m.splits.size());
+  write_vsplits_header(w, m.frame, vsplits_flags(m.final, m.ahead), m.splits.size());
   if (c.records) {
     BatchContexts batch(c, m.splits.size());
     for (const SplitRecord& s : m.splits) write_record_packet(w, s, c, batch);
@@ -328,7 +333,11 @@ VSplits decode_vsplits(std::span<const uint8_t> payload, const StreamContext& c)
   if (const std::string why = check_context(c); !why.empty()) r.fail(ErrorCode::internal, "stream context", why);
   VSplits m;
   m.frame = r.u32("frame");
-  m.final = read_final_flag(r);
+  const uint8_t flags = r.u8("flags");
+  if (flags & ~(kFlagFinal | kFlagAhead)) r.fail(ErrorCode::bad_message, "flags", "unknown bits set");
+  if ((flags & kFlagFinal) && (flags & kFlagAhead)) r.fail(ErrorCode::bad_message, "flags", "final and ahead");
+  m.final = flags & kFlagFinal;
+  m.ahead = flags & kFlagAhead;
   m.splits = read_packets(r, c);
   r.expect_end();
   return m;

@@ -112,7 +112,9 @@ RefineInfo read_refine(Reader& r, const char* field);
 
 // VSPLITS: frame, flags, count, then the packets (docs/protocol.md).
 constexpr uint8_t kFlagFinal = 1;
-void write_vsplits_header(Writer& w, uint32_t frame, bool final, size_t count);
+constexpr uint8_t kFlagAhead = 2;  // VSPLITS only: a batch sent ahead, never final
+void write_vsplits_header(Writer& w, uint32_t frame, uint8_t flags, size_t count);
+uint8_t vsplits_flags(bool final, bool ahead);  // throws pms::Error for both
 // One vsplit packet; throws pms::Error for values the context cannot carry. Not for a context with split
 // records (those need the batch's contexts: encode(VSplits)).
 void write_packet(Writer& w, const SplitRecord& s, const StreamContext& c);

@@ -33,6 +33,9 @@ struct ServerLimits {
   // a VIEW a frame, keeps its tags; an idle one, most of a real fleet, holds about two bits a node.
   bool compact_fronts = true;
   uint32_t park_after_ms = 1000;
+  // kim-lee-kobbelt §9's idle time: the bytes a sender-driven session may send ahead (AHEAD's answers) over
+  // its life, at most one batch over; 0: AHEAD is taken and never answered.
+  uint32_t ahead_budget_bytes = 1u << 20;
 };
 
 // Every bound the HTTP transport (receiver-driven mode) puts on a peer (docs/operating.md, "HTTP").

@@ -39,7 +39,8 @@ SenderDrivenMode::SenderDrivenMode(const protocol::OpenHeader& open, protocol::F
     : context_(context),
       importance_(view_.importance(context.served.tables->selective().criteria)),
       plain_(open.mode == protocol::StreamMode::sender_plain),
-      plain_wire_(context.served.context) {
+      plain_wire_(context.served.context),
+      ahead_importance_(ahead_.importance(context.served.tables->selective().criteria)) {
   plain_wire_.has_refinement = false;
   const uint32_t roots = context_.served.model().root_count;
   if (!open.resume) {
@@ -57,6 +58,11 @@ SenderDrivenMode::SenderDrivenMode(const protocol::OpenHeader& open, protocol::F
 SenderDrivenMode::~SenderDrivenMode() = default;
 
 void SenderDrivenMode::receive(const protocol::ClientMessage& message) {
+  if (const auto* ahead = std::get_if<protocol::Ahead>(&message)) {
+    if (plain_) throw ProtocolError(ErrorCode::out_of_order, "AHEAD: a plain session makes every split it gets");
+    ahead_.record(ahead->view, context_.served.model());
+    return;
+  }
   const auto* view = std::get_if<protocol::View>(&message);
   if (!view) throw ProtocolError(ErrorCode::out_of_order, "a sender-driven session takes only VIEW after OPEN");
   view_.record(*view, context_.served.model());
@@ -64,10 +70,12 @@ void SenderDrivenMode::receive(const protocol::ClientMessage& message) {
 
 void SenderDrivenMode::pump(uint64_t& work) {
   if (resume_) return pump_resume(work);
-  if (view_.pending) pump_answer(work);
+  if (view_.pending) return pump_answer(work);
+  if (ahead_due()) pump_ahead(work);
 }
 
 void SenderDrivenMode::stop() {
+  stop_ahead();
   streamer_.stop();
   resume_.reset();
   view_.pending = false;
@@ -114,6 +122,10 @@ void SenderDrivenMode::queue_base() {
 // VIEW still in the batch go out with the new one's frame number (the client applies every batch).
 void SenderDrivenMode::pump_answer(uint64_t& work) {
   unpark();
+  if (ahead_streamer_.active()) {  // the VIEW goes first; the ahead answer starts again after it
+    ahead_streamer_.stop();
+    ahead_.restart = true;
+  }
   if (std::exchange(view_.restart, false))
     streamer_.start(context_.served.model(), context_.served.tables->selective().dependencies, tags_, importance_);
   const size_t limit = context_.limits.batch_splits;
@@ -128,8 +140,41 @@ void SenderDrivenMode::pump_answer(uint64_t& work) {
   }
 }
 
+// Idle: no VIEW to answer, nothing waiting to be sent (the pipe's next bytes would be the next VIEW's
+// answer), and budget left.
+bool SenderDrivenMode::ahead_due() const {
+  return ahead_.pending && !resume_ && !view_.pending && context_.outbox.empty() &&
+         ahead_bytes_ < context_.limits.ahead_budget_bytes;
+}
+
+// One small batch at a time, each only once the one before has left the outbox: a VIEW that comes meanwhile
+// waits behind at most one batch.
+void SenderDrivenMode::pump_ahead(uint64_t& work) {
+  unpark();
+  if (std::exchange(ahead_.restart, false))
+    ahead_streamer_.start(context_.served.model(), context_.served.tables->selective().dependencies, tags_,
+                          ahead_importance_);
+  const bool served = ahead_streamer_.step(kAheadBatchSplits, context_.limits.slice_work, ahead_batch_, work);
+  if (!ahead_batch_.empty()) {
+    std::vector<uint8_t> frame = context_.served.tables->packets().encode_ahead(ahead_.frame, ahead_batch_);
+    ahead_bytes_ += frame.size();
+    splits_sent_ += ahead_batch_.size();
+    ahead_batch_.clear();
+    context_.queue(std::move(frame));
+  }
+  if (served || ahead_bytes_ >= context_.limits.ahead_budget_bytes) {
+    stop_ahead();
+    park_if_due();
+  }
+}
+
+void SenderDrivenMode::stop_ahead() {
+  ahead_streamer_.stop();
+  ahead_.pending = false;
+}
+
 bool SenderDrivenMode::can_park() const {
-  return context_.limits.compact_fronts && parked_.empty() && !resume_ && !view_.pending;
+  return context_.limits.compact_fronts && parked_.empty() && !resume_ && !view_.pending && !ahead_streamer_.active();
 }
 
 void SenderDrivenMode::park_front() {
@@ -168,7 +213,8 @@ void SenderDrivenMode::emit_batch(size_t count, bool final) {
 }
 
 size_t SenderDrivenMode::state_bytes() const {
-  size_t bytes = sizeof(*this) + front_bytes() + streamer_.memory_bytes() +
+  size_t bytes = sizeof(*this) + front_bytes() + streamer_.memory_bytes() + ahead_streamer_.memory_bytes() +
+                 ahead_batch_.capacity() * sizeof(uint32_t) +
                  batch_.capacity() * sizeof(uint32_t) + batch_cuts_.capacity() * sizeof(ActualCuts);
   if (resume_)
     bytes += sizeof(Resume) + resume_->payload.capacity() + resume_->tags.memory_bytes() +

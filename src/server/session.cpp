@@ -103,18 +103,23 @@ void Session::handle(protocol::Frame& frame) {
   } else {
     if (waiting_) throw ProtocolError(ErrorCode::out_of_order, protocol::to_string(frame.type) + " before BASE");
     if (!mode_) throw ProtocolError(ErrorCode::out_of_order, protocol::to_string(frame.type) + " before OPEN");
+    if (std::holds_alternative<protocol::Ahead>(message) && version_ < 7)
+      throw ProtocolError(ErrorCode::out_of_order, "AHEAD: not in a session greeted with version 6");
     mode_->receive(message);
   }
 }
 
 void Session::on_hello(const protocol::Hello& m) {
   if (greeted_) throw ProtocolError(ErrorCode::out_of_order, "HELLO: sent twice");
-  if (m.version != protocol::kProtocolVersion)
-    throw ProtocolError(ErrorCode::unsupported_version, "HELLO: protocol version " + std::to_string(m.version) +
-                                                            " (this server speaks " +
-                                                            std::to_string(protocol::kProtocolVersion) + ")");
+  if (m.version < protocol::kMinProtocolVersion || m.version > protocol::kProtocolVersion)
+    throw ProtocolError(ErrorCode::unsupported_version,
+                        "HELLO: protocol version " + std::to_string(m.version) + " (this server speaks " +
+                            std::to_string(protocol::kMinProtocolVersion) + " to " +
+                            std::to_string(protocol::kProtocolVersion) + ")");
   greeted_ = true;
+  version_ = m.version;
   protocol::HelloOk ok;
+  ok.version = m.version;
   ok.server_name = "pmstream";
   ok.max_client_message = limits_.max_client_message;
   ok.max_server_message = limits_.max_server_message;

@@ -97,6 +97,7 @@ class Session {
   std::shared_ptr<const ServedModel> model_hold_;
   ServerLimits limits_;
   bool greeted_ = false, closing_ = false;
+  uint16_t version_ = 0;  // HELLO's: the version this session speaks
   std::optional<protocol::ErrorCode> error_;
   std::string error_text_;
   const ServedModel* model_ = nullptr;

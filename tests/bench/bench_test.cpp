@@ -428,7 +428,7 @@ TEST(BenchCommand, RejectsUnknownGroupsAndMissingSharedDir) {
   const ChildResult unknown = run_child({PMSTREAM_BENCH_BINARY, "--only", "build,nope", "--out", out.string()});
   EXPECT_EQ(unknown.exit_code, 1);
   EXPECT_NE(unknown.err.find("pmstream-bench: error: --only: unknown experiment group 'nope' (known: build, refine, "
-                             "sender, receiver, multilevel, soak, fleet, tier, dag, attacks, viewer, web)"),
+                             "sender, receiver, multilevel, soak, fleet, tier, dag, attacks, viewer, idle, web)"),
             std::string::npos)
       << unknown.err;
   EXPECT_FALSE(std::filesystem::exists(out));  // refused before creating anything

@@ -55,6 +55,7 @@ std::vector<Sample> samples() {
       {MessageType::view, encode(view), [](auto p) { decode_view(p); }},
       {MessageType::close, encode(Close{}), [](auto p) { decode_close(p); }},
       {MessageType::dag_view, encode(DagView{}), [](auto p) { decode_dag_view(p); }},
+      {MessageType::ahead, encode(Ahead{view}), [](auto p) { decode_ahead(p); }},
       {MessageType::hello_ok, encode(HelloOk{kProtocolVersion, "srv", 1000, 2000}), [](auto p) { decode_hello_ok(p); }},
       {MessageType::catalogue, encode(Catalogue{{model_info(sphere.model(), "sphere"), ModelInfo{}}}),
        [](auto p) { decode_catalogue(p); }},

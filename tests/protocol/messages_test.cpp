@@ -141,6 +141,30 @@ TEST(Messages, ViewRoundTrip) {
   }
 }
 
+// AHEAD is VIEW's payload under its own type; a batch sent ahead is never final, and a decoder refuses both bits.
+TEST(Messages, AheadRoundTripAndAheadBatchesAreNeverFinal) {
+  View view;
+  view.camera.eye[2] = 3;
+  view.frame = 12;
+  const Ahead back = round_trip(Ahead{view}, MessageType::ahead, [](auto p) { return decode_ahead(p); });
+  EXPECT_EQ(std::memcmp(&back.view.camera, &view.camera, sizeof view.camera), 0);
+  EXPECT_EQ(back.view.frame, 12u);
+  Frame frame{MessageType::ahead, payload_of(encode(Ahead{view}), MessageType::ahead)};
+  EXPECT_TRUE(std::holds_alternative<Ahead>(decode_client_message(frame)));
+
+  Rng rng(3);
+  const StreamContext c = test::random_context(rng);
+  VSplits batch{5, true, {test::random_split(rng, c)}, true};
+  EXPECT_THROW(encode(batch, c), Error);
+  batch.final = false;
+  std::vector<uint8_t> payload = payload_of(encode(batch, c), MessageType::vsplits);
+  EXPECT_TRUE(decode_vsplits(payload, c).ahead);
+  payload[4] = 3;  // final and ahead
+  test::expect_rejected([&] { decode_vsplits(payload, c); }, ErrorCode::bad_message, "final and ahead");
+  payload[4] = 4;
+  test::expect_rejected([&] { decode_vsplits(payload, c); }, ErrorCode::bad_message, "unknown bits");
+}
+
 TEST(Messages, HelloOkRoundTrip) {
   for (uint64_t seed : kSeeds) {
     Rng rng(seed);
@@ -261,12 +285,14 @@ TEST(Messages, VSplitsRoundTrip) {
       VSplits m;
       m.frame = uint32_t(rng());
       m.final = rng() & 1;
+      m.ahead = !m.final && round % 4 == 1;
       m.splits.resize(rng() % 200);
       for (SplitRecord& s : m.splits) s = test::random_split(rng, c);
       const std::vector<uint8_t> frame = encode(m, c);
       const VSplits back = decode_vsplits(payload_of(frame, MessageType::vsplits), c);
       EXPECT_EQ(back.frame, m.frame);
       EXPECT_EQ(back.final, m.final);
+      EXPECT_EQ(back.ahead, m.ahead);
       ASSERT_EQ(back.splits.size(), m.splits.size());
       uint64_t bits = 0;
       for (size_t i = 0; i < m.splits.size(); ++i) {
