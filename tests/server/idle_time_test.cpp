@@ -17,6 +17,7 @@
 #include "protocol/server_messages.h"
 #include "server/limits.h"
 #include "server/session.h"
+#include "frame_of.h"
 #include "streaming_fixture.h"
 
 namespace pms {
@@ -31,13 +32,7 @@ constexpr float kTolerance = 1.0f;
 
 const test::Fixture& terrain() { return test::terrain_fixture(30000, 7); }
 
-protocol::Frame frame_of(const std::vector<uint8_t>& bytes) {
-  protocol::FrameReader reader;
-  reader.feed(bytes.data(), bytes.size());
-  protocol::Frame frame;
-  EXPECT_TRUE(reader.next(frame));
-  return frame;
-}
+using test::frame_of;
 
 protocol::View view_at(const Camera& camera, uint32_t frame) { return protocol::View{camera, kTolerance, frame}; }
 

@@ -22,6 +22,7 @@
 #include "spm/hierarchy.h"
 #include "spm/pms_file.h"
 #include "spm/vertex_id.h"
+#include "frame_of.h"
 #include "test_support.h"
 
 namespace pms {
@@ -45,13 +46,7 @@ const Model& terrain() {
   return m;
 }
 
-protocol::Frame frame_of(const std::vector<uint8_t>& bytes) {
-  protocol::FrameReader reader;
-  reader.feed(bytes.data(), bytes.size());
-  protocol::Frame frame;
-  EXPECT_TRUE(reader.next(frame));
-  return frame;
-}
+using test::frame_of;
 
 Camera close_camera(const Hierarchy& h) {
   Camera c;
