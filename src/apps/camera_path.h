@@ -1,5 +1,6 @@
-// Scripted camera paths over a model (`pmstream path`): orbit, scan (zheng-chan 2006 §6: close to the
-// surface, bottom to top) and zoom (far to a close-up). Deterministic: the same model and options give the
+// Scripted camera paths over a model (`pmstream path`): orbit, scan (zheng-chan 2006 §6's first route: close
+// to the surface, bottom to top), zoom (far to a close-up) and rotate (§6's second route: in close, circling
+// faster and faster). Deterministic: the same model and options give the
 // same cameras, bit for bit.
 #pragma once
 #include <cstdint>
@@ -11,9 +12,9 @@
 
 namespace pms::app {
 
-enum class PathKind { orbit, scan, zoom };
+enum class PathKind { orbit, scan, zoom, rotate };
 
-// "orbit" | "scan" | "zoom"; pms::Error otherwise.
+// "orbit" | "scan" | "zoom" | "rotate"; pms::Error otherwise.
 PathKind parse_path_kind(const std::string& name);
 
 struct PathOptions {
@@ -29,7 +30,9 @@ struct PathOptions {
 // horizontally at the vertical axis through the centre, rising from the bottom of the box to the top
 // while swinging 60° around it. Zoom: toward the model's most extreme surface vertex in the viewing
 // direction, from 6 framing distances (the model small on screen) to 2% of the box diagonal, geometric in
-// distance so the speed feels constant. pms::Error for no frames or bad camera settings.
+// distance so the speed feels constant. Rotate (zheng-chan 2006 §6's second route, 194 frames there): in from
+// the orbit's distance to the scan's over the first third while circling the vertical axis 10° above the
+// horizontal plane, faster and faster (the angle grows with the square of time): two turns. pms::Error for no frames or bad camera settings.
 std::vector<Camera> make_camera_path(PathKind kind, const ModelData& model, const PathOptions& options);
 
 }  // namespace pms::app

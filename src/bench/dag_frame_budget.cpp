@@ -1,0 +1,202 @@
+#include "bench/dag_frame_budget.h"
+
+#include <algorithm>
+#include <cstdio>
+
+#include "apps/percentile.h"
+#include "apps/resource_usage.h"
+#include "bench/bench_refine.h"
+#include "bench/gnuplot.h"
+#include "bench/mesh_faces.h"
+#include "bench/report.h"
+#include "client/streaming_client.h"
+
+namespace pms::bench {
+using app::percentile;
+using app::Stopwatch;
+namespace {
+
+using nlohmann::json;
+
+constexpr uint32_t kFixedN[] = {30, 100, 300, 1000, 3000};
+// The frame time the client's N aims at: a share of a 60 Hz frame left for the mesh's updates.
+constexpr double kFrameBudgetMs = 4;
+constexpr uint64_t kBudget = 60000;
+constexpr float kToleranceOfHeight = 0.001f;
+constexpr uint32_t kSampleEvery = 5;
+// Frame times "within budget": this percentile of a route's frames (the first, converged view left out).
+constexpr double kWithinPercentile = 0.95;
+
+struct BudgetRun {
+  std::string name;
+  bool automatic = false;
+  std::vector<double> frame_ms, n, down_bytes;  // frames 1..
+  std::vector<double> accuracy;                 // every kSampleEvery frames from frame kSampleEvery
+};
+
+client::ClientOptions options_of(float tolerance, uint32_t n, double frame_budget_ms) {
+  client::ClientOptions options{tolerance};
+  options.mode = protocol::StreamMode::dag;
+  options.dag.traversal = DagTraversal::priority;
+  options.dag.management = DagMode::budget;
+  options.dag.budget = kBudget;
+  options.dag.max_ops = n;
+  options.dag_management.frame_budget_ms = frame_budget_ms;
+  return options;
+}
+
+// The converged mesh of every kSampleEvery-th view: the priority traversal at the largest N, asked again at
+// each view until an answer changes nothing.
+std::vector<std::vector<IdFace>> converged_samples(const BenchModel& m, const std::vector<Camera>& cameras,
+                                                   float tolerance) {
+  InProcessSession local = in_process_session(m);
+  client::StreamingClient client(std::move(local.transport), options_of(tolerance, protocol::kMaxDagOps, 0));
+  client.open(m.name);
+  std::vector<std::vector<IdFace>> samples;
+  for (size_t i = 0; i < cameras.size(); i += kSampleEvery) {
+    client.settle(cameras[i]);
+    samples.push_back(faces_by_id(client.session().mesh()));
+  }
+  return samples;
+}
+
+BudgetRun run_n(const BenchModel& m, const std::vector<Camera>& cameras, float tolerance, uint32_t n,
+                double frame_budget_ms, const std::vector<std::vector<IdFace>>& reference) {
+  InProcessSession local = in_process_session(m);
+  client::StreamingClient client(std::move(local.transport), options_of(tolerance, n, frame_budget_ms));
+  client.open(m.name);
+  BudgetRun run;
+  run.automatic = frame_budget_ms > 0;
+  run.name = run.automatic ? "automatic" : std::to_string(n);
+  for (size_t i = 0; i < cameras.size(); ++i) {
+    Stopwatch clock;
+    const client::FrameReport report = client.frame(cameras[i]);
+    const double ms = 1000 * clock.seconds();
+    if (i > 0) {
+      run.frame_ms.push_back(ms);
+      run.n.push_back(client.last_dag_request().max_ops);
+      run.down_bytes.push_back(double(report.down_bytes));
+    }
+    if (i % kSampleEvery == 0 && i > 0)
+      run.accuracy.push_back(shared_percent(faces_by_id(client.session().mesh()), reference[i / kSampleEvery]));
+  }
+  return run;
+}
+
+double mean(const std::vector<double>& v) {
+  double sum = 0;
+  for (double x : v) sum += x;
+  return v.empty() ? 0 : sum / double(v.size());
+}
+
+bool within_budget(const BudgetRun& run) { return percentile(run.frame_ms, kWithinPercentile) <= kFrameBudgetMs; }
+
+std::vector<double> frames_from_one(size_t count) {
+  std::vector<double> frames;
+  for (size_t k = 1; k <= count; ++k) frames.push_back(double(k));
+  return frames;
+}
+
+std::string route_plot(const BenchContext& context, const DagRoute& route, const std::vector<BudgetRun>& runs,
+                       const BudgetRun* best) {
+  Plot plot{"Frame time against the budget, " + route.name, "frame", "ms", "N", false, false, {}};
+  const BudgetRun& automatic = runs.back();
+  const BudgetRun& largest = runs[runs.size() - 2];
+  plot.series.push_back({"automatic N: ms", frames_from_one(automatic.frame_ms.size()), automatic.frame_ms});
+  if (best && best != &largest)
+    plot.series.push_back({"N = " + best->name + ": ms", frames_from_one(best->frame_ms.size()), best->frame_ms});
+  plot.series.push_back({"N = " + largest.name + ": ms", frames_from_one(largest.frame_ms.size()), largest.frame_ms});
+  plot.series.push_back({"budget", {1, double(automatic.frame_ms.size())}, {kFrameBudgetMs, kFrameBudgetMs}});
+  plot.series.push_back({"automatic N", frames_from_one(automatic.n.size()), automatic.n, true});
+  std::string png = "dag-frame-budget-" + route.name + ".png";
+  std::replace(png.begin(), png.end(), ' ', '-');
+  return plot_markdown(context.options.out_dir, plot, png, "frame time and automatic N, " + route.name);
+}
+
+json run_json(const BudgetRun& run) {
+  return {{"frame_ms", run.frame_ms},
+          {"n", run.n},
+          {"down_bytes", run.down_bytes},
+          {"accuracy_every_5_frames", run.accuracy},
+          {"accuracy", mean(run.accuracy)},
+          {"p95_ms", percentile(run.frame_ms, kWithinPercentile)}};
+}
+
+std::string route_section(const BenchContext& context, const BenchModel& m, const DagRoute& route, json& out) {
+  const float tolerance = kToleranceOfHeight * float(route.cameras[0].height);
+  std::fprintf(stderr, "bench: dag frame budget, %s: converged views ...\n", route.name.c_str());
+  const std::vector<std::vector<IdFace>> reference = converged_samples(m, route.cameras, tolerance);
+  std::vector<BudgetRun> runs;
+  for (uint32_t n : kFixedN) {
+    std::fprintf(stderr, "bench: dag frame budget, %s: N = %u ...\n", route.name.c_str(), n);
+    runs.push_back(run_n(m, route.cameras, tolerance, n, 0, reference));
+  }
+  std::fprintf(stderr, "bench: dag frame budget, %s: automatic N ...\n", route.name.c_str());
+  runs.push_back(run_n(m, route.cameras, tolerance, protocol::DagView{}.max_ops, kFrameBudgetMs, reference));
+
+  const BudgetRun* best = nullptr;  // the most accurate fixed N within budget
+  for (size_t k = 0; k + 1 < runs.size(); ++k)
+    if (within_budget(runs[k]) && (!best || mean(runs[k].accuracy) > mean(best->accuracy))) best = &runs[k];
+  Table table({{"N", false},
+               {"median ms", true},
+               {"p95 ms", true},
+               {"max ms", true},
+               {"within budget", false},
+               {"mean N", true},
+               {"accuracy %", true},
+               {"bytes down / frame", true}});
+  json route_json = {{"label", route.label}, {"frames", route.cameras.size()}};
+  for (const BudgetRun& run : runs) {
+    table.add_row({run.name, fixed(percentile(run.frame_ms, 0.5), 2), fixed(percentile(run.frame_ms, 0.95), 2),
+                   fixed(percentile(run.frame_ms, 1.0), 2), within_budget(run) ? "yes" : "no",
+                   thousands(uint64_t(mean(run.n))), fixed(mean(run.accuracy), 1),
+                   thousands(uint64_t(mean(run.down_bytes)))});
+    route_json[run.name] = run_json(run);
+  }
+  const BudgetRun& automatic = runs.back();
+  std::string verdict;
+  if (best) {
+    const double gap = mean(best->accuracy) - mean(automatic.accuracy);
+    const bool met = gap <= 2 && within_budget(automatic);
+    verdict = "Best fixed N within budget: " + best->name + " (" + fixed(mean(best->accuracy), 1) +
+              " %); automatic N: " + fixed(mean(automatic.accuracy), 1) + " % (" + fixed(gap, 1) +
+              " points below), p95 " + fixed(percentile(automatic.frame_ms, kWithinPercentile), 2) + " ms: target " +
+              (met ? "met" : "NOT met") + ".";
+    route_json["best_fixed_n"] = best->name;
+    route_json["target_met"] = met;
+  } else {
+    verdict = "No fixed N kept its frames within budget on this machine; automatic N: p95 " +
+              fixed(percentile(automatic.frame_ms, kWithinPercentile), 2) + " ms.";
+    route_json["target_met"] = false;
+  }
+  out[route.name] = route_json;
+  print_now("\nE9 automatic N, " + route.name + " (" + route.label + "; budget " + fixed(kFrameBudgetMs, 1) +
+            " ms; target: within 2 points of the best fixed N within budget)\n" + table.markdown() + verdict + "\n");
+  return "#### " + route.name + " (" + route.label + ")\n\n" + table.markdown() + "\n" + verdict + "\n\n" +
+         route_plot(context, route, runs, best);
+}
+
+}  // namespace
+
+std::string dag_frame_budget_section(const BenchContext& context, const BenchModel& m,
+                                     const std::vector<DagRoute>& routes, json& out) {
+  json section = {{"frame_budget_ms", kFrameBudgetMs}, {"fixed_n", kFixedN}, {"budget", kBudget}};
+  std::string md = "### N from the frame time left (beyond the paper, its §7)\n\n";
+  for (const DagRoute& route : routes) md += route_section(context, m, route, section);
+  md += "The priority traversal in BUDGET mode (" + thousands(kBudget) +
+        " triangles), τ = 0.1 % of the height, with N fixed and with the client's automatic N "
+        "(`--frame-budget-ms " +
+        fixed(kFrameBudgetMs, 0) +
+        "`, client/dag_management.h: N scales by the time left over the time taken, aiming at 80 % of the budget; "
+        "the client chooses it because only it sees the server's traversal, the link and its own applying "
+        "together, and N is already DAG_VIEW's). ms: a frame as the client sees it, DAG_VIEW sent to its answer "
+        "applied, the session in this process (frames 1 on); within budget: p95 ≤ the budget. Accuracy: the share "
+        "of the view's converged mesh (the priority traversal at N = 65,536 asked until nothing changes) the "
+        "client's mesh has, every 5 frames from frame 5, averaged. Times are from a shared, loaded machine: the "
+        "figure needs a rerun on a quiet one, and on a faster or slower machine the best fixed N moves while the "
+        "automatic N follows.\n\n";
+  out["frame_budget"] = section;
+  return md;
+}
+
+}  // namespace pms::bench
