@@ -41,15 +41,11 @@ std::vector<Camera> path_of(const BenchModel& m, PathKind kind, uint32_t frames)
   return make_camera_path(kind, m.served->model(), options);
 }
 
-namespace {
-
 double thread_seconds() {
   timespec now{};
   clock_gettime(CLOCK_THREAD_CPUTIME_ID, &now);
   return double(now.tv_sec) + 1e-9 * double(now.tv_nsec);
 }
-
-}  // namespace
 
 InProcessSession in_process_session(const BenchModel& m, const server::ServerLimits& limits) {
   auto session = std::make_shared<server::Session>(m.catalogue, limits);

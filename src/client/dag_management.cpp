@@ -55,13 +55,18 @@ protocol::DagView DagManagement::next(const ClientSession& session, uint32_t in_
 
 // Proportional: the time of an answer grows with its operations (plus costs N does not change, such as the
 // priority traversal's evaluation of the whole front), so N scales by the time left over the time taken.
-// An answer N did not cut short says nothing about a larger N, and keeps it unless it was over budget.
+// An answer N did not cut short says nothing about a larger N, and keeps it unless it was over budget. Only
+// the second of two answers over budget in a row shrinks N, by the lesser overrun: one slow answer is as
+// often the machine (a time slice lost to another process) as the operations.
 void DagManagement::answered(uint32_t asked, double ms, uint64_t collapses, uint64_t splits) {
   if (!(options_.frame_budget_ms > 0) || !(ms > 0)) return;
   const double target = kHeadroom * options_.frame_budget_ms;
   const uint64_t done = std::max(collapses, splits);
+  const double over_before = over_ms_;
+  over_ms_ = ms > target ? ms : 0;
   if (ms > target) {
-    const double scaled = double(std::min<uint64_t>(done, asked)) * target / ms;
+    if (over_before == 0) return;
+    const double scaled = double(std::min<uint64_t>(done, asked)) * target / std::min(ms, over_before);
     max_ops_ = std::min(max_ops_, clamp_ops(std::max(scaled, kMaxShrink * max_ops_)));
   } else if (done >= asked) {
     max_ops_ = std::max(max_ops_, clamp_ops(max_ops_ * std::min(kMaxGrowth, target / ms)));

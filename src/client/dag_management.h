@@ -32,7 +32,9 @@ class DagManagement {
   // `in_flight` earlier requests not answered yet (each may still add up to 2 N triangles).
   protocol::DagView next(const ClientSession& session, uint32_t in_flight = 0) const;
   // An answer to a request with N = `asked` came in full: `ms` from sending it to its last operation
-  // applied, with `collapses` and `splits` operations. Only with a frame budget does this change N.
+  // applied, with `collapses` and `splits` operations. Only with a frame budget does this change N: it
+  // shrinks after two answers in a row over 80 % of the budget (at most halving), grows after one cut short
+  // by N under it (at most doubling).
   void answered(uint32_t asked, double ms, uint64_t collapses, uint64_t splits);
 
   uint32_t max_ops() const { return max_ops_; }
@@ -45,6 +47,7 @@ class DagManagement {
   protocol::DagView configured_;
   DagManagementOptions options_;
   uint32_t max_ops_;
+  double over_ms_ = 0;  // the last answer's time when it ran over the budget's target, else 0
 };
 
 // Whether the server answers `session`'s next DAG_VIEW with the converged cut of its view rather than N
