@@ -10,7 +10,7 @@ namespace pms::client {
 namespace {
 
 // N aims a frame at this share of the budget, so that one frame's noise stays within it.
-constexpr double kHeadroom = 0.8;
+constexpr double kHeadroom = 0.85;
 // A frame over budget halves N at most, so one slow frame (a busy machine) does not throw the rest away.
 constexpr double kMaxShrink = 0.5;
 // A frame cut short by N under budget at most doubles it.

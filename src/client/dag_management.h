@@ -33,7 +33,7 @@ class DagManagement {
   protocol::DagView next(const ClientSession& session, uint32_t in_flight = 0) const;
   // An answer to a request with N = `asked` came in full: `ms` from sending it to its last operation
   // applied, with `collapses` and `splits` operations. Only with a frame budget does this change N: it
-  // shrinks after two answers in a row over 80 % of the budget (at most halving), grows after one cut short
+  // shrinks after two answers in a row over 85 % of the budget (at most halving), grows after one cut short
   // by N under it (at most doubling).
   void answered(uint32_t asked, double ms, uint64_t collapses, uint64_t splits);
 

@@ -39,37 +39,38 @@ TEST(DagManagement, WithoutAFrameBudgetNIsTheRequests) {
   EXPECT_EQ(m.max_ops(), 300u);
 }
 
+// A 20 ms budget: N aims at 85 % of it, 17 ms.
 TEST(DagManagement, OverBudgetTwiceShrinksByTheTimeLeftAtMostHalving) {
-  DagManagement m(configured(1000, 0), {false, 10});
-  m.answered(1000, 12, 1000, 1000);  // aimed at 8 ms, took 12: one slow answer changes nothing
+  DagManagement m(configured(1000, 0), {false, 20});
+  m.answered(1000, 20, 1000, 1000);  // took 20: one slow answer changes nothing
   EXPECT_EQ(m.max_ops(), 1000u);
-  m.answered(1000, 10, 1000, 1000);  // over again: by the lesser overrun, 1000 * 8 / 10
-  EXPECT_EQ(m.max_ops(), 800u);
-  m.answered(800, 100, 800, 800);  // ten times over, after 10 ms: 800 * 8 / 10
-  EXPECT_EQ(m.max_ops(), 640u);
-  m.answered(640, 100, 640, 640);  // ten times over twice: halved, not a tenth
-  EXPECT_EQ(m.max_ops(), 320u);
-  m.answered(320, 12, 100, 100);  // over with only 100 operations: N was not what cost the time
-  EXPECT_EQ(m.max_ops(), 160u);   // halved at most, though 100 * 8 / 12 is less
+  m.answered(1000, 20, 1000, 1000);  // over again: 1000 * 17 / 20
+  EXPECT_EQ(m.max_ops(), 850u);
+  m.answered(850, 200, 850, 850);  // ten times over after 20 ms: by the lesser overrun, 850 * 17 / 20
+  EXPECT_EQ(m.max_ops(), 722u);
+  m.answered(722, 200, 722, 722);  // ten times over twice: halved, not a tenth
+  EXPECT_EQ(m.max_ops(), 361u);
+  m.answered(361, 24, 100, 100);  // over with only 100 operations: N was not what cost the time
+  EXPECT_EQ(m.max_ops(), 180u);   // halved at most, though 100 * 17 / 24 is less
 }
 
 TEST(DagManagement, OneSlowAnswerBetweenFastOnesKeepsN) {
-  DagManagement m(configured(500, 0), {false, 10});
+  DagManagement m(configured(500, 0), {false, 20});
   for (int i = 0; i < 5; ++i) {
-    m.answered(500, 40, 500, 500);  // a time slice lost
-    m.answered(500, 7.9, 100, 100);
+    m.answered(500, 80, 500, 500);  // a time slice lost
+    m.answered(500, 16.9, 100, 100);
   }
   EXPECT_EQ(m.max_ops(), 500u);
 }
 
 TEST(DagManagement, CutShortUnderBudgetGrowsAtMostDoubling) {
-  DagManagement m(configured(100, 0), {false, 10});
-  m.answered(100, 5, 100, 40);  // 100 collapses: cut short by N at 5 of 8 ms
-  EXPECT_EQ(m.max_ops(), 160u);
-  m.answered(160, 1, 20, 160);  // far under: doubled, not eightfold
-  EXPECT_EQ(m.max_ops(), 320u);
-  m.answered(320, 1, 20, 30);  // not cut short: says nothing about a larger N
-  EXPECT_EQ(m.max_ops(), 320u);
+  DagManagement m(configured(100, 0), {false, 20});
+  m.answered(100, 10, 100, 40);  // 100 collapses: cut short by N at 10 of 17 ms
+  EXPECT_EQ(m.max_ops(), 170u);
+  m.answered(170, 1, 20, 170);  // far under: doubled, not seventeenfold
+  EXPECT_EQ(m.max_ops(), 340u);
+  m.answered(340, 1, 20, 30);  // not cut short: says nothing about a larger N
+  EXPECT_EQ(m.max_ops(), 340u);
 }
 
 TEST(DagManagement, NStaysWithinItsBounds) {
