@@ -6,7 +6,8 @@ set(PMSTREAM_BROWSER_CORE
   # the client: the session modes' protocol logic and free-running driver, the HTTP clients over HttpTransport
   src/client/client_session.cpp src/client/client_modes.cpp src/client/free_running_session.cpp
   src/client/sender_driven_client.cpp src/client/sender_plain_client.cpp src/client/view_independent_client.cpp
-  src/client/dag_client.cpp src/client/receiver_client.cpp src/client/multilevel_client.cpp
+  src/client/dag_client.cpp src/client/dag_management.cpp src/client/receiver_client.cpp
+  src/client/multilevel_client.cpp
   src/client/http_transport.cpp src/client/mesh_buffers.cpp src/client/viewer.cpp src/client/model_version.cpp
   # the browser's viewers: the session modes over messages, the HTTP ones over a transport fed from outside,
   # the receiver's importance from a face-id frame

@@ -94,6 +94,11 @@ std::vector<Camera> look(const PathOptions& options, const Frame3& f) {
   return path;
 }
 
+// The support distance of the box from its centre along the horizontal direction `dir`.
+float horizontal_support(const Frame3& f, const float dir[3]) {
+  return 0.5f * (std::abs(dir[f.e1]) * f.extent[f.e1] + std::abs(dir[f.e2]) * f.extent[f.e2]);
+}
+
 std::vector<Camera> scan(const ModelData& model, const PathOptions& options, const Frame3& f) {
   const float height = f.extent[f.up];
   const float reach = height / (6 * std::tan(0.5f * options.fovy_deg * kDegree));  // a third of the height in view
@@ -104,11 +109,31 @@ std::vector<Camera> scan(const ModelData& model, const PathOptions& options, con
     float dir[3], eye[3], target[3];
     direction(f, theta, 0, dir);
     // Just outside the box along `dir`: its support distance from the centre, plus the reach.
-    const float support = 0.5f * (std::abs(dir[f.e1]) * f.extent[f.e1] + std::abs(dir[f.e2]) * f.extent[f.e2]);
+    const float support = horizontal_support(f, dir);
     for (int k = 0; k < 3; ++k) target[k] = f.centre[k];
     target[f.up] = model.bbox_min[f.up] + t * height;
     for (int k = 0; k < 3; ++k) eye[k] = target[k] + (support + reach) * dir[k];
     path.push_back(camera_at(options, f, eye, target));
+  }
+  return path;
+}
+
+// zheng-chan 2006 §6's second route: in from the orbit's distance to the scan's (geometric, over the first
+// third) while turning about the vertical axis through the centre, the angular speed growing linearly from
+// zero, so the last frames turn fastest: two turns in all.
+std::vector<Camera> rotate(const ModelData&, const PathOptions& options, const Frame3& f) {
+  const float height = f.extent[f.up];
+  const float reach = height / (6 * std::tan(0.5f * options.fovy_deg * kDegree));
+  const float far = framing_distance(options, f);
+  std::vector<Camera> path;
+  for (uint32_t i = 0; i < options.frames; ++i) {
+    const float t = parameter(i, options.frames);
+    float dir[3], eye[3];
+    direction(f, 4 * kPi * t * t, 10 * kDegree, dir);
+    const float near = std::min(far, horizontal_support(f, dir) + reach);
+    const float distance = far * std::pow(near / far, std::min(1.0f, 3 * t));
+    for (int k = 0; k < 3; ++k) eye[k] = f.centre[k] + distance * dir[k];
+    path.push_back(camera_at(options, f, eye, f.centre));
   }
   return path;
 }
@@ -151,7 +176,8 @@ PathKind parse_path_kind(const std::string& name) {
   if (name == "scan") return PathKind::scan;
   if (name == "zoom") return PathKind::zoom;
   if (name == "look") return PathKind::look;
-  fail("path", "unknown kind \"" + name + "\" (expected orbit, scan, zoom or look)");
+  if (name == "rotate") return PathKind::rotate;
+  fail("path", "unknown kind \"" + name + "\" (expected orbit, scan, zoom, look or rotate)");
 }
 
 std::vector<Camera> make_camera_path(PathKind kind, const ModelData& model, const PathOptions& options) {
@@ -170,6 +196,8 @@ std::vector<Camera> make_camera_path(PathKind kind, const ModelData& model, cons
       return zoom(model, options, f);
     case PathKind::look:
       return look(options, f);
+    case PathKind::rotate:
+      return rotate(model, options, f);
   }
   fail("path", "unknown kind");
 }

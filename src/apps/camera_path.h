@@ -1,6 +1,7 @@
-// Scripted camera paths over a model (`pmstream path`): orbit, scan (zheng-chan 2006 §6: close to the
-// surface, bottom to top), zoom (far to a close-up) and look (kim-lee-kobbelt 2005 Fig. 5: around the model
-// from top to bottom). Deterministic: the same model and options give the
+// Scripted camera paths over a model (`pmstream path`): orbit, scan (zheng-chan 2006 §6's first route: close
+// to the surface, bottom to top), zoom (far to a close-up), look (kim-lee-kobbelt 2005 Fig. 5: around the model
+// from top to bottom) and rotate (zheng-chan §6's second route: in close, circling faster and faster).
+// Deterministic: the same model and options give the
 // same cameras, bit for bit.
 #pragma once
 #include <cstdint>
@@ -12,9 +13,9 @@
 
 namespace pms::app {
 
-enum class PathKind { orbit, scan, zoom, look };
+enum class PathKind { orbit, scan, zoom, look, rotate };
 
-// "orbit" | "scan" | "zoom" | "look"; pms::Error otherwise.
+// "orbit" | "scan" | "zoom" | "look" | "rotate"; pms::Error otherwise.
 PathKind parse_path_kind(const std::string& name);
 
 struct PathOptions {
@@ -32,7 +33,10 @@ struct PathOptions {
 // direction, from 6 framing distances (the model small on screen) to 2% of the box diagonal, geometric in
 // distance so the speed feels constant. Look: the orbit's circle at its distance, its elevation falling from
 // 60° above the horizontal plane to 60° below over the turn, so a lap sees the top, the sides and the
-// bottom (kim-lee-kobbelt fly it twice: E3/E4's two laps). pms::Error for no frames or bad camera settings.
+// bottom (kim-lee-kobbelt fly it twice: E3/E4's two laps). Rotate (zheng-chan 2006 §6's second route, 194
+// frames there): in from the orbit's distance to the scan's over the first third while circling the vertical
+// axis 10° above the horizontal plane, faster and faster (the angle grows with the square of time): two
+// turns. pms::Error for no frames or bad camera settings.
 std::vector<Camera> make_camera_path(PathKind kind, const ModelData& model, const PathOptions& options);
 
 }  // namespace pms::app

@@ -1,4 +1,4 @@
-// pmstream path (orbit|scan|zoom|look) --model FILE.pms --frames N -o PATH.json [--width W --height H --fovy F]
+// pmstream path (orbit|scan|zoom|look|rotate) --model FILE.pms --frames N -o PATH.json [--width W --height H --fovy F]
 #include <cstdio>
 
 #include "apps/camera_json.h"
@@ -30,10 +30,10 @@ void add_path_command(CliCommand& app) {
   auto args = std::make_shared<PathArgs>();
   CliCommand cmd = app.subcommand("path", "Write a scripted camera path (PATH.json) around a .pms model");
   cmd.option("kind", args->kind,
-             "orbit (circle around the model), scan (close, bottom to top), zoom (far to close-up) or look (around "
-             "the model from top to bottom)")
+             "orbit (circle around the model), scan (close, bottom to top), zoom (far to close-up), look (around "
+             "the model from top to bottom) or rotate (in close while circling faster and faster)")
       .required()
-      .one_of({"orbit", "scan", "zoom", "look"});
+      .one_of({"orbit", "scan", "zoom", "look", "rotate"});
   cmd.option("--model", args->model, ".pms file the path is made for").required();
   cmd.option("--frames", args->options.frames, "Number of cameras").required().range(1, 1000000);
   cmd.option("-o,--output", args->output, "Output PATH.json").required().writes({".json"}, "JSON");

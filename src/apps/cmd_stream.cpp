@@ -43,7 +43,7 @@ struct StreamArgs {
   uint32_t ahead = 0;  // sender, with --fps
   uint32_t rerank_ms = client::ReceiverOptions{}.rerank_ms;
   uint64_t background_bytes = 0;
-  std::string traversal = "priority";  // dag mode
+  std::string traversal = "priority", management = "fixed";  // dag mode
   uint64_t budget = 0;
   bool json = false;
   bool plain_levels = false;  // multilevel mode
@@ -116,6 +116,10 @@ void refuse_unused(const StreamArgs& args, const ModeOptions& options) {
   if (args.mode == "receiver") refuse_unused_options(options.by_fetch, args.fetch, "--fetch " + args.fetch);
   if (args.mode == "multilevel" && options.budget.given() && options.tolerance.given())
     fail("--tolerance", "not used with --mode multilevel --budget (the budget picks the level)");
+  if (args.mode == "dag" && args.management == "auto" && args.budget == 0)
+    fail("--management", "auto needs --budget: it switches between FREE and BUDGET around the budget");
+  if (args.mode == "dag" && args.frame_budget_ms > 0 && args.fps > 0)
+    fail("--frame-budget-ms", "dag: lock-step only (free-running, an answer's time is the link's, which N does not set)");
   if (args.background_bytes > 0 && args.fps == 0)
     fail("--background-bytes", "needs --fps: a lock-step frame ends when its view is satisfied, so it has no idle time");
   if (args.ahead > 0 && args.fps == 0)
@@ -133,7 +137,10 @@ client::ViewerOptions viewer_options(const StreamArgs& args) {
   session.morph_frames = args.morph_frames;
   session.max_ops = args.max_ops;
   session.ahead_frames = args.ahead;
-  if (args.mode == "dag") session.dag = dag_request(args);
+  if (args.mode == "dag") {
+    session.dag = dag_request(args);
+    session.dag_management = {args.management == "auto", double(args.frame_budget_ms)};
+  }
   session.reconnect_attempts = args.reconnect;
   session.answer_timeout = std::chrono::milliseconds(args.timeout_ms);
   session.connect_timeout = std::chrono::milliseconds(args.connect_timeout_ms);
@@ -288,7 +295,8 @@ void add_stream_command(CliCommand& app) {
   const CliOption frame_budget_ms =
       cmd.option("--frame-budget-ms", args->frame_budget_ms,
                  "receiver: end a frame after this long (checked between answers; 0 = until the view is satisfied); "
-                 "what is left carries to the next frame")
+                 "what is left carries to the next frame; dag: choose N each frame so its answer takes this long at "
+                 "most (0 = --max-ops)")
           .range(0u, 3600000u)
           .show_default();
   const CliOption frame_answers =
@@ -329,6 +337,12 @@ void add_stream_command(CliCommand& app) {
   const CliOption traversal = cmd.option("--traversal", args->traversal, "dag: priority, linear or constant")
                                   .one_of({"priority", "linear", "constant"})
                                   .show_default();
+  const CliOption management =
+      cmd.option("--management", args->management,
+                 "dag: fixed (BUDGET mode with --budget, else FREE) or auto (FREE while the mesh plus 2 N stays "
+                 "within --budget, else BUDGET: zheng-chan's management)")
+          .one_of({"fixed", "auto"})
+          .show_default();
   const CliOption budget =
       cmd.option(
              "--budget", args->budget,
@@ -357,7 +371,7 @@ void add_stream_command(CliCommand& app) {
                    {ids_per_request, {"receiver"}},
                    {descendant_depth, {"receiver"}},
                    {block_depth, {"receiver"}},
-                   {frame_budget_ms, {"receiver"}},
+                   {frame_budget_ms, {"receiver", "dag"}},
                    {frame_answers, {"receiver"}},
                    {prefetch, {"receiver"}},
                    {ahead, {"sender"}},
@@ -367,6 +381,7 @@ void add_stream_command(CliCommand& app) {
                    {geomorph_frames, {"sender", "receiver", "multilevel"}},
                    {max_ops, {"sender", "receiver", "dag"}},
                    {traversal, {"dag"}},
+                   {management, {"dag"}},
                    {budget, {"dag", "multilevel"}},
                    {plain_levels, {"multilevel"}}},
                   {{ids_per_request, {"lists"}}, {descendant_depth, {"lists"}}, {block_depth, {"blocks"}}},

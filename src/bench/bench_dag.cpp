@@ -1,8 +1,11 @@
-// The "dag" group, E9 (zheng-chan 2006 §6, Figs. 6–9): dragon along the 180-frame scan route, τ = 0.1 % of
-// the viewport height, N = 300, a 60,000-triangle budget. Per traversal (priority, linear, constant-time):
-// the time of MANAGE-TRAVERSAL per frame, the accuracy of linear and constant-time against priority (the share
-// of priority's triangles their mesh also has, every 5 frames), the fronts against the mesh, the server's
-// state per session and the bytes down per frame.
+// The "dag" group, E9 (zheng-chan 2006 §6, Figs. 6–9): dragon along the paper's two routes (route 1: 180
+// frames scanning bottom to top; route 2: 194 frames circling in close, faster and faster), τ = 0.1 % of
+// the viewport height, N = 300, a 60,000-triangle budget. Per route and traversal (priority, linear,
+// constant-time, and priority under the client's FREE/BUDGET management): the time of MANAGE-TRAVERSAL per
+// frame, the accuracy of linear and constant-time against priority (the share of priority's triangles their
+// mesh also has, every 5 frames), the fronts against the mesh, the server's state per session and the bytes
+// down per frame. Fig. 8: the three traversals' meshes rendered at frame 110 of route 1. Then N chosen from
+// the frame time left against fixed N (dag_frame_budget.h).
 //
 // Each traversal runs twice in lockstep on the same views: once as the real DAG mode (a server Session in this
 // process, a StreamingClient applying its DAG_OPS, for bytes, session state and the client's mesh), once as a
@@ -20,6 +23,7 @@
 #include "bench/bench_model.h"
 #include "bench/bench_refine.h"
 #include "bench/gnuplot.h"
+#include "bench/dag_frame_budget.h"
 #include "bench/mesh_faces.h"
 #include "bench/report.h"
 #include "client/streaming_client.h"
@@ -27,6 +31,7 @@
 #include "dag/compact.h"
 #include "dag/traversal.h"
 #include "protocol/client_messages.h"
+#include "render/render.h"
 #include "server/dag_mode.h"
 #include "server/session_mode.h"
 
@@ -38,25 +43,19 @@ namespace {
 
 using nlohmann::json;
 
-constexpr uint32_t kFrames = 180, kQuickFrames = 40;
+constexpr uint32_t kRoute1Frames = 180, kRoute2Frames = 194, kQuickFrames = 40;
+constexpr uint32_t kFigureFrame = 110;  // Fig. 8, of route 1's 180 (scaled to a quick run's frames)
 constexpr uint32_t kMaxOps = 300;
 constexpr uint64_t kBudget = 60000;
 constexpr float kToleranceOfHeight = 0.001f;
 constexpr uint32_t kAccuracyEvery = 5;
 
-constexpr DagTraversal kTraversals[] = {DagTraversal::priority, DagTraversal::linear, DagTraversal::constant_time};
-constexpr const char* kTraversalNames[] = {"priority", "linear", "constant-time"};
-
-// The share of `reference`'s faces that `faces` holds too, in percent (both sorted).
-double shared_percent(const std::vector<IdFace>& faces, const std::vector<IdFace>& reference) {
-  size_t common = 0;
-  for (size_t i = 0, j = 0; i < faces.size() && j < reference.size();) {
-    if (faces[i] < reference[j]) ++i;
-    else if (reference[j] < faces[i]) ++j;
-    else ++common, ++i, ++j;
-  }
-  return reference.empty() ? 100 : 100.0 * double(common) / double(reference.size());
-}
+// The last is priority again, FREE or BUDGET as the client's management picks (--management auto).
+constexpr int kRuns = 4, kTraversalsDrawn = 3;
+constexpr DagTraversal kTraversals[] = {DagTraversal::priority, DagTraversal::linear, DagTraversal::constant_time,
+                                        DagTraversal::priority};
+constexpr const char* kTraversalNames[] = {"priority", "linear", "constant-time", "priority, management auto"};
+constexpr const char* kFileNames[] = {"priority", "linear", "constant-time", "priority-auto"};
 
 struct TraversalRun {
   struct First {
@@ -68,6 +67,8 @@ struct TraversalRun {
   size_t max_session_bytes = 0, max_cut_bytes = 0, max_scratch_bytes = 0;
   uint64_t max_triangles = 0;
   std::vector<std::vector<IdFace>> samples;  // the client's mesh every kAccuracyEvery frames
+  MeshArrays figure;                         // the client's mesh at the figure's frame
+  uint32_t free_requests = 0;                // DAG_VIEWs the client sent in FREE mode
   std::vector<double> accuracy;              // against priority's samples: the share of priority's triangles it has
   std::vector<double> precision;             // the share of its own triangles that priority's mesh has
 };
@@ -76,7 +77,8 @@ const server::DagSessionMode& dag_mode_of(const InProcessSession& local) {
   return dynamic_cast<const server::DagSessionMode&>(*local.session->session_mode());
 }
 
-TraversalRun run_traversal(const BenchModel& m, const std::vector<Camera>& route, DagTraversal traversal) {
+TraversalRun run_traversal(const BenchModel& m, const std::vector<Camera>& route, DagTraversal traversal,
+                           bool management_auto, uint32_t figure_frame) {
   const float tolerance = kToleranceOfHeight * float(route[0].height);
   InProcessSession local = in_process_session(m);
   client::ClientOptions options{tolerance};
@@ -85,6 +87,7 @@ TraversalRun run_traversal(const BenchModel& m, const std::vector<Camera>& route
   options.dag.management = DagMode::budget;
   options.dag.budget = kBudget;
   options.dag.max_ops = kMaxOps;
+  options.dag_management.automatic = management_auto;
   client::StreamingClient client(std::move(local.transport), options);
   client.open(m.name);
 
@@ -115,6 +118,8 @@ TraversalRun run_traversal(const BenchModel& m, const std::vector<Camera>& route
     const double store_ms = 1000 * store_clock.seconds();
 
     const client::FrameReport report = client.frame(route[i]);
+    run.free_requests += client.last_dag_request().management == DagMode::free;
+    if (i == figure_frame) client.session().mesh().extract(run.figure);
     const server::DagSessionMode& mode = dag_mode_of(local);
     if (mode.cut().split_count() != compact.split_count() || mode.cut().triangles() != triangles ||
         client.session().mesh().face_count() != triangles)
@@ -160,12 +165,13 @@ std::vector<double> all_frames(size_t count, size_t first = 0) {
   return frames;
 }
 
-std::string plots(const BenchContext& context, const TraversalRun (&runs)[3]) {
-  Plot time{"DAG traversal time per frame", "frame", "ms (log)", "", false, true, {}};
-  Plot accuracy{
-      "Correct triangles against priority, every 5 frames", "frame", "% of priority's triangles", "", false, false, {}};
-  Plot fronts{"Fronts against the mesh", "frame", "(Fc + Fs) / triangles", "triangles", false, false, {}};
-  for (int t = 0; t < 3; ++t) {
+std::string plots(const BenchContext& context, const std::string& prefix, const std::string& route,
+                  const TraversalRun (&runs)[kRuns]) {
+  Plot time{"DAG traversal time per frame, " + route, "frame", "ms (log)", "", false, true, {}};
+  Plot accuracy{"Correct triangles against priority, every 5 frames, " + route, "frame", "% of priority's triangles",
+                "", false, false, {}};
+  Plot fronts{"Fronts against the mesh, " + route, "frame", "(Fc + Fs) / triangles", "triangles", false, false, {}};
+  for (int t = 0; t < kTraversalsDrawn; ++t) {
     const std::vector<double> frames = all_frames(runs[t].triangles.size());
     time.series.push_back({kTraversalNames[t], all_frames(runs[t].frame_ms.size(), 1), runs[t].frame_ms});
     if (t > 0)
@@ -173,9 +179,35 @@ std::string plots(const BenchContext& context, const TraversalRun (&runs)[3]) {
     fronts.series.push_back({kTraversalNames[t], frames, runs[t].front_share});
     fronts.series.push_back({std::string(kTraversalNames[t]) + " triangles", frames, runs[t].triangles, true});
   }
-  return plot_markdown(context.options.out_dir, time, "dag-time.png", "traversal ms per frame") +
-         plot_markdown(context.options.out_dir, accuracy, "dag-accuracy.png", "accuracy against priority") +
-         plot_markdown(context.options.out_dir, fronts, "dag-fronts.png", "front size against mesh size");
+  const std::filesystem::path& dir = context.options.out_dir;
+  return plot_markdown(dir, time, prefix + "-time.png", "traversal ms per frame, " + route) +
+         plot_markdown(dir, accuracy, prefix + "-accuracy.png", "accuracy against priority, " + route) +
+         plot_markdown(dir, fronts, prefix + "-fronts.png", "front size against mesh size, " + route);
+}
+
+// Fig. 8: each traversal's mesh at the figure's frame, as the client holds it, rendered from that frame's
+// camera, side by side in the report.
+std::string figure_8(const BenchContext& context, const BenchModel& m, const Camera& camera, uint32_t frame,
+                     const TraversalRun (&runs)[kRuns]) {
+  const ModelData& model = m.served->model();
+  const ViewParams view = make_view(camera, model.bbox_min, model.bbox_max);
+  Renderer renderer;
+  Image image;
+  std::string header = "|", rule = "|", cells = "|";
+  for (int t = 0; t < kTraversalsDrawn; ++t) {
+    const MeshArrays& mesh = runs[t].figure;
+    renderer.render({mesh.positions, mesh.indices, mesh.colors}, view, image);
+    const std::string png = std::string("dag-fig8-") + kFileNames[t] + ".png";
+    save_png((context.options.out_dir / png).string(), image);
+    header += " (" + std::string(1, char('a' + t)) + ") " + kTraversalNames[t] + ", " +
+              thousands(mesh.indices.size() / 3) + " triangles |";
+    rule += " --- |";
+    cells += " ![" + std::string(kTraversalNames[t]) + "](" + png + ") |";
+  }
+  return "### Fig. 8: the three traversals' meshes at frame " + std::to_string(frame) + " of route 1\n\n" + header +
+         "\n" + rule + "\n" + cells +
+         "\n\nThe client's mesh after the frame, rendered by the bench's software renderer from the frame's camera "
+         "(the paper's Fig. 8 shows Buddha; ours is the model above).\n\n";
 }
 
 json run_json(const TraversalRun& run, uint32_t nodes) {
@@ -200,22 +232,22 @@ json run_json(const TraversalRun& run, uint32_t nodes) {
           {"session_bytes_per_node", double(run.max_session_bytes) / nodes}};
 }
 
-}  // namespace
 
-void run_dag_group(BenchContext& context) {
-  std::string section = "## dag: E9, the DAG of operations' traversals (zheng-chan 2006 §6)\n\n";
-  if (skipped_without_models(context, section)) return;
-  const bool quick = context.options.quick;
-  const std::string name = context.options.models.empty() ? (quick ? "bunny" : "dragon") : context.options.models[0];
-  const BenchModel m = prepare_model(context, name);
-  const std::vector<Camera> route = path_of(m, PathKind::scan, quick ? kQuickFrames : kFrames);
+struct RouteRuns {
+  std::string section;
+  TraversalRun runs[kRuns];
+};
+
+// Every traversal along one route: its table and plots, and its JSON under out[route.name].
+RouteRuns route_traversals(const BenchContext& context, const BenchModel& m, const DagRoute& route,
+                           uint32_t figure_frame, json& out) {
   const uint32_t nodes = m.served->tables->dag().size();
-  const float tolerance = kToleranceOfHeight * float(route[0].height);
-
-  TraversalRun runs[3];
-  for (int t = 0; t < 3; ++t) {
-    std::fprintf(stderr, "bench: dag %s along %zu frames ...\n", kTraversalNames[t], route.size());
-    runs[t] = run_traversal(m, route, kTraversals[t]);
+  const float tolerance = kToleranceOfHeight * float(route.cameras[0].height);
+  RouteRuns r;
+  TraversalRun(&runs)[kRuns] = r.runs;
+  for (int t = 0; t < kRuns; ++t) {
+    std::fprintf(stderr, "bench: dag %s, %s ...\n", route.name.c_str(), kTraversalNames[t]);
+    runs[t] = run_traversal(m, route.cameras, kTraversals[t], t == kRuns - 1, figure_frame);
   }
   for (TraversalRun& run : runs)
     for (size_t k = 0; k < run.samples.size(); ++k) {
@@ -240,21 +272,14 @@ void run_dag_group(BenchContext& context) {
                {"(Fc + Fs) / triangles", true},
                {"accuracy %", true},
                {"precision %", true},
+               {"FREE requests %", true},
                {"session B / node", true},
                {"session KB", true},
                {"cut KB", true},
                {"thread scratch KB", true},
                {"bytes down / frame", true}});
-  json out = {{"command", context.options.command_line},
-              {"machine", machine_json()},
-              {"model", name},
-              {"frames", route.size()},
-              {"nodes", nodes},
-              {"tolerance_px", tolerance},
-              {"max_ops", kMaxOps},
-              {"budget", kBudget},
-              {"dag_bytes", m.served->tables->dag().memory_bytes()}};
-  for (int t = 0; t < 3; ++t) {
+  json route_json = {{"label", route.label}, {"frames", route.cameras.size()}};
+  for (int t = 0; t < kRuns; ++t) {
     const TraversalRun& run = runs[t];
     table.add_row({kTraversalNames[t], fixed(run.first.ms, 1), thousands(uint64_t(run.first.ops)),
                    fixed(percentile(run.frame_ms, 0.5), 3), fixed(percentile(run.frame_ms, 0.99), 3),
@@ -262,33 +287,75 @@ void run_dag_group(BenchContext& context) {
                    thousands(uint64_t(mean(run.evaluated))), thousands(uint64_t(mean(run.ops))),
                    thousands(run.max_triangles), fixed(percentile(run.front_share, 0.5), 2),
                    t == 0 ? "—" : fixed(route_mean(run.accuracy), 1),
-                   t == 0 ? "—" : fixed(route_mean(run.precision), 1), fixed(double(run.max_session_bytes) / nodes, 3),
-                   fixed(double(run.max_session_bytes) / 1e3, 1), fixed(double(run.max_cut_bytes) / 1e3, 1),
-                   fixed(double(run.max_scratch_bytes) / 1e3, 1), thousands(uint64_t(mean(run.down_bytes)))});
-    out[kTraversalNames[t]] = run_json(run, nodes);
+                   t == 0 ? "—" : fixed(route_mean(run.precision), 1),
+                   fixed(100.0 * run.free_requests / double(route.cameras.size()), 1),
+                   fixed(double(run.max_session_bytes) / nodes, 3), fixed(double(run.max_session_bytes) / 1e3, 1),
+                   fixed(double(run.max_cut_bytes) / 1e3, 1), fixed(double(run.max_scratch_bytes) / 1e3, 1),
+                   thousands(uint64_t(mean(run.down_bytes)))});
+    route_json[kFileNames[t]] = run_json(run, nodes);
+    route_json[kFileNames[t]]["free_requests"] = run.free_requests;
   }
-  const std::string settings = name + ", " + std::to_string(route.size()) +
-                               "-frame scan route, τ = " + fixed(tolerance, 3) +
+  out[route.name] = route_json;
+  const std::string settings = m.name + ", " + route.label + ", τ = " + fixed(tolerance, 3) +
                                " px (0.1 % of the height), N = " + std::to_string(kMaxOps) + ", BUDGET " +
                                thousands(kBudget) + " triangles, " + thousands(nodes) + " DAG nodes";
-  print_now("\nE9: DAG traversals, " + settings +
+  print_now("\nE9: DAG traversals, " + route.name + ", " + settings +
             " (targets: constant-time ≤ 0.1 ms, priority ≤ 2 ms median; accuracy linear ≥ 80 %, constant-time ≥ 70 %; "
             "session ≤ 0.1 B / node)\n" +
             table.markdown());
-  section +=
-      "### Traversals along the route (" + settings + ")\n\n" + table.markdown() +
-      "\nFirst view: the converged answer to the session's first view (the same for every traversal). ms: "
-      "MANAGE-TRAVERSAL alone on a bare cut, fed the same views as the session, frames 1 on; load + store: the "
-      "medians of decoding the compact cut into the thread's dense one and encoding it back (each turn of a session "
-      "does both). Accuracy: the share "
-      "of priority's triangles (by vertex ids) the client's mesh also has, every 5 frames from frame 5, averaged; "
-      "precision: the share of the client's own triangles that priority's mesh has, averaged alike. "
-      "Session: the "
-      "DAG mode's `state_bytes()` at its largest along the route; cut: `CompactDagCut::memory_bytes()` (what a "
-      "session keeps between turns); thread scratch: the dense cut and the traversals' heaps and stack one I/O "
-      "thread keeps (shared by the sessions of a thread, not per session), run so far. Bytes down: "
-      "DAG_OPS frames as received, mean per frame. docs/internals.md, \"E9\", says what each figure is.\n\n";
-  section += plots(context, runs);
+  std::string prefix = "dag-" + route.name;
+  std::replace(prefix.begin(), prefix.end(), ' ', '-');
+  r.section = "### Traversals along " + route.name + " (" + settings + ")\n\n" + table.markdown() + "\n" +
+              plots(context, prefix, route.name, runs);
+  return r;
+}
+
+const char* const kTraversalNotes =
+    "First view: the converged answer to the session's first view (the same for every traversal). ms: "
+    "MANAGE-TRAVERSAL alone on a bare cut, fed the same views as the session, frames 1 on; load + store: the "
+    "medians of decoding the compact cut into the thread's dense one and encoding it back (each turn of a session "
+    "does both). Accuracy: the share of priority's triangles (by vertex ids) the client's mesh also has, every 5 "
+    "frames from frame 5, averaged; precision: the share of the client's own triangles that priority's mesh has, "
+    "averaged alike. FREE requests: the DAG_VIEWs the client sent in FREE mode; \"priority, management auto\" is "
+    "the client choosing FREE or BUDGET by the paper's rule (`--management auto`: FREE while its mesh plus 2 N "
+    "fits the budget), the others BUDGET throughout. Its mesh is priority's every frame (accuracy 100 %): our "
+    "server's BUDGET mode counts the cut's own triangles, so in a frame the rule sends in FREE mode the budget "
+    "could not have stopped a split; the rule spares the server the budget, not the client triangles. Session: "
+    "the DAG mode's `state_bytes()` at its largest along the route; cut: `CompactDagCut::memory_bytes()` (what a "
+    "session keeps between turns); thread scratch: the dense cut and the traversals' heaps and stack one I/O "
+    "thread keeps (shared by the sessions of a thread, not per session), run so far. Bytes down: DAG_OPS frames "
+    "as received, mean per frame. docs/internals.md, \"E9\", says what each figure is.\n\n";
+
+}  // namespace
+
+void run_dag_group(BenchContext& context) {
+  std::string section = "## dag: E9, the DAG of operations' traversals (zheng-chan 2006 §6)\n\n";
+  if (skipped_without_models(context, section)) return;
+  const bool quick = context.options.quick;
+  const std::string name = context.options.models.empty() ? (quick ? "bunny" : "dragon") : context.options.models[0];
+  const BenchModel m = prepare_model(context, name);
+  const uint32_t frames1 = quick ? kQuickFrames : kRoute1Frames, frames2 = quick ? kQuickFrames : kRoute2Frames;
+  const std::vector<DagRoute> routes = {
+      {"route 1", std::to_string(frames1) + "-frame scan, bottom to top", path_of(m, PathKind::scan, frames1)},
+      {"route 2", std::to_string(frames2) + "-frame rotation in close, faster and faster",
+       path_of(m, PathKind::rotate, frames2)}};
+  const uint32_t figure_frame = kFigureFrame * frames1 / kRoute1Frames;
+
+  json out = {{"command", context.options.command_line},
+              {"machine", machine_json()},
+              {"model", name},
+              {"nodes", m.served->tables->dag().size()},
+              {"max_ops", kMaxOps},
+              {"budget", kBudget},
+              {"figure_frame", figure_frame},
+              {"dag_bytes", m.served->tables->dag().memory_bytes()}};
+  std::string figure;
+  for (size_t r = 0; r < routes.size(); ++r) {
+    const RouteRuns runs = route_traversals(context, m, routes[r], r == 0 ? figure_frame : UINT32_MAX, out);
+    section += runs.section;
+    if (r == 0) figure = figure_8(context, m, routes[0].cameras[figure_frame], figure_frame, runs.runs);
+  }
+  section += kTraversalNotes + figure + dag_frame_budget_section(context, m, routes, out);
   write_text_file(context.options.out_dir / "dag.json", out.dump(2) + "\n");
   context.report += section;
 }

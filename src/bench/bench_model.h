@@ -39,6 +39,10 @@ struct InProcessSession {
   // The thread CPU time the session's receive() and pump() took: the server's share of a flight.
   std::shared_ptr<double> server_seconds;
 };
+// The calling thread's CPU time in seconds: an in-process session's work, and its client's, without the
+// time the thread waited for a core.
+double thread_seconds();
+
 InProcessSession in_process_session(const BenchModel& m, const server::ServerLimits& limits = {});
 
 }  // namespace pms::bench

@@ -41,7 +41,9 @@ constexpr BenchGroup kGroups[] = {
      "receiver-driven viewers behind an nginx cache over two origins, one killed: failures, hit rate, bytes from "
      "the cache and the origins, origin CPU per split against the sender-driven server's",
      run_tier_group},
-    {"dag", "E9 DAG traversals: time per frame, accuracy against priority, fronts, session memory, bytes down",
+    {"dag", "E9 DAG traversals on both of the paper's routes: time per frame, accuracy against priority, fronts, "
+            "session memory, bytes down, the client's FREE/BUDGET management; Fig. 8's renders; N from the frame "
+            "time left against fixed N",
      run_dag_group},
     {"attacks", "the HTTP attack classes beside a good receiver-driven client: p99, memory, CPU after, SIGTERM",
      run_attacks_group},

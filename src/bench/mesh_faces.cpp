@@ -21,4 +21,14 @@ std::vector<IdFace> faces_by_id(const SelectiveMesh& mesh) {
   return faces;
 }
 
+double shared_percent(const std::vector<IdFace>& faces, const std::vector<IdFace>& reference) {
+  size_t common = 0;
+  for (size_t i = 0, j = 0; i < faces.size() && j < reference.size();) {
+    if (faces[i] < reference[j]) ++i;
+    else if (reference[j] < faces[i]) ++j;
+    else ++common, ++i, ++j;
+  }
+  return reference.empty() ? 100 : 100.0 * double(common) / double(reference.size());
+}
+
 }  // namespace pms::bench

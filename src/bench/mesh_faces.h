@@ -14,4 +14,8 @@ using IdFace = std::array<uint64_t, 6>;
 
 std::vector<IdFace> faces_by_id(const SelectiveMesh& mesh);
 
+// The share of `reference`'s faces that `faces` holds too, in percent (both sorted; 100 for an empty
+// reference): zheng-chan's "percentage of the correct triangles".
+double shared_percent(const std::vector<IdFace>& faces, const std::vector<IdFace>& reference);
+
 }  // namespace pms::bench

@@ -47,6 +47,7 @@ class ClientSession {
   const protocol::Base& base() const { return base_; }
   VertexHierarchy& hierarchy() { return *hierarchy_; }
   SelectiveMesh& mesh() { return *mesh_; }
+  const SelectiveMesh& mesh() const { return *mesh_; }
   SelectiveRefinement& refinement() { return *refinement_; }
   const SelectiveRefinement& refinement() const { return *refinement_; }
   ViewParams view_params(const Camera& camera) const;

@@ -18,8 +18,10 @@ bool same_camera(const Camera& a, const Camera& b) {
 
 }  // namespace
 
-FreeRunningSession::FreeRunningSession(ClientSession& session, ClientMode& mode, const protocol::DagView& request)
-    : session_(session), mode_(mode), request_(request) {}
+// A frame budget is lock-step's: free-running, an answer's time is mostly the link's, which N does not set.
+FreeRunningSession::FreeRunningSession(ClientSession& session, ClientMode& mode, const protocol::DagView& request,
+                                       const DagManagementOptions& management)
+    : session_(session), mode_(mode), management_(request, {management.automatic, 0}) {}
 
 void FreeRunningSession::on_frame(const protocol::Frame& frame, Clock::time_point now) {
   switch (frame.type) {
@@ -83,7 +85,7 @@ std::vector<uint8_t> FreeRunningSession::request(const Camera& camera, Clock::ti
   asked_ = camera;
   ++rounds_;
   answer_operations_ = 0;
-  protocol::DagView request = request_;
+  protocol::DagView request = management_.next(session_, in_flight());
   request.view.camera = camera;
   request.view.frame = ++requests_;
   sent_.push_back({requests_, now});
@@ -119,7 +121,7 @@ std::vector<uint8_t> FreeRunningSession::frame(const Camera& camera, Clock::time
 }
 
 void FreeRunningSession::set_request(const protocol::DagView& request) {
-  request_ = request;
+  management_ = DagManagement(request, management_.options());
   asked_.reset();
   rounds_ = 0;
 }

@@ -24,6 +24,7 @@
 
 #include "client/client_mode.h"
 #include "client/client_session.h"
+#include "client/dag_management.h"
 #include "common/camera.h"
 #include "protocol/client_messages.h"
 #include "protocol/framing.h"
@@ -35,8 +36,11 @@ class FreeRunningSession {
   using Clock = std::chrono::steady_clock;
 
   // `request` is what every request carries besides its camera and number: the tolerance (view.tolerance)
-  // and the DAG mode's traversal. The session holds the model already (BASE is in).
-  FreeRunningSession(ClientSession& session, ClientMode& mode, const protocol::DagView& request);
+  // and the DAG mode's traversal; `management` sets the DAG mode's FREE or BUDGET per request, counting the
+  // requests in flight (its frame budget is lock-step's: N stays the request's here). The session holds
+  // the model already (BASE is in).
+  FreeRunningSession(ClientSession& session, ClientMode& mode, const protocol::DagView& request,
+                     const DagManagementOptions& management = {});
 
   // A frame from the server: VSPLITS attached and handed to the mode, DAG_OPS applied, a resumed session's
   // BASE and CODEC taken. A final batch answers its request and every earlier one still open. pms::Error
@@ -72,7 +76,7 @@ class FreeRunningSession {
 
   ClientSession& session_;
   ClientMode& mode_;
-  protocol::DagView request_;
+  DagManagement management_;  // holds the request
   std::deque<Sent> sent_;           // requests whose final batch has not come, oldest first
   uint32_t requests_ = 0;           // the last request's number
   uint32_t frames_ = 0;             // displayed frames

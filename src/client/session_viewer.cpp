@@ -36,7 +36,7 @@ std::unique_ptr<StreamingClient> connect(const std::string& server, ClientOption
 
 SessionViewer::SessionViewer(const std::string& server, const ClientOptions& options, Pacing pacing,
                              const std::string& model)
-    : client_(connect(server, options, model)), pacing_(pacing) {}
+    : client_(connect(server, options, model)), pacing_(pacing), dag_(options.mode == protocol::StreamMode::dag) {}
 
 ViewerReport SessionViewer::frame_view(const Camera& camera) {
   const bool lock_step = pacing_ == Pacing::lock_step;
@@ -51,6 +51,11 @@ ViewerReport SessionViewer::frame_view(const Camera& camera) {
   report.in_flight = r.in_flight;
   report.latency_ms = r.latency_ms;
   report.satisfied = r.satisfied;  // lock-step: always, the VIEW's whole answer is applied
+  if (dag_ && lock_step) {
+    const protocol::DagView& asked = client_->last_dag_request();
+    report.details = {{"dag_management", asked.management == DagMode::free ? "free" : "budget"},
+                      {"dag_max_ops", asked.max_ops}};
+  }
   return report;
 }
 

@@ -34,6 +34,7 @@ class SessionViewer : public Viewer {
  private:
   std::unique_ptr<StreamingClient> client_;
   Pacing pacing_;
+  bool dag_;  // the DAG mode: its lock-step frames report the mode and N they asked with
 };
 
 // HOST:PORT split; pms::Error naming `where` for anything else.

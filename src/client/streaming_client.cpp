@@ -62,14 +62,14 @@ StreamingClient::StreamingClient(const std::string& host, uint16_t port, const C
 }
 
 StreamingClient::StreamingClient(std::unique_ptr<Transport> transport, const ClientOptions& options)
-    : options_(options) {
+    : options_(options), dag_management_(options.dag, options.dag_management) {
   prepare();
   greet(std::move(transport));
 }
 
 StreamingClient::StreamingClient(const std::string& host, uint16_t port, const ClientOptions& options,
                                  const std::string& model)
-    : options_(options), host_(host), port_(port) {
+    : options_(options), host_(host), port_(port), dag_management_(options.dag, options.dag_management) {
   prepare();
   greet(open_link(host, port, options), Greeting::pipelined);
   open(model);
@@ -134,18 +134,22 @@ size_t StreamingClient::request_view(const Camera& camera, const BatchHandler& o
 }
 
 size_t StreamingClient::request_dag_view(const Camera& camera, FrameReport& report) {
-  protocol::DagView request = options_.dag;
+  protocol::DagView request = dag_management_.next(session_);
   request.view = {camera, options_.tolerance, ++frame_};
+  last_dag_request_ = request;
   const Clock::time_point sent = Clock::now();
   server_->send(protocol::encode(request));
   report.requested = true;
-  size_t received = 0;
+  size_t received = 0, collapses = 0;
   for (;;) {
     const protocol::DagOps ops = server_->next_dag_ops(session_.context());
     received += session_.apply_dag_ops(ops);
+    collapses += ops.collapses.size();
     if (ops.frame == request.view.frame && ops.final) break;
   }
-  report.latency_ms = std::max(report.latency_ms, milliseconds_since(sent));
+  const double ms = milliseconds_since(sent);
+  dag_management_.answered(request.max_ops, ms, collapses, received);
+  report.latency_ms = std::max(report.latency_ms, ms);
   return received;
 }
 
@@ -207,7 +211,7 @@ FreeRunningSession& StreamingClient::free_running() {
   if (!free_) {
     protocol::DagView request = options_.dag;
     request.view.tolerance = options_.tolerance;
-    free_ = std::make_unique<FreeRunningSession>(session_, *mode_, request);
+    free_ = std::make_unique<FreeRunningSession>(session_, *mode_, request, options_.dag_management);
     free_->set_ahead(options_.ahead_frames);
   }
   return *free_;

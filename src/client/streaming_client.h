@@ -9,6 +9,7 @@
 
 #include "client/client_mode.h"
 #include "client/client_session.h"
+#include "client/dag_management.h"
 #include "client/free_running_session.h"
 #include "client/server_connection.h"
 #include "client/transport.h"
@@ -32,8 +33,10 @@ struct ClientOptions {
   std::string name = "pmstream-client";
   // The streaming mode (client_mode.h): sender-driven, or the view-independent baseline.
   protocol::StreamMode mode = protocol::StreamMode::sender_driven;
-  // The DAG mode's MANAGE-TRAVERSAL parameters (its view and frame are filled per frame).
+  // The DAG mode's MANAGE-TRAVERSAL parameters (its view and frame are filled per frame), and how the client
+  // sets their mode and N per request (dag_management.h; lock-step only for the frame budget).
   protocol::DagView dag = {};
+  DagManagementOptions dag_management = {};
   // A frame that loses a TCP connection reconnects and resumes the session (kim-lee-kobbelt §5.3) up to
   // this many times, waiting reconnect_delay, then twice that, and so on (capped, docs/cli.md); 0 = fail at once.
   uint32_t reconnect_attempts = 0;
@@ -102,6 +105,8 @@ class StreamingClient : private ViewRequests {
   // Free-running idle time: AHEADs sent, and the splits that came ahead (0 in lock-step).
   uint32_t aheads_sent() const { return free_ ? free_->aheads_sent() : 0; }
   uint64_t ahead_splits() const { return free_ ? free_->ahead_splits() : 0; }
+  // The DAG mode: the last DAG_VIEW sent in lock-step (its mode, budget and N as DagManagement set them).
+  const protocol::DagView& last_dag_request() const { return last_dag_request_; }
 
  private:
   FrameReport frame_once(const Camera& camera);
@@ -128,6 +133,8 @@ class StreamingClient : private ViewRequests {
   std::string host_;  // empty: the transport was given, there is nothing to reconnect to
   uint16_t port_ = 0;
   uint32_t frame_ = 0;
+  DagManagement dag_management_;
+  protocol::DagView last_dag_request_;
   // Free-running.
   std::unique_ptr<FreeRunningSession> free_;
   uint32_t attempts_ = 0;  // reconnects since the last session that got its BASE

@@ -92,6 +92,7 @@ void add_served_fields(std::map<std::string, Names>& fields, const std::string& 
   const std::string http = "http://127.0.0.1:" + std::to_string(ready.at("http_port").get<int>());
   const std::string common = " --path " + dir + "/path.json --json --timeout-ms 20000";
   add_fields(fields, "stream", "stream --server " + tcp + " --model terrain" + common);
+  add_fields(fields, "stream", "stream --server " + tcp + " --mode dag --model terrain" + common);
   add_fields(fields, "stream", "stream --server " + http + " --mode receiver --model terrain" + common);
   add_fields(fields, "stream", "stream --server ws" + http.substr(4) + "/ws --model terrain" + common);
   add_fields(fields, "stream", "stream --server " + http + " --mode multilevel --model levels" + common);

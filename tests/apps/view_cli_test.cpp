@@ -51,7 +51,7 @@ float distance(const nlohmann::json& a, const nlohmann::json& b) {
 
 TEST(ViewCli, PathsAreDeterministicAndShapedAsTheirKind) {
   const Model model;
-  for (const std::string kind : {"orbit", "scan", "zoom", "look"}) {
+  for (const std::string kind : {"orbit", "scan", "zoom", "look", "rotate"}) {
     SCOPED_TRACE(kind);
     const std::string a = (model.dir / (kind + "-a.json")).string(), b = (model.dir / (kind + "-b.json")).string();
     const std::string options = " --model " + model.pms + " --frames 24 --width 640 --height 480 --fovy 50 -o ";
@@ -96,6 +96,22 @@ TEST(ViewCli, PathsAreDeterministicAndShapedAsTheirKind) {
         EXPECT_NEAR(distance(frames[i]["eye"], frames[i]["target"]), r, 1e-3f * r);
         EXPECT_EQ(frames[i]["target"], frames[0]["target"]);
         EXPECT_LT(frames[i]["eye"][2].get<float>(), frames[i - 1]["eye"][2].get<float>());
+      }
+    } else if (kind == "rotate") {  // in from the orbit's distance, circling faster and faster (z up)
+      EXPECT_GT(distance(frames[0]["eye"], frames[0]["target"]), 2.6f);
+      for (size_t i = 8; i < frames.size(); ++i)  // from a third of the way on: just outside the box
+        EXPECT_LT(distance(frames[i]["eye"], frames[i]["target"]), 0.5f * (2.5f + 2.5f) * 1.42f + 0.4f) << i;
+      const auto azimuth = [&](size_t i) {
+        const auto& c = frames[i];
+        return std::atan2(c["eye"][1].get<float>() - c["target"][1].get<float>(),
+                          c["eye"][0].get<float>() - c["target"][0].get<float>());
+      };
+      float last_step = 0;
+      for (size_t i = 1; i < frames.size(); ++i) {
+        float step = azimuth(i) - azimuth(i - 1);
+        if (step < -3.14159f) step += 2 * 3.14159f;
+        EXPECT_GT(step, last_step) << "frame " << i << ": not faster than the frame before";
+        last_step = step;
       }
     } else {  // from far to a close-up, always getting closer
       EXPECT_GT(distance(frames[0]["eye"], frames[0]["target"]), 10.0f);

@@ -139,6 +139,47 @@ TEST(DagStreaming, ClientMeshIsTheServersCutAndWithinBudgetEveryTraversal) {
   }
 }
 
+// zheng-chan §4's management (--management auto): the client asks in FREE mode while its mesh plus the 2 N
+// triangles an answer can add fits the budget, in BUDGET mode once it may not (and for the converged first
+// answer); both happen along a path that closes in, the mesh is the server's cut and within the budget every
+// frame, and it is the mesh of a client asking in BUDGET mode throughout (the server's BUDGET counts the
+// cut's triangles, so in a frame the rule sends FREE the budget could not have stopped a split).
+TEST(DagStreaming, ManagementAutoSwitchesToBudgetNearTheBudget) {
+  const Fixture& f = terrain();
+  const ModelData& model = f.catalogue->find(f.name)->model();
+  const std::vector<Camera> path = orbit_path(f.hierarchy, 24, 0.3f);
+  constexpr uint32_t kN = 200;
+  uint64_t most = 0;
+  {
+    test::InProcess free = in_process(f, dag_options(DagTraversal::priority, 0, kN, 1.0f));
+    for (const Camera& c : path) most = std::max<uint64_t>(most, free.client->frame(c).faces);
+  }
+  const uint64_t budget = most * 4 / 5;
+  client::ClientOptions automatic = dag_options(DagTraversal::priority, budget, kN, 1.0f);
+  automatic.dag_management.automatic = true;
+  test::InProcess p = in_process(f, automatic);
+  test::InProcess fixed = in_process(f, dag_options(DagTraversal::priority, budget, kN, 1.0f));
+  int free_frames = 0, budget_frames = 0;
+  for (size_t i = 0; i < path.size(); ++i) {
+    const uint64_t before = p.client->session().mesh().face_count();
+    p.client->frame(path[i]);
+    fixed.client->frame(path[i]);
+    const protocol::DagView& asked = p.client->last_dag_request();
+    const bool free = i > 0 && before + 2 * kN <= budget;
+    ASSERT_EQ(asked.management, free ? DagMode::free : DagMode::budget) << "frame " << i << ", " << before;
+    ASSERT_EQ(asked.budget, free ? 0 : budget) << "frame " << i;
+    (free ? free_frames : budget_frames) += 1;
+    const DagCut cut = session_cut(f, p);
+    std::string why;
+    ASSERT_TRUE(cut.check(&why)) << "frame " << i << ": " << why;
+    ASSERT_EQ(faces_by_id(p.client->session().mesh()), cut_faces(model, cut)) << "frame " << i;
+    ASSERT_LE(cut.triangles(), budget) << "frame " << i;
+    ASSERT_EQ(faces_by_id(p.client->session().mesh()), faces_by_id(fixed.client->session().mesh())) << "frame " << i;
+  }
+  EXPECT_GT(free_frames, 0);
+  EXPECT_GT(budget_frames, 1) << "only the first answer asked in BUDGET mode: the budget never came near";
+}
+
 // zheng-chan §5: at convergence the priority traversal is the adaptation loop's mesh of the view.
 TEST(DagStreaming, PriorityWithLargeNConvergesToLocalRefinement) {
   const Fixture& f = terrain();

@@ -1,9 +1,11 @@
 // The session modes free-running (sender, sender-plain, vi, dag; client/free_running_session.h) over real
 // loopback TCP: a frame never waits for the network (answers held back by the test stay outstanding when
 // it returns), and after settling the mesh is what lock-step gives at the last camera; a lost connection
-// is resumed by later frames, none of them sleeping, and the session ends where an unbroken one does.
+// is resumed by later frames, none of them sleeping, and the session ends where an unbroken one does; the DAG
+// client's FREE/BUDGET management counts its requests in flight against the budget.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <chrono>
 #include <memory>
 #include <optional>
@@ -16,6 +18,7 @@
 #include "client/transport.h"
 #include "protocol/client_messages.h"
 #include "protocol/framing.h"
+#include "protocol/message_types.h"
 #include "protocol/stream_mode.h"
 #include "server/limits.h"
 #include "streaming_fixture.h"
@@ -144,6 +147,55 @@ TEST(FreeRunning, ViewIndependentNeverWaitsAndSettlesWhereLockStepAsksNothing) {
   expect_settled_equals_lock_step(StreamMode::view_independent);
 }
 TEST(FreeRunning, DagNeverWaitsAndSettlesToLockStepsFixedPoint) { expect_settled_equals_lock_step(StreamMode::dag); }
+
+// A Link that reads back the DAG_VIEWs it sends: their FREE or BUDGET mode.
+class DagViewsSeen : public client::Transport {
+ public:
+  explicit DagViewsSeen(uint16_t port) : link_("127.0.0.1", port) {}
+  void send(const std::vector<uint8_t>& frame) override {
+    reader_.feed(frame);
+    for (protocol::Frame f; reader_.next(f);)
+      if (f.type == protocol::MessageType::dag_view)
+        ++(protocol::decode_dag_view(f.payload).management == DagMode::free ? free : budget);
+    link_.send(frame);
+  }
+  std::optional<protocol::Frame> receive(std::chrono::milliseconds timeout) override { return link_.receive(timeout); }
+  client::LinkCounters counters() const override { return link_.counters(); }
+
+  uint32_t free = 0, budget = 0;
+
+ private:
+  client::Link link_;
+  protocol::FrameReader reader_;
+};
+
+// zheng-chan's management free-running (--management auto --fps): the requests in flight count against
+// the budget, so FREE requests never take the mesh past it however many are answered at once.
+TEST(FreeRunning, DagManagementAutoKeepsTheBudgetWithRequestsInFlight) {
+  const test::Fixture& f = terrain();
+  Server server(f.catalogue);
+  const std::vector<Camera> path = orbit_path(f.hierarchy, 24, 0.3f);
+  client::ClientOptions options = options_for(StreamMode::dag);
+  options.dag.max_ops = 100;
+  options.dag.management = DagMode::budget;
+  options.dag.budget = 1800;
+  options.dag_management.automatic = true;
+  auto seen = std::make_unique<DagViewsSeen>(server.port());
+  DagViewsSeen& link = *seen;
+  client::StreamingClient client(std::move(seen), options);
+  client.open("terrain");
+  uint64_t most = 0;
+  for (const Camera& camera : path) {
+    client.frame_free_running(camera);
+    most = std::max<uint64_t>(most, client.session().mesh().face_count());
+  }
+  client.settle_free_running(path.back());
+  most = std::max<uint64_t>(most, client.session().mesh().face_count());
+  EXPECT_LE(most, options.dag.budget);
+  EXPECT_GT(most, options.dag.budget * 3 / 4) << "the budget is what held the mesh back";
+  EXPECT_GT(link.free, 0u);
+  EXPECT_GT(link.budget, 1u) << "only the first request asked in BUDGET mode";
+}
 
 // A lost connection, free-running: frames go on with the mesh held and nothing in flight, each makes at
 // most one reconnect attempt and only once the backoff's delay has passed (no frame sleeps it away), and

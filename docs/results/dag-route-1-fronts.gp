@@ -1,6 +1,6 @@
 set terminal pngcairo size 960,640 noenhanced font ",11"
-set output "docs/results/dag-fronts.png"
-set title "Fronts against the mesh"
+set output "docs/results/dag-route-1-fronts.png"
+set title "Fronts against the mesh, route 1"
 set xlabel "frame"
 set ylabel "(Fc + Fs) / triangles"
 set grid

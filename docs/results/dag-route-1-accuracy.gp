@@ -1,6 +1,6 @@
 set terminal pngcairo size 960,640 noenhanced font ",11"
-set output "docs/results/dag-accuracy.png"
-set title "Correct triangles against priority, every 5 frames"
+set output "docs/results/dag-route-1-accuracy.png"
+set title "Correct triangles against priority, every 5 frames, route 1"
 set xlabel "frame"
 set ylabel "% of priority's triangles"
 set grid
