@@ -39,6 +39,7 @@ class DagManagement {
 
   uint32_t max_ops() const { return max_ops_; }
   const DagManagementOptions& options() const { return options_; }
+  const protocol::DagView& configured() const { return configured_; }  // what every request carries
 
   // N never drops below this: a frame over budget with few operations is over on fixed costs N cannot cut.
   static constexpr uint32_t kMinOps = 8;

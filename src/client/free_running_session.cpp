@@ -99,7 +99,7 @@ std::vector<uint8_t> FreeRunningSession::ahead(const Camera& camera) {
   const std::optional<Camera> next = extrapolate(*previous_, camera, ahead_frames_);
   if (!next || camera_problem(*next)) return {};
   ++aheads_;
-  return protocol::encode(protocol::Ahead{protocol::View{*next, request_.view.tolerance, aheads_}});
+  return protocol::encode(protocol::Ahead{protocol::View{*next, management_.configured().view.tolerance, aheads_}});
 }
 
 std::vector<uint8_t> FreeRunningSession::frame(const Camera& camera, Clock::time_point now, FrameReport& report) {
