@@ -293,6 +293,7 @@ class Harness {
     reconnect,
     timeout,
     park,
+    ahead,
     count
   };
 
@@ -311,6 +312,11 @@ class Harness {
       case Op::view: {
         const Camera camera = near_camera(in, f_);
         return send_view(camera, pick(in, {0, 0.25f, 0.5f, 1, 2, 8, 100, 1e9f}));
+      }
+      case Op::ahead: {  // version 7's idle-time request, between VIEWs or instead of them
+        const Camera camera = near_camera(in, f_);
+        const float tolerance = pick(in, {0, 0.25f, 0.5f, 1, 2, 8, 100, 1e9f});
+        return send(protocol::encode(protocol::Ahead{protocol::View{camera, tolerance, next_frame_++}}));
       }
       case Op::wild_view: {
         const Camera camera = wild_camera(in);

@@ -74,7 +74,10 @@ class SimulatedClient {
 
   // A new connection: what the old one queued and the client did not read is lost; the leaves stay.
   void reconnect() { s_ = {}; }
-  void hello_sent() { s_.greeted = true; }
+  void hello_sent(uint16_t version) {
+    s_.greeted = true;
+    s_.version = version;
+  }
   void list_sent() { ++s_.lists; }
   // The session has every reason to accept this OPEN: BASE must come, and start from `front` (the roots
   // of a fresh session).
@@ -82,6 +85,7 @@ class SimulatedClient {
     s_.mode = mode;
     s_.front = front;
   }
+  void ahead_sent(uint32_t frame) { s_.aheads.push_back(frame); }
   void view_sent(uint32_t frame) {
     // Frame numbers tell answers apart only while no two VIEWs share one.
     if (std::find(s_.views.begin(), s_.views.end(), frame) != s_.views.end()) s_.frames_distinct = false;
@@ -163,6 +167,8 @@ class SimulatedClient {
   };
   struct PerSession {
     bool greeted = false;
+    uint16_t version = 0;          // the HELLO's: the session's HELLO_OK echoes it
+    std::vector<uint32_t> aheads;  // every AHEAD's frame: an ahead VSPLITS names one
     uint32_t hello_oks = 0, lists = 0, catalogues = 0;
     protocol::StreamMode mode = protocol::StreamMode::sender_driven;
     std::optional<std::vector<VertexId>> front;  // of the OPEN the session must accept
@@ -182,7 +188,7 @@ class SimulatedClient {
   void on(const protocol::HelloOk& m) {
     trace([] { return "<- HELLO_OK"; });
     check(s_.greeted && s_.hello_oks++ == 0, "a HELLO_OK that answers no HELLO");
-    check(m.version == protocol::kProtocolVersion, "HELLO_OK with another version");
+    check(m.version == s_.version, "HELLO_OK with another version than the HELLO's");
     check(m.max_client_message == limits_.max_client_message && m.max_server_message == limits_.max_server_message,
           "HELLO_OK announces other limits than the server's");
   }
@@ -216,6 +222,13 @@ class SimulatedClient {
       return "<- VSPLITS frame " + std::to_string(m.frame) + (m.final ? " final, " : ", ") +
              std::to_string(m.splits.size()) + " splits";
     });
+    if (m.ahead) {  // held splits of the leaves the client holds, answering no VIEW
+      check(std::find(s_.aheads.begin(), s_.aheads.end(), m.frame) != s_.aheads.end() && !m.final,
+            "an ahead VSPLITS for a frame no AHEAD named, or final");
+      check(m.splits.size() <= limits_.batch_splits, "an ahead VSPLITS batch over batch_splits");
+      for (const SplitRecord& split : m.splits) apply(split);
+      return;
+    }
     check(!s_.views.empty() && std::find(s_.views.begin(), s_.views.end(), m.frame) != s_.views.end(),
           "a VSPLITS for a frame no VIEW named");
     check(!(s_.frames_distinct && s_.last_answered), "a VSPLITS after the last VIEW's answer was final");
@@ -428,9 +441,11 @@ class Expectation {
     if (!greeted_) {
       const auto* hello = std::get_if<protocol::Hello>(&message);
       if (!hello) return allow(ErrorCode::out_of_order);
-      if (hello->version != protocol::kProtocolVersion) return allow(ErrorCode::unsupported_version);
+      if (hello->version < protocol::kMinProtocolVersion || hello->version > protocol::kProtocolVersion)
+        return allow(ErrorCode::unsupported_version);
       greeted_ = true;
-      client.hello_sent();
+      version_ = hello->version;
+      client.hello_sent(hello->version);
       return;
     }
     if (std::holds_alternative<protocol::Hello>(message)) return allow(ErrorCode::out_of_order);
@@ -446,6 +461,12 @@ class Expectation {
       });
       if (!open_ || mode_ == protocol::StreamMode::dag) return allow(ErrorCode::out_of_order);
       return client.view_sent(view->frame);
+    }
+    if (const auto* ahead = std::get_if<protocol::Ahead>(&message)) {
+      trace([&] { return "   AHEAD " + std::to_string(ahead->view.frame); });
+      // Version 7's, in a sender-driven session only (a plain one makes every split it gets).
+      if (!open_ || mode_ != protocol::StreamMode::sender_driven || version_ < 7) return allow(ErrorCode::out_of_order);
+      return client.ahead_sent(ahead->view.frame);
     }
     if (const auto* view = std::get_if<protocol::DagView>(&message)) {
       trace([&] {
@@ -503,6 +524,7 @@ class Expectation {
   const Dag& dag_;
   std::string name_;
   bool greeted_ = false, open_ = false, closed_ = false;
+  uint16_t version_ = 0;
   protocol::StreamMode mode_ = protocol::StreamMode::sender_driven;  // of the OPEN taken
   std::vector<protocol::ErrorCode> allowed_;
 };

@@ -155,13 +155,16 @@ void SenderDrivenMode::pump_ahead(uint64_t& work) {
     ahead_streamer_.start(context_.served.model(), context_.served.tables->selective().dependencies, tags_,
                           ahead_importance_);
   const bool served = ahead_streamer_.step(kAheadBatchSplits, context_.limits.slice_work, ahead_batch_, work);
-  if (!ahead_batch_.empty()) {
-    std::vector<uint8_t> frame = context_.served.tables->packets().encode_ahead(ahead_.frame, ahead_batch_);
+  // A dependency chain can carry the batch past batch_splits: it leaves in messages of at most that many.
+  const size_t per_message = std::max<size_t>(1, context_.limits.batch_splits);
+  for (size_t at = 0; at < ahead_batch_.size(); at += per_message) {
+    const auto nodes = std::span(ahead_batch_).subspan(at, std::min(per_message, ahead_batch_.size() - at));
+    std::vector<uint8_t> frame = context_.served.tables->packets().encode_ahead(ahead_.frame, nodes);
     ahead_bytes_ += frame.size();
-    splits_sent_ += ahead_batch_.size();
-    ahead_batch_.clear();
+    splits_sent_ += nodes.size();
     context_.queue(std::move(frame));
   }
+  ahead_batch_.clear();
   if (served || ahead_bytes_ >= context_.limits.ahead_budget_bytes) {
     stop_ahead();
     park_if_due();
