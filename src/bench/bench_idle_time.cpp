@@ -1,6 +1,6 @@
 // The viewer group's idle-time experiment (kim-lee-kobbelt §9; issue 47's target): the sender-driven viewer
-// free-running at 30 fps along the orbit, two laps, over a link with a 50 ms round trip (delay_proxy.h), with
-// `stream --ahead` and without, side by side: the share of frames whose view is satisfied, bytes down and up,
+// free-running at the display rate along the orbit, two laps, over a delayed link (delay_proxy.h; the rate and
+// the round trip are the issue's, set below), with `stream --ahead` and without, side by side: the share of frames whose view is satisfied, bytes down and up,
 // the splits that came ahead, and whether the settled mesh is the lock-step one.
 #include <array>
 #include <cstdio>

@@ -18,7 +18,7 @@ namespace asio = boost::asio;
 using nlohmann::json;
 namespace {
 
-// A lap of the orbit in 12 s at 30 fps, the scan up and down in as long.
+// An orbit slow enough to look around at the fleet's frame rate; the scan up and down in as long.
 constexpr uint32_t kOrbitFrames = 360, kScanFrames = 180;
 constexpr size_t kFailuresKept = 5;
 

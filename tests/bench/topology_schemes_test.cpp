@@ -64,7 +64,7 @@ void check_replay(const char*, const ModelData& model) {
   const std::vector<SchemeBits> rows = table2_bits(model, context);
   ASSERT_EQ(rows.size(), 6u);
   EXPECT_NEAR(rows[0].indices, 2 + valence + double(missing_sides) / double(splits), 1e-9)
-      << "explicit 1-ring: v_s, v_t and N(v_s), a placeholder where a cut vertex is missing";
+      << "explicit 1-ring: v_s, v_t and N(v_s), the top index value standing for a missing cut vertex";
   const double fixed_indices[] = {6, 8, 6, 3, 3};  // the other schemes' fields are fixed
   for (size_t k = 1; k < rows.size(); ++k) EXPECT_DOUBLE_EQ(rows[k].indices, fixed_indices[k - 1]) << k;
   for (const SchemeBits& row : rows) {
