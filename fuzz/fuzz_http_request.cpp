@@ -80,7 +80,7 @@ void serve_bytes(std::string_view bytes) {
     }
     if (!parser.is_done()) return;
     if (const auto refusal = refuse_header(parser)) return check_answer(refusal->answer, false);  // and close
-    check_answer(answer_request(*f.catalogue, f.limits, parser.get()), true);
+    check_answer(answer_request(*f.catalogue, f.limits, nullptr, parser.get()), true);
     bytes.remove_prefix(used);
   }
 }

@@ -59,6 +59,13 @@ double cpu_seconds() {
   return double(t.tv_sec) + 1e-9 * double(t.tv_nsec);
 }
 
+// Milliseconds spent in each of cheng-ooi's Table 1 phases (server/phase_times.h), by the phase's name.
+nlohmann::json phase_ms(const server::PhaseTimes& times) {
+  nlohmann::json ms = nlohmann::json::object();
+  for (size_t p = 0; p < size_t(server::Phase::count); ++p) ms[server::kPhaseNames[p]] = double(times.ns[p].load()) / 1e6;
+  return ms;
+}
+
 // The sessions' counters, the TCP port's or the WebSocket's.
 nlohmann::json session_counters(const server::ServerStats& s) {
   return {{"sessions_opened", s.sessions_opened.load()},
@@ -93,6 +100,7 @@ nlohmann::json stats_json(const char* event, const server::ServerStats& s, const
   line["rss_bytes"] = rss;
   line["peak_rss_bytes"] = peak_rss;
   line["cpu_s"] = cpu_seconds();
+  line["phases_ms"] = phase_ms(s.phases);
   return line;
 }
 
@@ -140,7 +148,8 @@ void add_http_stats(nlohmann::json& line, const server::HttpServer& http, const 
                   {"bytes_in", s.bytes_in.load()},
                   {"bytes_out", s.bytes_out.load()},
                   {"splits_served", s.splits_served.load()},
-                  {"split_requests", s.split_requests.load()}};
+                  {"split_requests", s.split_requests.load()},
+                  {"phases_ms", phase_ms(s.phases)}};
   const server::WsStats& ws = http.ws_stats();
   nlohmann::json& counters = line["ws"] = session_counters(http.ws_sessions());
   counters["upgrades"] = ws.upgrades.load();
@@ -385,6 +394,8 @@ void add_serve_command(CliCommand& app) {
   add_limit(cmd, "--ahead-budget", limits.ahead_budget_bytes,
             "Bytes a sender-driven session may send ahead of its views while idle (AHEAD, stream --ahead) over "
             "its life, at most one batch over; 0 = none");
+  cmd.flag("--profile-phases", limits.profile_phases,
+           "Time the sessions' and the HTTP answers' work by cheng-ooi's Table 1 phases (stats lines: phases_ms)");
   const CliOption preload =
       cmd.option("--preload", args->preload,
                  "Build these modes' tables before listening: all, or a comma list of sender, sender-plain, vi, dag, "
@@ -398,6 +409,7 @@ void add_serve_command(CliCommand& app) {
     args->http.trusted_proxies = server::AddressRanges::parse(args->trusted_proxies, "--trusted-proxy");
     args->preload_given = preload.given();
     args->limits.compact_fronts = args->session_front == "compact";
+    args->http.profile_phases = args->limits.profile_phases;
     run_serve(*args);
   });
 }

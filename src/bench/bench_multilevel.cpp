@@ -10,6 +10,7 @@
 
 #include "bench/bench.h"
 #include "bench/child_process.h"
+#include "bench/multilevel_figures.h"
 #include "bench/multilevel_sizes.h"
 #include "bench/report.h"
 #include "common/error.h"
@@ -115,6 +116,7 @@ void run_multilevel_group(BenchContext& context) {
   std::printf("\n## %s\n\n%s\n", section.c_str(), table.header().c_str());
   nlohmann::json rows = nlohmann::json::array();
   std::vector<std::string> size_rows;
+  std::string pictures;
   for (const std::string& name : models) {
     const std::string input = find_model(context.models_dir, name).string();
     const std::string output = (context.temp_dir / (name + ".pml")).string();
@@ -126,6 +128,7 @@ void run_multilevel_group(BenchContext& context) {
     }
     const MultilevelMesh m = read_multilevel(output);
     const LodTimes times = lod_times(m, repeats);
+    pictures += multilevel_figures(context.options.out_dir, name, m);
     // Progressive loading: the head, then each level's section, coarsest first (the HTTP bodies).
     const MultilevelParts parts = multilevel_parts(m);
     nlohmann::json per_level = nlohmann::json::array();
@@ -198,7 +201,7 @@ void run_multilevel_group(BenchContext& context) {
                     "and per triangle (connectivity and representatives), each level's header and code tables shared "
                     "out between them; gzip -9 of each level's binary section and ASCII batches; meshoptimizer's "
                     "vertex codec and index-sequence codec per level on the same grid.\n\n" +
-                    sizes.markdown();
+                    sizes.markdown() + "\n" + pictures;
   write_text_file(context.options.out_dir / "multilevel.json",
                   nlohmann::json{{"machine", machine_json()}, {"models", rows}}.dump(2) + "\n");
 }

@@ -14,6 +14,7 @@
 #include "apps/refine_pipeline.h"
 #include "bench/bench.h"
 #include "bench/bench_model.h"
+#include "bench/e7_phases.h"
 #include "bench/receiver_quality.h"
 #include "bench/report.h"
 #include "bench/serve_child.h"
@@ -142,20 +143,24 @@ struct ServerCost {
   double cpu_s = 0;
   // What the receiver-driven client sent: ids its split GETs named, their codes' bytes, all its bytes up.
   uint64_t requested_ids = 0, request_code_bytes = 0, bytes_up = 0;
+  PhaseMs phase_ms{};  // with `serve --profile-phases`
   std::string error;  // the flight or the server's figures failed: the row has none
 };
 
 struct Counters {
   double cpu_s = 0;
   uint64_t bytes_out = 0, splits = 0, requests = 0;
+  PhaseMs phase_ms{};
 };
 
-Counters tcp_counters(const ServeStats& s) { return {s.cpu_s, s.bytes_out, s.splits_sent, 0}; }
+Counters tcp_counters(const ServeStats& s) {
+  return {s.cpu_s, s.bytes_out, s.splits_sent, 0, phase_ms_of(s.line.at("phases_ms"))};
+}
 
 Counters http_counters(const ServeStats& s) {
   const json& h = s.line.at("http");
   return {s.cpu_s, h.at("bytes_out").get<uint64_t>(), h.at("splits_served").get<uint64_t>(),
-          h.at("requests").get<uint64_t>()};
+          h.at("requests").get<uint64_t>(), phase_ms_of(h.at("phases_ms"))};
 }
 
 // A TCP session adds its splits to the server's counters when it closes, which the client's disconnect
@@ -171,13 +176,15 @@ ServeStats settled_stats(ServeChild& server) {
 }
 
 // The server's counters just before and just after `flight`, which flies one client along the path: what
-// the flight cost, without the model's loading.
+// the flight cost, without the model's loading. `profile`: the server times its phases (e7_phases.h).
 template <class Read, class Flight>
-ServerCost server_cost(const BenchContext& context, const BenchModel& m, bool http, Read read, Flight flight) {
+ServerCost server_cost(const BenchContext& context, const BenchModel& m, bool http, bool profile, Read read,
+                       Flight flight) {
   ServerCost cost;
   try {
     std::vector<std::string> args = {m.pms.string()};
     if (http) args.insert(args.end(), {"--http-port", "0"});
+    if (profile) args.push_back("--profile-phases");
     ServeChild server(context.pmstream_exe, args);
     const uint16_t port = http ? server.listening().at("http_port").get<uint16_t>() : server.port();
     const Counters before = read(server.stats());
@@ -188,14 +195,16 @@ ServerCost server_cost(const BenchContext& context, const BenchModel& m, bool ht
     cost.bytes_out = after.bytes_out - before.bytes_out;
     cost.splits = after.splits - before.splits;
     cost.requests = after.requests - before.requests;
+    for (size_t p = 0; p < cost.phase_ms.size(); ++p) cost.phase_ms[p] = after.phase_ms[p] - before.phase_ms[p];
   } catch (const std::exception& e) {
     cost.error = e.what();
   }
   return cost;
 }
 
-ServerCost sender_cost(const BenchContext& context, const BenchModel& m, const std::vector<Camera>& path) {
-  return server_cost(context, m, false, tcp_counters, [&](uint16_t port) {
+ServerCost sender_cost(const BenchContext& context, const BenchModel& m, const std::vector<Camera>& path,
+                       bool profile = false) {
+  return server_cost(context, m, false, profile, tcp_counters, [&](uint16_t port) {
     client::ClientOptions options{kTolerance};
     client::StreamingClient client("127.0.0.1", port, options);
     client.open(m.name);
@@ -203,10 +212,11 @@ ServerCost sender_cost(const BenchContext& context, const BenchModel& m, const s
   });
 }
 
-ServerCost receiver_cost(const BenchContext& context, const BenchModel& m, const std::vector<Camera>& path) {
+ServerCost receiver_cost(const BenchContext& context, const BenchModel& m, const std::vector<Camera>& path,
+                         bool profile = false) {
   client::ReceiverTotals totals;
   uint64_t bytes_up = 0;
-  ServerCost cost = server_cost(context, m, true, http_counters, [&](uint16_t port) {
+  ServerCost cost = server_cost(context, m, true, profile, http_counters, [&](uint16_t port) {
     client::ReceiverOptions options;
     options.tolerance = kTolerance;
     client::ReceiverClient client(client::HttpUrl{"127.0.0.1", port, ""}, options);
@@ -399,6 +409,19 @@ void run_receiver_group(BenchContext& context) {
     out["models"][i]["e7"] = {
         {"frames", path.size()}, {"sender", cost_record(sender)}, {"receiver", cost_record(receiver)}};
   }
+  Table phases = e7_phase_table();
+  print("\nE7 by phase (cheng-ooi Table 1): the same flights, the servers timing their phases\n" + phases.header());
+  for (size_t i = 0; i < models.size(); ++i) {
+    const BenchModel& m = models[i];
+    const std::vector<Camera> path = path_of(m, PathKind::orbit, quick ? kQuickPathFrames : kPathFrames);
+    const auto profiled = [&](const ServerCost& c) { return PhaseCost{1e3 * c.cpu_s, c.phase_ms, c.error}; };
+    const PhaseCost sender = profiled(sender_cost(context, m, path, true)),
+                    receiver = profiled(receiver_cost(context, m, path, true));
+    for (const PhaseCost* c : {&sender, &receiver})
+      if (!c->error.empty()) context.failures.push_back("E7 by phase " + m.name + ": " + c->error);
+    add_e7_phase_rows(m.name, sender, receiver, phases);
+    out["models"][i]["e7_phases"] = e7_phase_record(sender, receiver);
+  }
   print("\nUp: bits per requested id, the receiver-driven E7 flights\n" + up.header());
   for (size_t i = 0; i < models.size(); ++i) print(up.add_row(up_row(models[i].name, receivers[i])));
   const std::string quality = e6_e8_sections(context, models, out["models"]);
@@ -431,6 +454,7 @@ void run_receiver_group(BenchContext& context) {
       "over the flight (its counters read by SIGUSR1 before and after, so loading the model is not counted); "
       "bytes out are the server's own count (TCP payload, or HTTP headers and bodies). Issue 19's targets: "
       "CPU per split ≥ 30 % and bytes out ≥ 40 % below the sender-driven mode's (cheng-ooi: −24 % and −40 %).\n\n";
+  section += "### E7 by phase: cheng-ooi's Table 1\n\n" + phases.markdown() + "\n" + e7_phase_notes();
   section += "### Up: bits per requested id\n\n" + up.markdown() +
              "\nThe receiver-driven client of the E7 flights: split GETs sent, the ids they named (each with its "
              "descendant depth, docs/protocol.md \"Receiver-driven client\"), the bits of their id sets' codes (docs/"

@@ -8,6 +8,7 @@
 
 #include "bench/bench.h"
 #include "bench/group_reports.h"
+#include "bench/paper_report.h"
 #include "bench/pmstream_binary.h"
 #include "common/error.h"
 
@@ -141,6 +142,7 @@ void run_bench(const BenchArgs& args) {
     std::printf("\nbench: wrote %s\n", (context.options.out_dir / (std::string(group->name) + ".md")).string().c_str());
   }
   write_report_index(context.options.out_dir);
+  write_paper_report(context.options.out_dir);
   if (!context.failures.empty()) {
     std::string list;
     for (const std::string& f : context.failures) list += (list.empty() ? "" : "; ") + f;

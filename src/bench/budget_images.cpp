@@ -25,7 +25,6 @@ constexpr uint64_t kPaperBudget = 1 << 19;  // 0.5 MiB
 constexpr double kBuddhaSplits = 545'557;   // the paper's Table 1: Buddha's details
 constexpr float kLowTolerance = 0.02f, kHighTolerance = 512;
 constexpr int kSteps = 9, kQuickSteps = 5;
-constexpr uint32_t kGap = 8;  // pixels between the panels
 
 struct Mode {
   const char* label;
@@ -72,24 +71,6 @@ std::optional<Shot> within_budget(const BenchModel& m, const Camera& camera, pro
     if (high.bytes <= budget) best = std::move(high);
   }
   return best;
-}
-
-// The panels left to right with a gap of the background colour.
-Image side_by_side(const std::vector<Image>& panels) {
-  Image out;
-  out.height = panels.front().height;
-  for (const Image& p : panels) out.width += p.width;
-  out.width += kGap * uint32_t(panels.size() - 1);
-  const RenderOptions defaults;
-  out.rgb.resize(size_t(out.width) * out.height * 3);
-  for (size_t p = 0; p < out.rgb.size(); p += 3) std::copy(defaults.background, defaults.background + 3, &out.rgb[p]);
-  uint32_t x0 = 0;
-  for (const Image& p : panels) {
-    for (uint32_t y = 0; y < p.height; ++y)
-      std::copy_n(&p.rgb[(size_t(y) * p.width) * 3], size_t(p.width) * 3, &out.rgb[(size_t(y) * out.width + x0) * 3]);
-    x0 += p.width + kGap;
-  }
-  return out;
 }
 
 struct Budget {

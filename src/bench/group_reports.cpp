@@ -75,7 +75,8 @@ void write_report_index(const fs::path& dir) {
   std::string s = "# pmstream-bench reports\n\n";
   s += "One report per experiment group (docs/architecture.md, \"Experiments\"), each made by `pmstream-bench "
        "--out DIR` and opening with its run's command, machine, version and date; `--only GROUP` regenerates "
-       "one. GROUP.json holds the same figures for scripts.\n\n";
+       "one. GROUP.json holds the same figures for scripts. [report.md](report.md) puts every figure and table of "
+       "the four papers beside ours.\n\n";
   Table table({{"group", false}, {"what it measures", false}, {"report", false}, {"data", false}});
   for (const BenchGroup& group : bench_groups()) {
     const std::string name = group.name;

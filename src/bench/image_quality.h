@@ -23,6 +23,9 @@ std::vector<Viewpoint> quality_viewpoints(const ModelData& model);
 
 RenderMesh as_render(const MeshArrays& mesh);
 
+// The panels left to right, as tall as the first, with a gap of the renderer's background colour.
+Image side_by_side(const std::vector<Image>& panels);
+
 // "inf" for identical images, else two decimals; JSON has no infinity (kPsnrIdenticalJson).
 std::string psnr_text(double psnr);
 double psnr_json(double psnr);

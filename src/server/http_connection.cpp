@@ -265,7 +265,8 @@ class HttpConnection : public std::enable_shared_from_this<HttpConnection> {
     HttpAnswer answer;
     try {
       catalogue_ = shared_.catalogues.get();  // held until the answer is sent: its body may be built from it
-      answer = answer_request(*catalogue_, limits_, parser_->get(), shared_.site);
+      answer = answer_request(*catalogue_, limits_, limits_.profile_phases ? &stats_.phases : nullptr, parser_->get(),
+                              shared_.site);
     } catch (const std::exception& e) {  // out of memory for an answer: this request's fault only
       log_line(std::string("internal error: ") + e.what());
       answer = error_answer(500, "internal error");

@@ -152,9 +152,10 @@ bool is_api_target(std::string_view target) {
   return !path || *path == "/models" || path->starts_with("/models/");
 }
 
-HttpAnswer answer_request(const Catalogue& catalogue, const HttpLimits& limits,
+HttpAnswer answer_request(const Catalogue& catalogue, const HttpLimits& limits, PhaseTimes* phases,
                           const http::request<http::vector_body<uint8_t>>& request, StaticSite* site) {
   HttpRequest r;
+  r.phases = phases;
   r.method = view_of(request.method_string());
   r.target = view_of(request.target());
   r.body = request.body();

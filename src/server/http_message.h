@@ -49,7 +49,7 @@ bool expects_continue(const HttpParser& parser);
 
 // The answer to a parsed request: the API's routes (with HEAD answered as GET) for /models and below,
 // the page's files (when `site` is given) for every other path.
-HttpAnswer answer_request(const Catalogue& catalogue, const HttpLimits& limits,
+HttpAnswer answer_request(const Catalogue& catalogue, const HttpLimits& limits, PhaseTimes* phases,
                           const http::request<http::vector_body<uint8_t>>& request, StaticSite* site = nullptr);
 
 // Whether `target` is the API's (/models and below, and any target that is not a path): those keep

@@ -135,6 +135,7 @@ HttpAnswer replaced_answer(const std::string& name, std::string_view asked, cons
 }
 
 HttpAnswer base_answer(const ServedModel& model, const HttpRequest& request) {
+  const PhaseTimer timer(request.phases, Phase::send_base);
   HttpAnswer answer = fresh(request, etag_of(model, {"/base"}), "application/octet-stream");
   if (answer.status == 200) {
     answer.shared = model.base_frame;
@@ -146,11 +147,15 @@ HttpAnswer base_answer(const ServedModel& model, const HttpRequest& request) {
 // The records of a decoded request; `etag` is its canonical URL's (the GET form's, also for a POST).
 HttpAnswer splits_answer(const ServedModel& model, const HttpLimits& limits, const HttpRequest& request,
                          const protocol::SplitRequest& split_request, const std::string& etag) {
-  const std::vector<uint32_t> nodes = requested_nodes(model.model(), split_request, limits.max_response_splits);
+  std::vector<uint32_t> nodes;
+  {
+    const PhaseTimer timer(request.phases, Phase::search_splits);
+    nodes = requested_nodes(model.model(), split_request, limits.max_response_splits);
+  }
   HttpAnswer answer = fresh(request, etag, "application/octet-stream");
   answer.split_resource = true;
   if (answer.status == 200) {
-    answer.builder = std::make_shared<SplitRecordsWriter>(model, split_request, nodes);
+    answer.builder = std::make_shared<SplitRecordsWriter>(model, split_request, nodes, request.phases);
     answer.splits = nodes.size();
   }
   return answer;
@@ -158,12 +163,15 @@ HttpAnswer splits_answer(const ServedModel& model, const HttpLimits& limits, con
 
 // The code tables every record of the model is coded with.
 HttpAnswer codec_answer(const ServedModel& model, const HttpRequest& request) {
+  const PhaseTimer timer(request.phases, Phase::send_base);
   HttpAnswer answer = fresh(request, etag_of(model, {"/codec"}), "application/octet-stream");
   if (answer.status == 200) answer.shared = model.tables->records().codec_tables;
   return answer;
 }
 
-protocol::SplitRequest decode_code(const ServedModel& model, const HttpLimits& limits, std::span<const uint8_t> code) {
+protocol::SplitRequest decode_code(const ServedModel& model, const HttpLimits& limits, const HttpRequest& request,
+                                   std::span<const uint8_t> code) {
+  const PhaseTimer timer(request.phases, Phase::decode_ids);
   protocol::SplitRequestLimits bounds;
   bounds.root_count = model.model().root_count;
   bounds.max_node_depth = int(model.context.node_id_bits) - 1;  // the deepest level holds leaves only
@@ -233,14 +241,17 @@ HttpAnswer progressive_route(const ServedModel& model, const HttpLimits& limits,
   if (s[2] == "codec") return codec_answer(model, request);
   if (s[2] == "blocks") return block_answer(model, limits, request, s.subspan(3));
   if (post_route)
-    return splits_answer(model, limits, request, decode_code(model, limits, request.body),
+    return splits_answer(model, limits, request, decode_code(model, limits, request, request.body),
                          etag_of(model, {"/splits/", protocol::base64url_encode(request.body)}));
   if (s[3].size() > (uint64_t(limits.max_body_bytes) * 4 + 2) / 3)
     return error_answer(414, "a request code of over " + std::to_string(limits.max_body_bytes) + " bytes");
-  const auto code = protocol::base64url_decode(s[3]);
+  const auto code = [&] {
+    const PhaseTimer timer(request.phases, Phase::decode_ids);
+    return protocol::base64url_decode(s[3]);
+  }();
   if (!code) return error_answer(400, "the request code is not canonical base64url (RFC 4648 §5, no padding)");
   // Strict base64url has one text per code: the segment is the canonical URL's.
-  return splits_answer(model, limits, request, decode_code(model, limits, *code),
+  return splits_answer(model, limits, request, decode_code(model, limits, request, *code),
                        etag_of(model, {"/splits/", s[3]}));
 }
 

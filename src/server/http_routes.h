@@ -12,6 +12,7 @@
 
 #include "server/catalogue.h"
 #include "server/limits.h"
+#include "server/phase_times.h"
 
 namespace pms::server {
 
@@ -20,6 +21,7 @@ struct HttpRequest {
   std::string_view target;  // the request line's URL (origin form: starts with '/')
   std::span<const uint8_t> body;
   std::string_view if_none_match;  // the header's value; empty when absent
+  PhaseTimes* phases = nullptr;     // the server's, when it profiles phases (HttpLimits::profile_phases)
 };
 
 // A body built a piece at a time by the transport, so that one large answer does not hold an I/O thread

@@ -36,6 +36,7 @@ struct ServerLimits {
   // kim-lee-kobbelt §9's idle time: the bytes a sender-driven session may send ahead (AHEAD's answers) over
   // its life, at most one batch over; 0: AHEAD is taken and never answered.
   uint32_t ahead_budget_bytes = 1u << 20;
+  bool profile_phases = false;  // time the sessions' work by cheng-ooi's Table 1 phases (phase_times.h)
 };
 
 // Every bound the HTTP transport (receiver-driven mode) puts on a peer (docs/operating.md, "HTTP").
@@ -60,6 +61,7 @@ struct HttpLimits {
   uint32_t catalogue_max_age_s = 60;     // GET /models: how long a cache may use it unasked (0: ask each time)
   // Peers whose X-Forwarded-For names the client the per-address limits apply to (--trusted-proxy).
   AddressRanges trusted_proxies;
+  bool profile_phases = false;  // time the answers' work by cheng-ooi's Table 1 phases (phase_times.h)
 };
 
 // The most the kernel holds for the HTTP connections' socket buffers: Linux doubles what SO_SNDBUF and

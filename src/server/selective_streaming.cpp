@@ -74,8 +74,9 @@ uint32_t active_ancestor(const ModelData& model, const ActiveTags& tags, uint32_
 }
 
 void SelectiveStreamer::start(const ModelData& model, const DependencyFilter& dependencies, ActiveTags& tags,
-                              Importance importance) {
+                              Importance importance, server::PhaseTimes* phases) {
   model_ = &model;
+  phases_ = phases;
   dependencies_ = &dependencies;
   tags_ = &tags;
   importance_ = std::move(importance);
@@ -137,7 +138,10 @@ bool SelectiveStreamer::step(size_t max_splits, uint64_t budget, std::vector<uin
   const size_t start = out.size();
   const uint64_t stop = work + budget;
   for (;;) {
-    if (scan_ != kNotScanning && !continue_scan(stop > work ? stop - work : 0, work)) return false;
+    if (scan_ != kNotScanning) {
+      const server::PhaseTimer timer(phases_, server::Phase::determine_visibility);
+      if (!continue_scan(stop > work ? stop - work : 0, work)) return false;
+    }
     if (heap_.empty()) {
       if (!overflow_) return true;
       begin_scan();
@@ -149,9 +153,13 @@ bool SelectiveStreamer::step(size_t max_splits, uint64_t budget, std::vector<uin
     heap_.pop_back();
     if (!tags_->is_active(v)) continue;  // split earlier as a dependency
     const size_t before = out.size();
-    sel_stream_vsplit(model, *dependencies_, *tags_, v, out, stack_, cuts);
+    {
+      const server::PhaseTimer timer(phases_, server::Phase::update_front);
+      sel_stream_vsplit(model, *dependencies_, *tags_, v, out, stack_, cuts);
+    }
     work += out.size() - before;
     // Children of every split just made may want refining too; forced splits' children included.
+    const server::PhaseTimer timer(phases_, server::Phase::determine_visibility);
     for (size_t i = before; i < out.size(); ++i) {
       const uint32_t child = model.first_child[out[i]];
       for (uint32_t c : {child, child + 1}) {
@@ -166,6 +174,7 @@ bool SelectiveStreamer::step(size_t max_splits, uint64_t budget, std::vector<uin
 
 void SelectiveStreamer::stop() {
   model_ = nullptr;
+  phases_ = nullptr;
   dependencies_ = nullptr;
   tags_ = nullptr;
   importance_ = nullptr;

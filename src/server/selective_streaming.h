@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "server/active_tags.h"
+#include "server/phase_times.h"
 #include "spm/dependency_filter.h"
 #include "spm/hierarchy.h"
 
@@ -33,7 +34,9 @@ class SelectiveStreamer {
  public:
   static constexpr size_t kMaxRanked = 1024;
 
-  void start(const ModelData& model, const DependencyFilter& dependencies, ActiveTags& tags, Importance importance);
+  // With `phases`, the ranking's time counts as determine_visibility and the splits' as update_front.
+  void start(const ModelData& model, const DependencyFilter& dependencies, ActiveTags& tags, Importance importance,
+             server::PhaseTimes* phases = nullptr);
   // Appends up to `max_splits` nodes to split to `out`, each after every split it depends on, and updates
   // the tags as if they were sent. Stops once `work` (nodes evaluated + split, added to) has grown by
   // `budget`, finishing the dependency chain in hand. Returns true once the view is fully served.
@@ -52,6 +55,7 @@ class SelectiveStreamer {
   const DependencyFilter* dependencies_ = nullptr;
   ActiveTags* tags_ = nullptr;
   Importance importance_;
+  server::PhaseTimes* phases_ = nullptr;
   // Ranks the front from scan_ on: its kMaxRanked most important wanted nodes. Returns false when the
   // budget ran out first (the scan goes on at the next call).
   bool continue_scan(uint64_t budget, uint64_t& work);

@@ -114,6 +114,7 @@ void SenderDrivenMode::pump_resume(uint64_t& work) {
 // BASE, and CODEC when the session's packets are split records (protocol::carries_split_records): not
 // the plain option.
 void SenderDrivenMode::queue_base() {
+  const PhaseTimer timer(context_.phases, Phase::send_base);
   context_.outbox.push_back(context_.served.base_frame);
   if (!plain_) context_.outbox.push_back(context_.served.tables->records().codec_frame);
 }
@@ -127,7 +128,8 @@ void SenderDrivenMode::pump_answer(uint64_t& work) {
     ahead_.restart = true;
   }
   if (std::exchange(view_.restart, false))
-    streamer_.start(context_.served.model(), context_.served.tables->selective().dependencies, tags_, importance_);
+    streamer_.start(context_.served.model(), context_.served.tables->selective().dependencies, tags_, importance_,
+                    context_.phases);
   const size_t limit = context_.limits.batch_splits;
   const size_t room = batch_.size() < limit ? limit - batch_.size() : 0;
   const bool served = streamer_.step(room, context_.limits.slice_work, batch_, work, plain_ ? &batch_cuts_ : nullptr);
@@ -182,6 +184,7 @@ bool SenderDrivenMode::can_park() const {
 
 void SenderDrivenMode::park_front() {
   if (!can_park()) return;
+  const PhaseTimer timer(context_.phases, Phase::update_front);
   parked_ = CompactFront(context_.served.model(), tags_);
   tags_ = ActiveTags();
 }
@@ -192,6 +195,7 @@ void SenderDrivenMode::park_if_due() {
 
 void SenderDrivenMode::unpark() {
   if (parked_.empty()) return;
+  const PhaseTimer timer(context_.phases, Phase::update_front);
   tags_ = parked_.tags(context_.served.model());
   parked_ = CompactFront();
 }
@@ -203,6 +207,7 @@ ActiveTags SenderDrivenMode::front_tags() const {
 // The first `count` splits of the batch (a VSPLITS never holds more than batch_splits: a dependency chain
 // can carry the batch past it, and the rest waits for the next frame, in order).
 void SenderDrivenMode::emit_batch(size_t count, bool final) {
+  const PhaseTimer timer(context_.phases, Phase::search_splits);
   const std::span<const uint32_t> nodes = std::span(batch_).first(count);
   if (plain_) {
     context_.queue(encode_plain_batch(context_.served.model(), plain_wire_, view_.frame, final, nodes,

@@ -144,7 +144,7 @@ void Session::on_open(const protocol::OpenHeader& m, protocol::Frame& frame) {
 }
 
 void Session::open_mode(const protocol::OpenHeader& m, protocol::Frame& frame) {
-  mode_ = open_session_mode(m, frame, ModeContext{*model_, limits_, outbox_});
+  mode_ = open_session_mode(m, frame, ModeContext{*model_, limits_, outbox_, phases_});
 }
 
 // The tables an OPEN waited for have settled: BASE (the mode opens), or the build's failure as ERROR.

@@ -40,6 +40,8 @@ class Session {
   // thread and must only post a turn to the session's own thread (table_builds.h). `group` is the
   // transport's, for TableBuilds::forget_group when it stops.
   void wake_with(const void* group, std::function<void()> wake);
+  // The mode this session opens times its work into `phases` (ServerLimits::profile_phases).
+  void profile_phases(PhaseTimes* phases) { phases_ = phases; }
   // The OPEN waits for its mode's tables.
   bool waiting_for_tables() const { return waiting_.has_value(); }
 
@@ -96,6 +98,7 @@ class Session {
   std::shared_ptr<TableBuilds> builds_;
   std::shared_ptr<const ServedModel> model_hold_;
   ServerLimits limits_;
+  PhaseTimes* phases_ = nullptr;
   bool greeted_ = false, closing_ = false;
   uint16_t version_ = 0;  // HELLO's: the version this session speaks
   std::optional<protocol::ErrorCode> error_;

@@ -32,7 +32,9 @@ SessionConnection::SessionConnection(const asio::any_io_executor& executor, std:
       timer_(executor),
       throttle_(executor),
       budget_(executor),
-      group_(group) {}
+      group_(group) {
+  if (limits.profile_phases) session_.profile_phases(&stats.phases);
+}
 
 void SessionConnection::start() {
   boost::system::error_code ec;

@@ -15,6 +15,7 @@
 #include "server/active_tags.h"
 #include "server/catalogue.h"
 #include "server/limits.h"
+#include "server/phase_times.h"
 #include "server/selective_streaming.h"
 #include "spm/criteria.h"
 
@@ -27,6 +28,7 @@ struct ModeContext {
   const ServedModel& served;
   const ServerLimits& limits;
   std::deque<Buffer>& outbox;
+  PhaseTimes* phases = nullptr;  // the server's, when it profiles phases
   void queue(std::vector<uint8_t> frame) const {
     outbox.push_back(std::make_shared<const std::vector<uint8_t>>(std::move(frame)));
   }

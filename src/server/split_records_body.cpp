@@ -12,8 +12,9 @@ constexpr size_t kIdsPerLook = 16;
 }  // namespace
 
 SplitRecordsWriter::SplitRecordsWriter(const ServedModel& model, protocol::SplitRequest request,
-                                       std::span<const uint32_t> nodes)
-    : model_(model), request_(std::move(request)) {
+                                       std::span<const uint32_t> nodes, PhaseTimes* phases)
+    : model_(model), request_(std::move(request)), phases_(phases) {
+  const PhaseTimer timer(phases_, Phase::search_splits);
   const auto& offsets = model.tables->records().records.offsets;
   uint64_t bits = 0;  // the records and at most two presence bits each
   for (uint32_t node : nodes) bits += offsets[node + 1] - offsets[node] + 2;
@@ -21,6 +22,7 @@ SplitRecordsWriter::SplitRecordsWriter(const ServedModel& model, protocol::Split
 }
 
 bool SplitRecordsWriter::build(std::chrono::steady_clock::time_point until) {
+  const PhaseTimer timer(phases_, Phase::search_splits);
   const auto& records = model_.tables->records().records;
   while (next_id_ < request_.ids.size()) {
     const size_t end = std::min(request_.ids.size(), next_id_ + kIdsPerLook);

@@ -20,7 +20,9 @@ class SplitRecordsWriter final : public BodyBuilder {
  public:
   // `nodes` are the request's nodes as split_lookup.h lists them (they size the answer). The model
   // outlives the writer (the catalogue holds it for the server's life).
-  SplitRecordsWriter(const ServedModel& model, protocol::SplitRequest request, std::span<const uint32_t> nodes);
+  // With `phases`, building counts as search_splits.
+  SplitRecordsWriter(const ServedModel& model, protocol::SplitRequest request, std::span<const uint32_t> nodes,
+                     PhaseTimes* phases = nullptr);
 
   bool build(std::chrono::steady_clock::time_point until) override;
   std::vector<uint8_t> take() override { return std::move(writer_).take(); }
@@ -28,6 +30,7 @@ class SplitRecordsWriter final : public BodyBuilder {
  private:
   const ServedModel& model_;
   protocol::SplitRequest request_;
+  PhaseTimes* phases_;
   size_t next_id_ = 0;
   BitWriter writer_;
 };

@@ -3,6 +3,8 @@
 #include <atomic>
 #include <cstdint>
 
+#include "server/phase_times.h"
+
 namespace pms::server {
 
 struct ServerStats {
@@ -16,6 +18,7 @@ struct ServerStats {
   std::atomic<uint64_t> peak_state_bytes{0};   // the largest Session::state_bytes() seen
   std::atomic<uint64_t> peak_buffer_bytes{0};  // the same without the client's front
   std::atomic<uint64_t> fronts_parked{0};      // sender-driven fronts coded once their session went idle
+  PhaseTimes phases;                           // with ServerLimits::profile_phases
 };
 
 // The HTTP transport's counters (docs/operating.md, "The JSON lines").
@@ -30,6 +33,7 @@ struct HttpStats {
   std::atomic<uint64_t> budget_waits{0};    // times a connection was not read until its budgets refilled
   std::atomic<uint64_t> sliced_answers{0};  // answers whose body took more than one turn to build
   std::atomic<uint64_t> longest_turn_us{0};  // the longest one connection held an I/O thread in one go
+  PhaseTimes phases;                         // with HttpLimits::profile_phases
 };
 
 // The WebSocket's counters beyond its sessions' (which are a ServerStats of their own): the upgrades and

@@ -199,6 +199,31 @@ TEST(Http, GetAndPostOfARequestCarryItsSplitsInCodeOrder) {
   EXPECT_EQ(post.header("etag"), get.header("etag"));  // one resource, whichever form named it
 }
 
+// Profiled (serve --profile-phases), the receiver-driven answers' time lands in the phases cheng-ooi's
+// Table 1 names for a receiver-driven sender, never in the sender-driven ones; unprofiled, nothing is timed.
+TEST(Http, ProfiledPhasesTimeTheReceiverDrivenAnswersOnly) {
+  const SplitRequest request = some_roots(20, 2);
+  const auto serve = [&](bool profile) {
+    HttpLimits limits;
+    limits.profile_phases = profile;
+    auto server = std::make_unique<Server>(limits);
+    HttpTestClient client(server->port());
+    EXPECT_EQ(client.get(at() + "/base").status, 200);
+    EXPECT_EQ(client.get(splits_url(request)).status, 200);
+    EXPECT_TRUE(reaches(server->http.stats().requests, 2));
+    return server;
+  };
+  const auto profiled = serve(true);
+  const auto& ns = profiled->http.stats().phases.ns;
+  EXPECT_GT(ns[size_t(server::Phase::send_base)].load(), 0u);
+  EXPECT_GT(ns[size_t(server::Phase::decode_ids)].load(), 0u);
+  EXPECT_GT(ns[size_t(server::Phase::search_splits)].load(), 0u);
+  EXPECT_EQ(ns[size_t(server::Phase::determine_visibility)].load(), 0u) << "the client ranks, not the server";
+  EXPECT_EQ(ns[size_t(server::Phase::update_front)].load(), 0u) << "a receiver-driven server holds no front";
+  const auto plain = serve(false);
+  for (const auto& phase : plain->http.stats().phases.ns) EXPECT_EQ(phase.load(), 0u);
+}
+
 TEST(Http, ADepthBringsDescendantsBreadthFirstAndBlocksTileTheTrees) {
   Server server;
   HttpTestClient client(server.port());

@@ -210,6 +210,37 @@ TEST(Session, AViewFloodCostsOneAnswer) {
   EXPECT_EQ(a, b);
 }
 
+// Profiled (serve --profile-phases), a sender-driven answer's time lands in the phases cheng-ooi's Table 1
+// names for a sender: visibility, the front's update, the packets' search; never in the receiver's decode.
+// Unprofiled, the same answer times nothing and is the same answer.
+TEST(Session, ProfiledPhasesTimeTheSenderDrivenAnswerOnly) {
+  const Camera camera = close_camera(terrain().hierarchy);
+  const auto answer = [&](server::PhaseTimes* phases) {
+    const server::ServerLimits limits;
+    server::Session session(terrain().catalogue, limits);
+    session.profile_phases(phases);
+    greet(session);
+    session.receive(frame_of(protocol::encode(protocol::Open{"terrain", {}})));
+    session.receive(frame_of(protocol::encode(protocol::View{camera, 0.5f, 1})));
+    Reader reader;
+    run(session, reader, limits);
+    std::vector<VertexId> splits;
+    for (const auto& batch : reader.batches)
+      for (const auto& s : batch.splits) splits.push_back(s.vs);
+    return splits;
+  };
+  server::PhaseTimes times;
+  const std::vector<VertexId> profiled = answer(&times);
+  EXPECT_EQ(profiled, answer(nullptr));
+  ASSERT_GT(profiled.size(), 500u);
+  const auto ns = [&](server::Phase p) { return times.ns[size_t(p)].load(); };
+  EXPECT_GT(ns(server::Phase::send_base), 0u);
+  EXPECT_GT(ns(server::Phase::determine_visibility), 0u);
+  EXPECT_GT(ns(server::Phase::update_front), 0u);
+  EXPECT_GT(ns(server::Phase::search_splits), 0u);
+  EXPECT_EQ(ns(server::Phase::decode_ids), 0u) << "a sender-driven server decodes no id sets";
+}
+
 // A newer VIEW in the middle of an answer: nothing sent is sent again, and the client ends up with what
 // one VIEW of the new camera from the same front would give.
 TEST(Session, ANewerViewMidAnswerNeverResendsASplit) {
