@@ -20,13 +20,15 @@ class SplitRecordsWriter final : public BodyBuilder {
  public:
   // `nodes` are the request's nodes as split_lookup.h lists them (they size the answer). The model
   // outlives the writer (the catalogue holds it for the server's life).
-  SplitRecordsWriter(const ServedModel& model, protocol::SplitRequest request, std::span<const uint32_t> nodes);
+  SplitRecordsWriter(const ServedModel& model, protocol::SplitRequest request, std::span<const uint32_t> nodes,
+                     RecordForm form = RecordForm::info);
 
   bool build(std::chrono::steady_clock::time_point until) override;
   std::vector<uint8_t> take() override { return std::move(writer_).take(); }
 
  private:
   const ServedModel& model_;
+  const protocol::StoredRecords& records_;
   protocol::SplitRequest request_;
   size_t next_id_ = 0;
   BitWriter writer_;
@@ -34,6 +36,6 @@ class SplitRecordsWriter final : public BodyBuilder {
 
 // The whole body in one go.
 std::vector<uint8_t> split_records_body(const ServedModel& model, const protocol::SplitRequest& request,
-                                        std::span<const uint32_t> nodes);
+                                        std::span<const uint32_t> nodes, RecordForm form = RecordForm::info);
 
 }  // namespace pms::server
