@@ -54,7 +54,7 @@ Ranking ranking_named(const std::string& name, const std::string& where = "--ran
 
 struct ReceiverOptions {
   Ranking ranking = Ranking::error;
-  uint32_t stop_area = 16;  // area ranking: pixels of visible faces below which a leaf is not split
+  uint32_t stop_area = 64;  // area ranking: pixels of visible faces below which a leaf is not split
   float tolerance = 1;
   uint32_t morph_frames = 0;
   uint32_t max_ops = 0;  // per frame, 0 = no cap
@@ -146,8 +146,9 @@ class ReceiverClient {
   bool poll_open();
 
   // One frame: adapt; while qrefine wants splits the client lacks, rank them by screen area × squared
-  // screen error, GET them in that order with several requests in flight, attach what arrives, adapt and
-  // rank again as answers come; within the frame budget, if any.
+  // screen error (the area ranking: while leaves cover the stop area, by screen area alone), GET them in that
+  // order with several requests in flight, attach what arrives, adapt and rank again as answers come; within
+  // the frame budget, if any.
   ReceiverFrame frame(const Camera& camera);
   // Holds the last camera for frames (within the budget, without prefetch) until its view is satisfied,
   // then reads what is still in flight and converges. settle_frames(): how many it took (1 unbudgeted).

@@ -235,7 +235,7 @@ TEST(Http, ThePlainFormIsServedBesideTheInfoFormWithItsOwnETags) {
   const std::string code = protocol::base64url_encode(protocol::encode_split_request(request));
   const uint32_t root = request.ids[0].tree;
   const std::string block = "/blocks/" + std::to_string(root) + "/1/2";
-  for (const std::string resource : {std::string("/codec"), "/splits/" + code, block}) {
+  for (const std::string& resource : {std::string("/codec"), "/splits/" + code, block}) {
     const HttpReply info = client.get(at() + resource);
     const HttpReply plain = client.get(at() + "/plain" + resource);
     ASSERT_EQ(info.status, 200) << resource;
