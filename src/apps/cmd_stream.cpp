@@ -120,6 +120,9 @@ void refuse_unused(const StreamArgs& args, const ModeOptions& options) {
   if (args.mode == "receiver") refuse_unused_options(options.by_fetch, args.fetch, "--fetch " + args.fetch);
   if (args.mode == "receiver" && args.ranking == "area" && options.tolerance.given())
     fail("--tolerance", "not used with --ranking area (its stop rule is --stop-area)");
+  if (args.mode == "receiver" && args.ranking == "area" && (args.prefetch || args.background_bytes > 0))
+    fail(args.prefetch ? "--prefetch" : "--background-bytes",
+         "not used with --ranking area (it chooses splits by qrefine, which the plain records give no input for)");
   if (options.stop_area.given() && !(args.mode == "receiver" && args.ranking == "area"))
     fail("--stop-area", "only with --mode receiver --ranking area");
   if (args.mode == "multilevel" && options.budget.given() && options.tolerance.given())
