@@ -291,13 +291,12 @@ void add_stream_command(CliCommand& app) {
                  "shared by clients behind a cache); docs/protocol.md")
           .one_of({"lists", "blocks"})
           .show_default();
+  constexpr const char* kRankingHelp =
+      "receiver: error (screen area × squared screen error over records with refinement info; the mesh is local "
+      "refinement's) or area (cheng-ooi's client: screen area alone over the plain records, stopping at "
+      "--stop-area); docs/protocol.md";
   const CliOption ranking =
-      cmd.option("--ranking", args->ranking,
-                 "receiver: error (screen area × squared screen error over records with refinement info; the mesh "
-                 "is local refinement's) or area (cheng-ooi's client: screen area alone over the plain records, "
-                 "stopping at --stop-area); docs/protocol.md")
-          .one_of({"error", "area"})
-          .show_default();
+      cmd.option("--ranking", args->ranking, kRankingHelp).one_of({"error", "area"}).show_default();
   const CliOption stop_area =
       cmd.option("--stop-area", args->stop_area,
                  "receiver, --ranking area: a leaf whose visible faces cover fewer pixels is not split")

@@ -35,12 +35,12 @@ struct CurveMode {
   protocol::StreamMode mode;
   client::Ranking ranking = client::Ranking::error;  // receiver: error over the info form, area over the plain one
 };
-constexpr CurveMode kModes[] = {{"sender-driven", false, protocol::StreamMode::sender_driven},
-                                {"sender-plain", false, protocol::StreamMode::sender_plain},
-                                {"receiver-driven", true, protocol::StreamMode::sender_driven},
-                                {"view-independent", false, protocol::StreamMode::view_independent},
-                                {"receiver-area plain", true, protocol::StreamMode::sender_driven,
-                                 client::Ranking::area}};
+constexpr CurveMode kModes[] = {
+    {"sender-driven", false, protocol::StreamMode::sender_driven},
+    {"sender-plain", false, protocol::StreamMode::sender_plain},
+    {"receiver-driven", true, protocol::StreamMode::sender_driven},
+    {"view-independent", false, protocol::StreamMode::view_independent},
+    {"receiver-area plain", true, protocol::StreamMode::sender_driven, client::Ranking::area}};
 constexpr size_t kModeCount = std::size(kModes), kReceiver = 2, kViewIndependent = 3;
 
 struct LocalMesh {

@@ -195,8 +195,7 @@ void ReceiverClient::open_version(const nlohmann::json& entry) {
   if (options_.ranking == Ranking::area && !serves_plain_form(entry))
     fail("GET /models", "the server does not serve the plain record form the area ranking reads");
   version_ = entry_version(entry);
-  opening_ =
-      std::make_unique<PendingGets>(std::vector<std::string>{prefix() + "/base", records_prefix() + "/codec"});
+  opening_ = std::make_unique<PendingGets>(std::vector<std::string>{prefix() + "/base", records_prefix() + "/codec"});
 }
 
 // A 410: the model was replaced under its name. The held mesh belongs to the old version: it is dropped
@@ -789,7 +788,8 @@ ReceiverFrame ReceiverClient::run_free(const Camera& camera, bool settling) {
   adapt_for_view(session_.refinement());
   const bool moved = !ranked_camera_ || !same_camera(*ranked_camera_, camera);
   // The area ranking's wants are its ranking's (missing() lists every leaf with a split): it ranks each frame.
-  const bool ranked = moved || options_.ranking == Ranking::area || options_.rerank_ms == 0 || ranking_due() || (queue_.empty() && wants_unasked());
+  const bool ranked = moved || options_.ranking == Ranking::area || options_.rerank_ms == 0 || ranking_due() ||
+                      (queue_.empty() && wants_unasked());
   // Not ranked: the same camera, ranked lately, with its queue standing.
   const bool wants = ranked ? rank(camera) : !session_.refinement().missing().empty();
   out.rounds = ranked && wants;

@@ -176,8 +176,8 @@ protocol::SplitRequest decode_code(const ServedModel& model, const HttpLimits& l
   return protocol::decode_split_request(code, bounds);
 }
 
-HttpAnswer block_answer(const ServedModel& model, const HttpLimits& limits, const HttpRequest& request,
-                        RecordForm form, std::span<const std::string_view> at) {
+HttpAnswer block_answer(const ServedModel& model, const HttpLimits& limits, const HttpRequest& request, RecordForm form,
+                        std::span<const std::string_view> at) {
   uint64_t tree = 0, node = 0, depth = 0;
   if (!parse_decimal(at[0], tree) || !parse_decimal(at[1], node) || !parse_decimal(at[2], depth) || node == 0)
     return error_answer(400, "a block is /models/M/blocks/TREE/NODE/DEPTH in plain decimal, NODE >= 1");
@@ -223,8 +223,8 @@ HttpAnswer records_route(const ServedModel& model, const HttpLimits& limits, con
   const std::span<const std::string_view> r = s.subspan(at);
   const bool get = request.method == "GET" || request.method == "HEAD";
   const bool post_route = r.size() == 1 && r[0] == "splits";
-  const bool get_route = (r.size() == 1 && r[0] == "codec") || (r.size() == 2 && r[0] == "splits") ||
-                         (r.size() == 4 && r[0] == "blocks");
+  const bool get_route =
+      (r.size() == 1 && r[0] == "codec") || (r.size() == 2 && r[0] == "splits") || (r.size() == 4 && r[0] == "blocks");
   if (!post_route && !get_route) return error_answer(404, "no such resource (docs/protocol.md lists them)");
   if (post_route && request.method != "POST") return method_not_allowed("POST");
   if (get_route && !get) return method_not_allowed("GET, HEAD");

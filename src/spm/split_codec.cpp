@@ -1047,9 +1047,9 @@ void SplitCodec::serialize(BitWriter& w) const {
   w.bits(position_bits_, 8);
   for (uint16_t step : steps_) w.bits(step, 16);
   w.bits(bit_cast<uint32_t>(grid_step_), 32);
-  w.bits((has_normals_ ? kHasNormals : 0) | (has_colors_ ? kHasColors : 0) |
-             (form_ == RecordForm::plain ? kPlainForm : 0),
-         8);
+  w.bits(
+      (has_normals_ ? kHasNormals : 0) | (has_colors_ ? kHasColors : 0) | (form_ == RecordForm::plain ? kPlainForm : 0),
+      8);
   std::vector<const PrefixCode*> carried_codes;
   for (uint32_t slot = 0; slot < kSlotCount; ++slot)
     if (carried(slot)) carried_codes.push_back(&codes_[slot]);

@@ -173,9 +173,9 @@ std::vector<uint32_t> grid_positions(const ModelData& model, uint32_t position_b
 EncodedRecords encode_records(const ModelData& model, uint32_t position_bits, RecordForm form = RecordForm::info);
 
 // The codec of stored records, after checking them against the model: the tables parse, fit its ids and
-// carry the attributes it has, are of the info form, the offsets are ordered and end with the stream, leaves have none and every
-// internal node's record decodes on its own to that node's split. Throws pms::Error naming `where` and
-// the node.
+// carry the attributes it has, are of the info form, the offsets are ordered and end with the stream, leaves have none
+// and every internal node's record decodes on its own to that node's split. Throws pms::Error naming `where` and the
+// node.
 SplitCodec check_records(const std::string& where, const ModelData& model, std::span<const uint8_t> tables,
                          std::span<const uint64_t> offsets, std::span<const uint8_t> records);
 

@@ -32,8 +32,11 @@ struct Forms {
 };
 
 Forms forms_of(const ModelData& model) {
-  Forms f{model, grid_positions(model, kPositionBits), encode_records(model, kPositionBits),
-          encode_records(model, kPositionBits, RecordForm::plain), {}};
+  Forms f{model,
+          grid_positions(model, kPositionBits),
+          encode_records(model, kPositionBits),
+          encode_records(model, kPositionBits, RecordForm::plain),
+          {}};
   BitReader r(f.plain.tables, "plain tables");
   f.plain_codec = SplitCodec::deserialize(r);
   return f;

@@ -7,6 +7,7 @@
 #include <nlohmann/json.hpp>
 #include <thread>
 
+#include "common/bit_stream.h"
 #include "http_test_client.h"
 #include "io/shapes.h"
 #include "protocol/base64url.h"
@@ -17,10 +18,9 @@
 #include "server/http_server.h"
 #include "server/limits.h"
 #include "spm/hierarchy.h"
-#include "spm/vertex_hierarchy.h"
-#include "common/bit_stream.h"
 #include "spm/refine_info.h"
 #include "spm/split_codec.h"
+#include "spm/vertex_hierarchy.h"
 #include "streaming_fixture.h"
 
 namespace pms::test {
@@ -274,16 +274,16 @@ TEST(Http, BadPlainFormRequestsGetA4xx) {
   const auto plain_splits = [](const SplitRequest& request) {
     return at() + "/plain/splits/" + protocol::base64url_encode(protocol::encode_split_request(request));
   };
-  EXPECT_EQ(bad.get(plain_splits({0, {model.id(leaf)}})).status, 404);           // a leaf: no split
-  EXPECT_EQ(bad.get(plain_splits({0, {{model.root_count, 1}}})).status, 404);    // no such tree
-  EXPECT_EQ(bad.get(plain_splits({99, {model.id(0)}})).status, 400);             // depth over the limit
-  EXPECT_EQ(bad.get(at() + "/plain/splits/AA+A").status, 400);                   // not base64url
+  EXPECT_EQ(bad.get(plain_splits({0, {model.id(leaf)}})).status, 404);         // a leaf: no split
+  EXPECT_EQ(bad.get(plain_splits({0, {{model.root_count, 1}}})).status, 404);  // no such tree
+  EXPECT_EQ(bad.get(plain_splits({99, {model.id(0)}})).status, 400);           // depth over the limit
+  EXPECT_EQ(bad.get(at() + "/plain/splits/AA+A").status, 400);                 // not base64url
   EXPECT_EQ(bad.post(at() + "/plain/splits", std::vector<uint8_t>(10, 0)).status, 400);
-  EXPECT_EQ(bad.get(at() + "/plain/blocks/0/2/1").status, 400);                  // an unaligned block
-  EXPECT_EQ(bad.get(at() + "/plain/blocks/0/01/1").status, 400);                 // not plain decimal
+  EXPECT_EQ(bad.get(at() + "/plain/blocks/0/2/1").status, 400);   // an unaligned block
+  EXPECT_EQ(bad.get(at() + "/plain/blocks/0/01/1").status, 400);  // not plain decimal
   EXPECT_EQ(bad.get(at() + "/plain/blocks/" + std::to_string(model.root_count) + "/1/1").status, 404);
-  EXPECT_EQ(bad.get(at() + "/plain/blocks/0/1").status, 404);                    // too few segments
-  EXPECT_EQ(bad.get(at() + "/plain/base").status, 404);                          // one base for both forms
+  EXPECT_EQ(bad.get(at() + "/plain/blocks/0/1").status, 404);  // too few segments
+  EXPECT_EQ(bad.get(at() + "/plain/base").status, 404);        // one base for both forms
   EXPECT_EQ(bad.get(at() + "/plain").status, 404);
   EXPECT_EQ(bad.post(at() + "/plain/codec", {}).status, 405);
   EXPECT_EQ(bad.get(at() + "/plain/codec").status, 200);  // still served on the same connection
