@@ -2,7 +2,8 @@
 // u16 table bytes T | T bytes of code tables | a record. Hostile tables and records either decode or throw
 // pms::Error; a record that decodes re-encodes (where the tables allow) to one that decodes the same. The
 // tables' attribute flags come from the input, so v_t's normal and color fields are decoded too, against a
-// v_s whose normal lies near the octahedral square's edge (where steps fold over it).
+// v_s whose normal lies near the octahedral square's edge (where steps fold over it), and so is the form
+// (bit 2: the plain records, which carry the children's presence instead of their info).
 #include <cstddef>
 #include <cstdint>
 #include <span>

@@ -1,5 +1,6 @@
 // pmstream stream --server HOST:PORT|ws://HOST:PORT/ws --model NAME --path PATH.json --mode MODE --tolerance PX
 //                 (--mode receiver: --server http://HOST:PORT[/prefix] [--in-flight N] [--fetch lists|blocks]
+//                  [--ranking error|area] [--stop-area PIXELS]
 //                  [--ids-per-request N] [--descendant-depth K] [--block-depth K] [--frame-budget-ms MS]
 //                  [--frame-answers N] [--prefetch] [--rerank-ms MS] [--background-bytes N] [--ahead N])
 //                 (--mode multilevel: --server http://HOST:PORT[/prefix] [--budget TRIANGLES | --tolerance PX])
@@ -38,6 +39,8 @@ struct StreamArgs {
   uint32_t in_flight = 4, ids_per_request = 64, block_depth = client::ReceiverOptions{}.block_depth;  // receiver
   uint32_t descendant_depth = client::ReceiverOptions{}.descendant_depth;
   std::string fetch = client::fetch_policy_name(client::ReceiverOptions{}.fetch);
+  std::string ranking = client::ranking_name(client::ReceiverOptions{}.ranking);
+  uint32_t stop_area = client::ReceiverOptions{}.stop_area;
   uint32_t frame_budget_ms = 0, frame_answers = 0;
   bool prefetch = false;
   uint32_t ahead = 0;  // sender, with --fps
@@ -107,6 +110,7 @@ struct ModeOptions {
   std::vector<VariantOption> by_mode;   // against --mode
   std::vector<VariantOption> by_fetch;  // --mode receiver: against --fetch
   CliOption tolerance, budget;          // --mode multilevel: the screen-size rule or a triangle budget
+  CliOption stop_area;                  // --mode receiver: the area ranking's stop rule, in place of τ
 };
 
 void refuse_unused(const StreamArgs& args, const ModeOptions& options) {
@@ -114,6 +118,13 @@ void refuse_unused(const StreamArgs& args, const ModeOptions& options) {
     fail("--mode", "'" + args.mode + "': this build streams in the modes " + client::viewer_mode_names());
   refuse_unused_options(options.by_mode, args.mode, "--mode " + args.mode);
   if (args.mode == "receiver") refuse_unused_options(options.by_fetch, args.fetch, "--fetch " + args.fetch);
+  if (args.mode == "receiver" && args.ranking == "area" && options.tolerance.given())
+    fail("--tolerance", "not used with --ranking area (its stop rule is --stop-area)");
+  if (args.mode == "receiver" && args.ranking == "area" && (args.prefetch || args.background_bytes > 0))
+    fail(args.prefetch ? "--prefetch" : "--background-bytes",
+         "not used with --ranking area (it chooses splits by qrefine, which the plain records give no input for)");
+  if (options.stop_area.given() && !(args.mode == "receiver" && args.ranking == "area"))
+    fail("--stop-area", "only with --mode receiver --ranking area");
   if (args.mode == "multilevel" && options.budget.given() && options.tolerance.given())
     fail("--tolerance", "not used with --mode multilevel --budget (the budget picks the level)");
   if (args.mode == "dag" && args.management == "auto" && args.budget == 0)
@@ -152,6 +163,8 @@ client::ViewerOptions viewer_options(const StreamArgs& args) {
   receiver.morph_frames = args.morph_frames;
   receiver.max_ops = args.max_ops;
   if (args.mode == "receiver") receiver.fetch = client::fetch_policy_named(args.fetch);
+  if (args.mode == "receiver") receiver.ranking = client::ranking_named(args.ranking);
+  receiver.stop_area = args.stop_area;
   receiver.ids_per_request = args.ids_per_request;
   receiver.block_depth = args.block_depth;
   receiver.descendant_depth = args.descendant_depth;
@@ -278,6 +291,17 @@ void add_stream_command(CliCommand& app) {
                  "shared by clients behind a cache); docs/protocol.md")
           .one_of({"lists", "blocks"})
           .show_default();
+  constexpr const char* kRankingHelp =
+      "receiver: error (screen area × squared screen error over records with refinement info; the mesh is local "
+      "refinement's) or area (cheng-ooi's client: screen area alone over the plain records, stopping at "
+      "--stop-area); docs/protocol.md";
+  const CliOption ranking =
+      cmd.option("--ranking", args->ranking, kRankingHelp).one_of({"error", "area"}).show_default();
+  const CliOption stop_area =
+      cmd.option("--stop-area", args->stop_area,
+                 "receiver, --ranking area: a leaf whose visible faces cover fewer pixels is not split")
+          .range(1u, 1u << 24)
+          .show_default();
   const CliOption ids_per_request =
       cmd.option("--ids-per-request", args->ids_per_request, "receiver, lists: split ids in one GET")
           .range(1u, 1024u)
@@ -368,6 +392,7 @@ void add_stream_command(CliCommand& app) {
       ModeOptions{{{reconnect, tcp},
                    {in_flight, {"receiver", "multilevel"}},
                    {fetch, {"receiver"}},
+                   {ranking, {"receiver"}},
                    {ids_per_request, {"receiver"}},
                    {descendant_depth, {"receiver"}},
                    {block_depth, {"receiver"}},
@@ -386,7 +411,8 @@ void add_stream_command(CliCommand& app) {
                    {plain_levels, {"multilevel"}}},
                   {{ids_per_request, {"lists"}}, {descendant_depth, {"lists"}}, {block_depth, {"blocks"}}},
                   tolerance,
-                  budget});
+                  budget,
+                  stop_area});
   cmd.on_run([args, modes] {
     refuse_unused(*args, *modes);
     run_stream(*args);

@@ -89,11 +89,15 @@ QualityCurve session_curve(const BenchModel& m, protocol::StreamMode mode, const
 }
 
 QualityCurve receiver_curve(uint16_t http_port, const std::string& model, const Camera& camera, float tolerance_px,
-                            const QualityTarget& target, Renderer& renderer) {
-  CurveSampler sampler(target, renderer, true);  // the records carry refinement info: the client refines
+                            const QualityTarget& target, Renderer& renderer, client::Ranking ranking,
+                            uint32_t stop_area) {
+  // Either ranking refines itself: the info form by qrefine, the plain form making every split it holds.
+  CurveSampler sampler(target, renderer, true);
   client::ReceiverClient* self = nullptr;
   client::ReceiverOptions options;
   options.tolerance = tolerance_px;
+  options.ranking = ranking;
+  options.stop_area = stop_area;
   options.on_attached = [&] {
     if (self != nullptr)
       sampler.during_view(self->session(), self->counters().bytes_down, self->counters().payload_down);

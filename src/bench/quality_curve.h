@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "bench/bench_model.h"
+#include "client/receiver_client.h"
 #include "common/camera.h"
 #include "protocol/stream_mode.h"
 #include "render/render.h"
@@ -47,8 +48,10 @@ QualityCurve session_curve(const BenchModel& m, protocol::StreamMode mode, const
                            const QualityTarget& target, Renderer& renderer);
 
 // A ReceiverClient against `pmstream serve --http-port` on loopback `http_port`: GET /models, the base and
-// code tables, then one frame at `camera` and `tolerance_px`.
+// code tables, then one frame at `camera` and `tolerance_px`; with `ranking` area (the plain records),
+// stopping at `stop_area` pixels instead of τ.
 QualityCurve receiver_curve(uint16_t http_port, const std::string& model, const Camera& camera, float tolerance_px,
-                            const QualityTarget& target, Renderer& renderer);
+                            const QualityTarget& target, Renderer& renderer,
+                            client::Ranking ranking = client::Ranking::error, uint32_t stop_area = 1);
 
 }  // namespace pms::bench

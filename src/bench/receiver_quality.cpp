@@ -25,15 +25,22 @@ constexpr float kTolerance = 0;
 constexpr double kPsnrCap = 40;
 constexpr double kPsnrSteps[] = {20, 25, 30, 35};
 
+// The area-ranking client's stop rule in E6: a leaf is split while its faces cover a pixel, the area
+// analogue of τ = 0.
+constexpr uint32_t kStopArea = 1;
+
 struct CurveMode {
   const char* name;
   bool receiver;  // over HTTP; else an in-process session in `mode`
   protocol::StreamMode mode;
+  client::Ranking ranking = client::Ranking::error;  // receiver: error over the info form, area over the plain one
 };
-constexpr CurveMode kModes[] = {{"sender-driven", false, protocol::StreamMode::sender_driven},
-                                {"sender-plain", false, protocol::StreamMode::sender_plain},
-                                {"receiver-driven", true, protocol::StreamMode::sender_driven},
-                                {"view-independent", false, protocol::StreamMode::view_independent}};
+constexpr CurveMode kModes[] = {
+    {"sender-driven", false, protocol::StreamMode::sender_driven},
+    {"sender-plain", false, protocol::StreamMode::sender_plain},
+    {"receiver-driven", true, protocol::StreamMode::sender_driven},
+    {"view-independent", false, protocol::StreamMode::view_independent},
+    {"receiver-area plain", true, protocol::StreamMode::sender_driven, client::Ranking::area}};
 constexpr size_t kModeCount = std::size(kModes), kReceiver = 2, kViewIndependent = 3;
 
 struct LocalMesh {
@@ -51,7 +58,8 @@ struct ViewRun {
 
 QualityCurve run_mode(const CurveMode& mode, const BenchModel& m, uint16_t http_port, const Camera& camera,
                       const QualityTarget& target, Renderer& renderer) {
-  if (mode.receiver) return receiver_curve(http_port, m.name, camera, kTolerance, target, renderer);
+  if (mode.receiver)
+    return receiver_curve(http_port, m.name, camera, kTolerance, target, renderer, mode.ranking, kStopArea);
   return session_curve(m, mode.mode, camera, kTolerance, target, renderer);
 }
 
@@ -269,7 +277,8 @@ std::string e6_e8_sections(BenchContext& context, const std::vector<BenchModel>&
   print("\nE8: the receiver-driven client fetching only visible splits (τ = 0 px), against the full model\n" +
         e8.markdown());
   std::string section =
-      "### E6: PSNR against bytes received, four modes toward one view\n\n" + e6.markdown() +
+      "### E6: PSNR against bytes received, four modes and the area-ranking client toward one view\n\n" +
+      e6.markdown() +
       "\nEach row: a fresh client from the base mesh streaming toward one view at τ = 0 px (one frame at that camera), "
       "its mesh rendered with the project's renderer against the full model's image there at geometrically spaced "
       "byte counts (every ×" +
@@ -280,7 +289,9 @@ std::string e6_e8_sections(BenchContext& context, const std::vector<BenchModel>&
       "headers (GET /models, the base, the code tables, the split GETs) from a `serve --http-port` child on "
       "loopback; payload B = the same without framing. \"to N dB\" = bytes at the first sample at or above N dB; "
       "— = never. Views: far and close are the zoom path's ends, mid the sender group's E5 close view (the refine "
-      "group's quality table uses the same three). Same .pms and 16-bit grid for every mode.\n\n";
+      "group's quality table uses the same three). Same .pms and 16-bit grid for every mode. receiver-area plain: "
+      "the receiver-driven client ranking by visible area alone over the plain records (cheng-ooi's client; "
+      "docs/protocol.md, \"The plain form\"), splitting while a leaf's faces cover at least 1 pixel.\n\n";
   section +=
       "### E6 target: receiver-driven against view-independent\n\n" + order.markdown() +
       "\nAt every byte count where either curve has a sample and both clients hold a mesh, the PSNR each shows then "

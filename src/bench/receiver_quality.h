@@ -1,5 +1,6 @@
 // The receiver group's image-quality experiments on its models: E6, PSNR against bytes received for the
-// four streaming modes toward one view (kim-lee-kobbelt Fig. 10; cheng-ooi Fig. 8), with a plot per model and
+// four streaming modes and the area-ranking receiver client (the plain records) toward one view
+// (kim-lee-kobbelt Fig. 10; cheng-ooi Fig. 8), with a plot per model and
 // view; and E8, error pixels and PSNR when the receiver-driven client fetches only the visible splits
 // (cheng-ooi Table 2).
 #pragma once

@@ -51,6 +51,29 @@ std::string block_target(const std::string& prefix, VertexId root, uint32_t dept
   return target;
 }
 
+// The area ranking's options: its own stop rule, and no prediction or idle fetch, whose choices follow
+// qrefine, which plain records give no input for.
+void check_area_options(const ReceiverOptions& options) {
+  if (options.ranking != Ranking::area) return;
+  if (options.stop_area == 0) fail("receiver", "the area ranking's stop area must be at least 1 pixel");
+  if (options.prefetch || options.background_bytes > 0)
+    fail("receiver", "the area ranking has no prefetch or idle fetch (they choose splits by qrefine)");
+}
+
+bool serves_plain_form(const nlohmann::json& entry) {
+  const auto forms = entry.find("record_forms");
+  if (forms == entry.end() || !forms->is_array()) return false;
+  return std::any_of(forms->begin(), forms->end(), [](const nlohmann::json& f) { return f == "plain"; });
+}
+
+// The area ranking holds the roots as it holds a plain record's children (plain_split_info()): a root
+// whose info can refine has a split and is made whatever the view; one whose info never refines stays a
+// leaf, as nothing on the wire says whether it has a split.
+void hold_roots_plain(protocol::Base& base) {
+  for (RefineInfo& info : base.refine)
+    if (!never_refines(info)) info = plain_split_info();
+}
+
 }  // namespace
 
 const char* fetch_policy_name(FetchPolicy policy) { return policy == FetchPolicy::blocks ? "blocks" : "lists"; }
@@ -61,6 +84,14 @@ FetchPolicy fetch_policy_named(const std::string& name, const std::string& where
   fail(where, "'" + name + "' is not a fetch policy (lists or blocks)");
 }
 
+const char* ranking_name(Ranking ranking) { return ranking == Ranking::area ? "area" : "error"; }
+
+Ranking ranking_named(const std::string& name, const std::string& where) {
+  if (name == "error") return Ranking::error;
+  if (name == "area") return Ranking::area;
+  fail(where, "'" + name + "' is not a ranking (error or area)");
+}
+
 ReceiverClient::ReceiverClient(std::unique_ptr<HttpTransport> http, std::unique_ptr<ImportanceSource> importance,
                                const ReceiverOptions& options)
     : options_(options), http_(std::move(http)), importance_(std::move(importance)) {
@@ -69,6 +100,7 @@ ReceiverClient::ReceiverClient(std::unique_ptr<HttpTransport> http, std::unique_
   if (options.block_depth > 8) fail("receiver", "block_depth must be at most 8 (the server's request depth limit)");
   if (options.descendant_depth > 8)
     fail("receiver", "descendant_depth must be at most 8 (the server's request depth limit)");
+  check_area_options(options);
   session_.adapt_options.tolerance = options.tolerance;
   session_.adapt_options.morph_frames = options.morph_frames;
   session_.adapt_options.max_ops = options.max_ops;
@@ -83,6 +115,7 @@ void ReceiverClient::set_view_options(const ReceiverOptions& options) {
   options_.rerank_ms = options.rerank_ms;
   ranked_camera_.reset();  // the next frame ranks by the new options
   options_.background_bytes = options.background_bytes;
+  check_area_options(options_);
   AdaptOptions adapt = session_.adapt_options;
   adapt.tolerance = options.tolerance;
   adapt.morph_frames = options.morph_frames;
@@ -95,6 +128,10 @@ std::vector<std::string> ReceiverClient::list() {
     if (model.is_object() && model.contains("name") && model["name"].is_string())
       names.push_back(model["name"].get<std::string>());
   return names;
+}
+
+std::string ReceiverClient::records_prefix() const {
+  return options_.ranking == Ranking::area ? prefix() + "/plain" : prefix();
 }
 
 // Its version from GET /models, then the base and the code tables of that version in one round trip.
@@ -155,8 +192,10 @@ void ReceiverClient::open_version(const nlohmann::json& entry) {
   if (records_format != kRecordsFormat)
     fail("GET /models", "records format " + std::to_string(records_format) + " is not one this client reads (" +
                             std::to_string(kRecordsFormat) + ")");
+  if (options_.ranking == Ranking::area && !serves_plain_form(entry))
+    fail("GET /models", "the server does not serve the plain record form the area ranking reads");
   version_ = entry_version(entry);
-  opening_ = std::make_unique<PendingGets>(std::vector<std::string>{prefix() + "/base", prefix() + "/codec"});
+  opening_ = std::make_unique<PendingGets>(std::vector<std::string>{prefix() + "/base", records_prefix() + "/codec"});
 }
 
 // A 410: the model was replaced under its name. The held mesh belongs to the old version: it is dropped
@@ -184,7 +223,9 @@ void ReceiverClient::opened(const std::vector<std::string>& targets, const std::
   const std::string& tables = targets[1];
   const HttpAnswer& answer = answers[0];
   if (answer.status != 200) refused(target, answer);
-  session_.on_base(protocol::decode_base(answer.body));
+  protocol::Base base_read = protocol::decode_base(answer.body);
+  if (options_.ranking == Ranking::area) hold_roots_plain(base_read);
+  session_.on_base(base_read);
   const HttpAnswer& codec = answers[1];
   if (codec.status != 200) refused(tables, codec);
   BitReader r(codec.body, "GET " + tables);
@@ -193,6 +234,10 @@ void ReceiverClient::opened(const std::vector<std::string>& targets, const std::
   if (codec_.root_count() != base.root_count() || codec_.position_bits() != session_.context().grid.bits ||
       codec_.has_normals() != base.has_normals || codec_.has_colors() != base.has_colors)
     fail("GET " + tables, "code tables of another model, grid or attributes than its BASE");
+  const RecordForm form = options_.ranking == Ranking::area ? RecordForm::plain : RecordForm::info;
+  if (codec_.form() != form)
+    fail("GET " + tables, std::string("code tables of the ") + record_form_name(codec_.form()) + " form, not the " +
+                              record_form_name(form) + " form");
 }
 
 // `slots` (leaves the client holds) as ids: the visible ones by the squared image error their splits may
@@ -202,6 +247,7 @@ void ReceiverClient::opened(const std::vector<std::string>& targets, const std::
 // off would go before a smaller one many pixels off, which the PM order fixes first. Each visible one comes
 // with the descendant depth to ask for it with (descendant_depth()).
 std::vector<ReceiverClient::Wanted> ReceiverClient::ranked(std::span<const uint32_t> slots, const ViewParams& view) {
+  if (options_.ranking == Ranking::area) return ranked_by_area(slots, view);
   std::vector<uint32_t> sorted(slots.begin(), slots.end());
   std::sort(sorted.begin(), sorted.end());
   sorted.erase(std::unique(sorted.begin(), sorted.end()), sorted.end());
@@ -239,6 +285,38 @@ std::vector<ReceiverClient::Wanted> ReceiverClient::ranked(std::span<const uint3
     taken[at] = 1;
     ids.push_back({hierarchy.id(slot), 0});
   }
+  return ids;
+}
+
+// cheng-ooi §4.2's ranking: the leaves of `slots` whose faces cover at least stop_area pixels as `view` sees
+// the mesh, most pixels first, then the leaves forced chains stopped at (the splits those depend on, which
+// the client fetches whatever their area: the partial order holds as in the error ranking). A leaf with no
+// visible face (a root of no face, one out of sight) has no area and is not asked for. Each comes with
+// descendants while its area is many times the stop area (cheng-ooi §4.3): one level more per quadrupling
+// beyond 4×, as a split's children share its area.
+std::vector<ReceiverClient::Wanted> ReceiverClient::ranked_by_area(std::span<const uint32_t> slots,
+                                                                   const ViewParams& view) {
+  std::vector<uint32_t> sorted(slots.begin(), slots.end());
+  std::sort(sorted.begin(), sorted.end());
+  sorted.erase(std::unique(sorted.begin(), sorted.end()), sorted.end());
+  const auto in_slots = [&sorted](uint32_t slot) { return std::binary_search(sorted.begin(), sorted.end(), slot); };
+  const std::vector<VertexArea>& by_area = importance_->rank(session_.mesh(), view, in_slots);
+  const VertexHierarchy& hierarchy = session_.hierarchy();
+  std::vector<uint8_t> taken(sorted.size(), 0);
+  const auto take = [&](uint32_t slot) {
+    uint8_t& t = taken[size_t(std::lower_bound(sorted.begin(), sorted.end(), slot) - sorted.begin())];
+    return !std::exchange(t, uint8_t(1));
+  };
+  std::vector<Wanted> ids;
+  for (const VertexArea& area : by_area) {
+    if (area.pixels < options_.stop_area) break;  // most pixels first: the rest are smaller
+    const double ratio = double(area.pixels) / double(options_.stop_area);
+    const int quadruplings = std::ilogb(ratio) / 2;
+    take(area.slot);
+    ids.push_back({hierarchy.id(area.slot), uint32_t(std::clamp(quadruplings - 1, 0, int(options_.descendant_depth)))});
+  }
+  for (const uint32_t slot : session_.refinement().forced_missing())
+    if (in_slots(slot) && take(slot)) ids.push_back({hierarchy.id(slot), 0});
   return ids;
 }
 
@@ -308,7 +386,7 @@ ReceiverClient::Request ReceiverClient::list_request(std::vector<VertexId> ids, 
   std::sort(r.request.ids.begin(), r.request.ids.end(), protocol::code_order);
   const std::vector<uint8_t> code = protocol::encode_split_request(r.request);
   r.code_bytes = uint32_t(code.size());
-  r.target = prefix() + "/splits/" + protocol::base64url_encode(code);
+  r.target = records_prefix() + "/splits/" + protocol::base64url_encode(code);
   return r;
 }
 
@@ -328,7 +406,7 @@ std::vector<ReceiverClient::Request> ReceiverClient::block_requests(const std::v
     const VertexId root = key(wanted.id);
     if (!asked.emplace(root.tree, root.node).second) continue;
     Request& r = out.emplace_back();
-    r.target = block_target(prefix(), root, options_.block_depth);
+    r.target = block_target(records_prefix(), root, options_.block_depth);
     r.request = {options_.block_depth, {root}};
   }
   return out;
@@ -709,7 +787,9 @@ ReceiverFrame ReceiverClient::run_free(const Camera& camera, bool settling) {
   }
   adapt_for_view(session_.refinement());
   const bool moved = !ranked_camera_ || !same_camera(*ranked_camera_, camera);
-  const bool ranked = moved || options_.rerank_ms == 0 || ranking_due() || (queue_.empty() && wants_unasked());
+  // The area ranking's wants are its ranking's (missing() lists every leaf with a split): it ranks each frame.
+  const bool ranked = moved || options_.ranking == Ranking::area || options_.rerank_ms == 0 || ranking_due() ||
+                      (queue_.empty() && wants_unasked());
   // Not ranked: the same camera, ranked lately, with its queue standing.
   const bool wants = ranked ? rank(camera) : !session_.refinement().missing().empty();
   out.rounds = ranked && wants;

@@ -37,7 +37,24 @@ const char* fetch_policy_name(FetchPolicy policy);
 // Throws pms::Error naming `where` for a name that is not "lists" or "blocks".
 FetchPolicy fetch_policy_named(const std::string& name, const std::string& where = "--fetch");
 
+// What the client ranks the front's leaves by and how it decides it is done (docs/protocol.md,
+// "Receiver-driven client"; docs/architecture.md says which properties each keeps).
+enum class Ranking : uint8_t {
+  // Screen area × squared screen error over the info form's records; qrefine (τ) decides what is wanted,
+  // so the mesh is local refinement's for the view.
+  error,
+  // cheng-ooi 2008 §4.2, faithfully: screen area alone over the plain form's records (no spheres, cones or
+  // errors on the wire); a leaf is wanted while its visible area is at least stop_area pixels, and every
+  // split held is made. Its mesh is judged by PSNR, not by equality.
+  area,
+};
+const char* ranking_name(Ranking ranking);
+// Throws pms::Error naming `where` for a name that is not "error" or "area".
+Ranking ranking_named(const std::string& name, const std::string& where = "--ranking");
+
 struct ReceiverOptions {
+  Ranking ranking = Ranking::error;
+  uint32_t stop_area = 64;  // area ranking: pixels of visible faces below which a leaf is not split
   float tolerance = 1;
   uint32_t morph_frames = 0;
   uint32_t max_ops = 0;  // per frame, 0 = no cap
@@ -129,8 +146,9 @@ class ReceiverClient {
   bool poll_open();
 
   // One frame: adapt; while qrefine wants splits the client lacks, rank them by screen area × squared
-  // screen error, GET them in that order with several requests in flight, attach what arrives, adapt and
-  // rank again as answers come; within the frame budget, if any.
+  // screen error (the area ranking: while leaves cover the stop area, by screen area alone), GET them in that
+  // order with several requests in flight, attach what arrives, adapt and rank again as answers come; within
+  // the frame budget, if any.
   ReceiverFrame frame(const Camera& camera);
   // Holds the last camera for frames (within the budget, without prefetch) until its view is satisfied,
   // then reads what is still in flight and converges. settle_frames(): how many it took (1 unbudgeted).
@@ -161,6 +179,8 @@ class ReceiverClient {
     uint32_t stale = 0;              // of its ids, those the last ranking no longer wants (view GETs only)
   };
   std::string prefix() const { return protocol::model_path(model_, version_); }
+  // Where the records of the form this client reads are: the plain form's under /plain.
+  std::string records_prefix() const;
   void open_version(const nlohmann::json& entry);
   void await_open();
   void replaced(const std::string& target, const HttpAnswer& answer);
@@ -177,6 +197,7 @@ class ReceiverClient {
     uint32_t depth = 0;
   };
   std::vector<Wanted> ranked(std::span<const uint32_t> slots, const ViewParams& view);
+  std::vector<Wanted> ranked_by_area(std::span<const uint32_t> slots, const ViewParams& view);
   uint32_t descendant_depth(float priority, float pixel_angle2) const;
   VertexId key(VertexId id) const;
   std::vector<VertexId> keys_on_wire() const;

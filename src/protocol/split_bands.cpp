@@ -21,8 +21,16 @@ void copy_record(const StoredRecords& records, uint32_t node, BitWriter& w) {
 }
 
 // A child whose info can refine has a split of its own (every leaf's info never refines); for one whose
-// info never refines, the stream says.
-bool child_has_split(const RefineInfo& info, BitReader& r) { return !never_refines(info) || r.bit("child's split"); }
+// info never refines, the stream says, but in the plain form, whose records say it themselves.
+bool child_has_split(const RefineInfo& info, RecordForm form, BitReader& r) {
+  return !never_refines(info) || (form == RecordForm::info && r.bit("child's split"));
+}
+
+// The bit that says whether `child` has a split, where its info (in the info form) does not say it.
+void write_presence(const ModelData& model, uint32_t child, bool split, BitWriter& w) {
+  if (never_refines(as_sent(model.refine[child]))) w.bit(split ? 1 : 0);
+  else if (!split) fail("split band", "leaf " + std::to_string(child) + " has an info that refines");
+}
 
 }  // namespace
 
@@ -40,8 +48,7 @@ uint32_t write_split_band(const ModelData& model, const StoredRecords& records, 
     if (level == depth) continue;
     for (uint32_t child = model.first_child[node]; child < model.first_child[node] + 2; ++child) {
       const bool split = !model.is_leaf(child);
-      if (never_refines(as_sent(model.refine[child]))) w.bit(split ? 1 : 0);
-      else if (!split) fail("split band", "leaf " + std::to_string(child) + " has an info that refines");
+      if (records.form == RecordForm::info) write_presence(model, child, split, w);
       if (split) queue.push_back({child, level + 1});
     }
   }
@@ -111,7 +118,7 @@ uint32_t read_split_bands(std::span<const uint8_t> body, const SplitRequest& req
       if (level == request.depth) continue;
       const RefineInfo* infos[2] = {&p.info_t, &p.info_u};
       for (uint32_t k = 0; k < 2; ++k)
-        if (child_has_split(*infos[k], r)) queue.push_back({h.first_child(slot) + k, level + 1});
+        if (child_has_split(*infos[k], codec.form(), r)) queue.push_back({h.first_child(slot) + k, level + 1});
     }
   }
   // The writer pads the stream to a byte with zeros.

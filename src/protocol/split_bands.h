@@ -2,7 +2,8 @@
 // for each requested id, the compact split records (spm/split_codec.h) of its band — the id's split and its
 // descendants' down to the request's depth — in one bit stream. Both ends walk the band the same way, so
 // the stream needs no ids: a record's children are known from its id, and whether a child has a split of
-// its own is implied by its refinement info unless that info never refines (then one bit says).
+// its own is implied by its refinement info unless that info never refines (then one bit says); in the plain
+// form (RecordForm::plain) the record says it.
 // Shared with the browser build: single-threaded, no std::ranges algorithms, std::format or coroutines.
 #pragma once
 #include <cstdint>
@@ -24,6 +25,8 @@ namespace pms::protocol {
 struct StoredRecords {
   std::span<const uint8_t> bits;
   std::span<const uint64_t> offsets;  // node i's record: bits [offsets[i], offsets[i + 1])
+  // A plain record says itself which children have splits: its bands carry no presence bits.
+  RecordForm form = RecordForm::info;
 };
 
 // Appends the band of internal node `root`, `depth` levels down, to `w`. Returns the records written.

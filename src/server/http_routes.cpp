@@ -100,6 +100,7 @@ nlohmann::json progressive_entry(const ServedModel& model) {
           {"node_id_bits", info.node_id_bits},
           {"position_bits", model.context.grid.bits},
           {"records_format", model.records_format},
+          {"record_forms", {"info", "plain"}},
           {"block_depth", kSuggestedBlockDepth}};
 }
 
@@ -146,7 +147,7 @@ HttpAnswer base_answer(const ServedModel& model, const HttpRequest& request) {
 
 // The records of a decoded request; `etag` is its canonical URL's (the GET form's, also for a POST).
 HttpAnswer splits_answer(const ServedModel& model, const HttpLimits& limits, const HttpRequest& request,
-                         const protocol::SplitRequest& split_request, const std::string& etag) {
+                         RecordForm form, const protocol::SplitRequest& split_request, const std::string& etag) {
   std::vector<uint32_t> nodes;
   {
     const PhaseTimer timer(request.phases, Phase::search_splits);
@@ -155,17 +156,19 @@ HttpAnswer splits_answer(const ServedModel& model, const HttpLimits& limits, con
   HttpAnswer answer = fresh(request, etag, "application/octet-stream");
   answer.split_resource = true;
   if (answer.status == 200) {
-    answer.builder = std::make_shared<SplitRecordsWriter>(model, split_request, nodes, request.phases);
+    answer.builder = std::make_shared<SplitRecordsWriter>(model, split_request, nodes, form, request.phases);
     answer.splits = nodes.size();
   }
   return answer;
 }
 
-// The code tables every record of the model is coded with.
-HttpAnswer codec_answer(const ServedModel& model, const HttpRequest& request) {
+// The path piece before a records resource: none for the info form, /plain for the plain one.
+std::string_view form_path(RecordForm form) { return form == RecordForm::plain ? "/plain" : ""; }
+// The code tables every record of the model in `form` is coded with.
+HttpAnswer codec_answer(const ServedModel& model, const HttpRequest& request, RecordForm form) {
   const PhaseTimer timer(request.phases, Phase::send_base);
-  HttpAnswer answer = fresh(request, etag_of(model, {"/codec"}), "application/octet-stream");
-  if (answer.status == 200) answer.shared = model.tables->records().codec_tables;
+  HttpAnswer answer = fresh(request, etag_of(model, {form_path(form), "/codec"}), "application/octet-stream");
+  if (answer.status == 200) answer.shared = model.tables->records(form).codec_tables;
   return answer;
 }
 
@@ -181,7 +184,7 @@ protocol::SplitRequest decode_code(const ServedModel& model, const HttpLimits& l
   return protocol::decode_split_request(code, bounds);
 }
 
-HttpAnswer block_answer(const ServedModel& model, const HttpLimits& limits, const HttpRequest& request,
+HttpAnswer block_answer(const ServedModel& model, const HttpLimits& limits, const HttpRequest& request, RecordForm form,
                         std::span<const std::string_view> at) {
   uint64_t tree = 0, node = 0, depth = 0;
   if (!parse_decimal(at[0], tree) || !parse_decimal(at[1], node) || !parse_decimal(at[2], depth) || node == 0)
@@ -199,8 +202,8 @@ HttpAnswer block_answer(const ServedModel& model, const HttpLimits& limits, cons
                                  "multiple of " +
                                  std::to_string(depth + 1) + "; " + to_string(id) + " is at depth " +
                                  std::to_string(id.depth()));
-  return splits_answer(model, limits, request, {uint32_t(depth), {id}},
-                       etag_of(model, {"/blocks/", at[0], "/", at[1], "/", at[2]}));
+  return splits_answer(model, limits, request, form, {uint32_t(depth), {id}},
+                       etag_of(model, {form_path(form), "/blocks/", at[0], "/", at[1], "/", at[2]}));
 }
 
 // Nothing when `mode`'s tables of the model are built; a 503 to wait on while they are being built (the
@@ -222,6 +225,34 @@ bool multilevel_resource(std::span<const std::string_view> s) {
   return s[2] == "head" || s[2] == "levels" || s[2] == "compressed" || s[2] == "multilevel";
 }
 
+// The records resources of `form`, s[at...]: codec, splits (POST), splits/CODE, blocks/TREE/NODE/DEPTH.
+HttpAnswer records_route(const ServedModel& model, const HttpLimits& limits, const HttpRequest& request,
+                         RecordForm form, std::span<const std::string_view> s, size_t at) {
+  const std::span<const std::string_view> r = s.subspan(at);
+  const bool get = request.method == "GET" || request.method == "HEAD";
+  const bool post_route = r.size() == 1 && r[0] == "splits";
+  const bool get_route =
+      (r.size() == 1 && r[0] == "codec") || (r.size() == 2 && r[0] == "splits") || (r.size() == 4 && r[0] == "blocks");
+  if (!post_route && !get_route) return error_answer(404, "no such resource (docs/protocol.md lists them)");
+  if (post_route && request.method != "POST") return method_not_allowed("POST");
+  if (get_route && !get) return method_not_allowed("GET, HEAD");
+  if (auto pending = tables_pending(model, ServedMode::receiver)) return std::move(*pending);
+  if (r[0] == "codec") return codec_answer(model, request, form);
+  if (r[0] == "blocks") return block_answer(model, limits, request, form, r.subspan(1));
+  if (post_route)
+    return splits_answer(model, limits, request, form, decode_code(model, limits, request, request.body),
+                         etag_of(model, {form_path(form), "/splits/", protocol::base64url_encode(request.body)}));
+  if (r[1].size() > (uint64_t(limits.max_body_bytes) * 4 + 2) / 3)
+    return error_answer(414, "a request code of over " + std::to_string(limits.max_body_bytes) + " bytes");
+  const auto code = [&] {
+    const PhaseTimer timer(request.phases, Phase::decode_ids);
+    return protocol::base64url_decode(r[1]);
+  }();
+  if (!code) return error_answer(400, "the request code is not canonical base64url (RFC 4648 §5, no padding)");
+  // Strict base64url has one text per code: the segment is the canonical URL's.
+  return splits_answer(model, limits, request, form, decode_code(model, limits, request, *code),
+                       etag_of(model, {form_path(form), "/splits/", r[1]}));
+}
 // A .pms model's resources under /models/{m}/{version}/: `s` is the URL's segments without the version.
 HttpAnswer progressive_route(const ServedModel& model, const HttpLimits& limits, const HttpRequest& request,
                              std::span<const std::string_view> s) {
@@ -229,30 +260,12 @@ HttpAnswer progressive_route(const ServedModel& model, const HttpLimits& limits,
     if (auto pending = tables_pending(model, ServedMode::multilevel)) return std::move(*pending);
     return multilevel_route(model.tables->multilevel(), request, s);
   }
-  const bool get = request.method == "GET" || request.method == "HEAD";
-  const bool post_route = s.size() == 3 && s[2] == "splits";
-  const bool get_route = (s.size() == 3 && (s[2] == "base" || s[2] == "codec")) ||
-                         (s.size() == 4 && s[2] == "splits") || (s.size() == 6 && s[2] == "blocks");
-  if (!post_route && !get_route) return error_answer(404, "no such resource (docs/protocol.md lists them)");
-  if (post_route && request.method != "POST") return method_not_allowed("POST");
-  if (get_route && !get) return method_not_allowed("GET, HEAD");
-  if (s[2] == "base") return base_answer(model, request);
-  if (auto pending = tables_pending(model, ServedMode::receiver)) return std::move(*pending);
-  if (s[2] == "codec") return codec_answer(model, request);
-  if (s[2] == "blocks") return block_answer(model, limits, request, s.subspan(3));
-  if (post_route)
-    return splits_answer(model, limits, request, decode_code(model, limits, request, request.body),
-                         etag_of(model, {"/splits/", protocol::base64url_encode(request.body)}));
-  if (s[3].size() > (uint64_t(limits.max_body_bytes) * 4 + 2) / 3)
-    return error_answer(414, "a request code of over " + std::to_string(limits.max_body_bytes) + " bytes");
-  const auto code = [&] {
-    const PhaseTimer timer(request.phases, Phase::decode_ids);
-    return protocol::base64url_decode(s[3]);
-  }();
-  if (!code) return error_answer(400, "the request code is not canonical base64url (RFC 4648 §5, no padding)");
-  // Strict base64url has one text per code: the segment is the canonical URL's.
-  return splits_answer(model, limits, request, decode_code(model, limits, request, *code),
-                       etag_of(model, {"/splits/", s[3]}));
+  if (s.size() >= 4 && s[2] == "plain") return records_route(model, limits, request, RecordForm::plain, s, 3);
+  if (s.size() == 3 && s[2] == "base") {
+    if (request.method != "GET" && request.method != "HEAD") return method_not_allowed("GET, HEAD");
+    return base_answer(model, request);
+  }
+  return records_route(model, limits, request, RecordForm::info, s, 2);
 }
 
 // /models/{m}/{version}/...: the model, then its version (410 for another), then the resource.

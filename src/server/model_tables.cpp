@@ -30,30 +30,42 @@ std::vector<float> snapped_positions(const ModelData& model, const protocol::Pos
   return positions;
 }
 
+// The serialized tables `tables`, decoded once, and the CODEC frame that carries them.
+void hold_tables(RecordTables& out, std::vector<uint8_t> tables) {
+  out.codec_tables = std::make_shared<const std::vector<uint8_t>>(std::move(tables));
+  BitReader reader(*out.codec_tables, "split tables");
+  out.codec = std::make_shared<const SplitCodec>(SplitCodec::deserialize(reader));
+  out.codec_frame =
+      std::make_shared<const std::vector<uint8_t>>(protocol::encode(protocol::Codec{*out.codec_tables, {}}));
+}
+
 // The .pms holds records at the grid it was built for; a server started with other position bits codes
 // its own once.
 std::unique_ptr<RecordTables> record_tables(const ServedModel& served) {
   auto out = std::make_unique<RecordTables>();
   const PmsFile& file = *served.file;
   const uint32_t bits = served.context.grid.bits;
-  const SplitCodec* codec = &file.split_codec();
-  if (!file.split_offsets().empty() && codec->position_bits() == bits) {
+  const SplitCodec& codec = file.split_codec();
+  if (!file.split_offsets().empty() && codec.position_bits() == bits) {
     out->records = {file.split_records(), file.split_offsets()};
+    BitWriter w;
+    codec.serialize(w);
+    hold_tables(*out, w.bytes());
   } else {
     out->own_records = encode_records(file.model(), bits);
     out->records = {out->own_records.records, out->own_records.offsets};
+    hold_tables(*out, out->own_records.tables);
   }
-  if (!out->own_records.tables.empty()) {
-    out->codec_tables = std::make_shared<const std::vector<uint8_t>>(out->own_records.tables);
-  } else {
-    BitWriter w;
-    codec->serialize(w);
-    out->codec_tables = std::make_shared<const std::vector<uint8_t>>(w.bytes());
-  }
-  BitReader tables(*out->codec_tables, "split tables");
-  out->codec = std::make_shared<const SplitCodec>(SplitCodec::deserialize(tables));
-  out->codec_frame =
-      std::make_shared<const std::vector<uint8_t>>(protocol::encode(protocol::Codec{*out->codec_tables, {}}));
+  return out;
+}
+
+// The plain form (docs/protocol.md, "The plain form") is derived from the same model at load: the file
+// stores the info form only, so both forms come from one .pms.
+std::unique_ptr<RecordTables> plain_record_tables(const ServedModel& served) {
+  auto out = std::make_unique<RecordTables>();
+  out->own_records = encode_records(served.model(), served.context.grid.bits, RecordForm::plain);
+  out->records = {out->own_records.records, out->own_records.offsets, RecordForm::plain};
+  hold_tables(*out, out->own_records.tables);
   return out;
 }
 
@@ -85,6 +97,13 @@ void ModelTables::build_records(const ServedModel& served, ServedMode mode) {
   std::call_once(records_once_, [&] {
     records_ = record_tables(served);
     count(mode, record_bytes(*records_));
+  });
+}
+
+void ModelTables::build_plain_records(const ServedModel& served, ServedMode mode) {
+  std::call_once(plain_records_once_, [&] {
+    plain_records_ = plain_record_tables(served);
+    count(mode, record_bytes(*plain_records_));
   });
 }
 
@@ -120,7 +139,8 @@ void ModelTables::build(const ServedModel& served, ServedMode mode) {
       });
       return;
     case ServedMode::receiver:
-      return build_records(served, mode);
+      build_records(served, mode);
+      return build_plain_records(served, mode);
     case ServedMode::multilevel:
       std::call_once(multilevel_once_, [&] {
         multilevel_ = derive_multilevel(served.name, served.path, served.version, data);

@@ -55,7 +55,10 @@ class ModelTables {
   // The pieces, each valid once a mode that uses it is ready.
   const SelectiveTables& selective() const { return *selective_; }
   const std::vector<uint32_t>& split_rank() const { return split_rank_; }  // per node, in split_order; leaves kNone
-  const RecordTables& records() const { return *records_; }
+  // The records in `form`: the info form's serve every mode, the plain form's the receiver-driven one.
+  const RecordTables& records(RecordForm form = RecordForm::info) const {
+    return form == RecordForm::plain ? *plain_records_ : *records_;
+  }
   const protocol::PacketTable& packets() const { return packets_; }  // sender-driven packets with refinement info
   const Dag& dag() const { return *dag_; }
   const ServedMultilevel& multilevel() const { return *multilevel_; }
@@ -68,15 +71,17 @@ class ModelTables {
   void set_state(ServedMode mode, State state) { states_[index_of(mode)].store(state, std::memory_order_release); }
   void build_selective(const ServedModel& model, ServedMode mode);
   void build_records(const ServedModel& model, ServedMode mode);
+  void build_plain_records(const ServedModel& model, ServedMode mode);
   void count(ServedMode mode, uint64_t bytes) { bytes_[index_of(mode)] += bytes; }
 
   std::array<std::atomic<State>, kServedModeCount> states_{};
   std::array<std::atomic<uint64_t>, kServedModeCount> bytes_{};
   std::array<std::string, kServedModeCount> failures_;
-  std::once_flag selective_once_, rank_once_, records_once_, packets_once_, dag_once_, multilevel_once_;
+  std::once_flag selective_once_, rank_once_, records_once_, plain_records_once_, packets_once_, dag_once_,
+      multilevel_once_;
   std::unique_ptr<const SelectiveTables> selective_;
   std::vector<uint32_t> split_rank_;
-  std::unique_ptr<const RecordTables> records_;
+  std::unique_ptr<const RecordTables> records_, plain_records_;
   protocol::PacketTable packets_;
   std::unique_ptr<const Dag> dag_;
   std::unique_ptr<const ServedMultilevel> multilevel_;

@@ -22,13 +22,14 @@ class SplitRecordsWriter final : public BodyBuilder {
   // outlives the writer (the catalogue holds it for the server's life).
   // With `phases`, building counts as search_splits.
   SplitRecordsWriter(const ServedModel& model, protocol::SplitRequest request, std::span<const uint32_t> nodes,
-                     PhaseTimes* phases = nullptr);
+                     RecordForm form = RecordForm::info, PhaseTimes* phases = nullptr);
 
   bool build(std::chrono::steady_clock::time_point until) override;
   std::vector<uint8_t> take() override { return std::move(writer_).take(); }
 
  private:
   const ServedModel& model_;
+  const protocol::StoredRecords& records_;
   protocol::SplitRequest request_;
   PhaseTimes* phases_;
   size_t next_id_ = 0;
@@ -37,6 +38,6 @@ class SplitRecordsWriter final : public BodyBuilder {
 
 // The whole body in one go.
 std::vector<uint8_t> split_records_body(const ServedModel& model, const protocol::SplitRequest& request,
-                                        std::span<const uint32_t> nodes);
+                                        std::span<const uint32_t> nodes, RecordForm form = RecordForm::info);
 
 }  // namespace pms::server

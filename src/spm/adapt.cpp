@@ -279,6 +279,11 @@ void SelectiveRefinement::report_missing(uint32_t v) {
   missing_.push_back(v);
 }
 
+void SelectiveRefinement::report_forced(uint32_t v) {
+  report_missing(v);
+  forced_missing_.push_back(v);  // a leaf reported first as wanted may be forced too: at most once per report
+}
+
 // A vertex that wants to split but cannot yet (its own packet or one of its forced chain is missing, or
 // the frame is capped): the nodes its chain already split stay, or the next frame would collapse them
 // and split them again. Walks SelStreamVSplit's chain: while v_l == v_r, that vertex must split first,
@@ -288,7 +293,8 @@ void SelectiveRefinement::pin_chain(uint32_t v) {
   const size_t limit = mesh_->vertex_count();
   for (size_t steps = 0; steps <= limit; ++steps) {
     if (h.is_leaf(v)) {
-      report_missing(v);
+      if (steps == 0) report_missing(v);
+      else report_forced(v);
       return;
     }
     const VertexId cut_l = h.cut_left(v), cut_r = h.cut_right(v);
@@ -322,7 +328,7 @@ void SelectiveRefinement::pin_chain(uint32_t v) {
   const VSplitResult r = mesh_->vsplit(v);
   stats.vsplits += uint32_t(mesh_->vertex_count() - before);
   if (r.done) return keep(v, true, margin, true);
-  report_missing(r.needs);
+  report_forced(r.needs);
   pin_chain(v);
   return kNone;
 }
@@ -467,6 +473,7 @@ FrameStats SelectiveRefinement::adapt() {
   }
   FrameStats stats;
   missing_.clear();
+  forced_missing_.clear();
   tops_.clear();
   stack_.clear();
   whole_walk_ = walk_trees(stats);

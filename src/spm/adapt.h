@@ -88,6 +88,10 @@ class SelectiveRefinement {
   // the leaf a forced chain stopped at, among the trees the last adapt() walked. Valid until the next
   // adapt(): the streaming client asks for them.
   std::span<const uint32_t> missing() const { return missing_; }
+  // Of missing(), the leaves forced chains stopped at: splits some wanted split depends on (the partial
+  // order), which a client that chooses its splits by another rule than qrefine must still fetch. A leaf
+  // may be listed more than once.
+  std::span<const uint32_t> forced_missing() const { return forced_missing_; }
   // Some leaf wants a packet the hierarchy lacks: missing() is not empty, or, after a walk the time budget
   // paused, a frame since every tree was last walked reported one.
   bool lacks_packets() const { return !missing_.empty() || (lacked_frame_ != 0 && lacked_frame_ >= earlier_round_); }
@@ -144,6 +148,7 @@ class SelectiveRefinement {
   uint32_t visit_split(uint32_t v, float& margin);
   void pin_chain(uint32_t v);
   void report_missing(uint32_t v);
+  void report_forced(uint32_t v);
   bool walk_trees(FrameStats& stats);
   void walk_tree(uint32_t root, FrameStats& stats, uint32_t& evaluated);
   bool recently_kept(uint32_t v) const;
@@ -207,6 +212,7 @@ class SelectiveRefinement {
   std::vector<uint32_t> tops_;  // split nodes not wanted, whose subtrees may have to collapse
   std::vector<uint32_t> subtree_, collapse_, retry_;
   std::vector<uint32_t> missing_;
+  std::vector<uint32_t> forced_missing_;  // of missing_, once per report (a leaf may be forced twice)
   Geomorphs morphs_;
 };
 

@@ -112,7 +112,7 @@ constexpr uint32_t kSlotColor = kSlotNormalSecond + kNormalClasses;             
 constexpr uint32_t kSlotColorNext = kSlotColor + kSizeClasses;  // [channel 1..3][class of the one before]
 constexpr uint32_t kSlotCount = kSlotColorNext + 3 * kColorClasses;
 static_assert(kSlotCount - kSlotNormal == 66 + 53, "docs/protocol.md, \"Split records\", gives the counts");
-constexpr uint8_t kHasNormals = 1, kHasColors = 2;
+constexpr uint8_t kHasNormals = 1, kHasColors = 2, kPlainForm = 4;
 
 // Integers by magnitude steps of `precision` bits: magnitudes below 2^precision each a step, larger ones
 // by their bit_width and the `precision` bits below the leading one, the bits below those raw. A symbol is
@@ -699,7 +699,8 @@ void SplitCodec::emit_cuts(const SplitContext& c, const SplitPayload& p, Out& ou
 }
 
 template <class Out>
-void SplitCodec::emit(const SplitContext& c, const SplitPayload& p, Out& out) const {
+void SplitCodec::emit(const SplitContext& context, const SplitPayload& p, Out& out) const {
+  const SplitContext c = coding_context(context);
   emit_cuts(c, p, out);
   // Position of v_t against v_s's.
   const PositionFrame frame = position_frame(c.info_s, steps_, position_bits_);
@@ -712,15 +713,25 @@ void SplitCodec::emit(const SplitContext& c, const SplitPayload& p, Out& out) co
   put_pair(out, in_plane_tables(c), d[frame.order[0]], d[frame.order[1]], geometry);
   const int64_t predicted = frame.plane ? plane_prediction(frame, d) : 0;
   put_int(out, third_position_slot(frame, d), d[frame.order[2]] - predicted, geometry, kOffPlanePrecision);
-  const uint32_t edge = edge_class(d);
-  // Refinement info of v_t and v_u against v_s's.
+  emit_children(c, p, out);
+  emit_attributes(c, p, edge_class(d), out);
+}
+
+// Refinement info of v_t and v_u against v_s's; in the plain form only whether each has a split.
+template <class Out>
+void SplitCodec::emit_children(const SplitContext& c, const SplitPayload& p, Out& out) const {
   const RefineInfo* child[2] = {&p.info_t, &p.info_u};
   for (const RefineInfo* info : child)
     if (!is_canonical(*info) || !(*info == as_sent(*info)))
       fail("split record", "split of " + to_string(c.vs) + ": refinement info is not as sent");
+  if (form_ == RecordForm::plain && !(p == plain_payload(p, !never_refines(p.info_t), !never_refines(p.info_u))))
+    fail("split record", "split of " + to_string(c.vs) + ": refinement info in the plain form");
   const RefineInfo& s = c.info_s;
+  // The plain form's flags are the hierarchy's shape, not refinement info: counted as topology.
   out.symbol(kSlotInfoFlags + height_context(c, max_depth_),
-             (never_refines(p.info_t) ? 1u : 0u) | (never_refines(p.info_u) ? 2u : 0u), refinement);
+             (never_refines(p.info_t) ? 1u : 0u) | (never_refines(p.info_u) ? 2u : 0u),
+             form_ == RecordForm::plain ? topology : refinement);
+  if (form_ == RecordForm::plain) return;
   uint32_t t_radius = kNoRadiusSymbol;
   for (uint32_t k = 0; k < 2; ++k) {
     const RefineInfo& v = *child[k];
@@ -750,7 +761,6 @@ void SplitCodec::emit(const SplitContext& c, const SplitPayload& p, Out& out) co
     const int64_t dy = coarse_axis(v.cone_y) - axis_origin(s, t, v, &RefineInfo::cone_y);
     put_pair(out, axis_tables(axis_slot, k), dx, dy, refinement);
   }
-  emit_attributes(c, p, edge, out);
 }
 
 template <class Out>
@@ -810,8 +820,9 @@ void SplitCodec::encode(const SplitContext& context, const SplitPayload& payload
   if (bits) *bits = out.bits;
 }
 
-SplitPayload SplitCodec::decode(const SplitContext& c, BitReader& r) const {
+SplitPayload SplitCodec::decode(const SplitContext& context, BitReader& r) const {
   if (codes_.size() != kSlotCount) fail("split record", "the codec has no tables");
+  const SplitContext c = coding_context(context);
   SplitPayload p;
   References refs = references(c);
   uint32_t ref_slot = left_reference_slot(refs);
@@ -873,9 +884,18 @@ SplitPayload SplitCodec::decode(const SplitContext& c, BitReader& r) const {
   const int64_t predicted = frame.plane ? plane_prediction(frame, d) : 0;
   place(frame.order[2], predicted + get_int(codes_[third_position_slot(frame, d)].read(r, "position"), r, "position",
                                             kOffPlanePrecision));
-  const uint32_t edge = edge_class(d);
+  decode_children(c, r, p);
+  decode_attributes(c, edge_class(d), r, p);
+  return p;
+}
+
+void SplitCodec::decode_children(const SplitContext& c, BitReader& r, SplitPayload& p) const {
   const RefineInfo& s = c.info_s;
   const uint32_t flags = codes_[kSlotInfoFlags + height_context(c, max_depth_)].read(r, "info flags");
+  if (form_ == RecordForm::plain) {
+    p = plain_payload(p, !(flags & 1u), !(flags & 2u));
+    return;
+  }
   uint32_t t_radius = kNoRadiusSymbol;
   RefineInfo* child[2] = {&p.info_t, &p.info_u};
   for (uint32_t k = 0; k < 2; ++k) {
@@ -916,8 +936,6 @@ SplitPayload SplitCodec::decode(const SplitContext& c, BitReader& r) const {
     }
     if (!is_canonical(v) || never_refines(v)) r.fail_field(field, "not a value the quantizer produces");
   }
-  decode_attributes(c, edge, r, p);
-  return p;
 }
 
 namespace {
@@ -941,12 +959,27 @@ std::vector<size_t> split_bounds(const ModelData& model) {
 
 }  // namespace
 
-SplitCodec SplitCodec::build(const ModelData& model, std::span<const uint32_t> positions, uint32_t position_bits) {
-  return fit(model, positions, position_bits, nullptr);
+SplitCodec SplitCodec::build(const ModelData& model, std::span<const uint32_t> positions, uint32_t position_bits,
+                             RecordForm form) {
+  return fit(model, positions, position_bits, form, nullptr);
+}
+
+SplitPayload SplitCodec::form_payload(const ModelData& model, std::span<const uint32_t> positions,
+                                      uint32_t node) const {
+  const SplitPayload p = split_payload(model, positions, node);
+  if (form_ == RecordForm::info) return p;
+  const uint32_t t = model.first_child[node];
+  return plain_payload(p, !model.is_leaf(t), !model.is_leaf(t + 1));
+}
+
+SplitContext SplitCodec::coding_context(const SplitContext& context) const {
+  SplitContext c = context;
+  if (form_ == RecordForm::plain) c.info_s = as_sent(RefineInfo{});
+  return c;
 }
 
 SplitCodec SplitCodec::fit(const ModelData& model, std::span<const uint32_t> positions, uint32_t position_bits,
-                           std::vector<SymbolLog>* logs) {
+                           RecordForm form, std::vector<SymbolLog>* logs) {
   check_node_arrays(model);
   if (positions.size() != 3 * model.node_count()) fail("split record", "positions are not 3 per node");
   if (!(position_bits >= 1 && position_bits <= 32)) fail("split record", "position bits outside 1..32");
@@ -957,6 +990,7 @@ SplitCodec SplitCodec::fit(const ModelData& model, std::span<const uint32_t> pos
   codec.grid_step_ = largest_grid_step(model, position_bits);
   codec.has_normals_ = !model.normals.empty();
   codec.has_colors_ = !model.colors.empty();
+  codec.form_ = form;
   for (size_t n = 0; n < model.node_count(); ++n)
     codec.max_depth_ = std::max<uint32_t>(codec.max_depth_, uint32_t(model.id(uint32_t(n)).depth()));
   // One fit: every choice the coding makes is canonical, so no symbol depends on the tables.
@@ -970,7 +1004,7 @@ SplitCodec SplitCodec::fit(const ModelData& model, std::span<const uint32_t> pos
     Fitting out{part.counts, logs ? &part.log : nullptr};
     for (uint32_t node = uint32_t(begin); node < end; ++node) {
       if (!model.is_leaf(node))
-        codec.emit(split_context(model, positions, node), split_payload(model, positions, node), out);
+        codec.emit(split_context(model, positions, node), codec.form_payload(model, positions, node), out);
       if (logs) part.log.end_record();
     }
     return part;
@@ -1001,6 +1035,7 @@ std::vector<uint32_t> SplitCodec::code_words() const {
 }
 
 bool SplitCodec::carried(uint32_t slot) const {
+  if (slot >= kSlotRadius && slot < kCoreSlots) return form_ == RecordForm::info;
   if (slot < kCoreSlots) return true;
   return slot < kSlotColor ? has_normals_ : has_colors_;
 }
@@ -1012,7 +1047,9 @@ void SplitCodec::serialize(BitWriter& w) const {
   w.bits(position_bits_, 8);
   for (uint16_t step : steps_) w.bits(step, 16);
   w.bits(bit_cast<uint32_t>(grid_step_), 32);
-  w.bits((has_normals_ ? kHasNormals : 0) | (has_colors_ ? kHasColors : 0), 8);
+  w.bits(
+      (has_normals_ ? kHasNormals : 0) | (has_colors_ ? kHasColors : 0) | (form_ == RecordForm::plain ? kPlainForm : 0),
+      8);
   std::vector<const PrefixCode*> carried_codes;
   for (uint32_t slot = 0; slot < kSlotCount; ++slot)
     if (carried(slot)) carried_codes.push_back(&codes_[slot]);
@@ -1031,9 +1068,10 @@ SplitCodec SplitCodec::deserialize(BitReader& r) {
   if (codec.max_depth_ > 63) r.fail_field("max depth", "above 63");
   if (codec.position_bits_ < 1 || codec.position_bits_ > 32) r.fail_field("position bits", "outside 1..32");
   const auto attributes = uint32_t(r.bits(8, "attributes"));
-  if (attributes & ~uint32_t(kHasNormals | kHasColors)) r.fail_field("attributes", "unknown bits set");
+  if (attributes & ~uint32_t(kHasNormals | kHasColors | kPlainForm)) r.fail_field("attributes", "unknown bits set");
   codec.has_normals_ = attributes & kHasNormals;
   codec.has_colors_ = attributes & kHasColors;
+  codec.form_ = attributes & kPlainForm ? RecordForm::plain : RecordForm::info;
   std::vector<uint32_t> slots;
   std::vector<size_t> alphabets;
   for (uint32_t s = 0; s < kSlotCount; ++s)
@@ -1053,6 +1091,20 @@ void copy_attributes(const ModelData& model, uint32_t node, uint16_t normal[2], 
 }
 
 }  // namespace
+
+const char* record_form_name(RecordForm form) { return form == RecordForm::plain ? "plain" : "info"; }
+
+RefineInfo plain_split_info() {
+  // The largest finite length the quantizer stores: the sphere holds any view and the error any tolerance.
+  constexpr uint16_t kLargestLength = 0x7BFF & ~uint16_t((1u << kLengthDroppedBits) - 1);
+  return {kLargestLength, kLargestLength, kLargestLength, 0, 0, kNoCone};
+}
+
+SplitPayload plain_payload(SplitPayload payload, bool t_has_split, bool u_has_split) {
+  payload.info_t = t_has_split ? plain_split_info() : as_sent(RefineInfo{});
+  payload.info_u = u_has_split ? plain_split_info() : as_sent(RefineInfo{});
+  return payload;
+}
 
 SplitContext split_context(const ModelData& model, std::span<const uint32_t> positions, uint32_t node) {
   SplitContext c;
@@ -1119,10 +1171,10 @@ std::vector<uint32_t> grid_positions(const ModelData& model, uint32_t position_b
   return q;
 }
 
-EncodedRecords encode_records(const ModelData& model, uint32_t position_bits) {
+EncodedRecords encode_records(const ModelData& model, uint32_t position_bits, RecordForm form) {
   const std::vector<uint32_t> q = grid_positions(model, position_bits);
   std::vector<SplitCodec::SymbolLog> logs;
-  const SplitCodec codec = SplitCodec::fit(model, q, position_bits, &logs);
+  const SplitCodec codec = SplitCodec::fit(model, q, position_bits, form, &logs);
   EncodedRecords out;
   BitWriter tables;
   codec.serialize(tables);
@@ -1165,6 +1217,7 @@ SplitCodec check_records(const std::string& where, const ModelData& model, std::
     fail(where, "split tables: root count, depth or position bits do not match the model");
   if (codec.has_normals() != !model.normals.empty() || codec.has_colors() != !model.colors.empty())
     fail(where, "split tables: the normals and colors they carry are not the model's");
+  if (codec.form() != RecordForm::info) fail(where, "split tables: stored records carry the refinement info");
   const size_t n = model.node_count();
   if (offsets.size() != n + 1) fail(where, "split record offsets: not one per node plus one");
   const uint64_t bits = 8 * uint64_t(records.size());

@@ -74,24 +74,41 @@ struct EncodedRecords {
   std::vector<uint8_t> records;
 };
 
+// What a record carries of its children (docs/protocol.md, "The plain form"): their refinement info (the
+// sender-driven mode's and today's receiver-driven client's), or only whether each has a split of its own
+// (cheng-ooi 2008 §3: no spheres or cones on the wire; the area-ranking client decides by screen area).
+enum class RecordForm : uint8_t { info, plain };
+const char* record_form_name(RecordForm form);
+
+// The info a plain record's child is held with when it has a split: one that always refines (its sphere
+// holds the view, no cone, an error far above any tolerance), so adapt() makes every split the client holds
+// and lists every leaf with a split in missing(); a child without one is held with never-refining info.
+RefineInfo plain_split_info();
+// `payload` with its children's info replaced by what the plain form carries: plain_split_info() for a
+// child that has a split, never-refining info for one that has none.
+SplitPayload plain_payload(SplitPayload payload, bool t_has_split, bool u_has_split);
+
 // A model's static code tables and the record coder over them.
 class SplitCodec {
  public:
   SplitCodec() = default;
   // Tables fitted to every split of the model. `positions` holds 3 quantized coordinates per node on a
   // grid of `position_bits` (1..32) per axis.
-  static SplitCodec build(const ModelData& model, std::span<const uint32_t> positions, uint32_t position_bits);
-  friend EncodedRecords encode_records(const ModelData& model, uint32_t position_bits);
+  static SplitCodec build(const ModelData& model, std::span<const uint32_t> positions, uint32_t position_bits,
+                          RecordForm form = RecordForm::info);
+  friend EncodedRecords encode_records(const ModelData& model, uint32_t position_bits, RecordForm form);
 
-  // Throws pms::Error for a payload the tables or the model's widths cannot carry.
+  // Throws pms::Error for a payload the tables or the model's widths cannot carry, and in the plain form for
+  // children's info other than plain_payload()'s (the form has no room for it).
   void encode(const SplitContext& context, const SplitPayload& payload, BitWriter& w, RecordBits* bits = nullptr) const;
   // Throws pms::Error for a record that is not one: truncated, unknown code word, ids outside the model or
   // inside v_s's subtree, values the quantizer never produces.
   SplitPayload decode(const SplitContext& context, BitReader& r) const;
 
   // u32 root count, u8 max depth, u8 position bits, u16 grid step ratios x, y, z, f32 largest grid step
-  // over the model's scale, u8 attributes (bit 0 normals, bit 1 colors), then every table
-  // (PrefixCode::serialize): the attribute tables only for the attributes the model has.
+  // over the model's scale, u8 attributes (bit 0 normals, bit 1 colors, bit 2 the plain form), then every
+  // table (PrefixCode::serialize): the attribute tables only for the attributes the model has, the
+  // refinement info's only in the info form. Unknown attribute bits are refused.
   void serialize(BitWriter& w) const;
   static SplitCodec deserialize(BitReader& r);
 
@@ -101,6 +118,7 @@ class SplitCodec {
   // Whether records carry v_t's normal / color: the model has them.
   bool has_normals() const { return has_normals_; }
   bool has_colors() const { return has_colors_; }
+  RecordForm form() const { return form_; }
 
  private:
   struct Counts;
@@ -109,7 +127,14 @@ class SplitCodec {
   // build(); with `logs`, also each range of nodes' symbols, so encode_records() writes them without
   // working them out again.
   static SplitCodec fit(const ModelData& model, std::span<const uint32_t> positions, uint32_t position_bits,
-                        std::vector<SymbolLog>* logs);
+                        RecordForm form, std::vector<SymbolLog>* logs);
+  // What the record of `node` carries in this codec's form.
+  SplitPayload form_payload(const ModelData& model, std::span<const uint32_t> positions, uint32_t node) const;
+  // The context the coding reads: the plain form's ignores v_s's info, which its clients do not hold.
+  SplitContext coding_context(const SplitContext& context) const;
+  template <class Out>
+  void emit_children(const SplitContext& context, const SplitPayload& payload, Out& out) const;
+  void decode_children(const SplitContext& context, BitReader& r, SplitPayload& payload) const;
   // Every slot's code words in one array, at kFirstSymbol[slot] + symbol (split_codec.cpp): the word in
   // stream order from the lowest bit, its length from bit 16.
   std::vector<uint32_t> code_words() const;
@@ -127,6 +152,7 @@ class SplitCodec {
 
   uint32_t root_count_ = 0, max_depth_ = 0, position_bits_ = 0;
   bool has_normals_ = false, has_colors_ = false;
+  RecordForm form_ = RecordForm::info;
   std::array<uint16_t, 3> steps_{};  // each axis's grid step over the largest, in 1/65535
   float grid_step_ = 0;              // the largest grid step over the model's scale; 0 without a grid (serialized,
                                      // read by no field since nested info: docs/protocol.md)
@@ -143,13 +169,13 @@ std::array<uint16_t, 3> grid_step_ratios(const ModelData& model);
 float largest_grid_step(const ModelData& model, uint32_t position_bits);
 std::vector<uint32_t> grid_positions(const ModelData& model, uint32_t position_bits);
 
-// The tables fitted to the model and every record coded with them.
-EncodedRecords encode_records(const ModelData& model, uint32_t position_bits);
+// The tables fitted to the model and every record coded with them, in `form`.
+EncodedRecords encode_records(const ModelData& model, uint32_t position_bits, RecordForm form = RecordForm::info);
 
 // The codec of stored records, after checking them against the model: the tables parse, fit its ids and
-// carry the attributes it has, the offsets are ordered and end with the stream, leaves have none and every
-// internal node's record decodes on its own to that node's split. Throws pms::Error naming `where` and
-// the node.
+// carry the attributes it has, are of the info form, the offsets are ordered and end with the stream, leaves have none
+// and every internal node's record decodes on its own to that node's split. Throws pms::Error naming `where` and the
+// node.
 SplitCodec check_records(const std::string& where, const ModelData& model, std::span<const uint8_t> tables,
                          std::span<const uint64_t> offsets, std::span<const uint8_t> records);
 

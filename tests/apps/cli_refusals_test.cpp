@@ -93,6 +93,11 @@ TEST(CliRefusals, StreamOptionsOutsideTheirModes) {
       {stream + "--mode receiver --block-depth 3", {"--block-depth", "--fetch lists", "blocks"}},
       {stream + "--mode receiver --fetch blocks --ids-per-request 8", {"--ids-per-request", "--fetch blocks"}},
       {stream + "--mode multilevel --budget 100 --tolerance 2", {"--tolerance", "--budget"}},
+      {stream + "--mode sender --ranking area", {"--ranking", "--mode sender", "receiver"}},
+      {stream + "--mode receiver --stop-area 32", {"--stop-area", "--ranking area"}},
+      {stream + "--mode receiver --ranking area --tolerance 2", {"--tolerance", "--stop-area"}},
+      {stream + "--mode receiver --ranking area --prefetch", {"--prefetch", "--ranking area"}},
+      {stream + "--mode receiver --ranking size", {"--ranking", "size not in {error,area}"}},
       {stream + "--mode bogus", {"--mode", "'bogus'"}},
   });
 }

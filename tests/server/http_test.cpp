@@ -7,6 +7,7 @@
 #include <nlohmann/json.hpp>
 #include <thread>
 
+#include "common/bit_stream.h"
 #include "http_test_client.h"
 #include "io/shapes.h"
 #include "protocol/base64url.h"
@@ -17,6 +18,8 @@
 #include "server/http_server.h"
 #include "server/limits.h"
 #include "spm/hierarchy.h"
+#include "spm/refine_info.h"
+#include "spm/split_codec.h"
 #include "spm/vertex_hierarchy.h"
 #include "streaming_fixture.h"
 
@@ -244,6 +247,71 @@ TEST(Http, ADepthBringsDescendantsBreadthFirstAndBlocksTileTheTrees) {
   // Blocks of depth 1 start at even depths only; node 2 is at depth 1.
   EXPECT_EQ(client.get(at() + "/blocks/" + std::to_string(root) + "/2/1").status, 400);
   EXPECT_EQ(client.get(at() + "/blocks/" + std::to_string(root) + "/01/1").status, 400);
+}
+
+// Both record forms from the one .pms (docs/protocol.md, "The plain form"): the plain form's URLs mirror
+// the records' under /plain, with their own bytes and ETags, and the catalogue says the form is there.
+TEST(Http, ThePlainFormIsServedBesideTheInfoFormWithItsOwnETags) {
+  Server server;
+  HttpTestClient client(server.port());
+  const auto json = nlohmann::json::parse(client.get("/models").text());
+  EXPECT_EQ(json["models"][0]["record_forms"], nlohmann::json::array({"info", "plain"}));
+  const SplitRequest request = some_roots(20, 1);
+  const std::string code = protocol::base64url_encode(protocol::encode_split_request(request));
+  const uint32_t root = request.ids[0].tree;
+  const std::string block = "/blocks/" + std::to_string(root) + "/1/2";
+  for (const std::string& resource : {std::string("/codec"), "/splits/" + code, block}) {
+    const HttpReply info = client.get(at() + resource);
+    const HttpReply plain = client.get(at() + "/plain" + resource);
+    ASSERT_EQ(info.status, 200) << resource;
+    ASSERT_EQ(plain.status, 200) << resource << ": " << plain.text();
+    expect_cacheable(plain);
+    EXPECT_NE(plain.header("etag"), info.header("etag")) << resource;
+    EXPECT_LT(plain.body.size(), info.body.size()) << resource << ": no refinement info";
+    const HttpReply again = HttpTestClient(server.port()).get(at() + "/plain" + resource);
+    EXPECT_EQ(again.body, plain.body);
+    EXPECT_EQ(again.header("etag"), plain.header("etag"));
+    EXPECT_EQ(client.get(at() + "/plain" + resource, {{"If-None-Match", plain.header("etag")}}).status, 304);
+  }
+  const HttpReply post = client.post(at() + "/plain/splits", protocol::encode_split_request(request));
+  ASSERT_EQ(post.status, 200);
+  EXPECT_EQ(post.body, client.get(at() + "/plain/splits/" + code).body);
+  // Read as the area client reads them: the plain codec from /plain/codec, the splits of the request.
+  const HttpReply tables = client.get(at() + "/plain/codec");
+  BitReader r(tables.body, "plain tables");
+  const SplitCodec codec = SplitCodec::deserialize(r);
+  EXPECT_EQ(codec.form(), RecordForm::plain);
+  const protocol::Base base = protocol::decode_base(client.get(at() + "/base").body);
+  VertexHierarchy h;
+  for (uint32_t t = 0; t < base.root_count(); ++t)
+    h.add_root(VertexId{t, 1}, &base.positions[3 * size_t(t)],
+               never_refines(base.refine[t]) ? base.refine[t] : plain_split_info());
+  EXPECT_EQ(protocol::read_split_bands(post.body, request, codec, served().context.grid, h, 1u << 20),
+            split_ids(client.get(splits_url(request)).body, request).size());
+}
+
+TEST(Http, BadPlainFormRequestsGetA4xx) {
+  Server server;
+  HttpTestClient bad(server.port());
+  const ModelData& model = served().model();
+  uint32_t leaf = 0;
+  while (!model.is_leaf(leaf)) ++leaf;
+  const auto plain_splits = [](const SplitRequest& request) {
+    return at() + "/plain/splits/" + protocol::base64url_encode(protocol::encode_split_request(request));
+  };
+  EXPECT_EQ(bad.get(plain_splits({0, {model.id(leaf)}})).status, 404);         // a leaf: no split
+  EXPECT_EQ(bad.get(plain_splits({0, {{model.root_count, 1}}})).status, 404);  // no such tree
+  EXPECT_EQ(bad.get(plain_splits({99, {model.id(0)}})).status, 400);           // depth over the limit
+  EXPECT_EQ(bad.get(at() + "/plain/splits/AA+A").status, 400);                 // not base64url
+  EXPECT_EQ(bad.post(at() + "/plain/splits", std::vector<uint8_t>(10, 0)).status, 400);
+  EXPECT_EQ(bad.get(at() + "/plain/blocks/0/2/1").status, 400);   // an unaligned block
+  EXPECT_EQ(bad.get(at() + "/plain/blocks/0/01/1").status, 400);  // not plain decimal
+  EXPECT_EQ(bad.get(at() + "/plain/blocks/" + std::to_string(model.root_count) + "/1/1").status, 404);
+  EXPECT_EQ(bad.get(at() + "/plain/blocks/0/1").status, 404);  // too few segments
+  EXPECT_EQ(bad.get(at() + "/plain/base").status, 404);        // one base for both forms
+  EXPECT_EQ(bad.get(at() + "/plain").status, 404);
+  EXPECT_EQ(bad.post(at() + "/plain/codec", {}).status, 405);
+  EXPECT_EQ(bad.get(at() + "/plain/codec").status, 200);  // still served on the same connection
 }
 
 TEST(Http, KeepAliveServesManyRequestsOnOneConnection) {

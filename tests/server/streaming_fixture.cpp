@@ -200,6 +200,17 @@ Vertices local_vertices(const Hierarchy& snapped, const Camera& camera, float to
   return refine_locally(snapped, camera, tolerance, [](SelectiveMesh& mesh) { return vertices_by_id(mesh); });
 }
 
+Image picture(const SelectiveMesh& mesh, const Camera& camera, const Hierarchy& model) {
+  MeshArrays arrays;
+  mesh.extract(arrays);
+  return render({arrays.positions, arrays.indices, arrays.colors}, make_view(camera, model.bbox_min, model.bbox_max));
+}
+
+Image local_picture(const Hierarchy& snapped, const Camera& camera, float tolerance) {
+  return refine_locally(snapped, camera, tolerance,
+                        [&](SelectiveMesh& mesh) { return picture(mesh, camera, snapped); });
+}
+
 InProcess in_process(const Fixture& f, const client::ClientOptions& options, const server::ServerLimits& limits) {
   InProcess p;
   p.session = std::make_shared<server::Session>(f.catalogue, limits);

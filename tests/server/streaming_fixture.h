@@ -17,6 +17,7 @@
 #include "io/mesh.h"
 #include "protocol/message_types.h"
 #include "protocol/server_messages.h"
+#include "render/render.h"
 #include "server/catalogue.h"
 #include "server/http_server.h"
 #include "server/limits.h"
@@ -98,6 +99,10 @@ Vertices vertices_by_id(SelectiveMesh& mesh);
 // Local refinement of the same model (positions and normals as the wire carries them) for one view.
 Faces local_faces(const Hierarchy& snapped, const Camera& camera, float tolerance);
 Vertices local_vertices(const Hierarchy& snapped, const Camera& camera, float tolerance);
+// The shaded picture of `mesh` as `camera` sees it (the view from the model's box, as every client frames
+// it), and that of local refinement's mesh for the view and τ: what a client judged by PSNR is compared to.
+Image picture(const SelectiveMesh& mesh, const Camera& camera, const Hierarchy& model);
+Image local_picture(const Hierarchy& snapped, const Camera& camera, float tolerance);
 
 // Viewers flown on threads of their own, each checked as it finishes (from its thread) against local
 // refinement for its last view; the test then asserts all_same().

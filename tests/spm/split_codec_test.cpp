@@ -272,7 +272,7 @@ TEST(SplitCodec, HostileAttributeFieldsAreRefused) {
   codec.serialize(w);
   constexpr size_t kAttributesAt = 32 + 8 + 8 + 3 * 16 + 32;  // after the grid step
   std::vector<uint8_t> bytes = w.bytes();
-  bytes[kAttributesAt / 8] |= 4;  // an attribute this version does not know
+  bytes[kAttributesAt / 8] |= 8;  // an attribute this version does not know (4 is the plain form)
   BitReader unknown(bytes, "tables");
   EXPECT_THROW(SplitCodec::deserialize(unknown), Error);
 
