@@ -241,25 +241,61 @@ void code_triangles(Side& side, const LevelShape& s, LevelValues& x, Models& m, 
   side.end_part(&CompressedLevelBits::triangles);
 }
 
+// Ring members a vertex's prediction looks at: enough for a vertex's triangles, few enough that a
+// hostile mesh's crowded vertices cost little.
+constexpr uint32_t kPredictionRing = 8;
+
+// What predicts vertex v from the vertices decoded before it (index below v): the parallelograms of its
+// known triangles (v, a, b) across from a decoded triangle (b, a, c), a + b - c (touma and gotsman 1998),
+// averaged; without one, the mean of its decoded neighbours; without those, the vertex before it.
+struct Prediction {
+  std::array<std::array<uint32_t, 3>, kPredictionRing * kPredictionRing> terms;  // (a, b, c): a + b - c
+  uint32_t parallelograms = 0;
+  std::array<uint32_t, kPredictionRing> ring;
+  uint32_t around = 0;
+
+  void find(const LevelNeighbours& mesh, uint32_t v) {
+    parallelograms = around = 0;
+    for (uint32_t u : mesh.of(v))
+      if (u < v && around < kPredictionRing) ring[around++] = u;
+    for (uint32_t i = 0; i < around; ++i)
+      for (uint32_t j = i + 1; j < around; ++j) {
+        const uint32_t a = ring[i], b = ring[j];
+        if (!mesh.adjacent(a, b)) continue;
+        for (uint32_t c : mesh.of(a))
+          if (c != v && c < v && mesh.adjacent(b, c)) {
+            terms[parallelograms++] = {a, b, c};
+            break;
+          }
+      }
+  }
+  // Grid coordinate k (of w per vertex in q); `fallback` when nothing is decoded around v.
+  int64_t at(const std::vector<uint32_t>& q, uint32_t w, uint32_t k, int64_t fallback) const {
+    const auto value = [&](uint32_t u) { return int64_t(q[size_t(u) * w + k]); };
+    int64_t sum = 0;
+    if (parallelograms > 0) {
+      for (uint32_t i = 0; i < parallelograms; ++i) sum += value(terms[i][0]) + value(terms[i][1]) - value(terms[i][2]);
+      return rounded_mean(sum, parallelograms);
+    }
+    if (around == 0) return fallback;
+    for (uint32_t i = 0; i < around; ++i) sum += value(ring[i]);
+    return rounded_mean(sum, around);
+  }
+  static int64_t rounded_mean(int64_t sum, uint32_t n) {
+    return sum >= 0 ? (sum + n / 2) / n : -((-sum + n / 2) / n);
+  }
+};
+
 template <class Side>
 void code_vertices(Side& side, const LevelShape& s, LevelValues& x, Models& m, CompressedLevelState& state) {
   const uint32_t d = s.dimension, w = grid_width(d, s.texcoords);
   std::vector<uint32_t>& q = state.quantized;
-  std::array<uint32_t, LevelNeighbours::kMaxNeighbours> ring;
+  Prediction prediction;
   for (uint32_t v = s.v_begin; v < s.v_begin + s.vertices; ++v) {
-    uint32_t around = 0;
-    for (uint32_t u : state.neighbours.of(v))
-      if (u < v) ring[around++] = u;
-    // Grid coordinate k of v, on a grid of `bits`: the ring's mean, else the vertex before, else the middle.
+    prediction.find(state.neighbours, v);
+    // Grid coordinate k of v, on a grid of `bits`.
     const auto axis = [&](uint32_t k, uint32_t bits) {
-      int64_t guess = int64_t(1) << (bits - 1);
-      if (around > 0) {
-        int64_t sum = 0;
-        for (uint32_t i = 0; i < around; ++i) sum += q[size_t(ring[i]) * w + k];
-        guess = (sum + around / 2) / around;
-      } else if (v > 0) {
-        guess = q[size_t(v - 1) * w + k];
-      }
+      const int64_t guess = prediction.at(q, w, k, v > 0 ? int64_t(q[size_t(v - 1) * w + k]) : int64_t(1) << (bits - 1));
       const uint32_t z = side.integer(m.axis[k], Side::kEncoding ? zigzag(int64_t(q[size_t(v) * w + k]) - guess) : 0);
       const uint32_t value = on_grid(side, guess, z, bits, "vertex " + str(v));
       if (!Side::kEncoding) q.push_back(value);
