@@ -126,7 +126,8 @@ uint32_t RangeDecoder::integer(AdaptiveInteger& model) {
 }
 
 void RangeDecoder::expect_end() const {
-  if (at_ != data_.size()) fail(where_, std::to_string(data_.size() - at_) + " bytes after the stream's end");
+  const size_t left = data_.size() - at_;
+  if (left != 0) fail(where_, std::to_string(left) + (left == 1 ? " byte" : " bytes") + " after the stream's end");
 }
 
 }  // namespace pms

@@ -439,7 +439,6 @@ std::vector<uint8_t> decode_compressed_level(const std::string& where, std::span
                      c.dimension,  c.normals,         c.colors,   c.texcoords, c.grid.bits,       c.texcoord_grid.bits,
                      c.mesh_vertices};
   const uint32_t d = c.dimension, w = grid_width(d, c.texcoords);
-  state.quantized.reserve(state.quantized.size() + size_t(h.vertices) * w);
   LevelValues x;
   DecodeSide side(level.subspan(count_bytes), at);
   code_level(side, s, x, state);
