@@ -224,7 +224,7 @@ void run_multilevel_group(BenchContext& context) {
                     sizes.markdown() +
                     "\nThe compressed form's bits per input vertex by part over every level (positions include "
                     "normals, colours and texture coordinates; header: each level's counts and the coder's flush), "
-                    "and the fastest of 3 loads of every level through the client's loader.\n\n" +
+                    "and the time a client's loader takes to decode every level (each level's fastest of 5 loads, summed).\n\n" +
                     part_table.markdown();
   write_text_file(context.options.out_dir / "multilevel.json",
                   nlohmann::json{{"machine", machine_json()}, {"models", rows}}.dump(2) + "\n");

@@ -17,7 +17,7 @@ struct MultilevelSizes {
   uint64_t vertex_bits = 0, triangle_bits = 0;  // compressed: positions and attributes; connectivity + representatives
   uint64_t meshopt_vertex = 0, meshopt_index = 0;  // meshoptimizer's vertex and index-sequence codecs, per level
   CompressedLevelBits parts;  // the compressed form's bits by part, over every level
-  double decode_ms = 0;       // the fastest of a few loads of every compressed level through the loader
+  double decode_ms = 0;       // decoding every compressed level through the loader: each level's fastest of a few
 };
 
 // `per_level` gets one object per level, coarsest first.

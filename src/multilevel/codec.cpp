@@ -214,7 +214,8 @@ void code_triangles(Side& side, const LevelShape& s, LevelValues& x, Models& m, 
           lead.assign(d.begin(), d.end());
         }
       }
-      const std::span<const uint32_t> list = candidates.build(mesh, {c, k}, lead, cursor < v_end ? cursor : kNone);
+      const std::span<const uint32_t> list =
+          candidates.build(mesh, {c, k}, lead, cursor < v_end ? cursor : kNone, state.listed, state.beside);
       const uint32_t actual = Side::kEncoding ? x.triangles[3 * size_t(t) + k] : 0;
       uint32_t symbol = kEscape;
       if (Side::kEncoding) {
@@ -254,20 +255,25 @@ struct Prediction {
   std::array<uint32_t, kPredictionRing> ring;
   uint32_t around = 0;
 
-  void find(const LevelNeighbours& mesh, uint32_t v) {
+  // `beside` (sized to the mesh) is scratch.
+  void find(const LevelNeighbours& mesh, uint32_t v, VertexMarks& beside) {
     parallelograms = around = 0;
     for (uint32_t u : mesh.of(v))
       if (u < v && around < kPredictionRing) ring[around++] = u;
-    for (uint32_t i = 0; i < around; ++i)
+    for (uint32_t i = 0; i < around; ++i) {
+      const uint32_t a = ring[i];
+      beside.clear();
+      for (uint32_t u : mesh.of(a)) beside.add(u);
       for (uint32_t j = i + 1; j < around; ++j) {
-        const uint32_t a = ring[i], b = ring[j];
-        if (!mesh.adjacent(a, b)) continue;
-        for (uint32_t c : mesh.of(a))
-          if (c != v && c < v && mesh.adjacent(b, c)) {
+        const uint32_t b = ring[j];
+        if (!beside.has(b)) continue;
+        for (uint32_t c : mesh.of(b))
+          if (c != v && c < v && beside.has(c)) {
             terms[parallelograms++] = {a, b, c};
             break;
           }
       }
+    }
   }
   // Grid coordinate k (of w per vertex in q); `fallback` when nothing is decoded around v.
   int64_t at(const std::vector<uint32_t>& q, uint32_t w, uint32_t k, int64_t fallback) const {
@@ -292,7 +298,7 @@ void code_vertices(Side& side, const LevelShape& s, LevelValues& x, Models& m, C
   std::vector<uint32_t>& q = state.quantized;
   Prediction prediction;
   for (uint32_t v = s.v_begin; v < s.v_begin + s.vertices; ++v) {
-    prediction.find(state.neighbours, v);
+    prediction.find(state.neighbours, v, state.beside);
     // Grid coordinate k of v, on a grid of `bits`.
     const auto axis = [&](uint32_t k, uint32_t bits) {
       const int64_t guess = prediction.at(q, w, k, v > 0 ? int64_t(q[size_t(v - 1) * w + k]) : int64_t(1) << (bits - 1));
@@ -355,6 +361,8 @@ void code_level(Side& side, const LevelShape& s, LevelValues& x, CompressedLevel
   if (state.neighbours.vertices() != s.mesh_vertices) {
     state.neighbours.reset(uint32_t(s.mesh_vertices));
     state.representative.assign(s.mesh_vertices, kNone);
+    state.listed.reset(uint32_t(s.mesh_vertices));
+    state.beside.reset(uint32_t(s.mesh_vertices));
   }
   Models m;
   code_representatives(side, s, x, m, state.representative);

@@ -10,11 +10,6 @@ void LevelNeighbours::reset(uint32_t vertices) {
   lists_.clear();
 }
 
-bool LevelNeighbours::adjacent(uint32_t a, uint32_t b) const {
-  const std::span<const uint32_t> n = of(a);
-  return std::find(n.begin(), n.end(), b) != n.end();
-}
-
 void LevelNeighbours::add_edge(uint32_t a, uint32_t b) {
   if (slot_[a] == kNone) {
     slot_[a] = uint32_t(lists_.size());
@@ -32,26 +27,31 @@ void LevelNeighbours::add_triangle(const uint32_t corner[3]) {
   }
 }
 
-void CornerCandidates::add(uint32_t v, std::span<const uint32_t> decided) {
-  if (size_ >= kCandidates || v == LevelNeighbours::kNone) return;
-  if (std::find(decided.begin(), decided.end(), v) != decided.end()) return;
-  if (std::find(list_.begin(), list_.begin() + size_, v) != list_.begin() + size_) return;
+void CornerCandidates::add(uint32_t v, VertexMarks& listed) {
+  if (size_ >= kCandidates || v == LevelNeighbours::kNone || listed.has(v)) return;
+  listed.add(v);
   list_[size_++] = v;
 }
 
 std::span<const uint32_t> CornerCandidates::build(const LevelNeighbours& mesh, std::span<const uint32_t> decided,
-                                                  std::span<const uint32_t> first, uint32_t cursor) {
+                                                  std::span<const uint32_t> first, uint32_t cursor,
+                                                  VertexMarks& listed, VertexMarks& beside) {
   size_ = 0;
-  for (uint32_t v : first) add(v, decided);
-  add(cursor, decided);
-  if (decided.size() == 2)
+  listed.clear();
+  for (uint32_t v : decided) listed.add(v);
+  for (uint32_t v : first) add(v, listed);
+  add(cursor, listed);
+  if (decided.size() == 2) {
+    beside.clear();
+    for (uint32_t v : mesh.of(decided[0])) beside.add(v);
     for (uint32_t v : mesh.of(decided[1]))
-      if (mesh.adjacent(decided[0], v)) add(v, decided);
+      if (beside.has(v)) add(v, listed);
+  }
   if (!decided.empty())
-    for (uint32_t v : mesh.of(decided.back())) add(v, decided);
+    for (uint32_t v : mesh.of(decided.back())) add(v, listed);
   if (decided.size() == 2)
-    for (uint32_t v : mesh.of(decided[0])) add(v, decided);
-  for (uint32_t i = 0; i < recent_size_; ++i) add(recent_[i], decided);
+    for (uint32_t v : mesh.of(decided[0])) add(v, listed);
+  for (uint32_t i = 0; i < recent_size_; ++i) add(recent_[i], listed);
   return {list_.data(), size_};
 }
 

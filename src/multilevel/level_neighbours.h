@@ -3,12 +3,35 @@
 // them), and which vertices some triangle names. Encoder and decoder keep the same one, so a corner is
 // coded as its place among the vertices the mesh so far puts next to the corners before it.
 #pragma once
+#include <algorithm>
 #include <array>
 #include <cstdint>
 #include <span>
 #include <vector>
 
 namespace pms {
+
+// A set of vertices emptied in O(1): a round number per vertex, the set being those of the current round.
+// What lets a coder test "is it already listed / next to that vertex" in constant time.
+class VertexMarks {
+ public:
+  void reset(uint32_t vertices) {
+    round_.assign(vertices, 0);
+    current_ = 0;
+  }
+  void clear() {
+    if (++current_ == 0) {  // the rounds wrapped: start them again
+      std::fill(round_.begin(), round_.end(), 0);
+      current_ = 1;
+    }
+  }
+  void add(uint32_t v) { round_[v] = current_; }
+  bool has(uint32_t v) const { return round_[v] == current_; }
+
+ private:
+  std::vector<uint32_t> round_;
+  uint32_t current_ = 0;
+};
 
 class LevelNeighbours {
  public:
@@ -26,7 +49,6 @@ class LevelNeighbours {
   std::span<const uint32_t> of(uint32_t v) const {
     return slot_[v] == kNone ? std::span<const uint32_t>{} : std::span<const uint32_t>(lists_[slot_[v]]);
   }
-  bool adjacent(uint32_t a, uint32_t b) const;
   void add_triangle(const uint32_t corner[3]);
 
  private:
@@ -46,13 +68,15 @@ class CornerCandidates {
 
   // `decided`: the triangle's corners before this one (0 to 2); `first`: vertices to lead the list (the
   // ones the level's structure points at); `cursor`: kNone when the level has no vertex left unnamed.
+  // `listed` and `beside` (sized to the mesh) are scratch.
   std::span<const uint32_t> build(const LevelNeighbours& mesh, std::span<const uint32_t> decided,
-                                  std::span<const uint32_t> first, uint32_t cursor);
+                                  std::span<const uint32_t> first, uint32_t cursor, VertexMarks& listed,
+                                  VertexMarks& beside);
   // After each triangle: its corners go to the front of the recent list.
   void remember(const uint32_t corner[3]);
 
  private:
-  void add(uint32_t v, std::span<const uint32_t> decided);
+  void add(uint32_t v, VertexMarks& listed);
   std::array<uint32_t, kCandidates> list_{};
   uint32_t size_ = 0;
   std::array<uint32_t, kRecent> recent_{};
@@ -65,6 +89,7 @@ struct CompressedLevelState {
   std::vector<uint32_t> quantized;
   LevelNeighbours neighbours;           // the edges of every loaded triangle
   std::vector<uint32_t> representative;  // every loaded level's, LevelNeighbours::kNone where none is stated
+  VertexMarks listed, beside;            // scratch sets of the coder's lists
 };
 
 }  // namespace pms
