@@ -11,7 +11,7 @@
 namespace pms {
 namespace {
 
-constexpr uint32_t kTop = uint32_t(1) << 24;  // below this the range takes one more byte
+constexpr uint32_t kTop = uint32_t(1) << 24;  // as the decoder's
 
 }  // namespace
 
@@ -45,9 +45,11 @@ void RangeEncoder::bit(AdaptiveBit& model, unsigned bit) {
 }
 
 void RangeEncoder::raw(uint32_t value, unsigned n) {
-  for (unsigned i = n; i-- > 0;) {
-    range_ >>= 1;
-    if ((value >> i) & 1) low_ += range_;
+  while (n > 0) {
+    const unsigned k = n < kRawChunk ? n : kRawChunk;
+    n -= k;
+    range_ >>= k;
+    low_ += uint64_t((value >> n) & ((uint32_t(1) << k) - 1)) * range_;
     while (range_ < kTop) {
       range_ <<= 8;
       shift_low();
@@ -86,31 +88,16 @@ void RangeDecoder::normalize() {
   }
 }
 
-unsigned RangeDecoder::bit(AdaptiveBit& model) {
-  const uint32_t bound = (range_ >> AdaptiveBit::kBits) * model.zero;
-  unsigned bit = 0;
-  if (code_ < bound) {
-    range_ = bound;
-  } else {
-    code_ -= bound;
-    range_ -= bound;
-    bit = 1;
-  }
-  model.update(bit);
-  normalize();
-  return bit;
-}
-
 uint32_t RangeDecoder::raw(unsigned n) {
   uint32_t value = 0;
-  for (unsigned i = 0; i < n; ++i) {
-    range_ >>= 1;
-    unsigned bit = 0;
-    if (code_ >= range_) {
-      code_ -= range_;
-      bit = 1;
-    }
-    value = value << 1 | bit;
+  while (n > 0) {
+    const unsigned k = n < kRawChunk ? n : kRawChunk;
+    n -= k;
+    range_ >>= k;
+    const uint32_t chunk = code_ / range_;
+    if (chunk >> k) fail(where_, "corrupt");  // an encoder never leaves the code above the range
+    code_ -= chunk * range_;
+    value = uint32_t((uint64_t(value) << k) | chunk);
     normalize();
   }
   return value;

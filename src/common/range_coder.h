@@ -40,10 +40,15 @@ struct AdaptiveInteger {
   std::array<AdaptiveBit, 33> second{};
 };
 
+// Raw bits the coders take in one step.
+constexpr unsigned kRawChunk = 16;
+
 class RangeEncoder {
  public:
   void bit(AdaptiveBit& model, unsigned bit);
-  void raw(uint32_t value, unsigned n);  // n <= 32, most significant first, each at probability 1/2
+  // n <= 32 bits, each at probability 1/2, most significant first, up to kRawChunk of them in one step
+  // (the range, at least 2^24, divided by 2^kRawChunk still tells them apart).
+  void raw(uint32_t value, unsigned n);
   template <unsigned Bits>
   void symbol(AdaptiveSymbol<Bits>& model, uint32_t s) {
     uint32_t node = 1;
@@ -72,7 +77,21 @@ class RangeDecoder {
  public:
   // `where` names the data in errors ("WHERE: truncated"); it must outlive the decoder.
   RangeDecoder(std::span<const uint8_t> data, const std::string& where);
-  unsigned bit(AdaptiveBit& model);
+  // Inline: a level's decoding is mostly this.
+  unsigned bit(AdaptiveBit& model) {
+    const uint32_t bound = (range_ >> AdaptiveBit::kBits) * model.zero;
+    unsigned bit = 0;
+    if (code_ < bound) {
+      range_ = bound;
+    } else {
+      code_ -= bound;
+      range_ -= bound;
+      bit = 1;
+    }
+    model.update(bit);
+    if (range_ < kTop) normalize();
+    return bit;
+  }
   uint32_t raw(unsigned n);
   template <unsigned Bits>
   uint32_t symbol(AdaptiveSymbol<Bits>& model) {
@@ -86,6 +105,7 @@ class RangeDecoder {
   void expect_end() const;
 
  private:
+  static constexpr uint32_t kTop = uint32_t(1) << 24;  // below this the range takes one more byte
   uint8_t next_byte();
   void normalize();
   std::span<const uint8_t> data_;

@@ -120,11 +120,13 @@ class DecodeSide {
   const std::string& where_;
 };
 
-// A grid coordinate `guess + offset` checked on a grid of `bits`.
+// A grid coordinate `guess + offset` of `what` vertex v, checked on a grid of `bits` (the error's text is
+// made only for an error: this runs for every coordinate).
 template <class Side>
-uint32_t on_grid(const Side& side, int64_t guess, uint32_t zigzagged, uint32_t bits, const std::string& what) {
+uint32_t on_grid(const Side& side, int64_t guess, uint32_t zigzagged, uint32_t bits, const char* what, uint64_t v) {
   const int64_t x = guess + unzigzag(zigzagged);
-  if (x < 0 || x > (int64_t(1) << bits) - 1) side.error(what + " is off the " + str(bits) + "-bit grid");
+  if (x < 0 || x > (int64_t(1) << bits) - 1)
+    side.error(what + str(v) + " is off the " + str(bits) + "-bit grid");
   return uint32_t(x);
 }
 
@@ -204,36 +206,35 @@ void code_triangles(Side& side, const LevelShape& s, LevelValues& x, Models& m, 
       anchor = uint32_t(a);
       last_anchor = a;
     }
-    std::vector<uint32_t> lead;
     for (uint32_t k = 0; k < 3; ++k) {
-      lead.clear();
+      std::span<const uint32_t> lead;
       if (anchor != kNone) {
         const uint32_t at = k == 0 ? anchor : state.representative[anchor];
-        if (at != kNone) {
-          const std::span<const uint32_t> d = descendants.of(at, CornerCandidates::kCandidates);
-          lead.assign(d.begin(), d.end());
-        }
+        if (at != kNone) lead = descendants.of(at, CornerCandidates::kCandidates);
       }
-      const std::span<const uint32_t> list =
-          candidates.build(mesh, {c, k}, lead, cursor < v_end ? cursor : kNone, state.listed, state.beside);
+      const uint32_t unnamed = cursor < v_end ? cursor : kNone;
+      const auto candidates_until = [&](CornerCandidates::Until until) {
+        return candidates.build(mesh, {c, k}, lead, unnamed, until);
+      };
       const uint32_t actual = Side::kEncoding ? x.triangles[3 * size_t(t) + k] : 0;
       uint32_t symbol = kEscape;
       if (Side::kEncoding) {
-        const auto found = std::find(list.begin(), list.end(), actual);
-        if (found != list.end()) symbol = uint32_t(found - list.begin());
+        const std::span<const uint32_t> list = candidates_until({actual, kEscape});
+        if (!list.empty() && list.back() == actual) symbol = uint32_t(list.size() - 1);
       }
       symbol = side.symbol(m.corner[k], symbol);
-      if (symbol < list.size()) {
-        c[k] = list[symbol];
-      } else if (symbol == kEscape) {
+      if (symbol == kEscape) {
         const int64_t v = last_escape + unzigzag(side.integer(m.escape, zigzag(int64_t(actual) - last_escape)));
         if (v < 0 || uint64_t(v) >= s.mesh_vertices)
           side.error("triangle " + str(t) + " names vertex " + str(v) + " of " + str(s.mesh_vertices));
         c[k] = uint32_t(v);
         last_escape = v;
-      } else {
-        side.error("triangle " + str(t) + " names candidate " + str(symbol) + " of " + str(list.size()));
+        continue;
       }
+      const std::span<const uint32_t> list = Side::kEncoding ? candidates.list() : candidates_until({kNone, symbol});
+      if (symbol >= list.size())
+        side.error("triangle " + str(t) + " names candidate " + str(symbol) + " of " + str(list.size()));
+      c[k] = list[symbol];
     }
     mesh.add_triangle(c);
     candidates.remember(c);
@@ -255,20 +256,17 @@ struct Prediction {
   std::array<uint32_t, kPredictionRing> ring;
   uint32_t around = 0;
 
-  // `beside` (sized to the mesh) is scratch.
-  void find(const LevelNeighbours& mesh, uint32_t v, VertexMarks& beside) {
+  void find(const LevelNeighbours& mesh, uint32_t v) {
     parallelograms = around = 0;
     for (uint32_t u : mesh.of(v))
       if (u < v && around < kPredictionRing) ring[around++] = u;
     for (uint32_t i = 0; i < around; ++i) {
       const uint32_t a = ring[i];
-      beside.clear();
-      for (uint32_t u : mesh.of(a)) beside.add(u);
       for (uint32_t j = i + 1; j < around; ++j) {
         const uint32_t b = ring[j];
-        if (!beside.has(b)) continue;
+        if (!mesh.adjacent(a, b)) continue;
         for (uint32_t c : mesh.of(b))
-          if (c != v && c < v && beside.has(c)) {
+          if (c != v && c < v && mesh.adjacent(a, c)) {
             terms[parallelograms++] = {a, b, c};
             break;
           }
@@ -292,18 +290,24 @@ struct Prediction {
   }
 };
 
+// Vertices ahead whose neighbours' lists are fetched while one is decoded: its prediction reads the lists
+// of vertices anywhere in the mesh, and fetching them early hides the wait.
+constexpr uint32_t kPrefetchAhead = 2;
+
 template <class Side>
 void code_vertices(Side& side, const LevelShape& s, LevelValues& x, Models& m, CompressedLevelState& state) {
   const uint32_t d = s.dimension, w = grid_width(d, s.texcoords);
   std::vector<uint32_t>& q = state.quantized;
   Prediction prediction;
-  for (uint32_t v = s.v_begin; v < s.v_begin + s.vertices; ++v) {
-    prediction.find(state.neighbours, v, state.beside);
+  const uint32_t v_end = s.v_begin + s.vertices;
+  for (uint32_t v = s.v_begin; v < v_end; ++v) {
+    if (v + kPrefetchAhead < v_end) state.neighbours.prefetch_around(v + kPrefetchAhead);
+    prediction.find(state.neighbours, v);
     // Grid coordinate k of v, on a grid of `bits`.
     const auto axis = [&](uint32_t k, uint32_t bits) {
       const int64_t guess = prediction.at(q, w, k, v > 0 ? int64_t(q[size_t(v - 1) * w + k]) : int64_t(1) << (bits - 1));
       const uint32_t z = side.integer(m.axis[k], Side::kEncoding ? zigzag(int64_t(q[size_t(v) * w + k]) - guess) : 0);
-      const uint32_t value = on_grid(side, guess, z, bits, "vertex " + str(v));
+      const uint32_t value = on_grid(side, guess, z, bits, "vertex ", v);
       if (!Side::kEncoding) q.push_back(value);
     };
     for (uint32_t k = 0; k < d; ++k) axis(k, s.position_bits);
@@ -340,7 +344,7 @@ void code_changed(Side& side, const LevelShape& s, LevelValues& x, Models& m, co
       const int64_t own = q[size_t(v) * w + k];
       const uint32_t z =
           side.integer(m.changed_axis[k], Side::kEncoding ? zigzag(int64_t(x.changed_grid[size_t(i) * d + k]) - own) : 0);
-      const uint32_t value = on_grid(side, own, z, s.position_bits, "the secondary array's vertex " + str(v));
+      const uint32_t value = on_grid(side, own, z, s.position_bits, "the secondary array's vertex ", v);
       if (!Side::kEncoding) x.changed_grid.push_back(value);
     }
     for (uint32_t k = 0; k < (s.normals ? 3u : 0u); ++k) {
@@ -361,8 +365,6 @@ void code_level(Side& side, const LevelShape& s, LevelValues& x, CompressedLevel
   if (state.neighbours.vertices() != s.mesh_vertices) {
     state.neighbours.reset(uint32_t(s.mesh_vertices));
     state.representative.assign(s.mesh_vertices, kNone);
-    state.listed.reset(uint32_t(s.mesh_vertices));
-    state.beside.reset(uint32_t(s.mesh_vertices));
   }
   Models m;
   code_representatives(side, s, x, m, state.representative);

@@ -5,19 +5,14 @@
 
 namespace pms {
 
-void LevelNeighbours::reset(uint32_t vertices) {
-  slot_.assign(vertices, kNone);
-  lists_.clear();
-}
-
 void LevelNeighbours::add_edge(uint32_t a, uint32_t b) {
-  if (slot_[a] == kNone) {
-    slot_[a] = uint32_t(lists_.size());
-    lists_.emplace_back();
-  }
-  std::vector<uint32_t>& list = lists_[slot_[a]];
-  if (a == b || list.size() >= kMaxNeighbours || std::find(list.begin(), list.end(), b) != list.end()) return;
-  list.push_back(b);
+  if (a >= block_.size()) block_.resize(std::clamp<size_t>(2 * block_.size(), a + 1, std::max(a + 1, vertices_)));
+  Block& block = block_[a];
+  block.named = 1;
+  const auto end = block.neighbour.begin() + block.count;
+  if (a == b || block.count >= kMaxNeighbours || std::find(block.neighbour.begin(), end, b) != end) return;
+  *end = b;
+  ++block.count;
 }
 
 void LevelNeighbours::add_triangle(const uint32_t corner[3]) {
@@ -27,32 +22,35 @@ void LevelNeighbours::add_triangle(const uint32_t corner[3]) {
   }
 }
 
-void CornerCandidates::add(uint32_t v, VertexMarks& listed) {
-  if (size_ >= kCandidates || v == LevelNeighbours::kNone || listed.has(v)) return;
-  listed.add(v);
-  list_[size_++] = v;
+bool CornerCandidates::add(uint32_t v, std::span<const uint32_t> decided, const Until& until) {
+  const std::span<const uint32_t> listed = list();
+  if (size_ < kCandidates && v != LevelNeighbours::kNone && std::find(decided.begin(), decided.end(), v) == decided.end() &&
+      std::find(listed.begin(), listed.end(), v) == listed.end()) {
+    list_[size_++] = v;
+    if (v == until.vertex) return true;
+  }
+  return size_ >= kCandidates || size_ > until.place;
 }
 
 std::span<const uint32_t> CornerCandidates::build(const LevelNeighbours& mesh, std::span<const uint32_t> decided,
-                                                  std::span<const uint32_t> first, uint32_t cursor,
-                                                  VertexMarks& listed, VertexMarks& beside) {
+                                                  std::span<const uint32_t> first, uint32_t cursor, Until until) {
   size_ = 0;
-  listed.clear();
-  for (uint32_t v : decided) listed.add(v);
-  for (uint32_t v : first) add(v, listed);
-  add(cursor, listed);
-  if (decided.size() == 2) {
-    beside.clear();
-    for (uint32_t v : mesh.of(decided[0])) beside.add(v);
-    for (uint32_t v : mesh.of(decided[1]))
-      if (beside.has(v)) add(v, listed);
-  }
-  if (!decided.empty())
-    for (uint32_t v : mesh.of(decided.back())) add(v, listed);
+  const auto done = [&] { return list(); };
+  for (uint32_t v : first)
+    if (add(v, decided, until)) return done();
+  if (add(cursor, decided, until)) return done();
   if (decided.size() == 2)
-    for (uint32_t v : mesh.of(decided[0])) add(v, listed);
-  for (uint32_t i = 0; i < recent_size_; ++i) add(recent_[i], listed);
-  return {list_.data(), size_};
+    for (uint32_t v : mesh.of(decided[1]))
+      if (mesh.adjacent(decided[0], v) && add(v, decided, until)) return done();
+  if (!decided.empty())
+    for (uint32_t v : mesh.of(decided.back()))
+      if (add(v, decided, until)) return done();
+  if (decided.size() == 2)
+    for (uint32_t v : mesh.of(decided[0]))
+      if (add(v, decided, until)) return done();
+  for (uint32_t i = 0; i < recent_size_; ++i)
+    if (add(recent_[i], decided, until)) return done();
+  return done();
 }
 
 void CornerCandidates::remember(const uint32_t corner[3]) {
