@@ -3,9 +3,9 @@
 // (Edgebreaker's traversal makes a new triangle's corners the vertices next to the gate's; here the
 // triangles keep the structure's order, so each corner is coded as its place in a list of the vertices the
 // mesh so far puts next to the corners before it, led by the level's next unnamed vertex: a corner
-// outside the list is an escape, its difference to the last escape). Then its vertices, each predicted by
-// the mean of its neighbours already decoded (the triangles of this level and the coarser ones name
-// them), so what is coded is the vertex's offset from its ring, not its edge. Every decision and integer
+// outside the list is an escape, its difference to the last escape). Then its vertices, each predicted
+// from what is decoded around it (the triangles of this level and the coarser ones name them: see
+// Prediction), so what is coded is the vertex's offset from its surroundings, not its edge. Every decision and integer
 // goes through one adaptive range coder (common/range_coder.h) with models fresh per level, so a level
 // decodes with nothing but the levels before it. Encoder and decoder run the same function, `code_level`.
 #include "multilevel/codec.h"
@@ -170,18 +170,27 @@ class Descendants {
         if (const uint32_t at = standing(representative, pairs[i], n_l); at != kNone) by_.push_back({at, pairs[i]});
     std::sort(by_.begin(), by_.end());
   }
-  // `a` and what stands at it, at most `cap`.
-  std::span<const uint32_t> of(uint32_t a, size_t cap) {
-    list_.assign(1, a);
+  // `a` and what stands at it, at most `cap`, into buffer `which` (0 or 1): a triangle's first corner
+  // asks for its anchor, the others for the anchor's representative, each the same for a run of triangles,
+  // so each buffer keeps its last answer.
+  std::span<const uint32_t> of(uint32_t a, size_t cap, int which) {
+    Answer& answer = answers_[which];
+    if (answer.vertex == a && !answer.list.empty()) return answer.list;
+    answer.vertex = a;
+    answer.list.assign(1, a);
     for (auto it = std::lower_bound(by_.begin(), by_.end(), std::pair<uint32_t, uint32_t>{a, 0});
-         it != by_.end() && it->first == a && list_.size() < cap; ++it)
-      list_.push_back(it->second);
-    return list_;
+         it != by_.end() && it->first == a && answer.list.size() < cap; ++it)
+      answer.list.push_back(it->second);
+    return answer.list;
   }
 
  private:
+  struct Answer {
+    uint32_t vertex = kNone;
+    std::vector<uint32_t> list;
+  };
   std::vector<std::pair<uint32_t, uint32_t>> by_;
-  std::vector<uint32_t> list_;
+  std::array<Answer, 2> answers_;
 };
 
 // A triangle's first corner: whether it stands at a vertex of the level (its anchor: builds put the
@@ -210,7 +219,7 @@ void code_triangles(Side& side, const LevelShape& s, LevelValues& x, Models& m, 
       std::span<const uint32_t> lead;
       if (anchor != kNone) {
         const uint32_t at = k == 0 ? anchor : state.representative[anchor];
-        if (at != kNone) lead = descendants.of(at, CornerCandidates::kCandidates);
+        if (at != kNone) lead = descendants.of(at, CornerCandidates::kCandidates, k == 0 ? 0 : 1);
       }
       const uint32_t unnamed = cursor < v_end ? cursor : kNone;
       const auto candidates_until = [&](CornerCandidates::Until until) {
@@ -235,6 +244,7 @@ void code_triangles(Side& side, const LevelShape& s, LevelValues& x, Models& m, 
       if (symbol >= list.size())
         side.error("triangle " + str(t) + " names candidate " + str(symbol) + " of " + str(list.size()));
       c[k] = list[symbol];
+      mesh.prefetch(c[k]);  // its list is read for the next corner and when the triangle is added
     }
     mesh.add_triangle(c);
     candidates.remember(c);
@@ -249,14 +259,17 @@ constexpr uint32_t kPredictionRing = 8;
 
 // What predicts vertex v from the vertices decoded before it (index below v): the parallelograms of its
 // known triangles (v, a, b) across from a decoded triangle (b, a, c), a + b - c (touma and gotsman 1998),
-// averaged; without one, the mean of its decoded neighbours; without those, the vertex before it.
+// averaged; without one, its representative's position when one is stated (the vertex it splits from sits
+// where it ends up, near); else the mean of its decoded neighbours; without those, the vertex before it.
 struct Prediction {
   std::array<std::array<uint32_t, 3>, kPredictionRing * kPredictionRing> terms;  // (a, b, c): a + b - c
   uint32_t parallelograms = 0;
   std::array<uint32_t, kPredictionRing> ring;
   uint32_t around = 0;
+  uint32_t representative = kNone;
 
-  void find(const LevelNeighbours& mesh, uint32_t v) {
+  void find(const LevelNeighbours& mesh, uint32_t v, uint32_t v_representative) {
+    representative = v_representative < v ? v_representative : kNone;
     parallelograms = around = 0;
     for (uint32_t u : mesh.of(v))
       if (u < v && around < kPredictionRing) ring[around++] = u;
@@ -281,6 +294,7 @@ struct Prediction {
       for (uint32_t i = 0; i < parallelograms; ++i) sum += value(terms[i][0]) + value(terms[i][1]) - value(terms[i][2]);
       return rounded_mean(sum, parallelograms);
     }
+    if (representative != kNone) return value(representative);
     if (around == 0) return fallback;
     for (uint32_t i = 0; i < around; ++i) sum += value(ring[i]);
     return rounded_mean(sum, around);
@@ -302,7 +316,7 @@ void code_vertices(Side& side, const LevelShape& s, LevelValues& x, Models& m, C
   const uint32_t v_end = s.v_begin + s.vertices;
   for (uint32_t v = s.v_begin; v < v_end; ++v) {
     if (v + kPrefetchAhead < v_end) state.neighbours.prefetch_around(v + kPrefetchAhead);
-    prediction.find(state.neighbours, v);
+    prediction.find(state.neighbours, v, state.representative[v]);
     // Grid coordinate k of v, on a grid of `bits`.
     const auto axis = [&](uint32_t k, uint32_t bits) {
       const int64_t guess = prediction.at(q, w, k, v > 0 ? int64_t(q[size_t(v - 1) * w + k]) : int64_t(1) << (bits - 1));

@@ -38,7 +38,10 @@ class LevelNeighbours {
     const std::span<const uint32_t> list = of(v);
     return std::find(list.begin(), list.end(), u) != list.end();
   }
-  // Asks the memory for the lists of v's neighbours (a hint: nothing changes).
+  // Ask the memory for v's list, or its neighbours' (hints: nothing changes).
+  void prefetch(uint32_t v) const {
+    if (v < block_.size()) __builtin_prefetch(block_.data() + v);
+  }
   void prefetch_around(uint32_t v) const {
     for (uint32_t u : of(v)) __builtin_prefetch(block_.data() + u);
   }
