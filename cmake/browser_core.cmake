@@ -20,11 +20,12 @@ set(PMSTREAM_BROWSER_CORE
   src/protocol/split_bands.cpp src/protocol/split_request.cpp src/protocol/stream_mode.cpp src/protocol/url_segment.cpp
   src/protocol/vsplits.cpp src/protocol/wire.cpp
   # multilevel: the loader, its codec and the LOD
-  src/multilevel/codec.cpp src/multilevel/loader.cpp src/multilevel/mesh.cpp
+  src/multilevel/codec.cpp src/multilevel/level_neighbours.cpp src/multilevel/loader.cpp src/multilevel/mesh.cpp
   # spm: the partial hierarchy, the refinement engine, the split records and their codec
   src/spm/adapt.cpp src/spm/criteria.cpp src/spm/geomorph.cpp src/spm/hierarchy.cpp src/spm/nested_info.cpp
   src/spm/octahedral_normal.cpp src/spm/position_grid.cpp src/spm/quantize.cpp src/spm/selective_mesh.cpp
   src/spm/selective_mesh_audit.cpp src/spm/split_codec.cpp src/spm/split_record.cpp
   src/spm/vertex_hierarchy.cpp src/spm/vertex_id.cpp
-  src/common/camera.cpp src/common/portable_math.cpp src/common/prefix_code.cpp src/common/recycled_blocks.cpp)
+  src/common/camera.cpp src/common/portable_math.cpp src/common/prefix_code.cpp src/common/range_coder.cpp
+  src/common/recycled_blocks.cpp)
 list(TRANSFORM PMSTREAM_BROWSER_CORE PREPEND "${PMSTREAM_ROOT}/")

@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <nlohmann/json_fwd.hpp>
 
+#include "multilevel/codec.h"
 #include "multilevel/mesh.h"
 
 namespace pms::bench {
@@ -15,6 +16,8 @@ struct MultilevelSizes {
   uint64_t compressed = 0, binary = 0, binary_gzip = 0, ascii = 0, ascii_gzip = 0;
   uint64_t vertex_bits = 0, triangle_bits = 0;  // compressed: positions and attributes; connectivity + representatives
   uint64_t meshopt_vertex = 0, meshopt_index = 0;  // meshoptimizer's vertex and index-sequence codecs, per level
+  CompressedLevelBits parts;  // the compressed form's bits by part, over every level
+  double decode_ms = 0;       // decoding every compressed level through the loader: each level's fastest of a few
 };
 
 // `per_level` gets one object per level, coarsest first.

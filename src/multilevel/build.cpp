@@ -207,6 +207,36 @@ CollapseLevels assign_levels(const Mesh& mesh, std::span<const EdgeCollapse> col
   return out;
 }
 
+// Within each level, the triangles by the vertex of that level they stand on (the one a corner reaches
+// in the level's LOD), each turned (its orientation kept) to start at the corner that reaches it: the
+// order the compressed levels code best (multilevel/codec.h: the level's next unnamed vertex leads a
+// corner's candidates). A triangle whose corners all reach coarser vertices goes after the others.
+void order_level_triangles(MultilevelMesh& m) {
+  std::vector<uint32_t> key, sorted;
+  for (uint32_t level = 0; level < m.level_count(); ++level) {
+    const uint32_t n_l = m.vertex_count[level], lo = n_l - m.level_vertices(level);
+    const uint32_t t_end = m.triangle_count[level], t_begin = t_end - m.level_triangles(level);
+    key.assign(t_end - t_begin, kNoRep);
+    for (uint32_t t = t_begin; t < t_end; ++t) {
+      uint32_t* corner = &m.triangles[3 * size_t(t)];
+      for (uint32_t c = 0; c < 3; ++c) {
+        uint32_t x = corner[c];
+        while (x != kNoRep && x >= n_l) x = m.representative[x];
+        if (x == kNoRep || x < lo) continue;
+        key[t - t_begin] = x;
+        std::rotate(corner, corner + c, corner + 3);
+        break;
+      }
+    }
+    std::vector<uint32_t> order(t_end - t_begin);
+    std::iota(order.begin(), order.end(), 0u);
+    std::stable_sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) { return key[a] < key[b]; });
+    sorted.clear();
+    for (uint32_t i : order) sorted.insert(sorted.end(), &m.triangles[3 * size_t(t_begin + i)], &m.triangles[3 * size_t(t_begin + i) + 3]);
+    std::copy(sorted.begin(), sorted.end(), m.triangles.begin() + 3 * long(t_begin));
+  }
+}
+
 MultilevelMesh assemble_multilevel(const Mesh& mesh, const CollapseLevels& levels, MultilevelRepresentatives kind,
                                    std::vector<uint32_t>* vertex_order_out) {
   const uint32_t n = uint32_t(mesh.vertex_count()), f = uint32_t(mesh.face_count());
@@ -272,7 +302,9 @@ MultilevelMesh build_multilevel(const Mesh& mesh, std::span<const EdgeCollapse> 
                                 MultilevelRepresentatives kind) {
   CollapseLevels levels = assign_levels(mesh, collapses);
   merge_levels(levels, level_count);
-  return assemble_multilevel(mesh, levels, kind);
+  MultilevelMesh m = assemble_multilevel(mesh, levels, kind);
+  order_level_triangles(m);
+  return m;
 }
 
 }  // namespace pms

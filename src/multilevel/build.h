@@ -63,8 +63,9 @@ MultilevelMesh assemble_multilevel(const Mesh& mesh, const CollapseLevels& level
 // Merges consecutive levels down to `level_count` (merge_level_map); 0 or more than there are: unchanged.
 void merge_levels(CollapseLevels& levels, uint32_t level_count);
 
-// The whole path: levels from the collapses, then assembled; `level_count` > 0 merges consecutive levels
-// down to that many (merge_level_map). Geomorph representatives by default: they make every geomorph's
+// The whole path: levels from the collapses, then assembled, then each level's triangles in the order the
+// compressed levels code best (by the level's vertex each stands on, turned to start at the corner that
+// reaches it; orientation kept); `level_count` > 0 merges consecutive levels down to that many (merge_level_map). Geomorph representatives by default: they make every geomorph's
 // ends its two LODs, for up to 2.5% of the binary file (dragon merged to 8 levels; docs/internals.md, "Geomorph
 // representatives").
 MultilevelMesh build_multilevel(const Mesh& mesh, std::span<const EdgeCollapse> collapses, uint32_t level_count = 0,

@@ -1,14 +1,16 @@
 // Compressed multilevel levels (gueziec et al. 1999, "coupling with a geometry-compression method";
-// docs/multilevel-format.md, "Compressed levels"): each level on its own, its vertices quantized on one
-// grid and predicted from their representatives, its triangles' corners coded against the corners just
-// before them, with static prefix codes of its own (common/prefix_code.h). The progressive loader decodes a
-// level into the LEVL section it stands for, so both forms reach the structure through the same checks.
+// docs/multilevel-format.md, "Compressed levels"): each level coded as a mesh against the levels before
+// it, its vertices quantized on one grid, its triangles' corners as places among the vertices the mesh so
+// far puts next to each other, its positions predicted from their decoded neighbours, every decision
+// under an adaptive range coder (common/range_coder.h). The progressive loader decodes a level into the
+// LEVL section it stands for, so both forms reach the structure through the same checks.
 #pragma once
 #include <cstdint>
 #include <span>
 #include <string>
 #include <vector>
 
+#include "multilevel/level_neighbours.h"
 #include "multilevel/loader.h"
 #include "multilevel/mesh.h"
 #include "spm/position_grid.h"
@@ -24,6 +26,10 @@ struct CompressedLevelBits {
   uint64_t changed = 0;          // the secondary array of its LOD
   uint64_t total() const { return header + representatives + vertices + triangles + changed; }
 };
+
+// The compressed form's version, in the compressed head's HEAD `reserved` word (the binary form's is 0):
+// a loader refuses a head of any other.
+constexpr uint32_t kCompressedLevelsVersion = 2;
 
 // Bits per axis of the texture coordinates' grid in the compressed form.
 constexpr uint32_t kDefaultTexcoordBits = 16;
@@ -48,18 +54,17 @@ struct CompressedLevelContext {
   uint32_t level = 0, dimension = 3;
   bool normals = false, colors = false, texcoords = false;
   PositionGrid grid, texcoord_grid;                     // texcoord_grid: only when `texcoords`
-  const RepresentativeArray* representative = nullptr;  // every vertex's, as loaded so far
+  uint64_t mesh_vertices = 0;  // the head's total
   uint32_t vertices_loaded = 0;
   uint32_t vertices_left = 0, triangles_left = 0, representatives_left = 0;  // what the head's totals allow
   bool changed = false;       // the levels carry secondary arrays
   uint32_t changed_left = 0;  // their entries the head's total allows
 };
 
-// The LEVL section a compressed level stands for; appends its vertices' grid coordinates (dimension per
-// vertex, then 2 for the texture coordinates if any) to `quantized`, which holds those of every loaded vertex.
-// pms::Error "WHERE: what" for a level that is not one: truncated, counts over what is left, unknown code words, values
-// outside the grid or the mesh, representatives not below their vertex.
+// The LEVL section a compressed level stands for; adds what it loads to `state`. pms::Error "WHERE:
+// compressed level L: what" for a level that is not one: truncated or longer than its stream, counts over
+// what is left, values outside the grid or the mesh, representatives not below their vertex.
 std::vector<uint8_t> decode_compressed_level(const std::string& where, std::span<const uint8_t> level,
-                                             const CompressedLevelContext& context, std::vector<uint32_t>& quantized);
+                                             const CompressedLevelContext& context, CompressedLevelState& state);
 
 }  // namespace pms

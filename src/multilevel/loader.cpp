@@ -134,9 +134,13 @@ MultilevelParts multilevel_parts(const MultilevelMesh& m) {
 MultilevelLoader::MultilevelLoader(const std::string& where, std::span<const uint8_t> head,
                                    const MultilevelLimits& limits, MultilevelForm form)
     : form_(form) {
+  HeadSection compressed_head;
   if (form == MultilevelForm::compressed) {
     read_compressed_head(where, head);
-    head = head.first(std::min(head.size(), sizeof(HeadSection)));
+    // Its HEAD carries the compressed form's version where the binary form's has 0.
+    std::memcpy(&compressed_head, head.data(), sizeof compressed_head);
+    compressed_head.reserved = 0;
+    head = {reinterpret_cast<const uint8_t*>(&compressed_head), sizeof compressed_head};
   }
   if (head.size() != sizeof(HeadSection))
     fail(where, "section HEAD: " + str(head.size()) + " bytes (" + str(sizeof(HeadSection)) + " expected)");
@@ -179,6 +183,9 @@ MultilevelLoader::MultilevelLoader(const std::string& where, std::span<const uin
 void MultilevelLoader::read_compressed_head(const std::string& where, std::span<const uint8_t> head) {
   CompressedHead h{};
   if (head.size() >= sizeof h) std::memcpy(&h, head.data(), sizeof h);
+  if (head.size() >= sizeof h && h.head.reserved != kCompressedLevelsVersion)
+    fail(where, "compressed head: version " + str(h.head.reserved) + " levels (this client decodes version " +
+                    str(kCompressedLevelsVersion) + "); load the model again");
   const bool texcoords = h.head.flags & kHasTexcoords;
   const size_t expected = sizeof h + (texcoords ? sizeof(TexcoordBox) : 0);
   if (head.size() != expected)
@@ -207,16 +214,16 @@ void MultilevelLoader::add_level(const std::string& where, std::span<const uint8
                                        (flags_ & kHasTexcoords) != 0,
                                        grid_,
                                        texcoord_grid_,
-                                       &mesh_.representative,
+                                       total_vertices_,
                                        mesh_.vertices(),
                                        total_vertices_ - mesh_.vertices(),
                                        total_triangles_ - mesh_.faces(),
                                        total_representatives_ - representatives_,
                                        (flags_ & kHasChanged) != 0,
                                        total_changed_ - changed_};
-  const std::vector<uint8_t> plain = decode_compressed_level(where, section, context, quantized_);
+  const std::vector<uint8_t> plain = decode_compressed_level(where, section, context, compressed_);
   add_plain_level(where, plain, offset);
-  if (complete()) quantized_ = {};  // only later levels predict from it
+  if (complete()) compressed_ = {};  // only later levels are coded against it
 }
 
 void MultilevelLoader::add_plain_level(const std::string& where, std::span<const uint8_t> section, uint64_t offset) {

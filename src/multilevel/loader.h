@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "multilevel/file.h"
+#include "multilevel/level_neighbours.h"
 #include "multilevel/mesh.h"
 #include "spm/position_grid.h"
 
@@ -69,7 +70,7 @@ class MultilevelLoader {
   MultilevelForm form_;
   PositionGrid grid_;                // the compressed form's
   PositionGrid texcoord_grid_;       // the compressed form's, when it has texture coordinates (z unused)
-  std::vector<uint32_t> quantized_;  // the compressed form's: grid coordinates of the loaded vertices
+  CompressedLevelState compressed_;  // the compressed form's: what its levels are coded against
 };
 
 }  // namespace pms

@@ -56,6 +56,32 @@ TEST(MultilevelCodec, EveryLevelOfBunnyDecodesToTheStructureOnTheGrid) {
   expect_same(snapped_multilevel(got, kDefaultPositionBits), got);
 }
 
+// What the compressed levels code best: within a level, the triangles by the vertex of the level each
+// stands on in its LOD, each starting at a corner that reaches that vertex.
+TEST(MultilevelCodec, BuildsOrderEachLevelsTrianglesByTheVertexTheyStandOn) {
+  const test::BuiltModel& terrain = test::built_terrain();
+  const MultilevelMesh m = build_multilevel(terrain.input, collapses_of(terrain.h));
+  uint64_t standing = 0;
+  for (uint32_t level = 0; level < m.level_count(); ++level) {
+    const uint32_t n_l = m.vertex_count[level], lo = n_l - m.level_vertices(level);
+    uint32_t last = 0;
+    bool past_standing = false;  // the triangles that stand on no vertex of the level come last
+    for (uint32_t t = m.triangle_count[level] - m.level_triangles(level); t < m.triangle_count[level]; ++t) {
+      uint32_t x = m.triangles[3 * size_t(t)];
+      while (x != MultilevelMesh::kNoRepresentative && x >= n_l) x = m.representative[x];
+      if (x == MultilevelMesh::kNoRepresentative || x < lo) {
+        past_standing = true;
+        continue;
+      }
+      ASSERT_FALSE(past_standing) << "level " << level << ", triangle " << t;
+      ASSERT_GE(x, last) << "level " << level << ", triangle " << t;
+      last = x;
+      ++standing;
+    }
+  }
+  EXPECT_GT(standing, uint64_t(m.faces()) / 2);
+}
+
 TEST(MultilevelCodec, MergedLevelsAttributesAndCoarseGridsRoundTrip) {
   const test::BuiltModel& terrain = test::built_terrain();
   for (uint32_t levels : {1u, 4u, 10u})
@@ -108,7 +134,13 @@ TEST(MultilevelCodec, HostileCompressedPiecesAreRefusedByName) {
   EXPECT_EQ(error_of([&] { MultilevelLoader("h", head, {}, compressed); }),
             "h: compressed head: the grid's box is not a box");
 
-  // A level out of order, truncated, or with counts past the head's totals.
+  // A head of another version of the compressed levels (HEAD's reserved word), e.g. one cached before it.
+  head = parts.head;
+  std::memset(head.data() + 28, 0, 4);
+  EXPECT_EQ(error_of([&] { MultilevelLoader("h", head, {}, compressed); }),
+            "h: compressed head: version 0 levels (this client decodes version 2); load the model again");
+
+  // A level out of order, truncated, longer than its stream, or with counts past the head's totals.
   MultilevelLoader out_of_order("h", parts.head, {}, compressed);
   EXPECT_EQ(error_of([&] { out_of_order.add_level("GET /l", parts.levels[1]); }),
             "GET /l: compressed level 5: says it is level 4");
@@ -119,6 +151,11 @@ TEST(MultilevelCodec, HostileCompressedPiecesAreRefusedByName) {
     EXPECT_EQ(e.rfind("GET /l: ", 0), 0u) << e;
     EXPECT_NE(e.find("truncated"), std::string::npos) << "cut at " << cut << ": " << e;
   }
+  std::vector<uint8_t> longer = first;
+  longer.push_back(0);
+  MultilevelLoader trailing("h", parts.head, {}, compressed);
+  EXPECT_EQ(error_of([&] { trailing.add_level("GET /l", longer); }),
+            "GET /l: compressed level 5: 1 byte after the stream's end");
   std::vector<uint8_t> inflated = first;
   inflated[4] = 0xFF, inflated[5] = 0xFF, inflated[6] = 0xFF;  // vertex count
   MultilevelLoader too_many("h", parts.head, {}, compressed);
