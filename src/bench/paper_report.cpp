@@ -158,7 +158,8 @@ std::string cheng_table1(const Groups& g) {
     const double r = m.at("e7_phases").at("receiver").at("cpu_ms").get<double>();
     if (s > 0) rows.push_back(m.at("model").get<std::string>() + " " + fixed(r / s, 2));
   }
-  return rows.empty() ? "" : "receiver-driven over sender-driven server CPU: " + joined(rows) + " (by phase in receiver.md)";
+  if (rows.empty()) return "not in this receiver.json: a run of `--only receiver` adds it";
+  return "receiver-driven over sender-driven server CPU: " + joined(rows) + " (by phase in receiver.md)";
 }
 
 // The fewest bytes after which a mode's samples reach `psnr` dB; 0 when they never do.
